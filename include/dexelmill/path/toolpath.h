@@ -1,0 +1,85 @@
+/// @file toolpath.h
+/// @brief Moves, tool changes and diagnostics: what the program readers produce and the cutting
+/// loop consumes. Positions in mm in the part frame.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "dexelmill/error.h"
+#include "dexelmill/geometry/types.h"
+#include "dexelmill/tool/tool.h"
+
+namespace dexelmill {
+
+/// @brief Where a move came from: an index into ToolPath::files and a 1-based line (0: none).
+struct SourceRef {
+    std::uint32_t file = 0;
+    std::int32_t line = 0;
+};
+
+/// @brief A linear cutter-location move F(u) = start + (end - start) u, u in [0, 1] (Eq. 1),
+/// with a fixed unit tool axis: the tool extends from the CL point (its tip) along +axis.
+struct Move {
+    Vec3 start{0.0};
+    Vec3 end{0.0};
+    Vec3 axis{0.0, 0.0, 1.0};
+    int tool = 0;        ///< tool number, a key of the tool table
+    bool rapid = false;  ///< G0 / RAPID: still cuts, and any cut is a collision to report
+    SourceRef source;
+
+    Vec3 feed() const { return end - start; }
+};
+
+/// @brief The tool in the spindle changes before move `moveIndex`.
+struct ToolChange {
+    std::size_t moveIndex = 0;
+    int tool = 0;
+    SourceRef source;
+};
+
+/// @brief A warning or note from a reader or the cutting loop, with its place.
+struct Diagnostic {
+    enum class Severity { Note, Warning };
+    Severity severity = Severity::Warning;
+    SourceLocation where;
+    std::string message;
+};
+
+/// @brief A program turned into moves: the sequence the cutting loop applies in order.
+struct ToolPath {
+    std::vector<std::string> files;  ///< source files; SourceRef::file indexes this
+    std::vector<Move> moves;
+    std::vector<ToolChange> toolChanges;
+
+    /// @brief "file:line" of a move's source.
+    SourceLocation where(const SourceRef& ref) const {
+        SourceLocation loc;
+        if (ref.file < files.size()) loc.file = files[ref.file];
+        loc.line = ref.line;
+        return loc;
+    }
+    /// @brief The extent of all CL points.
+    Box bounds() const {
+        Box b;
+        for (const Move& m : moves) {
+            b.expand(m.start);
+            b.expand(m.end);
+        }
+        return b;
+    }
+};
+
+/// @brief Tools by number.
+using ToolTable = std::map<int, Tool>;
+
+/// @brief Everything a reader returns.
+struct Program {
+    ToolPath path;
+    ToolTable tools;  ///< tools the program or project defines (APT CUTTER/, .camotics tools)
+    std::vector<Diagnostic> diagnostics;
+};
+
+}  // namespace dexelmill

@@ -1,0 +1,112 @@
+/// @file dexel.h
+/// @brief Dexels and dexel families: sorted lists of disjoint material segments along rays,
+/// stored compactly in tiles.
+///
+/// Storage (docs/architecture.md): a family's dexels are grouped in tiles of kTile x kTile. A tile
+/// keeps every segment of its dexels in one contiguous array, with an offset per dexel (its
+/// capacity is the distance to the next offset) and a count. Endpoints are float, in mm along the
+/// ray, relative to the lattice origin: that is 8 bytes a segment, so a one-segment dexel costs 14
+/// bytes plus a share of the tile's fixed overhead. Floats hold about 7 significant digits: 1e-4 mm
+/// at 1.7 m from the origin, well below any practical lattice spacing. A tile with no material
+/// frees its arrays, so empty regions cost only the tile header.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "dexelmill/stock/lattice.h"
+
+namespace dexelmill {
+
+/// @brief A material segment [lo, hi] along a dexel, mm relative to the lattice origin.
+struct Segment {
+    float lo = 0.0f;
+    float hi = 0.0f;
+};
+
+/// @brief A read-only view of a dexel's segments.
+struct SegmentSpan {
+    const Segment* data = nullptr;
+    std::size_t size = 0;
+
+    const Segment* begin() const { return data; }
+    const Segment* end() const { return data + size; }
+    bool empty() const { return size == 0; }
+    const Segment& operator[](std::size_t i) const { return data[i]; }
+};
+
+/// @brief kTile x kTile dexels of one family with their segments in one array.
+class DexelTile {
+public:
+    static constexpr int kTile = 16;
+    static constexpr int kDexels = kTile * kTile;
+
+    /// @brief Segments of dexel `local` (0 .. kDexels-1, index b + kTile * c within the tile).
+    SegmentSpan segments(int local) const;
+    /// @brief Replaces the segments of a dexel. They must be sorted and disjoint.
+    void setSegments(int local, const Segment* segs, std::size_t count);
+    /// @brief Removes [lo, hi] from a dexel. Returns the length of material removed (mm).
+    double subtract(int local, float lo, float hi);
+    /// @brief True when no dexel holds material.
+    bool empty() const { return offset_.empty(); }
+    /// @brief Sum of segment lengths (mm).
+    double materialLength() const;
+    /// @brief Heap bytes held (capacity, not size).
+    std::size_t memoryBytes() const;
+
+private:
+    void grow(int local, std::size_t needed);
+    void releaseIfEmpty();
+
+    // offset_[i] .. offset_[i + 1] is dexel i's capacity; count_[i] the segments in use.
+    std::vector<std::uint32_t> offset_;
+    std::vector<std::uint16_t> count_;
+    std::vector<Segment> segs_;
+};
+
+/// @brief All dexels along one axis. Dexel (ib, ic) runs along `axis` through the lattice points
+/// whose indices on the two other axes, taken cyclically (b = axis + 1, c = axis + 2, mod 3), are
+/// ib and ic.
+class DexelFamily {
+public:
+    static constexpr int kTile = DexelTile::kTile;
+
+    DexelFamily(Axis axis, int nb, int nc);
+
+    Axis axis() const { return axis_; }
+    /// @brief The axis of the first and second dexel index.
+    Axis axisB() const { return axisFromIndex((index(axis_) + 1) % 3); }
+    Axis axisC() const { return axisFromIndex((index(axis_) + 2) % 3); }
+    int nb() const { return nb_; }
+    int nc() const { return nc_; }
+    int tilesB() const { return tilesB_; }
+    int tilesC() const { return tilesC_; }
+    std::size_t tileCount() const { return tiles_.size(); }
+
+    DexelTile& tile(int tb, int tc) { return tiles_[std::size_t(tb) + std::size_t(tilesB_) * tc]; }
+    const DexelTile& tile(int tb, int tc) const {
+        return tiles_[std::size_t(tb) + std::size_t(tilesB_) * tc];
+    }
+    static int localIndex(int ib, int ic) { return (ib % kTile) + kTile * (ic % kTile); }
+
+    SegmentSpan segments(int ib, int ic) const {
+        return tile(ib / kTile, ic / kTile).segments(localIndex(ib, ic));
+    }
+    void setSegments(int ib, int ic, const Segment* segs, std::size_t count) {
+        tile(ib / kTile, ic / kTile).setSegments(localIndex(ib, ic), segs, count);
+    }
+    double subtract(int ib, int ic, float lo, float hi) {
+        return tile(ib / kTile, ic / kTile).subtract(localIndex(ib, ic), lo, hi);
+    }
+    /// @brief Sum of all segment lengths (mm).
+    double materialLength() const;
+    std::size_t memoryBytes() const;
+
+private:
+    Axis axis_;
+    int nb_, nc_, tilesB_, tilesC_;
+    std::vector<DexelTile> tiles_;
+};
+
+}  // namespace dexelmill

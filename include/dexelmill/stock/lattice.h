@@ -1,0 +1,55 @@
+/// @file lattice.h
+/// @brief The one lattice of the tri-dexel stock (method.md section 7). The stock owns this
+/// convention; the level-set rebuild reads it from here and never recomputes it.
+#pragma once
+
+#include <array>
+
+#include "dexelmill/geometry/types.h"
+
+namespace dexelmill {
+
+/// @brief A coordinate axis; also names a dexel family by its ray direction.
+enum class Axis : int { X = 0, Y = 1, Z = 2 };
+
+constexpr int index(Axis a) { return static_cast<int>(a); }
+constexpr Axis axisFromIndex(int i) { return static_cast<Axis>(i); }
+/// @brief 'x', 'y' or 'z'.
+constexpr char axisName(Axis a) { return "xyz"[index(a)]; }
+/// @brief The unit vector along an axis.
+inline Vec3 axisVector(Axis a) {
+    Vec3 v(0.0);
+    v[index(a)] = 1.0;
+    return v;
+}
+
+/// @brief Lattice points at origin + (i + 1/2) h per axis: the centres of the n cells of size h
+/// that tile the stock box from its minimum corner. A dexel of family `a` runs along axis a
+/// through the lattice points with fixed indices on the other two axes, so every cell edge lies
+/// on exactly one dexel and faces at round heights fall between lattice lines.
+struct Lattice {
+    Vec3 origin{0.0};               ///< minimum corner of the stock box (mm)
+    double h = 1.0;                 ///< spacing (mm)
+    std::array<int, 3> n{1, 1, 1};  ///< lattice points per axis
+
+    /// @brief The lattice tiling `box` with spacing h: n = ceil(size / h) per axis (at least 1).
+    /// @throw Error if the box is empty or degenerate, h is not positive, or the lattice would
+    /// need more than 2^31 points along an axis.
+    static Lattice fromBox(const Box& box, double h);
+
+    /// @brief World coordinate of lattice index i along axis a.
+    double coord(Axis a, int i) const { return origin[index(a)] + (i + 0.5) * h; }
+    /// @brief World position of lattice point (i, j, k).
+    Vec3 point(int i, int j, int k) const {
+        return origin + (Vec3(i, j, k) + 0.5) * h;
+    }
+    /// @brief The box covered by the cells: origin to origin + n h.
+    Box cellBox() const { return {origin, origin + Vec3(n[0], n[1], n[2]) * h}; }
+    /// @brief Total number of lattice points.
+    double pointCount() const { return double(n[0]) * n[1] * n[2]; }
+    /// @brief Index range [first, last] of lattice coordinates along axis a inside [lo, hi];
+    /// first > last when there is none.
+    std::array<int, 2> indexRange(Axis a, double lo, double hi) const;
+};
+
+}  // namespace dexelmill

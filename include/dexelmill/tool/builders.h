@@ -1,0 +1,45 @@
+/// @file builders.h
+/// @brief Builders for the common cutters and the APT 7-parameter cutter. Lengths in mm, angles
+/// in radians. Every builder throws dexelmill::Error naming the parameter and its value when the
+/// parameters describe no real tool.
+#pragma once
+
+#include "dexelmill/tool/tool.h"
+
+namespace dexelmill {
+
+/// @brief Cutting length and total length (stick-out) of a tool, in mm. Zero means "default":
+/// the cutting length defaults to 3 cutting diameters (at least 10 mm), the total length to the
+/// cutting length plus 2 diameters.
+struct ToolLengths {
+    double cutting = 0.0;
+    double total = 0.0;
+};
+
+/// @brief Flat end mill of diameter d.
+Tool flatEndMill(double d, ToolLengths lengths = {});
+/// @brief Ball end mill of diameter d.
+Tool ballEndMill(double d, ToolLengths lengths = {});
+/// @brief Bull-nose (toroidal, fillet-end) mill of diameter d with corner radius r, 0 < r <= d/2.
+Tool bullNoseEndMill(double d, double r, ToolLengths lengths = {});
+/// @brief Tapered end mill: flat tip of diameter tipD, flank at halfAngle from the axis,
+/// widening over the whole cutting length; the shank above keeps the top radius.
+Tool taperEndMill(double tipD, double halfAngle, ToolLengths lengths = {});
+/// @brief Chamfer mill or V-bit: flat tip of diameter tipD (0 for a V-bit), flank at halfAngle
+/// from the axis up to diameter d, then cylindrical.
+Tool chamferMill(double tipD, double halfAngle, double d, ToolLengths lengths = {});
+/// @brief Tapered ball mill: ball of diameter ballD at the tip, tangent to a flank at halfAngle
+/// from the axis.
+Tool taperBallMill(double ballD, double halfAngle, ToolLengths lengths = {});
+/// @brief Twist drill of diameter d with included point angle (e.g. 118 degrees, in radians).
+Tool drill(double d, double pointAngle, ToolLengths lengths = {});
+
+/// @brief The APT `CUTTER/d, r, e, f, alpha, beta, h` cutter: corner circle of radius r centred
+/// (e, f) in the (radial, axial) plane, bottom flank at alpha above the horizontal, side flank at
+/// beta from the vertical, height h. With r = 0 the corner is the sharp point (e, f) and the
+/// bottom flank runs through it, leaving a flat tip where it meets z = 0 (chamfer mills).
+/// @param cuttingLength flute length; 0 means all of h.
+Tool aptCutter(double d, double r, double e, double f, double alpha, double beta, double h,
+               double cuttingLength = 0.0);
+
+}  // namespace dexelmill

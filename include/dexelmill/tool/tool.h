@@ -1,0 +1,100 @@
+/// @file tool.h
+/// @brief A milling cutter: a validated profile, its lengths, and exact point and line queries.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "dexelmill/geometry/types.h"
+#include "dexelmill/tool/profile.h"
+
+namespace dexelmill {
+
+/// @brief Where a tool is: the tip (cutter-location point) and the unit axis along which the tool
+/// extends from its tip.
+struct ToolPose {
+    Vec3 tip{0.0};
+    Vec3 axis{0.0, 0.0, 1.0};
+};
+
+/// @brief A line expressed in a tool's frame. Along the line, with parameter t = v - vShift,
+///   height above the tip   z(t)     = z0 + zv t
+///   squared axis distance  rho^2(t) = A t^2 + 2 B t + C.
+/// `vShift` is the parameter of the line point nearest the tip, so that the coefficients stay
+/// small however far the line's origin is from the tool.
+struct LocalLine {
+    double z0 = 0.0, zv = 0.0;
+    double A = 0.0, B = 0.0, C = 0.0;
+    double vShift = 0.0;
+
+    /// @brief The line `line` (unit direction) seen from a tool at `pose`.
+    static LocalLine make(const ToolPose& pose, const Line& line);
+};
+
+/// @brief A maximal run of pieces whose solid is convex (R concave and continuous over it).
+struct ConvexPart {
+    std::size_t first = 0;  ///< index of the first piece
+    std::size_t last = 0;   ///< index one past the last piece
+    double z0 = 0.0, z1 = 0.0;
+};
+
+/// @brief A cutter as a solid of revolution: see profile.h.
+///
+/// The pieces cover [0, totalLength] without gaps or overlaps. The part above `cuttingLength` is
+/// the shank: it does not cut, and material it meets is a collision.
+class Tool {
+public:
+    /// @brief Validates and takes a profile chain.
+    /// @throw Error if the chain is empty, has gaps or overlaps, a negative radius, a zero-height
+    /// piece, an arc outside its circle, or if cuttingLength is not in (0, total length].
+    Tool(std::string description, std::vector<ProfilePiece> pieces, double cuttingLength);
+
+    /// @brief What the tool is, e.g. "ball D6 L25/50".
+    const std::string& description() const { return description_; }
+    const std::vector<ProfilePiece>& pieces() const { return pieces_; }
+    /// @brief The convex parts, bottom to top. One part for every common cutter.
+    const std::vector<ConvexPart>& convexParts() const { return parts_; }
+    bool isConvex() const { return parts_.size() == 1; }
+
+    double totalLength() const { return totalLength_; }
+    double cuttingLength() const { return cuttingLength_; }
+    double maxRadius() const { return maxRadius_; }
+    /// @brief The largest radius at or below the cutting length (half the cutting diameter).
+    double cuttingRadius() const { return cuttingRadius_; }
+
+    /// @brief The profile radius R(z) at height z above the tip; where R jumps between pieces, the
+    /// larger side. Negative when z is outside [0, totalLength].
+    double radiusAt(double z) const;
+
+    /// @brief Point membership in the tool frame: axial height z, distance rho from the axis.
+    bool containsLocal(double rho, double z) const;
+    /// @brief Point membership of a world point for a tool at `pose`.
+    bool contains(const ToolPose& pose, const Vec3& p) const;
+
+    /// @brief The material intervals of `line` (unit direction) inside the tool at `pose`, as line
+    /// parameters: sorted, disjoint, at most one per convex part. Exact up to rounding.
+    std::vector<Interval> intersect(const ToolPose& pose, const Line& line) const;
+    /// @brief The interval of a line (in tool-frame form) inside one convex part.
+    Interval intersectPart(const ConvexPart& part, const LocalLine& line) const;
+
+    /// @brief The same tool restricted to heights [z0, z1] (clipped to the tool). Used for the
+    /// shank region above the cutting length. Its tip stays at height 0 of the original tool.
+    /// @throw Error if the range is empty.
+    std::vector<ProfilePiece> piecesBetween(double z0, double z1) const;
+
+private:
+    std::string description_;
+    std::vector<ProfilePiece> pieces_;
+    std::vector<ConvexPart> parts_;
+    double totalLength_ = 0.0;
+    double cuttingLength_ = 0.0;
+    double maxRadius_ = 0.0;
+    double cuttingRadius_ = 0.0;
+};
+
+/// @brief The interval of the line inside one piece's slab solid { z in [z0, z1], rho <= R(z) }.
+/// Cones, cylinders and spheres in closed form; the torus by bracketed root finding on the convex
+/// function rho(t) - R(z(t)) (Boost.Math Brent minimisation, then TOMS 748).
+Interval intersectPiece(const ProfilePiece& piece, const LocalLine& line);
+
+}  // namespace dexelmill
