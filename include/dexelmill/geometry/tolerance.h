@@ -19,6 +19,10 @@ constexpr double kZeroMove = 1e-9;
 /// Profile chains: consecutive pieces must meet within this distance (mm).
 constexpr double kProfileJoint = 1e-7;
 
+/// Profile slopes dR/dz that differ by less than this count as equal when deciding whether a
+/// joint between two pieces is convex (dimensionless).
+constexpr double kSlope = 1e-9;
+
 /// Root finders stop when the bracket is this narrow relative to the problem scale (mm).
 constexpr double kRoot = 1e-12;
 

@@ -46,6 +46,9 @@ public:
     SegmentSpan segments(int local) const;
     /// @brief Replaces the segments of a dexel. They must be sorted and disjoint.
     void setSegments(int local, const Segment* segs, std::size_t count);
+    /// @brief Replaces the whole tile at once: `counts[i]` segments for dexel i (kDexels entries),
+    /// all segments concatenated in dexel order. Sorted and disjoint per dexel.
+    void assign(const std::uint16_t* counts, const Segment* segs);
     /// @brief Removes [lo, hi] from a dexel. Returns the length of material removed (mm).
     double subtract(int local, float lo, float hi);
     /// @brief True when no dexel holds material.

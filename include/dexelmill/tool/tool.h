@@ -40,13 +40,15 @@ struct ConvexPart {
 
 /// @brief A cutter as a solid of revolution: see profile.h.
 ///
-/// The pieces cover [0, totalLength] without gaps or overlaps. The part above `cuttingLength` is
+/// The pieces cover [bottom, totalLength] without gaps or overlaps; bottom is 0 for a whole
+/// tool. The part above `cuttingLength` is
 /// the shank: it does not cut, and material it meets is a collision.
 class Tool {
 public:
     /// @brief Validates and takes a profile chain.
-    /// @throw Error if the chain is empty, has gaps or overlaps, a negative radius, a zero-height
-    /// piece, an arc outside its circle, or if cuttingLength is not in (0, total length].
+    /// @throw Error if the chain is empty, starts below the tip, has gaps or overlaps, a negative
+    /// radius, a zero-height piece, an arc outside its circle, no positive radius, or if
+    /// cuttingLength is not in (0, total length].
     Tool(std::string description, std::vector<ProfilePiece> pieces, double cuttingLength);
 
     /// @brief What the tool is, e.g. "ball D6 L25/50".
@@ -63,7 +65,7 @@ public:
     double cuttingRadius() const { return cuttingRadius_; }
 
     /// @brief The profile radius R(z) at height z above the tip; where R jumps between pieces, the
-    /// larger side. Negative when z is outside [0, totalLength].
+    /// larger side. Negative when z is outside [bottom, totalLength].
     double radiusAt(double z) const;
 
     /// @brief Point membership in the tool frame: axial height z, distance rho from the axis.
@@ -77,15 +79,20 @@ public:
     /// @brief The interval of a line (in tool-frame form) inside one convex part.
     Interval intersectPart(const ConvexPart& part, const LocalLine& line) const;
 
-    /// @brief The same tool restricted to heights [z0, z1] (clipped to the tool). Used for the
-    /// shank region above the cutting length. Its tip stays at height 0 of the original tool.
-    /// @throw Error if the range is empty.
-    std::vector<ProfilePiece> piecesBetween(double z0, double z1) const;
+    /// @brief The part of the tool between heights z0 and z1 (clipped to the tool), as a tool in
+    /// the same frame: its tip, the CL point, stays at height 0, so its lowest face is at z0.
+    /// `region(cuttingLength(), totalLength())` is the shank, for collision checks.
+    /// @throw Error if the clipped range has no height.
+    Tool region(double z0, double z1) const;
+
+    /// @brief The lowest height of the solid: 0 for a whole tool, z0 for a region.
+    double bottom() const { return bottom_; }
 
 private:
     std::string description_;
     std::vector<ProfilePiece> pieces_;
     std::vector<ConvexPart> parts_;
+    double bottom_ = 0.0;
     double totalLength_ = 0.0;
     double cuttingLength_ = 0.0;
     double maxRadius_ = 0.0;

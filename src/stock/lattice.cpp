@@ -1,0 +1,49 @@
+#include "dexelmill/stock/lattice.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "dexelmill/error.h"
+
+namespace dexelmill {
+
+Lattice Lattice::fromBox(const Box& box, double h) {
+    if (!(h > 0.0) || !std::isfinite(h)) {
+        std::ostringstream s;
+        s << "lattice spacing must be positive, got " << h;
+        throw Error(s.str());
+    }
+    if (box.isEmpty() || !(box.size().x > 0 && box.size().y > 0 && box.size().z > 0)) {
+        throw Error("stock box must have positive size on every axis");
+    }
+    Lattice l;
+    l.origin = box.lo;
+    l.h = h;
+    for (int a = 0; a < 3; ++a) {
+        // A size that is a whole number of cells up to rounding gets exactly that many cells.
+        const double cells = box.size()[a] / h;
+        const double rounded = std::round(cells);
+        const double n = std::abs(cells - rounded) <= 1e-9 * std::max(1.0, cells) ? rounded : std::ceil(cells);
+        if (n > double(std::numeric_limits<int>::max() / 2)) {
+            std::ostringstream s;
+            s << "stock is " << box.size()[a] << " mm along " << "xyz"[a] << ": spacing " << h
+              << " mm would need " << n << " lattice points";
+            throw Error(s.str());
+        }
+        l.n[a] = std::max(1, int(n));
+    }
+    return l;
+}
+
+std::array<int, 2> Lattice::indexRange(Axis a, double lo, double hi) const {
+    const int ax = index(a);
+    // coord(i) = origin + (i + 1/2) h >= lo  <=>  i >= (lo - origin) / h - 1/2
+    const double first = std::ceil((lo - origin[ax]) / h - 0.5);
+    const double last = std::floor((hi - origin[ax]) / h - 0.5);
+    const int f = int(std::max(first, 0.0));
+    const int l = int(std::min(last, double(n[ax] - 1)));
+    return {f, l};
+}
+
+}  // namespace dexelmill

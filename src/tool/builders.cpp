@@ -1,0 +1,194 @@
+#include "dexelmill/tool/builders.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "dexelmill/error.h"
+#include "dexelmill/geometry/tolerance.h"
+
+namespace dexelmill {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+std::string num(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
+std::string deg(double radians) { return num(radians * 180.0 / kPi) + " deg"; }
+
+[[noreturn]] void bad(const std::string& tool, const std::string& what) {
+    throw Error(tool + ": " + what);
+}
+
+void requirePositive(const std::string& tool, const char* name, double v) {
+    if (!(v > 0.0) || !std::isfinite(v)) bad(tool, std::string(name) + " must be positive, got " + num(v));
+}
+
+void requireNonNegative(const std::string& tool, const char* name, double v) {
+    if (!(v >= 0.0) || !std::isfinite(v)) bad(tool, std::string(name) + " must not be negative, got " + num(v));
+}
+
+/// An angle in [0, 90 deg) (or (0, 90) when `open` is set), e.g. a flank angle.
+void requireAngle(const std::string& tool, const char* name, double a, bool positive) {
+    if (!std::isfinite(a) || a < 0.0 || (positive && a == 0.0) || a >= 0.5 * kPi)
+        bad(tool, std::string(name) + " must lie in " + (positive ? "(0" : "[0") + ", 90) deg, got " + deg(a));
+}
+
+/// Resolves default lengths: cutting length 3 diameters (at least 10 mm), total length the
+/// cutting length plus 2 diameters. `minimum` is the height of the profile's shaped end, which
+/// the total length must reach.
+ToolLengths resolve(const std::string& tool, ToolLengths l, double diameter, double minimum) {
+    requireNonNegative(tool, "cutting length", l.cutting);
+    requireNonNegative(tool, "total length", l.total);
+    if (l.cutting == 0.0) l.cutting = std::max({3.0 * diameter, 10.0, minimum});
+    if (l.total == 0.0) l.total = std::max(l.cutting + 2.0 * diameter, minimum);
+    if (l.total < l.cutting)
+        bad(tool, "total length " + num(l.total) + " is shorter than the cutting length " + num(l.cutting));
+    if (l.total <= minimum + tol::kLength)
+        bad(tool, "total length " + num(l.total) + " does not clear the shaped end (" + num(minimum) + " mm)");
+    return l;
+}
+
+std::string name(const std::string& kind, const ToolLengths& l) {
+    return kind + " L" + num(l.cutting) + "/" + num(l.total);
+}
+
+/// Appends a cylinder of radius r from the last piece's top to height z1.
+void addShank(std::vector<ProfilePiece>& pieces, double z0, double z1, double r) {
+    if (z1 > z0 + tol::kLength) pieces.push_back(ConePiece{z0, z1, r, r});
+}
+
+}  // namespace
+
+Tool flatEndMill(double d, ToolLengths lengths) {
+    const std::string who = "flat end mill";
+    requirePositive(who, "diameter d", d);
+    const ToolLengths l = resolve(who, lengths, d, 0.0);
+    return Tool(name("flat D" + num(d), l), {ConePiece{0.0, l.total, d / 2, d / 2}}, l.cutting);
+}
+
+Tool ballEndMill(double d, ToolLengths lengths) {
+    const std::string who = "ball end mill";
+    requirePositive(who, "diameter d", d);
+    const double r = d / 2;
+    const ToolLengths l = resolve(who, lengths, d, r);
+    return Tool(name("ball D" + num(d), l), {ArcPiece{0.0, r, 0.0, r, r}, ConePiece{r, l.total, r, r}},
+                l.cutting);
+}
+
+Tool bullNoseEndMill(double d, double r, ToolLengths lengths) {
+    const std::string who = "bull-nose end mill";
+    requirePositive(who, "diameter d", d);
+    requirePositive(who, "corner radius r", r);
+    if (r > d / 2 + tol::kLength) bad(who, "corner radius r = " + num(r) + " exceeds d/2 = " + num(d / 2));
+    r = std::min(r, d / 2);
+    const ToolLengths l = resolve(who, lengths, d, r);
+    return Tool(name("bull D" + num(d) + " R" + num(r), l),
+                {ArcPiece{0.0, r, d / 2 - r, r, r}, ConePiece{r, l.total, d / 2, d / 2}}, l.cutting);
+}
+
+Tool taperEndMill(double tipD, double halfAngle, ToolLengths lengths) {
+    const std::string who = "taper end mill";
+    requireNonNegative(who, "tip diameter", tipD);
+    requireAngle(who, "half angle", halfAngle, true);
+    const ToolLengths l = resolve(who, lengths, std::max(tipD, 1.0), 0.0);
+    const double rTop = tipD / 2 + l.cutting * std::tan(halfAngle);
+    std::vector<ProfilePiece> pieces{ConePiece{0.0, l.cutting, tipD / 2, rTop}};
+    addShank(pieces, l.cutting, l.total, rTop);
+    return Tool(name("taper D" + num(tipD) + " A" + deg(halfAngle), l), std::move(pieces), l.cutting);
+}
+
+Tool chamferMill(double tipD, double halfAngle, double d, ToolLengths lengths) {
+    const std::string who = "chamfer mill";
+    requireNonNegative(who, "tip diameter", tipD);
+    requirePositive(who, "diameter d", d);
+    requireAngle(who, "half angle", halfAngle, true);
+    if (!(d > tipD)) bad(who, "diameter d = " + num(d) + " must exceed the tip diameter " + num(tipD));
+    const double hCone = (d - tipD) / 2 / std::tan(halfAngle);
+    const ToolLengths l = resolve(who, lengths, d, hCone);
+    std::vector<ProfilePiece> pieces{ConePiece{0.0, hCone, tipD / 2, d / 2}};
+    addShank(pieces, hCone, l.total, d / 2);
+    return Tool(name("chamfer D" + num(d) + " tip " + num(tipD) + " A" + deg(halfAngle), l), std::move(pieces),
+                l.cutting);
+}
+
+Tool taperBallMill(double ballD, double halfAngle, ToolLengths lengths) {
+    const std::string who = "tapered ball mill";
+    requirePositive(who, "ball diameter", ballD);
+    requireAngle(who, "half angle", halfAngle, false);
+    const double rb = ballD / 2;
+    // The flank touches the sphere where the sphere's normal is perpendicular to it.
+    const double zT = rb * (1.0 - std::sin(halfAngle));
+    const double rT = rb * std::cos(halfAngle);
+    const ToolLengths l = resolve(who, lengths, ballD, rb);
+    const double rTop = rT + (l.cutting - zT) * std::tan(halfAngle);
+    std::vector<ProfilePiece> pieces{ArcPiece{0.0, zT, 0.0, rb, rb}};
+    if (halfAngle == 0.0) {
+        pieces.push_back(ConePiece{zT, l.total, rb, rb});
+    } else {
+        pieces.push_back(ConePiece{zT, l.cutting, rT, rTop});
+        addShank(pieces, l.cutting, l.total, rTop);
+    }
+    return Tool(name("taper-ball D" + num(ballD) + " A" + deg(halfAngle), l), std::move(pieces), l.cutting);
+}
+
+Tool drill(double d, double pointAngle, ToolLengths lengths) {
+    const std::string who = "drill";
+    requirePositive(who, "diameter d", d);
+    if (!std::isfinite(pointAngle) || !(pointAngle > 0.0) || !(pointAngle < kPi))
+        bad(who, "point angle must lie in (0, 180) deg, got " + deg(pointAngle));
+    const double hTip = d / 2 / std::tan(pointAngle / 2);
+    const ToolLengths l = resolve(who, lengths, d, hTip);
+    std::vector<ProfilePiece> pieces{ConePiece{0.0, hTip, 0.0, d / 2}};
+    addShank(pieces, hTip, l.total, d / 2);
+    return Tool(name("drill D" + num(d) + " P" + deg(pointAngle), l), std::move(pieces), l.cutting);
+}
+
+Tool aptCutter(double d, double r, double e, double f, double alpha, double beta, double h,
+               double cuttingLength) {
+    const std::string who = "CUTTER/" + num(d) + "," + num(r) + "," + num(e) + "," + num(f) + "," +
+                            deg(alpha) + "," + deg(beta) + "," + num(h);
+    requirePositive(who, "d", d);
+    requireNonNegative(who, "r", r);
+    requireNonNegative(who, "e", e);
+    requireNonNegative(who, "f", f);
+    requirePositive(who, "h", h);
+    requireAngle(who, "alpha", alpha, false);
+    if (!std::isfinite(beta) || std::abs(beta) >= 0.5 * kPi)
+        bad(who, "beta must lie in (-90, 90) deg, got " + deg(beta));
+    if (r > d / 2 + tol::kLength) bad(who, "r = " + num(r) + " exceeds d/2 = " + num(d / 2));
+    // The side flank touches the corner at T2; its radius there is the nominal d/2.
+    const double r2 = e + r * std::cos(beta), z2 = f - r * std::sin(beta);
+    const double dTol = 1e-3 * std::max(1.0, d);
+    if (std::abs(r2 - d / 2) > dTol)
+        bad(who, "d/2 = " + num(d / 2) + " does not match the corner, e + r cos(beta) = " + num(r2));
+    // The bottom flank at alpha touches the corner at T1 (the corner point itself when r = 0).
+    const double r1 = e + r * std::sin(alpha), z1 = f - r * std::cos(alpha);
+    if (z1 < -tol::kProfileJoint) bad(who, "the corner reaches below the tip: f - r cos(alpha) = " + num(z1));
+    double rTip = r1;
+    if (alpha > 0.0) rTip = r1 - z1 / std::tan(alpha);
+    else if (z1 > tol::kProfileJoint)
+        bad(who, "with alpha = 0 the bottom is flat, so f must equal r, got f = " + num(f) + ", r = " + num(r));
+    if (rTip < -tol::kProfileJoint)
+        bad(who, "the bottom flank meets the axis " + num(-rTip * std::tan(alpha)) + " mm above the tip");
+    rTip = std::max(rTip, 0.0);
+    if (!(h > std::max(z1, z2) + tol::kLength)) bad(who, "h = " + num(h) + " does not clear the corner");
+    const double rTop = r2 + (h - z2) * std::tan(beta);
+    if (rTop < 0.0) bad(who, "the side flank at beta = " + deg(beta) + " reaches the axis below h");
+
+    std::vector<ProfilePiece> pieces;
+    if (z1 > tol::kProfileJoint) pieces.push_back(ConePiece{0.0, z1, rTip, r1});
+    if (r > 0.0 && z2 > std::max(z1, 0.0) + tol::kLength)
+        pieces.push_back(ArcPiece{std::max(z1, 0.0), z2, e, f, r});
+    pieces.push_back(ConePiece{pieces.empty() ? 0.0 : pieceZ1(pieces.back()), h, r2, rTop});
+    if (cuttingLength == 0.0) cuttingLength = h;
+    if (!(cuttingLength > 0.0) || cuttingLength > h + tol::kLength)
+        bad(who, "cutting length " + num(cuttingLength) + " must lie in (0, h]");
+    return Tool(who, std::move(pieces), cuttingLength);
+}
+
+}  // namespace dexelmill
