@@ -1,0 +1,132 @@
+/// @file sweep.h
+/// @brief The volume a tool sweeps on one linear move, intersected with lines: the paper's
+/// envelope method (method.md sections 3-5, Eqs. 13-37) made exact for every line direction.
+///
+/// A 3+2-axis linear move translates the tool by u f, u in [0, 1] (Eq. 1). Each convex part P of
+/// the tool sweeps the convex set S = P + [0, 1] f, so a line meets S in one interval. Its ends
+/// are found from the shadow cylinder Z = P + R f (P translated along the whole feed line):
+///
+///  - The boundary of Z is made of the grazing points of P (outward normal perpendicular to f,
+///    Eqs. 15-21) translated along f: the grazing strips of cones and cylinders (Eqs. 28-31), the
+///    grazing cylinder of a sphere, the grazing surface of a torus (Eq. 36), the sweep of the rims
+///    where two pieces meet at an angle, and for horizontal moves the flat faces themselves.
+///  - A line (direction w, not parallel to f) crosses the boundary of Z at most twice, at
+///    parameters v_lo <= v_hi, each at a feed parameter u_lo, u_hi. Along the line, the largest v
+///    inside P + u f is a concave function of u whose maximum over all u is v_hi at u_hi, so the
+///    largest v inside S is v_hi when u_hi is in [0, 1], and otherwise the static tool's upper end
+///    at u = 0 or 1, whichever is nearer (the same for the lower end, mirrored).
+///
+/// This is the paper's hull of (start tool, end tool, grazing surfaces) with two savings: the
+/// grazing candidates need no u-range test to be kept, and the static tools are only intersected
+/// when an end of the interval actually lies on them. The degenerate cases of method.md section 5
+/// each have a branch: zero-length moves (the static tool), plunges and retracts (f parallel to
+/// the axis: Z is the cylinder of the largest radius), horizontal moves (the profile projected
+/// along f, with the flat faces), and lines parallel to the move (the static intervals at both
+/// ends, hulled). Non-convex tools are swept part by part; the parts' intervals are united.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+#include "dexelmill/geometry/frame.h"
+#include "dexelmill/geometry/types.h"
+#include "dexelmill/path/toolpath.h"
+#include "dexelmill/tool/tool.h"
+
+namespace dexelmill {
+
+/// Named tolerances of the sweep solver.
+namespace sweep_tol {
+
+/// A line whose direction makes a sine below this with the feed is parallel to the move (its
+/// interval is the static intervals at both ends, hulled). The error of that model is at most
+/// this sine times the move length.
+constexpr double kParallelFeed = 1e-9;
+
+/// A move whose feed has an axial component below this fraction of its length is horizontal: its
+/// flat faces graze. The height error of that model is this fraction times the move length.
+constexpr double kHorizontal = 1e-12;
+
+/// Slack on the generator parameter of a strip and on heights of grazing points (relative): keeps
+/// a crossing exactly at a joint between two pieces from being rejected by both.
+constexpr double kParam = 1e-12;
+
+/// Two boundary crossings closer than this along the line (mm) are the same crossing; their feed
+/// parameter ranges are united.
+constexpr double kTie = 1e-9;
+
+/// Root brackets on the torus's grazing curve stop at this width of the half-angle tangent
+/// parameter (dimensionless, in [-1, 1]); a position error of about (rc + rho) times this.
+constexpr double kAngleRoot = 1e-13;
+
+}  // namespace sweep_tol
+
+/// @brief How a move is swept, decided once per move from its feed f and tool axis n.
+enum class SweepKind {
+    Static,      ///< |f| below tol::kZeroMove: the tool at the start pose
+    Plunge,      ///< f parallel to n (plunge or retract)
+    Horizontal,  ///< n . f = 0: flat faces graze
+    General      ///< everything else, ascending or descending
+};
+
+/// @brief The swept volume of one tool (or tool region) on one linear move, for line queries.
+///
+/// Built once per move; every per-move quantity (tool frame, grazing generators, torus grazing
+/// arcs, rims) is precomputed so a line query costs a few dot products per piece. Pure maths: no
+/// storage, threads or files. Thread-safe for concurrent queries.
+class MoveSweep {
+public:
+    /// The most convex parts a tool may have.
+    static constexpr std::size_t kMaxParts = 8;
+
+    /// @brief Sweeps `tool` (typically a whole tool, or `Tool::region` for the cutting part or the
+    /// shank) with its tip moving from `start` to `end`, its axis along `axis`.
+    /// @throw Error if the axis has zero length or the tool has more than kMaxParts convex parts.
+    MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const Vec3& axis);
+    /// @brief Sweeps `tool` along `move` (its start, end and axis; the move's tool id is ignored).
+    MoveSweep(const Tool& tool, const Move& move);
+
+    MoveSweep(const MoveSweep&);
+    MoveSweep(MoveSweep&&) noexcept;
+    MoveSweep& operator=(const MoveSweep&);
+    MoveSweep& operator=(MoveSweep&&) noexcept;
+    ~MoveSweep();
+
+    SweepKind kind() const { return kind_; }
+    /// @brief The tool frame (d, e, n) of the move (Eq. 2).
+    const ToolFrame& frame() const { return frame_; }
+    /// @brief The tight axis-aligned box of the swept volume (from the support function of each
+    /// part, exact up to rounding).
+    const Box& bounds() const { return bounds_; }
+    /// @brief Number of convex parts (one interval each).
+    std::size_t partCount() const;
+
+    /// @brief The interval of `line` (unit direction) inside the swept volume, as line parameters.
+    /// For a convex tool this is the exact answer; for a non-convex tool it is the hull of the
+    /// parts' intervals (use intersectParts or intersectAll to keep the gaps).
+    Interval intersect(const Line& line) const;
+    /// @brief One interval per convex part, written to `out[0 .. partCount())`; empty ones included.
+    /// @return partCount().
+    std::size_t intersectParts(const Line& line, Interval* out) const;
+    /// @brief The swept material along `line`: the parts' intervals united, sorted, non-empty.
+    std::vector<Interval> intersectAll(const Line& line) const;
+
+    /// The precomputed sweep of one convex part (defined in sweep.cpp).
+    struct Part;
+
+private:
+    struct Query;
+    Query toLocal(const Line& line) const;
+    Interval intersectLocal(const Part& part, const Query& q) const;
+
+    SweepKind kind_ = SweepKind::Static;
+    ToolFrame frame_;
+    Vec3 start_{0.0};
+    Vec3 feedLocal_{0.0};  ///< f in the frame (d, e, n): (f.d, 0, f.n)
+    double feedLength_ = 0.0;
+    Box bounds_;
+    std::vector<Part> parts_;
+};
+
+}  // namespace dexelmill

@@ -1,0 +1,728 @@
+#include "dexelmill/sweep/sweep.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <boost/math/tools/toms748_solve.hpp>
+
+#include "dexelmill/error.h"
+#include "dexelmill/geometry/tolerance.h"
+
+// Symbols. Everything below works in the tool frame of the move at its start pose: the origin is
+// the start tip (CL point), x = d, y = e, z = n (Eq. 2), so the feed is f = (fd, 0, fn) with
+// fd = d.f >= 0 and fn = n.f. A query line is o + v w in that frame. A profile piece is given by
+// its height range [z0, z1] and radius R(z) (profile.h).
+
+namespace dexelmill {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// Real roots of a v^2 + 2 b v + c = 0 (numerically stable form). Returns how many (0, 1 or 2).
+int quadraticRoots(double a, double b, double c, double& r1, double& r2) {
+    if (a == 0.0) {
+        if (b == 0.0) return 0;
+        r1 = r2 = -c / (2.0 * b);
+        return 1;
+    }
+    const double disc = b * b - a * c;
+    if (disc < 0.0) return 0;
+    const double q = -(b + std::copysign(std::sqrt(disc), b));
+    if (q == 0.0) {  // b == 0 and c == 0: a double root at 0
+        r1 = r2 = 0.0;
+        return 2;
+    }
+    r1 = q / a;
+    r2 = c / q;
+    return 2;
+}
+
+double coneSlope(const ConePiece& c) { return (c.r1 - c.r0) / (c.z1 - c.z0); }
+
+/// True when an arc piece ends (at height z) where its tangent is horizontal in the profile,
+/// i.e. where its surface normal is the axis: a flat face there joins it without a kink.
+bool arcEndIsFlat(const ArcPiece& a, double z) {
+    return std::abs(std::abs(z - a.zc) - a.rho) <= tol::kProfileJoint;
+}
+
+}  // namespace
+
+/// A generator segment O + t S (t in [0, 1]) of a cone or cylinder that grazes, with N = S x f.
+struct GrazingStrip {
+    Vec3 origin{0.0};
+    Vec3 span{0.0};
+    Vec3 normal{0.0};
+    double degenerate = 0.0;  ///< |w . N| at or below this: the line is parallel to the strip
+};
+
+/// The grazing great circle of a sphere piece, swept: a cylinder of radius rho about the line
+/// through (0, 0, zc) along f, clipped to the piece's heights.
+struct GrazingCapsule {
+    double zc = 0.0, rho = 0.0, z0 = 0.0, z1 = 0.0;
+};
+
+/// One of the two mirror arcs of a torus piece's grazing curve, psi = psiMid + 2 atan(t),
+/// t in [-T, T], where psi is the angle of the grazing normal N(psi) = cos(psi) q + sin(psi) e,
+/// q = (-fn, 0, fd) / |f| (both perpendicular to f).
+struct TorusArc {
+    double cosMid = 1.0, sinMid = 0.0, T = 0.0;
+    double side = 1.0;     ///< +1: psi in [0, pi] (e . N >= 0); -1: psi in [-pi, 0]
+    Vec3 endLo{0.0};       ///< grazing point at t = -T
+    Vec3 endHi{0.0};       ///< grazing point at t = +T
+};
+
+/// The grazing curve of a torus piece (rc > 0) on an ascending or descending move.
+struct GrazingTorus {
+    double rc = 0.0, zc = 0.0, rho = 0.0;
+    double cosLo = -1.0, cosHi = 1.0;  ///< cos(psi) range of the arcs (heights within the piece)
+    int arcs = 0;
+    TorusArc arc[2];
+};
+
+/// A circle at height z, radius r where two faces meet at an angle (or a flat face of a
+/// horizontal move, as a disk).
+struct Circle {
+    double z = 0.0, r = 0.0;
+};
+
+struct MoveSweep::Part {
+    std::vector<ProfilePiece> pieces;  ///< for the static tool
+    double z0 = 0.0, z1 = 0.0;
+    // Plunge: the cylinder of the largest radius, reached on heights [zMax0, zMax1].
+    double rMax = 0.0, zMax0 = 0.0, zMax1 = 0.0;
+    // General and horizontal moves.
+    std::vector<GrazingStrip> strips;
+    std::vector<GrazingCapsule> capsules;  // general moves
+    std::vector<GrazingTorus> tori;        // general moves
+    std::vector<Circle> rims;              // general moves
+    std::vector<ArcPiece> meridianArcs;    // horizontal moves
+    std::vector<Circle> disks;             // horizontal moves
+};
+
+/// A query line in the move's frame, with the per-line quantities every part shares.
+struct MoveSweep::Query {
+    Vec3 o{0.0}, w{0.0};
+    double vShift = 0.0;  ///< world line parameter = local parameter + vShift
+    Vec3 c{0.0};          ///< w x f: normal of the plane through the line spanned by w and f
+    double c2 = 0.0;      ///< |c|^2
+    double co = 0.0;      ///< c . o
+    bool parallel = false;
+};
+
+namespace {
+
+/// The candidate ends of a line's interval in the shadow cylinder: the lowest and highest line
+/// parameters found on its boundary, each with the range of feed parameters u that put a tool
+/// point there.
+struct Extremes {
+    double vLo = kInf, vHi = -kInf;
+    double loU0 = 0.0, loU1 = 0.0, hiU0 = 0.0, hiU1 = 0.0;
+
+    bool empty() const { return vLo > vHi; }
+    void add(double v, double u0, double u1) {
+        if (v < vLo - sweep_tol::kTie) {
+            vLo = v, loU0 = u0, loU1 = u1;
+        } else if (v <= vLo + sweep_tol::kTie) {
+            vLo = std::min(vLo, v), loU0 = std::min(loU0, u0), loU1 = std::max(loU1, u1);
+        }
+        if (v > vHi + sweep_tol::kTie) {
+            vHi = v, hiU0 = u0, hiU1 = u1;
+        } else if (v >= vHi - sweep_tol::kTie) {
+            vHi = std::max(vHi, v), hiU0 = std::min(hiU0, u0), hiU1 = std::max(hiU1, u1);
+        }
+    }
+    void add(double v, double u) { add(v, u, u); }
+};
+
+/// The tool-frame line coefficients of the foundation's static queries (tool.h): height
+/// z0 + zv t, squared axis distance A t^2 + 2 B t + C, with t the local line parameter.
+LocalLine localLine(const Vec3& o, const Vec3& w) {
+    LocalLine l;
+    l.z0 = o.z;
+    l.zv = w.z;
+    l.A = w.x * w.x + w.y * w.y;
+    l.B = o.x * w.x + o.y * w.y;
+    l.C = o.x * o.x + o.y * o.y;
+    l.vShift = 0.0;
+    return l;
+}
+
+/// A line parallel to the axis (A = 0) in a torus piece's slab: closed form, instead of the
+/// general bracketed search in intersectPiece.
+Interval torusAlongAxis(const ArcPiece& a, const LocalLine& l) {
+    const double rho = std::sqrt(l.C);
+    const double out = std::max(rho - a.rc, 0.0);
+    if (out > a.rho) return Interval::empty();
+    const double half = std::sqrt(a.rho * a.rho - out * out);
+    const double z0 = std::max(a.z0, a.zc - half), z1 = std::min(a.z1, a.zc + half);
+    if (z0 > z1) return Interval::empty();
+    double t0 = (z0 - l.z0) / l.zv, t1 = (z1 - l.z0) / l.zv;
+    if (t0 > t1) std::swap(t0, t1);
+    return {t0, t1};
+}
+
+/// The line o + v w inside the static part (the tool at one pose): the hull of its pieces'
+/// intervals, which is exact because the part is convex.
+Interval staticPart(const MoveSweep::Part& part, const Vec3& o, const Vec3& w) {
+    const LocalLine l = localLine(o, w);
+    const bool alongAxis = l.A <= tol::kParallel * tol::kParallel && l.zv != 0.0;
+    Interval hull;
+    for (const ProfilePiece& p : part.pieces) {
+        const ArcPiece* arc = std::get_if<ArcPiece>(&p);
+        if (arc && arc->rc > 0.0 && alongAxis) {
+            hull = hull.hull(torusAlongAxis(*arc, l));
+        } else {
+            hull = hull.hull(intersectPiece(p, l));
+        }
+    }
+    return hull;
+}
+
+/// Support value max over the part of (z xn + R(z) xr): the part's extent in a direction with
+/// axial component xn and radial component xr >= 0, measured from the tip.
+double partSupport(const std::vector<ProfilePiece>& pieces, double xn, double xr) {
+    double h = -kInf;
+    for (const ProfilePiece& p : pieces) {
+        if (const auto* c = std::get_if<ConePiece>(&p)) {
+            h = std::max({h, c->z0 * xn + c->r0 * xr, c->z1 * xn + c->r1 * xr});
+        } else {
+            const ArcPiece& a = std::get<ArcPiece>(p);
+            // On the arc the outward normal (xr, xn) is reached at z = zc + rho xn.
+            const double len = std::hypot(xn, xr);
+            const double z = std::clamp(a.zc + a.rho * xn / len, a.z0, a.z1);
+            h = std::max(h, z * xn + pieceRadius(p, z) * xr);
+        }
+    }
+    return h;
+}
+
+/// The grazing point of a torus (rc, zc, rho) with outward normal N, Nr = |N projected on the
+/// plane perpendicular to the axis| > 0: the spine point in N's azimuth plus rho N (Eq. 21).
+inline Vec3 torusPoint(const GrazingTorus& t, double nx, double ny, double nz) {
+    const double k = t.rc / std::sqrt(nx * nx + ny * ny) + t.rho;
+    return {k * nx, k * ny, t.zc + t.rho * nz};
+}
+
+
+/// The query quantities the torus solver needs: the local line, c = w x f, |c|^2, c . o, f.
+struct TorusLine {
+    Vec3 o, w, c;
+    double c2, co;
+    Vec3 f;
+};
+
+/// Adds the crossings of the line with a torus piece's grazing surface to `ex`.
+///
+/// Eq. (36): the line meets the sweep of the grazing point G where g = c . (G - o) = 0,
+/// c = w x f. Seen along f, the grazing curve is the outline of the torus's shadow and g is the
+/// signed distance of its points from the projected line, times |c|. Along that convex outline g
+/// has exactly one maximum, where the grazing normal is c / |c|, and one minimum (-c / |c|): so
+/// each arc, split at those two points, falls into pieces where g is monotone and every root is
+/// bracketed by a sign change. That is Algorithm 1 with its extremum (fminbnd in the paper) in
+/// closed form; the roots are found by TOMS 748.
+///
+/// Two charts of the curve keep the root finder well conditioned:
+///  - the normal angle psi, N(psi) = cos(psi) q + sin(psi) e, on most of the curve;
+///  - the spine angle s (the paper's parameter, Eq. 34), N(s) ~ (|fn| cos s, |fn| sin s,
+///    -sign(fn) fd cos s), where the normal is within 45 degrees of the d-n plane. On a nearly
+///    horizontal move that stretch of the curve runs along the torus's bottom (or top) circle
+///    but is squeezed into a psi-window of width about |fn| / |f|.
+void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
+    const double fd = l.f.x, fn = l.f.z;
+    const double flen = std::sqrt(fd * fd + fn * fn);
+    const double kappa = std::abs(fn) / flen;
+    const Vec3 qDir(-fn / flen, 0.0, fd / flen);
+    const double cLen = std::sqrt(l.c2);
+    const double cq = glm::dot(l.c, qDir) / cLen, ce = l.c.y / cLen;  // c / |c| = cq q + ce e
+    const double sgnFn = fn > 0.0 ? 1.0 : -1.0;
+
+    // The crossing (v, u) of the line with the sweep of the grazing point G:
+    // G - o = v w - u f, so v = ((G - o) x f) . c / |c|^2 and u = ((G - o) x w) . c / |c|^2.
+    auto addCrossing = [&](const Vec3& g) {
+        const Vec3 go = g - l.o;
+        ex.add(glm::dot(glm::cross(go, l.f), l.c) / l.c2, glm::dot(glm::cross(go, l.w), l.c) / l.c2);
+    };
+    const auto stop = [](double a, double b) { return std::abs(b - a) <= sweep_tol::kAngleRoot; };
+    // A root of a monotone piece of g on [a, b] (values ga, gb), or nothing.
+    auto solve = [&](auto&& g, double a, double b, double ga, double gb, double& root) {
+        if (ga == 0.0) return root = a, true;
+        if (gb == 0.0) return root = b, true;
+        if ((ga < 0.0) == (gb < 0.0)) return false;
+        boost::uintmax_t iters = 80;
+        const auto br = boost::math::tools::toms748_solve(g, a, b, ga, gb, stop, iters);
+        root = 0.5 * (br.first + br.second);
+        return true;
+    };
+    // Spine chart: the grazing point at spine angle s.
+    auto spinePoint = [&](double s) {
+        const double cs = std::cos(s), ss = std::sin(s);
+        const double inv = 1.0 / std::sqrt(fn * fn + fd * fd * cs * cs);
+        const double nr = std::abs(fn) * inv;
+        return Vec3((tor.rc + tor.rho * nr) * cs, (tor.rc + tor.rho * nr) * ss,
+                    tor.zc - sgnFn * tor.rho * fd * cs * inv);
+    };
+    auto gSpine = [&](double s) { return glm::dot(l.c, spinePoint(s)) - l.co; };
+
+    for (int k = 0; k < tor.arcs; ++k) {
+        const TorusArc& arc = tor.arc[k];
+        // Normal-angle chart: psi = psiMid + 2 atan(t).
+        auto normal = [&](double t, double& cp, double& sp) {
+            const double t2 = t * t, den = 1.0 / (1.0 + t2);
+            const double cd = (1.0 - t2) * den, sd = 2.0 * t * den;
+            cp = arc.cosMid * cd - arc.sinMid * sd;
+            sp = arc.sinMid * cd + arc.cosMid * sd;
+        };
+        auto point = [&](double t) {
+            double cp, sp;
+            normal(t, cp, sp);
+            return torusPoint(tor, -fn * cp / flen, sp, fd * cp / flen);
+        };
+        auto g = [&](double t) { return glm::dot(l.c, point(t)) - l.co; };
+        // t of a normal direction (cos psi, sin psi) inside the arc.
+        auto tOf = [&](double cx, double sy) {
+            const double cosD = cx * arc.cosMid + sy * arc.sinMid;
+            const double sinD = sy * arc.cosMid - cx * arc.sinMid;
+            return std::clamp(sinD / (1.0 + cosD), -arc.T, arc.T);
+        };
+        auto inArc = [&](double cx, double sy) {
+            return arc.side * sy >= 0.0 && cx >= tor.cosLo && cx <= tor.cosHi;
+        };
+
+        // Split points: the extrema of g (N = +-c/|c|) and the chart boundaries |sin psi| =
+        // kappa |cos psi| (normals at 45 degrees to the d-n plane).
+        double ts[6];
+        int m = 0;
+        ts[m++] = -arc.T;
+        for (double sgn : {1.0, -1.0})
+            if (inArc(sgn * cq, sgn * ce)) ts[m++] = tOf(sgn * cq, sgn * ce);
+        const double cw = 1.0 / std::sqrt(1.0 + kappa * kappa), sw = kappa * cw;
+        for (double sgn : {1.0, -1.0})
+            if (inArc(sgn * cw, arc.side * sw)) ts[m++] = tOf(sgn * cw, arc.side * sw);
+        ts[m++] = arc.T;
+        for (int i = 2; i + 1 < m; ++i)  // insertion sort of the (at most 4) inner points
+            for (int j = i; j > 1 && ts[j - 1] > ts[j]; --j) std::swap(ts[j - 1], ts[j]);
+
+        double gPrev = glm::dot(l.c, arc.endLo) - l.co;
+        for (int i = 0; i + 1 < m; ++i) {
+            const double ta = ts[i], tb = ts[i + 1];
+            const double gb = i + 2 == m ? glm::dot(l.c, arc.endHi) - l.co : g(tb);
+            const double ga = gPrev;
+            gPrev = gb;
+            if (!(tb > ta) && !(ga == 0.0)) continue;
+            double cp, sp;
+            normal(0.5 * (ta + tb), cp, sp);
+            const bool spineChart = std::abs(sp) < kappa * std::abs(cp);
+            double root;
+            if (!spineChart) {
+                if (solve(g, ta, tb, ga, gb, root)) addCrossing(point(root));
+                continue;
+            }
+            // The same stretch in the spine chart: the azimuths of the normals at its ends (on
+            // this arc's side of the d-n plane, so that no angle wraps).
+            auto azimuth = [&](double t) {
+                double c, s;
+                normal(t, c, s);
+                return std::atan2(arc.side * std::abs(s), -fn * c / flen);
+            };
+            double sa = azimuth(ta), sb = azimuth(tb);
+            if (sa > sb) std::swap(sa, sb);
+            if (solve(gSpine, sa, sb, gSpine(sa), gSpine(sb), root)) addCrossing(spinePoint(root));
+        }
+    }
+}
+}  // namespace
+
+MoveSweep::MoveSweep(const Tool& tool, const Move& move) : MoveSweep(tool, move.start, move.end, move.axis) {}
+
+MoveSweep::MoveSweep(const MoveSweep&) = default;
+MoveSweep::MoveSweep(MoveSweep&&) noexcept = default;
+MoveSweep& MoveSweep::operator=(const MoveSweep&) = default;
+MoveSweep& MoveSweep::operator=(MoveSweep&&) noexcept = default;
+MoveSweep::~MoveSweep() = default;
+
+std::size_t MoveSweep::partCount() const { return parts_.size(); }
+
+MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const Vec3& axis)
+    : start_(start) {
+    const Vec3 f = end - start;
+    frame_ = ToolFrame::make(axis, f);  // validates the axis
+    if (tool.convexParts().size() > kMaxParts)
+        throw Error("tool '" + tool.description() + "' has " + std::to_string(tool.convexParts().size()) +
+                    " convex parts; the sweep handles at most " + std::to_string(kMaxParts));
+    feedLength_ = glm::length(f);
+    // Eq. (2) written as d = (f - (f.n) n) / |f - (f.n) n|, e = n x d (the same frame as
+    // e = n x f / |n x f|, d = e x n): projecting twice keeps d perpendicular to n and
+    // f = (d.f) d + (n.f) n to rounding even when f is within a hair of the axis, where n x f
+    // loses its relative accuracy.
+    const Vec3& n = frame_.n;
+    const double fn = glm::dot(f, n);
+    Vec3 fPerp = f - fn * n;
+    fPerp -= glm::dot(fPerp, n) * n;
+    const double fd = glm::length(fPerp);
+    if (feedLength_ <= tol::kZeroMove) {
+        kind_ = SweepKind::Static;
+        feedLocal_ = Vec3(0.0);
+    } else if (fd <= tol::kParallel * feedLength_) {
+        kind_ = SweepKind::Plunge;
+        feedLocal_ = Vec3(0.0, 0.0, fn);
+        ToolFrame::perpendicularPair(n, frame_.d, frame_.e);
+        frame_.plunge = true;
+    } else {
+        frame_.d = fPerp / fd;
+        frame_.e = glm::cross(n, frame_.d);
+        frame_.plunge = false;
+        if (std::abs(fn) <= sweep_tol::kHorizontal * feedLength_) {
+            kind_ = SweepKind::Horizontal;
+            feedLocal_ = Vec3(fd, 0.0, 0.0);
+        } else {
+            kind_ = SweepKind::General;
+            feedLocal_ = Vec3(fd, 0.0, fn);
+        }
+    }
+    const double fnl = feedLocal_.z;
+    const double flen = glm::length(feedLocal_);
+
+    for (const ConvexPart& cp : tool.convexParts()) {
+        Part part;
+        part.pieces.assign(tool.pieces().begin() + std::ptrdiff_t(cp.first),
+                           tool.pieces().begin() + std::ptrdiff_t(cp.last));
+        part.z0 = cp.z0;
+        part.z1 = cp.z1;
+        const ProfilePiece& bottom = part.pieces.front();
+        const ProfilePiece& top = part.pieces.back();
+        const double rBottom = pieceRadius(bottom, part.z0), rTop = pieceRadius(top, part.z1);
+
+        // The largest radius and the heights where it is reached (R is concave: an interval).
+        part.rMax = -kInf;
+        for (const ProfilePiece& p : part.pieces) {
+            const double pz0 = pieceZ0(p), pz1 = pieceZ1(p);
+            double zPeak0, zPeak1, r;
+            if (const auto* c = std::get_if<ConePiece>(&p)) {
+                if (c->r0 == c->r1) zPeak0 = pz0, zPeak1 = pz1, r = c->r0;
+                else if (c->r0 > c->r1) zPeak0 = zPeak1 = pz0, r = c->r0;
+                else zPeak0 = zPeak1 = pz1, r = c->r1;
+            } else {
+                const ArcPiece& a = std::get<ArcPiece>(p);
+                zPeak0 = zPeak1 = std::clamp(a.zc, pz0, pz1);
+                r = pieceRadius(p, zPeak0);
+            }
+            const double same = tol::kLength * std::max(1.0, r);
+            if (r > part.rMax + same) {
+                part.rMax = r, part.zMax0 = zPeak0, part.zMax1 = zPeak1;
+            } else if (r >= part.rMax - same) {
+                part.rMax = std::max(part.rMax, r);
+                part.zMax0 = std::min(part.zMax0, zPeak0), part.zMax1 = std::max(part.zMax1, zPeak1);
+            }
+        }
+
+        if (kind_ == SweepKind::General || kind_ == SweepKind::Horizontal) {
+            // Cones and cylinders: Eq. (28), the generators at azimuth phi with
+            // cos(phi) = k (n.f) / (d.f) graze (k = dR/dz); Eq. (30), each sweeps the planar strip
+            // O + t S + u f. Horizontal moves: cos(phi) = 0, the generators at +-e.
+            for (const ProfilePiece& p : part.pieces) {
+                const auto* c = std::get_if<ConePiece>(&p);
+                if (!c) continue;
+                const double cosPhi = coneSlope(*c) * fnl / fd;
+                if (std::abs(cosPhi) > 1.0) continue;  // no generator grazes: steeper than the flank
+                const double sinPhi = std::sqrt(std::max(0.0, 1.0 - cosPhi * cosPhi));
+                for (double sgn : {1.0, -1.0}) {
+                    GrazingStrip s;
+                    const Vec3 radial(cosPhi, sgn * sinPhi, 0.0);
+                    s.origin = c->r0 * radial + Vec3(0.0, 0.0, c->z0);
+                    s.span = (c->r1 - c->r0) * radial + Vec3(0.0, 0.0, c->z1 - c->z0);
+                    s.normal = glm::cross(s.span, feedLocal_);
+                    s.degenerate = tol::kParallel * glm::length(s.span) * flen;
+                    if (glm::length(s.normal) > s.degenerate) part.strips.push_back(s);
+                    if (sinPhi == 0.0) break;  // a single generator
+                }
+            }
+        }
+
+        if (kind_ == SweepKind::General) {
+            for (const ProfilePiece& p : part.pieces) {
+                const auto* a = std::get_if<ArcPiece>(&p);
+                if (!a) continue;
+                if (a->rc == 0.0) {
+                    part.capsules.push_back({a->zc, a->rho, a->z0, a->z1});
+                    continue;
+                }
+                // Torus: the grazing normals are N(psi) = cos(psi) q + sin(psi) e; the grazing
+                // point at height zc + rho fd cos(psi) / |f| lies on the piece when that height
+                // is in [z0, z1].
+                GrazingTorus t;
+                t.rc = a->rc, t.zc = a->zc, t.rho = a->rho;
+                // cos(psi) = (z - zc) |f| / (rho fd). The lowest grazing point is rho (1 - fd / |f|)
+                // above the torus's bottom; decide "the piece reaches it" by comparing products,
+                // not through acos of a value one rounding away from -1 (off by 1e-8 rad, more
+                // than the whole bottom stretch of a nearly horizontal move).
+                const double scale = flen / (a->rho * fd);
+                t.cosLo = (a->z0 - a->zc) * flen <= -a->rho * fd ? -1.0 : (a->z0 - a->zc) * scale;
+                t.cosHi = (a->z1 - a->zc) * flen >= a->rho * fd ? 1.0 : (a->z1 - a->zc) * scale;
+                if (t.cosLo > t.cosHi) continue;
+                const double psiA = std::acos(t.cosHi), psiB = std::acos(t.cosLo);
+                if (!(psiB > psiA)) continue;
+                for (double side : {1.0, -1.0}) {
+                    TorusArc& arc = t.arc[t.arcs++];
+                    arc.side = side;
+                    const double mid = side * 0.5 * (psiA + psiB);
+                    arc.cosMid = std::cos(mid), arc.sinMid = std::sin(mid);
+                    arc.T = std::tan(0.25 * (psiB - psiA));
+                    for (double end : {-1.0, 1.0}) {
+                        const double psi = mid + end * 0.5 * (psiB - psiA);
+                        const double cp = std::cos(psi), sp = std::sin(psi);
+                        const Vec3 pt = torusPoint(t, -fnl * cp / flen, sp, fd * cp / flen);
+                        (end < 0 ? arc.endLo : arc.endHi) = pt;
+                    }
+                }
+                part.tori.push_back(t);
+            }
+            // Rims: the bottom and top faces' edges, and joints where the slope jumps. A rim point
+            // grazes where its cone of normals holds one perpendicular to f; its sweep is an
+            // elliptic cylinder. Points of a rim that do not graze lie inside the shadow cylinder,
+            // so they are harmless extra candidates.
+            const auto* bottomArc = std::get_if<ArcPiece>(&bottom);
+            if (rBottom > 0.0 && !(bottomArc && arcEndIsFlat(*bottomArc, part.z0)))
+                part.rims.push_back({part.z0, rBottom});
+            for (std::size_t i = 0; i + 1 < part.pieces.size(); ++i) {
+                const double zj = pieceZ1(part.pieces[i]);
+                const double sLeft = pieceSlope(part.pieces[i], zj), sRight = pieceSlope(part.pieces[i + 1], zj);
+                if (std::abs(sLeft - sRight) > tol::kSlope * std::max(1.0, std::abs(sLeft)))
+                    part.rims.push_back({zj, pieceRadius(part.pieces[i], zj)});
+            }
+            const auto* topArc = std::get_if<ArcPiece>(&top);
+            if (rTop > 0.0 && !(topArc && arcEndIsFlat(*topArc, part.z1))) part.rims.push_back({part.z1, rTop});
+        }
+
+        if (kind_ == SweepKind::Horizontal) {
+            for (const ProfilePiece& p : part.pieces)
+                if (const auto* a = std::get_if<ArcPiece>(&p)) part.meridianArcs.push_back(*a);
+            if (rBottom > 0.0) part.disks.push_back({part.z0, rBottom});
+            if (rTop > 0.0) part.disks.push_back({part.z1, rTop});
+        }
+        parts_.push_back(std::move(part));
+    }
+
+    // The box: the support function of the sweep in +-x, +-y, +-z is the part's support from the
+    // start tip plus max(0, f . direction).
+    for (int i = 0; i < 3; ++i) {
+        for (double sgn : {1.0, -1.0}) {
+            const double xn = sgn * frame_.n[i];
+            const double xr = std::sqrt(std::max(0.0, 1.0 - xn * xn));
+            double h = -kInf;
+            for (const Part& part : parts_) h = std::max(h, partSupport(part.pieces, xn, xr));
+            const double along = std::max(0.0, sgn * f[i]);
+            if (sgn > 0) bounds_.hi[i] = start[i] + h + along;
+            else bounds_.lo[i] = start[i] - h - along;
+        }
+    }
+}
+
+MoveSweep::Query MoveSweep::toLocal(const Line& line) const {
+    Query q;
+    const Vec3& w = line.dir;
+    const Vec3 rel = line.origin - start_;
+    // Re-anchor the line at its point nearest the start tip: keeps the local numbers small.
+    q.vShift = -glm::dot(rel, w);
+    const Vec3 a = rel + q.vShift * w;
+    q.o = Vec3(glm::dot(a, frame_.d), glm::dot(a, frame_.e), glm::dot(a, frame_.n));
+    q.w = Vec3(glm::dot(w, frame_.d), glm::dot(w, frame_.e), glm::dot(w, frame_.n));
+    q.c = glm::cross(q.w, feedLocal_);
+    q.c2 = glm::dot(q.c, q.c);
+    q.co = glm::dot(q.c, q.o);
+    const double par = sweep_tol::kParallelFeed * feedLength_;
+    q.parallel = q.c2 <= par * par;
+    return q;
+}
+
+Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
+    const Vec3& o = q.o;
+    const Vec3& w = q.w;
+    if (kind_ == SweepKind::Static) return staticPart(part, o, w);
+    if (q.parallel) {
+        // A line parallel to the move: the static interval stretched along it by the move.
+        return staticPart(part, o, w).hull(staticPart(part, o - feedLocal_, w));
+    }
+
+    const double fd = feedLocal_.x, fn = feedLocal_.z;
+    Extremes ex;
+
+    if (kind_ == SweepKind::Plunge) {
+        // The shadow cylinder is rho = rMax; its point at height z is swept by the tool at u when
+        // z - u fn lies where R = rMax.
+        double r1, r2;
+        const int n = quadraticRoots(w.x * w.x + w.y * w.y, o.x * w.x + o.y * w.y,
+                                     o.x * o.x + o.y * o.y - part.rMax * part.rMax, r1, r2);
+        for (int i = 0; i < n; ++i) {
+            const double v = i ? r2 : r1;
+            const double z = o.z + v * w.z;
+            const double ua = (z - part.zMax1) / fn, ub = (z - part.zMax0) / fn;
+            ex.add(v, std::min(ua, ub), std::max(ua, ub));
+        }
+    } else {
+        // Eq. (31): o + v w = O + t S + u f, solved by triple products with D = w . (S x f).
+        for (const GrazingStrip& s : part.strips) {
+            const double D = glm::dot(w, s.normal);
+            if (std::abs(D) <= s.degenerate) continue;
+            const Vec3 r = o - s.origin;
+            const double t = -glm::dot(r, q.c) / D;
+            if (t < -sweep_tol::kParam || t > 1.0 + sweep_tol::kParam) continue;
+            const double v = -glm::dot(r, s.normal) / D;
+            const double u = glm::dot(r, glm::cross(w, s.span)) / D;
+            ex.add(v, u);
+        }
+
+        if (kind_ == SweepKind::Horizontal) {
+            // The profile seen along f: arcs as circles in the (e, n) plane on either side.
+            for (const ArcPiece& a : part.meridianArcs) {
+                const double zSlack = sweep_tol::kParam * (a.z1 - a.z0);
+                for (double side : {1.0, -1.0}) {
+                    const double y0 = o.y - side * a.rc, z0 = o.z - a.zc;
+                    double r1, r2;
+                    const int n = quadraticRoots(w.y * w.y + w.z * w.z, y0 * w.y + z0 * w.z,
+                                                 y0 * y0 + z0 * z0 - a.rho * a.rho, r1, r2);
+                    for (int i = 0; i < n; ++i) {
+                        const double v = i ? r2 : r1;
+                        const Vec3 p = o + v * w;
+                        if (p.z < a.z0 - zSlack || p.z > a.z1 + zSlack) continue;
+                        if (a.rc > 0.0 && side * p.y < a.rc) continue;  // the inner half: not the tool's
+                        ex.add(v, p.x / fd);
+                    }
+                    if (a.rc == 0.0) break;  // a sphere: one circle
+                }
+            }
+            // The flat faces graze: a disk of radius r at height z sweeps a stadium in its plane.
+            for (const Circle& disk : part.disks) {
+                if (std::abs(w.z) <= tol::kParallel) {
+                    // A line lying in the face's plane (method.md section 5: closed convention,
+                    // the face's points are removed) crosses the stadium's sides y = +-r.
+                    if (std::abs(o.z - disk.z) > tol::kLength || w.y == 0.0) continue;
+                    for (double side : {1.0, -1.0}) {
+                        const double v = (side * disk.r - o.y) / w.y;
+                        ex.add(v, (o.x + v * w.x) / fd);
+                    }
+                    continue;
+                }
+                const double v = (disk.z - o.z) / w.z;
+                const Vec3 p = o + v * w;
+                const double s2 = disk.r * disk.r - p.y * p.y;
+                if (s2 < 0.0) continue;
+                const double s = std::sqrt(s2);
+                ex.add(v, (p.x - s) / fd, (p.x + s) / fd);
+            }
+        } else {
+            // Sphere: the grazing great circle perpendicular to f sweeps a cylinder of radius rho
+            // about the centre's path (with the start and end spheres: a capsule).
+            const double f2 = fd * fd + fn * fn;
+            for (const GrazingCapsule& cap : part.capsules) {
+                const Vec3 r(o.x, o.y, o.z - cap.zc);
+                const double rf = glm::dot(r, feedLocal_), wf = glm::dot(w, feedLocal_);
+                double r1, r2;
+                const int n = quadraticRoots(q.c2 / f2, glm::dot(r, w) - rf * wf / f2,
+                                             glm::dot(r, r) - rf * rf / f2 - cap.rho * cap.rho, r1, r2);
+                const double zSlack = sweep_tol::kParam * (cap.z1 - cap.z0);
+                for (int i = 0; i < n; ++i) {
+                    const double v = i ? r2 : r1;
+                    const double u = (rf + v * wf) / f2;
+                    const double z = o.z + v * w.z - u * fn;  // height of the grazing point
+                    if (z < cap.z0 - zSlack || z > cap.z1 + zSlack) continue;
+                    ex.add(v, u);
+                }
+            }
+
+            // Torus: Eq. (36) and Algorithm 1 (see torusCrossings).
+            const double flen = std::sqrt(f2);
+            const Vec3 qDir(-fn / flen, 0.0, fd / flen);
+            if (!part.tori.empty()) {
+                const TorusLine tl{o, w, q.c, q.c2, q.co, feedLocal_};
+                for (const GrazingTorus& tor : part.tori) torusCrossings(tor, tl, ex);
+            }
+
+            // Rims: the sweep of a rim circle (radius r at height zr) is an elliptic cylinder.
+            // Seen along f it is the ellipse with semi-axes r along e and r kappa along q,
+            // kappa = |fn| / |f|, centred at q = fd zr / |f|. The projected line o + v w crosses it
+            // where, with dq = o.q - fd zr / |f| and a = kappa^2 w.e^2 + (w.q)^2,
+            //   v = (-(kappa^2 o.e w.e + dq w.q) +- kappa sqrt(r^2 a - (o.e w.q - w.e dq)^2)) / a,
+            // a form in which nothing cancels when the move is nearly horizontal (kappa -> 0).
+            // The feed parameter follows from the axial row: u = (o.z + v w.z - zr) / fn.
+            const double kappa = std::abs(fn) / flen, kappa2 = kappa * kappa;
+            const double oq = glm::dot(o, qDir), wq = glm::dot(w, qDir);
+            const double a = kappa2 * w.y * w.y + wq * wq;
+            for (const Circle& rim : part.rims) {
+                const double dq = oq - fd * rim.z / flen;
+                const double cross = o.y * wq - w.y * dq;
+                const double disc = rim.r * rim.r * a - cross * cross;
+                if (disc < 0.0 || a == 0.0) continue;
+                const double b = kappa2 * o.y * w.y + dq * wq;
+                const double c = kappa2 * (o.y * o.y - rim.r * rim.r) + dq * dq;
+                const double qq = -(b + std::copysign(kappa * std::sqrt(disc), b));
+                const double roots[2] = {qq / a, qq != 0.0 ? c / qq : qq / a};
+                for (double v : roots) ex.add(v, (o.z + v * w.z - rim.z) / fn);
+            }
+        }
+    }
+
+    if (ex.empty()) return Interval::empty();  // the line misses the shadow cylinder
+    // Each end: the boundary crossing when a tool pose in the move puts it there, otherwise the
+    // static tool at the nearer end of the move.
+    Interval statics[2];
+    bool have[2] = {false, false};
+    auto staticAt = [&](int end) -> const Interval& {
+        if (!have[end]) {
+            statics[end] = staticPart(part, end ? o - feedLocal_ : o, w);
+            have[end] = true;
+        }
+        return statics[end];
+    };
+    Interval out;
+    if (ex.hiU1 >= 0.0 && ex.hiU0 <= 1.0) {
+        out.hi = ex.vHi;
+    } else {
+        const Interval& s = staticAt(ex.hiU0 > 1.0 ? 1 : 0);
+        if (s.isEmpty()) return s;
+        out.hi = s.hi;
+    }
+    if (ex.loU1 >= 0.0 && ex.loU0 <= 1.0) {
+        out.lo = ex.vLo;
+    } else {
+        const Interval& s = staticAt(ex.loU0 > 1.0 ? 1 : 0);
+        if (s.isEmpty()) return s;
+        out.lo = s.lo;
+    }
+    return out;
+}
+
+std::size_t MoveSweep::intersectParts(const Line& line, Interval* out) const {
+    const Query q = toLocal(line);
+    for (std::size_t i = 0; i < parts_.size(); ++i) {
+        const Interval iv = intersectLocal(parts_[i], q);
+        out[i] = iv.isEmpty() ? Interval::empty() : Interval{iv.lo + q.vShift, iv.hi + q.vShift};
+    }
+    return parts_.size();
+}
+
+Interval MoveSweep::intersect(const Line& line) const {
+    Interval parts[kMaxParts];
+    const std::size_t n = intersectParts(line, parts);
+    Interval hull;
+    for (std::size_t i = 0; i < n; ++i) hull = hull.hull(parts[i]);
+    return hull;
+}
+
+std::vector<Interval> MoveSweep::intersectAll(const Line& line) const {
+    Interval parts[kMaxParts];
+    const std::size_t n = intersectParts(line, parts);
+    std::vector<Interval> ivs;
+    for (std::size_t i = 0; i < n; ++i)
+        if (!parts[i].isEmpty()) ivs.push_back(parts[i]);
+    std::sort(ivs.begin(), ivs.end(), [](const Interval& a, const Interval& b) { return a.lo < b.lo; });
+    std::vector<Interval> merged;
+    for (const Interval& iv : ivs) {
+        if (!merged.empty() && iv.lo <= merged.back().hi) merged.back().hi = std::max(merged.back().hi, iv.hi);
+        else merged.push_back(iv);
+    }
+    return merged;
+}
+
+}  // namespace dexelmill
