@@ -326,9 +326,10 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
                 normal(t, c, s);
                 return std::atan2(arc.side * std::abs(s), -fn * c / flen);
             };
-            double sa = azimuth(ta), sb = azimuth(tb);
-            if (sa > sb) std::swap(sa, sb);
-            if (solve(gSpine, sa, sb, gSpine(sa), gSpine(sb), root)) addCrossing(spinePoint(root));
+            // The bracket keeps the values of g the neighbouring pieces saw at its ends.
+            double sa = azimuth(ta), sb = azimuth(tb), gsa = ga, gsb = gb;
+            if (sa > sb) std::swap(sa, sb), std::swap(gsa, gsb);
+            if (solve(gSpine, sa, sb, gsa, gsb, root)) addCrossing(spinePoint(root));
         }
     }
 }
@@ -476,6 +477,11 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
                         (end < 0 ? arc.endLo : arc.endHi) = pt;
                     }
                 }
+                // Where the two mirror arcs meet (psi = 0 or pi: the d-n plane), they share the
+                // point bit for bit, so that both see the same sign of g there: a line in the
+                // plane of symmetry of the move crosses the curve exactly at the junction.
+                if (t.cosLo == -1.0) t.arc[1].endLo = t.arc[0].endHi;
+                if (t.cosHi == 1.0) t.arc[1].endHi = t.arc[0].endLo;
                 part.tori.push_back(t);
             }
             // Rims: the bottom and top faces' edges, and joints where the slope jumps. A rim point

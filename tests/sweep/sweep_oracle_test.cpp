@@ -1,6 +1,6 @@
 // The sweep solver against the brute-force oracle (oracle.h): random tools of every kind, random
 // tool axes, moves and dexel directions, one test case per degenerate family of method.md
-// section 5. Fixed seeds; case counts scale with DEXELMILL_TEST_SCALE (default 1: 116,000 cases).
+// section 5. Fixed seeds; case counts scale with DEXELMILL_TEST_SCALE (default 1: 123,000 cases).
 //
 // Agreement: every removed interval longer than 2 kTolerance has a partner on the other side with
 // both ends within kTolerance = 1e-6 mm. The oracle's own error is far below that: its inner
@@ -35,7 +35,8 @@ enum class Family {
     DexelAlongAxis,  ///< w parallel to the tool axis
     NearDegenerate,  ///< within 1e-10 .. 1e-3 of each of the above
     DexelInFace,     ///< horizontal move, the line lying in the bottom or top face's plane
-    Regions          ///< the cutting part [0, Lc] and the shank [Lc, L] swept separately
+    Regions,         ///< the cutting part [0, Lc] and the shank [Lc, L] swept separately
+    SymmetryPlane    ///< axis z, a move along x or y, the line in the plane of the axis and feed
 };
 
 Vec3 randomUnit(std::mt19937_64& rng) {
@@ -125,7 +126,8 @@ FamilyResult runFamily(Family family, std::uint64_t seed, int count) {
         for (const oracle::Part& p : parts) rBound = std::max(rBound, p.rBound);
 
         // The move.
-        Vec3 n = (family == Family::ThreeAxis || family == Family::DexelInFace || rng() % 4 == 0)
+        Vec3 n = (family == Family::ThreeAxis || family == Family::DexelInFace ||
+                  family == Family::SymmetryPlane || rng() % 4 == 0)
                      ? Vec3(0, 0, 1)
                      : randomUnit(rng);
         Vec3 ps(uniform(rng, -10, 10), uniform(rng, -10, 10), uniform(rng, -10, 10));
@@ -179,6 +181,19 @@ FamilyResult runFamily(Family family, std::uint64_t seed, int count) {
             }
             break;
         }
+        case Family::SymmetryPlane: {
+            // Exact coordinates, so that the line lies exactly in the move's plane of symmetry.
+            const int along = int(rng() % 2);
+            f = Vec3(0.0);
+            f[along] = std::round(uniform(rng, -30, 30));
+            f.z = rng() % 3 == 0 ? 0.0 : std::round(uniform(rng, -10, 10));
+            if (f == Vec3(0.0)) f.z = 1.0;
+            w = Vec3(0.0);
+            const double a = uniform(rng, 0.0, 2 * models::kPi);
+            w[along] = std::cos(a), w.z = std::sin(a);
+            if (rng() % 3 == 0) w = Vec3(0, 0, 1);
+            break;
+        }
         case Family::DexelInFace:
             // The tip at height 0 so that the face heights below are exact sums.
             ps = Vec3(std::round(ps.x), std::round(ps.y), 0.0);
@@ -197,6 +212,10 @@ FamilyResult runFamily(Family family, std::uint64_t seed, int count) {
         Line line{anchor - uniform(rng, 5.0, 60.0) * w, w};
         if (family == Family::DexelInFace) {
             line.origin.z = rng() % 2 ? ps.z + parts.front().za : ps.z + parts.back().zb;
+        }
+        if (family == Family::SymmetryPlane) {
+            const int across = f.x != 0.0 ? 1 : 0;  // the coordinate the plane fixes
+            line.origin[across] = ps[across];
         }
 
         const MoveSweep sweep(*tool, ps, ps + f, n);
@@ -279,4 +298,8 @@ TEST_CASE("sweep vs oracle: dexel lying in a flat face's plane", "[sweep][oracle
 
 TEST_CASE("sweep vs oracle: cutting region and shank region", "[sweep][oracle]") {
     check(Family::Regions, 110, 10000);
+}
+
+TEST_CASE("sweep vs oracle: line in the move's plane of symmetry", "[sweep][oracle]") {
+    check(Family::SymmetryPlane, 111, 8000);
 }
