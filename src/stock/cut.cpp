@@ -1,0 +1,282 @@
+#include "dexelmill/stock/cut.h"
+
+#include <algorithm>
+#include <limits>
+#include <map>
+#include <optional>
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "dexelmill/error.h"
+#include "dexelmill/geometry/tolerance.h"
+#include "dexelmill/sweep/sweep.h"
+
+namespace dexelmill {
+
+namespace {
+
+constexpr int kTile = DexelTile::kTile;
+
+/// A tool split at its cutting length: the part that cuts and the shank above it (if any).
+struct ToolRegions {
+    std::optional<Tool> cutting;
+    std::optional<Tool> shank;
+};
+
+/// One move's sweeps and the box that holds both.
+struct MoveGeometry {
+    std::optional<MoveSweep> cutting;
+    std::optional<MoveSweep> shank;
+    Box box;
+};
+
+/// One tile of one family, with the extent of its material along the family's axis (relative
+/// to the lattice origin; empty when lo > hi). The extent only shrinks while cutting.
+struct TileSlot {
+    int family = 0, tb = 0, tc = 0;
+    float lo = std::numeric_limits<float>::infinity();
+    float hi = -std::numeric_limits<float>::infinity();
+};
+
+/// A tile's contribution to one move's statistics; lengths in mm summed over the tile's dexels.
+struct TileMoveStats {
+    std::uint32_t move = 0;  ///< index within the batch
+    std::uint32_t visited = 0, changed = 0;
+    double removed = 0.0, shank = 0.0;
+};
+
+void updateExtent(const DexelTile& tile, TileSlot& slot) {
+    slot.lo = std::numeric_limits<float>::infinity();
+    slot.hi = -std::numeric_limits<float>::infinity();
+    if (tile.empty()) return;
+    for (int i = 0; i < DexelTile::kDexels; ++i) {
+        const SegmentSpan s = tile.segments(i);
+        if (s.empty()) continue;
+        slot.lo = std::min(slot.lo, s[0].lo);
+        slot.hi = std::max(slot.hi, s[s.size - 1].hi);
+    }
+}
+
+/// Length of material of a dexel inside [lo, hi].
+double overlapLength(const SegmentSpan& segs, float lo, float hi) {
+    double sum = 0.0;
+    for (const Segment& s : segs) {
+        if (s.lo >= hi) break;
+        if (s.hi > lo) sum += double(std::min(s.hi, hi)) - double(std::max(s.lo, lo));
+    }
+    return sum;
+}
+
+/// A line parameter as a dexel endpoint (float), kept finite.
+float toFloat(double v) {
+    constexpr double big = 1e30;
+    return float(std::clamp(v, -big, big));
+}
+
+/// Applies the moves `moves` (indices into the batch) to one tile, in order.
+void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeometry>& geoms,
+                 const std::vector<std::uint32_t>& moves, bool removeShank, std::vector<TileMoveStats>& out) {
+    const Lattice& lattice = stock.lattice();
+    const Axis a = axisFromIndex(slot.family);
+    DexelFamily& fam = stock.family(a);
+    DexelTile& tile = fam.tile(slot.tb, slot.tc);
+    const Axis axB = fam.axisB(), axC = fam.axisC();
+    const int ia = index(a), ibx = index(axB), icx = index(axC);
+    const int ib0 = slot.tb * kTile, ic0 = slot.tc * kTile;
+    const int ib1 = std::min(ib0 + kTile, fam.nb()) - 1, ic1 = std::min(ic0 + kTile, fam.nc()) - 1;
+    const double originA = lattice.origin[ia];
+
+    Line line;
+    line.dir = axisVector(a);
+    line.origin[ia] = originA;
+    Interval parts[MoveSweep::kMaxParts];
+
+    for (std::uint32_t m : moves) {
+        if (slot.lo > slot.hi) break;  // no material left in the tile
+        const MoveGeometry& g = geoms[m];
+        // The box along the dexels, relative to the lattice origin, against the tile's material.
+        const double boxLo = g.box.lo[ia] - originA, boxHi = g.box.hi[ia] - originA;
+        if (boxHi < double(slot.lo) || boxLo > double(slot.hi)) continue;
+        const auto rb = lattice.indexRange(axB, g.box.lo[ibx], g.box.hi[ibx]);
+        const auto rc = lattice.indexRange(axC, g.box.lo[icx], g.box.hi[icx]);
+        const int b0 = std::max(rb[0], ib0), b1 = std::min(rb[1], ib1);
+        const int c0 = std::max(rc[0], ic0), c1 = std::min(rc[1], ic1);
+        if (b0 > b1 || c0 > c1) continue;
+
+        TileMoveStats st;
+        st.move = m;
+        for (int ic = c0; ic <= c1; ++ic) {
+            line.origin[icx] = lattice.coord(axC, ic);
+            for (int ib = b0; ib <= b1; ++ib) {
+                const int local = (ib - ib0) + kTile * (ic - ic0);
+                const SegmentSpan segs = tile.segments(local);
+                if (segs.empty() || double(segs[0].lo) > boxHi || double(segs[segs.size - 1].hi) < boxLo)
+                    continue;
+                line.origin[ibx] = lattice.coord(axB, ib);
+                ++st.visited;
+                double removed = 0.0;
+                if (g.cutting) {
+                    const std::size_t n = g.cutting->intersectParts(line, parts);
+                    for (std::size_t k = 0; k < n; ++k)
+                        if (!parts[k].isEmpty())
+                            removed += tile.subtract(local, toFloat(parts[k].lo), toFloat(parts[k].hi));
+                }
+                if (g.shank) {
+                    const std::size_t n = g.shank->intersectParts(line, parts);
+                    for (std::size_t k = 0; k < n; ++k) {
+                        if (parts[k].isEmpty()) continue;
+                        const float lo = toFloat(parts[k].lo), hi = toFloat(parts[k].hi);
+                        if (removeShank) {
+                            const double met = tile.subtract(local, lo, hi);
+                            st.shank += met;
+                            removed += met;
+                        } else {
+                            st.shank += overlapLength(tile.segments(local), lo, hi);
+                        }
+                    }
+                }
+                if (removed > 0.0) {
+                    ++st.changed;
+                    st.removed += removed;
+                }
+            }
+        }
+        if (st.changed > 0) updateExtent(tile, slot);
+        if (st.visited > 0) out.push_back(st);
+    }
+}
+
+}  // namespace
+
+CutResult cut(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools, const CutOptions& options) {
+    const std::size_t nMoves = path.moves.size();
+    CutResult result;
+    result.moves.resize(nMoves);
+
+    // Each tool used, split at its cutting length.
+    std::map<int, ToolRegions> regions;
+    for (std::size_t i = 0; i < nMoves; ++i) {
+        const Move& mv = path.moves[i];
+        if (regions.count(mv.tool)) continue;
+        const auto it = tools.find(mv.tool);
+        if (it == tools.end())
+            throw Error(path.where(mv.source).str() + ": move " + std::to_string(i + 1) + " uses tool " +
+                        std::to_string(mv.tool) + ", which is not in the tool table");
+        const Tool& t = it->second;
+        ToolRegions r;
+        const bool hasShank = t.cuttingLength() < t.totalLength() - tol::kLength;
+        r.cutting.emplace(hasShank ? t.region(t.bottom(), t.cuttingLength()) : t);
+        if (hasShank) r.shank.emplace(t.region(t.cuttingLength(), t.totalLength()));
+        if (r.cutting->convexParts().size() > MoveSweep::kMaxParts ||
+            (r.shank && r.shank->convexParts().size() > MoveSweep::kMaxParts))
+            throw Error("tool " + std::to_string(mv.tool) + " ('" + t.description() + "') has more than " +
+                        std::to_string(MoveSweep::kMaxParts) + " convex parts");
+        regions.emplace(mv.tool, std::move(r));
+    }
+
+    // Every tile of every kept family, with its material extent.
+    std::vector<TileSlot> slots;
+    std::size_t familyBase[3] = {0, 0, 0};
+    int familyCount = 0;
+    for (int a = 0; a < 3; ++a) {
+        familyBase[a] = slots.size();
+        if (!stock.has(axisFromIndex(a))) continue;
+        ++familyCount;
+        const DexelFamily& fam = stock.family(axisFromIndex(a));
+        for (int tc = 0; tc < fam.tilesC(); ++tc)
+            for (int tb = 0; tb < fam.tilesB(); ++tb) slots.push_back(TileSlot{a, tb, tc});
+    }
+
+    tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+    arena.execute([&] {
+        tbb::parallel_for(std::size_t(0), slots.size(), [&](std::size_t i) {
+            TileSlot& s = slots[i];
+            updateExtent(stock.family(axisFromIndex(s.family)).tile(s.tb, s.tc), s);
+        });
+    });
+
+    const Lattice& lattice = stock.lattice();
+    const double cell = lattice.h * lattice.h / std::max(1, familyCount);
+    const std::size_t batch =
+        options.batchMoves > 0 ? options.batchMoves : std::max<std::size_t>(64, (nMoves + 99) / 100);
+    std::vector<std::vector<std::uint32_t>> tileMoves(slots.size());
+    std::vector<std::vector<TileMoveStats>> tileStats(slots.size());
+    std::vector<std::size_t> active;
+    std::vector<MoveGeometry> geoms;
+
+    for (std::size_t m0 = 0; m0 < nMoves; m0 += batch) {
+        const std::size_t m1 = std::min(nMoves, m0 + batch);
+        // The batch's sweeps, built once and shared read-only by the tiles.
+        geoms.assign(m1 - m0, MoveGeometry{});
+        arena.execute([&] {
+            tbb::parallel_for(m0, m1, [&](std::size_t i) {
+                const Move& mv = path.moves[i];
+                const ToolRegions& r = regions.at(mv.tool);
+                MoveGeometry& g = geoms[i - m0];
+                g.cutting.emplace(*r.cutting, mv);
+                g.box = g.cutting->bounds();
+                if (r.shank) {
+                    g.shank.emplace(*r.shank, mv);
+                    g.box.expand(g.shank->bounds());
+                }
+            });
+        });
+        // Bucket the moves by the tiles their boxes overlap, in program order.
+        active.clear();
+        for (std::size_t i = m0; i < m1; ++i) {
+            const Box& box = geoms[i - m0].box;
+            for (int a = 0; a < 3; ++a) {
+                if (!stock.has(axisFromIndex(a))) continue;
+                const DexelFamily& fam = stock.family(axisFromIndex(a));
+                const auto rb = lattice.indexRange(fam.axisB(), box.lo[index(fam.axisB())], box.hi[index(fam.axisB())]);
+                const auto rc = lattice.indexRange(fam.axisC(), box.lo[index(fam.axisC())], box.hi[index(fam.axisC())]);
+                if (rb[0] > rb[1] || rc[0] > rc[1]) continue;
+                for (int tc = rc[0] / kTile; tc <= rc[1] / kTile; ++tc) {
+                    for (int tb = rb[0] / kTile; tb <= rb[1] / kTile; ++tb) {
+                        const std::size_t t = familyBase[a] + std::size_t(tb) + std::size_t(fam.tilesB()) * tc;
+                        if (slots[t].lo > slots[t].hi) continue;  // no material
+                        if (tileMoves[t].empty()) active.push_back(t);
+                        tileMoves[t].push_back(std::uint32_t(i - m0));
+                    }
+                }
+            }
+        }
+        std::sort(active.begin(), active.end());
+        arena.execute([&] {
+            tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t k) {
+                const std::size_t t = active[k];
+                processTile(stock, slots[t], geoms, tileMoves[t], options.removeShankMaterial, tileStats[t]);
+            });
+        });
+        // Reduce in tile order: the same sums in the same order for any thread count.
+        for (std::size_t t : active) {
+            for (const TileMoveStats& s : tileStats[t]) {
+                MoveStats& ms = result.moves[m0 + s.move];
+                ms.visited += s.visited;
+                ms.changed += s.changed;
+                ms.removedVolume += s.removed * cell;
+                ms.shankVolume += s.shank * cell;
+            }
+            tileStats[t].clear();
+            tileMoves[t].clear();
+        }
+        if (options.progress) options.progress(m1, nMoves);
+    }
+
+    for (std::size_t i = 0; i < nMoves; ++i) {
+        const MoveStats& ms = result.moves[i];
+        const Move& mv = path.moves[i];
+        result.visited += ms.visited;
+        result.changed += ms.changed;
+        result.removedVolume += ms.removedVolume;
+        result.shankVolume += ms.shankVolume;
+        if (mv.rapid && ms.removedVolume > options.collisionVolume)
+            result.collisions.push_back({i, mv.source, CollisionKind::Rapid, ms.removedVolume});
+        if (ms.shankVolume > options.collisionVolume)
+            result.collisions.push_back({i, mv.source, CollisionKind::Shank, ms.shankVolume});
+    }
+    return result;
+}
+
+}  // namespace dexelmill

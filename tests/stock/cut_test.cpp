@@ -1,0 +1,251 @@
+// The cutting loop: consistency of the three dexel families after random programs, determinism
+// across thread counts, collision reports, statistics.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "dexelmill/error.h"
+#include "dexelmill/stock/cut.h"
+#include "dexelmill/tool/builders.h"
+
+using namespace dexelmill;
+
+namespace {
+
+const Box kStockBox{Vec3(0, 0, 0), Vec3(20, 20, 10)};
+
+ToolTable testTools() {
+    ToolTable t;
+    t.emplace(1, flatEndMill(4.0, {15.0, 25.0}));
+    t.emplace(2, ballEndMill(3.0, {15.0, 25.0}));
+    t.emplace(3, bullNoseEndMill(5.0, 1.0, {15.0, 25.0}));
+    t.emplace(4, chamferMill(0.0, 0.6, 6.0, {15.0, 25.0}));
+    return t;
+}
+
+/// A random program over the stock: feeds, ramps, plunges and a few tilted axes, with the tips
+/// between 5 and 11 mm high (the stock is 10 mm high).
+ToolPath randomProgram(std::uint64_t seed, int moves) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> xy(-2.0, 22.0), z(5.0, 11.0), unit(0.0, 1.0);
+    ToolPath path;
+    path.files.push_back("random.nc");
+    Vec3 at(xy(rng), xy(rng), z(rng));
+    int tool = 1;
+    for (int i = 0; i < moves; ++i) {
+        if (i % 50 == 0) tool = 1 + int(rng() % 4);
+        Move m;
+        m.start = at;
+        const double r = unit(rng);
+        if (r < 0.1) m.end = Vec3(at.x, at.y, z(rng));                          // plunge or retract
+        else if (r < 0.5) m.end = Vec3(xy(rng), xy(rng), at.z);                 // horizontal
+        else m.end = Vec3(xy(rng), xy(rng), z(rng));                            // ramp
+        m.axis = unit(rng) < 0.15 ? glm::normalize(Vec3(unit(rng) - 0.5, unit(rng) - 0.5, 2.0)) : Vec3(0, 0, 1);
+        m.tool = tool;
+        m.source = SourceRef{0, i + 1};
+        path.moves.push_back(m);
+        at = m.end;
+    }
+    return path;
+}
+
+std::size_t segmentCount(const TriDexelStock& s, Axis a) {
+    const DexelFamily& f = s.family(a);
+    std::size_t n = 0;
+    for (int ic = 0; ic < f.nc(); ++ic)
+        for (int ib = 0; ib < f.nb(); ++ib) n += f.segments(ib, ic).size;
+    return n;
+}
+
+bool sameStock(const TriDexelStock& a, const TriDexelStock& b) {
+    for (int ax = 0; ax < 3; ++ax) {
+        const DexelFamily& fa = a.family(axisFromIndex(ax));
+        const DexelFamily& fb = b.family(axisFromIndex(ax));
+        for (int ic = 0; ic < fa.nc(); ++ic) {
+            for (int ib = 0; ib < fa.nb(); ++ib) {
+                const SegmentSpan sa = fa.segments(ib, ic), sb = fb.segments(ib, ic);
+                if (sa.size != sb.size) return false;
+                for (std::size_t k = 0; k < sa.size; ++k)
+                    if (sa[k].lo != sb[k].lo || sa[k].hi != sb[k].hi) return false;
+            }
+        }
+    }
+    return true;
+}
+
+}  // namespace
+
+TEST_CASE("cut: after a random program the three families agree", "[stock][cut]") {
+    const double h = 0.25;
+    TriDexelStock stock = TriDexelStock::fromBox(kStockBox, h);
+    const ToolPath path = randomProgram(7, 300);
+    const CutResult res = cut(stock, path, testTools());
+    REQUIRE(res.removedVolume > 100.0);  // the program does cut
+
+    // Every lattice point gets the same answer from its three dexels.
+    const Lattice& l = stock.lattice();
+    std::size_t inside = 0, mismatches = 0;
+    for (int k = 0; k < l.n[2]; ++k)
+        for (int j = 0; j < l.n[1]; ++j)
+            for (int i = 0; i < l.n[0]; ++i) {
+                const bool x = stock.inside(Axis::X, i, j, k), y = stock.inside(Axis::Y, i, j, k),
+                           z = stock.inside(Axis::Z, i, j, k);
+                inside += x;
+                mismatches += (x != y) || (y != z);
+            }
+    INFO(inside << " of " << l.pointCount() << " lattice points inside");
+    CHECK(mismatches == 0);
+    CHECK(inside > 0);
+    CHECK(double(inside) < l.pointCount());
+
+    // Volumes. A segment's length and h times the lattice points it holds differ by less than h,
+    // so with all points agreeing, |V_a - V_b| <= h^3 (S_a + S_b) for segment counts S. That is
+    // h^2 per dexel end: O(h^2) in the lattice's own units, O(h) times the surface area in total,
+    // which is the true order when faces are parallel to a family (a floor moves every x and y
+    // dexel crossing it by the same offset from the lattice).
+    const double v[3] = {stock.volume(Axis::X), stock.volume(Axis::Y), stock.volume(Axis::Z)};
+    const double s[3] = {double(segmentCount(stock, Axis::X)), double(segmentCount(stock, Axis::Y)),
+                         double(segmentCount(stock, Axis::Z))};
+    for (int a = 0; a < 3; ++a) {
+        const int b = (a + 1) % 3;
+        INFO("V" << "xyz"[a] << " = " << v[a] << ", V" << "xyz"[b] << " = " << v[b] << ", segments " << s[a]
+                 << " and " << s[b]);
+        CHECK(std::abs(v[a] - v[b]) <= h * h * h * (s[a] + s[b]));
+    }
+    // The removed volumes add up to what the families lost (mean over the three).
+    const double before = kStockBox.volume();
+    CHECK(before - (v[0] + v[1] + v[2]) / 3.0 == Approx(res.removedVolume).epsilon(1e-9));
+}
+
+TEST_CASE("cut: 1 and N threads give identical results bit for bit", "[stock][cut]") {
+    const ToolPath path = randomProgram(11, 250);
+    const ToolTable tools = testTools();
+    TriDexelStock serial = TriDexelStock::fromBox(kStockBox, 0.3);
+    TriDexelStock parallel = TriDexelStock::fromBox(kStockBox, 0.3);
+    TriDexelStock batched = TriDexelStock::fromBox(kStockBox, 0.3);
+    CutOptions one;
+    one.threads = 1;
+    CutOptions many;
+    many.threads = 2;
+    CutOptions small = many;
+    small.batchMoves = 7;
+    const CutResult a = cut(serial, path, tools, one);
+    const CutResult b = cut(parallel, path, tools, many);
+    const CutResult c = cut(batched, path, tools, small);
+    CHECK(sameStock(serial, parallel));
+    CHECK(sameStock(serial, batched));
+    for (const CutResult* r : {&b, &c}) {
+        REQUIRE(r->moves.size() == a.moves.size());
+        bool same = r->visited == a.visited && r->changed == a.changed && r->removedVolume == a.removedVolume &&
+                    r->collisions.size() == a.collisions.size();
+        for (std::size_t i = 0; i < a.moves.size(); ++i)
+            same = same && r->moves[i].visited == a.moves[i].visited && r->moves[i].changed == a.moves[i].changed &&
+                   r->moves[i].removedVolume == a.moves[i].removedVolume &&
+                   r->moves[i].shankVolume == a.moves[i].shankVolume;
+        CHECK(same);
+    }
+    CHECK(a.removedVolume > 0.0);
+}
+
+TEST_CASE("cut: a rapid through material is a collision with its source line", "[stock][cut]") {
+    TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.25);
+    ToolPath path;
+    path.files.push_back("part.nc");
+    Move safe;  // above the stock: no contact
+    safe.start = Vec3(-5, 10, 12), safe.end = Vec3(25, 10, 12), safe.rapid = true, safe.tool = 1;
+    safe.source = {0, 3};
+    Move crash = safe;  // through the top 2 mm of the stock
+    crash.start = Vec3(-5, 5, 8), crash.end = Vec3(25, 5, 8), crash.source = {0, 4};
+    Move feed = crash;  // the same cut as a feed move: no collision
+    feed.rapid = false, feed.start.y = feed.end.y = 15, feed.source = {0, 5};
+    path.moves = {safe, crash, feed};
+    const CutResult res = cut(stock, path, testTools());
+    REQUIRE(res.collisions.size() == 1);
+    CHECK(res.collisions[0].move == 1);
+    CHECK(res.collisions[0].kind == CollisionKind::Rapid);
+    CHECK(path.where(res.collisions[0].source).str() == "part.nc:4");
+    // A slot 4 wide, 2 deep, 20 long: 160 mm^3 up to the lattice's O(h) resolution.
+    CHECK(res.collisions[0].volume == Approx(160.0).epsilon(0.05));
+    CHECK(res.moves[0].changed == 0);
+    CHECK(res.moves[2].removedVolume == Approx(160.0).epsilon(0.05));
+}
+
+TEST_CASE("cut: material met by the shank is reported, and kept unless asked", "[stock][cut]") {
+    // Flat D4 with 3 mm of flute under a 27 mm shank, fed along x at a tip height of 4 from
+    // outside the stock to x = 15: the flutes cut heights 4..7 and the shank meets 7..10, each
+    // over the footprint 15 x 4 plus the half disk at the end, 60 + 2 pi mm^2. A plunge would not
+    // do: the flutes clear the hole before the shank reaches it.
+    ToolTable tools;
+    tools.emplace(9, flatEndMill(4.0, {3.0, 30.0}));
+    ToolPath path;
+    path.files.push_back("deep.nc");
+    Move feed;
+    feed.start = Vec3(-5, 10, 4), feed.end = Vec3(15, 10, 4), feed.tool = 9, feed.source = {0, 7};
+    path.moves = {feed};
+    const double layer = (60.0 + 2.0 * M_PI) * 3.0;
+    for (bool remove : {false, true}) {
+        TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.2);
+        CutOptions opt;
+        opt.removeShankMaterial = remove;
+        const CutResult res = cut(stock, path, tools, opt);
+        REQUIRE(res.collisions.size() == 1);
+        CHECK(res.collisions[0].kind == CollisionKind::Shank);
+        CHECK(res.collisions[0].move == 0);
+        CHECK(res.collisions[0].source.line == 7);
+        CHECK(res.collisions[0].volume == Approx(layer).epsilon(0.03));
+        const double lost =
+            kStockBox.volume() - (stock.volume(Axis::X) + stock.volume(Axis::Y) + stock.volume(Axis::Z)) / 3;
+        CHECK(lost == Approx(remove ? 2 * layer : layer).epsilon(0.03));
+        CHECK(res.removedVolume == Approx(lost).epsilon(1e-9));  // the mean over the families
+    }
+}
+
+TEST_CASE("cut: a move whose tool is not in the table throws", "[stock][cut]") {
+    TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 1.0);
+    ToolPath path;
+    path.files.push_back("x.nc");
+    Move m;
+    m.tool = 42, m.source = {0, 12};
+    path.moves = {m};
+    CHECK_THROWS_AS(cut(stock, path, testTools()), Error);
+    try {
+        cut(stock, path, testTools());
+    } catch (const Error& e) {
+        CHECK(std::string(e.what()).find("x.nc:12") != std::string::npos);
+    }
+}
+
+TEST_CASE("cut: progress is reported per batch, the same for any thread count", "[stock][cut]") {
+    const ToolPath path = randomProgram(5, 130);
+    std::vector<std::size_t> seen[2];
+    for (int run = 0; run < 2; ++run) {
+        TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.5);
+        CutOptions opt;
+        opt.threads = run ? 2 : 1;
+        opt.batchMoves = 32;
+        opt.progress = [&](std::size_t done, std::size_t total) {
+            CHECK(total == 130);
+            seen[run].push_back(done);
+        };
+        cut(stock, path, testTools(), opt);
+    }
+    CHECK(seen[0] == std::vector<std::size_t>{32, 64, 96, 128, 130});
+    CHECK(seen[0] == seen[1]);
+}
+
+TEST_CASE("cut: culling visits few dexels that do not change", "[stock][cut]") {
+    // One long slot through a fresh stock: every visited z dexel in the slot changes; the box
+    // adds the rounded ends and the dexels just outside the slot's width.
+    TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.2, FamilySet::only(Axis::Z));
+    ToolPath path;
+    path.files.push_back("slot.nc");
+    Move m;
+    m.start = Vec3(2, 10, 8), m.end = Vec3(18, 10, 8), m.tool = 1;
+    path.moves = {m};
+    const CutResult res = cut(stock, path, testTools());
+    REQUIRE(res.moves[0].changed > 0);
+    CHECK(double(res.moves[0].visited) / double(res.moves[0].changed) < 1.2);
+    // Slot 16 x 4 plus two half disks of radius 2, 2 deep.
+    CHECK(res.moves[0].removedVolume == Approx((16.0 * 4.0 + M_PI * 4.0) * 2.0).epsilon(0.03));
+}
