@@ -226,9 +226,10 @@ struct TorusLine {
 /// Two charts of the curve keep the root finder well conditioned:
 ///  - the normal angle psi, N(psi) = cos(psi) q + sin(psi) e, on most of the curve;
 ///  - the spine angle s (the paper's parameter, Eq. 34), N(s) ~ (|fn| cos s, |fn| sin s,
-///    -sign(fn) fd cos s), where the normal is within 45 degrees of the d-n plane. On a nearly
-///    horizontal move that stretch of the curve runs along the torus's bottom (or top) circle
-///    but is squeezed into a psi-window of width about |fn| / |f|.
+///    -sign(fn) fd cos s), where the normal is within 45 degrees of the d-n plane, on moves with
+///    |fn| / |f| < kSpineChart. On a nearly horizontal move that stretch of the curve runs along
+///    the torus's bottom (or top) circle but is squeezed into a psi-window of width about
+///    |fn| / |f|.
 void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
     const double fd = l.f.x, fn = l.f.z;
     const double flen = std::sqrt(fd * fd + fn * fn);
@@ -255,16 +256,14 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
         root = 0.5 * (br.first + br.second);
         return true;
     };
-    // Spine chart: the grazing point at spine angle s.
-    auto spinePoint = [&](double s) {
-        const double cs = std::cos(s), ss = std::sin(s);
+    // Spine chart: the grazing point at the azimuth (cs, ss) of its normal (a unit vector).
+    auto spinePoint = [&](double cs, double ss) {
         const double inv = 1.0 / std::sqrt(fn * fn + fd * fd * cs * cs);
         const double nr = std::abs(fn) * inv;
         return Vec3((tor.rc + tor.rho * nr) * cs, (tor.rc + tor.rho * nr) * ss,
                     tor.zc - sgnFn * tor.rho * fd * cs * inv);
     };
-    auto gSpine = [&](double s) { return glm::dot(l.c, spinePoint(s)) - l.co; };
-
+    const bool useSpine = kappa < sweep_tol::kSpineChart;
     for (int k = 0; k < tor.arcs; ++k) {
         const TorusArc& arc = tor.arc[k];
         // Normal-angle chart: psi = psiMid + 2 atan(t).
@@ -297,9 +296,11 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
         ts[m++] = -arc.T;
         for (double sgn : {1.0, -1.0})
             if (inArc(sgn * cq, sgn * ce)) ts[m++] = tOf(sgn * cq, sgn * ce);
-        const double cw = 1.0 / std::sqrt(1.0 + kappa * kappa), sw = kappa * cw;
-        for (double sgn : {1.0, -1.0})
-            if (inArc(sgn * cw, arc.side * sw)) ts[m++] = tOf(sgn * cw, arc.side * sw);
+        if (useSpine) {
+            const double cw = 1.0 / std::sqrt(1.0 + kappa * kappa), sw = kappa * cw;
+            for (double sgn : {1.0, -1.0})
+                if (inArc(sgn * cw, arc.side * sw)) ts[m++] = tOf(sgn * cw, arc.side * sw);
+        }
         ts[m++] = arc.T;
         for (int i = 2; i + 1 < m; ++i)  // insertion sort of the (at most 4) inner points
             for (int j = i; j > 1 && ts[j - 1] > ts[j]; --j) std::swap(ts[j - 1], ts[j]);
@@ -313,23 +314,28 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
             if (!(tb > ta) && !(ga == 0.0)) continue;
             double cp, sp;
             normal(0.5 * (ta + tb), cp, sp);
-            const bool spineChart = std::abs(sp) < kappa * std::abs(cp);
+            const bool spineChart = useSpine && std::abs(sp) < kappa * std::abs(cp);
             double root;
             if (!spineChart) {
                 if (solve(g, ta, tb, ga, gb, root)) addCrossing(point(root));
                 continue;
             }
-            // The same stretch in the spine chart: the azimuths of the normals at its ends (on
-            // this arc's side of the d-n plane, so that no angle wraps).
-            auto azimuth = [&](double t) {
-                double c, s;
-                normal(t, c, s);
-                return std::atan2(arc.side * std::abs(s), -fn * c / flen);
-            };
+            // The same stretch in the spine chart, parametrised without trigonometry by the
+            // direction a(tau) ~ a0 + tau (a1 - a0), tau in [0, 1], between the azimuths a0, a1 of
+            // the normals at its ends (less than 90 degrees apart, so a is monotone in angle).
             // The bracket keeps the values of g the neighbouring pieces saw at its ends.
-            double sa = azimuth(ta), sb = azimuth(tb), gsa = ga, gsb = gb;
-            if (sa > sb) std::swap(sa, sb), std::swap(gsa, gsb);
-            if (solve(gSpine, sa, sb, gsa, gsb, root)) addCrossing(spinePoint(root));
+            double c0, s0, c1, s1;
+            normal(ta, c0, s0);
+            normal(tb, c1, s1);
+            const double ax0 = -fn * c0 / flen, ay0 = arc.side * std::abs(s0);
+            const double ax1 = -fn * c1 / flen, ay1 = arc.side * std::abs(s1);
+            auto spineAt = [&](double tau) {
+                const double x = ax0 + tau * (ax1 - ax0), y = ay0 + tau * (ay1 - ay0);
+                const double inv = 1.0 / std::sqrt(x * x + y * y);
+                return spinePoint(x * inv, y * inv);
+            };
+            auto gSpine = [&](double tau) { return glm::dot(l.c, spineAt(tau)) - l.co; };
+            if (solve(gSpine, 0.0, 1.0, ga, gb, root)) addCrossing(spineAt(root));
         }
     }
 }

@@ -56,6 +56,11 @@ constexpr double kParam = 1e-12;
 /// parameter ranges are united.
 constexpr double kTie = 1e-9;
 
+/// Below this |n.f| / |f| the stretch of a torus's grazing curve near the d-n plane is solved in
+/// the spine chart (see torusCrossings in sweep.cpp): the normal-angle chart resolves it only to
+/// about kAngleRoot / (|n.f| / |f|) there.
+constexpr double kSpineChart = 1e-3;
+
 /// Root brackets on the torus's grazing curve stop at this width of the half-angle tangent
 /// parameter (dimensionless, in [-1, 1]); a position error of about (rc + rho) times this.
 constexpr double kAngleRoot = 1e-13;

@@ -1,0 +1,143 @@
+// The sweep solver and the cutting loop.
+//
+//  BM_SweepQuery/<tool>/<move>: one move, every x, y and z lattice line (h = 0.1 mm) through the
+//    sweep's box is intersected with the sweep; the counter ns_per_query is the average.
+//  BM_Raster/<threads>/<h in um>: a 10,000-move ball-end finishing raster over a wavy surface on a
+//    40 x 40 x 10 mm stock (400 x 400 lattice at h = 0.1): moves per second, visited/changed.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <vector>
+
+#include "dexelmill/stock/cut.h"
+#include "dexelmill/sweep/sweep.h"
+#include "dexelmill/tool/builders.h"
+
+using namespace dexelmill;
+
+namespace {
+
+Tool benchTool(int kind) {
+    switch (kind) {
+    case 0: return flatEndMill(10.0, {30.0, 50.0});
+    case 1: return ballEndMill(10.0, {30.0, 50.0});
+    case 2: return bullNoseEndMill(10.0, 2.0, {30.0, 50.0});
+    default: return taperBallMill(6.0, 0.1, {30.0, 50.0});
+    }
+}
+
+const char* kToolNames[] = {"flat", "ball", "bull", "taperball"};
+const char* kMoveNames[] = {"ramp", "horizontal", "tilted"};
+
+/// Every lattice line of the three families (spacing h, lattice at multiples of h) through the
+/// sweep's box.
+std::vector<Line> linesThrough(const Box& box, double h) {
+    std::vector<Line> lines;
+    for (int a = 0; a < 3; ++a) {
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        Vec3 dir(0.0);
+        dir[a] = 1.0;
+        for (double yc = std::ceil(box.lo[c] / h) * h; yc <= box.hi[c]; yc += h)
+            for (double yb = std::ceil(box.lo[b] / h) * h; yb <= box.hi[b]; yb += h) {
+                Line l;
+                l.dir = dir;
+                l.origin[a] = -100.0;
+                l.origin[b] = yb;
+                l.origin[c] = yc;
+                lines.push_back(l);
+            }
+    }
+    return lines;
+}
+
+void BM_SweepQuery(benchmark::State& state) {
+    const Tool tool = benchTool(int(state.range(0)));
+    const int moveKind = int(state.range(1));
+    const Vec3 start(0.0);
+    const Vec3 end = moveKind == 1 ? Vec3(30, 10, 0) : Vec3(30, 10, -3);
+    const Vec3 axis = moveKind == 2 ? glm::normalize(Vec3(0.3, -0.2, 1.0)) : Vec3(0, 0, 1);
+    const MoveSweep sweep(tool, start, end, axis);
+    // The cutting-relevant box: the sweep's box below the tool's top 5 mm above the tip (the
+    // rest of a 50 mm tool is above any stock and the loop would cull it by material extent).
+    Box box = sweep.bounds();
+    box.hi.z = std::min(box.hi.z, 8.0);
+    const std::vector<Line> lines = linesThrough(box, 0.1);
+    std::size_t hits = 0;
+    for (auto _ : state) {
+        for (const Line& l : lines) {
+            const Interval iv = sweep.intersect(l);
+            hits += !iv.isEmpty();
+            benchmark::DoNotOptimize(iv);
+        }
+    }
+    state.SetLabel(std::string(kToolNames[state.range(0)]) + "/" + kMoveNames[moveKind]);
+    state.counters["queries"] = double(lines.size());
+    state.counters["hit_fraction"] = double(hits) / double(lines.size() * state.iterations());
+    state.counters["ns_per_query"] = benchmark::Counter(double(lines.size()) * 1e-9,
+                                                        benchmark::Counter::kIsIterationInvariantRate |
+                                                            benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_SweepQuery)->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2}})->Unit(benchmark::kMicrosecond);
+
+/// 100 passes along x at y steps of 0.4 mm, 100 moves of 0.4 mm each, following
+/// z = 6 + 2 sin(x / 5) cos(y / 7): 10,000 feed moves (and 99 link moves).
+ToolPath rasterProgram() {
+    ToolPath path;
+    path.files.push_back("raster.nc");
+    auto surface = [](double x, double y) { return 6.0 + 2.0 * std::sin(x / 5.0) * std::cos(y / 7.0); };
+    int line = 1;
+    Vec3 prev(0.0);
+    for (int p = 0; p < 100; ++p) {
+        const double y = 0.2 + 0.4 * p;
+        for (int i = 0; i < 100; ++i) {
+            const bool forward = p % 2 == 0;
+            const double x0 = forward ? 0.4 * i : 40.0 - 0.4 * i;
+            const double x1 = forward ? x0 + 0.4 : x0 - 0.4;
+            Move m;
+            m.start = Vec3(x0, y, surface(x0, y));
+            m.end = Vec3(x1, y, surface(x1, y));
+            if (p > 0 && i == 0) {  // the step over from the previous pass
+                Move link;
+                link.start = prev, link.end = m.start, link.tool = 1, link.source = {0, line++};
+                path.moves.push_back(link);
+            }
+            m.tool = 1;
+            m.source = {0, line++};
+            path.moves.push_back(m);
+            prev = m.end;
+        }
+    }
+    return path;
+}
+
+void BM_Raster(benchmark::State& state) {
+    const int threads = int(state.range(0));
+    const double h = state.range(1) * 1e-3;
+    const ToolPath path = rasterProgram();
+    ToolTable tools;
+    tools.emplace(1, ballEndMill(6.0, {20.0, 40.0}));
+    CutOptions opt;
+    opt.threads = threads;
+    CutResult res;
+    for (auto _ : state) {
+        state.PauseTiming();
+        TriDexelStock stock = TriDexelStock::fromBox(Box{Vec3(0, 0, 0), Vec3(40, 40, 10)}, h);
+        state.ResumeTiming();
+        res = cut(stock, path, tools, opt);
+        benchmark::DoNotOptimize(res.removedVolume);
+    }
+    state.counters["moves"] = double(path.moves.size());
+    state.counters["moves_per_s"] =
+        benchmark::Counter(double(path.moves.size()), benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["visited_per_changed"] = double(res.visited) / double(std::max<std::uint64_t>(1, res.changed));
+    state.counters["visited"] = double(res.visited);
+}
+BENCHMARK(BM_Raster)
+    ->Args({1, 100})
+    ->Args({2, 100})
+    ->Args({1, 200})
+    ->Args({2, 200})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+}  // namespace
