@@ -55,8 +55,9 @@ Project readCamoticsProject(const std::string& path);
 Program runProject(const Project& project, const GcodeOptions& options = {});
 
 /// @brief CAMotics-style automatic workpiece: the box of the cutting moves, widened by the
-/// cutting radius of each move's tool across its axis, topped at z = 0 when the cuts go below
-/// it, and grown by marginPercent of each size (not above the top).
+/// cutting radius of each move's tool across its axis (the widest defined tool for tools nobody
+/// defined), topped at z = 0 when the cuts go below it, and grown by marginPercent of each size
+/// (not above the top).
 Box automaticWorkpieceBounds(const Program& program, double marginPercent);
 
 /// @brief Kinds of program files.
