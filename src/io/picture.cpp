@@ -79,7 +79,7 @@ Image renderPicture(const Mesh& mesh, const PictureOptions& options) {
 
     // Lights in view space terms: key from upper left, fill from the right, both towards the
     // viewer; Blinn-Phong specular on the key light.
-    const Vec3 key = glm::normalize(-0.45 * cam.right + 0.65 * cam.up + 0.62 * cam.back);
+    const Vec3 key = glm::normalize(-0.6 * cam.right + 0.6 * cam.up + 0.55 * cam.back);
     const Vec3 fill = glm::normalize(0.7 * cam.right - 0.2 * cam.up + 0.7 * cam.back);
     const Vec3 halfKey = glm::normalize(key + cam.back);
     const Vec3 base(0.62, 0.66, 0.72);  // light steel
@@ -124,7 +124,8 @@ Image renderPicture(const Mesh& mesh, const PictureOptions& options) {
                 Vec3 n = w0 * normals[t[0]] + w1 * normals[t[1]] + w2 * normals[t[2]];
                 const double len = glm::length(n);
                 n = len > 0.0 ? n / len : cam.back;
-                const double diffuse = 0.72 * clamp01(glm::dot(n, key)) + 0.28 * clamp01(glm::dot(n, fill));
+                const double diffuse =
+                    0.8 * clamp01(glm::dot(n, key)) + 0.15 * clamp01(glm::dot(n, fill));
                 const double spec = std::pow(clamp01(glm::dot(n, halfKey)), 40.0) * 0.35;
                 const Vec3 col = base * (0.18 + 0.85 * diffuse) + Vec3(spec);
                 float* out = &color[3 * pix];
