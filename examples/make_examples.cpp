@@ -200,7 +200,8 @@ void writeGearbox(const std::string& dir) {
             for (const auto& r : runs) {
                 w.rapid = true;
                 w.go(r.first, y, safe);
-                w.go(r.first, y, zl + 5);
+                // Down to just above the previous level, which cleared this run; then feed in.
+                w.go(r.first, y, std::min(zl + 20, Z) + 2);
                 w.rapid = false;
                 for (double x = r.first; x <= r.second + 1e-9; x += ds) w.go(std::min(x, r.second), y, zl);
                 w.go(r.second, y, zl);
@@ -275,23 +276,25 @@ void writeTilted(const std::string& dir) {
     };
     for (const Slot& slot : {Slot{22, 1.0}, Slot{58, -1.0}}) {
         const double i = 0, j = slot.lean * std::sin(t), k = std::cos(t);
-        const double depthStep = 3, depth = 18, safe = 25;
+        const double depthStep = 3, depth = 18, clearance = 3;
         for (double d = depthStep; d <= depth + 1e-9; d += depthStep) {
-            // The tip runs d below the top face along the axis direction, entering from above.
-            const double ty = slot.y - j * (safe - 0), tz = Z + k * safe;
-            const double yTip = slot.y - j * d / k, zTip = Z - d;
+            // The tip runs d below the top face; it enters and leaves along the tool axis, from
+            // and to a point where the tip is `clearance` above the stock, so the whole tool is
+            // clear of material during the rapids.
+            const double zTip = Z - d, yTip = slot.y - j * d / k;
+            const double up = (d + clearance) / k;  // distance along the axis to clear the top
+            auto above = [&](double x, double y) {
+                w.goAxis(x + i * up, y + j * up, zTip + k * up, i, j, k);
+            };
             w.rapid = true;
-            w.goAxis(10, ty, tz, i, j, k);
-            w.goAxis(10, yTip + j * 5 / k, zTip + 5, i, j, k);
+            above(10, yTip);
             w.rapid = false;
             w.goAxis(10, yTip, zTip, i, j, k);
             w.goAxis(X - 10, yTip, zTip, i, j, k);
-            // Widen the slot by a second pass offset across the axis.
+            // Widen the slot by a second pass 4 mm across.
             w.goAxis(X - 10, yTip + 4, zTip, i, j, k);
             w.goAxis(10, yTip + 4, zTip, i, j, k);
-            w.rapid = true;
-            w.goAxis(10, yTip + 4 + j * safe, zTip + k * safe + d, i, j, k);
-            w.rapid = false;
+            above(10, yTip + 4);
         }
     }
     w.line("FINI");
