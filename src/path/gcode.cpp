@@ -252,6 +252,10 @@ private:
 
     void prescan(SourceFile& f) {
         std::string_view all(f.text);
+        // One allocation for the line table and, as a first guess, one move per line.
+        const std::size_t lineCount = std::size_t(std::count(all.begin(), all.end(), '\n')) + 1;
+        f.lines.reserve(lineCount);
+        out_.path.moves.reserve(out_.path.moves.size() + lineCount);
         std::size_t pos = 0;
         int number = 0;
         bool seenContent = false;
