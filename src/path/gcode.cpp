@@ -805,7 +805,6 @@ private:
             i = close + 1;
             return r;
         }
-        const int col = int(i) + 1;
         const double v = readRealValue(i);
         const double rounded = std::nearbyint(v);
         if (std::abs(v - rounded) > 1e-4 || rounded < 1 || rounded >= kNumParams)
@@ -1406,6 +1405,9 @@ private:
     void emit(const Vec3& target, bool rapid) {
         if (!std::isfinite(target.x) || !std::isfinite(target.y) || !std::isfinite(target.z))
             fail(0, "move to a non-finite position", std::string(line_.substr(0, 40)));
+        if (out_.path.moves.size() >= opt_.maxMoves)
+            fail(0, "program makes more than " + std::to_string(opt_.maxMoves) + " moves",
+                 std::string(line_.substr(0, 40)));
         Move m;
         m.start = mpos_;
         m.end = target;
