@@ -252,6 +252,10 @@ private:
 
     void prescan(SourceFile& f) {
         std::string_view all(f.text);
+        // One allocation for the line table and, as a first guess, one move per line.
+        const std::size_t lineCount = std::size_t(std::count(all.begin(), all.end(), '\n')) + 1;
+        f.lines.reserve(lineCount);
+        out_.path.moves.reserve(out_.path.moves.size() + lineCount);
         std::size_t pos = 0;
         int number = 0;
         bool seenContent = false;
@@ -525,15 +529,16 @@ private:
         }
         if (!ended) {
             const SourceFile& f = *files_[std::size_t(curFile_)];
-            if (!frames_.empty()) {
-                curLineNo_ = f.lines.empty() ? 0 : f.lines.back().number;
-                fail(0, "file ends inside a subroutine (missing M99 or endsub)");
-            }
-            if (f.startsWithPercent) {
-                curLineNo_ = f.lines.empty() ? 0 : f.lines.back().number;
-                fail(1, "file ends without its closing '%' (truncated file?)",
-                     f.lines.empty() ? std::string() : std::string(f.lines.back().text.substr(0, 40)));
-            }
+            // Report at the last line that holds anything.
+            std::size_t last = f.lines.size();
+            while (last > 0 && skipSpaces(f.lines[last - 1].text, 0) >= f.lines[last - 1].text.size()) --last;
+            const std::string lastText = last ? std::string(f.lines[last - 1].text.substr(0, 40)) : std::string();
+            curLineNo_ = last ? f.lines[last - 1].number : 0;
+            line_ = {};
+            if (!frames_.empty())
+                fail(1, "file ends inside a subroutine (missing M99 or endsub)", lastText);
+            if (f.startsWithPercent)
+                fail(1, "file ends without its closing '%' (truncated file?)", lastText);
         }
         frames_.clear();
     }
@@ -800,11 +805,10 @@ private:
             i = close + 1;
             return r;
         }
-        const int col = int(i) + 1;
         const double v = readRealValue(i);
         const double rounded = std::nearbyint(v);
         if (std::abs(v - rounded) > 1e-4 || rounded < 1 || rounded >= kNumParams)
-            fail(col, "parameter number out of range (1.." + std::to_string(kNumParams - 1) + ")",
+            fail(r.col, "parameter number out of range (1.." + std::to_string(kNumParams - 1) + ")",
                  tokenAt(r.col));
         r.index = int(rounded);
         return r;
@@ -1251,12 +1255,16 @@ private:
         if (groupCode[4] >= 0) arcAbsolute_ = groupCode[4] == 901;
         if (groupCode[10] >= 0) retract_ = groupCode[10];
         // 7. Tilted work plane.
+        bool axisConsumed = false;
         if (groupCode[16] >= 0) {
-            if (groupCode[16] == 690) cancelTwp();
-            else defineTwp(b);
+            if (groupCode[16] == 690) {
+                cancelTwp();
+            } else {
+                defineTwp(b);
+                axisConsumed = true;
+            }
         }
         // 8. Non-modal codes.
-        bool axisConsumed = false;
         if (nonModal >= 0 && nonModal != 40) {
             axisConsumed = executeNonModal(nonModal, b, motion);
         }
@@ -1397,6 +1405,9 @@ private:
     void emit(const Vec3& target, bool rapid) {
         if (!std::isfinite(target.x) || !std::isfinite(target.y) || !std::isfinite(target.z))
             fail(0, "move to a non-finite position", std::string(line_.substr(0, 40)));
+        if (out_.path.moves.size() >= opt_.maxMoves)
+            fail(0, "program makes more than " + std::to_string(opt_.maxMoves) + " moves",
+                 std::string(line_.substr(0, 40)));
         Move m;
         m.start = mpos_;
         m.end = target;

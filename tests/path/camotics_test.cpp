@@ -90,3 +90,17 @@ TEST_CASE("camotics: comments are allowed, errors carry their place", "[path][ca
     CHECK_THROWS_AS(parseCamoticsProject(R"({"tools": {"1": {"shape": "ballnose", "length": 1, "diameter": -1}}})", "x", ""), ParseError);
     CHECK_THROWS_AS(parseCamoticsProject(R"({"workpiece": {"bounds": {"min": [0, 0], "max": [1, 1, 1]}}})", "x", ""), ParseError);
 }
+
+TEST_CASE("readProgram: the bundled samples of every kind read", "[path][camotics]") {
+    const std::string dir = std::string(DEXELMILL_TEST_DATA) + "/path/";
+    const Program g = readProgram(dir + "sample.ngc");
+    CHECK(g.path.moves.size() > 20);
+    const Program a = readProgram(dir + "sample.apt");
+    CHECK(a.tools.count(1) == 1);
+    CHECK(a.path.moves.size() > 10);
+    const Program c = readProgram(dir + "sample.camotics");
+    CHECK(c.tools.size() == 3);
+    CHECK(c.path.moves.size() == g.path.moves.size());
+    CHECK(detectProgramKind("x.unknown", "PARTNO/X\nGOTO/1,2,3\n") == ProgramKind::Apt);
+    CHECK(detectProgramKind("x.unknown", "G0 X1\n") == ProgramKind::Gcode);
+}

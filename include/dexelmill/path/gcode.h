@@ -42,6 +42,8 @@ struct GcodeOptions {
     std::size_t maxBlocks = 50'000'000;
     /// Most chords one arc may become before the reader refuses it.
     std::size_t maxArcSegments = 1'000'000;
+    /// Most moves a program may make (loops and repeats included) before the reader refuses it.
+    std::size_t maxMoves = 200'000'000;
 };
 
 /// @brief Interprets G-code text.
