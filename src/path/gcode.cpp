@@ -169,6 +169,10 @@ public:
         if (!(options.chordTolerance > 0.0))
             throw Error("GcodeOptions::chordTolerance must be positive");
         hot_.fill(kNone);
+        if (options.startPosition) {
+            mpos_ = *options.startPosition;
+            known_[0] = known_[1] = known_[2] = positionKnown_ = true;
+        }
     }
 
     void loadToolTable(const std::string& path) {
@@ -1408,6 +1412,17 @@ private:
         if (out_.path.moves.size() >= opt_.maxMoves)
             fail(0, "program makes more than " + std::to_string(opt_.maxMoves) + " moves",
                  std::string(line_.substr(0, 40)));
+        for (int a = 0; a < 3; ++a) known_[a] = known_[a] || target[a] != mpos_[a];
+        if (!positionKnown_) {
+            // Where the machine starts is not in the program: moves until X, Y and Z have all
+            // been given only establish the position, rather than sweep from a guessed origin.
+            positionKnown_ = known_[0] && known_[1] && known_[2];
+            warn("the start position is unknown until X, Y and Z are all programmed: this move only sets "
+                 "the position and is not simulated",
+                 "unknown start");
+            mpos_ = target;
+            return;
+        }
         Move m;
         m.start = mpos_;
         m.end = target;
@@ -1427,6 +1442,7 @@ private:
             if (b.has(letters[a])) {
                 const double v = b.get(letters[a]) * units_;
                 t[a] = incremental ? from[a] + v : v;
+                known_[a] = true;
             }
         checkRotary(b, incremental);
         return t;
@@ -1861,6 +1877,9 @@ private:
     std::array<Vec3, 9> g5x_{};
     Vec3 g92_{0.0};
     Vec3 mpos_{0.0};
+    /// Which coordinates of the position the program has set, and whether all three are.
+    bool known_[3] = {false, false, false};
+    bool positionKnown_ = false;
     double rotary_[3] = {0, 0, 0};
     Vec3 baseAxis_{0, 0, 1};
     Vec3 axis_{0, 0, 1};

@@ -21,7 +21,14 @@ namespace {
 using test::haveSharedData;
 using test::sharedData;
 
-Program run(const std::string& text, GcodeOptions options = {}) {
+/// Options as LinuxCNC runs a program: the machine starts at the origin.
+GcodeOptions linuxcnc() {
+    GcodeOptions o;
+    o.startPosition = Vec3(0.0);
+    return o;
+}
+
+Program run(const std::string& text, GcodeOptions options = linuxcnc()) {
     return parseGcode(text, "test.ngc", options);
 }
 
@@ -164,7 +171,7 @@ TEST_CASE("gcode: LinuxCNC canon references of canned cycles and M98 loops", "[p
     for (const char* name : {"g81-cycles/g17-g98-g81", "g81-cycles/g18-g98-g81",
                              "g81-cycles/g19-g98-g81", "fanuc-subs/05-M98-loops"}) {
         INFO(name);
-        const Program p = readGcode(base + name + ".ngc");
+        const Program p = readGcode(base + name + ".ngc", linuxcnc());
         const auto canon = readCanon(base + name + ".expected.canon");
         REQUIRE(canon.size() > 10);
         checkAgainstCanon(p, canon);
@@ -175,6 +182,7 @@ TEST_CASE("gcode: cam-nisley O-word program against its canon (cutter comp aside
     if (!haveSharedData()) return;
     const std::string base = sharedData() + "/linuxcnc/cam-nisley/";
     GcodeOptions options;
+    options.startPosition = Vec3(0.0);
     options.toolTableFile = base + "test.tbl";
     options.toolTableInches = true;
     const Program p = readGcode(base + "cam.ngc", options);
@@ -276,6 +284,7 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
         INFO(c.what << ": " << c.text);
         try {
             GcodeOptions options;
+            options.startPosition = Vec3(0.0);
             options.maxBlocks = 100000;
             parseGcode(c.text, "bad.ngc", options);
             FAIL("no error");
@@ -295,6 +304,7 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
 TEST_CASE("gcode: arcs are split within the chord tolerance and end exactly", "[path][gcode]") {
     for (double tol : {0.001, 0.01, 0.1}) {
         GcodeOptions o;
+        o.startPosition = Vec3(0.0);
         o.chordTolerance = tol;
         // Full circle, a half circle by R, and a helix of 2 turns.
         const Program p = run("G0 X10 Y0 Z0\nG3 I-10 J0 X10 Y0\nG2 X-10 Y0 R10\nG17 G3 X-10 Y0 Z-4 I10 J0 P2\n", o);
@@ -380,6 +390,7 @@ TEST_CASE("gcode: tools, warnings and their aggregation", "[path][gcode]") {
         CHECK(hasDiagnostic(p, w));
     // CAMotics: T alone changes the tool.
     GcodeOptions camotics;
+    camotics.startPosition = Vec3(0.0);
     camotics.toolChangeOnT = true;
     const Program q = run("T3 G0 X1\n", camotics);
     REQUIRE(q.path.toolChanges.size() == 1);
@@ -441,4 +452,15 @@ TEST_CASE("gcode: canned cycles G73 G83 G85 G89 and G99", "[path][gcode]") {
     CHECK(zmin == Approx(-3));
     CHECK(m.back().end.z == Approx(2));  // G98: back to the level where this cycle began
     CHECK(hasDiagnostic(p, "dwell"));
+}
+
+TEST_CASE("gcode: with no start position, moves only place the tool until X, Y and Z are known", "[path]") {
+    const Program p = parseGcode("G21 G90\nG0 Z15\nG0 X5 Y15\nG1 Z7 F100\nG1 X35\n", "start.ngc");
+    REQUIRE(p.path.moves.size() == 2);
+    CHECK(near(p.path.moves[0].start, Vec3(5, 15, 15)));
+    CHECK(near(p.path.moves[0].end, Vec3(5, 15, 7)));
+    CHECK(p.path.moves[0].source.line == 4);
+    bool warned = false;
+    for (const Diagnostic& d : p.diagnostics) warned = warned || d.message.find("start position is unknown") != std::string::npos;
+    CHECK(warned);
 }

@@ -9,6 +9,7 @@
 /// length offsets do not move the cutter-location point: the tip follows the programmed point.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -44,6 +45,11 @@ struct GcodeOptions {
     std::size_t maxArcSegments = 1'000'000;
     /// Most moves a program may make (loops and repeats included) before the reader refuses it.
     std::size_t maxMoves = 200'000'000;
+    /// Where the machine is when the program starts (machine coordinates, mm). Unset, the start
+    /// is unknown: moves only establish the position until X, Y and Z have all been programmed,
+    /// so no move sweeps from a guessed origin through the stock (one warning says so). LinuxCNC
+    /// itself starts wherever the machine is, commonly (0, 0, 0).
+    std::optional<Vec3> startPosition;
 };
 
 /// @brief Interprets G-code text.
