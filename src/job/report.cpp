@@ -59,7 +59,7 @@ std::string reportJson(const SimulateReport& r) {
 double chooseResolution(const Box& stock) {
     const Vec3 s = stock.size();
     const double longest = std::max({s.x, s.y, s.z});
-    const double raw = longest / 800.0;
+    const double raw = longest / 400.0;
     const double decade = std::pow(10.0, std::floor(std::log10(raw)));
     for (double m : {5.0, 2.0, 1.0})
         if (m * decade <= raw) return m * decade;

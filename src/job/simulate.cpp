@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "dexelmill/error.h"
+#include "dexelmill/geometry/tolerance.h"
 #include "dexelmill/io/atomic_file.h"
 #include "dexelmill/io/mesh_io.h"
 #include "dexelmill/io/picture.h"
@@ -107,8 +108,30 @@ struct LoadedStock {
     Box box;
 };
 
-LoadedStock loadStock(const SimulateOptions& o, const Program& program, const Project* project,
-                      SimulateReport& report, std::vector<ReportWarning>& notes) {
+/// A stock box from the program when none is given: its cutting moves' extent (CAMotics'
+/// automatic workpiece), else every move's; an axis the program never moves along gets a
+/// thickness of 5 % of the largest extent (at least 1 mm) on both sides.
+Box guessStock(const ToolPath& path, const ToolTable& tools, double marginPercent) {
+    Box box = automaticWorkpieceBounds(path, tools, marginPercent);
+    if (box.isEmpty()) {
+        box = path.bounds();
+        double widest = 0.0;
+        for (const auto& [n, t] : tools) widest = std::max(widest, t.cuttingRadius());
+        box = box.padded(widest);
+    }
+    if (box.isEmpty()) throw Error("no stock given and the program has no moves to guess one from; use --stock");
+    const Vec3 size = box.size();
+    const double pad = std::max(1.0, 0.05 * std::max({size.x, size.y, size.z}));
+    for (int a = 0; a < 3; ++a) {
+        if (size[a] > tol::kLength) continue;
+        box.lo[a] -= pad;
+        box.hi[a] += pad;
+    }
+    return box;
+}
+
+LoadedStock loadStock(const SimulateOptions& o, const Program& program, const ToolTable& tools,
+                      const Project* project, SimulateReport& report, std::vector<ReportWarning>& notes) {
     Box box;
     std::optional<LevelSet> fromVdb;
     std::optional<Mesh> fromStl;
@@ -130,8 +153,7 @@ LoadedStock loadStock(const SimulateOptions& o, const Program& program, const Pr
         box = project->workpiece.bounds;
     } else {
         const double margin = project ? project->workpiece.marginPercent : 5.0;
-        box = automaticWorkpieceBounds(program, margin);
-        if (box.isEmpty()) throw Error("no stock given and the program has no cutting moves to guess one from");
+        box = guessStock(program.path, tools, margin);
         if (!project) {
             ReportWarning w;
             w.message = "no --stock given: using the program's cutting extent plus 5 %";
@@ -197,7 +219,7 @@ Simulation runSimulation(const SimulateOptions& o) {
                                               [](const Move& m) { return m.rapid; }));
     report.toolChanges = program.path.toolChanges.size();
     std::vector<ReportWarning> notes;
-    LoadedStock loaded = loadStock(o, program, project ? &*project : nullptr, report, notes);
+    LoadedStock loaded = loadStock(o, program, tools, project ? &*project : nullptr, report, notes);
     sim.stock.emplace(std::move(loaded.stock));
     TriDexelStock& stock = *sim.stock;
     report.stockBox = loaded.box;

@@ -248,15 +248,19 @@ Program runProject(const Project& project, const GcodeOptions& options) {
 }
 
 Box automaticWorkpieceBounds(const Program& program, double marginPercent) {
+    return automaticWorkpieceBounds(program.path, program.tools, marginPercent);
+}
+
+Box automaticWorkpieceBounds(const ToolPath& path, const ToolTable& tools, double marginPercent) {
     Box box;
     // A tool the program calls but nobody defined counts as the widest defined tool.
     double widest = 0.0;
-    for (const auto& [n, t] : program.tools) widest = std::max(widest, t.cuttingRadius());
-    for (const Move& m : program.path.moves) {
+    for (const auto& [n, t] : tools) widest = std::max(widest, t.cuttingRadius());
+    for (const Move& m : path.moves) {
         if (m.rapid) continue;
         double radius = widest;
-        auto it = program.tools.find(m.tool);
-        if (it != program.tools.end()) radius = it->second.cuttingRadius();
+        auto it = tools.find(m.tool);
+        if (it != tools.end()) radius = it->second.cuttingRadius();
         for (const Vec3& p : {m.start, m.end}) {
             // Widen across the axis: for a vertical axis, in x and y.
             const Vec3 a = glm::normalize(m.axis);

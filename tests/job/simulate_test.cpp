@@ -146,6 +146,6 @@ TEST_CASE("the job names what is missing or malformed", "[job][errors]") {
 
 TEST_CASE("the default spacing is a round fraction of the stock", "[job]") {
     CHECK(chooseResolution(Box{Vec3(0.0), Vec3(1694, 890, 870)}) == Approx(2.0));
-    CHECK(chooseResolution(Box{Vec3(0.0), Vec3(80, 80, 20)}) == Approx(0.1));
-    CHECK(chooseResolution(Box{Vec3(0.0), Vec3(1000, 800, 440)}) == Approx(1.0));
+    CHECK(chooseResolution(Box{Vec3(0.0), Vec3(80, 80, 20)}) == Approx(0.2));
+    CHECK(chooseResolution(Box{Vec3(0.0), Vec3(1000, 800, 440)}) == Approx(2.0));
 }

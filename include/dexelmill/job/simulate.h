@@ -129,7 +129,7 @@ SimulateReport simulate(const SimulateOptions& options);
 /// @brief The report as JSON text (the fields of SimulateReport, snake_case, units in the names).
 std::string reportJson(const SimulateReport& report);
 
-/// @brief A default lattice spacing for a stock box: about 1/800 of its longest side, rounded
+/// @brief A default lattice spacing for a stock box: about 1/400 of its longest side, rounded
 /// down to 1, 2 or 5 times a power of ten.
 double chooseResolution(const Box& stock);
 

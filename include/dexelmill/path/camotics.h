@@ -59,6 +59,8 @@ Program runProject(const Project& project, const GcodeOptions& options = {});
 /// defined), topped at z = 0 when the cuts go below it, and grown by marginPercent of each size
 /// (not above the top).
 Box automaticWorkpieceBounds(const Program& program, double marginPercent);
+/// @brief The same for a tool path and the tools its moves use.
+Box automaticWorkpieceBounds(const ToolPath& path, const ToolTable& tools, double marginPercent);
 
 /// @brief Kinds of program files.
 enum class ProgramKind { Gcode, Apt, Camotics };
