@@ -56,10 +56,10 @@ std::string reportJson(const SimulateReport& r) {
     return j.dump(2) + "\n";
 }
 
-double chooseResolution(const Box& stock) {
+double chooseResolution(const Box& stock, double cells) {
     const Vec3 s = stock.size();
     const double longest = std::max({s.x, s.y, s.z});
-    const double raw = longest / 400.0;
+    const double raw = longest / cells;
     const double decade = std::pow(10.0, std::floor(std::log10(raw)));
     for (double m : {5.0, 2.0, 1.0})
         if (m * decade <= raw) return m * decade;

@@ -166,7 +166,7 @@ LoadedStock loadStock(const SimulateOptions& o, const Program& program, const To
     double h = o.resolution;
     if (h <= 0 && project && project->resolution > 0) h = project->resolution;
     if (h <= 0) {
-        h = chooseResolution(box);
+        h = chooseResolution(box, o.cellsAlongLongestSide);
         report.resolutionChosen = true;
     }
     const Lattice lattice = Lattice::fromBox(box, h);

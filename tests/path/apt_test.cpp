@@ -7,7 +7,7 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/path/apt.h"
-#include "path/testdata.h"
+#include "testdata.h"
 
 using namespace dexelmill;
 

@@ -6,7 +6,7 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/path/camotics.h"
-#include "path/testdata.h"
+#include "testdata.h"
 
 using namespace dexelmill;
 

@@ -12,7 +12,7 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/path/gcode.h"
-#include "path/testdata.h"
+#include "testdata.h"
 
 using namespace dexelmill;
 

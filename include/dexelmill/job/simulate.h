@@ -40,6 +40,8 @@ struct SimulateOptions {
 
     /// Lattice spacing; 0 chooses one from the stock (see chooseResolution).
     double resolution = 0.0;
+    /// When the spacing is chosen: about this many lattice points along the stock's longest side.
+    double cellsAlongLongestSide = 400;
     FamilySet families = FamilySet::all();
     /// Largest distance between an arc and its chords.
     double chordTolerance = 0.001;
@@ -129,9 +131,9 @@ SimulateReport simulate(const SimulateOptions& options);
 /// @brief The report as JSON text (the fields of SimulateReport, snake_case, units in the names).
 std::string reportJson(const SimulateReport& report);
 
-/// @brief A default lattice spacing for a stock box: about 1/400 of its longest side, rounded
-/// down to 1, 2 or 5 times a power of ten.
-double chooseResolution(const Box& stock);
+/// @brief A default lattice spacing for a stock box: its longest side divided by `cells` (about),
+/// rounded down to 1, 2 or 5 times a power of ten.
+double chooseResolution(const Box& stock, double cells = 400);
 
 /// @brief Peak resident memory of this process so far (MiB).
 double peakMemoryMb();

@@ -1,4 +1,4 @@
-// Where the shared real-program testdata lives, for the path tests.
+// Where the shared real-program testdata lives (../shared/testdata), for every test area.
 #pragma once
 
 #include <catch2/catch.hpp>
