@@ -123,7 +123,7 @@ void BM_Raster(benchmark::State& state) {
         state.PauseTiming();
         TriDexelStock stock = TriDexelStock::fromBox(Box{Vec3(0, 0, 0), Vec3(40, 40, 10)}, h);
         state.ResumeTiming();
-        res = cut(stock, path, tools, opt);
+        res = cutStock(stock, path, tools, opt);
         benchmark::DoNotOptimize(res.removedVolume);
     }
     state.counters["moves"] = double(path.moves.size());

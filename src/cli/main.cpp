@@ -1,25 +1,68 @@
-// dexelmill: the command-line tool. It parses options, calls the library and prints; nothing else.
+// dexelmill: the command-line tool. It parses options, calls the library and prints; nothing
+// else. Exit codes: 0 success, 1 an input or processing error, 2 a usage error.
+#include <cstdio>
 #include <iostream>
+#include <sstream>
 
 #include <CLI/CLI.hpp>
 
+#include "commands.h"
 #include "dexelmill/error.h"
 
+namespace {
+
+const char* kDescription =
+    "dexelmill " DEXELMILL_VERSION
+    " - predicts the part a CNC milling program cuts from a block of stock.\n"
+    "The stock is a tri-dexel model (rays along x, y and z holding material intervals); every\n"
+    "move's swept tool volume is subtracted exactly, then the result is rebuilt as an OpenVDB\n"
+    "level set and written as a watertight mesh, a .vdb file, a picture and a JSON report.\n"
+    "Lengths are in mm and angles in degrees everywhere.";
+
+}  // namespace
+
 int main(int argc, char** argv) {
-    CLI::App app{
-        "dexelmill " DEXELMILL_VERSION
-        " - predicts the part a CNC milling program cuts from a block of stock, with a tri-dexel\n"
-        "stock model and exact swept tool envelopes. Lengths are in mm, angles in degrees."};
+    CLI::App app{kDescription, "dexelmill"};
     app.set_version_flag("--version", std::string("dexelmill ") + DEXELMILL_VERSION);
+    app.require_subcommand(1);
+    app.footer(
+        "Examples:\n"
+        "  dexelmill simulate part.ngc --stock box:0,0,-20,100,80,0 --tool ball:d=6 -o part.stl\n"
+        "  dexelmill simulate project.camotics --png part.png --report report.json\n"
+        "  dexelmill info part.ngc\n"
+        "  dexelmill study --case tilted-slot --resolutions 2,1,0.5 --families z,xyz --csv study.csv\n"
+        "Run 'dexelmill COMMAND --help' for a command's options.");
+
+    dexelmill::cli::SimulateArgs sim;
+    CLI::App* simulate = dexelmill::cli::addSimulate(app, sim);
+    std::string infoFile;
+    CLI::App* info = app.add_subcommand("info", "What a program, project or VDB file holds: moves, tools, extents.");
+    info->add_option("FILE", infoFile, "A G-code or APT program, a .camotics project or a .vdb file")->required();
+
+    dexelmill::cli::StudyArgs study;
+    CLI::App* studyCmd = dexelmill::cli::addStudy(app, study);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e) == 0 ? 0 : 2;
+        const int code = app.exit(e);
+        return code == 0 ? 0 : 2;
     }
     try {
-        std::cout << app.help();
+        if (simulate->parsed()) return dexelmill::cli::runSimulate(sim);
+        if (info->parsed()) return dexelmill::cli::runInfo(infoFile);
+        if (studyCmd->parsed()) return dexelmill::cli::runStudy(study);
+    } catch (const dexelmill::cli::UsageError& e) {
+        std::cerr << "dexelmill: " << e.what() << "\nRun 'dexelmill --help' for usage.\n";
+        return 2;
     } catch (const dexelmill::Error& e) {
-        std::cerr << e.what() << "\n";
+        // ParseErrors already read "file:line:col: error: ..."; others get a prefix.
+        const std::string msg = e.what();
+        if (dynamic_cast<const dexelmill::ParseError*>(&e)) std::cerr << msg << "\n";
+        else std::cerr << "dexelmill: error: " << msg << "\n";
+        return 1;
+    } catch (const std::exception& e) {
+        std::cerr << "dexelmill: error: " << e.what() << "\n";
         return 1;
     }
     return 0;

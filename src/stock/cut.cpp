@@ -149,7 +149,7 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
 
 }  // namespace
 
-CutResult cut(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools, const CutOptions& options) {
+CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools, const CutOptions& options) {
     const std::size_t nMoves = path.moves.size();
     CutResult result;
     result.moves.resize(nMoves);
@@ -161,7 +161,7 @@ CutResult cut(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools
         if (regions.count(mv.tool)) continue;
         const auto it = tools.find(mv.tool);
         if (it == tools.end())
-            throw Error(path.where(mv.source).str() + ": move " + std::to_string(i + 1) + " uses tool " +
+            throw Error(path.where(mv.source).str() + ": move " + std::to_string(i + 1) + " uses tool T" +
                         std::to_string(mv.tool) + ", which is not in the tool table");
         const Tool& t = it->second;
         ToolRegions r;
@@ -255,7 +255,7 @@ CutResult cut(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools
                 MoveStats& ms = result.moves[m0 + s.move];
                 ms.visited += s.visited;
                 ms.changed += s.changed;
-                ms.removedVolume += s.removed * cell;
+                ms.removed += s.removed * cell;
                 ms.shankVolume += s.shank * cell;
             }
             tileStats[t].clear();
@@ -269,10 +269,10 @@ CutResult cut(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools
         const Move& mv = path.moves[i];
         result.visited += ms.visited;
         result.changed += ms.changed;
-        result.removedVolume += ms.removedVolume;
+        result.removedVolume += ms.removed;
         result.shankVolume += ms.shankVolume;
-        if (mv.rapid && ms.removedVolume > options.collisionVolume)
-            result.collisions.push_back({i, mv.source, CollisionKind::Rapid, ms.removedVolume});
+        if (mv.rapid && ms.removed > options.collisionVolume)
+            result.collisions.push_back({i, mv.source, CollisionKind::Rapid, ms.removed});
         if (ms.shankVolume > options.collisionVolume)
             result.collisions.push_back({i, mv.source, CollisionKind::Shank, ms.shankVolume});
     }

@@ -12,6 +12,10 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
+/// CL files print CUTTER values with about six significant digits, so an APT profile that should
+/// meet the axis or a corner exactly may miss it by this much relative to the diameter.
+constexpr double kAptDigits = 1e-6;
+
 std::string num(double v) {
     std::ostringstream s;
     s << v;
@@ -168,12 +172,12 @@ Tool aptCutter(double d, double r, double e, double f, double alpha, double beta
         bad(who, "d/2 = " + num(d / 2) + " does not match the corner, e + r cos(beta) = " + num(r2));
     // The bottom flank at alpha touches the corner at T1 (the corner point itself when r = 0).
     const double r1 = e + r * std::sin(alpha), z1 = f - r * std::cos(alpha);
-    if (z1 < -tol::kProfileJoint) bad(who, "the corner reaches below the tip: f - r cos(alpha) = " + num(z1));
+    if (z1 < -kAptDigits * std::max(1.0, d)) bad(who, "the corner reaches below the tip: f - r cos(alpha) = " + num(z1));
     double rTip = r1;
     if (alpha > 0.0) rTip = r1 - z1 / std::tan(alpha);
-    else if (z1 > tol::kProfileJoint)
+    else if (z1 > kAptDigits * std::max(1.0, d))
         bad(who, "with alpha = 0 the bottom is flat, so f must equal r, got f = " + num(f) + ", r = " + num(r));
-    if (rTip < -tol::kProfileJoint)
+    if (rTip < -kAptDigits * std::max(1.0, d))
         bad(who, "the bottom flank meets the axis " + num(-rTip * std::tan(alpha)) + " mm above the tip");
     rTip = std::max(rTip, 0.0);
     if (!(h > std::max(z1, z2) + tol::kLength)) bad(who, "h = " + num(h) + " does not clear the corner");

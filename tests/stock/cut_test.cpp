@@ -80,7 +80,7 @@ TEST_CASE("cut: after a random program the three families agree", "[stock][cut]"
     const double h = 0.25;
     TriDexelStock stock = TriDexelStock::fromBox(kStockBox, h);
     const ToolPath path = randomProgram(7, 300);
-    const CutResult res = cut(stock, path, testTools());
+    const CutResult res = cutStock(stock, path, testTools());
     REQUIRE(res.removedVolume > 100.0);  // the program does cut
 
     // Every lattice point gets the same answer from its three dexels.
@@ -130,9 +130,9 @@ TEST_CASE("cut: 1 and N threads give identical results bit for bit", "[stock][cu
     many.threads = 2;
     CutOptions small = many;
     small.batchMoves = 7;
-    const CutResult a = cut(serial, path, tools, one);
-    const CutResult b = cut(parallel, path, tools, many);
-    const CutResult c = cut(batched, path, tools, small);
+    const CutResult a = cutStock(serial, path, tools, one);
+    const CutResult b = cutStock(parallel, path, tools, many);
+    const CutResult c = cutStock(batched, path, tools, small);
     CHECK(sameStock(serial, parallel));
     CHECK(sameStock(serial, batched));
     for (const CutResult* r : {&b, &c}) {
@@ -141,7 +141,7 @@ TEST_CASE("cut: 1 and N threads give identical results bit for bit", "[stock][cu
                     r->collisions.size() == a.collisions.size();
         for (std::size_t i = 0; i < a.moves.size(); ++i)
             same = same && r->moves[i].visited == a.moves[i].visited && r->moves[i].changed == a.moves[i].changed &&
-                   r->moves[i].removedVolume == a.moves[i].removedVolume &&
+                   r->moves[i].removed == a.moves[i].removed &&
                    r->moves[i].shankVolume == a.moves[i].shankVolume;
         CHECK(same);
     }
@@ -160,7 +160,7 @@ TEST_CASE("cut: a rapid through material is a collision with its source line", "
     Move feed = crash;  // the same cut as a feed move: no collision
     feed.rapid = false, feed.start.y = feed.end.y = 15, feed.source = {0, 5};
     path.moves = {safe, crash, feed};
-    const CutResult res = cut(stock, path, testTools());
+    const CutResult res = cutStock(stock, path, testTools());
     REQUIRE(res.collisions.size() == 1);
     CHECK(res.collisions[0].move == 1);
     CHECK(res.collisions[0].kind == CollisionKind::Rapid);
@@ -168,10 +168,10 @@ TEST_CASE("cut: a rapid through material is a collision with its source line", "
     // A slot 4 wide, 2 deep, 20 long: 160 mm^3 up to the lattice's O(h) resolution.
     CHECK(res.collisions[0].volume == Approx(160.0).epsilon(0.05));
     CHECK(res.moves[0].changed == 0);
-    CHECK(res.moves[2].removedVolume == Approx(160.0).epsilon(0.05));
+    CHECK(res.moves[2].removed == Approx(160.0).epsilon(0.05));
 }
 
-TEST_CASE("cut: material met by the shank is reported, and kept unless asked", "[stock][cut]") {
+TEST_CASE("cut: material met by the shank is reported, and removed unless asked not to", "[stock][cut]") {
     // Flat D4 with 3 mm of flute under a 27 mm shank, fed along x at a tip height of 4 from
     // outside the stock to x = 15: the flutes cut heights 4..7 and the shank meets 7..10, each
     // over the footprint 15 x 4 plus the half disk at the end, 60 + 2 pi mm^2. A plunge would not
@@ -188,7 +188,7 @@ TEST_CASE("cut: material met by the shank is reported, and kept unless asked", "
         TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.2);
         CutOptions opt;
         opt.removeShankMaterial = remove;
-        const CutResult res = cut(stock, path, tools, opt);
+        const CutResult res = cutStock(stock, path, tools, opt);
         REQUIRE(res.collisions.size() == 1);
         CHECK(res.collisions[0].kind == CollisionKind::Shank);
         CHECK(res.collisions[0].move == 0);
@@ -208,9 +208,9 @@ TEST_CASE("cut: a move whose tool is not in the table throws", "[stock][cut]") {
     Move m;
     m.tool = 42, m.source = {0, 12};
     path.moves = {m};
-    CHECK_THROWS_AS(cut(stock, path, testTools()), Error);
+    CHECK_THROWS_AS(cutStock(stock, path, testTools()), Error);
     try {
-        cut(stock, path, testTools());
+        cutStock(stock, path, testTools());
     } catch (const Error& e) {
         CHECK(std::string(e.what()).find("x.nc:12") != std::string::npos);
     }
@@ -228,7 +228,7 @@ TEST_CASE("cut: progress is reported per batch, the same for any thread count", 
             CHECK(total == 130);
             seen[run].push_back(done);
         };
-        cut(stock, path, testTools(), opt);
+        cutStock(stock, path, testTools(), opt);
     }
     CHECK(seen[0] == std::vector<std::size_t>{32, 64, 96, 128, 130});
     CHECK(seen[0] == seen[1]);
@@ -243,9 +243,9 @@ TEST_CASE("cut: culling visits few dexels that do not change", "[stock][cut]") {
     Move m;
     m.start = Vec3(2, 10, 8), m.end = Vec3(18, 10, 8), m.tool = 1;
     path.moves = {m};
-    const CutResult res = cut(stock, path, testTools());
+    const CutResult res = cutStock(stock, path, testTools());
     REQUIRE(res.moves[0].changed > 0);
     CHECK(double(res.moves[0].visited) / double(res.moves[0].changed) < 1.2);
     // Slot 16 x 4 plus two half disks of radius 2, 2 deep.
-    CHECK(res.moves[0].removedVolume == Approx((16.0 * 4.0 + M_PI * 4.0) * 2.0).epsilon(0.03));
+    CHECK(res.moves[0].removed == Approx((16.0 * 4.0 + M_PI * 4.0) * 2.0).epsilon(0.03));
 }

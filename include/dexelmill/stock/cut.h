@@ -16,9 +16,9 @@
 ///  - a rapid move whose cutting part removes material (a crash through the stock);
 ///  - material met by the shank region (heights [cutting length, total length]) swept along the
 ///    move. It is measured after the move's cutting part has removed what it sweeps, so a shank
-///    following its flutes into their own cut is not a collision. By default that material stays
-///    in the stock (CutOptions::removeShankMaterial): the flutes did not cut it, and the report
-///    says where the program is wrong.
+///    following its flutes into their own cut is not a collision. By default that material is
+///    removed as well (the tool went through it; CutOptions::removeShankMaterial = false keeps
+///    it, to show what the flutes alone would have cut).
 #pragma once
 
 #include <cstddef>
@@ -33,8 +33,8 @@ namespace dexelmill {
 
 /// @brief Options of the cutting loop.
 struct CutOptions {
-    /// Also remove the material the shank region meets (it is reported either way).
-    bool removeShankMaterial = false;
+    /// Remove the material the shank region meets as well as report it (it is reported either way).
+    bool removeShankMaterial = true;
     /// A move meeting at most this volume (mm^3) is not reported as a collision: float endpoint
     /// storage makes grazing contacts of about 1e-7 mm per dexel.
     double collisionVolume = 1e-6;
@@ -52,7 +52,7 @@ struct CutOptions {
 struct MoveStats {
     std::uint64_t visited = 0;   ///< dexels whose line was intersected with the move's sweep
     std::uint64_t changed = 0;   ///< dexels that lost material
-    double removedVolume = 0.0;  ///< material removed (mm^3), mean over the stock's families
+    double removed = 0.0;        ///< material removed (mm^3), mean over the stock's families
     double shankVolume = 0.0;    ///< material met by the shank region (mm^3), mean over families
 };
 
@@ -63,7 +63,7 @@ enum class CollisionKind {
 };
 
 /// @brief A collision: which move, where it came from, what and how much (mm^3).
-struct Collision {
+struct CutCollision {
     std::size_t move = 0;
     SourceRef source;
     CollisionKind kind = CollisionKind::Rapid;
@@ -73,7 +73,7 @@ struct Collision {
 /// @brief The result of a cut: per-move statistics, collisions in move order, totals.
 struct CutResult {
     std::vector<MoveStats> moves;
-    std::vector<Collision> collisions;
+    std::vector<CutCollision> collisions;
     std::uint64_t visited = 0;
     std::uint64_t changed = 0;
     double removedVolume = 0.0;
@@ -84,6 +84,7 @@ struct CutResult {
 /// @param tools the tools by number; every move's tool must be in it.
 /// @throw Error if a move uses a tool that is not in the table (naming the move and its source)
 /// or a tool has more convex parts than the sweep handles.
-CutResult cut(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools, const CutOptions& options = {});
+CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools,
+                   const CutOptions& options = {});
 
 }  // namespace dexelmill

@@ -1,0 +1,34 @@
+/// @file mesh_io.h
+/// @brief Triangle mesh files: OBJ, binary STL and binary PLY out; STL (binary or ASCII) in.
+/// Every writer goes through writeFileAtomically.
+#pragma once
+
+#include <string>
+
+#include "dexelmill/surface/mesh.h"
+
+namespace dexelmill {
+
+/// @brief Writes a Wavefront OBJ: "v x y z" lines (shortest round-trip decimal), then
+/// "f a b c" with 1-based indices.
+/// @throw Error on any I/O failure (the target is then untouched).
+void writeObj(const std::string& path, const Mesh& mesh);
+
+/// @brief Writes a binary STL: 80-byte header, triangle count, per triangle the unit normal,
+/// three vertices (32-bit little-endian floats) and a zero attribute word.
+/// @throw Error on any I/O failure, or more than 2^32 - 1 triangles.
+void writeStl(const std::string& path, const Mesh& mesh);
+
+/// @brief Writes a binary little-endian PLY: float x, y, z per vertex; uchar count and int
+/// indices per face.
+/// @throw Error on any I/O failure.
+void writePly(const std::string& path, const Mesh& mesh);
+
+/// @brief Reads an STL file, binary or ASCII. Binary when the size is exactly 84 + 50 n bytes,
+/// n being the count at byte 80 (many binary files start with "solid" too); ASCII otherwise.
+/// Vertices with identical coordinates are merged, so a closed STL gives a closed mesh.
+/// @throw ParseError with file, line and column on malformed ASCII; Error if the file cannot be
+/// read or holds no triangle.
+Mesh readStl(const std::string& path);
+
+}  // namespace dexelmill

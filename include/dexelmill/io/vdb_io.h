@@ -1,0 +1,23 @@
+/// @file vdb_io.h
+/// @brief Level sets to and from OpenVDB .vdb files (openvdb::io::File). This header does not
+/// include OpenVDB.
+#pragma once
+
+#include <string>
+
+#include "dexelmill/surface/levelset.h"
+
+namespace dexelmill {
+
+/// @brief Writes the level set's grid, with its metadata, to a .vdb file (through
+/// writeFileAtomically).
+/// @throw Error if the handle is null or the file cannot be written.
+void writeVdb(const std::string& path, const LevelSet& levelSet);
+
+/// @brief Reads a float level-set grid from a .vdb file: the grid named `gridName`, or when that
+/// is empty the grid named "stock" if there is one, else the first float grid of class level set
+/// (or of unknown class).
+/// @throw Error if the file cannot be read or holds no such grid.
+LevelSet readVdb(const std::string& path, const std::string& gridName = "");
+
+}  // namespace dexelmill

@@ -1,0 +1,141 @@
+/// @file simulate.h
+/// @brief The main job: program in, part out. Reads the programs (or a CAMotics project), builds
+/// the stock, cuts it, rebuilds the level set, meshes it and writes the requested files and a
+/// report. The command line's `dexelmill simulate` is a thin layer over this.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "dexelmill/geometry/types.h"
+#include "dexelmill/path/toolpath.h"
+#include "dexelmill/stock/tridexel.h"
+#include "dexelmill/surface/levelset.h"
+#include "dexelmill/surface/mesh.h"
+#include "dexelmill/tool/tool.h"
+
+namespace dexelmill {
+
+/// @brief What a simulation reads and writes. Lengths in mm.
+struct SimulateOptions {
+    /// A `.camotics` project, or one or more programs (G-code or APT CL) run in order.
+    std::vector<std::string> inputs;
+    /// A program already in memory (used instead of `inputs` when set, e.g. by studies).
+    std::optional<Program> program;
+
+    /// The stock: a box, or a file (STL or VDB) ray-cast into tri-dexels. With neither, the
+    /// project's workpiece, else the programs' cutting extent with a margin.
+    std::optional<Box> stockBox;
+    std::string stockFile;
+
+    /// Tools by number; they override the project's and the program's own. `defaultTool` serves
+    /// every tool number nobody defines (and programs that never select a tool).
+    std::map<int, Tool> tools;
+    std::optional<Tool> defaultTool;
+
+    /// Lattice spacing; 0 chooses one from the stock (see chooseResolution).
+    double resolution = 0.0;
+    /// When the spacing is chosen: about this many lattice points along the stock's longest side.
+    double cellsAlongLongestSide = 400;
+    FamilySet families = FamilySet::all();
+    /// Largest distance between an arc and its chords.
+    double chordTolerance = 0.001;
+
+    /// Outputs; empty paths are not written. The mesh format follows the extension (.obj, .stl,
+    /// .ply).
+    std::string meshPath, vdbPath, pngPath, reportPath;
+
+    /// Worker threads for cutting and rebuilding; 0 uses every core.
+    int threads = 0;
+
+    /// Called now and then from the calling thread with a stage name and the work done so far
+    /// out of `total` (moves while cutting). May be empty.
+    std::function<void(const char* stage, std::size_t done, std::size_t total)> progress;
+};
+
+/// @brief A place in a source file, as reported.
+struct ReportLocation {
+    std::string file;
+    int line = 0;
+};
+
+/// @brief A collision found while cutting.
+struct ReportCollision {
+    std::size_t move = 0;  ///< 0-based index into the program's moves
+    ReportLocation where;
+    std::string kind;  ///< "rapid" (a rapid move removed material) or "shank" (above the flutes)
+    double volumeMm3 = 0.0;
+};
+
+/// @brief A warning from a reader or the cutting loop.
+struct ReportWarning {
+    ReportLocation where;
+    std::string message;
+};
+
+/// @brief Everything the job found; also written as the JSON report.
+struct SimulateReport {
+    std::string version;
+    std::vector<std::string> inputs;
+    double resolutionMm = 0.0;
+    bool resolutionChosen = false;  ///< true when the job chose the spacing itself
+    std::string families;
+    Box stockBox;
+
+    std::size_t moves = 0, rapids = 0, toolChanges = 0;
+    std::array<int, 3> lattice{0, 0, 0};
+    std::array<std::size_t, 3> dexels{0, 0, 0};  ///< per family, 0 when not kept
+
+    double stockVolumeMm3 = 0.0, finalVolumeMm3 = 0.0, removedVolumeMm3 = 0.0;
+    std::array<std::optional<double>, 3> familyVolumesMm3;
+
+    std::vector<ReportCollision> collisions;
+    std::vector<ReportWarning> warnings;
+
+    std::size_t meshVertices = 0, meshTriangles = 0;
+    bool meshClosed = false;
+    double meshVolumeMm3 = 0.0;
+
+    struct Timing {
+        double parse = 0, cut = 0, rebuild = 0, mesh = 0, write = 0, total = 0;
+    } timingS;
+    double peakMemoryMb = 0.0;
+    std::size_t stockMemoryBytes = 0;
+};
+
+/// @brief Everything one run produced, in memory.
+struct Simulation {
+    Program program;
+    ToolTable tools;  ///< the tools the moves used, after the command line's overrides
+    std::optional<TriDexelStock> stock;
+    LevelSet levelSet;
+    Mesh mesh;
+    SimulateReport report;
+};
+
+/// @brief Reads, cuts, rebuilds and meshes; writes no file (the report's write and total times
+/// are then incomplete).
+/// @throw Error (ParseError with a location for bad programs) on any input or processing error.
+Simulation runSimulation(const SimulateOptions& options);
+
+/// @brief Runs the whole job: runSimulation, then writes the requested files.
+/// @throw Error as runSimulation, or when a file cannot be written; no output file is then left
+/// half-written, and existing files are not replaced.
+SimulateReport simulate(const SimulateOptions& options);
+
+/// @brief The report as JSON text (the fields of SimulateReport, snake_case, units in the names).
+std::string reportJson(const SimulateReport& report);
+
+/// @brief A default lattice spacing for a stock box: its longest side divided by `cells` (about),
+/// rounded down to 1, 2 or 5 times a power of ten.
+double chooseResolution(const Box& stock, double cells = 400);
+
+/// @brief Peak resident memory of this process so far (MiB).
+double peakMemoryMb();
+
+}  // namespace dexelmill

@@ -1,0 +1,88 @@
+/// @file gcode.h
+/// @brief The RS274/NGC (G-code) reader: LinuxCNC's dialect plus the Fanuc, Haas and GRBL forms
+/// met in practice. Programs are interpreted (parameters, expressions, O-word flow, M98
+/// subprograms, canned cycles) into linear cutter-location moves; arcs and helices are split into
+/// chords within a tolerance.
+///
+/// Coordinates of the moves are machine coordinates in mm: the program point plus the active work
+/// offsets (G54..G59.3, G92, G52), after the tilted work plane (G68.2) if one is active. Tool
+/// length offsets do not move the cutter-location point: the tip follows the programmed point.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "dexelmill/geometry/types.h"
+#include "dexelmill/path/toolpath.h"
+
+namespace dexelmill {
+
+/// @brief How to read G-code.
+struct GcodeOptions {
+    /// Largest distance between an arc and the chords that replace it (mm).
+    double chordTolerance = 0.001;
+    /// Units before the program says G20/G21: false = mm (G21), true = inch (G20).
+    bool initialInches = false;
+    /// A LinuxCNC tool table (`T1 P1 D6 Z..`) to read; empty for none. Its tools are flat end
+    /// mills of the table's diameter and go into Program::tools.
+    std::string toolTableFile;
+    /// Units of the tool table's lengths: false = mm, true = inch.
+    bool toolTableInches = false;
+    /// Tool axis of the moves while no tilted work plane is active (normalised by the reader).
+    Vec3 initialToolAxis{0.0, 0.0, 1.0};
+    /// A `T` word changes the tool at once, without M6 (CAMotics behaviour). Off: T only selects,
+    /// M6 changes (LinuxCNC behaviour).
+    bool toolChangeOnT = false;
+    /// Run blocks starting with `/` (block delete switch off). Off: skip them.
+    bool runDeletedBlocks = true;
+    /// Deepest nesting of subroutine calls before the program is declared runaway recursion.
+    int maxCallDepth = 64;
+    /// Most blocks executed (loops included) before the program is declared not to terminate.
+    std::size_t maxBlocks = 50'000'000;
+    /// Most chords one arc may become before the reader refuses it.
+    std::size_t maxArcSegments = 1'000'000;
+    /// Most moves a program may make (loops and repeats included) before the reader refuses it.
+    std::size_t maxMoves = 200'000'000;
+    /// Where the machine is when the program starts (machine coordinates, mm). Unset, the start
+    /// is unknown: moves only establish the position until X, Y and Z have all been programmed,
+    /// so no move sweeps from a guessed origin through the stock (one warning says so). LinuxCNC
+    /// itself starts wherever the machine is, commonly (0, 0, 0).
+    std::optional<Vec3> startPosition;
+};
+
+/// @brief Interprets G-code text.
+/// @param text the program
+/// @param fileName the name used in locations and in ToolPath::files
+/// @throw ParseError with file:line:col and the offending text for malformed input or
+/// unsupported motion (rotary axes, XY rotation, threading, probing...).
+Program parseGcode(std::string_view text, const std::string& fileName,
+                   const GcodeOptions& options = {});
+
+/// @brief Reads and interprets one G-code file.
+/// @throw Error if the file cannot be read; ParseError as parseGcode.
+Program readGcode(const std::string& path, const GcodeOptions& options = {});
+
+/// @brief Runs several G-code files one after the other on one machine (state such as position,
+/// tool and offsets carries over), as CAMotics does with a project's file list.
+/// @throw Error if a file cannot be read; ParseError as parseGcode.
+Program readGcodeFiles(const std::vector<std::string>& paths, const GcodeOptions& options = {});
+
+/// @brief One entry of a LinuxCNC tool table.
+struct ToolTableEntry {
+    int tool = 0;
+    int pocket = 0;
+    double diameter = 0.0;     ///< mm
+    double zOffset = 0.0;      ///< tool length offset, mm
+    std::string comment;
+    int line = 0;
+};
+
+/// @brief Parses a LinuxCNC tool table (`T<n> P<n> [X Y Z A B C U V W D I J Q]... ;comment`).
+/// @param inches the table's lengths are inches (converted to mm)
+/// @throw ParseError for malformed entries.
+std::vector<ToolTableEntry> parseLinuxCncToolTable(std::string_view text,
+                                                   const std::string& fileName, bool inches);
+
+}  // namespace dexelmill

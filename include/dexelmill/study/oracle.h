@@ -1,0 +1,51 @@
+/// @file oracle.h
+/// @brief The exact machined solid by brute force (method.md section 6): a point is removed iff
+/// some move puts it inside the tool at some feed parameter u in [0, 1]. Shares no code with the
+/// sweep solver: it samples u densely and refines with a golden-section search, using only the
+/// tool's profile radius. Slow, simple and independent: the yardstick of accuracy studies.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "dexelmill/geometry/types.h"
+#include "dexelmill/path/toolpath.h"
+
+namespace dexelmill {
+
+/// @brief Point membership in "stock minus the union of the swept volumes", localised with a
+/// uniform grid of buckets over the stock so a query only visits the moves whose tool box
+/// overlaps its bucket.
+class MachinedSolidOracle {
+public:
+    /// @param stock the stock box; the program's moves are taken from `path`, their tools from
+    /// `tools` (every tool a move names must be there).
+    /// @param resolution the finest length the oracle must resolve along a move (mm); the feed
+    /// parameter is sampled at least every resolution / 4.
+    /// @throw Error if a move names a tool that is not in the table.
+    MachinedSolidOracle(const Box& stock, const ToolPath& path, const ToolTable& tools, double resolution);
+
+    /// @brief True when some move's tool covers p at some u in [0, 1].
+    bool removed(const Vec3& p) const;
+    /// @brief True when p is in the stock box and not removed: inside the exact machined part.
+    bool inside(const Vec3& p) const { return stock_.contains(p) && !removed(p); }
+    const Box& stock() const { return stock_; }
+
+private:
+    struct MoveRef {
+        Vec3 start, feed, axis;
+        const Tool* tool;
+        Box bounds;
+    };
+    bool inSweep(const MoveRef& m, const Vec3& p) const;
+    std::size_t bucketOf(const Vec3& p) const;
+
+    Box stock_;
+    double step_;
+    std::vector<MoveRef> moves_;
+    int nb_[3] = {1, 1, 1};
+    Vec3 bucketSize_{1.0};
+    std::vector<std::vector<std::uint32_t>> buckets_;
+};
+
+}  // namespace dexelmill

@@ -1,0 +1,85 @@
+/// @file study.h
+/// @brief Accuracy studies: run the main job once per (spacing, dexel family set) and measure each
+/// result against the exact machined solid (MachinedSolidOracle): surface deviation of the mesh,
+/// volume error, and material the model loses or invents.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "dexelmill/job/simulate.h"
+
+namespace dexelmill {
+
+/// @brief What to study.
+struct StudyOptions {
+    /// The job to repeat: program or project, stock, tools. Its resolution, families and output
+    /// paths are ignored.
+    SimulateOptions job;
+    std::vector<double> resolutions{2.0, 1.0, 0.5};  ///< mm, any order
+    std::vector<FamilySet> familySets{FamilySet::only(Axis::Z), FamilySet::all()};
+    /// Mesh vertices measured per run at most (an even spread over the mesh).
+    std::size_t maxVertices = 20000;
+    /// Random points (fixed seed) for the lost and invented material counts.
+    std::size_t samplePoints = 100000;
+    /// When set, a PLY mesh coloured by deviation is written per run into this folder.
+    std::string plyDeviationDir;
+    /// Exact part volume when known (mm^3); otherwise a finer tri-dexel run is the reference.
+    std::optional<double> exactVolumeMm3;
+    std::function<void(const char* stage, std::size_t done, std::size_t total)> progress;
+};
+
+/// @brief Measurements of one run.
+struct StudyRun {
+    double h = 0.0;
+    std::string families;
+    std::size_t vertices = 0;  ///< mesh vertices measured
+    double devMaxMm = 0.0, devRmsMm = 0.0, devP95Mm = 0.0;  ///< |signed distance| statistics
+    double devMeanMm = 0.0;                                 ///< signed mean (+ = extra material)
+    double volumeMm3 = 0.0;                                 ///< the model's part volume
+    double volumeErrorMm3 = 0.0;                            ///< model minus reference
+    /// Sample points in the exact part that the model calls empty, and the reverse, as volumes;
+    /// the "far" counts only those more than one spacing from the model's surface (features
+    /// lost or invented, not boundary rounding).
+    double lostMm3 = 0.0, inventedMm3 = 0.0, lostFarMm3 = 0.0, inventedFarMm3 = 0.0;
+    double seconds = 0.0;
+    double peakMemoryMb = 0.0;
+    double stockMemoryMb = 0.0;
+};
+
+struct StudyResult {
+    std::string subject;
+    double referenceVolumeMm3 = 0.0;
+    std::string reference;  ///< "exact" or "tri-dexel at h = ..."
+    std::vector<StudyRun> runs;
+};
+
+/// @brief Runs and measures every (spacing, family set).
+/// @throw Error as the job does, or if the lists are empty.
+StudyResult runStudy(const StudyOptions& options);
+
+/// @brief One row per run: h_mm, families, vertices, dev_max_mm, dev_rms_mm, dev_p95_mm,
+/// dev_max_h, dev_rms_h, dev_p95_h, dev_mean_mm, volume_mm3, volume_error_mm3, volume_error_rel,
+/// lost_mm3, invented_mm3, lost_far_mm3, invented_far_mm3, seconds, peak_memory_mb, stock_memory_mb.
+std::string studyCsv(const StudyResult& result);
+
+/// @brief A log-log PNG plot of the maximum and RMS deviation against spacing, one line pair per
+/// family set (written atomically).
+void writeStudyPlot(const std::string& path, const StudyResult& result);
+
+/// @brief A built-in study case: a program, its tools and stock, made in memory.
+struct StudyCase {
+    std::string name;
+    std::string description;
+    Program program;
+    Box stock;
+};
+
+/// @brief The names of the built-in cases: tilted-slot, bull-undercut, ball-raster, v-carve.
+std::vector<std::string> studyCaseNames();
+/// @brief Builds a built-in case.
+/// @throw Error listing the names if there is no such case.
+StudyCase studyCase(const std::string& name);
+
+}  // namespace dexelmill

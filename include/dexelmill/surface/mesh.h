@@ -1,0 +1,68 @@
+/// @file mesh.h
+/// @brief A plain indexed triangle mesh, free of OpenVDB, and the checks every mesh the library
+/// produces must pass: a closed, consistently oriented 2-manifold without degenerate triangles.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "dexelmill/geometry/types.h"
+
+namespace dexelmill {
+
+namespace tol {
+/// A triangle whose doubled area |(b-a) x (c-a)| is at most this times its longest squared edge
+/// is degenerate (a sliver with all three vertices on one line, or a point).
+constexpr double kDegenerateTriangle = 1e-12;
+}  // namespace tol
+
+/// @brief An indexed triangle mesh in world coordinates (mm). Triangles are counter-clockwise
+/// seen from outside the solid, so the outward normal is (b - a) x (c - a).
+struct Mesh {
+    using Triangle = std::array<std::uint32_t, 3>;
+
+    std::vector<Vec3> vertices;
+    std::vector<Triangle> triangles;
+
+    bool empty() const { return triangles.empty(); }
+    /// @brief The bounding box of the vertices (empty for an empty mesh).
+    Box bounds() const;
+    /// @brief Twice the area vector of triangle t: (b - a) x (c - a).
+    Vec3 areaVector(std::size_t t) const;
+};
+
+/// @brief What checkMesh found. A mesh is a closed 2-manifold when every undirected edge is
+/// shared by exactly two triangles that traverse it in opposite directions.
+struct MeshCheck {
+    std::size_t vertexCount = 0;
+    std::size_t triangleCount = 0;
+    std::size_t edgeCount = 0;            ///< distinct undirected edges
+    std::size_t boundaryEdges = 0;        ///< edges used by one triangle
+    std::size_t nonManifoldEdges = 0;     ///< edges used by three or more triangles
+    std::size_t misorientedEdges = 0;     ///< edges used twice in the same direction
+    std::size_t degenerateTriangles = 0;  ///< repeated index or (numerically) zero area
+    std::size_t invalidIndices = 0;       ///< triangles with an index past the vertex list
+    std::size_t unusedVertices = 0;       ///< vertices no triangle uses (allowed, reported)
+    double signedVolume = 0.0;            ///< mm^3, positive for outward-facing triangles
+    double area = 0.0;                    ///< mm^2
+
+    /// @brief Closed, oriented 2-manifold: no boundary, non-manifold or misoriented edges.
+    bool closedManifold() const {
+        return boundaryEdges == 0 && nonManifoldEdges == 0 && misorientedEdges == 0 &&
+               invalidIndices == 0 && triangleCount > 0;
+    }
+    /// @brief closedManifold() and no degenerate triangles.
+    bool ok() const { return closedManifold() && degenerateTriangles == 0; }
+};
+
+/// @brief Checks a mesh: edge manifoldness and orientation, degenerate triangles, volume, area.
+/// A triangle is degenerate when two of its indices are equal or when |(b-a) x (c-a)| is at most
+/// tol::kDegenerateTriangle times its longest squared edge (a needle or a sliver of zero area).
+MeshCheck checkMesh(const Mesh& mesh);
+
+/// @brief The signed volume enclosed by the mesh (divergence theorem), mm^3.
+double meshVolume(const Mesh& mesh);
+
+}  // namespace dexelmill

@@ -1,0 +1,60 @@
+// The subcommands of the dexelmill tool: option declarations and the code that runs them.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "dexelmill/error.h"
+
+namespace dexelmill {
+struct SimulateOptions;
+}
+
+namespace dexelmill::cli {
+
+/// @brief A malformed invocation: exit code 2.
+class UsageError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// @brief `dexelmill simulate` options as typed.
+struct SimulateArgs {
+    std::vector<std::string> inputs;
+    std::string stock;
+    std::vector<std::string> tools;
+    double resolution = 0.0;
+    std::string families = "xyz";
+    std::string output, vdb, png, report;
+    double chordTolerance = 0.001;
+    int threads = 0;
+    bool quiet = false;
+};
+
+/// @brief `dexelmill study` options as typed.
+struct StudyArgs {
+    SimulateArgs job;  ///< inputs, stock and tools (its output options are unused)
+    std::string caseName;
+    std::string resolutions = "2,1,0.5";
+    std::string familySets = "z,xyz";
+    std::string csv, plot, plyDir;
+    std::size_t maxVertices = 20000;
+    std::size_t samples = 100000;
+};
+
+CLI::App* addSimulate(CLI::App& app, SimulateArgs& args);
+int runSimulate(const SimulateArgs& args);
+CLI::App* addStudy(CLI::App& app, StudyArgs& args);
+int runStudy(const StudyArgs& args);
+int runInfo(const std::string& file);
+
+/// @brief The library's options for a typed simulate command.
+/// @throw UsageError for malformed values.
+SimulateOptions toOptions(const SimulateArgs& args);
+
+/// @brief Adds simulate's input, stock and tool options to a command.
+void addJobOptions(CLI::App& cmd, SimulateArgs& args, bool inputsRequired);
+
+}  // namespace dexelmill::cli

@@ -1,0 +1,89 @@
+// `dexelmill info FILE`: what a program, project or VDB file holds.
+#include <cstdio>
+#include <iostream>
+
+#include "commands.h"
+#include "dexelmill/io/vdb_io.h"
+#include "dexelmill/path/camotics.h"
+#include "dexelmill/surface/levelset.h"
+
+namespace dexelmill::cli {
+
+namespace {
+
+bool endsWith(const std::string& s, const std::string& suffix) {
+    if (s.size() < suffix.size()) return false;
+    for (std::size_t i = 0; i < suffix.size(); ++i)
+        if (std::tolower(static_cast<unsigned char>(s[s.size() - suffix.size() + i])) != suffix[i]) return false;
+    return true;
+}
+
+void printBox(const char* label, const Box& b) {
+    if (b.isEmpty()) {
+        std::printf("%-14s none\n", label);
+        return;
+    }
+    std::printf("%-14s x %.4g .. %.4g, y %.4g .. %.4g, z %.4g .. %.4g mm\n", label, b.lo.x, b.hi.x, b.lo.y, b.hi.y,
+                b.lo.z, b.hi.z);
+}
+
+void printProgram(const Program& p) {
+    std::size_t rapids = 0;
+    double feedLength = 0, rapidLength = 0;
+    Box cutting;
+    bool tilted = false;
+    for (const Move& m : p.path.moves) {
+        const double len = glm::length(m.end - m.start);
+        if (m.rapid) {
+            ++rapids;
+            rapidLength += len;
+        } else {
+            feedLength += len;
+            cutting.expand(m.start);
+            cutting.expand(m.end);
+        }
+        if (std::abs(m.axis.z - 1.0) > 1e-12) tilted = true;
+    }
+    std::printf("%-14s %zu (%zu rapid), feed %.6g mm, rapid %.6g mm\n", "moves", p.path.moves.size(), rapids,
+                feedLength, rapidLength);
+    std::printf("%-14s %zu\n", "tool changes", p.path.toolChanges.size());
+    std::printf("%-14s %s\n", "tool axis", tilted ? "tilted (3+2)" : "+z throughout");
+    printBox("extent", p.path.bounds());
+    printBox("cutting", cutting);
+    for (const auto& [n, t] : p.tools) std::printf("%-14s T%d: %s\n", "tool", n, t.description().c_str());
+    std::printf("%-14s %zu\n", "warnings", p.diagnostics.size());
+    for (std::size_t i = 0; i < p.diagnostics.size() && i < 10; ++i)
+        std::printf("  %s: %s\n", p.diagnostics[i].where.str().c_str(), p.diagnostics[i].message.c_str());
+}
+
+}  // namespace
+
+int runInfo(const std::string& file) {
+    std::printf("%-14s %s\n", "file", file.c_str());
+    if (endsWith(file, ".vdb")) {
+        const LevelSet ls = readVdb(file);
+        std::printf("%-14s OpenVDB level set, voxel %.6g mm, half-width %.3g voxels\n", "kind", ls.voxelSize(),
+                    ls.halfWidth());
+        std::printf("%-14s %zu active voxels in %zu leaves, %.1f MiB\n", "grid", ls.activeVoxelCount(), ls.leafCount(),
+                    double(ls.memoryBytes()) / (1 << 20));
+        printBox("active", ls.activeBounds());
+        if (!ls.source().empty()) std::printf("%-14s %s\n", "source", ls.source().c_str());
+        return 0;
+    }
+    if (endsWith(file, ".camotics")) {
+        const Project project = readCamoticsProject(file);
+        std::printf("%-14s CAMotics project, %s units\n", "kind", project.metric ? "metric" : "imperial");
+        for (const std::string& f : project.files) std::printf("%-14s %s\n", "program", f.c_str());
+        if (project.workpiece.automatic)
+            std::printf("%-14s automatic, margin %.3g %%\n", "workpiece", project.workpiece.marginPercent);
+        else
+            printBox("workpiece", project.workpiece.bounds);
+        if (project.resolution > 0) std::printf("%-14s %.6g mm\n", "resolution", project.resolution);
+        printProgram(runProject(project));
+        return 0;
+    }
+    printProgram(readProgram(file));
+    return 0;
+}
+
+}  // namespace dexelmill::cli

@@ -1,0 +1,176 @@
+// `dexelmill simulate`: options to SimulateOptions, run the job, print warnings and a summary.
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+#include "commands.h"
+#include "dexelmill/job/simulate.h"
+#include "dexelmill/tool/spec.h"
+#include "progress.h"
+
+namespace dexelmill::cli {
+
+namespace {
+
+/// Most warnings and collisions printed one by one; the rest are counted (all are in --report).
+constexpr std::size_t kPrintedDiagnostics = 20;
+
+Box parseBox(const std::string& text) {
+    std::vector<double> v;
+    std::stringstream s(text);
+    std::string item;
+    while (std::getline(s, item, ',')) {
+        std::size_t used = 0;
+        double x = 0;
+        try {
+            x = std::stod(item, &used);
+        } catch (const std::exception&) {
+            used = 0;
+        }
+        if (used == 0 || used != item.size()) throw UsageError("--stock box: '" + item + "' is not a number");
+        v.push_back(x);
+    }
+    if (v.size() != 6) throw UsageError("--stock box: expected XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (6 numbers, mm)");
+    const Box b{Vec3(v[0], v[1], v[2]), Vec3(v[3], v[4], v[5])};
+    if (!(b.lo.x < b.hi.x && b.lo.y < b.hi.y && b.lo.z < b.hi.z))
+        throw UsageError("--stock box: each minimum must be below its maximum");
+    return b;
+}
+
+}  // namespace
+
+SimulateOptions toOptions(const SimulateArgs& a) {
+    SimulateOptions o;
+    o.inputs = a.inputs;
+    if (!a.stock.empty()) {
+        if (a.stock.rfind("box:", 0) == 0) o.stockBox = parseBox(a.stock.substr(4));
+        else o.stockFile = a.stock;
+    }
+    for (const std::string& t : a.tools) {
+        // N=SPEC gives tool N; a bare SPEC serves every tool number nobody defines.
+        const std::size_t eq = t.find('=');
+        const std::size_t colon = t.find(':');
+        try {
+            if (eq != std::string::npos && (colon == std::string::npos || eq < colon)) {
+                const std::string num = t.substr(0, eq);
+                std::size_t used = 0;
+                int n = -1;
+                try {
+                    n = std::stoi(num, &used);
+                } catch (const std::exception&) {
+                    used = 0;
+                }
+                if (used == 0 || used != num.size() || n < 0)
+                    throw UsageError("--tool " + t + ": '" + num + "' is not a tool number");
+                if (o.tools.count(n)) throw UsageError("--tool: tool " + num + " is given twice");
+                o.tools.emplace(n, parseToolSpec(t.substr(eq + 1)));
+            } else {
+                if (o.defaultTool) throw UsageError("--tool: more than one tool without a number (use N=SPEC)");
+                o.defaultTool = parseToolSpec(t);
+            }
+        } catch (const Error& e) {
+            throw UsageError(std::string("--tool: ") + e.what());
+        }
+    }
+    if (a.resolution < 0) throw UsageError("--resolution must be positive (mm)");
+    o.resolution = a.resolution;
+    try {
+        o.families = FamilySet::parse(a.families);
+    } catch (const Error& e) {
+        throw UsageError(std::string("--families: ") + e.what());
+    }
+    o.chordTolerance = a.chordTolerance;
+    o.meshPath = a.output;
+    o.vdbPath = a.vdb;
+    o.pngPath = a.png;
+    o.reportPath = a.report;
+    o.threads = a.threads;
+    return o;
+}
+
+namespace {
+
+std::string where(const ReportLocation& l) {
+    if (l.file.empty()) return "dexelmill";
+    return l.line > 0 ? l.file + ":" + std::to_string(l.line) : l.file;
+}
+
+}  // namespace
+
+void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
+    CLI::App* c = &cmd;
+    CLI::Option* in =
+        c->add_option("INPUTS", a.inputs, "PROJECT.camotics or PROGRAM... (.ngc, .nc, .gcode, .tap, .apt, .cl)");
+    if (inputsRequired) in->required();
+    c->add_option("--stock", a.stock,
+                  "box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (mm), or FILE.stl / FILE.vdb (a casting, a forging,\n"
+                  "an earlier result). Default: the project's workpiece, else the program's extent.");
+    c->add_option("--tool", a.tools,
+                  "SPEC or N=SPEC, repeatable; N is the tool number used by T words.\n"
+                  "SPEC: ball:d=6 | flat:d=10 | bull:d=10,r=2 | taper:d=2,angle=15 |\n"
+                  "      chamfer:d=12,angle=45[,tip=T] | vbit:d=6,angle=30 | taperball:d=3,angle=5 |\n"
+                  "      drill:d=6[,angle=118] | apt:D,R,E,F,ALPHA,BETA,H\n"
+                  "      optional ,length=L (cutting length) ,total=T (stick-out); mm, degrees.\n"
+                  "A bare SPEC serves every tool number nothing else defines.");
+    c->add_option("--chord-tolerance", a.chordTolerance, "Largest arc-to-chord distance when arcs are linearised (mm)")
+        ->capture_default_str();
+    c->add_option("--threads", a.threads, "Worker threads; 0 uses every core")->capture_default_str();
+    c->add_flag("-q,--quiet", a.quiet, "No progress bar and no warnings on stderr; only the final summary");
+}
+
+CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
+    CLI::App* c = app.add_subcommand(
+        "simulate",
+        "Cut the stock with the programs and write the part.\n"
+        "Inputs are a CAMotics .camotics project or G-code / APT CL programs run in order.");
+    addJobOptions(*c, a, true);
+    c->add_option("--resolution", a.resolution, "Lattice spacing in mm. Default: chosen from the stock, and printed.");
+    c->add_option("--families", a.families, "Dexel families to keep: xyz, z, x, y, xy, xz or yz")
+        ->capture_default_str();
+    c->add_option("-o,--output", a.output, "Mesh of the part: PART.obj, PART.stl or PART.ply");
+    c->add_option("--vdb", a.vdb, "The part as an OpenVDB level set, PART.vdb");
+    c->add_option("--png", a.png, "A shaded isometric picture of the part, PART.png");
+    c->add_option("--report", a.report, "A JSON report: volumes, collisions, warnings, timings");
+    return c;
+}
+
+int runSimulate(const SimulateArgs& args) {
+    SimulateOptions options = toOptions(args);
+    ProgressBar bar(!args.quiet && ProgressBar::stderrIsTerminal());
+    options.progress = [&bar](const char* stage, std::size_t done, std::size_t total) {
+        bar.update(stage, done, total);
+    };
+    const SimulateReport r = simulate(options);
+    bar.finish();
+
+    if (!args.quiet) {
+        if (r.resolutionChosen)
+            std::cerr << "dexelmill: lattice spacing " << r.resolutionMm << " mm (chosen from the stock; set --resolution)\n";
+        std::size_t shown = 0;
+        for (const ReportWarning& w : r.warnings) {
+            if (shown++ == kPrintedDiagnostics) break;
+            std::cerr << where(w.where) << ": warning: " << w.message << "\n";
+        }
+        if (r.warnings.size() > kPrintedDiagnostics)
+            std::cerr << "dexelmill: " << r.warnings.size() - kPrintedDiagnostics << " more warnings"
+                      << (args.report.empty() ? "" : " in " + args.report) << "\n";
+        shown = 0;
+        for (const ReportCollision& c : r.collisions) {
+            if (shown++ == kPrintedDiagnostics) break;
+            std::fprintf(stderr, "%s: collision: %s move %zu removes %.4g mm^3\n", where(c.where).c_str(),
+                         c.kind.c_str(), c.move + 1, c.volumeMm3);
+        }
+        if (r.collisions.size() > kPrintedDiagnostics)
+            std::cerr << "dexelmill: " << r.collisions.size() - kPrintedDiagnostics << " more collisions\n";
+    }
+    const double pct = r.stockVolumeMm3 > 0 ? 100.0 * r.removedVolumeMm3 / r.stockVolumeMm3 : 0.0;
+    std::printf(
+        "dexelmill: %zu moves, %zu tool changes; removed %.6g mm^3 (%.1f %% of the stock), part %.6g mm^3; "
+        "h %.4g mm; %zu collisions, %zu warnings; mesh %zu triangles%s; %.2f s, %.0f MiB\n",
+        r.moves, r.toolChanges, r.removedVolumeMm3, pct, r.finalVolumeMm3, r.resolutionMm, r.collisions.size(),
+        r.warnings.size(), r.meshTriangles, r.meshTriangles ? (r.meshClosed ? " (closed)" : " (NOT closed)") : "",
+        r.timingS.total, r.peakMemoryMb);
+    return 0;
+}
+
+}  // namespace dexelmill::cli

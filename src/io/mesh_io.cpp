@@ -1,0 +1,317 @@
+#include "dexelmill/io/mesh_io.h"
+
+#include <cctype>
+#include <charconv>
+#include <cstdio>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <sstream>
+#include <unordered_map>
+
+#include "dexelmill/error.h"
+#include "dexelmill/io/atomic_file.h"
+#include "io/detail/binary.h"
+
+namespace dexelmill {
+
+namespace {
+
+/// Buffers output and hands it to the stream in large blocks.
+class BlockWriter {
+public:
+    explicit BlockWriter(std::ostream& out) : out_(out) { buf_.reserve(kBlock + 256); }
+    ~BlockWriter() = default;
+
+    void put(const char* s, std::size_t n) {
+        buf_.append(s, n);
+        if (buf_.size() >= kBlock) flush();
+    }
+    void put(const std::string& s) { put(s.data(), s.size()); }
+    void put(char c) {
+        buf_.push_back(c);
+        if (buf_.size() >= kBlock) flush();
+    }
+    void number(double v) {
+        char tmp[32];
+        const auto res = std::to_chars(tmp, tmp + sizeof(tmp), v);
+        put(tmp, std::size_t(res.ptr - tmp));
+    }
+    void number(std::uint64_t v) {
+        char tmp[24];
+        const auto res = std::to_chars(tmp, tmp + sizeof(tmp), v);
+        put(tmp, std::size_t(res.ptr - tmp));
+    }
+    void flush() {
+        out_.write(buf_.data(), std::streamsize(buf_.size()));
+        buf_.clear();
+    }
+
+private:
+    static constexpr std::size_t kBlock = 1 << 20;
+    std::ostream& out_;
+    std::string buf_;
+};
+
+void requireValidIndices(const Mesh& mesh) {
+    for (const Mesh::Triangle& t : mesh.triangles)
+        for (std::uint32_t i : t)
+            if (i >= mesh.vertices.size()) throw Error("mesh has a vertex index past its vertex list");
+}
+
+}  // namespace
+
+void writeObj(const std::string& path, const Mesh& mesh) {
+    requireValidIndices(mesh);
+    writeStreamAtomically(path, [&](std::ostream& out) {
+        BlockWriter w(out);
+        w.put("# dexelmill mesh: " + std::to_string(mesh.vertices.size()) + " vertices, " +
+              std::to_string(mesh.triangles.size()) + " triangles, mm\n");
+        for (const Vec3& v : mesh.vertices) {
+            w.put("v ", 2);
+            w.number(v.x);
+            w.put(' ');
+            w.number(v.y);
+            w.put(' ');
+            w.number(v.z);
+            w.put('\n');
+        }
+        for (const Mesh::Triangle& t : mesh.triangles) {
+            w.put("f ", 2);
+            w.number(std::uint64_t(t[0]) + 1);
+            w.put(' ');
+            w.number(std::uint64_t(t[1]) + 1);
+            w.put(' ');
+            w.number(std::uint64_t(t[2]) + 1);
+            w.put('\n');
+        }
+        w.flush();
+    });
+}
+
+void writeStl(const std::string& path, const Mesh& mesh) {
+    requireValidIndices(mesh);
+    if (mesh.triangles.size() > std::numeric_limits<std::uint32_t>::max())
+        throw Error("binary STL holds at most 2^32 - 1 triangles");
+    writeStreamAtomically(path, [&](std::ostream& out) {
+        BlockWriter w(out);
+        char header[80] = {};
+        std::snprintf(header, sizeof(header), "dexelmill binary STL, mm");
+        w.put(header, sizeof(header));
+        char rec[50];
+        binary::putU32(rec, std::uint32_t(mesh.triangles.size()));
+        w.put(rec, 4);
+        for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+            const Vec3 a = mesh.areaVector(t);
+            const double len = glm::length(a);
+            const Vec3 n = len > 0.0 ? a / len : Vec3(0.0);
+            char* p = rec;
+            for (int k = 0; k < 3; ++k) p = binary::putF32(p, float(n[k]));
+            for (std::uint32_t vi : mesh.triangles[t])
+                for (int k = 0; k < 3; ++k) p = binary::putF32(p, float(mesh.vertices[vi][k]));
+            p[0] = p[1] = 0;
+            w.put(rec, sizeof(rec));
+        }
+        w.flush();
+    });
+}
+
+void writePly(const std::string& path, const Mesh& mesh) {
+    requireValidIndices(mesh);
+    writeStreamAtomically(path, [&](std::ostream& out) {
+        BlockWriter w(out);
+        w.put("ply\nformat binary_little_endian 1.0\ncomment dexelmill mesh, mm\nelement vertex " +
+              std::to_string(mesh.vertices.size()) +
+              "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+              std::to_string(mesh.triangles.size()) +
+              "\nproperty list uchar int vertex_indices\nend_header\n");
+        char rec[13];
+        for (const Vec3& v : mesh.vertices) {
+            char* p = rec;
+            for (int k = 0; k < 3; ++k) p = binary::putF32(p, float(v[k]));
+            w.put(rec, 12);
+        }
+        for (const Mesh::Triangle& t : mesh.triangles) {
+            rec[0] = 3;
+            char* p = rec + 1;
+            for (std::uint32_t vi : t) p = binary::putU32(p, vi);
+            w.put(rec, 13);
+        }
+        w.flush();
+    });
+}
+
+// ---------------------------------------------------------------------------------------------
+// STL input
+
+namespace {
+
+/// Merges vertices with bit-identical coordinates.
+class VertexWelder {
+public:
+    explicit VertexWelder(Mesh& mesh) : mesh_(mesh) {}
+
+    std::uint32_t add(float x, float y, float z) {
+        Key k{};
+        std::memcpy(&k.bits[0], &x, 4);
+        std::memcpy(&k.bits[1], &y, 4);
+        std::memcpy(&k.bits[2], &z, 4);
+        // +0 and -0 are the same point.
+        for (auto& b : k.bits)
+            if (b == 0x80000000u) b = 0;
+        const auto [it, inserted] = index_.emplace(k, std::uint32_t(mesh_.vertices.size()));
+        if (inserted) mesh_.vertices.emplace_back(x, y, z);
+        return it->second;
+    }
+
+private:
+    struct Key {
+        std::uint32_t bits[3];
+        bool operator==(const Key& o) const {
+            return bits[0] == o.bits[0] && bits[1] == o.bits[1] && bits[2] == o.bits[2];
+        }
+    };
+    struct KeyHash {
+        std::size_t operator()(const Key& k) const {
+            std::uint64_t h = 1469598103934665603ull;
+            for (std::uint32_t b : k.bits) h = (h ^ b) * 1099511628211ull;
+            return std::size_t(h ^ (h >> 29));
+        }
+    };
+    Mesh& mesh_;
+    std::unordered_map<Key, std::uint32_t, KeyHash> index_;
+};
+
+void addTriangle(Mesh& mesh, VertexWelder& welder, const float v[9]) {
+    const Mesh::Triangle t{welder.add(v[0], v[1], v[2]), welder.add(v[3], v[4], v[5]),
+                           welder.add(v[6], v[7], v[8])};
+    // A triangle collapsed by float rounding adds nothing to a closed surface: drop it.
+    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) return;
+    mesh.triangles.push_back(t);
+}
+
+Mesh parseBinaryStl(const std::string& data, std::uint32_t count) {
+    Mesh mesh;
+    VertexWelder welder(mesh);
+    mesh.triangles.reserve(count);
+    for (std::uint32_t t = 0; t < count; ++t) {
+        const char* rec = data.data() + 84 + std::size_t(t) * 50;
+        float v[9];
+        for (int k = 0; k < 9; ++k) v[k] = binary::getF32(rec + 12 + 4 * k);
+        addTriangle(mesh, welder, v);
+    }
+    return mesh;
+}
+
+/// A whitespace tokenizer that knows the line and column of each token.
+class Tokens {
+public:
+    Tokens(const std::string& text, std::string file) : text_(text), file_(std::move(file)) {}
+
+    bool next() {
+        while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) {
+            if (text_[pos_] == '\n') {
+                ++line_;
+                lineStart_ = pos_ + 1;
+            }
+            ++pos_;
+        }
+        if (pos_ >= text_.size()) {
+            token_.clear();
+            return false;
+        }
+        where_ = {file_, line_, int(pos_ - lineStart_) + 1};
+        const std::size_t start = pos_;
+        while (pos_ < text_.size() && !std::isspace(static_cast<unsigned char>(text_[pos_])))
+            ++pos_;
+        token_.assign(text_, start, pos_ - start);
+        return true;
+    }
+    const std::string& token() const { return token_; }
+    const SourceLocation& where() const { return where_; }
+
+    void expect(const char* word) {
+        if (!next()) throw ParseError(where_, std::string("expected '") + word + "', found the end of the file");
+        if (token_ != word) throw ParseError(where_, std::string("expected '") + word + "'", token_);
+    }
+    float number() {
+        if (!next()) throw ParseError(where_, "expected a number, found the end of the file");
+        float v = 0.0f;
+        const char* b = token_.data();
+        const char* e = b + token_.size();
+        if (*b == '+') ++b;
+        const auto res = std::from_chars(b, e, v);
+        if (res.ec != std::errc() || res.ptr != e || !std::isfinite(v))
+            throw ParseError(where_, "expected a finite number", token_);
+        return v;
+    }
+    /// Skips the rest of the current line (a solid's name).
+    void skipLine() {
+        while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+    }
+
+private:
+    const std::string& text_;
+    std::string file_;
+    std::size_t pos_ = 0, lineStart_ = 0;
+    int line_ = 1;
+    std::string token_;
+    SourceLocation where_;
+};
+
+Mesh parseAsciiStl(const std::string& text, const std::string& path) {
+    Mesh mesh;
+    VertexWelder welder(mesh);
+    Tokens tok(text, path);
+    bool inSolid = false;
+    while (tok.next()) {
+        const std::string word = tok.token();
+        if (word == "solid") {
+            inSolid = true;
+            tok.skipLine();
+        } else if (word == "endsolid") {
+            inSolid = false;
+            tok.skipLine();
+        } else if (word == "facet" && inSolid) {
+            tok.expect("normal");
+            for (int k = 0; k < 3; ++k) tok.number();
+            tok.expect("outer");
+            tok.expect("loop");
+            float v[9];
+            for (int i = 0; i < 3; ++i) {
+                tok.expect("vertex");
+                for (int k = 0; k < 3; ++k) v[3 * i + k] = tok.number();
+            }
+            tok.expect("endloop");
+            tok.expect("endfacet");
+            addTriangle(mesh, welder, v);
+        } else {
+            throw ParseError(tok.where(),
+                             inSolid ? "expected 'facet' or 'endsolid'" : "expected 'solid'", word);
+        }
+    }
+    if (inSolid) throw ParseError(tok.where(), "missing 'endsolid' at the end of the file");
+    return mesh;
+}
+
+}  // namespace
+
+Mesh readStl(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error("cannot open '" + path + "'");
+    std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (in.bad()) throw Error("cannot read '" + path + "'");
+    Mesh mesh;
+    if (data.size() >= 84 &&
+        data.size() == 84 + 50 * std::uint64_t(binary::getU32(data.data() + 80))) {
+        mesh = parseBinaryStl(data, binary::getU32(data.data() + 80));
+    } else {
+        mesh = parseAsciiStl(data, path);
+    }
+    if (mesh.triangles.empty()) throw Error("'" + path + "' holds no triangle");
+    return mesh;
+}
+
+}  // namespace dexelmill

@@ -1,0 +1,55 @@
+#include "dexelmill/io/stock_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+
+#include "dexelmill/error.h"
+#include "dexelmill/io/mesh_io.h"
+#include "dexelmill/io/vdb_io.h"
+#include "dexelmill/surface/voxelize.h"
+
+namespace dexelmill {
+
+namespace {
+
+/// How far the lattice box reaches past an STL's bounds, in units of h: the faces of a part
+/// modelled at round coordinates then lie between lattice planes, not on them.
+constexpr double kStlBoxMargin = 0.25;
+
+/// Lattice spacings that differ by less than this fraction are the same spacing.
+constexpr double kSameSpacing = 1e-9;
+
+std::string lowerExtension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char ch) { return char(std::tolower(ch)); });
+    return ext;
+}
+
+}  // namespace
+
+TriDexelStock readStock(const std::string& path, double h, FamilySet families,
+                        MeshCastStats* stats) {
+    if (!(h > 0.0) || !std::isfinite(h))
+        throw Error("stock from '" + path + "': spacing must be positive");
+    const std::string ext = lowerExtension(path);
+    if (ext == ".stl") {
+        const Mesh mesh = readStl(path);
+        const Lattice lattice = Lattice::fromBox(mesh.bounds().padded(kStlBoxMargin * h), h);
+        return stockFromMesh(mesh, lattice, families, stats);
+    }
+    if (ext == ".vdb") {
+        const LevelSet ls = readVdb(path);
+        const std::optional<Lattice> recorded = ls.lattice();
+        if (recorded && std::abs(recorded->h - h) <= kSameSpacing * h)
+            return stockFromLevelSet(ls, *recorded, families);
+        const Box box = materialBounds(ls);
+        if (box.isEmpty()) throw Error("'" + path + "' holds no material (no negative voxel)");
+        return stockFromLevelSet(ls, Lattice::fromBox(box, h), families);
+    }
+    throw Error("stock from '" + path + "': unknown file type '" + ext + "' (expected .stl or .vdb)");
+}
+
+}  // namespace dexelmill

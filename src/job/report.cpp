@@ -1,0 +1,84 @@
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "dexelmill/job/simulate.h"
+#include "dexelmill/stock/lattice.h"
+
+namespace dexelmill {
+
+std::string reportJson(const SimulateReport& r) {
+    using nlohmann::json;
+    json j;
+    j["version"] = r.version;
+    j["inputs"] = r.inputs;
+    j["units"] = "mm";
+    j["resolution_mm"] = r.resolutionMm;
+    j["resolution_chosen"] = r.resolutionChosen;
+    j["families"] = r.families;
+    j["stock_box_mm"] = {{"min", {r.stockBox.lo.x, r.stockBox.lo.y, r.stockBox.lo.z}},
+                         {"max", {r.stockBox.hi.x, r.stockBox.hi.y, r.stockBox.hi.z}}};
+    j["moves"] = r.moves;
+    j["rapids"] = r.rapids;
+    j["tool_changes"] = r.toolChanges;
+    j["lattice"] = {{"nx", r.lattice[0]}, {"ny", r.lattice[1]}, {"nz", r.lattice[2]}};
+    j["dexels"] = {{"x", r.dexels[0]}, {"y", r.dexels[1]}, {"z", r.dexels[2]}};
+    j["stock_volume_mm3"] = r.stockVolumeMm3;
+    j["final_volume_mm3"] = r.finalVolumeMm3;
+    j["removed_volume_mm3"] = r.removedVolumeMm3;
+    json fam = json::object();
+    for (int a = 0; a < 3; ++a)
+        if (r.familyVolumesMm3[a]) fam[std::string(1, axisName(axisFromIndex(a)))] = *r.familyVolumesMm3[a];
+    j["family_volumes_mm3"] = fam;
+    json collisions = json::array();
+    for (const ReportCollision& c : r.collisions)
+        collisions.push_back({{"move", c.move},
+                              {"file", c.where.file},
+                              {"line", c.where.line},
+                              {"kind", c.kind},
+                              {"volume_mm3", c.volumeMm3}});
+    j["collisions"] = collisions;
+    json warnings = json::array();
+    for (const ReportWarning& w : r.warnings)
+        warnings.push_back({{"file", w.where.file}, {"line", w.where.line}, {"message", w.message}});
+    j["warnings"] = warnings;
+    j["mesh"] = {{"vertices", r.meshVertices},
+                 {"triangles", r.meshTriangles},
+                 {"closed", r.meshClosed},
+                 {"volume_mm3", r.meshVolumeMm3}};
+    j["timing_s"] = {{"parse", r.timingS.parse}, {"cut", r.timingS.cut},   {"rebuild", r.timingS.rebuild},
+                     {"mesh", r.timingS.mesh},   {"write", r.timingS.write}, {"total", r.timingS.total}};
+    j["peak_memory_mb"] = r.peakMemoryMb;
+    j["stock_memory_mb"] = double(r.stockMemoryBytes) / (1024.0 * 1024.0);
+    return j.dump(2) + "\n";
+}
+
+double chooseResolution(const Box& stock, double cells) {
+    const Vec3 s = stock.size();
+    const double longest = std::max({s.x, s.y, s.z});
+    const double raw = longest / cells;
+    const double decade = std::pow(10.0, std::floor(std::log10(raw)));
+    for (double m : {5.0, 2.0, 1.0})
+        if (m * decade <= raw) return m * decade;
+    return decade;
+}
+
+double peakMemoryMb() {
+    // VmHWM: the peak resident set size, in kB.
+    std::ifstream status("/proc/self/status");
+    std::string key;
+    while (status >> key) {
+        if (key == "VmHWM:") {
+            double kb = 0;
+            status >> kb;
+            return kb / 1024.0;
+        }
+        status.ignore(4096, '\n');
+    }
+    return 0.0;
+}
+
+}  // namespace dexelmill

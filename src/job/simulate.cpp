@@ -1,0 +1,307 @@
+#include "dexelmill/job/simulate.h"
+
+#include <algorithm>
+#include <chrono>
+#include <set>
+#include <sstream>
+
+#include "dexelmill/error.h"
+#include "dexelmill/geometry/tolerance.h"
+#include "dexelmill/io/atomic_file.h"
+#include "dexelmill/io/mesh_io.h"
+#include "dexelmill/io/picture.h"
+#include "dexelmill/io/vdb_io.h"
+#include "dexelmill/path/camotics.h"
+#include "dexelmill/stock/cut.h"
+#include "dexelmill/surface/levelset.h"
+#include "dexelmill/surface/voxelize.h"
+
+namespace dexelmill {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds(Clock::time_point since) {
+    return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+std::string lowerExtension(const std::string& path) {
+    const std::size_t dot = path.find_last_of('.');
+    const std::size_t slash = path.find_last_of('/');
+    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+    std::string e = path.substr(dot);
+    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return e;
+}
+
+/// Fails before any work when an output names a format we cannot write.
+void checkOutputs(const SimulateOptions& o) {
+    if (!o.meshPath.empty()) {
+        const std::string e = lowerExtension(o.meshPath);
+        if (e != ".obj" && e != ".stl" && e != ".ply")
+            throw Error("output '" + o.meshPath + "': the mesh format follows the extension: .obj, .stl or .ply");
+    }
+    if (!o.vdbPath.empty() && lowerExtension(o.vdbPath) != ".vdb")
+        throw Error("output '" + o.vdbPath + "': a level set is written as .vdb");
+    if (!o.pngPath.empty() && lowerExtension(o.pngPath) != ".png")
+        throw Error("output '" + o.pngPath + "': a picture is written as .png");
+}
+
+/// Appends `next` to `all`: moves, files and tool changes renumbered, tools merged (a later
+/// program's tool of the same number wins, with a note), diagnostics kept.
+void append(Program& all, Program&& next) {
+    const auto fileBase = std::uint32_t(all.path.files.size());
+    const std::size_t moveBase = all.path.moves.size();
+    for (std::string& f : next.path.files) all.path.files.push_back(std::move(f));
+    for (Move m : next.path.moves) {
+        m.source.file += fileBase;
+        all.path.moves.push_back(m);
+    }
+    for (ToolChange c : next.path.toolChanges) {
+        c.moveIndex += moveBase;
+        c.source.file += fileBase;
+        all.path.toolChanges.push_back(c);
+    }
+    for (auto& [n, t] : next.tools) all.tools.insert_or_assign(n, std::move(t));
+    for (Diagnostic& d : next.diagnostics) all.diagnostics.push_back(std::move(d));
+}
+
+/// The tools the cutting loop uses: the command line's over the program's; tool numbers nobody
+/// defines get the default tool, or the only tool there is (with a warning).
+ToolTable resolveTools(const SimulateOptions& o, Program& program) {
+    ToolTable table = program.tools;
+    for (const auto& [n, t] : o.tools) table.insert_or_assign(n, t);
+    std::set<int> used;
+    std::map<int, SourceRef> firstUse;
+    for (const Move& m : program.path.moves) {
+        if (used.insert(m.tool).second) firstUse[m.tool] = m.source;
+    }
+    for (int n : used) {
+        if (table.count(n)) continue;
+        const SourceLocation at = program.path.where(firstUse[n]);
+        if (o.defaultTool) {
+            table.insert_or_assign(n, *o.defaultTool);
+            continue;
+        }
+        if (table.size() == 1) {
+            std::ostringstream msg;
+            msg << (n == 0 ? std::string("moves before any tool is selected") : "tool T" + std::to_string(n) + " is not defined")
+                << "; using the only tool defined, T" << table.begin()->first << " ("
+                << table.begin()->second.description() << ")";
+            program.diagnostics.push_back({Diagnostic::Severity::Warning, at, msg.str()});
+            table.insert_or_assign(n, table.begin()->second);
+            continue;
+        }
+        throw ParseError(at,
+                         n == 0 ? "the program moves before selecting a tool and no default tool is given; "
+                                  "use --tool SPEC"
+                                : "the program uses tool T" + std::to_string(n) +
+                                      " but no tool of that number is defined; use --tool " + std::to_string(n) +
+                                      "=SPEC");
+    }
+    return table;
+}
+
+struct LoadedStock {
+    TriDexelStock stock;
+    Box box;
+};
+
+/// A stock box from the program when none is given: its cutting moves' extent (CAMotics'
+/// automatic workpiece), else every move's; an axis the program never moves along gets a
+/// thickness of 5 % of the largest extent (at least 1 mm) on both sides.
+Box guessStock(const ToolPath& path, const ToolTable& tools, double marginPercent) {
+    Box box = automaticWorkpieceBounds(path, tools, marginPercent);
+    if (box.isEmpty()) {
+        box = path.bounds();
+        double widest = 0.0;
+        for (const auto& [n, t] : tools) widest = std::max(widest, t.cuttingRadius());
+        box = box.padded(widest);
+    }
+    if (box.isEmpty()) throw Error("no stock given and the program has no moves to guess one from; use --stock");
+    const Vec3 size = box.size();
+    const double pad = std::max(1.0, 0.05 * std::max({size.x, size.y, size.z}));
+    for (int a = 0; a < 3; ++a) {
+        if (size[a] > tol::kLength) continue;
+        box.lo[a] -= pad;
+        box.hi[a] += pad;
+    }
+    return box;
+}
+
+LoadedStock loadStock(const SimulateOptions& o, const Program& program, const ToolTable& tools,
+                      const Project* project, SimulateReport& report, std::vector<ReportWarning>& notes) {
+    Box box;
+    std::optional<LevelSet> fromVdb;
+    std::optional<Mesh> fromStl;
+    if (o.stockBox) {
+        box = *o.stockBox;
+    } else if (!o.stockFile.empty()) {
+        const std::string e = lowerExtension(o.stockFile);
+        if (e == ".stl") {
+            fromStl = readStl(o.stockFile);
+            box = fromStl->bounds();
+        } else if (e == ".vdb") {
+            fromVdb = readVdb(o.stockFile);
+            box = materialBounds(*fromVdb);
+        } else {
+            throw Error("stock '" + o.stockFile + "': expected box:..., an .stl or a .vdb file");
+        }
+        if (box.isEmpty()) throw Error("stock '" + o.stockFile + "' holds no material");
+    } else if (project && !project->workpiece.automatic && !project->workpiece.bounds.isEmpty()) {
+        box = project->workpiece.bounds;
+    } else {
+        const double margin = project ? project->workpiece.marginPercent : 5.0;
+        box = guessStock(program.path, tools, margin);
+        if (!project) {
+            ReportWarning w;
+            w.message = "no --stock given: using the program's cutting extent plus 5 %";
+            notes.push_back(w);
+        }
+    }
+    const Vec3 size = box.size();
+    if (!(size.x > 0 && size.y > 0 && size.z > 0)) throw Error("the stock box has no volume");
+
+    double h = o.resolution;
+    if (h <= 0 && project && project->resolution > 0) h = project->resolution;
+    if (h <= 0) {
+        h = chooseResolution(box, o.cellsAlongLongestSide);
+        report.resolutionChosen = true;
+    }
+    const Lattice lattice = Lattice::fromBox(box, h);
+    if (lattice.pointCount() > 4.0e10)
+        throw Error("a spacing of " + std::to_string(h) + " mm gives " + std::to_string(lattice.pointCount()) +
+                    " lattice points for this stock; use a larger --resolution");
+    if (fromStl) return {stockFromMesh(*fromStl, lattice, o.families), box};
+    if (fromVdb) return {stockFromLevelSet(*fromVdb, lattice, o.families), box};
+    return {TriDexelStock::fromBox(box, h, o.families), box};
+}
+
+}  // namespace
+
+Simulation runSimulation(const SimulateOptions& o) {
+    const auto tStart = Clock::now();
+    Simulation sim;
+    SimulateReport& report = sim.report;
+    report.version = DEXELMILL_VERSION;
+    report.inputs = o.inputs;
+    report.families = o.families.str();
+    if (o.inputs.empty() && !o.program) throw Error("nothing to simulate: give a project or at least one program");
+    checkOutputs(o);
+
+    // Parse.
+    auto t = Clock::now();
+    GcodeOptions gcode;
+    gcode.chordTolerance = o.chordTolerance;
+    AptOptions apt;
+    apt.chordTolerance = o.chordTolerance;
+    std::optional<Project> project;
+    Program& program = sim.program;
+    if (o.program) {
+        program = *o.program;
+    } else if (o.inputs.size() == 1 && lowerExtension(o.inputs[0]) == ".camotics") {
+        project = readCamoticsProject(o.inputs[0]);
+        program = runProject(*project, gcode);
+    } else {
+        for (const std::string& in : o.inputs) {
+            if (lowerExtension(in) == ".camotics")
+                throw Error("'" + in + "': a project must be the only input");
+            append(program, readProgram(in, gcode, apt));
+        }
+    }
+    sim.tools = resolveTools(o, program);
+    const ToolTable& tools = sim.tools;
+    report.timingS.parse = seconds(t);
+
+    report.moves = program.path.moves.size();
+    report.rapids = std::size_t(std::count_if(program.path.moves.begin(), program.path.moves.end(),
+                                              [](const Move& m) { return m.rapid; }));
+    report.toolChanges = program.path.toolChanges.size();
+    std::vector<ReportWarning> notes;
+    LoadedStock loaded = loadStock(o, program, tools, project ? &*project : nullptr, report, notes);
+    sim.stock.emplace(std::move(loaded.stock));
+    TriDexelStock& stock = *sim.stock;
+    report.stockBox = loaded.box;
+    report.resolutionMm = stock.lattice().h;
+    report.lattice = stock.lattice().n;
+    for (int a = 0; a < 3; ++a) {
+        const Axis ax = axisFromIndex(a);
+        if (stock.has(ax)) report.dexels[a] = std::size_t(stock.family(ax).nb()) * std::size_t(stock.family(ax).nc());
+    }
+    // The stock's volume as the first kept family measures it (z preferred).
+    const Axis measure = stock.has(Axis::Z) ? Axis::Z : (stock.has(Axis::X) ? Axis::X : Axis::Y);
+    report.stockVolumeMm3 = stock.volume(measure);
+
+    // Cut.
+    t = Clock::now();
+    CutOptions cutOptions;
+    cutOptions.threads = o.threads;
+    if (o.progress) cutOptions.progress = [&](std::size_t done, std::size_t total) { o.progress("cutting", done, total); };
+    const CutResult cut = cutStock(stock, program.path, tools, cutOptions);
+    report.timingS.cut = seconds(t);
+    for (const CutCollision& c : cut.collisions) {
+        const SourceLocation at = program.path.where(c.source);
+        report.collisions.push_back({c.move, {at.file, at.line}, c.kind == CollisionKind::Rapid ? "rapid" : "shank",
+                                     c.volume});
+    }
+    for (const Diagnostic& d : program.diagnostics)
+        report.warnings.push_back({{d.where.file, d.where.line}, d.message});
+    for (ReportWarning& n : notes) report.warnings.push_back(std::move(n));
+    for (int a = 0; a < 3; ++a)
+        if (stock.has(axisFromIndex(a))) report.familyVolumesMm3[a] = stock.volume(axisFromIndex(a));
+    report.finalVolumeMm3 = stock.volume(measure);
+    report.removedVolumeMm3 = report.stockVolumeMm3 - report.finalVolumeMm3;
+    report.stockMemoryBytes = stock.memoryBytes();
+
+    // Rebuild and mesh.
+    t = Clock::now();
+    if (o.progress) o.progress("rebuild", 0, 1);
+    RebuildOptions rebuild;
+    rebuild.source = o.inputs.empty() ? std::string("program in memory") : o.inputs.front();
+    rebuild.families = o.families;
+    sim.levelSet = rebuildLevelSet(stock, rebuild);
+    report.timingS.rebuild = seconds(t);
+    t = Clock::now();
+    if (o.progress) o.progress("mesh", 0, 1);
+    sim.mesh = meshLevelSet(sim.levelSet);
+    const Mesh& mesh = sim.mesh;
+    const MeshCheck check = checkMesh(mesh);
+    report.meshVertices = mesh.vertices.size();
+    report.meshTriangles = mesh.triangles.size();
+    report.meshClosed = check.closedManifold();
+    report.meshVolumeMm3 = check.signedVolume;
+    report.timingS.mesh = seconds(t);
+    report.timingS.total = seconds(tStart);
+    report.peakMemoryMb = peakMemoryMb();
+    return sim;
+}
+
+SimulateReport simulate(const SimulateOptions& o) {
+    const auto tStart = Clock::now();
+    Simulation sim = runSimulation(o);
+    SimulateReport& report = sim.report;
+    const Mesh& mesh = sim.mesh;
+
+    // Write.
+    auto t = Clock::now();
+    if (o.progress) o.progress("write", 0, 1);
+    if (!o.meshPath.empty()) {
+        const std::string e = lowerExtension(o.meshPath);
+        if (e == ".obj") writeObj(o.meshPath, mesh);
+        else if (e == ".stl") writeStl(o.meshPath, mesh);
+        else writePly(o.meshPath, mesh);
+    }
+    if (!o.vdbPath.empty()) writeVdb(o.vdbPath, sim.levelSet);
+    if (!o.pngPath.empty()) writePicture(o.pngPath, mesh);
+    report.timingS.write = seconds(t);
+    report.timingS.total = seconds(tStart);
+    report.peakMemoryMb = peakMemoryMb();
+    if (!o.reportPath.empty()) {
+        const std::string text = reportJson(report);
+        writeStreamAtomically(o.reportPath, [&](std::ostream& out) { out << text; });
+    }
+    return report;
+}
+
+}  // namespace dexelmill

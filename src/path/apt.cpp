@@ -1,0 +1,630 @@
+/// @file apt.cpp
+/// @brief APT CL reader. Statement forms follow the APT language (ANSI X3.37) as written by
+/// SolidWorks CAM / CAMWorks and NX postprocessor input: `MAJOR/arg, arg, ...`, `$` continues a
+/// statement on the next line, `$$` starts a comment.
+#include "dexelmill/path/apt.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <optional>
+
+#include "dexelmill/error.h"
+#include "dexelmill/tool/builders.h"
+#include "path/detail/arc.h"
+#include "path/detail/diagnostics.h"
+#include "path/detail/text.h"
+
+namespace dexelmill {
+
+namespace {
+
+using detail::upper;
+
+constexpr double kInch = 25.4;
+constexpr double kPi = 3.14159265358979323846;
+/// CIRCLE: the radius to the end may differ from the radius to the start by this much (mm) and
+/// this fraction before the arc is rejected.
+constexpr double kArcRadiusAbsTol = 0.02;
+constexpr double kArcRadiusRelTol = 0.001;
+/// Peck drilling: the rapid back into the hole stops this far above the previous depth (mm).
+constexpr double kPeckClearance = 0.254;
+/// CUTTER values are printed with about 6 significant digits: mismatches below this fraction of
+/// the diameter are rounding.
+constexpr double kCutterRounding = 1e-5;
+
+struct Token {
+    std::string text;  ///< upper case, trimmed
+    int line = 0;
+    int col = 0;
+};
+
+struct Statement {
+    std::string major;
+    std::vector<Token> args;
+    int line = 0;
+    int col = 0;
+    bool hasSlash = false;
+    std::string raw;  ///< for messages
+};
+
+struct CutterSpec {
+    std::vector<double> params;  ///< mm (angles in degrees)
+    double cuttingLength = 0.0;
+    SourceLocation where;
+};
+
+class AptReader {
+public:
+    AptReader(const AptOptions& opt, std::string fileName, Program& out)
+        : opt_(opt), file_(std::move(fileName)), out_(out) {
+        scale_ = opt.initialInches ? kInch : 1.0;
+        if (!(opt.chordTolerance > 0.0)) throw Error("AptOptions::chordTolerance must be positive");
+        out_.path.files.push_back(file_);
+    }
+
+    void run(std::string_view text) {
+        std::vector<Statement> statements = split(text);
+        for (const Statement& s : statements) {
+            cur_ = &s;
+            if (finished_) {
+                diags_.warn(loc(s), "statement after FINI ignored", "after FINI");
+                continue;
+            }
+            execute(s);
+        }
+        if (circle_)
+            throw ParseError(circleWhere_, "CIRCLE without the GOTO that ends it (truncated file?)");
+        buildTools();
+        diags_.appendTo(out_.diagnostics);
+    }
+
+private:
+    SourceLocation loc(const Statement& s, int col = 0) const {
+        return {file_, s.line, col ? col : s.col};
+    }
+    SourceLocation loc(const Token& t) const { return {file_, t.line, t.col}; }
+    [[noreturn]] void fail(const Statement& s, const std::string& msg) const {
+        throw ParseError(loc(s), msg, s.raw.substr(0, 60));
+    }
+    [[noreturn]] void fail(const Token& t, const std::string& msg) const {
+        throw ParseError(loc(t), msg, t.text);
+    }
+
+    // ---- lexing ----
+    std::vector<Statement> split(std::string_view text) {
+        std::vector<Statement> out;
+        std::size_t pos = 0;
+        int lineNo = 0;
+        Statement st;
+        bool continuing = false;
+        while (pos < text.size()) {
+            std::size_t e = text.find('\n', pos);
+            if (e == std::string_view::npos) e = text.size();
+            std::string_view line = text.substr(pos, e - pos);
+            pos = e + 1;
+            ++lineNo;
+            if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+            // Comments.
+            const std::size_t cm = line.find("$$");
+            bool cont = false;
+            if (cm != std::string_view::npos) line = line.substr(0, cm);
+            std::size_t end = line.size();
+            while (end > 0 && (line[end - 1] == ' ' || line[end - 1] == '\t')) --end;
+            if (end > 0 && line[end - 1] == '$') {
+                cont = true;
+                --end;
+            }
+            line = line.substr(0, end);
+            if (!continuing) {
+                std::size_t i = 0;
+                while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+                if (i >= line.size()) {
+                    if (cont) {  // a lone '$'
+                        st = Statement{};
+                        st.line = lineNo;
+                        st.col = int(i) + 1;
+                        continuing = true;
+                    }
+                    continue;
+                }
+                st = Statement{};
+                st.line = lineNo;
+                st.col = int(i) + 1;
+                parseHead(st, line, i, lineNo);
+            } else {
+                parseArgs(st, line, 0, lineNo);
+            }
+            continuing = cont;
+            if (!continuing) out.push_back(std::move(st));
+        }
+        if (continuing)
+            throw ParseError({file_, lineNo, 0},
+                             "statement continued with '$' at the end of the file (truncated file?)",
+                             st.raw.substr(0, 60));
+        return out;
+    }
+
+    void parseHead(Statement& st, std::string_view line, std::size_t i, int lineNo) {
+        st.raw = std::string(line.substr(i));
+        const std::size_t slash = line.find('/', i);
+        std::string_view head = line.substr(i, slash == std::string_view::npos ? std::string_view::npos : slash - i);
+        std::string major;
+        for (char c : head)
+            if (c != ' ' && c != '\t') major += upper(c);
+        st.major = major;
+        if (slash == std::string_view::npos) return;
+        st.hasSlash = true;
+        // Text statements keep their text as one argument.
+        if (major == "PARTNO" || major == "INSERT" || major == "PPRINT" || major == "REMARK") {
+            st.args.push_back({std::string(line.substr(slash + 1)), lineNo, int(slash) + 2});
+            return;
+        }
+        parseArgs(st, line, slash + 1, lineNo);
+    }
+
+    void parseArgs(Statement& st, std::string_view line, std::size_t i, int lineNo) {
+        if (st.major == "PARTNO" || st.major == "INSERT" || st.major == "PPRINT") {
+            if (!st.args.empty()) st.args.back().text += std::string(line);
+            return;
+        }
+        while (i <= line.size()) {
+            std::size_t e = line.find(',', i);
+            if (e == std::string_view::npos) e = line.size();
+            std::size_t b = i;
+            while (b < e && (line[b] == ' ' || line[b] == '\t')) ++b;
+            std::size_t t = e;
+            while (t > b && (line[t - 1] == ' ' || line[t - 1] == '\t')) --t;
+            if (b < t || e < line.size()) {
+                Token tok;
+                for (std::size_t k = b; k < t; ++k) tok.text += upper(line[k]);
+                tok.line = lineNo;
+                tok.col = int(b) + 1;
+                st.args.push_back(tok);
+            }
+            if (e == line.size()) break;
+            i = e + 1;
+        }
+    }
+
+    static bool isNumber(const std::string& s) {
+        if (s.empty()) return false;
+        bool digit = false;
+        for (std::size_t k = 0; k < s.size(); ++k) {
+            const char c = s[k];
+            if (c >= '0' && c <= '9') digit = true;
+            else if (c == '.' || ((c == '-' || c == '+') && (k == 0 || s[k - 1] == 'E'))) continue;
+            else if (c == 'E' && digit) continue;
+            else return false;
+        }
+        return digit;
+    }
+    double number(const Token& t) const {
+        if (!isNumber(t.text)) fail(t, "bad number");
+        char* end = nullptr;
+        const double v = std::strtod(t.text.c_str(), &end);
+        if (end != t.text.c_str() + t.text.size() || !std::isfinite(v)) fail(t, "bad number");
+        return v;
+    }
+    std::vector<double> numbers(const Statement& s, std::size_t from = 0) const {
+        std::vector<double> v;
+        for (std::size_t k = from; k < s.args.size(); ++k) v.push_back(number(s.args[k]));
+        return v;
+    }
+
+    // ---- statements ----
+    void execute(const Statement& s) {
+        const std::string& w = s.major;
+        if (w == "GOTO") return gotoPoint(s);
+        if (w == "FEDRAT") return warnKind(s, "feed rate FEDRAT is not simulated (ignored)");
+        if (w == "RAPID") {
+            rapidNext_ = true;
+            return;
+        }
+        if (w == "CIRCLE") return circle(s);
+        if (w == "FROM") {
+            const auto v = numbers(s);
+            if (v.size() != 3 && v.size() != 6) fail(s, "FROM needs x,y,z[,i,j,k]");
+            pos_ = toPart(Vec3(v[0], v[1], v[2]) * scale_);
+            if (v.size() == 6) axis_ = axisOf(s, v[3], v[4], v[5]);
+            havePos_ = true;
+            return;
+        }
+        if (w == "GODLTA") return godlta(s);
+        if (w == "CUTTER") return cutter(s);
+        if (w == "LOAD" || w == "TOOLNO") return loadTool(s);
+        if (w == "UNITS" || w == "UNIT") return units(s);
+        if (w == "CSYS") return csys(s);
+        if (w == "TRNTYP") {
+            world_ = !s.args.empty() && s.args[0].text == "WORLD";
+            if (!world_) diags_.warn(loc(s), "TRNTYP other than WORLD: CSYS maps local coordinates to the part frame", "TRNTYP");
+            return;
+        }
+        if (w == "MULTAX") {
+            multax_ = s.args.empty() || s.args[0].text != "OFF";
+            return;
+        }
+        if (w == "CYCLE") return cycle(s);
+        if (w == "CUTCOM") {
+            if (!s.args.empty() && s.args[0].text != "OFF")
+                diags_.warn(loc(s), "cutter compensation CUTCOM is not simulated: the path is the CL path", "CUTCOM");
+            return;
+        }
+        if (w == "SPINDL") return warnKind(s, "spindle SPINDL is not simulated (ignored)");
+        if (w == "COOLNT") return warnKind(s, "coolant COOLNT is not simulated (ignored)");
+        if (w == "CSI_SET_FLUTE_LENGTH") {
+            const auto v = numbers(s);
+            if (v.size() != 1 || !(v[0] > 0)) fail(s, "CSI_SET_FLUTE_LENGTH needs one positive length");
+            if (tool_ != 0 && cutters_.count(tool_)) cutters_[tool_].cuttingLength = v[0] * scale_;
+            else if (pending_) pending_->cuttingLength = v[0] * scale_;
+            return;
+        }
+        if (w == "FINI") {
+            finished_ = true;
+            return;
+        }
+        if (w == "PARTNO" || w == "INSERT" || w == "PPRINT" || w == "REMARK")
+            return warnKind(s, w + " text ignored");
+        if (w == "SELECT") return warnKind(s, "SELECT/TOOL (tool preselection) ignored");
+        if (w.empty()) fail(s, "statement without a major word");
+        warnKind(s, "statement " + w + " ignored");
+    }
+
+    void warnKind(const Statement& s, const std::string& message) {
+        diags_.warn(loc(s), message, "apt:" + s.major);
+    }
+
+    void units(const Statement& s) {
+        if (s.args.empty()) fail(s, "UNITS needs MM or INCHES");
+        const std::string& u = s.args[0].text;
+        if (u == "MM") scale_ = 1.0;
+        else if (u == "INCHES" || u == "INCH" || u == "IN") scale_ = kInch;
+        else fail(s.args[0], "unknown units");
+    }
+
+    void csys(const Statement& s) {
+        const auto v = numbers(s);
+        if (v.size() != 12) fail(s, "CSYS needs 12 numbers (a 3x4 matrix)");
+        // Rows: r11 r12 r13 t1 / r21 r22 r23 t2 / r31 r32 r33 t3.
+        for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) rot_[c][r] = v[std::size_t(4 * r + c)];
+            trans_[r] = v[std::size_t(4 * r + 3)] * scale_;
+        }
+        for (int c = 0; c < 3; ++c) {
+            const double len = glm::length(rot_[c]);
+            if (std::abs(len - 1.0) > 1e-3) fail(s, "CSYS rotation is not orthonormal");
+        }
+        if (std::abs(glm::dot(rot_[0], rot_[1])) > 1e-3 || std::abs(glm::dot(rot_[1], rot_[2])) > 1e-3 ||
+            std::abs(glm::dot(rot_[0], rot_[2])) > 1e-3)
+            fail(s, "CSYS rotation is not orthonormal");
+        haveCsys_ = true;
+        axis_ = glm::normalize(rot_[2]);
+    }
+
+    Vec3 toPart(const Vec3& p) const {
+        if (world_ || !haveCsys_) return p;
+        return rot_[0] * p.x + rot_[1] * p.y + rot_[2] * p.z + trans_;
+    }
+    Vec3 axisOf(const Statement& s, double i, double j, double k) const {
+        Vec3 a(i, j, k);
+        if (!world_ && haveCsys_) a = rot_[0] * a.x + rot_[1] * a.y + rot_[2] * a.z;
+        const double len = glm::length(a);
+        if (!(len > 1e-9)) fail(s, "tool axis i,j,k of zero length");
+        return a / len;
+    }
+
+    void cutter(const Statement& s) {
+        const auto v = numbers(s);
+        if (v.empty() || v.size() > 7 || v.size() == 3 || v.size() == 4)
+            fail(s, "CUTTER needs d, or d,r, or d,r,h... (1, 2, 5, 6 or 7 numbers)");
+        CutterSpec spec;
+        for (std::size_t k = 0; k < v.size(); ++k)
+            spec.params.push_back((k == 4 || k == 5) ? v[k] : v[k] * scale_);
+        spec.where = loc(s);
+        if (!(spec.params[0] > 0)) fail(s.args[0], "CUTTER diameter must be positive");
+        pending_ = spec;
+        if (tool_ != 0 && !cutters_.count(tool_)) cutters_[tool_] = spec, pending_.reset();
+    }
+
+    void loadTool(const Statement& s) {
+        std::size_t k = 0;
+        if (!s.args.empty() && s.args[0].text == "TOOL") k = 1;
+        if (k >= s.args.size()) fail(s, "LOAD/TOOL needs a tool number");
+        const double n = number(s.args[k]);
+        if (n < 0 || n != std::floor(n) || n > 1e7) fail(s.args[k], "bad tool number");
+        changeTool(int(n), s);
+        if (pending_) {
+            cutters_[tool_] = *pending_;
+            pending_.reset();
+        }
+        for (std::size_t t = k + 1; t < s.args.size(); ++t)
+            diags_.warn(loc(s.args[t]), "LOAD/TOOL argument ignored", "load args");
+    }
+
+    void changeTool(int n, const Statement& s) {
+        if (n == tool_) return;
+        tool_ = n;
+        ToolChange tc;
+        tc.moveIndex = out_.path.moves.size();
+        tc.tool = n;
+        tc.source = {0, s.line};
+        out_.path.toolChanges.push_back(tc);
+    }
+
+    void requireTool(const Statement& s) {
+        if (tool_ == 0) {
+            if (!pending_) fail(s, "motion before any CUTTER statement (missing CUTTER)");
+            diags_.note(loc(s), "CUTTER without LOAD/TOOL: taken as tool 1");
+            changeTool(1, s);
+            cutters_[1] = *pending_;
+            pending_.reset();
+        }
+        if (!cutters_.count(tool_))
+            fail(s, "tool " + std::to_string(tool_) + " has no CUTTER (missing CUTTER)");
+    }
+
+    void emit(const Vec3& to, bool rapid, const Statement& s) {
+        Move m;
+        m.start = pos_;
+        m.end = to;
+        m.axis = axis_;
+        m.tool = tool_;
+        m.rapid = rapid;
+        m.source = {0, s.line};
+        out_.path.moves.push_back(m);
+        pos_ = to;
+    }
+
+    void gotoPoint(const Statement& s) {
+        const auto v = numbers(s);
+        if (v.size() != 3 && v.size() != 6) fail(s, "GOTO needs x,y,z or x,y,z,i,j,k");
+        requireTool(s);
+        const Vec3 p = toPart(Vec3(v[0], v[1], v[2]) * scale_);
+        if (v.size() == 6) axis_ = axisOf(s, v[3], v[4], v[5]);
+        const bool rapid = rapidNext_;
+        rapidNext_ = false;
+        if (!havePos_) {
+            havePos_ = true;
+            pos_ = p;
+            diags_.note(loc(s), "first GOTO without FROM: the tool starts there (no move)");
+            if (!cycle_.active) return;
+        }
+        if (circle_) return arcTo(p, s);
+        if (cycle_.active) return drill(p, s);
+        emit(p, rapid, s);
+    }
+
+    void godlta(const Statement& s) {
+        const auto v = numbers(s);
+        requireTool(s);
+        if (!havePos_) fail(s, "GODLTA before any position (no FROM or GOTO)");
+        Vec3 d;
+        if (v.size() == 1) d = axis_ * (v[0] * scale_);
+        else if (v.size() == 3) d = Vec3(v[0], v[1], v[2]) * scale_;
+        else fail(s, "GODLTA needs d or dx,dy,dz");
+        if (!world_ && haveCsys_ && v.size() == 3) d = rot_[0] * d.x + rot_[1] * d.y + rot_[2] * d.z;
+        const bool rapid = rapidNext_;
+        rapidNext_ = false;
+        emit(pos_ + d, rapid, s);
+    }
+
+    void circle(const Statement& s) {
+        const auto v = numbers(s);
+        if (v.size() < 6) fail(s, "CIRCLE needs xc,yc,zc,i,j,k[,r,...]");
+        if (circle_) fail(s, "CIRCLE follows CIRCLE without the GOTO that ends the first");
+        Circle c;
+        c.centre = toPart(Vec3(v[0], v[1], v[2]) * scale_);
+        c.axis = axisOf(s, v[3], v[4], v[5]);
+        c.radius = v.size() >= 7 ? v[6] * scale_ : -1.0;
+        circle_ = c;
+        circleWhere_ = loc(s);
+    }
+
+    void arcTo(const Vec3& end, const Statement& s) {
+        const Circle c = *circle_;
+        circle_.reset();
+        const Vec3 w = c.axis;
+        const Vec3 ds = pos_ - c.centre, de = end - c.centre;
+        const double hs = glm::dot(ds, w), he = glm::dot(de, w);
+        const Vec3 us = ds - hs * w, ue = de - he * w;
+        const double rs = glm::length(us), re = glm::length(ue);
+        if (rs < 1e-9) throw ParseError(circleWhere_, "CIRCLE: the arc starts at its centre", std::string());
+        if (std::abs(rs - re) > kArcRadiusAbsTol && std::abs(rs - re) > kArcRadiusRelTol * rs)
+            fail(s, "CIRCLE: the GOTO end point is not on the circle (radius " + std::to_string(re) +
+                        " vs " + std::to_string(rs) + " mm)");
+        if (c.radius > 0 && std::abs(c.radius - rs) > kArcRadiusAbsTol && std::abs(c.radius - rs) > kArcRadiusRelTol * rs)
+            throw ParseError(circleWhere_, "CIRCLE radius does not match the distance of the start point", std::to_string(c.radius));
+        detail::ArcSpec arc;
+        arc.u = us / rs;
+        arc.w = w;
+        arc.v = glm::cross(w, arc.u);
+        arc.centre = c.centre;
+        arc.startAngle = 0.0;
+        double sweep = 2 * kPi;
+        if (glm::length(ue - us) > 1e-9) {
+            sweep = std::atan2(glm::dot(ue, arc.v), glm::dot(ue, arc.u));
+            if (sweep <= 0) sweep += 2 * kPi;
+        }
+        arc.sweep = sweep;
+        arc.startRadius = rs;
+        arc.endRadius = re;
+        arc.startHeight = hs;
+        arc.endHeight = he;
+        const std::size_t n = detail::arcSegments(std::max(rs, re), sweep, opt_.chordTolerance, opt_.maxArcSegments);
+        if (n == 0) fail(s, "CIRCLE needs more chords than allowed at this tolerance");
+        pts_.clear();
+        detail::arcPoints(arc, n, pts_);
+        pts_.back() = end;
+        const bool rapid = rapidNext_;
+        rapidNext_ = false;
+        for (const Vec3& p : pts_) emit(p, rapid, s);
+    }
+
+    // ---- drilling cycles ----
+    struct Cycle {
+        bool active = false;
+        std::string kind;
+        double fedto = 0, rapto = 0, rtrcto = 0, incr = 0, first = 0, sub = 0;
+        bool haveRtrcto = false;
+    };
+
+    void cycle(const Statement& s) {
+        if (s.args.empty()) fail(s, "CYCLE needs a type");
+        const std::string& kind = s.args[0].text;
+        if (kind == "OFF") {
+            cycle_.active = false;
+            return;
+        }
+        if (kind == "INIT" || kind == "CLEAR") return warnKind(s, "CYCLE/INIT and CYCLE/CLEAR ignored");
+        if (kind != "DRILL" && kind != "DEEP" && kind != "DEEP2" && kind != "BRKCHP" && kind != "FACE")
+            fail(s.args[0], "unsupported CYCLE type");
+        Cycle c;
+        c.active = true;
+        c.kind = kind;
+        bool haveFedto = false;
+        for (std::size_t k = 1; k < s.args.size(); ++k) {
+            const std::string& key = s.args[k].text;
+            auto value = [&]() {
+                if (k + 1 >= s.args.size()) fail(s.args[k], "CYCLE keyword without its value");
+                return number(s.args[++k]);
+            };
+            if (key == "FEDTO") c.fedto = value() * scale_, haveFedto = true;
+            else if (key == "RAPTO") c.rapto = value() * scale_;
+            else if (key == "RTRCTO") c.rtrcto = value() * scale_, c.haveRtrcto = true;
+            else if (key == "INCR") c.incr = value() * scale_;
+            else if (key == "1STPECK") c.first = value() * scale_;
+            else if (key == "SUBPECK") c.sub = value() * scale_;
+            else if (key == "MMPM" || key == "IPM" || key == "MMPR" || key == "IPR") {
+                value();
+                warnKind(s, "cycle feed rate is not simulated (ignored)");
+            } else if (key == "DWELL") {
+                value();
+                diags_.warn(loc(s.args[k]), "cycle dwell ignored (time is not simulated)", "apt dwell");
+            } else if (isNumber(key)) {
+                fail(s.args[k], "CYCLE value without keyword");
+            } else {
+                diags_.warn(loc(s.args[k]), "CYCLE keyword " + key + " ignored", "cycle " + key);
+            }
+        }
+        if (!haveFedto) fail(s, "CYCLE without FEDTO depth");
+        if (!c.haveRtrcto) c.rtrcto = c.rapto;
+        if (kind == "DEEP" && !(c.incr > 0)) fail(s, "CYCLE/DEEP needs a positive INCR");
+        if (kind == "DEEP2" || kind == "BRKCHP") {
+            if (!(c.first > 0)) c.first = c.incr;
+            if (!(c.sub > 0)) c.sub = c.first;
+            if (!(c.first > 0)) fail(s, "CYCLE/" + kind + " needs a positive 1STPECK or INCR");
+        } else {
+            c.first = c.sub = c.incr;
+        }
+        cycle_ = c;
+    }
+
+    void drill(const Vec3& p, const Statement& s) {
+        const Vec3 a = axis_;
+        const Vec3 clear = p + cycle_.rtrcto * a;
+        const Vec3 approach = p + cycle_.rapto * a;
+        const double bottom = -cycle_.fedto;
+        emit(clear, true, s);
+        emit(approach, true, s);
+        if (cycle_.kind == "DRILL" || cycle_.kind == "FACE" || !(cycle_.first > 0)) {
+            emit(p + bottom * a, false, s);
+        } else {
+            double depth = cycle_.rapto;
+            double step = cycle_.first;
+            std::size_t guard = 0;
+            while (depth - step > bottom) {
+                if (++guard > opt_.maxArcSegments) fail(s, "too many pecks");
+                if (depth < cycle_.rapto) emit(p + (depth + kPeckClearance) * a, true, s);
+                depth -= step;
+                emit(p + depth * a, false, s);
+                emit(approach, true, s);
+                step = cycle_.sub;
+            }
+            if (depth < cycle_.rapto) emit(p + (depth + kPeckClearance) * a, true, s);
+            emit(p + bottom * a, false, s);
+        }
+        emit(clear, true, s);
+    }
+
+    void buildTools() {
+        for (auto& [n, spec] : cutters_) {
+            const auto& v = spec.params;
+            try {
+                const double d = v[0];
+                const double r = v.size() > 1 ? v[1] : 0.0;
+                if (v.size() <= 2) {
+                    ToolLengths lengths{spec.cuttingLength, 0.0};
+                    if (r <= 0) out_.tools.insert_or_assign(n, flatEndMill(d, lengths));
+                    else if (std::abs(r - d / 2) < 1e-9) out_.tools.insert_or_assign(n, ballEndMill(d, lengths));
+                    else out_.tools.insert_or_assign(n, bullNoseEndMill(d, r, lengths));
+                } else {
+                    // CUTTER/d,r,e,f,alpha,beta,h with defaults for the short forms.
+                    const double e = v.size() > 2 ? v[2] : d / 2 - r;
+                    const double f0 = v.size() > 3 ? v[3] : r;
+                    const double alpha = (v.size() > 4 ? v[4] : 0.0) * kPi / 180.0;
+                    const double beta = (v.size() > 5 ? v[5] : 0.0) * kPi / 180.0;
+                    const double h = v.size() > 6 ? v[6] : 0.0;
+                    // CL files print 6 digits: a pointed tip (drill) whose flank misses the axis
+                    // by rounding alone is snapped onto it.
+                    double f = f0;
+                    if (r == 0.0 && alpha > 0.0) {
+                        const double pointed = e * std::tan(alpha);
+                        if (std::abs(f - pointed) < kCutterRounding * std::max(1.0, d)) f = pointed;
+                    }
+                    double cutting = spec.cuttingLength;
+                    if (h > 0 && cutting > h) cutting = h;
+                    out_.tools.insert_or_assign(n, aptCutter(d, r, e, f, alpha, beta, h, cutting));
+                }
+            } catch (const ParseError&) {
+                throw;
+            } catch (const Error& err) {
+                throw ParseError(spec.where, std::string("CUTTER describes no real tool: ") + err.what());
+            }
+        }
+    }
+
+    struct Circle {
+        Vec3 centre{0.0};
+        Vec3 axis{0, 0, 1};
+        double radius = -1;
+    };
+
+    const AptOptions& opt_;
+    std::string file_;
+    Program& out_;
+    detail::DiagnosticCollector diags_;
+    const Statement* cur_ = nullptr;
+    double scale_ = 1.0;
+    bool world_ = false;
+    bool haveCsys_ = false;
+    Vec3 rot_[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};  ///< columns
+    Vec3 trans_{0.0};
+    Vec3 pos_{0.0};
+    Vec3 axis_{0, 0, 1};
+    bool havePos_ = false;
+    bool rapidNext_ = false;
+    bool multax_ = false;
+    bool finished_ = false;
+    int tool_ = 0;
+    std::optional<CutterSpec> pending_;
+    std::map<int, CutterSpec> cutters_;
+    std::optional<Circle> circle_;
+    SourceLocation circleWhere_;
+    Cycle cycle_;
+    std::vector<Vec3> pts_;
+};
+
+}  // namespace
+
+Program parseApt(std::string_view text, const std::string& fileName, const AptOptions& options) {
+    Program program;
+    AptReader reader(options, fileName, program);
+    reader.run(text);
+    return program;
+}
+
+Program readApt(const std::string& path, const AptOptions& options) {
+    return parseApt(detail::readTextFile(path), path, options);
+}
+
+}  // namespace dexelmill

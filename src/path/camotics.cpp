@@ -1,0 +1,324 @@
+/// @file camotics.cpp
+/// @brief CAMotics project files. The format is CAMotics' JSON project (tools, workpiece, files,
+/// resolution); shapes and units follow CAMotics' tool table: lengths in the tool's units, the
+/// cone of a conical tool reaching the full diameter at the tool length.
+#include "dexelmill/path/camotics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include <nlohmann/json.hpp>
+
+#include "dexelmill/error.h"
+#include "dexelmill/tool/builders.h"
+#include "path/detail/text.h"
+
+namespace dexelmill {
+
+namespace {
+
+constexpr double kInch = 25.4;
+
+using Json = nlohmann::json;
+
+/// The line and column of a byte offset, for JSON errors.
+SourceLocation locate(std::string_view text, std::size_t offset, const std::string& file) {
+    SourceLocation loc{file, 1, 1};
+    for (std::size_t i = 0; i < offset && i < text.size(); ++i) {
+        if (text[i] == '\n') {
+            ++loc.line;
+            loc.column = 1;
+        } else {
+            ++loc.column;
+        }
+    }
+    return loc;
+}
+
+double number(const Json& j, const char* key, const std::string& where, const std::string& file,
+              double fallback, bool required = false) {
+    if (!j.contains(key)) {
+        if (required) throw ParseError({file, 0, 0}, where + ": missing \"" + key + "\"");
+        return fallback;
+    }
+    const Json& v = j.at(key);
+    if (!v.is_number())
+        throw ParseError({file, 0, 0}, where + ": \"" + key + "\" must be a number", v.dump());
+    const double d = v.get<double>();
+    if (!std::isfinite(d)) throw ParseError({file, 0, 0}, where + ": \"" + key + "\" is not finite", v.dump());
+    return d;
+}
+
+Tool camoticsTool(const Json& t, const std::string& where, const std::string& file) {
+    if (!t.is_object()) throw ParseError({file, 0, 0}, where + ": a tool must be an object", t.dump());
+    const std::string units = t.value("units", std::string("metric"));
+    if (units != "metric" && units != "imperial")
+        throw ParseError({file, 0, 0}, where + ": units must be \"metric\" or \"imperial\"", units);
+    const double s = units == "imperial" ? kInch : 1.0;
+    const std::string shape = t.value("shape", std::string("cylindrical"));
+    const double d = number(t, "diameter", where, file, 0.0, true) * s;
+    const double length = number(t, "length", where, file, 0.0, true) * s;
+    if (!(d > 0) || !(length > 0))
+        throw ParseError({file, 0, 0}, where + ": diameter and length must be positive", t.dump());
+    ToolLengths lengths{length, 0.0};
+    try {
+        if (shape == "cylindrical") return flatEndMill(d, lengths);
+        if (shape == "ballnose") return ballEndMill(d, lengths);
+        if (shape == "conical") {
+            // CAMotics: a cone from the point to the full diameter at the tool's length.
+            return chamferMill(0.0, std::atan2(d / 2, length), d, lengths);
+        }
+        if (shape == "snubnose") {
+            const double snub = number(t, "snub_diameter", where, file, 0.0, true) * s;
+            if (!(snub > 0) || snub > d)
+                throw ParseError({file, 0, 0}, where + ": snub_diameter must be in (0, diameter]", t.dump());
+            return taperEndMill(snub, std::atan2((d - snub) / 2, length), lengths);
+        }
+    } catch (const ParseError&) {
+        throw;
+    } catch (const Error& e) {
+        throw ParseError({file, 0, 0}, where + ": no real tool: " + e.what(), t.dump());
+    }
+    throw ParseError({file, 0, 0}, where + ": unknown tool shape", shape);
+}
+
+Vec3 vec3(const Json& j, const std::string& where, const std::string& file) {
+    if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
+        throw ParseError({file, 0, 0}, where + " must be an array of 3 numbers", j.dump());
+    return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+}
+
+Diagnostic warning(SourceLocation where, std::string message) {
+    Diagnostic d;
+    d.severity = Diagnostic::Severity::Warning;
+    d.where = std::move(where);
+    d.message = std::move(message);
+    return d;
+}
+
+std::string lower(std::string s) {
+    for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+}
+
+}  // namespace
+
+Project parseCamoticsProject(std::string_view text, const std::string& fileName,
+                             const std::string& directory) {
+    Json j;
+    try {
+        j = Json::parse(text.begin(), text.end(), nullptr, true, /*ignore_comments=*/true);
+    } catch (const Json::parse_error& e) {
+        const SourceLocation loc = locate(text, e.byte > 0 ? e.byte - 1 : 0, fileName);
+        const std::size_t at = std::min(text.size(), e.byte > 0 ? e.byte - 1 : 0);
+        throw ParseError(loc, "invalid JSON in CAMotics project", std::string(text.substr(at, 20)));
+    }
+    if (!j.is_object()) throw ParseError({fileName, 1, 1}, "a CAMotics project must be a JSON object");
+    Project p;
+    p.file = fileName;
+    try {
+        const std::string units = j.value("units", std::string("metric"));
+        if (units != "metric" && units != "imperial")
+            throw ParseError({fileName, 0, 0}, "project units must be \"metric\" or \"imperial\"", units);
+        p.metric = units == "metric";
+        const double s = p.metric ? 1.0 : kInch;
+        p.resolution = number(j, "resolution", "project", fileName, 0.0) * s;
+        p.resolutionMode = j.value("resolution-mode", std::string());
+        if (j.contains("tools")) {
+            const Json& tools = j.at("tools");
+            if (!tools.is_object()) throw ParseError({fileName, 0, 0}, "\"tools\" must be an object", tools.dump().substr(0, 40));
+            for (const auto& [key, t] : tools.items()) {
+                int n = 0;
+                try {
+                    std::size_t used = 0;
+                    n = std::stoi(key, &used);
+                    if (used != key.size() || n < 0) throw std::invalid_argument(key);
+                } catch (const std::exception&) {
+                    throw ParseError({fileName, 0, 0}, "tool numbers must be integers", key);
+                }
+                p.tools.insert_or_assign(n, camoticsTool(t, "tool " + key, fileName));
+            }
+        }
+        if (j.contains("workpiece")) {
+            const Json& w = j.at("workpiece");
+            if (!w.is_object()) throw ParseError({fileName, 0, 0}, "\"workpiece\" must be an object", w.dump().substr(0, 40));
+            p.workpiece.automatic = w.value("automatic", false);
+            p.workpiece.marginPercent = number(w, "margin", "workpiece", fileName, 0.0);
+            if (w.contains("bounds")) {
+                const Json& b = w.at("bounds");
+                if (!b.is_object() || !b.contains("min") || !b.contains("max"))
+                    throw ParseError({fileName, 0, 0}, "workpiece bounds need min and max", b.dump().substr(0, 40));
+                p.workpiece.bounds.lo = vec3(b.at("min"), "workpiece bounds min", fileName) * s;
+                p.workpiece.bounds.hi = vec3(b.at("max"), "workpiece bounds max", fileName) * s;
+                if (!p.workpiece.automatic && p.workpiece.bounds.isEmpty())
+                    throw ParseError({fileName, 0, 0}, "workpiece bounds are empty (min > max)", b.dump().substr(0, 60));
+            }
+        }
+        if (j.contains("files")) {
+            const Json& files = j.at("files");
+            if (!files.is_array()) throw ParseError({fileName, 0, 0}, "\"files\" must be an array", files.dump().substr(0, 40));
+            for (const Json& f : files) {
+                std::string name;
+                if (f.is_string()) name = f.get<std::string>();
+                else if (f.is_object() && f.contains("path") && f.at("path").is_string()) name = f.at("path").get<std::string>();
+                else throw ParseError({fileName, 0, 0}, "a file entry must be a string", f.dump().substr(0, 40));
+                p.files.push_back(detail::joinPath(directory, name));
+            }
+        }
+        static const std::set<std::string> known = {"units", "resolution", "resolution-mode", "tools", "workpiece", "files"};
+        for (const auto& [key, v] : j.items()) {
+            (void)v;
+            if (!known.count(key))
+                p.diagnostics.push_back(warning({fileName, 0, 0}, "project entry \"" + key + "\" ignored"));
+        }
+    } catch (const Json::exception& e) {
+        throw ParseError({fileName, 0, 0}, std::string("CAMotics project field of the wrong type: ") + e.what());
+    }
+    return p;
+}
+
+Project readCamoticsProject(const std::string& path) {
+    return parseCamoticsProject(detail::readTextFile(path), path, detail::directoryOf(path));
+}
+
+Program runProject(const Project& project, const GcodeOptions& options) {
+    GcodeOptions o = options;
+    o.initialInches = !project.metric;
+    o.toolChangeOnT = true;
+    std::vector<std::string> gcodeFiles;
+    Program program;
+    // Runs of G-code files share one machine; an APT file stands alone.
+    auto flush = [&]() {
+        if (gcodeFiles.empty()) return;
+        Program part = readGcodeFiles(gcodeFiles, o);
+        gcodeFiles.clear();
+        const auto fileBase = std::uint32_t(program.path.files.size());
+        const std::size_t moveBase = program.path.moves.size();
+        program.path.files.insert(program.path.files.end(), part.path.files.begin(), part.path.files.end());
+        for (Move m : part.path.moves) {
+            m.source.file += fileBase;
+            program.path.moves.push_back(m);
+        }
+        for (ToolChange tc : part.path.toolChanges) {
+            tc.moveIndex += moveBase;
+            tc.source.file += fileBase;
+            program.path.toolChanges.push_back(tc);
+        }
+        program.diagnostics.insert(program.diagnostics.end(), part.diagnostics.begin(), part.diagnostics.end());
+    };
+    for (const std::string& f : project.files) {
+        const std::string text = detail::readTextFile(f);
+        if (detectProgramKind(f, text) == ProgramKind::Apt) {
+            flush();
+            AptOptions a;
+            a.chordTolerance = o.chordTolerance;
+            a.initialInches = o.initialInches;
+            Program part = parseApt(text, f, a);
+            const auto fileBase = std::uint32_t(program.path.files.size());
+            const std::size_t moveBase = program.path.moves.size();
+            program.path.files.push_back(f);
+            for (Move m : part.path.moves) {
+                m.source.file += fileBase;
+                program.path.moves.push_back(m);
+            }
+            for (ToolChange tc : part.path.toolChanges) {
+                tc.moveIndex += moveBase;
+                tc.source.file += fileBase;
+                program.path.toolChanges.push_back(tc);
+            }
+            for (auto& [n, t] : part.tools) program.tools.insert_or_assign(n, t);
+            program.diagnostics.insert(program.diagnostics.end(), part.diagnostics.begin(), part.diagnostics.end());
+        } else {
+            gcodeFiles.push_back(f);
+        }
+    }
+    flush();
+    for (const auto& [n, t] : project.tools) program.tools.insert_or_assign(n, t);
+    program.diagnostics.insert(program.diagnostics.begin(), project.diagnostics.begin(), project.diagnostics.end());
+    std::set<int> warned;
+    for (const ToolChange& tc : program.path.toolChanges) {
+        if (tc.tool == 0 || program.tools.count(tc.tool) || warned.count(tc.tool)) continue;
+        warned.insert(tc.tool);
+        program.diagnostics.push_back(warning(program.path.where(tc.source),
+                                              "the program calls tool " + std::to_string(tc.tool) +
+                                                  ", which the project does not define"));
+    }
+    return program;
+}
+
+Box automaticWorkpieceBounds(const Program& program, double marginPercent) {
+    return automaticWorkpieceBounds(program.path, program.tools, marginPercent);
+}
+
+Box automaticWorkpieceBounds(const ToolPath& path, const ToolTable& tools, double marginPercent) {
+    Box box;
+    // A tool the program calls but nobody defined counts as the widest defined tool.
+    double widest = 0.0;
+    for (const auto& [n, t] : tools) widest = std::max(widest, t.cuttingRadius());
+    for (const Move& m : path.moves) {
+        if (m.rapid) continue;
+        double radius = widest;
+        auto it = tools.find(m.tool);
+        if (it != tools.end()) radius = it->second.cuttingRadius();
+        for (const Vec3& p : {m.start, m.end}) {
+            // Widen across the axis: for a vertical axis, in x and y.
+            const Vec3 a = glm::normalize(m.axis);
+            for (int k = 0; k < 3; ++k) {
+                const double across = radius * std::sqrt(std::max(0.0, 1.0 - a[k] * a[k]));
+                Vec3 lo = p, hi = p;
+                lo[k] -= across;
+                hi[k] += across;
+                box.expand(lo);
+                box.expand(hi);
+            }
+        }
+    }
+    if (box.isEmpty()) return box;
+    if (box.lo.z < 0.0 && box.hi.z > 0.0) box.hi.z = 0.0;
+    const Vec3 size = box.size();
+    const Vec3 margin = size * (marginPercent / 100.0);
+    box.lo -= margin;
+    box.hi.x += margin.x;
+    box.hi.y += margin.y;
+    return box;
+}
+
+ProgramKind detectProgramKind(const std::string& path, std::string_view text) {
+    std::string ext;
+    const auto dot = path.find_last_of('.');
+    const auto slash = path.find_last_of('/');
+    if (dot != std::string::npos && (slash == std::string::npos || dot > slash)) ext = lower(path.substr(dot + 1));
+    if (ext == "camotics") return ProgramKind::Camotics;
+    if (ext == "apt" || ext == "cl" || ext == "cls" || ext == "aptsource") return ProgramKind::Apt;
+    static const std::set<std::string> gcode = {"nc", "ngc", "gcode", "gc", "tap", "cnc", "g", "txt", "eia", "mpf", "iso"};
+    if (gcode.count(ext)) return ProgramKind::Gcode;
+    // By content: the first statement of an APT file is MAJOR/... or a $$ comment.
+    std::size_t i = 0;
+    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+    if (i < text.size() && text[i] == '{') return ProgramKind::Camotics;
+    if (text.substr(i, 2) == "$$") return ProgramKind::Apt;
+    std::size_t k = i;
+    while (k < text.size() && (std::isalpha(static_cast<unsigned char>(text[k])) || text[k] == '_')) ++k;
+    if (k - i >= 3 && k < text.size() && text[k] == '/') return ProgramKind::Apt;
+    return ProgramKind::Gcode;
+}
+
+Program readProgram(const std::string& path, const GcodeOptions& gcode, const AptOptions& apt) {
+    const std::string text = detail::readTextFile(path);
+    switch (detectProgramKind(path, text)) {
+    case ProgramKind::Camotics: {
+        const Project project = parseCamoticsProject(text, path, detail::directoryOf(path));
+        return runProject(project, gcode);
+    }
+    case ProgramKind::Apt:
+        return parseApt(text, path, apt);
+    case ProgramKind::Gcode:
+    default: {
+        Program p = parseGcode(text, path, gcode);
+        return p;
+    }
+    }
+}
+
+}  // namespace dexelmill

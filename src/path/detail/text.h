@@ -1,0 +1,27 @@
+/// @file text.h
+/// @brief Small text helpers shared by the readers.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+namespace dexelmill::detail {
+
+/// @brief The whole file as a string.
+/// @throw Error naming the file when it cannot be read.
+std::string readTextFile(const std::string& path);
+
+/// @brief Parses an unsigned decimal number without exponent ("12", "1.5", ".5", "3.") starting
+/// at s[pos]; advances pos. Correctly rounded for up to 19 significant digits (the value is an
+/// exact integer divided by an exact power of ten), strtod otherwise.
+/// @return false when there is no digit at all.
+bool parseUnsignedDecimal(std::string_view s, std::size_t& pos, double& value);
+
+/// @brief ASCII upper case of c.
+inline char upper(char c) { return (c >= 'a' && c <= 'z') ? char(c - 'a' + 'A') : c; }
+
+/// @brief The directory part of a path ("" for none), and a path joined to a directory.
+std::string directoryOf(const std::string& path);
+std::string joinPath(const std::string& dir, const std::string& name);
+
+}  // namespace dexelmill::detail

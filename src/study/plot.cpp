@@ -1,0 +1,146 @@
+// The study's log-log plot: deviation against spacing, drawn into an RGB image. Text comes from
+// stb_easy_font (Debian's libstb-dev), the PNG from the io module's writer.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include <stb/stb_easy_font.h>
+
+#include "dexelmill/error.h"
+#include "dexelmill/io/picture.h"
+#include "dexelmill/study/study.h"
+
+namespace dexelmill {
+
+namespace {
+
+struct Rgb {
+    std::uint8_t r, g, b;
+};
+
+class Canvas {
+public:
+    Canvas(int w, int h) {
+        img_.width = w;
+        img_.height = h;
+        img_.rgb.assign(std::size_t(3) * w * h, 255);
+    }
+    void dot(int x, int y, Rgb c, int size = 1) {
+        for (int dy = -size / 2; dy <= size / 2; ++dy)
+            for (int dx = -size / 2; dx <= size / 2; ++dx) put(x + dx, y + dy, c);
+    }
+    void line(double x0, double y0, double x1, double y1, Rgb c, int width, bool dashed = false) {
+        const double len = std::hypot(x1 - x0, y1 - y0);
+        const int n = std::max(1, int(len * 2));
+        for (int i = 0; i <= n; ++i) {
+            if (dashed && (i / 16) % 2) continue;
+            const double t = double(i) / n;
+            dot(int(std::lround(x0 + t * (x1 - x0))), int(std::lround(y0 + t * (y1 - y0))), c, width);
+        }
+    }
+    /// Text with its top-left corner at (x, y), scaled by `scale`.
+    void text(int x, int y, const std::string& s, Rgb c, int scale = 2) {
+        static char buffer[60000];
+        std::string copy = s;
+        unsigned char col[4] = {c.r, c.g, c.b, 255};
+        const int quads = stb_easy_font_print(0, 0, copy.data(), col, buffer, sizeof buffer);
+        for (int q = 0; q < quads; ++q) {
+            float v[4][4];
+            std::memcpy(v, buffer + q * 64, 64);
+            const int x0 = int(v[0][0] * scale), y0 = int(v[0][1] * scale);
+            const int x1 = int(v[2][0] * scale), y1 = int(v[2][1] * scale);
+            for (int yy = y0; yy < y1; ++yy)
+                for (int xx = x0; xx < x1; ++xx) put(x + xx, y + yy, c);
+        }
+    }
+    static int textWidth(const std::string& s, int scale = 2) {
+        std::string copy = s;
+        return stb_easy_font_width(copy.data()) * scale;
+    }
+    const Image& image() const { return img_; }
+
+private:
+    void put(int x, int y, Rgb c) {
+        if (x < 0 || y < 0 || x >= img_.width || y >= img_.height) return;
+        std::uint8_t* p = &img_.rgb[3 * (std::size_t(y) * img_.width + x)];
+        p[0] = c.r;
+        p[1] = c.g;
+        p[2] = c.b;
+    }
+    Image img_;
+};
+
+std::string fmt(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
+}  // namespace
+
+void writeStudyPlot(const std::string& path, const StudyResult& result) {
+    if (result.runs.empty()) throw Error("study plot: no runs to plot");
+    const int W = 1000, H = 700, left = 110, right = 230, top = 60, bottom = 80;
+    Canvas c(W, H);
+    double hMin = 1e300, hMax = 0, eMin = 1e300, eMax = 0;
+    for (const StudyRun& r : result.runs) {
+        hMin = std::min(hMin, r.h);
+        hMax = std::max(hMax, r.h);
+        for (double e : {r.devMaxMm, r.devRmsMm})
+            if (e > 0) {
+                eMin = std::min(eMin, e);
+                eMax = std::max(eMax, e);
+            }
+    }
+    if (eMax <= 0) eMin = 1e-3, eMax = 1;
+    // Whole decades around the data.
+    const double lx0 = std::floor(std::log10(hMin)), lx1 = std::max(lx0 + 1, std::ceil(std::log10(hMax)));
+    const double ly0 = std::floor(std::log10(eMin)), ly1 = std::max(ly0 + 1, std::ceil(std::log10(eMax)));
+    auto X = [&](double h) { return left + (std::log10(h) - lx0) / (lx1 - lx0) * (W - left - right); };
+    auto Y = [&](double e) { return H - bottom - (std::log10(e) - ly0) / (ly1 - ly0) * (H - top - bottom); };
+    const Rgb grid{225, 225, 225}, axis{60, 60, 60};
+    for (double d = lx0; d <= lx1; ++d) {
+        for (int m = 1; m < 10 && d + std::log10(m) <= lx1; ++m) c.line(X(m * std::pow(10, d)), top, X(m * std::pow(10, d)), H - bottom, grid, 1);
+        const std::string label = fmt(std::pow(10, d));
+        c.text(int(X(std::pow(10, d))) - Canvas::textWidth(label) / 2, H - bottom + 12, label, axis);
+    }
+    for (double d = ly0; d <= ly1; ++d) {
+        for (int m = 1; m < 10 && d + std::log10(m) <= ly1; ++m) c.line(left, Y(m * std::pow(10, d)), W - right, Y(m * std::pow(10, d)), grid, 1);
+        const std::string label = fmt(std::pow(10, d));
+        c.text(left - 12 - Canvas::textWidth(label), int(Y(std::pow(10, d))) - 6, label, axis);
+    }
+    c.line(left, top, left, H - bottom, axis, 2);
+    c.line(left, H - bottom, W - right, H - bottom, axis, 2);
+    c.text(left, 18, "surface deviation against lattice spacing: " + result.subject, axis);
+    c.text((W - right + left) / 2 - 100, H - 36, "lattice spacing h (mm)", axis);
+    c.text(12, top - 30, "deviation (mm)", axis);
+
+    const Rgb palette[] = {{200, 40, 40}, {30, 90, 200}, {30, 150, 60}, {150, 60, 180}, {230, 140, 20}, {20, 160, 170}, {110, 110, 110}};
+    std::vector<std::string> families;
+    for (const StudyRun& r : result.runs)
+        if (std::find(families.begin(), families.end(), r.families) == families.end()) families.push_back(r.families);
+    int legendY = top + 10;
+    for (std::size_t f = 0; f < families.size(); ++f) {
+        const Rgb col = palette[f % (sizeof palette / sizeof palette[0])];
+        std::vector<const StudyRun*> rs;
+        for (const StudyRun& r : result.runs)
+            if (r.families == families[f]) rs.push_back(&r);
+        std::sort(rs.begin(), rs.end(), [](auto* a, auto* b) { return a->h < b->h; });
+        for (int kind = 0; kind < 2; ++kind) {
+            auto val = [&](const StudyRun* r) { return kind == 0 ? r->devMaxMm : r->devRmsMm; };
+            for (std::size_t i = 0; i < rs.size(); ++i) {
+                if (val(rs[i]) <= 0) continue;
+                c.dot(int(X(rs[i]->h)), int(Y(val(rs[i]))), col, 7);
+                if (i > 0 && val(rs[i - 1]) > 0)
+                    c.line(X(rs[i - 1]->h), Y(val(rs[i - 1])), X(rs[i]->h), Y(val(rs[i])), col, 2, kind == 1);
+            }
+            c.line(W - right + 20, legendY + 6, W - right + 60, legendY + 6, col, 2, kind == 1);
+            c.text(W - right + 68, legendY, families[f] + (kind == 0 ? " max" : " rms"), axis);
+            legendY += 24;
+        }
+    }
+    writePng(path, c.image());
+}
+
+}  // namespace dexelmill

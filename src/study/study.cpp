@@ -1,0 +1,251 @@
+#include "dexelmill/study/study.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <random>
+#include <sstream>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "dexelmill/error.h"
+#include "dexelmill/io/atomic_file.h"
+#include "dexelmill/study/oracle.h"
+
+namespace dexelmill {
+
+namespace {
+
+/// Search range along a vertex normal for the exact surface, in spacings; a vertex farther than
+/// this from the exact surface is reported at this distance.
+constexpr double kSearchSpacings = 4.0;
+/// Bisection steps along the normal: the distance is then known to 2^-40 of the range.
+constexpr int kBisections = 40;
+
+/// Vertex normals: the sum of the adjacent triangles' area vectors, normalised.
+std::vector<Vec3> vertexNormals(const Mesh& mesh) {
+    std::vector<Vec3> n(mesh.vertices.size(), Vec3(0.0));
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const Vec3 a = mesh.areaVector(t);
+        for (std::uint32_t v : mesh.triangles[t]) n[v] += a;
+    }
+    for (Vec3& v : n) {
+        const double l = glm::length(v);
+        if (l > 0) v /= l;
+    }
+    return n;
+}
+
+/// Signed distance from the exact surface to p along the unit direction n (+ when p is outside
+/// the exact part, i.e. the model holds extra material there), found by bisection on the
+/// oracle's membership. Clamped to +-range.
+double signedDistanceAlong(const MachinedSolidOracle& oracle, const Vec3& p, const Vec3& n, double range) {
+    const bool in = oracle.inside(p);
+    // Walk outwards (p inside) or inwards (p outside) until membership flips.
+    const Vec3 dir = in ? n : -n;
+    double lo = 0, hi = 0;
+    bool found = false;
+    for (double step = range / 16; hi < range;) {
+        lo = hi;
+        hi = std::min(range, hi + step);
+        if (oracle.inside(p + hi * dir) != in) {
+            found = true;
+            break;
+        }
+    }
+    if (!found) return in ? -range : range;
+    for (int i = 0; i < kBisections; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (oracle.inside(p + mid * dir) == in ? lo : hi) = mid;
+    }
+    const double d = 0.5 * (lo + hi);
+    return in ? -d : d;
+}
+
+std::vector<std::size_t> spreadIndices(std::size_t count, std::size_t most) {
+    std::vector<std::size_t> idx;
+    if (count == 0) return idx;
+    const std::size_t n = std::min(count, most);
+    idx.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) idx.push_back(i * count / n);
+    return idx;
+}
+
+void writeDeviationPly(const std::string& path, const Mesh& mesh, const std::vector<double>& deviation, double h) {
+    writeStreamAtomically(path, [&](std::ostream& out) {
+        out << "ply\nformat ascii 1.0\ncomment dexelmill deviation from the exact part, red = extra material, "
+               "blue = missing; full colour at one spacing "
+            << h << " mm\nelement vertex " << mesh.vertices.size()
+            << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar "
+               "green\nproperty uchar blue\nelement face "
+            << mesh.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
+        for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+            const double t = std::clamp(deviation[i] / h, -1.0, 1.0);
+            const int r = int(255 * (t > 0 ? 1.0 : 1.0 + t)), b = int(255 * (t < 0 ? 1.0 : 1.0 - t));
+            const int g = int(255 * (1.0 - std::abs(t)));
+            const Vec3& v = mesh.vertices[i];
+            out << v.x << ' ' << v.y << ' ' << v.z << ' ' << r << ' ' << g << ' ' << b << '\n';
+        }
+        for (const auto& t : mesh.triangles) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+    });
+}
+
+}  // namespace
+
+StudyResult runStudy(const StudyOptions& o) {
+    if (o.resolutions.empty() || o.familySets.empty()) throw Error("a study needs spacings and family sets");
+    for (double h : o.resolutions)
+        if (!(h > 0)) throw Error("study spacings must be positive");
+    std::vector<double> hs = o.resolutions;
+    std::sort(hs.begin(), hs.end(), std::greater<double>());
+
+    StudyResult result;
+    result.subject = o.job.inputs.empty() ? std::string("program in memory") : o.job.inputs.front();
+    const std::size_t total = hs.size() * o.familySets.size() + (o.exactVolumeMm3 ? 0 : 1);
+    std::size_t done = 0;
+    auto tick = [&](const char* stage) {
+        if (o.progress) o.progress(stage, done, total);
+    };
+
+    // The reference volume: exact when known, else a tri-dexel run at half the finest spacing.
+    std::optional<MachinedSolidOracle> oracle;
+    if (o.exactVolumeMm3) {
+        result.referenceVolumeMm3 = *o.exactVolumeMm3;
+        result.reference = "exact";
+    } else {
+        tick("reference");
+        SimulateOptions ref = o.job;
+        ref.resolution = hs.back() / 2;
+        ref.families = FamilySet::all();
+        ref.progress = nullptr;
+        const Simulation s = runSimulation(ref);
+        result.referenceVolumeMm3 = s.stock->volume(Axis::Z);
+        std::ostringstream r;
+        r << "tri-dexel at h = " << ref.resolution << " mm";
+        result.reference = r.str();
+        ++done;
+    }
+
+    for (double h : hs) {
+        for (FamilySet fams : o.familySets) {
+            tick("study");
+            const auto t0 = std::chrono::steady_clock::now();
+            SimulateOptions job = o.job;
+            job.resolution = h;
+            job.families = fams;
+            job.progress = nullptr;
+            const Simulation s = runSimulation(job);
+            StudyRun run;
+            run.h = h;
+            run.families = fams.str();
+            run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            run.peakMemoryMb = s.report.peakMemoryMb;
+            run.stockMemoryMb = double(s.report.stockMemoryBytes) / (1024.0 * 1024.0);
+            // The model's part volume as its level set's mesh encloses it, so that every family set
+            // is judged the same way (a lone family's dexel volume is its own measure).
+            run.volumeMm3 = s.report.meshVolumeMm3;
+            run.volumeErrorMm3 = run.volumeMm3 - result.referenceVolumeMm3;
+            if (!oracle) oracle.emplace(s.report.stockBox, s.program.path, s.tools, hs.back() / 2);
+
+            // Surface deviation at an even spread of vertices.
+            const std::vector<Vec3> normals = vertexNormals(s.mesh);
+            const std::vector<std::size_t> picked = spreadIndices(s.mesh.vertices.size(), o.maxVertices);
+            std::vector<double> dev(picked.size());
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, picked.size()), [&](const auto& r) {
+                for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                    const std::size_t v = picked[i];
+                    dev[i] = signedDistanceAlong(*oracle, s.mesh.vertices[v], normals[v], kSearchSpacings * h);
+                }
+            });
+            run.vertices = dev.size();
+            if (!dev.empty()) {
+                std::vector<double> mag(dev.size());
+                double sum2 = 0, sum = 0;
+                for (std::size_t i = 0; i < dev.size(); ++i) {
+                    mag[i] = std::abs(dev[i]);
+                    sum2 += dev[i] * dev[i];
+                    sum += dev[i];
+                }
+                run.devMaxMm = *std::max_element(mag.begin(), mag.end());
+                run.devRmsMm = std::sqrt(sum2 / double(dev.size()));
+                run.devMeanMm = sum / double(dev.size());
+                std::nth_element(mag.begin(), mag.begin() + std::ptrdiff_t(mag.size() * 95 / 100), mag.end());
+                run.devP95Mm = mag[mag.size() * 95 / 100];
+            }
+            if (!o.plyDeviationDir.empty()) {
+                std::vector<double> all(s.mesh.vertices.size(), 0.0);
+                if (picked.size() == all.size()) {
+                    for (std::size_t i = 0; i < picked.size(); ++i) all[picked[i]] = dev[i];
+                } else {
+                    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, all.size()), [&](const auto& r) {
+                        for (std::size_t v = r.begin(); v < r.end(); ++v)
+                            all[v] = signedDistanceAlong(*oracle, s.mesh.vertices[v], normals[v], kSearchSpacings * h);
+                    });
+                }
+                std::ostringstream name;
+                name << o.plyDeviationDir << "/deviation_h" << h << "_" << run.families << ".ply";
+                writeDeviationPly(name.str(), s.mesh, all, h);
+            }
+
+            // Lost and invented material at random points (the same points for every run).
+            std::mt19937_64 rng(20261122);
+            const Box box = s.report.stockBox;
+            std::uniform_real_distribution<double> ux(box.lo.x, box.hi.x), uy(box.lo.y, box.hi.y),
+                uz(box.lo.z, box.hi.z);
+            std::vector<Vec3> pts(o.samplePoints);
+            for (Vec3& p : pts) p = Vec3(ux(rng), uy(rng), uz(rng));
+            struct Counts {
+                std::size_t lost = 0, invented = 0, lostFar = 0, inventedFar = 0;
+            };
+            std::vector<Counts> perPoint(pts.size());
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pts.size()), [&](const auto& r) {
+                for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                    const bool exact = oracle->inside(pts[i]);
+                    const double phi = s.levelSet.valueAt(pts[i]);
+                    const bool model = phi < 0;
+                    Counts& c = perPoint[i];
+                    if (exact && !model) c.lost = 1, c.lostFar = phi > h;
+                    if (!exact && model) c.invented = 1, c.inventedFar = phi < -h;
+                }
+            });
+            Counts sum;
+            for (const Counts& c : perPoint) {
+                sum.lost += c.lost;
+                sum.invented += c.invented;
+                sum.lostFar += c.lostFar;
+                sum.inventedFar += c.inventedFar;
+            }
+            const double perPointVolume = pts.empty() ? 0.0 : box.volume() / double(pts.size());
+            run.lostMm3 = double(sum.lost) * perPointVolume;
+            run.inventedMm3 = double(sum.invented) * perPointVolume;
+            run.lostFarMm3 = double(sum.lostFar) * perPointVolume;
+            run.inventedFarMm3 = double(sum.inventedFar) * perPointVolume;
+            result.runs.push_back(run);
+            ++done;
+        }
+    }
+    tick("study");
+    return result;
+}
+
+std::string studyCsv(const StudyResult& r) {
+    std::ostringstream s;
+    s << std::setprecision(8);
+    s << "h_mm,families,vertices,dev_max_mm,dev_rms_mm,dev_p95_mm,dev_max_h,dev_rms_h,dev_p95_h,dev_mean_mm,"
+         "volume_mm3,volume_error_mm3,volume_error_rel,lost_mm3,invented_mm3,lost_far_mm3,invented_far_mm3,"
+         "seconds,peak_memory_mb,stock_memory_mb\n";
+    for (const StudyRun& x : r.runs) {
+        s << x.h << ',' << x.families << ',' << x.vertices << ',' << x.devMaxMm << ',' << x.devRmsMm << ','
+          << x.devP95Mm << ',' << x.devMaxMm / x.h << ',' << x.devRmsMm / x.h << ',' << x.devP95Mm / x.h << ','
+          << x.devMeanMm << ',' << x.volumeMm3 << ',' << x.volumeErrorMm3 << ','
+          << (r.referenceVolumeMm3 != 0 ? x.volumeErrorMm3 / r.referenceVolumeMm3 : 0.0) << ',' << x.lostMm3 << ','
+          << x.inventedMm3 << ',' << x.lostFarMm3 << ',' << x.inventedFarMm3 << ',' << x.seconds << ','
+          << x.peakMemoryMb << ',' << x.stockMemoryMb << '\n';
+    }
+    return s.str();
+}
+
+}  // namespace dexelmill

@@ -1,0 +1,57 @@
+/// @file tile_fill.h
+/// @brief Filling a dexel family a tile row at a time, for builders that compute every dexel's
+/// segments from scratch (casting a mesh or a level set). Tiles are the unit of thread safety.
+#pragma once
+
+#include <vector>
+
+#include "dexelmill/stock/dexel.h"
+
+namespace dexelmill::detail {
+
+/// @brief The segments of the dexels of one tile row: kTile rows of nb dexels each.
+struct TileRowSegments {
+    int tc = 0;
+    int nb = 0;
+    std::vector<std::vector<Segment>> dexels;  ///< index (ic - tc kTile) nb + ib
+
+    TileRowSegments(int tileRow, int nbDexels)
+        : tc(tileRow), nb(nbDexels), dexels(std::size_t(DexelTile::kTile) * nbDexels) {}
+    std::vector<Segment>& at(int ib, int ic) {
+        return dexels[std::size_t(ic - tc * DexelTile::kTile) * nb + ib];
+    }
+};
+
+/// @brief Replaces every tile of row `row.tc` of `fam` with the row's segments.
+inline void assignTileRow(DexelFamily& fam, TileRowSegments& row) {
+    constexpr int kTile = DexelTile::kTile;
+    std::uint16_t counts[DexelTile::kDexels];
+    std::vector<Segment> segs;
+    for (int tb = 0; tb < fam.tilesB(); ++tb) {
+        segs.clear();
+        for (int i = 0; i < DexelTile::kDexels; ++i) {
+            const int ib = tb * kTile + i % kTile, ic = row.tc * kTile + i / kTile;
+            counts[i] = 0;
+            if (ib >= fam.nb() || ic >= fam.nc()) continue;
+            const std::vector<Segment>& d = row.at(ib, ic);
+            counts[i] = std::uint16_t(d.size());
+            segs.insert(segs.end(), d.begin(), d.end());
+        }
+        fam.tile(tb, row.tc).assign(counts, segs.data());
+    }
+}
+
+/// @brief Appends [lo, hi] (clipped to [0, len]) to sorted segments, merging a touching one.
+inline void appendSegment(std::vector<Segment>& segs, double lo, double hi, double len) {
+    lo = std::max(lo, 0.0);
+    hi = std::min(hi, len);
+    const float flo = float(lo), fhi = float(hi);
+    if (!(fhi > flo)) return;
+    if (!segs.empty() && segs.back().hi >= flo) {
+        segs.back().hi = std::max(segs.back().hi, fhi);
+        return;
+    }
+    segs.push_back({flo, fhi});
+}
+
+}  // namespace dexelmill::detail

@@ -1,0 +1,348 @@
+#include "dexelmill/surface/levelset.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <vector>
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/SignedFloodFill.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "dexelmill/error.h"
+#include "dexelmill/surface/levelset_vdb.h"
+#include "surface/detail/grid_meta.h"
+
+namespace dexelmill {
+
+// ---------------------------------------------------------------------------------------------
+// The handle
+
+LevelSet::LevelSet() = default;
+LevelSet::~LevelSet() = default;
+LevelSet::LevelSet(const LevelSet&) = default;
+LevelSet& LevelSet::operator=(const LevelSet&) = default;
+LevelSet::LevelSet(LevelSet&&) noexcept = default;
+LevelSet& LevelSet::operator=(LevelSet&&) noexcept = default;
+LevelSet::LevelSet(std::shared_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+namespace {
+
+const openvdb::FloatGrid& requireGrid(const std::shared_ptr<LevelSet::Impl>& impl) {
+    if (!impl || !impl->grid) throw Error("level set: the handle holds no grid");
+    return *impl->grid;
+}
+
+}  // namespace
+
+double LevelSet::voxelSize() const { return requireGrid(impl_).voxelSize()[0]; }
+
+double LevelSet::halfWidth() const {
+    const openvdb::FloatGrid& g = requireGrid(impl_);
+    return double(g.background()) / g.voxelSize()[0];
+}
+
+std::size_t LevelSet::activeVoxelCount() const {
+    return std::size_t(requireGrid(impl_).activeVoxelCount());
+}
+
+std::size_t LevelSet::leafCount() const { return std::size_t(requireGrid(impl_).tree().leafCount()); }
+
+std::size_t LevelSet::memoryBytes() const { return std::size_t(requireGrid(impl_).memUsage()); }
+
+Box LevelSet::activeBounds() const {
+    const openvdb::FloatGrid& g = requireGrid(impl_);
+    openvdb::CoordBBox bbox;
+    if (!g.tree().evalActiveVoxelBoundingBox(bbox)) return Box::empty();
+    const openvdb::Vec3d lo = g.indexToWorld(bbox.min()), hi = g.indexToWorld(bbox.max());
+    Box b;
+    b.expand(Vec3(lo.x(), lo.y(), lo.z()));
+    b.expand(Vec3(hi.x(), hi.y(), hi.z()));
+    return b;
+}
+
+std::string LevelSet::source() const {
+    const openvdb::FloatGrid& g = requireGrid(impl_);
+    const auto meta = g.getMetadata<openvdb::StringMetadata>(detail::kMetaSource);
+    return meta ? meta->value() : std::string();
+}
+
+std::optional<Lattice> LevelSet::lattice() const {
+    return detail::latticeFromMeta(requireGrid(impl_));
+}
+
+double LevelSet::valueAt(const Vec3& world) const {
+    const openvdb::FloatGrid& g = requireGrid(impl_);
+    openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> sampler(g);
+    return double(sampler.wsSample(openvdb::Vec3d(world.x, world.y, world.z)));
+}
+
+float LevelSet::voxelValue(int i, int j, int k) const {
+    return requireGrid(impl_).tree().getValue(openvdb::Coord(i, j, k));
+}
+
+void ensureOpenVdbInitialized() {
+    static std::once_flag once;
+    std::call_once(once, [] { openvdb::initialize(); });
+}
+
+openvdb::FloatGrid::ConstPtr gridOf(const LevelSet& levelSet) {
+    return levelSet.impl() ? openvdb::FloatGrid::ConstPtr(levelSet.impl()->grid) : nullptr;
+}
+
+LevelSet levelSetFromGrid(openvdb::FloatGrid::Ptr grid) {
+    if (!grid) throw Error("level set: null grid");
+    if (grid->getGridClass() != openvdb::GRID_LEVEL_SET &&
+        grid->getGridClass() != openvdb::GRID_UNKNOWN)
+        throw Error("level set: grid '" + grid->getName() + "' is not a level set");
+    if (!grid->hasUniformVoxels() || !grid->transform().isLinear())
+        throw Error("level set: grid '" + grid->getName() + "' needs a uniform linear transform");
+    if (!(grid->background() > 0.0f))
+        throw Error("level set: grid '" + grid->getName() + "' has a non-positive background");
+    auto impl = std::make_shared<LevelSet::Impl>();
+    impl->grid = std::move(grid);
+    return LevelSet(std::move(impl));
+}
+
+// ---------------------------------------------------------------------------------------------
+// The rebuild (method.md section 7)
+
+namespace {
+
+using LeafT = openvdb::FloatTree::LeafNodeType;
+constexpr int kLeafLog2 = 3;  // openvdb::FloatTree leaves are 8^3 voxels
+constexpr int kLeafDim = 1 << kLeafLog2;
+static_assert(LeafT::DIM == kLeafDim, "FloatTree leaves must be 8^3");
+
+/// floor(i / 8) for negative i too.
+inline int blockOf(int i) { return i >> kLeafLog2; }
+
+/// For the 8 lattice points t = (i0 + m + 1/2) h, m = 0..7, along one dexel: whether each is in
+/// material and its distance to the nearest segment endpoint (infinity if the dexel is empty).
+/// Endpoints alternate lo, hi, lo, hi ...: a point is in material when an odd number of them
+/// lie at or below it.
+inline void scanDexel(const SegmentSpan& segs, int i0, double h, double* dist, bool* inside) {
+    const std::size_t ends = 2 * segs.size;
+    auto endpoint = [&](std::size_t k) -> double {
+        const Segment& s = segs.data[k >> 1];
+        return (k & 1) ? s.hi : s.lo;
+    };
+    const double t0 = (i0 + 0.5) * h;
+    // First endpoint above t0: binary search over the sorted endpoints.
+    std::size_t lo = 0, hi = ends;
+    while (lo < hi) {
+        const std::size_t mid = (lo + hi) / 2;
+        if (endpoint(mid) <= t0) lo = mid + 1; else hi = mid;
+    }
+    std::size_t k = lo;
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    for (int m = 0; m < kLeafDim; ++m) {
+        const double t = (i0 + m + 0.5) * h;
+        while (k < ends && endpoint(k) <= t) ++k;
+        inside[m] = (k & 1) != 0;
+        const double below = k > 0 ? t - endpoint(k - 1) : inf;
+        const double above = k < ends ? endpoint(k) - t : inf;
+        dist[m] = std::min(below, above);
+    }
+}
+
+/// The rebuild of one stock; see rebuildLevelSet.
+class Rebuilder {
+public:
+    Rebuilder(const TriDexelStock& stock, const RebuildOptions& options)
+        : stock_(stock), lattice_(stock.lattice()), h_(lattice_.h) {
+        for (int a = 0; a < 3; ++a) {
+            const Axis axis = axisFromIndex(a);
+            if (options.families.has(axis) && stock.has(axis)) axes_[axisCount_++] = a;
+        }
+        if (axisCount_ == 0)
+            throw Error("level set rebuild: none of the families '" + options.families.str() +
+                        "' is kept by the stock ('" + stock.families().str() + "')");
+        // The tie of two votes goes to z, else x: put that axis first.
+        std::sort(axes_, axes_ + axisCount_, [](int x, int y) { return (x + 1) % 3 > (y + 1) % 3; });
+        width_ = options.halfWidth * h_;
+        // A point with phi < w has an axis distance below sqrt(3) w (equality for a surface at
+        // equal angles to the three axes), so it lies that close to a crossing on its own dexel.
+        reach_ = std::sqrt(3.0) * width_;
+        // Crossings farther than this along an axis belong to other surfaces, not to the local
+        // plane the estimate assumes; dropping them costs at most 1/12 of the relative weight
+        // of a plane's axis term, and only near the band's edge.
+        cutoff_ = 2.0 * reach_;
+        const int pad = int(std::ceil(reach_ / h_)) + 1;
+        for (int a = 0; a < 3; ++a) {
+            blockLo_[a] = blockOf(-pad);
+            blockN_[a] = blockOf(lattice_.n[a] - 1 + pad) - blockLo_[a] + 1;
+        }
+    }
+
+    openvdb::FloatGrid::Ptr run() {
+        const float background = float(width_);
+        auto grid = openvdb::FloatGrid::create(background);
+        markBlocks();
+        std::vector<std::size_t> blocks;
+        for (std::size_t b = 0; b < marks_.size(); ++b)
+            if (marks_[b].load(std::memory_order_relaxed)) blocks.push_back(b);
+        std::vector<std::atomic<std::uint8_t>>().swap(marks_);
+
+        std::vector<LeafT*> leaves(blocks.size(), nullptr);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 16),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t i = r.begin(); i < r.end(); ++i)
+                                  leaves[i] = buildLeaf(blocks[i], background);
+                          });
+        openvdb::FloatTree& tree = grid->tree();
+        for (LeafT* leaf : leaves)
+            if (leaf) tree.addLeaf(leaf);
+        // Every leaf's inactive voxels already carry +-background; this sets the tiles between
+        // the leaves: inside the closed band -background, outside +background.
+        openvdb::tools::signedFloodFill(tree);
+        return grid;
+    }
+
+private:
+    std::size_t blockIndex(int bx, int by, int bz) const {
+        return std::size_t(bx - blockLo_[0]) +
+               std::size_t(blockN_[0]) * (std::size_t(by - blockLo_[1]) +
+                                          std::size_t(blockN_[1]) * std::size_t(bz - blockLo_[2]));
+    }
+
+    /// Marks every 8^3 block holding a lattice point within reach_ of a crossing on its dexel.
+    void markBlocks() {
+        marks_ = std::vector<std::atomic<std::uint8_t>>(std::size_t(blockN_[0]) * blockN_[1] *
+                                                        blockN_[2]);
+        for (int ai = 0; ai < axisCount_; ++ai) {
+            const int a = axes_[ai], b = (a + 1) % 3, c = (a + 2) % 3;
+            const DexelFamily& fam = stock_.family(axisFromIndex(a));
+            tbb::parallel_for(tbb::blocked_range<int>(0, fam.nc()), [&](const tbb::blocked_range<int>& r) {
+                for (int ic = r.begin(); ic < r.end(); ++ic) {
+                    for (int ib = 0; ib < fam.nb(); ++ib) {
+                        int p[3];
+                        p[b] = ib;
+                        p[c] = ic;
+                        int lastBlock = std::numeric_limits<int>::min();
+                        for (const Segment& s : fam.segments(ib, ic)) {
+                            for (double e : {double(s.lo), double(s.hi)}) {
+                                // Points (i + 1/2) h within reach_ of e.
+                                const int i0 = int(std::ceil((e - reach_) / h_ - 0.5));
+                                const int i1 = int(std::floor((e + reach_) / h_ - 0.5));
+                                for (int blk = std::max(blockOf(i0), lastBlock);
+                                     blk <= blockOf(i1); ++blk) {
+                                    p[a] = blk << kLeafLog2;
+                                    marks_[blockIndex(blockOf(p[0]), blockOf(p[1]), blockOf(p[2]))]
+                                        .store(1, std::memory_order_relaxed);
+                                }
+                                lastBlock = blockOf(i1);
+                            }
+                        }
+                    }
+                }
+            });
+        }
+    }
+
+    /// The leaf of block `index`, or null if none of its points is within the band.
+    LeafT* buildLeaf(std::size_t index, float background) const {
+        int o[3];
+        o[0] = int(index % blockN_[0]);
+        o[1] = int((index / blockN_[0]) % blockN_[1]);
+        o[2] = int(index / (std::size_t(blockN_[0]) * blockN_[1]));
+        for (int a = 0; a < 3; ++a) o[a] = (o[a] + blockLo_[a]) << kLeafLog2;
+
+        constexpr int kSize = LeafT::SIZE;
+        float invSq[kSize];        // sum over axes of d_a^-2
+        std::uint8_t votes[kSize];  // families saying "in material"
+        bool first[kSize];          // what the first (tie-breaking) family says
+        std::fill(invSq, invSq + kSize, 0.0f);
+        std::fill(votes, votes + kSize, std::uint8_t(0));
+        std::fill(first, first + kSize, false);
+
+        double dist[kLeafDim];
+        bool in[kLeafDim];
+        // LeafNode offset of (x, y, z) within the leaf: x * 64 + y * 8 + z.
+        constexpr int kStride[3] = {kLeafDim * kLeafDim, kLeafDim, 1};
+        for (int ai = 0; ai < axisCount_; ++ai) {
+            const int a = axes_[ai], b = (a + 1) % 3, c = (a + 2) % 3;
+            const DexelFamily& fam = stock_.family(axisFromIndex(a));
+            for (int v = 0; v < kLeafDim; ++v) {
+                for (int u = 0; u < kLeafDim; ++u) {
+                    const int ib = o[b] + u, ic = o[c] + v;
+                    SegmentSpan segs;
+                    if (ib >= 0 && ib < fam.nb() && ic >= 0 && ic < fam.nc())
+                        segs = fam.segments(ib, ic);
+                    scanDexel(segs, o[a], h_, dist, in);
+                    const int base = u * kStride[b] + v * kStride[c];
+                    for (int m = 0; m < kLeafDim; ++m) {
+                        const int off = base + m * kStride[a];
+                        const double d = std::max(dist[m], kMinDistance * h_);
+                        if (d <= cutoff_) invSq[off] += float(1.0 / (d * d));
+                        votes[off] += in[m];
+                        if (ai == 0) first[off] = in[m];
+                    }
+                }
+            }
+        }
+
+        auto* leaf = new LeafT(openvdb::Coord(o[0], o[1], o[2]), background, false);
+        float* values = leaf->buffer().data();
+        bool any = false;
+        const float w2 = float(1.0 / (width_ * width_));
+        for (int off = 0; off < kSize; ++off) {
+            const bool inside = 2 * votes[off] > axisCount_ || (2 * votes[off] == axisCount_ && first[off]);
+            const float s = inside ? -1.0f : 1.0f;
+            if (invSq[off] > w2) {
+                values[off] = s / std::sqrt(invSq[off]);
+                leaf->setActiveState(openvdb::Index(off), true);
+                any = true;
+            } else {
+                values[off] = s * background;
+            }
+        }
+        if (!any) {
+            delete leaf;
+            return nullptr;
+        }
+        return leaf;
+    }
+
+    /// Axis distances are clamped below at this fraction of h, so that a point on a crossing
+    /// gets a tiny non-zero value instead of a division by zero.
+    static constexpr double kMinDistance = 1e-6;
+
+    const TriDexelStock& stock_;
+    const Lattice& lattice_;
+    double h_;
+    int axes_[3] = {0, 0, 0};
+    int axisCount_ = 0;
+    double width_ = 0.0, reach_ = 0.0, cutoff_ = 0.0;
+    int blockLo_[3] = {0, 0, 0}, blockN_[3] = {0, 0, 0};
+    std::vector<std::atomic<std::uint8_t>> marks_;
+};
+
+}  // namespace
+
+LevelSet rebuildLevelSet(const TriDexelStock& stock, const RebuildOptions& options) {
+    if (options.halfWidth < 3)
+        throw Error("level set rebuild: half-width " + std::to_string(options.halfWidth) +
+                    " voxels is below the minimum of 3");
+    ensureOpenVdbInitialized();
+    Rebuilder rebuilder(stock, options);
+    openvdb::FloatGrid::Ptr grid = rebuilder.run();
+
+    const Lattice& lat = stock.lattice();
+    auto xform = openvdb::math::Transform::createLinearTransform(lat.h);
+    xform->postTranslate(openvdb::Vec3d(lat.origin.x, lat.origin.y, lat.origin.z) + 0.5 * lat.h);
+    grid->setTransform(xform);
+    grid->setGridClass(openvdb::GRID_LEVEL_SET);
+    grid->setName(detail::kGridName);
+    detail::writeMeta(*grid, lat, options.source);
+
+    auto impl = std::make_shared<LevelSet::Impl>();
+    impl->grid = std::move(grid);
+    return LevelSet(std::move(impl));
+}
+
+}  // namespace dexelmill

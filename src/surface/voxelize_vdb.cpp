@@ -1,0 +1,107 @@
+// Casting a level set into tri-dexels: the OpenVDB half of voxelize.h.
+#include <algorithm>
+#include <cmath>
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Interpolation.h>
+#include <tbb/parallel_for.h>
+
+#include "dexelmill/error.h"
+#include "dexelmill/surface/levelset_vdb.h"
+#include "dexelmill/surface/voxelize.h"
+#include "surface/detail/tile_fill.h"
+
+namespace dexelmill {
+
+namespace {
+
+/// Marching stops refining a crossing when its bracket is this fraction of a voxel.
+constexpr double kCrossingTolerance = 1e-6;
+/// The smallest and largest march step, in voxels (the largest is also capped by the band).
+constexpr double kMinStep = 0.25;
+/// Steps are this fraction of |phi|: phi is a distance estimate, so this cannot jump a crossing.
+constexpr double kStepFactor = 0.8;
+
+}  // namespace
+
+Box materialBounds(const LevelSet& levelSet) {
+    openvdb::FloatGrid::ConstPtr grid = gridOf(levelSet);
+    if (!grid) throw Error("material bounds: the level set holds no grid");
+    openvdb::CoordBBox bbox;
+    for (auto it = grid->cbeginValueOn(); it; ++it) {
+        if (*it < 0.0f) {
+            openvdb::CoordBBox item;
+            it.getBoundingBox(item);
+            bbox.expand(item);
+        }
+    }
+    if (bbox.empty()) return Box::empty();
+    const openvdb::Vec3d lo = grid->indexToWorld(bbox.min().asVec3d() - 1.0);
+    const openvdb::Vec3d hi = grid->indexToWorld(bbox.max().asVec3d() + 1.0);
+    Box box;
+    box.expand(Vec3(lo.x(), lo.y(), lo.z()));
+    box.expand(Vec3(hi.x(), hi.y(), hi.z()));
+    return box;
+}
+
+TriDexelStock stockFromLevelSet(const LevelSet& levelSet, const Lattice& lattice,
+                                FamilySet families) {
+    openvdb::FloatGrid::ConstPtr grid = gridOf(levelSet);
+    if (!grid) throw Error("stock from level set: the level set holds no grid");
+    TriDexelStock stock(lattice, families);
+    const double vs = grid->voxelSize()[0];
+    const double maxStep = std::max(kMinStep * vs, double(grid->background()));
+    constexpr int kTile = DexelTile::kTile;
+
+    for (int a = 0; a < 3; ++a) {
+        const Axis axis = axisFromIndex(a);
+        if (!stock.has(axis)) continue;
+        DexelFamily& fam = stock.family(axis);
+        const double len = lattice.n[a] * lattice.h;
+        tbb::parallel_for(0, fam.tilesC(), [&](int tc) {
+            openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor,
+                                        openvdb::tools::BoxSampler>
+                sampler(grid->getConstAccessor(), grid->transform());
+            detail::TileRowSegments row(tc, fam.nb());
+            const int icHi = std::min(fam.nc(), tc * kTile + kTile);
+            for (int ic = tc * kTile; ic < icHi; ++ic) {
+                for (int ib = 0; ib < fam.nb(); ++ib) {
+                    const Line line = stock.dexelLine(axis, ib, ic);
+                    auto phi = [&](double v) {
+                        const Vec3 p = line.at(v);
+                        return double(sampler.wsSample(openvdb::Vec3d(p.x, p.y, p.z)));
+                    };
+                    std::vector<Segment>& segs = row.at(ib, ic);
+                    double v = 0.0, f = phi(v);
+                    bool in = f < 0.0;
+                    double start = 0.0;
+                    while (v < len) {
+                        const double step =
+                            std::min(maxStep, std::max(kMinStep * vs, kStepFactor * std::abs(f)));
+                        const double w = std::min(len, v + step);
+                        const double g = phi(w);
+                        if ((g < 0.0) != in) {
+                            // Bisect [v, w] for the sign change.
+                            double lo = v, hi = w;
+                            while (hi - lo > kCrossingTolerance * vs) {
+                                const double mid = 0.5 * (lo + hi);
+                                ((phi(mid) < 0.0) == in ? lo : hi) = mid;
+                            }
+                            const double x = 0.5 * (lo + hi);
+                            if (in) detail::appendSegment(segs, start, x, len);
+                            else start = x;
+                            in = !in;
+                        }
+                        v = w;
+                        f = g;
+                    }
+                    if (in) detail::appendSegment(segs, start, len, len);
+                }
+            }
+            detail::assignTileRow(fam, row);
+        });
+    }
+    return stock;
+}
+
+}  // namespace dexelmill

@@ -1,0 +1,118 @@
+// The dexelmill executable: exit codes, messages and outputs as a user sees them.
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sys/wait.h>
+
+using Catch::Matchers::Contains;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Run {
+    int code = -1;
+    std::string out, err;
+};
+
+fs::path scratch() {
+    const fs::path p = fs::temp_directory_path() / "dexelmill_cli_test";
+    fs::create_directories(p);
+    return p;
+}
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+/// Runs the CLI with `args` (shell words) in the scratch folder.
+Run cli(const std::string& args) {
+    const fs::path dir = scratch();
+    const std::string cmd = "cd '" + dir.string() + "' && '" + DEXELMILL_CLI_PATH + "' " + args + " > out.txt 2> err.txt";
+    const int status = std::system(cmd.c_str());
+    Run r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(dir / "out.txt");
+    r.err = slurp(dir / "err.txt");
+    return r;
+}
+
+void file(const std::string& name, const std::string& text) { std::ofstream(scratch() / name) << text; }
+
+}  // namespace
+
+TEST_CASE("help and version explain themselves and exit 0", "[cli]") {
+    Run r = cli("--help");
+    CHECK(r.code == 0);
+    CHECK_THAT(r.out, Contains("simulate") && Contains("info") && Contains("study") && Contains("mm"));
+    r = cli("simulate --help");
+    CHECK(r.code == 0);
+    CHECK_THAT(r.out, Contains("--stock") && Contains("--tool") && Contains("ball:d=6") && Contains("--resolution"));
+    r = cli("--version");
+    CHECK(r.code == 0);
+    CHECK_THAT(r.out, Contains("dexelmill"));
+}
+
+TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]") {
+    file("ok.ngc", "G21\nG0 X0 Y0 Z5\nG1 X5 F100\n");
+    CHECK(cli("").code == 2);
+    CHECK(cli("frobnicate").code == 2);
+    Run r = cli("simulate");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("INPUTS"));
+    r = cli("simulate ok.ngc --bogus");
+    CHECK(r.code == 2);
+    r = cli("simulate ok.ngc --tool ball:d=x");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("'x' is not a number"));
+    r = cli("simulate ok.ngc --tool bull:d=10,r=7");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("corner radius r = 7"));
+    r = cli("simulate ok.ngc --tool flat:d=3 --stock box:0,0,0,10,10");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("6 numbers"));
+    r = cli("simulate ok.ngc --tool flat:d=3 --stock box:0,0,0,-10,10,10");
+    CHECK(r.code == 2);
+    r = cli("simulate ok.ngc --tool flat:d=3 --families xw");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("x, y and z"));
+    r = cli("study ok.ngc --case tilted-slot");
+    CHECK(r.code == 2);
+    r = cli("study --case tilted-slot --resolutions 1,zero");
+    CHECK(r.code == 2);
+}
+
+TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
+    file("bad.ngc", "G21\nG0 X0 Y0 Z5\nG1 X1.2.3 F100\n");
+    Run r = cli("simulate bad.ngc --tool flat:d=3 --stock box:0,0,0,10,10,10 -o part.obj");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("bad.ngc:3:") && Contains("error"));
+    CHECK_FALSE(fs::exists(scratch() / "part.obj"));
+    r = cli("simulate nowhere.ngc --tool flat:d=3");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("nowhere.ngc"));
+    r = cli("info nowhere.apt");
+    CHECK(r.code == 1);
+}
+
+TEST_CASE("a successful run writes every output and a one-line summary in mm", "[cli]") {
+    file("slot.ngc", "G21 G90\nT1 M6\nG0 X5 Y15 Z15\nG1 Z7 F100\nG1 X35\nG0 Z15\nM30\n");
+    for (const char* f : {"part.ply", "part.vdb", "part.png", "report.json"}) fs::remove(scratch() / f);
+    const Run r = cli("simulate slot.ngc --stock box:0,0,0,40,30,10 --tool 1=flat:d=6 --resolution 0.5 "
+                      "-o part.ply --vdb part.vdb --png part.png --report report.json --quiet");
+    CHECK(r.code == 0);
+    CHECK_THAT(r.out, Contains("mm^3") && Contains("closed"));
+    CHECK(r.err.empty());  // --quiet
+    for (const char* f : {"part.ply", "part.vdb", "part.png", "report.json"}) {
+        INFO(f);
+        CHECK(fs::file_size(scratch() / f) > 100);
+    }
+    const Run info = cli("info part.vdb");
+    CHECK(info.code == 0);
+    CHECK_THAT(info.out, Contains("level set") && Contains("0.5 mm"));
+    const Run prog = cli("info slot.ngc");
+    CHECK(prog.code == 0);
+    CHECK_THAT(prog.out, Contains("moves") && Contains("tool changes"));
+}

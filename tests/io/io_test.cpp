@@ -1,0 +1,350 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include <unistd.h>
+
+#include "dexelmill/error.h"
+#include "dexelmill/io/atomic_file.h"
+#include "dexelmill/io/mesh_io.h"
+#include "dexelmill/io/picture.h"
+#include "dexelmill/io/stock_io.h"
+#include "dexelmill/io/vdb_io.h"
+#include "dexelmill/surface/levelset.h"
+#include "dexelmill/surface/voxelize.h"
+#include "support/analytic_parts.h"
+
+using namespace dexelmill;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A fresh, empty directory under the system temp directory, removed at the end of the test.
+struct TempDir {
+    fs::path path;
+    TempDir() {
+        static int counter = 0;
+        path = fs::temp_directory_path() /
+               ("dexelmill_io_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+        fs::remove_all(path);
+        fs::create_directories(path);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        fs::remove_all(path, ec);
+    }
+    std::string file(const std::string& name) const { return (path / name).string(); }
+    std::size_t entries() const {
+        return std::size_t(std::distance(fs::directory_iterator(path), fs::directory_iterator()));
+    }
+};
+
+std::string slurp(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+const Box kBox{Vec3(0.0), Vec3(24.0, 20.0, 16.0)};
+constexpr double kH = 0.5;
+
+/// A box with a spherical dent in its top: small (48 x 40 x 32 lattice) and closed.
+TriDexelStock dentedBox() {
+    TriDexelStock stock = TriDexelStock::fromBox(kBox, kH);
+    testing::carve(stock, testing::sphere(Vec3(12.0, 10.0, 19.0), 7.0));
+    return stock;
+}
+
+/// A cube [lo, hi]^3 as 12 triangles, outward.
+Mesh cubeMesh(double lo, double hi) {
+    Mesh m;
+    for (int i = 0; i < 8; ++i)
+        m.vertices.emplace_back(i & 1 ? hi : lo, i & 2 ? hi : lo, i & 4 ? hi : lo);
+    const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                       {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : quads) {
+        m.triangles.push_back({q[0], q[1], q[2]});
+        m.triangles.push_back({q[0], q[2], q[3]});
+    }
+    return m;
+}
+
+/// A UV sphere with `rings` x `sectors` faces, outward.
+Mesh uvSphere(Vec3 c, double r, int rings, int sectors) {
+    Mesh m;
+    m.vertices.push_back(c + Vec3(0, 0, -r));
+    for (int i = 1; i < rings; ++i) {
+        const double th = M_PI * i / rings;
+        for (int j = 0; j < sectors; ++j) {
+            const double ph = 2 * M_PI * j / sectors;
+            m.vertices.push_back(c + r * Vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph),
+                                              -std::cos(th)));
+        }
+    }
+    m.vertices.push_back(c + Vec3(0, 0, r));
+    auto at = [&](int i, int j) { return std::uint32_t(1 + (i - 1) * sectors + (j % sectors)); };
+    const std::uint32_t top = std::uint32_t(m.vertices.size() - 1);
+    for (int j = 0; j < sectors; ++j) {
+        m.triangles.push_back({0, at(1, j + 1), at(1, j)});
+        m.triangles.push_back({top, at(rings - 1, j), at(rings - 1, j + 1)});
+        for (int i = 1; i < rings - 1; ++i) {
+            m.triangles.push_back({at(i, j), at(i, j + 1), at(i + 1, j + 1)});
+            m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i + 1, j)});
+        }
+    }
+    return m;
+}
+
+}  // namespace
+
+TEST_CASE("atomic write: a failed writer leaves the target and the directory untouched", "[io]") {
+    TempDir dir;
+    const std::string target = dir.file("out.txt");
+    writeStreamAtomically(target, [](std::ostream& out) { out << "first"; });
+    CHECK(slurp(target) == "first");
+    CHECK_THROWS_AS(writeStreamAtomically(target,
+                                          [](std::ostream& out) {
+                                              out << "half";
+                                              throw Error("boom");
+                                          }),
+                    Error);
+    CHECK(slurp(target) == "first");
+    CHECK(dir.entries() == 1);  // no temporary left behind
+    writeStreamAtomically(target, [](std::ostream& out) { out << "second"; });
+    CHECK(slurp(target) == "second");
+    CHECK(dir.entries() == 1);
+    CHECK_THROWS_AS(writeStreamAtomically(dir.file("no/such/dir/x"), [](std::ostream&) {}), Error);
+}
+
+TEST_CASE("mesh files: OBJ, binary STL and PLY", "[io]") {
+    TempDir dir;
+    const Mesh mesh = meshLevelSet(rebuildLevelSet(dentedBox()));
+    REQUIRE(checkMesh(mesh).ok());
+
+    writeStl(dir.file("part.stl"), mesh);
+    const std::string stl = slurp(dir.file("part.stl"));
+    CHECK(stl.size() == 84 + 50 * mesh.triangles.size());
+    const Mesh back = readStl(dir.file("part.stl"));
+    CHECK(back.triangles.size() == mesh.triangles.size());
+    CHECK(back.vertices.size() == mesh.vertices.size());  // welded again
+    const MeshCheck check = checkMesh(back);
+    CHECK(check.closedManifold());
+    CHECK(check.signedVolume == Approx(meshVolume(mesh)).epsilon(1e-5));
+
+    writePly(dir.file("part.ply"), mesh);
+    const std::string ply = slurp(dir.file("part.ply"));
+    const std::string header = ply.substr(0, ply.find("end_header\n") + 11);
+    CHECK(header.rfind("ply\nformat binary_little_endian 1.0\n", 0) == 0);
+    CHECK(header.find("element vertex " + std::to_string(mesh.vertices.size())) != std::string::npos);
+    CHECK(ply.size() == header.size() + 12 * mesh.vertices.size() + 13 * mesh.triangles.size());
+
+    writeObj(dir.file("part.obj"), mesh);
+    std::istringstream obj(slurp(dir.file("part.obj")));
+    std::size_t v = 0, f = 0;
+    Vec3 first(0.0);
+    for (std::string line; std::getline(obj, line);) {
+        if (line.rfind("v ", 0) == 0) {
+            if (v == 0) std::istringstream(line.substr(2)) >> first.x >> first.y >> first.z;
+            ++v;
+        }
+        if (line.rfind("f ", 0) == 0) ++f;
+    }
+    CHECK(v == mesh.vertices.size());
+    CHECK(f == mesh.triangles.size());
+    CHECK(first == mesh.vertices[0]);  // shortest round-trip decimals
+    CHECK(dir.entries() == 3);
+}
+
+TEST_CASE("STL: ASCII is parsed, a binary file starting with 'solid' is binary", "[io]") {
+    TempDir dir;
+    const Mesh cube = cubeMesh(0.0, 2.0);
+    std::ostringstream ascii;
+    ascii << "solid cube\n";
+    for (std::size_t t = 0; t < cube.triangles.size(); ++t) {
+        ascii << "  facet normal 0 0 0\n    outer loop\n";
+        for (std::uint32_t i : cube.triangles[t])
+            ascii << "      vertex " << cube.vertices[i].x << " " << cube.vertices[i].y << " "
+                  << cube.vertices[i].z << "\n";
+        ascii << "    endloop\n  endfacet\n";
+    }
+    ascii << "endsolid cube\n";
+    writeStreamAtomically(dir.file("a.stl"), [&](std::ostream& o) { o << ascii.str(); });
+    const Mesh a = readStl(dir.file("a.stl"));
+    CHECK(a.vertices.size() == 8);
+    CHECK(checkMesh(a).ok());
+    CHECK(meshVolume(a) == Approx(8.0));
+
+    // A binary STL whose 80-byte header begins with "solid".
+    writeStl(dir.file("b.stl"), cube);
+    std::string bin = slurp(dir.file("b.stl"));
+    bin.replace(0, 6, "solid ");
+    writeStreamAtomically(dir.file("b.stl"), [&](std::ostream& o) { o << bin; });
+    CHECK(meshVolume(readStl(dir.file("b.stl"))) == Approx(8.0));
+
+    std::string bad = ascii.str();
+    bad.replace(bad.find("vertex 0 0 0"), 12, "vertex 0 x 0");
+    writeStreamAtomically(dir.file("bad.stl"), [&](std::ostream& o) { o << bad; });
+    try {
+        readStl(dir.file("bad.stl"));
+        FAIL("no ParseError");
+    } catch (const ParseError& e) {
+        CHECK(e.where().line == 4);
+        CHECK(e.offending() == "x");
+    }
+    CHECK_THROWS_AS(readStl(dir.file("missing.stl")), Error);
+}
+
+TEST_CASE("VDB: a level set written and read back is identical", "[io]") {
+    TempDir dir;
+    const LevelSet ls = rebuildLevelSet(dentedBox(), {3, FamilySet::all(), "dented box"});
+    writeVdb(dir.file("part.vdb"), ls);
+    const LevelSet back = readVdb(dir.file("part.vdb"));
+    CHECK(back.source() == "dented box");
+    CHECK(back.voxelSize() == ls.voxelSize());
+    CHECK(back.halfWidth() == ls.halfWidth());
+    CHECK(back.activeVoxelCount() == ls.activeVoxelCount());
+    CHECK(back.leafCount() == ls.leafCount());
+    REQUIRE(back.lattice().has_value());
+    CHECK(back.lattice()->n == ls.lattice()->n);
+    CHECK(back.lattice()->origin == ls.lattice()->origin);
+    // Every voxel of the padded lattice, active or not, holds the same value.
+    const auto n = ls.lattice()->n;
+    std::size_t differ = 0;
+    for (int k = -6; k < n[2] + 6; ++k)
+        for (int j = -6; j < n[1] + 6; ++j)
+            for (int i = -6; i < n[0] + 6; ++i)
+                differ += ls.voxelValue(i, j, k) != back.voxelValue(i, j, k);
+    CHECK(differ == 0);
+    CHECK(back.valueAt(Vec3(3.3, 4.4, 5.5)) == ls.valueAt(Vec3(3.3, 4.4, 5.5)));
+    CHECK_THROWS_AS(readVdb(dir.file("part.vdb"), "nope"), Error);
+    CHECK_THROWS_AS(readVdb(dir.file("missing.vdb")), Error);
+}
+
+TEST_CASE("stock from a mesh: lines through edges and vertices cross once", "[io][surface]") {
+    // Lattice points at integer coordinates: every x, y and z line through the cube's faces at
+    // integer positions passes through triangle edges, and the diagonals hit vertices.
+    Lattice lat;
+    lat.origin = Vec3(-2.5);
+    lat.h = 1.0;
+    lat.n = {15, 15, 15};
+    MeshCastStats stats;
+    const TriDexelStock stock = stockFromMesh(cubeMesh(0.0, 10.0), lat, FamilySet::all(), &stats);
+    CHECK(stats.unpairedDexels == 0);
+    for (int a = 0; a < 3; ++a) {
+        const DexelFamily& fam = stock.family(axisFromIndex(a));
+        for (int ic = 0; ic < fam.nc(); ++ic) {
+            for (int ib = 0; ib < fam.nb(); ++ib) {
+                const SegmentSpan segs = fam.segments(ib, ic);
+                // Strictly inside the square (lattice coordinates 1..9): exactly [2.5, 12.5].
+                const double yb = lat.coord(fam.axisB(), ib), yc = lat.coord(fam.axisC(), ic);
+                if (yb > 0.0 && yb < 10.0 && yc > 0.0 && yc < 10.0) {
+                    REQUIRE(segs.size == 1);
+                    CHECK(segs[0].lo == 2.5f);
+                    CHECK(segs[0].hi == 12.5f);
+                } else if (yb < 0.0 || yb > 10.0 || yc < 0.0 || yc > 10.0) {
+                    CHECK(segs.empty());
+                } else {
+                    CHECK(segs.size <= 1);  // on the boundary: the top-left rule decides
+                }
+            }
+        }
+    }
+}
+
+TEST_CASE("stock from a mesh: a faceted sphere", "[io][surface]") {
+    const Mesh sphere = uvSphere(Vec3(10.0, 10.0, 10.0), 8.0, 24, 48);
+    REQUIRE(checkMesh(sphere).ok());
+    const Lattice lat = Lattice::fromBox(sphere.bounds().padded(1.0), 0.25);
+    MeshCastStats stats;
+    const TriDexelStock stock = stockFromMesh(sphere, lat, FamilySet::all(), &stats);
+    CHECK(stats.unpairedDexels == 0);
+    const double v = meshVolume(sphere);
+    for (int a = 0; a < 3; ++a) CHECK(stock.volume(axisFromIndex(a)) == Approx(v).epsilon(0.005));
+    // And back: the rebuilt surface is closed with the same volume.
+    const MeshCheck check = checkMesh(meshLevelSet(rebuildLevelSet(stock)));
+    CHECK(check.ok());
+    CHECK(check.signedVolume == Approx(v).epsilon(0.005));
+}
+
+TEST_CASE("stock from files: STL and VDB", "[io]") {
+    TempDir dir;
+    const TriDexelStock original = dentedBox();
+    const LevelSet ls = rebuildLevelSet(original, {3, FamilySet::all(), "dented"});
+    writeVdb(dir.file("part.vdb"), ls);
+    writeStl(dir.file("part.stl"), meshLevelSet(ls));
+    const double v = original.volume(Axis::Z);
+
+    // VDB with the recorded lattice: the same dexels, endpoints within a small fraction of h.
+    const TriDexelStock fromVdb = readStock(dir.file("part.vdb"), kH);
+    REQUIRE(fromVdb.lattice().n == original.lattice().n);
+    // The level set rounds sharp edges a little (the distance estimate is not planar there): the
+    // worst endpoints lie on the box's edges and the dent's rim. The RMS leaves out dexels within
+    // 2 h of a box face across them.
+    double worstAll = 0.0, sum2 = 0.0;
+    std::size_t countMismatch = 0, ends = 0;
+    auto nearFace = [&](Axis axis, double coord) {
+        const int i = index(axis);
+        return coord - kBox.lo[i] < 2 * kH || kBox.hi[i] - coord < 2 * kH;
+    };
+    for (int a = 0; a < 3; ++a) {
+        const DexelFamily& f0 = original.family(axisFromIndex(a));
+        const DexelFamily& f1 = fromVdb.family(axisFromIndex(a));
+        const Lattice& lat = original.lattice();
+        for (int ic = 0; ic < f0.nc(); ++ic)
+            for (int ib = 0; ib < f0.nb(); ++ib) {
+                const SegmentSpan s0 = f0.segments(ib, ic), s1 = f1.segments(ib, ic);
+                if (s0.size != s1.size) {
+                    ++countMismatch;
+                    continue;
+                }
+                const bool edge = nearFace(f0.axisB(), lat.coord(f0.axisB(), ib)) ||
+                                  nearFace(f0.axisC(), lat.coord(f0.axisC(), ic));
+                for (std::size_t s = 0; s < s0.size; ++s) {
+                    const double dlo = s0[s].lo - s1[s].lo, dhi = s0[s].hi - s1[s].hi;
+                    worstAll = std::max({worstAll, std::abs(dlo), std::abs(dhi)});
+                    if (edge) continue;
+                    sum2 += dlo * dlo + dhi * dhi;
+                    ends += 2;
+                }
+            }
+    }
+    CHECK(countMismatch == 0);
+    CHECK(worstAll <= 0.25 * kH);
+    CHECK(std::sqrt(sum2 / double(ends)) <= 0.02 * kH);
+    CHECK(fromVdb.volume(Axis::Z) == Approx(v).epsilon(0.005));
+
+    // VDB at another spacing: a fresh lattice on the material box.
+    const TriDexelStock coarse = readStock(dir.file("part.vdb"), 2 * kH, FamilySet::only(Axis::Z));
+    CHECK(coarse.volume(Axis::Z) == Approx(v).epsilon(0.02));
+
+    MeshCastStats stats;
+    const TriDexelStock fromStl = readStock(dir.file("part.stl"), kH, FamilySet::all(), &stats);
+    CHECK(stats.unpairedDexels == 0);
+    for (int a = 0; a < 3; ++a)
+        CHECK(fromStl.volume(axisFromIndex(a)) == Approx(v).epsilon(0.005));
+    CHECK_THROWS_AS(readStock(dir.file("part.txt"), kH), Error);
+    CHECK_THROWS_AS(readStock(dir.file("part.stl"), 0.0), Error);
+}
+
+TEST_CASE("picture: an isometric PNG of the part", "[io]") {
+    TempDir dir;
+    const Mesh mesh = meshLevelSet(rebuildLevelSet(dentedBox()));
+    PictureOptions opt;
+    opt.width = 160;
+    opt.height = 120;
+    const Image img = renderPicture(mesh, opt);
+    REQUIRE(img.rgb.size() == 160u * 120u * 3u);
+    // The part fills the middle; the corners are background.
+    const std::uint8_t* corner = img.pixel(0, 0);
+    const std::uint8_t* middle = img.pixel(80, 60);
+    CHECK((corner[0] != middle[0] || corner[1] != middle[1] || corner[2] != middle[2]));
+    writePng(dir.file("part.png"), img);
+    const std::string png = slurp(dir.file("part.png"));
+    REQUIRE(png.size() > 8);
+    CHECK(png.compare(0, 8, "\x89PNG\r\n\x1a\n") == 0);
+    CHECK_THROWS_AS(renderPicture(mesh, PictureOptions{0, 10, 1, Vec3(1.0), 0.05}), Error);
+}

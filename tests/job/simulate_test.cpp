@@ -1,0 +1,151 @@
+// The main job end to end through the library: volumes against analytic values, report fields,
+// failures that leave existing files alone.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "dexelmill/error.h"
+#include "dexelmill/job/simulate.h"
+#include "dexelmill/tool/builders.h"
+
+using namespace dexelmill;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// A fresh folder under the system's temporary folder.
+fs::path scratch(const std::string& name) {
+    const fs::path p = fs::temp_directory_path() / ("dexelmill_test_" + name);
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+}
+
+std::string write(const fs::path& p, const std::string& text) {
+    std::ofstream(p) << text;
+    return p.string();
+}
+
+std::string read(const fs::path& p) {
+    std::ifstream in(p);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+/// A slot 3 mm deep and 30 mm long with a D6 flat end mill: volume 3 (30 * 6 + pi * 9).
+const char* kSlot =
+    "G21 G90 G17\n"
+    "T1 M6\n"
+    "G0 X5 Y15 Z15\n"
+    "G1 Z7 F100\n"
+    "G1 X35\n"
+    "G0 Z15\n"
+    "M30\n";
+const double kSlotVolume = 3 * (30 * 6 + kPi * 9);
+
+}  // namespace
+
+TEST_CASE("a slot removes its analytic volume and the report says so", "[job]") {
+    const fs::path dir = scratch("slot");
+    SimulateOptions o;
+    o.inputs = {write(dir / "slot.ngc", kSlot)};
+    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
+    o.tools.emplace(1, flatEndMill(6, {20, 40}));
+    o.resolution = 0.25;
+    o.meshPath = (dir / "part.stl").string();
+    o.reportPath = (dir / "report.json").string();
+    const SimulateReport r = simulate(o);
+    CHECK(r.removedVolumeMm3 == Approx(kSlotVolume).epsilon(0.01));
+    CHECK(r.stockVolumeMm3 == Approx(40 * 30 * 10));
+    CHECK(r.collisions.empty());
+    CHECK(r.meshClosed);
+    CHECK(r.meshVolumeMm3 == Approx(r.finalVolumeMm3).epsilon(0.005));
+    CHECK(r.lattice == std::array<int, 3>{160, 120, 40});
+    CHECK(r.dexels[2] == std::size_t(160 * 120));
+    for (int a = 0; a < 3; ++a) {
+        REQUIRE(r.familyVolumesMm3[a]);
+        CHECK(*r.familyVolumesMm3[a] == Approx(40 * 30 * 10 - kSlotVolume).epsilon(0.001));
+    }
+    CHECK(r.toolChanges == 1);
+    CHECK(r.rapids >= 1);
+
+    const nlohmann::json j = nlohmann::json::parse(read(dir / "report.json"));
+    for (const char* key : {"version", "inputs", "resolution_mm", "families", "moves", "rapids", "tool_changes",
+                            "lattice", "dexels", "stock_volume_mm3", "final_volume_mm3", "removed_volume_mm3",
+                            "family_volumes_mm3", "collisions", "warnings", "mesh", "timing_s", "peak_memory_mb"})
+        CHECK(j.contains(key));
+    CHECK(j["removed_volume_mm3"].get<double>() == Approx(kSlotVolume).epsilon(0.01));
+    CHECK(j["mesh"]["closed"].get<bool>());
+    CHECK(j["lattice"]["nx"].get<int>() == 160);
+    CHECK(j["family_volumes_mm3"].contains("y"));
+    for (const char* key : {"parse", "cut", "rebuild", "mesh", "write", "total"}) CHECK(j["timing_s"].contains(key));
+    // The F word is reported, not dropped.
+    bool feedWarned = false;
+    for (const auto& w : j["warnings"]) feedWarned = feedWarned || w["line"].get<int>() == 4;
+    CHECK(feedWarned);
+    CHECK(fs::file_size(dir / "part.stl") == 84 + 50 * r.meshTriangles);
+}
+
+TEST_CASE("z-only and x-only stocks measure the same slot", "[job]") {
+    const fs::path dir = scratch("families");
+    SimulateOptions o;
+    o.inputs = {write(dir / "slot.ngc", kSlot)};
+    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
+    o.defaultTool = flatEndMill(6, {20, 40});
+    o.resolution = 0.25;
+    for (const char* f : {"z", "x"}) {
+        o.families = FamilySet::parse(f);
+        const Simulation s = runSimulation(o);
+        INFO(f);
+        CHECK(s.report.removedVolumeMm3 == Approx(kSlotVolume).epsilon(0.01));
+        CHECK(s.report.meshClosed);
+        CHECK(s.report.dexels[f[0] == 'z' ? 0 : 2] == 0);
+    }
+}
+
+TEST_CASE("a failed run leaves existing outputs untouched", "[job][errors]") {
+    const fs::path dir = scratch("noclobber");
+    const std::string out = write(dir / "part.obj", "keep me\n");
+    const std::string report = write(dir / "report.json", "{\"old\": true}\n");
+    SimulateOptions o;
+    o.inputs = {write(dir / "bad.ngc", "G21\nG1 X1 Y2 Z3 F100\nG1 X1..5\n")};
+    o.stockBox = Box{Vec3(0.0), Vec3(10.0)};
+    o.defaultTool = flatEndMill(3);
+    o.meshPath = out;
+    o.reportPath = report;
+    CHECK_THROWS_AS(simulate(o), ParseError);
+    CHECK(read(out) == "keep me\n");
+    CHECK(read(report) == "{\"old\": true}\n");
+    // No temporary files are left behind either.
+    std::size_t files = 0;
+    for (const auto& e : fs::directory_iterator(dir)) files += e.is_regular_file();
+    CHECK(files == 3);
+}
+
+TEST_CASE("the job names what is missing or malformed", "[job][errors]") {
+    const fs::path dir = scratch("errors");
+    SimulateOptions o;
+    o.inputs = {write(dir / "t2.ngc", "G21\nT2 M6\nG0 X0 Y0 Z5\nG1 X5\n")};
+    o.stockBox = Box{Vec3(0.0), Vec3(10.0)};
+    o.tools.emplace(1, flatEndMill(3));
+    o.tools.emplace(3, flatEndMill(4));
+    CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains("t2.ngc:") && Catch::Matchers::Contains("T2") &&
+                                            Catch::Matchers::Contains("--tool 2="));
+    o.tools.emplace(2, flatEndMill(3));
+    o.meshPath = (dir / "part.xyz").string();
+    CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains(".obj, .stl or .ply"));
+    o.meshPath.clear();
+    o.inputs = {(dir / "missing.ngc").string()};
+    CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains("missing.ngc"));
+}
+
+TEST_CASE("the default spacing is a round fraction of the stock", "[job]") {
+    CHECK(chooseResolution(Box{Vec3(0.0), Vec3(1694, 890, 870)}) == Approx(2.0));
+    CHECK(chooseResolution(Box{Vec3(0.0), Vec3(80, 80, 20)}) == Approx(0.2));
+    CHECK(chooseResolution(Box{Vec3(0.0), Vec3(1000, 800, 440)}) == Approx(2.0));
+}

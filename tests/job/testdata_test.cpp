@@ -1,0 +1,70 @@
+// Every real program in ../shared/testdata runs end to end (with its CAMotics project where there
+// is one) and gives a closed mesh; the 5-axis A/C programs stop with a clear "not supported yet".
+// Skips cleanly when the folder is absent.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "dexelmill/error.h"
+#include "dexelmill/job/simulate.h"
+#include "dexelmill/tool/builders.h"
+#include "testdata.h"
+
+using namespace dexelmill;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// Lattice points along the stock's longest side: coarse, so the whole set runs in seconds.
+constexpr double kPointsAlongLongestSide = 120;
+
+/// The programs to run: a folder's .camotics project stands for the programs it lists;
+/// UGS's *.parsed_output.nc files are expected outputs, not programs.
+std::vector<fs::path> programs(const fs::path& root) {
+    std::vector<fs::path> out;
+    for (const auto& e : fs::recursive_directory_iterator(root)) {
+        if (!e.is_regular_file()) continue;
+        const fs::path& p = e.path();
+        const std::string ext = p.extension().string(), name = p.filename().string();
+        if (ext == ".camotics") {
+            out.push_back(p);
+            continue;
+        }
+        if (ext != ".ngc" && ext != ".nc" && ext != ".gcode" && ext != ".apt") continue;
+        if (name.find(".parsed_output.") != std::string::npos) continue;
+        bool inProject = false;
+        for (const auto& s : fs::directory_iterator(p.parent_path())) inProject |= s.path().extension() == ".camotics";
+        if (p.parent_path().filename() == "twp-g68.2" && name == "square.ngc") continue;  // a subroutine file
+        if (!inProject) out.push_back(p);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("every shared test program runs end to end with a closed mesh", "[job][testdata]") {
+    if (!test::haveSharedData()) return;
+    const std::vector<fs::path> all = programs(test::sharedData());
+    REQUIRE(all.size() >= 25);
+    for (const fs::path& p : all) {
+        INFO(p.string());
+        SimulateOptions o;
+        o.inputs = {p.string()};
+        // Programs without tools of their own get a 3 mm flat end mill with long flutes.
+        o.defaultTool = flatEndMill(3, {60, 80});
+        o.cellsAlongLongestSide = kPointsAlongLongestSide;
+        const bool fiveAxis = p.string().find("xyzac") != std::string::npos || p.filename() == "rotation.ngc";
+        if (fiveAxis) {
+            CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains("not supported yet"));
+            continue;
+        }
+        const Simulation s = runSimulation(o);
+        CHECK(s.report.moves > 0);
+        CHECK(s.report.meshTriangles > 0);
+        CHECK(s.report.meshClosed);
+        CHECK(s.report.finalVolumeMm3 > 0);
+        CHECK(s.report.finalVolumeMm3 <= s.report.stockVolumeMm3);
+    }
+}

@@ -1,0 +1,112 @@
+// Tests of the APT CL reader.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+
+#include "dexelmill/error.h"
+#include "dexelmill/path/apt.h"
+#include "testdata.h"
+
+using namespace dexelmill;
+
+namespace {
+
+bool hasDiagnostic(const Program& p, const std::string& fragment) {
+    for (const Diagnostic& d : p.diagnostics)
+        if (d.message.find(fragment) != std::string::npos) return true;
+    return false;
+}
+
+}  // namespace
+
+TEST_CASE("apt: every APT program of the shared testdata parses", "[path][apt]") {
+    if (!test::haveSharedData()) return;
+    namespace fs = std::filesystem;
+    int count = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(test::sharedData())) {
+        if (entry.path().extension() != ".apt") continue;
+        INFO(entry.path().string());
+        Program p;
+        REQUIRE_NOTHROW(p = readApt(entry.path().string()));
+        CHECK(p.path.moves.size() > 50);
+        CHECK_FALSE(p.tools.empty());
+        for (const Move& m : p.path.moves) {
+            REQUIRE(p.tools.count(m.tool) == 1);
+            REQUIRE(std::abs(glm::length(m.axis) - 1.0) < 1e-9);
+        }
+        CHECK(hasDiagnostic(p, "FEDRAT"));
+        ++count;
+    }
+    CHECK(count == 4);
+}
+
+TEST_CASE("apt: motion, CIRCLE, cycles and frames", "[path][apt]") {
+    const Program p = parseApt(
+        "UNITS/MM\nCUTTER/10,0,5,0,0,0,50\nLOAD/TOOL,3\nFEDRAT/100,MMPM\n"
+        "FROM/0,0,10\nRAPID\nGOTO/10,0,0\nCIRCLE/0,0,0,0,0,1,10\nGOTO/0,10,0\n"
+        "CYCLE/DRILL,FEDTO,5,MMPM,50,RAPTO,2,RTRCTO,10\nGOTO/20,20,0\nCYCLE/OFF\n"
+        "CUTCOM/LEFT\nGODLTA/0,0,5\nFINI\n",
+        "t.apt");
+    REQUIRE(p.tools.count(3) == 1);
+    const auto& m = p.path.moves;
+    REQUIRE(m.size() > 6);
+    CHECK(m[0].rapid);
+    CHECK(m[0].tool == 3);
+    // The quarter circle turns counter-clockwise about +Z: through x, y > 0.
+    for (std::size_t k = 1; m[k].source.line == 9; ++k) {
+        CHECK(std::hypot(m[k].end.x, m[k].end.y) == Approx(10));
+        CHECK(m[k].end.x >= -1e-9);
+        CHECK(m[k].end.y >= -1e-9);
+    }
+    double zmin = 1e9;
+    for (const Move& mv : m) zmin = std::min(zmin, mv.end.z);
+    CHECK(zmin == Approx(-5));
+    CHECK(m.back().end.z == Approx(15));
+    CHECK(hasDiagnostic(p, "CUTCOM"));
+    CHECK(hasDiagnostic(p, "FEDRAT"));
+
+    // A rotated CSYS without TRNTYP/WORLD maps local coordinates; its z column is the axis.
+    const Program q = parseApt("CUTTER/6\nCSYS/0,0,1,5,0,1,0,0,-1,0,0,0\nFROM/0,0,0\nGOTO/0,0,10\n", "q.apt");
+    REQUIRE(q.path.moves.size() == 1);
+    CHECK(q.path.moves[0].end.x == Approx(15));
+    CHECK(q.path.moves[0].axis.x == Approx(1));
+}
+
+TEST_CASE("apt: malformed programs give a parse error with file:line:col and the text",
+          "[path][apt][errors]") {
+    struct Case {
+        const char* text;
+        int line;
+        const char* message;
+        const char* offending;
+    };
+    const Case cases[] = {
+        {"GOTO/1,2,3\n", 1, "missing CUTTER", "GOTO"},
+        {"CUTTER/6\nGOTO/1,2\n", 2, "GOTO needs", "GOTO/1,2"},
+        {"CUTTER/6\nGOTO/1,2,3x\n", 2, "bad number", "3X"},
+        {"CUTTER/-6\n", 1, "positive", "-6"},
+        {"CUTTER/6\nFROM/1,0,0\nCIRCLE/0,0,0,0,0,1\nGOTO/3,3,0\n", 4, "not on the circle", "GOTO"},
+        {"CUTTER/6\nFROM/1,0,0\nCIRCLE/0,0,0,0,0,1\n", 3, "truncated", ""},
+        {"CUTTER/6\nGOTO/1,2,$\n", 2, "truncated", "GOTO"},
+        {"CUTTER/6\nCYCLE/TAPX,FEDTO,1\n", 2, "unsupported CYCLE", "TAPX"},
+        {"CUTTER/6\nCYCLE/DRILL,RAPTO,1\n", 2, "without FEDTO", "CYCLE"},
+        {"CUTTER/6\nCSYS/1,0,0\n", 2, "12 numbers", "CSYS"},
+        {"UNITS/FURLONGS\n", 1, "unknown units", "FURLONGS"},
+        {"CUTTER/6,0,3,0,0,0,-5\nLOAD/TOOL,1\n", 1, "no real tool", ""},
+    };
+    for (const Case& c : cases) {
+        INFO(c.text);
+        try {
+            parseApt(c.text, "bad.apt");
+            FAIL("no error");
+        } catch (const ParseError& e) {
+            INFO(e.what());
+            CHECK(e.where().file == "bad.apt");
+            CHECK(e.where().line == c.line);
+            CHECK(e.message().find(c.message) != std::string::npos);
+            CHECK(e.offending().find(c.offending) != std::string::npos);
+        }
+    }
+}

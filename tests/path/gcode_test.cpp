@@ -1,0 +1,466 @@
+// Tests of the G-code reader: real programs, LinuxCNC canon references, semantics, errors.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "dexelmill/error.h"
+#include "dexelmill/path/gcode.h"
+#include "testdata.h"
+
+using namespace dexelmill;
+
+namespace {
+
+using test::haveSharedData;
+using test::sharedData;
+
+/// Options as LinuxCNC runs a program: the machine starts at the origin.
+GcodeOptions linuxcnc() {
+    GcodeOptions o;
+    o.startPosition = Vec3(0.0);
+    return o;
+}
+
+Program run(const std::string& text, GcodeOptions options = linuxcnc()) {
+    return parseGcode(text, "test.ngc", options);
+}
+
+bool near(const Vec3& a, const Vec3& b, double tol = 1e-9) {
+    return std::abs(a.x - b.x) <= tol && std::abs(a.y - b.y) <= tol && std::abs(a.z - b.z) <= tol;
+}
+
+bool hasDiagnostic(const Program& p, const std::string& fragment) {
+    for (const Diagnostic& d : p.diagnostics)
+        if (d.message.find(fragment) != std::string::npos) return true;
+    return false;
+}
+
+}  // namespace
+
+TEST_CASE("gcode: every G-code program of the shared testdata parses", "[path][gcode]") {
+    if (!haveSharedData()) return;
+    namespace fs = std::filesystem;
+    int count = 0;
+    for (const auto& entry : fs::recursive_directory_iterator(sharedData())) {
+        const std::string ext = entry.path().extension().string();
+        if (ext != ".nc" && ext != ".ngc" && ext != ".gcode") continue;
+        const std::string path = entry.path().string();
+        const bool rotary = path.find("5axis-xyzac") != std::string::npos ||
+                            path.find("rotation.ngc") != std::string::npos;
+        INFO(path);
+        if (rotary) {
+            // A/C and A programs need machine kinematics: a clear error, not a wrong path.
+            try {
+                readGcode(path);
+                FAIL("expected a rotary-axis error");
+            } catch (const ParseError& e) {
+                CHECK(std::string(e.what()).find("rotary") != std::string::npos);
+                CHECK(e.where().line > 0);
+            }
+            continue;
+        }
+        Program p;
+        REQUIRE_NOTHROW(p = readGcode(path));
+        ++count;
+    }
+    CHECK(count >= 20);
+}
+
+namespace {
+
+/// A motion call of a LinuxCNC canon file: its kind and end point in program units.
+struct CanonMotion {
+    enum Kind { Traverse, Feed, Arc } kind;
+    double end[3];
+    double scale;  ///< mm per program unit when the call was made
+    int line;
+};
+
+std::vector<CanonMotion> readCanon(const std::string& path) {
+    std::ifstream in(path);
+    std::vector<CanonMotion> out;
+    std::string line;
+    double scale = 1.0;
+    int plane = 17;
+    int number = 0;
+    while (std::getline(in, line)) {
+        ++number;
+        if (line.find("USE_LENGTH_UNITS(CANON_UNITS_INCHES)") != std::string::npos) scale = 25.4;
+        if (line.find("USE_LENGTH_UNITS(CANON_UNITS_MM)") != std::string::npos) scale = 1.0;
+        if (line.find("SELECT_PLANE(CANON_PLANE_XY)") != std::string::npos) plane = 17;
+        if (line.find("SELECT_PLANE(CANON_PLANE_XZ)") != std::string::npos) plane = 18;
+        if (line.find("SELECT_PLANE(CANON_PLANE_YZ)") != std::string::npos) plane = 19;
+        const char* kinds[] = {"STRAIGHT_TRAVERSE(", "STRAIGHT_FEED(", "ARC_FEED("};
+        for (int k = 0; k < 3; ++k) {
+            const auto p = line.find(kinds[k]);
+            if (p == std::string::npos) continue;
+            std::vector<double> v;
+            std::stringstream ss(line.substr(p + std::strlen(kinds[k])));
+            std::string item;
+            while (std::getline(ss, item, ',')) v.push_back(std::stod(item));
+            CanonMotion m{CanonMotion::Kind(k), {0, 0, 0}, scale, number};
+            if (k < 2) {
+                m.end[0] = v.at(0), m.end[1] = v.at(1), m.end[2] = v.at(2);
+            } else {
+                // ARC_FEED(first_end, second_end, first_axis, second_axis, rotation, axis_end...)
+                const double first = v.at(0), second = v.at(1), axisEnd = v.at(5);
+                if (plane == 17) m.end[0] = first, m.end[1] = second, m.end[2] = axisEnd;
+                if (plane == 18) m.end[2] = first, m.end[0] = second, m.end[1] = axisEnd;
+                if (plane == 19) m.end[1] = first, m.end[2] = second, m.end[0] = axisEnd;
+            }
+            out.push_back(m);
+        }
+    }
+    return out;
+}
+
+/// Our coordinate printed as the canon prints it (4 decimals, program units) and read back.
+double asCanon(double mm, double scale) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.4f", mm / scale);
+    return std::stod(buf);
+}
+
+bool matchesCanon(const Vec3& p, const CanonMotion& c) {
+    for (int a = 0; a < 3; ++a)
+        if (std::abs(asCanon(p[a], c.scale) - c.end[a]) > 1e-6) return false;
+    return true;
+}
+
+/// Walks the canon motions and our moves together: a straight call is one move of the same kind
+/// ending at the same point; an arc call is a run of feed moves from one source line whose last
+/// move ends at the arc's end.
+void checkAgainstCanon(const Program& p, const std::vector<CanonMotion>& canon) {
+    const auto& moves = p.path.moves;
+    std::size_t m = 0;
+    for (const CanonMotion& c : canon) {
+        INFO("canon line " << c.line);
+        REQUIRE(m < moves.size());
+        if (c.kind != CanonMotion::Arc) {
+            INFO("move " << m << " from program line " << moves[m].source.line << " ends at "
+                         << moves[m].end.x << ", " << moves[m].end.y << ", " << moves[m].end.z);
+            CHECK(moves[m].rapid == (c.kind == CanonMotion::Traverse));
+            REQUIRE(matchesCanon(moves[m].end, c));
+            ++m;
+            continue;
+        }
+        const int line = moves[m].source.line;
+        while (m < moves.size() && !moves[m].rapid && moves[m].source.line == line &&
+               !matchesCanon(moves[m].end, c))
+            ++m;
+        REQUIRE(m < moves.size());
+        CHECK_FALSE(moves[m].rapid);
+        REQUIRE(matchesCanon(moves[m].end, c));
+        ++m;
+    }
+    CHECK(m == moves.size());
+}
+
+}  // namespace
+
+TEST_CASE("gcode: LinuxCNC canon references of canned cycles and M98 loops", "[path][gcode][canon]") {
+    if (!haveSharedData()) return;
+    const std::string base = sharedData() + "/linuxcnc/";
+    for (const char* name : {"g81-cycles/g17-g98-g81", "g81-cycles/g18-g98-g81",
+                             "g81-cycles/g19-g98-g81", "fanuc-subs/05-M98-loops"}) {
+        INFO(name);
+        const Program p = readGcode(base + name + ".ngc", linuxcnc());
+        const auto canon = readCanon(base + name + ".expected.canon");
+        REQUIRE(canon.size() > 10);
+        checkAgainstCanon(p, canon);
+    }
+}
+
+TEST_CASE("gcode: cam-nisley O-word program against its canon (cutter comp aside)", "[path][gcode][canon]") {
+    if (!haveSharedData()) return;
+    const std::string base = sharedData() + "/linuxcnc/cam-nisley/";
+    GcodeOptions options;
+    options.startPosition = Vec3(0.0);
+    options.toolTableFile = base + "test.tbl";
+    options.toolTableInches = true;
+    const Program p = readGcode(base + "cam.ngc", options);
+    const auto canon = readCanon(base + "cam.expected.canon");
+    CHECK(hasDiagnostic(p, "cutter radius compensation"));
+    REQUIRE(p.tools.count(1) == 1);
+    // LinuxCNC applied G42 with the table's 1/16" cutter, which this reader warns about and
+    // does not simulate: compare the programmed path where comp does not move it: Z of every
+    // call, and every coordinate of the moves made before comp starts and after it ends.
+    const auto& moves = p.path.moves;
+    std::size_t m = 0;
+    std::size_t compared = 0;
+    for (std::size_t k = 0; k < canon.size(); ++k) {
+        const CanonMotion& c = canon[k];
+        INFO("canon line " << c.line << ", move " << m);
+        REQUIRE(m < moves.size());
+        if (c.kind != CanonMotion::Arc) {
+            CHECK(moves[m].rapid == (c.kind == CanonMotion::Traverse));
+            CHECK(std::abs(asCanon(moves[m].end.z, c.scale) - c.end[2]) <= 1e-6);
+            if (k < 2 || k + 1 == canon.size()) {
+                CHECK(matchesCanon(moves[m].end, c));
+                ++compared;
+            }
+            ++m;
+            continue;
+        }
+        const int line = moves[m].source.line;
+        while (m + 1 < moves.size() && moves[m + 1].source.line == line && !moves[m + 1].rapid) ++m;
+        CHECK(std::abs(asCanon(moves[m].end.z, c.scale) - c.end[2]) <= 1e-6);
+        ++m;
+    }
+    CHECK(m == moves.size());
+    CHECK(compared == 3);
+}
+
+namespace {
+
+struct Malformed {
+    const char* what;
+    const char* text;
+    int line;
+    int column;           ///< 0: any
+    const char* message;  ///< fragment of the message
+    const char* offending;  ///< fragment of the offending text
+};
+
+}  // namespace
+
+TEST_CASE("gcode: malformed programs give a parse error with file:line:col and the text",
+          "[path][gcode][errors]") {
+    const Malformed cases[] = {
+        {"bad number", "G1 X1.2.3\n", 1, 5, "bad number", "1.2.3"},
+        {"missing value", "G1 X\n", 1, 0, "missing value", ""},
+        {"letter without number", "G1 XY2\n", 1, 5, "expected a number", "Y2"},
+        {"two motion codes", "G0 G1 X1\n", 1, 4, "modal group", "G1"},
+        {"two plane codes", "G17 G18\n", 1, 5, "modal group", "G18"},
+        {"two unit codes", "G20 G21\n", 1, 5, "modal group", "G21"},
+        {"two words of one letter", "G1 X1 X2\n", 1, 7, "two X words", "X2"},
+        {"arc radius does not fit", "G0 X0 Y0\nG2 X10 Y0 R2\n", 2, 11, "radius too small", "R2"},
+        {"arc end not on circle", "G0 X0 Y0\nG2 X10 Y0 I3 J0\n", 2, 1, "radius to end of arc differs", "G2"},
+        {"arc without centre", "G0 X0 Y0\nG2 X10 Y0\n", 2, 1, "arc without", "G2"},
+        {"arc without end", "G0 X0 Y0\nG2 I5\n", 2, 1, "arc without end", "G2"},
+        {"R arc to itself", "G0 X1 Y1\nG2 X1 Y1 R5\n", 2, 10, "same start and end", "R5"},
+        {"unterminated comment", "G0 X1 (rapid\n", 1, 7, "unterminated comment", "(rapid"},
+        {"unterminated subroutine", "o100 sub\nG1 X1\n", 1, 1, "unterminated subroutine", "o100 sub"},
+        {"unterminated while", "o1 while [1]\nG1 X1\n", 1, 1, "unterminated loop", "o1 while"},
+        {"unterminated if", "o2 if [1]\nG1 X1\n", 1, 1, "unterminated if", "o2 if"},
+        {"recursion without end", "o<r> sub\no<r> call\no<r> endsub\nG0 X0\no<r> call\nM2\n", 2, 1, "recursion", "o<r> call"},
+        {"M98 recursion", "M98 P7\nM30\nO7\nM98 P7\nM99\n", 4, 0, "recursion", "M98"},
+        {"endless loop", "o1 while [1]\nG0 X1\no1 endwhile\n", 2, 1, "does not terminate", "G0 X1"},
+        {"division by zero", "#1 = [1 / 0]\n", 1, 9, "division by zero", "/ 0"},
+        {"MOD by zero", "#1 = [5 MOD 0]\n", 1, 9, "MOD by zero", "MOD"},
+        {"sqrt of negative", "#1 = SQRT[-1]\n", 1, 6, "domain", "SQRT"},
+        {"unclosed bracket", "G1 X[1 + 2\n", 1, 5, "unclosed '['", "[1 + 2"},
+        {"undefined named parameter", "G1 X#<nope>\n", 1, 5, "not defined", "#<nope>"},
+        {"parameter out of range", "#99999 = 1\n", 1, 1, "out of range", "#99999"},
+        {"assignment without =", "#1 5\n", 1, 1, "without '='", "#1"},
+        {"truncated file", "%\nG0 X1\nG1 X2\n", 3, 1, "closing '%'", "G1 X2"},
+        {"unknown G-code", "G7.7 X1\n", 1, 1, "unsupported G-code", "G7.7"},
+        {"threading", "G33 Z-1 K1\n", 1, 1, "unsupported motion", "G33"},
+        {"rotary axis", "G0 X1 A10\n", 1, 7, "rotary", "A10"},
+        {"unknown word", "G0 X1 E5\n", 1, 7, "unknown word", "E5"},
+        {"axis words without motion mode", "X10\n", 1, 1, "no motion mode", "X10"},
+        {"cycle R below Z", "G0 Z5\nG81 X1 Y1 Z2 R-1\n", 2, 14, "R plane below", "R"},
+        {"cycle without R", "G0 Z5\nG81 X1 Y1 Z-2\n", 2, 0, "without R", "G81"},
+        {"peck without Q", "G0 Z5\nG83 X1 Y1 Z-2 R1\n", 2, 0, "without Q", "G83"},
+        {"call of undefined sub", "o<nowhere> call\n", 1, 1, "undefined subroutine", "o<nowhere>"},
+        {"M98 to missing program", "M98 P42\nM30\n", 1, 5, "missing program", "P42"},
+        {"return outside sub", "o9 return\n", 1, 1, "outside a subroutine", "o9 return"},
+        {"Fanuc sub without M99", "M98 P5\nM30\nO5\nG0 X1\n", 4, 1, "missing M99", "G0 X1"},
+        {"alarm", "#3000 = 1\n", 1, 1, "alarm", "#3000"},
+        {"XY rotation", "G10 L2 P1 R30\n", 1, 11, "rotation", "R30"},
+        {"bad G number", "G1.25 X1\n", 1, 1, "bad G-code", "G1.25"},
+        {"N word late", "G0 N10 X1\n", 1, 4, "N word", "N10"},
+        {"stray character", "G0 X1 @\n", 1, 7, "unexpected character", "@"},
+        {"GOTO to missing line", "GOTO 99\n", 1, 0, "missing N99", ""},
+    };
+    for (const Malformed& c : cases) {
+        INFO(c.what << ": " << c.text);
+        try {
+            GcodeOptions options;
+            options.startPosition = Vec3(0.0);
+            options.maxBlocks = 100000;
+            parseGcode(c.text, "bad.ngc", options);
+            FAIL("no error");
+        } catch (const ParseError& e) {
+            INFO(e.what());
+            CHECK(e.where().file == "bad.ngc");
+            CHECK(e.where().line == c.line);
+            if (c.column) CHECK(e.where().column == c.column);
+            CHECK(e.message().find(c.message) != std::string::npos);
+            CHECK(e.offending().find(c.offending) != std::string::npos);
+            CHECK(std::string(e.what()).rfind("bad.ngc:" + std::to_string(c.line), 0) == 0);
+        }
+    }
+    CHECK(sizeof(cases) / sizeof(cases[0]) >= 30);
+}
+
+TEST_CASE("gcode: arcs are split within the chord tolerance and end exactly", "[path][gcode]") {
+    for (double tol : {0.001, 0.01, 0.1}) {
+        GcodeOptions o;
+        o.startPosition = Vec3(0.0);
+        o.chordTolerance = tol;
+        // Full circle, a half circle by R, and a helix of 2 turns.
+        const Program p = run("G0 X10 Y0 Z0\nG3 I-10 J0 X10 Y0\nG2 X-10 Y0 R10\nG17 G3 X-10 Y0 Z-4 I10 J0 P2\n", o);
+        REQUIRE(p.path.moves.size() > 4);
+        std::size_t full = 0;
+        for (const Move& m : p.path.moves) {
+            if (m.rapid) continue;
+            // Every chord's ends are on the circle of radius 10 around the origin, and its middle
+            // is within tol of it.
+            const double r0 = std::hypot(m.start.x, m.start.y), r1 = std::hypot(m.end.x, m.end.y);
+            CHECK(r0 == Approx(10).margin(1e-9));
+            CHECK(r1 == Approx(10).margin(1e-9));
+            const Vec3 mid = 0.5 * (m.start + m.end);
+            CHECK(10.0 - std::hypot(mid.x, mid.y) <= tol + 1e-12);
+            if (m.source.line == 2) ++full;
+        }
+        CHECK(full == std::size_t(std::ceil(2 * M_PI / (2 * std::acos(1 - tol / 10)) - 1e-12)));
+        CHECK(near(p.path.moves.back().end, Vec3(-10, 0, -4)));
+    }
+}
+
+TEST_CASE("gcode: arcs in G18 and G19 turn the right way (UGS fixtures)", "[path][gcode]") {
+    // G18 G2 from (-1.5,0,0) to (1.5,0,0) around the origin: clockwise seen from +Y, through
+    // -Z, as UGS's own expansion beside the input shows.
+    const Program a = run("G18\nG0 X-1.5 Y0 Z0\nG2 X1.5 Z0 I1.5 K0\n");
+    double zmax = -1, zmin2 = 1;
+    for (const Move& m : a.path.moves) zmax = std::max(zmax, m.end.z), zmin2 = std::min(zmin2, m.end.z);
+    CHECK(zmax == Approx(0).margin(1e-12));
+    CHECK(zmin2 == Approx(-1.5).margin(1e-3));
+    const Program b = run("G19\nG0 Y-1.5 Z0 X0\nG3 Y1.5 Z0 J1.5 K0\n");
+    double zmin = 1;
+    for (const Move& m : b.path.moves) zmin = std::min(zmin, m.end.z);
+    CHECK(zmin == Approx(-1.5).margin(1e-3));
+}
+
+TEST_CASE("gcode: units, distance modes, offsets and homes", "[path][gcode]") {
+    const Program p = run(
+        "G20 G0 X1 Y2 Z3\n"          // inch
+        "G21 G91 G0 X1\n"            // incremental mm
+        "G90 G10 L2 P2 X100 Y0 Z0\n"
+        "G55 G0 X0 Y0\n"             // machine X100
+        "G92 X10\n"                  // here is X10 now
+        "G0 X20\n"                   // machine X110
+        "G92.1\n"
+        "G53 G0 X5 Y5\n"             // machine coordinates
+        "#5161 = 1 #5162 = 2 #5163 = 3\n"
+        "G28 Z10\n"                  // via Z10 (program), then Z home = 3
+        "M2\n");
+    const auto& m = p.path.moves;
+    REQUIRE(m.size() == 7);
+    CHECK(near(m[0].end, Vec3(25.4, 50.8, 76.2)));
+    CHECK(near(m[1].end, Vec3(26.4, 50.8, 76.2)));
+    CHECK(near(m[2].end, Vec3(100, 0, 76.2)));
+    CHECK(near(m[3].end, Vec3(110, 0, 76.2)));
+    CHECK(near(m[4].end, Vec3(5, 5, 76.2)));
+    CHECK(near(m[5].end, Vec3(5, 5, 10)));
+    CHECK(near(m[6].end, Vec3(5, 5, 3)));
+    for (const Move& mv : m) CHECK(mv.rapid);
+    CHECK(m[3].source.line == 6);
+}
+
+TEST_CASE("gcode: tools, warnings and their aggregation", "[path][gcode]") {
+    std::string text = "T1 M6\nS1000 M3\n";
+    for (int i = 0; i < 1000; ++i) text += "G1 X" + std::to_string(i) + " F100\n";
+    text += "T2\nG0 Z5\nM6\nG0 Z6\nM5 M9 M88\nG4 P1\nG41 D1\nG1 X0\nG40\nM2\n";
+    const Program p = run(text);
+    REQUIRE(p.path.toolChanges.size() == 2);
+    CHECK(p.path.toolChanges[0].tool == 1);
+    CHECK(p.path.toolChanges[1].tool == 2);
+    CHECK(p.path.toolChanges[1].moveIndex == 1001);
+    CHECK(p.path.moves[1000].tool == 1);
+    CHECK(p.path.moves[1001].tool == 2);
+    // One feed warning for 1000 F words, with the count, at the first one.
+    int feed = 0;
+    for (const Diagnostic& d : p.diagnostics)
+        if (d.message.find("feed rate F") != std::string::npos) {
+            ++feed;
+            CHECK(d.message.find("1000 occurrences") != std::string::npos);
+            CHECK(d.where.line == 3);
+        }
+    CHECK(feed == 1);
+    for (const char* w : {"spindle speed", "spindle M3", "coolant", "M88", "dwell", "cutter radius compensation"})
+        CHECK(hasDiagnostic(p, w));
+    // CAMotics: T alone changes the tool.
+    GcodeOptions camotics;
+    camotics.startPosition = Vec3(0.0);
+    camotics.toolChangeOnT = true;
+    const Program q = run("T3 G0 X1\n", camotics);
+    REQUIRE(q.path.toolChanges.size() == 1);
+    CHECK(q.path.moves[0].tool == 3);
+}
+
+TEST_CASE("gcode: parameters, expressions and O-word flow", "[path][gcode]") {
+    const Program p = run(
+        "#1 = 2 #2 = [#1 * 3]\n"  // #2 reads the old #1 (0): assignments happen after the line
+        "#<_r> = [ATAN[1]/[1] + SQRT[16] ** 2 - 10 MOD 3]\n"  // 45 + 16 - 1
+        "G0 X#1 Y#2 Z#<_r>\n"
+        "o<twice> sub\n"
+        "  G0 X[#1 * 2]\n"
+        "o<twice> endsub\n"
+        "o<twice> call [7]\n"
+        "#3 = 0\n"
+        "o10 while [#3 LT 3]\n"
+        "  #3 = [#3 + 1]\n"
+        "  o11 if [#3 EQ 2]\n"
+        "    G0 Y-2\n"
+        "  o11 elseif [#3 EQ 3]\n"
+        "    G0 Y-3\n"
+        "  o11 else\n"
+        "    G0 Y-1\n"
+        "  o11 endif\n"
+        "o10 endwhile\n"
+        "o12 repeat [2]\n"
+        "  G91\n  G0 Z1\n  G90\n"
+        "o12 endrepeat\n"
+        "G0 X#1\n"  // #1 restored after the call
+        "M2\n");
+    const auto& m = p.path.moves;
+    REQUIRE(m.size() == 8);
+    CHECK(near(m[0].end, Vec3(2, 0, 60)));
+    CHECK(m[1].end.x == Approx(14));
+    CHECK(m[2].end.y == Approx(-1));
+    CHECK(m[3].end.y == Approx(-2));
+    CHECK(m[4].end.y == Approx(-3));
+    CHECK(m[6].end.z == Approx(62));
+    CHECK(m[7].end.x == Approx(2));
+}
+
+TEST_CASE("gcode: G68.2 tilts coordinates and, after G53.1, the tool axis", "[path][gcode]") {
+    const Program p = run("G68.2 X10 Y0 Z0 Q121 I0 J90 K0\nG53.1\nG0 X0 Y0 Z5\nG69\nG0 X0 Y0 Z5\n");
+    REQUIRE(p.path.moves.size() == 2);
+    // Rotation about Y by 90 degrees: the plane's +Z is the part's +X.
+    CHECK(near(p.path.moves[0].axis, Vec3(1, 0, 0), 1e-12));
+    CHECK(near(p.path.moves[0].end, Vec3(15, 0, 0), 1e-12));
+    CHECK(near(p.path.moves[1].axis, Vec3(0, 0, 1)));
+    CHECK(near(p.path.moves[1].end, Vec3(0, 0, 5)));
+}
+
+TEST_CASE("gcode: canned cycles G73 G83 G85 G89 and G99", "[path][gcode]") {
+    const Program p = run("G0 X0 Y0 Z10\nG99 G83 X1 Y1 Z-3 R2 Q2\nG85 X2 Z-1 R2\nG80\nG98 G73 X3 Z-1 R1 Q0.5\nG89 X4 Z-1 R1 P1\nM2\n");
+    const auto& m = p.path.moves;
+    REQUIRE(m.size() > 10);
+    double zmin = 0;
+    for (const Move& mv : m) zmin = std::min(zmin, mv.end.z);
+    CHECK(zmin == Approx(-3));
+    CHECK(m.back().end.z == Approx(2));  // G98: back to the level where this cycle began
+    CHECK(hasDiagnostic(p, "dwell"));
+}
+
+TEST_CASE("gcode: with no start position, moves only place the tool until X, Y and Z are known", "[path]") {
+    const Program p = parseGcode("G21 G90\nG0 Z15\nG0 X5 Y15\nG1 Z7 F100\nG1 X35\n", "start.ngc");
+    REQUIRE(p.path.moves.size() == 2);
+    CHECK(near(p.path.moves[0].start, Vec3(5, 15, 15)));
+    CHECK(near(p.path.moves[0].end, Vec3(5, 15, 7)));
+    CHECK(p.path.moves[0].source.line == 4);
+    bool warned = false;
+    for (const Diagnostic& d : p.diagnostics) warned = warned || d.message.find("start position is unknown") != std::string::npos;
+    CHECK(warned);
+}

@@ -1,0 +1,120 @@
+// Accuracy studies: the brute-force oracle, convergence as the spacing halves, and what z-only
+// dexels lose on undercuts.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "dexelmill/study/oracle.h"
+#include "dexelmill/study/study.h"
+#include "dexelmill/tool/builders.h"
+
+using namespace dexelmill;
+
+namespace {
+
+/// A ball end D8 ploughing a straight groove 3 mm deep (tip at z = 7) along x through a
+/// 30 x 20 x 10 block, entering from outside: the part is the block minus a capsule-ended
+/// half-cylinder whose exact membership is written here directly.
+Program groove() {
+    Program p;
+    p.path.files = {"groove"};
+    p.tools.emplace(1, ballEndMill(8, {20, 30}));
+    p.path.moves.push_back({Vec3(-10, 10, 7), Vec3(40, 10, 7), Vec3(0, 0, 1), 1, false, {0, 1}});
+    return p;
+}
+
+bool inGroovePart(const Vec3& p) {
+    if (p.x < 0 || p.x > 30 || p.y < 0 || p.y > 20 || p.z < 0 || p.z > 10) return false;
+    // Removed: within 4 of the centre line (y = 10, z = 11) below z = 11, or above it within the
+    // cylinder's 4 mm radius of the axis band (the shank is a D8 cylinder).
+    const double dy = p.y - 10, dz = p.z - 11;
+    if (dz <= 0) return dy * dy + dz * dz > 16;
+    return std::abs(dy) > 4;
+}
+
+}  // namespace
+
+TEST_CASE("the machined-solid oracle agrees with a groove written by hand", "[study]") {
+    const Program g = groove();
+    const MachinedSolidOracle oracle(Box{Vec3(0.0), Vec3(30, 20, 10)}, g.path, g.tools, 0.5);
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> x(-1, 31), y(-1, 21), z(-1, 11);
+    int inside = 0;
+    for (int i = 0; i < 20000; ++i) {
+        const Vec3 p(x(rng), y(rng), z(rng));
+        const double dy = p.y - 10, dz = p.z - 11;
+        // Skip points within 1e-6 mm of the groove's surface, where rounding decides.
+        if (std::abs(std::sqrt(dy * dy + std::min(dz, 0.0) * std::min(dz, 0.0)) - 4) < 1e-6) continue;
+        INFO(p.x << " " << p.y << " " << p.z);
+        REQUIRE(oracle.inside(p) == inGroovePart(p));
+        inside += inGroovePart(p);
+    }
+    CHECK(inside > 5000);
+}
+
+TEST_CASE("surface deviation converges as the spacing halves", "[study]") {
+    StudyOptions o;
+    o.job.program = groove();
+    o.job.stockBox = Box{Vec3(0.0), Vec3(30, 20, 10)};
+    o.resolutions = {1.0, 0.5, 0.25};
+    o.familySets = {FamilySet::all()};
+    o.maxVertices = 4000;
+    o.samplePoints = 20000;
+    // The exact volume: the block minus the groove (a half-cylinder of radius 4 below z = 11,
+    // cut off at z = 10... i.e. the circular segment below z = 10, plus nothing above) along 30.
+    const double r = 4, c = 1;  // radius, distance from the centre line down to the top face
+    const double segment = r * r * std::acos(c / r) - c * std::sqrt(r * r - c * c);
+    o.exactVolumeMm3 = 30 * 20 * 10 - 30 * segment;
+    const StudyResult res = runStudy(o);
+    REQUIRE(res.runs.size() == 3);
+    for (const StudyRun& run : res.runs) {
+        INFO("h " << run.h << ": max " << run.devMaxMm << " rms " << run.devRmsMm << " volume error "
+                  << run.volumeErrorMm3);
+        // Vertices lie within a voxel of the exact surface, most of them far closer.
+        CHECK(run.devMaxMm < run.h);
+        CHECK(run.devRmsMm < 0.2 * run.h);
+    }
+    // RMS error falls at least linearly as h halves (second order on smooth parts, first order at
+    // the sharp rims of the groove), and so does the volume error.
+    for (int i = 0; i + 1 < 3; ++i) {
+        INFO("from h " << res.runs[i].h << " to " << res.runs[i + 1].h);
+        CHECK(res.runs[i + 1].devRmsMm < 0.6 * res.runs[i].devRmsMm);
+        CHECK(std::abs(res.runs[i + 1].volumeErrorMm3) < 0.6 * std::abs(res.runs[i].volumeErrorMm3));
+    }
+    const std::string csv = studyCsv(res);
+    CHECK(csv.find("h_mm,families,vertices,dev_max_mm") == 0);
+    CHECK(std::count(csv.begin(), csv.end(), '\n') == 4);
+}
+
+TEST_CASE("z-only dexels lose the undercut material that three families keep", "[study]") {
+    const StudyCase c = studyCase("tilted-slot");
+    StudyOptions o;
+    o.job.program = c.program;
+    o.job.stockBox = c.stock;
+    o.resolutions = {1.0};
+    o.familySets = {FamilySet::only(Axis::Z), FamilySet::all()};
+    o.maxVertices = 3000;
+    o.samplePoints = 200000;
+    o.exactVolumeMm3 = 0.0;  // not measured here
+    const StudyResult res = runStudy(o);
+    REQUIRE(res.runs.size() == 2);
+    const StudyRun& z = res.runs[0];
+    const StudyRun& xyz = res.runs[1];
+    INFO("lost far: z " << z.lostFarMm3 << ", xyz " << xyz.lostFarMm3 << "; max dev z " << z.devMaxMm << ", xyz "
+                        << xyz.devMaxMm);
+    CHECK(z.families == "z");
+    CHECK(z.devMaxMm > 2 * xyz.devMaxMm);
+    CHECK(z.lostFarMm3 + z.inventedFarMm3 > 5 * (xyz.lostFarMm3 + xyz.inventedFarMm3) + 1.0);
+}
+
+TEST_CASE("every built-in case builds a program with its tools", "[study]") {
+    for (const std::string& name : studyCaseNames()) {
+        const StudyCase c = studyCase(name);
+        INFO(name);
+        CHECK_FALSE(c.program.path.moves.empty());
+        for (const Move& m : c.program.path.moves) CHECK(c.program.tools.count(m.tool) == 1);
+        CHECK(c.stock.volume() > 0);
+    }
+    CHECK_THROWS_WITH(studyCase("nope"), Catch::Matchers::Contains("tilted-slot"));
+}

@@ -1,0 +1,111 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "dexelmill/error.h"
+#include "dexelmill/surface/levelset.h"
+#include "support/analytic_parts.h"
+
+using namespace dexelmill;
+using dexelmill::testing::Cutter;
+
+namespace {
+
+// 64^3 lattice: a 32 mm cube at h = 0.5 mm, its corner off the origin so that the transform's
+// translation matters.
+const Box kStockBox{Vec3(-10.0, 5.0, 2.0), Vec3(22.0, 37.0, 34.0)};
+constexpr double kH = 0.5;
+const Vec3 kC = Vec3(6.0, 21.0, 18.0);  // the box centre
+
+struct Accuracy {
+    double maxError = 0.0, rmsError = 0.0;
+    std::size_t measured = 0;
+};
+
+Accuracy measureVertices(const Mesh& mesh, const testing::PartSurfaces& part, double band) {
+    Accuracy acc;
+    double sum2 = 0.0;
+    for (const Vec3& v : mesh.vertices) {
+        const auto [d, nearFeature] = part.measure(v, band);
+        if (nearFeature) continue;
+        acc.maxError = std::max(acc.maxError, d);
+        sum2 += d * d;
+        ++acc.measured;
+    }
+    acc.rmsError = acc.measured ? std::sqrt(sum2 / acc.measured) : 0.0;
+    return acc;
+}
+
+/// Carves, rebuilds, meshes and checks one part against the criteria.
+void checkPart(const std::vector<Cutter>& cuts) {
+    TriDexelStock stock = TriDexelStock::fromBox(kStockBox, kH);
+    for (const Cutter& c : cuts) testing::carve(stock, c);
+    const LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "test"});
+    const Mesh mesh = meshLevelSet(ls);
+    const MeshCheck check = checkMesh(mesh);
+    INFO("vertices " << check.vertexCount << " triangles " << check.triangleCount);
+    INFO("boundary " << check.boundaryEdges << " non-manifold " << check.nonManifoldEdges
+                     << " misoriented " << check.misorientedEdges << " degenerate "
+                     << check.degenerateTriangles);
+    CHECK(check.closedManifold());
+    CHECK(check.degenerateTriangles == 0);
+
+    const double dexelVolume = stock.volume(Axis::Z);
+    INFO("mesh volume " << check.signedVolume << " dexel volume " << dexelVolume);
+    CHECK(std::abs(check.signedVolume - dexelVolume) <= 0.005 * dexelVolume);
+
+    const testing::PartSurfaces part(kStockBox, cuts);
+    const Accuracy acc = measureVertices(mesh, part, 2.0 * kH);
+    INFO("max " << acc.maxError / kH << " h, rms " << acc.rmsError / kH << " h over "
+                << acc.measured << " vertices");
+    CHECK(acc.measured > mesh.vertices.size() / 2);
+    CHECK(acc.maxError <= 0.1 * kH);
+    CHECK(acc.rmsError <= 0.02 * kH);
+}
+
+}  // namespace
+
+TEST_CASE("rebuild: grid convention, class, name and metadata", "[surface]") {
+    const TriDexelStock stock = TriDexelStock::fromBox(kStockBox, kH);
+    const LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "box"});
+    CHECK(ls.voxelSize() == Approx(kH));
+    CHECK(ls.halfWidth() == Approx(3.0));
+    CHECK(ls.source() == "box");
+    REQUIRE(ls.lattice().has_value());
+    CHECK(ls.lattice()->n == stock.lattice().n);
+    // Voxel (i,j,k) is lattice point (i,j,k): point 0 lies h/2 inside the box face, point -1
+    // h/2 outside, and both are exact distances to the plane.
+    CHECK(ls.voxelValue(0, 30, 30) == Approx(-0.5 * kH));
+    CHECK(ls.voxelValue(-1, 30, 30) == Approx(0.5 * kH));
+    CHECK(ls.voxelValue(2, 30, 30) == Approx(-2.5 * kH));
+    CHECK(ls.voxelValue(30, 30, 30) == Approx(-3.0 * kH));  // interior background
+    CHECK(ls.voxelValue(-10, 30, 30) == Approx(3.0 * kH));   // exterior background
+    // Near a box corner the three axis distances combine: h/2 from each face.
+    CHECK(ls.voxelValue(0, 0, 0) == Approx(-0.5 * kH / std::sqrt(3.0)));
+    CHECK(ls.valueAt(stock.lattice().point(10, 0, 30)) == Approx(-0.5 * kH));
+    CHECK_THROWS_AS(rebuildLevelSet(stock, {2, FamilySet::all(), ""}), Error);
+}
+
+TEST_CASE("rebuild: a box meshes to its exact volume", "[surface]") {
+    const TriDexelStock stock = TriDexelStock::fromBox(kStockBox, kH);
+    const Mesh mesh = meshLevelSet(rebuildLevelSet(stock));
+    const MeshCheck check = checkMesh(mesh);
+    CHECK(check.ok());
+    CHECK(check.signedVolume == Approx(kStockBox.volume()).epsilon(0.005));
+}
+
+TEST_CASE("surface: box minus sphere", "[surface]") {
+    checkPart({testing::sphere(kC + Vec3(0.0, 0.0, 12.0), 10.0)});
+}
+
+TEST_CASE("surface: box minus a tilted cylinder", "[surface]") {
+    checkPart({testing::cylinder(kC, Vec3(1.0, 0.5, 2.0), 6.0)});
+}
+
+TEST_CASE("surface: box minus a torus", "[surface]") {
+    checkPart({testing::torus(kC + Vec3(0.0, 0.0, 11.0), Vec3(0.2, -0.1, 1.0), 9.0, 4.0)});
+}
+
+TEST_CASE("surface: pocket with vertical walls", "[surface]") {
+    checkPart({testing::boxCutter({kC + Vec3(-7.7, -9.8, 0.3), kC + Vec3(7.7, 9.8, 20.0)})});
+}

@@ -1,0 +1,57 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "dexelmill/error.h"
+#include "dexelmill/tool/spec.h"
+
+using namespace dexelmill;
+using Catch::Matchers::Contains;
+
+namespace {
+std::string errorOf(const std::string& spec) {
+    try {
+        parseToolSpec(spec);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "<no error>";
+}
+}  // namespace
+
+TEST_CASE("tool specs build the tools they name", "[tool]") {
+    const Tool ball = parseToolSpec("ball:d=6");
+    CHECK(ball.radiusAt(0) == 0);
+    CHECK(ball.radiusAt(3) == Approx(3));
+    const Tool flat = parseToolSpec("flat:d=10,length=25,total=60");
+    CHECK(flat.radiusAt(0) == 5);
+    CHECK(flat.cuttingLength() == 25);
+    CHECK(flat.totalLength() == 60);
+    const Tool bull = parseToolSpec("bull:d=10,r=2");
+    CHECK(bull.radiusAt(0) == Approx(3));
+    CHECK(bull.radiusAt(2) == Approx(5));
+    const Tool taper = parseToolSpec("taper:d=2,angle=15,length=10");
+    CHECK(taper.radiusAt(10) == Approx(1 + 10 * std::tan(15 * M_PI / 180)));
+    const Tool vbit = parseToolSpec("vbit:d=6,angle=30");
+    CHECK(vbit.radiusAt(0) == 0);
+    CHECK(vbit.radiusAt(1) == Approx(std::tan(30 * M_PI / 180)));
+    CHECK(parseToolSpec("chamfer:d=12,angle=45,tip=3").radiusAt(0) == Approx(1.5));
+    CHECK(parseToolSpec("drill:d=6").radiusAt(1) == Approx(std::tan(59 * M_PI / 180)));
+    CHECK(parseToolSpec("taperball:d=3,angle=5").radiusAt(0) == 0);
+    const Tool apt = parseToolSpec("apt:12,0,6,4.5,45,0,73");
+    CHECK(apt.radiusAt(0) == Approx(1.5));
+    CHECK(apt.totalLength() == 73);
+}
+
+TEST_CASE("bad tool specs say what is wrong", "[tool][errors]") {
+    CHECK_THAT(errorOf("ball"), Contains("KIND:PARAMETERS"));
+    CHECK_THAT(errorOf("ball:d=six"), Contains("'six' is not a number"));
+    CHECK_THAT(errorOf("ball:r=3"), Contains("missing d="));
+    CHECK_THAT(errorOf("ball:d=6,q=1"), Contains("unknown parameter 'q'"));
+    CHECK_THAT(errorOf("ball:d=6,d=7"), Contains("'d' is given twice"));
+    CHECK_THAT(errorOf("bull:d=10,r=6"), Contains("corner radius r = 6"));
+    CHECK_THAT(errorOf("saw:d=100"), Contains("unknown kind 'saw'"));
+    CHECK_THAT(errorOf("apt:10,0,5"), Contains("7 values"));
+    CHECK_THAT(errorOf("flat:6"), Contains("name=value"));
+    CHECK_THAT(errorOf("ball:d=0"), Contains("diameter d must be positive"));
+}
