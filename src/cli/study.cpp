@@ -91,7 +91,7 @@ int runStudy(const StudyArgs& a) {
     std::printf("%8s %-8s %12s %12s %12s %9s %9s %13s %13s %8s\n", "h_mm", "families", "dev_max_mm", "dev_rms_mm",
                 "dev_p95_mm", "max/h", "rms/h", "vol_err_mm3", "lost_far_mm3", "time_s");
     for (const StudyRun& x : r.runs)
-        std::printf("%8.4g %-8s %12.5g %12.5g %12.5g %9.3f %9.3f %13.5g %13.5g %8.2f\n", x.h, x.families.c_str(),
+        std::printf("%8.4g %-8s %12.5g %12.5g %12.5g %9.3f %9.3f %13.5g %13.5g %8.3f\n", x.h, x.families.c_str(),
                     x.devMaxMm, x.devRmsMm, x.devP95Mm, x.devMaxMm / x.h, x.devRmsMm / x.h, x.volumeErrorMm3,
                     x.lostFarMm3, x.seconds);
     return 0;

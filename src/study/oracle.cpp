@@ -27,11 +27,11 @@ double outside(const Tool& tool, const Vec3& axis, const Vec3& q) {
 
 MachinedSolidOracle::MachinedSolidOracle(const Box& stock, const ToolPath& path, const ToolTable& tools,
                                          double resolution)
-    : stock_(stock), step_(resolution / 4) {
+    : stock_(stock), step_(resolution / 4), tools_(tools) {
     if (!(step_ > 0)) throw Error("oracle resolution must be positive");
     for (const Move& m : path.moves) {
-        const auto it = tools.find(m.tool);
-        if (it == tools.end()) throw Error("move uses tool T" + std::to_string(m.tool) + ", which is not defined");
+        const auto it = tools_.find(m.tool);
+        if (it == tools_.end()) throw Error("move uses tool T" + std::to_string(m.tool) + ", which is not defined");
         const Tool& t = it->second;
         MoveRef r{m.start, m.end - m.start, glm::normalize(m.axis), &t, {}};
         // The tool's box at a pose: the axis segment padded by the largest radius.

@@ -112,9 +112,9 @@ void writeStudyPlot(const std::string& path, const StudyResult& result) {
     }
     c.line(left, top, left, H - bottom, axis, 2);
     c.line(left, H - bottom, W - right, H - bottom, axis, 2);
-    c.text(left, 18, "surface deviation against lattice spacing: " + result.subject, axis);
+    c.text(left, 8, "surface deviation against lattice spacing: " + result.subject, axis);
     c.text((W - right + left) / 2 - 100, H - 36, "lattice spacing h (mm)", axis);
-    c.text(12, top - 30, "deviation (mm)", axis);
+    c.text(12, top - 24, "deviation (mm)", axis);
 
     const Rgb palette[] = {{200, 40, 40}, {30, 90, 200}, {30, 150, 60}, {150, 60, 180}, {230, 140, 20}, {20, 160, 170}, {110, 110, 110}};
     std::vector<std::string> families;

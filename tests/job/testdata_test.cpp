@@ -35,7 +35,9 @@ std::vector<fs::path> programs(const fs::path& root) {
         if (name.find(".parsed_output.") != std::string::npos) continue;
         bool inProject = false;
         for (const auto& s : fs::directory_iterator(p.parent_path())) inProject |= s.path().extension() == ".camotics";
-        if (p.parent_path().filename() == "twp-g68.2" && name == "square.ngc") continue;  // a subroutine file
+        // Subroutine files: they define an o-word sub for the demo programs and make no move.
+        if (p.parent_path().filename() == "twp-g68.2" && (name == "square.ngc" || name == "circular_pocket.ngc"))
+            continue;
         if (!inProject) out.push_back(p);
     }
     std::sort(out.begin(), out.end());

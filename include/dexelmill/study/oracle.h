@@ -19,11 +19,13 @@ namespace dexelmill {
 class MachinedSolidOracle {
 public:
     /// @param stock the stock box; the program's moves are taken from `path`, their tools from
-    /// `tools` (every tool a move names must be there).
+    /// `tools` (every tool a move names must be there). Both are copied.
     /// @param resolution the finest length the oracle must resolve along a move (mm); the feed
     /// parameter is sampled at least every resolution / 4.
     /// @throw Error if a move names a tool that is not in the table.
     MachinedSolidOracle(const Box& stock, const ToolPath& path, const ToolTable& tools, double resolution);
+    MachinedSolidOracle(const MachinedSolidOracle&) = delete;
+    MachinedSolidOracle& operator=(const MachinedSolidOracle&) = delete;
 
     /// @brief True when some move's tool covers p at some u in [0, 1].
     bool removed(const Vec3& p) const;
@@ -42,6 +44,7 @@ private:
 
     Box stock_;
     double step_;
+    ToolTable tools_;  ///< a copy: MoveRef points into it
     std::vector<MoveRef> moves_;
     int nb_[3] = {1, 1, 1};
     Vec3 bucketSize_{1.0};
