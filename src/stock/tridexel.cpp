@@ -47,11 +47,16 @@ TriDexelStock TriDexelStock::fromBox(const Box& box, double h, FamilySet familie
         std::uint16_t counts[DexelTile::kDexels];
         for (int tc = 0; tc < fam.tilesC(); ++tc) {
             for (int tb = 0; tb < fam.tilesB(); ++tb) {
-                // Tiles at the far edges hang over the lattice: their outer dexels stay empty.
+                // Tiles at the far edges hang over the lattice, and the last lattice line can lie
+                // past the box when its size is not a whole number of cells: those dexels miss
+                // the box and stay empty.
                 for (int i = 0; i < DexelTile::kDexels; ++i) {
                     const int ib = tb * DexelTile::kTile + i % DexelTile::kTile;
                     const int ic = tc * DexelTile::kTile + i / DexelTile::kTile;
-                    counts[i] = (ib < fam.nb() && ic < fam.nc()) ? 1 : 0;
+                    const bool inBox = ib < fam.nb() && ic < fam.nc() &&
+                                       stock.lattice_.coord(fam.axisB(), ib) <= box.hi[index(fam.axisB())] &&
+                                       stock.lattice_.coord(fam.axisC(), ic) <= box.hi[index(fam.axisC())];
+                    counts[i] = inBox ? 1 : 0;
                 }
                 fam.tile(tb, tc).assign(counts, segs.data());
             }

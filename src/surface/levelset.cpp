@@ -121,11 +121,12 @@ static_assert(LeafT::DIM == kLeafDim, "FloatTree leaves must be 8^3");
 /// floor(i / 8) for negative i too.
 inline int blockOf(int i) { return i >> kLeafLog2; }
 
-/// For the 8 lattice points t = (i0 + m + 1/2) h, m = 0..7, along one dexel: whether each is in
-/// material and its distance to the nearest segment endpoint (infinity if the dexel is empty).
-/// Endpoints alternate lo, hi, lo, hi ...: a point is in material when an odd number of them
-/// lie at or below it.
-inline void scanDexel(const SegmentSpan& segs, int i0, double h, double* dist, bool* inside) {
+/// For the `count` lattice points t = (i0 + m + 1/2) h, m = 0..count-1, along one dexel: whether
+/// each is in material and its distance to the nearest segment endpoint (infinity if the dexel is
+/// empty). Endpoints alternate lo, hi, lo, hi ...: a point is in material when an odd number of
+/// them lie at or below it.
+inline void scanDexel(const SegmentSpan& segs, int i0, double h, double* dist, bool* inside,
+                      int count = kLeafDim) {
     const std::size_t ends = 2 * segs.size;
     auto endpoint = [&](std::size_t k) -> double {
         const Segment& s = segs.data[k >> 1];
@@ -140,7 +141,7 @@ inline void scanDexel(const SegmentSpan& segs, int i0, double h, double* dist, b
     }
     std::size_t k = lo;
     constexpr double inf = std::numeric_limits<double>::infinity();
-    for (int m = 0; m < kLeafDim; ++m) {
+    for (int m = 0; m < count; ++m) {
         const double t = (i0 + m + 0.5) * h;
         while (k < ends && endpoint(k) <= t) ++k;
         inside[m] = (k & 1) != 0;
@@ -242,6 +243,85 @@ private:
                 }
             });
         }
+        markMissingAxisWalls();
+    }
+
+    /// With fewer than three families, a surface across a missing axis (a wall of a z-only stock)
+    /// has no crossing on any kept dexel near it: it shows only as neighbouring dexels that
+    /// disagree. Marks the blocks around every stretch where a dexel and its neighbour along a
+    /// missing axis differ (a missing neighbour beyond the lattice counts as empty).
+    void markMissingAxisWalls() {
+        for (int ai = 0; ai < axisCount_; ++ai) {
+            const int a = axes_[ai], b = (a + 1) % 3, c = (a + 2) % 3;
+            const DexelFamily& fam = stock_.family(axisFromIndex(a));
+            for (int step = 0; step < 2; ++step) {
+                const int across = step == 0 ? b : c;  // the neighbour's direction
+                if (hasAxis(across)) continue;
+                const int nb = fam.nb(), nc = fam.nc();
+                tbb::parallel_for(tbb::blocked_range<int>(-1, nc), [&](const tbb::blocked_range<int>& r) {
+                    for (int ic = r.begin(); ic < r.end(); ++ic) {
+                        for (int ib = -1; ib < nb; ++ib) {
+                            const int jb = step == 0 ? ib + 1 : ib, jc = step == 0 ? ic : ic + 1;
+                            if (step == 0 ? ic < 0 : ib < 0) continue;
+                            auto segsAt = [&](int x, int y) {
+                                return (x >= 0 && x < nb && y >= 0 && y < nc) ? fam.segments(x, y) : SegmentSpan{};
+                            };
+                            const SegmentSpan s1 = segsAt(ib, ic), s2 = segsAt(jb, jc);
+                            if (s1.empty() && s2.empty()) continue;
+                            forEachDifference(s1, s2, [&](double t0, double t1) {
+                                const int i0 = int(std::ceil(t0 / h_ - 0.5)) - 1;
+                                const int i1 = int(std::floor(t1 / h_ - 0.5)) + 1;
+                                for (const auto& [x, y] : {std::pair{ib, ic}, std::pair{jb, jc}}) {
+                                    int p[3];
+                                    p[b] = x;
+                                    p[c] = y;
+                                    for (int blk = blockOf(i0); blk <= blockOf(i1); ++blk) {
+                                        p[a] = blk << kLeafLog2;
+                                        markPoint(p);
+                                    }
+                                }
+                            });
+                        }
+                    }
+                });
+            }
+        }
+    }
+
+    /// Calls f(t0, t1) for each stretch where exactly one of two dexels is in material.
+    template <class F>
+    static void forEachDifference(const SegmentSpan& s1, const SegmentSpan& s2, F&& f) {
+        std::size_t i = 0, j = 0;
+        const std::size_t n1 = 2 * s1.size, n2 = 2 * s2.size;
+        auto end1 = [&](std::size_t k) { return double((k & 1) ? s1[k >> 1].hi : s1[k >> 1].lo); };
+        auto end2 = [&](std::size_t k) { return double((k & 1) ? s2[k >> 1].hi : s2[k >> 1].lo); };
+        bool differ = false;
+        double start = 0.0;
+        while (i < n1 || j < n2) {
+            double t;
+            if (j >= n2 || (i < n1 && end1(i) <= end2(j))) t = end1(i++);
+            else t = end2(j++);
+            const bool now = ((i & 1) != 0) != ((j & 1) != 0);
+            if (now && !differ) start = t;
+            if (!now && differ) f(start, t);
+            differ = now;
+        }
+    }
+
+    /// Marks the block of lattice point p if it lies in the padded block range.
+    void markPoint(const int* p) {
+        int blk[3];
+        for (int k = 0; k < 3; ++k) {
+            blk[k] = blockOf(p[k]);
+            if (blk[k] < blockLo_[k] || blk[k] >= blockLo_[k] + blockN_[k]) return;
+        }
+        marks_[blockIndex(blk[0], blk[1], blk[2])].store(1, std::memory_order_relaxed);
+    }
+
+    bool hasAxis(int a) const {
+        for (int k = 0; k < axisCount_; ++k)
+            if (axes_[k] == a) return true;
+        return false;
     }
 
     /// The leaf of block `index`, or null if none of its points is within the band.
@@ -254,36 +334,71 @@ private:
 
         constexpr int kSize = LeafT::SIZE;
         float invSq[kSize];        // sum over axes of d_a^-2
-        std::uint8_t votes[kSize];  // families saying "in material"
-        bool first[kSize];          // what the first (tie-breaking) family says
         std::fill(invSq, invSq + kSize, 0.0f);
-        std::fill(votes, votes + kSize, std::uint8_t(0));
-        std::fill(first, first + kSize, false);
+        // Votes on a block padded by one point on every side, so that with a missing axis the
+        // neighbours across it are known too.
+        constexpr int kPad = kLeafDim + 2;
+        constexpr int kPadSize = kPad * kPad * kPad;
+        std::uint8_t votes[kPadSize];  // families saying "in material"
+        bool first[kPadSize];          // what the first (tie-breaking) family says
+        std::fill(votes, votes + kPadSize, std::uint8_t(0));
+        std::fill(first, first + kPadSize, false);
+        auto padIndex = [](int x, int y, int z) { return ((x + 1) * kPad + (y + 1)) * kPad + (z + 1); };
 
-        double dist[kLeafDim];
-        bool in[kLeafDim];
+        double dist[kPad];
+        bool in[kPad];
         // LeafNode offset of (x, y, z) within the leaf: x * 64 + y * 8 + z.
         constexpr int kStride[3] = {kLeafDim * kLeafDim, kLeafDim, 1};
         for (int ai = 0; ai < axisCount_; ++ai) {
             const int a = axes_[ai], b = (a + 1) % 3, c = (a + 2) % 3;
             const DexelFamily& fam = stock_.family(axisFromIndex(a));
-            for (int v = 0; v < kLeafDim; ++v) {
-                for (int u = 0; u < kLeafDim; ++u) {
+            for (int v = -1; v <= kLeafDim; ++v) {
+                for (int u = -1; u <= kLeafDim; ++u) {
                     const int ib = o[b] + u, ic = o[c] + v;
                     SegmentSpan segs;
                     if (ib >= 0 && ib < fam.nb() && ic >= 0 && ic < fam.nc())
                         segs = fam.segments(ib, ic);
-                    scanDexel(segs, o[a], h_, dist, in);
-                    const int base = u * kStride[b] + v * kStride[c];
-                    for (int m = 0; m < kLeafDim; ++m) {
-                        const int off = base + m * kStride[a];
-                        const double d = std::max(dist[m], kMinDistance * h_);
+                    scanDexel(segs, o[a] - 1, h_, dist, in, kPad);
+                    const bool inner = u >= 0 && u < kLeafDim && v >= 0 && v < kLeafDim;
+                    int q[3];
+                    q[b] = u;
+                    q[c] = v;
+                    for (int m = -1; m <= kLeafDim; ++m) {
+                        q[a] = m;
+                        const int pi = padIndex(q[0], q[1], q[2]);
+                        votes[pi] += in[m + 1];
+                        if (ai == 0) first[pi] = in[m + 1];
+                        if (!inner || m < 0 || m >= kLeafDim) continue;
+                        const int off = u * kStride[b] + v * kStride[c] + m * kStride[a];
+                        const double d = std::max(dist[m + 1], kMinDistance * h_);
                         if (d <= cutoff_) invSq[off] += float(1.0 / (d * d));
-                        votes[off] += in[m];
-                        if (ai == 0) first[off] = in[m];
                     }
                 }
             }
+        }
+        auto insideAt = [&](int pi) {
+            return 2 * votes[pi] > axisCount_ || (2 * votes[pi] == axisCount_ && first[pi]);
+        };
+        // Across a missing axis the crossing between two disagreeing neighbours is taken at the
+        // midpoint: a distance of h/2.
+        if (axisCount_ < 3) {
+            const float wall = float(4.0 / (h_ * h_));
+            for (int x = 0; x < kLeafDim; ++x)
+                for (int y = 0; y < kLeafDim; ++y)
+                    for (int z = 0; z < kLeafDim; ++z) {
+                        const int pi = padIndex(x, y, z);
+                        const bool here = insideAt(pi);
+                        const int q[3] = {x, y, z};
+                        for (int mm = 0; mm < 3; ++mm) {
+                            if (hasAxis(mm)) continue;
+                            int lo[3] = {q[0], q[1], q[2]}, hi[3] = {q[0], q[1], q[2]};
+                            --lo[mm];
+                            ++hi[mm];
+                            if (insideAt(padIndex(lo[0], lo[1], lo[2])) != here ||
+                                insideAt(padIndex(hi[0], hi[1], hi[2])) != here)
+                                invSq[x * kStride[0] + y * kStride[1] + z * kStride[2]] += wall;
+                        }
+                    }
         }
 
         auto* leaf = new LeafT(openvdb::Coord(o[0], o[1], o[2]), background, false);
@@ -291,7 +406,8 @@ private:
         bool any = false;
         const float w2 = float(1.0 / (width_ * width_));
         for (int off = 0; off < kSize; ++off) {
-            const bool inside = 2 * votes[off] > axisCount_ || (2 * votes[off] == axisCount_ && first[off]);
+            const int x = off / (kLeafDim * kLeafDim), y = (off / kLeafDim) % kLeafDim, z = off % kLeafDim;
+            const bool inside = insideAt(padIndex(x, y, z));
             const float s = inside ? -1.0f : 1.0f;
             if (invSq[off] > w2) {
                 values[off] = s / std::sqrt(invSq[off]);

@@ -109,3 +109,18 @@ TEST_CASE("memory: one-segment dexels cost at most 16 bytes, empty tiles almost 
     CHECK(double(z.memoryBytes()) / (256.0 * 256.0) < 1.0);
     CHECK_THROWS_AS(TriDexelStock(s.lattice(), FamilySet::only(Axis::X)).family(Axis::Y), Error);
 }
+
+TEST_CASE("a box whose size is not a whole number of cells: lines past it hold nothing", "[stock]") {
+    // 10.3 mm at h = 1 gives 11 lattice lines; the last, at 10.5, lies outside the box.
+    const TriDexelStock s = TriDexelStock::fromBox(Box{Vec3(0.0), Vec3(10.3, 4, 4)}, 1.0);
+    REQUIRE(s.lattice().n[0] == 11);
+    CHECK(s.family(Axis::Z).segments(10, 0).empty());  // z dexel at x = 10.5
+    CHECK_FALSE(s.family(Axis::Z).segments(9, 0).empty());
+    CHECK(s.family(Axis::Y).segments(0, 10).empty());  // y dexels run through (z, x)
+    for (int k = 0; k < 4; ++k)
+        for (int j = 0; j < 4; ++j) {
+            CHECK(s.inside(Axis::X, 10, j, k) == s.inside(Axis::Z, 10, j, k));
+            CHECK(s.inside(Axis::Y, 10, j, k) == s.inside(Axis::Z, 10, j, k));
+        }
+    CHECK(s.volume(Axis::X) == Approx(s.volume(Axis::Z)).epsilon(0.1));
+}
