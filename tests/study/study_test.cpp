@@ -87,25 +87,27 @@ TEST_CASE("surface deviation converges as the spacing halves", "[study]") {
     CHECK(std::count(csv.begin(), csv.end(), '\n') == 4);
 }
 
-TEST_CASE("z-only dexels lose the undercut material that three families keep", "[study]") {
-    const StudyCase c = studyCase("tilted-slot");
+TEST_CASE("z-only dexels place the undercut walls less accurately than three families", "[study]") {
+    // z dexels hold several segments, so the overhanging walls' material is kept; what one
+    // direction lacks is the crossings across it: steep walls are placed from neighbouring
+    // dexels that disagree (to within h / 2) instead of from exact crossings.
+    const StudyCase c = studyCase("bull-undercut");
     StudyOptions o;
     o.job.program = c.program;
     o.job.stockBox = c.stock;
-    o.resolutions = {1.0};
+    o.resolutions = {0.5};
     o.familySets = {FamilySet::only(Axis::Z), FamilySet::all()};
-    o.maxVertices = 3000;
-    o.samplePoints = 200000;
+    o.maxVertices = 4000;
+    o.samplePoints = 20000;
     o.exactVolumeMm3 = 0.0;  // not measured here
     const StudyResult res = runStudy(o);
     REQUIRE(res.runs.size() == 2);
     const StudyRun& z = res.runs[0];
     const StudyRun& xyz = res.runs[1];
-    INFO("lost far: z " << z.lostFarMm3 << ", xyz " << xyz.lostFarMm3 << "; max dev z " << z.devMaxMm << ", xyz "
-                        << xyz.devMaxMm);
+    INFO("p95: z " << z.devP95Mm << ", xyz " << xyz.devP95Mm << "; rms: z " << z.devRmsMm << ", xyz " << xyz.devRmsMm);
     CHECK(z.families == "z");
-    CHECK(z.devMaxMm > 2 * xyz.devMaxMm);
-    CHECK(z.lostFarMm3 + z.inventedFarMm3 > 5 * (xyz.lostFarMm3 + xyz.inventedFarMm3) + 1.0);
+    CHECK(z.devP95Mm > 1.5 * xyz.devP95Mm);
+    CHECK(z.devRmsMm > xyz.devRmsMm);
 }
 
 TEST_CASE("every built-in case builds a program with its tools", "[study]") {
