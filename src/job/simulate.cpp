@@ -200,13 +200,18 @@ Simulation runSimulation(const SimulateOptions& o) {
     Program& program = sim.program;
     if (o.program) {
         program = *o.program;
-    } else if (o.inputs.size() == 1 && lowerExtension(o.inputs[0]) == ".camotics") {
+    } else if (lowerExtension(o.inputs[0]) == ".camotics") {
+        // A project, and optionally programs that replace its own (its tools, workpiece and
+        // resolution still apply).
         project = readCamoticsProject(o.inputs[0]);
+        if (o.inputs.size() > 1) project->files.assign(o.inputs.begin() + 1, o.inputs.end());
+        for (const std::string& f : project->files)
+            if (lowerExtension(f) == ".camotics") throw Error("'" + f + "': only the first input may be a project");
         program = runProject(*project, gcode);
     } else {
         for (const std::string& in : o.inputs) {
             if (lowerExtension(in) == ".camotics")
-                throw Error("'" + in + "': a project must be the only input");
+                throw Error("'" + in + "': a project must be the first input");
             append(program, readProgram(in, gcode, apt));
         }
     }

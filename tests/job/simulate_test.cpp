@@ -149,3 +149,22 @@ TEST_CASE("the default spacing is a round fraction of the stock", "[job]") {
     CHECK(chooseResolution(Box{Vec3(0.0), Vec3(80, 80, 20)}) == Approx(0.2));
     CHECK(chooseResolution(Box{Vec3(0.0), Vec3(1000, 800, 440)}) == Approx(2.0));
 }
+
+TEST_CASE("programs after a project replace its programs; its tools and stock stay", "[job]") {
+    const fs::path dir = scratch("project");
+    write(dir / "own.ngc", "G21 G90\nT1\nG0 X5 Y5 Z5\nG1 Z-1 F100\nG1 X15\n");
+    const std::string other = write(dir / "other.ngc", kSlot);
+    const std::string project = write(dir / "p.camotics", R"({
+      "units": "metric",
+      "resolution-mode": "manual", "resolution": 0.5,
+      "tools": {"1": {"units": "metric", "shape": "cylindrical", "length": 20, "diameter": 6}},
+      "workpiece": {"automatic": false, "bounds": {"min": [0, 0, 0], "max": [40, 30, 10]}},
+      "files": ["own.ngc"]
+    })");
+    SimulateOptions o;
+    o.inputs = {project, other};
+    const SimulateReport r = runSimulation(o).report;
+    CHECK(r.resolutionMm == 0.5);
+    CHECK(r.stockVolumeMm3 == Approx(12000));
+    CHECK(r.removedVolumeMm3 == Approx(kSlotVolume).epsilon(0.02));
+}

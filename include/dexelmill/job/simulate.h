@@ -23,7 +23,8 @@ namespace dexelmill {
 
 /// @brief What a simulation reads and writes. Lengths in mm.
 struct SimulateOptions {
-    /// A `.camotics` project, or one or more programs (G-code or APT CL) run in order.
+    /// A `.camotics` project, or one or more programs (G-code or APT CL) run in order, or a
+    /// project followed by programs that replace the project's own.
     std::vector<std::string> inputs;
     /// A program already in memory (used instead of `inputs` when set, e.g. by studies).
     std::optional<Program> program;
