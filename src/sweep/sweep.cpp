@@ -149,34 +149,12 @@ LocalLine localLine(const Vec3& o, const Vec3& w) {
     return l;
 }
 
-/// A line parallel to the axis (A = 0) in a torus piece's slab: closed form, instead of the
-/// general bracketed search in intersectPiece.
-Interval torusAlongAxis(const ArcPiece& a, const LocalLine& l) {
-    const double rho = std::sqrt(l.C);
-    const double out = std::max(rho - a.rc, 0.0);
-    if (out > a.rho) return Interval::empty();
-    const double half = std::sqrt(a.rho * a.rho - out * out);
-    const double z0 = std::max(a.z0, a.zc - half), z1 = std::min(a.z1, a.zc + half);
-    if (z0 > z1) return Interval::empty();
-    double t0 = (z0 - l.z0) / l.zv, t1 = (z1 - l.z0) / l.zv;
-    if (t0 > t1) std::swap(t0, t1);
-    return {t0, t1};
-}
-
 /// The line o + v w inside the static part (the tool at one pose): the hull of its pieces'
 /// intervals, which is exact because the part is convex.
 Interval staticPart(const MoveSweep::Part& part, const Vec3& o, const Vec3& w) {
     const LocalLine l = localLine(o, w);
-    const bool alongAxis = l.A <= tol::kParallel * tol::kParallel && l.zv != 0.0;
     Interval hull;
-    for (const ProfilePiece& p : part.pieces) {
-        const ArcPiece* arc = std::get_if<ArcPiece>(&p);
-        if (arc && arc->rc > 0.0 && alongAxis) {
-            hull = hull.hull(torusAlongAxis(*arc, l));
-        } else {
-            hull = hull.hull(intersectPiece(p, l));
-        }
-    }
+    for (const ProfilePiece& p : part.pieces) hull = hull.hull(intersectPiece(p, l));
     return hull;
 }
 
@@ -359,27 +337,18 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
         throw Error("tool '" + tool.description() + "' has " + std::to_string(tool.convexParts().size()) +
                     " convex parts; the sweep handles at most " + std::to_string(kMaxParts));
     feedLength_ = glm::length(f);
-    // Eq. (2) written as d = (f - (f.n) n) / |f - (f.n) n|, e = n x d (the same frame as
-    // e = n x f / |n x f|, d = e x n): projecting twice keeps d perpendicular to n and
-    // f = (d.f) d + (n.f) n to rounding even when f is within a hair of the axis, where n x f
-    // loses its relative accuracy.
     const Vec3& n = frame_.n;
     const double fn = glm::dot(f, n);
-    Vec3 fPerp = f - fn * n;
-    fPerp -= glm::dot(fPerp, n) * n;
-    const double fd = glm::length(fPerp);
     if (feedLength_ <= tol::kZeroMove) {
         kind_ = SweepKind::Static;
         feedLocal_ = Vec3(0.0);
-    } else if (fd <= tol::kParallel * feedLength_) {
+    } else if (frame_.plunge) {
         kind_ = SweepKind::Plunge;
         feedLocal_ = Vec3(0.0, 0.0, fn);
-        ToolFrame::perpendicularPair(n, frame_.d, frame_.e);
-        frame_.plunge = true;
     } else {
-        frame_.d = fPerp / fd;
-        frame_.e = glm::cross(n, frame_.d);
-        frame_.plunge = false;
+        // d.f as the length of f's part perpendicular to n (d is that part normalised): dotting f
+        // itself with d would add (n.f)(n.d), a rounding error large against a tiny d.f.
+        const double fd = glm::dot(f - fn * n, frame_.d);
         if (std::abs(fn) <= sweep_tol::kHorizontal * feedLength_) {
             kind_ = SweepKind::Horizontal;
             feedLocal_ = Vec3(fd, 0.0, 0.0);
@@ -388,7 +357,7 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
             feedLocal_ = Vec3(fd, 0.0, fn);
         }
     }
-    const double fnl = feedLocal_.z;
+    const double fd = feedLocal_.x, fnl = feedLocal_.z;
     const double flen = glm::length(feedLocal_);
 
     for (const ConvexPart& cp : tool.convexParts()) {
