@@ -184,6 +184,39 @@ inline Vec3 torusPoint(const GrazingTorus& t, double nx, double ny, double nz) {
 }
 
 
+/// A root of a function monotone on [a, b] whose values ga = g(a) and gb = g(b) are of opposite
+/// signs and not zero: Newton's method with the analytic slope, safeguarded by the sign-change
+/// bracket. A Newton step is taken only when it lands strictly inside the bracket and is at most
+/// half the step before it; otherwise the bracket is bisected. The first point is the secant
+/// (regula falsi) point of the bracket. Stops when a step or the bracket is at most `tol`.
+/// `gd(t, slope)` returns g(t) and writes g'(t).
+template <class GD>
+double bracketedNewton(GD&& gd, double a, double b, double ga, double gb, double tol) {
+    constexpr int kMaxSteps = 100;  // bisection alone halves a bracket of width 2 to 1e-13 in 45
+    double neg = ga < 0.0 ? a : b, pos = ga < 0.0 ? b : a;  // g(neg) < 0 < g(pos)
+    double t = a - ga * (b - a) / (gb - ga);
+    if (!(t > std::min(a, b) && t < std::max(a, b))) t = 0.5 * (a + b);
+    double step = std::abs(b - a), stepBefore = 2.0 * step;
+    for (int i = 0; i < kMaxSteps; ++i) {
+        double slope;
+        const double g = gd(t, slope);
+        if (g == 0.0) return t;
+        (g < 0.0 ? neg : pos) = t;
+        const double newton = t - g / slope;
+        const bool inside = slope != 0.0 && newton > std::min(neg, pos) && newton < std::max(neg, pos);
+        stepBefore = step;
+        if (inside && 2.0 * std::abs(g) <= std::abs(stepBefore * slope)) {
+            step = std::abs(newton - t);
+            t = newton;
+        } else {
+            t = 0.5 * (neg + pos);
+            step = 0.5 * std::abs(pos - neg);
+        }
+        if (step <= tol || std::abs(pos - neg) <= tol) return t;
+    }
+    return t;
+}
+
 /// The query quantities the torus solver needs: the local line, c = w x f, |c|^2, c . o, f.
 struct TorusLine {
     Vec3 o, w, c;
@@ -199,7 +232,8 @@ struct TorusLine {
 /// has exactly one maximum, where the grazing normal is c / |c|, and one minimum (-c / |c|): so
 /// each arc, split at those two points, falls into pieces where g is monotone and every root is
 /// bracketed by a sign change. That is Algorithm 1 with its extremum (fminbnd in the paper) in
-/// closed form; the roots are found by TOMS 748.
+/// closed form; the roots are found by Newton's method on the bracket (bracketedNewton), with
+/// TOMS 748 in the spine chart.
 ///
 /// Two charts of the curve keep the root finder well conditioned:
 ///  - the normal angle psi, N(psi) = cos(psi) q + sin(psi) e, on most of the curve;
@@ -257,6 +291,22 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
             return torusPoint(tor, -fn * cp / flen, sp, fd * cp / flen);
         };
         auto g = [&](double t) { return glm::dot(l.c, point(t)) - l.co; };
+        // g and dg/dt: with dpsi/dt = 2 / (1 + t^2), the grazing point P = k Nxy + (0, 0, zc + rho Nz)
+        // (k = rc / |Nxy| + rho, Nxy the normal's part across the axis) moves by
+        // dP/dpsi = dk Nxy + k dNxy/dpsi + rho dNz/dpsi, dk = -rc (Nxy . dNxy/dpsi) / |Nxy|^3.
+        auto gSlope = [&](double t, double& slope) {
+            double cp, sp;
+            normal(t, cp, sp);
+            const double nx = -fn * cp / flen, nz = fd * cp / flen;
+            const double dnx = fn * sp / flen, dnz = -fd * sp / flen;  // dny/dpsi = cp
+            const double nr2 = nx * nx + sp * sp, nr = std::sqrt(nr2);
+            const double k = tor.rc / nr + tor.rho;
+            const double dk = -tor.rc * (nx * dnx + sp * cp) / (nr2 * nr);
+            const Vec3 p(k * nx, k * sp, tor.zc + tor.rho * nz);
+            const Vec3 dp(dk * nx + k * dnx, dk * sp + k * cp, tor.rho * dnz);
+            slope = glm::dot(l.c, dp) * 2.0 / (1.0 + t * t);
+            return glm::dot(l.c, p) - l.co;
+        };
         // t of a normal direction (cos psi, sin psi) inside the arc.
         auto tOf = [&](double cx, double sy) {
             const double cosD = cx * arc.cosMid + sy * arc.sinMid;
@@ -295,7 +345,13 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
             const bool spineChart = useSpine && std::abs(sp) < kappa * std::abs(cp);
             double root;
             if (!spineChart) {
-                if (solve(g, ta, tb, ga, gb, root)) addCrossing(point(root));
+                if (ga == 0.0) {
+                    addCrossing(point(ta));
+                } else if (gb == 0.0) {
+                    addCrossing(point(tb));
+                } else if ((ga < 0.0) != (gb < 0.0)) {
+                    addCrossing(point(bracketedNewton(gSlope, ta, tb, ga, gb, sweep_tol::kAngleRoot)));
+                }
                 continue;
             }
             // The same stretch in the spine chart, parametrised without trigonometry by the
