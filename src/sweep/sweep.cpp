@@ -99,6 +99,31 @@ struct MoveSweep::Part {
     std::vector<Circle> rims;              // general moves
     std::vector<ArcPiece> meridianArcs;    // horizontal moves
     std::vector<Circle> disks;             // horizontal moves
+    /// The heights where R(z) >= r, one interval since R is concave on the part.
+    Interval widerThan(double r) const {
+        Interval z;
+        for (const ProfilePiece& p : pieces) {
+            if (const auto* c = std::get_if<ConePiece>(&p)) {
+                if (std::max(c->r0, c->r1) < r) continue;
+                // R = r0 + k (z - z0) >= r on the piece.
+                Interval piece{c->z0, c->z1};
+                if (c->r1 > c->r0) piece.lo = std::max(c->z0, c->z0 + (r - c->r0) / coneSlope(*c));
+                else if (c->r1 < c->r0) piece.hi = std::min(c->z1, c->z0 + (r - c->r0) / coneSlope(*c));
+                z = z.hull(piece);
+            } else {
+                const ArcPiece& a = std::get<ArcPiece>(p);
+                const double out = r - a.rc;
+                if (out > a.rho) continue;
+                const double half = out <= 0.0 ? a.rho : std::sqrt(a.rho * a.rho - out * out);
+                const Interval piece = Interval{a.z0, a.z1}.intersect({a.zc - half, a.zc + half});
+                if (!piece.isEmpty()) z = z.hull(piece);
+            }
+        }
+        return z;
+    }
+    /// The swept part's extent along each of MoveSweep::boxAxes_ (coordinates from the start tip):
+    /// an oriented box holding the sweep.
+    Interval box[3];
 };
 
 /// A query line in the move's frame, with the per-line quantities every part shares.
@@ -541,6 +566,22 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
         parts_.push_back(std::move(part));
     }
 
+    // The oriented boxes: e, and for a moving tool q across the feed and f / |f| along it (the
+    // shadow cylinder's cross-section is bounded in e and q); else d and n.
+    if (kind_ == SweepKind::General || kind_ == SweepKind::Horizontal)
+        boxAxes_ = {Vec3(0.0, 1.0, 0.0), Vec3(-fnl / flen, 0.0, fd / flen), feedLocal_ / flen};
+    else
+        boxAxes_ = {Vec3(0.0, 1.0, 0.0), Vec3(1.0, 0.0, 0.0), Vec3(0.0, 0.0, 1.0)};
+    for (Part& part : parts_) {
+        for (int i = 0; i < 3; ++i) {
+            const Vec3& a = boxAxes_[i];
+            const double xr = std::sqrt(a.x * a.x + a.y * a.y);
+            const double along = glm::dot(a, feedLocal_);
+            part.box[i] = {-partSupport(part.pieces, -a.z, xr) + std::min(0.0, along),
+                           partSupport(part.pieces, a.z, xr) + std::max(0.0, along)};
+        }
+    }
+
     // The box: the support function of the sweep in +-x, +-y, +-z is the part's support from the
     // start tip plus max(0, f . direction).
     for (int i = 0; i < 3; ++i) {
@@ -573,9 +614,28 @@ MoveSweep::Query MoveSweep::toLocal(const Line& line) const {
     return q;
 }
 
+Interval MoveSweep::boxLocal(const Part& part, const Query& q) const {
+    Interval range = Interval::all();
+    for (int i = 0; i < 3; ++i) {
+        const double oa = glm::dot(q.o, boxAxes_[i]), wa = glm::dot(q.w, boxAxes_[i]);
+        const double lo = part.box[i].lo - sweep_tol::kBoxSlack - oa, hi = part.box[i].hi + sweep_tol::kBoxSlack - oa;
+        if (wa == 0.0) {
+            if (lo > 0.0 || hi < 0.0) return Interval::empty();
+            continue;
+        }
+        const double v0 = lo / wa, v1 = hi / wa;
+        range = range.intersect(wa > 0.0 ? Interval{v0, v1} : Interval{v1, v0});
+    }
+    return range;
+}
+
 Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
     const Vec3& o = q.o;
     const Vec3& w = q.w;
+    // Early rejection by the oriented box: it pays only where the exact work is root finding (a
+    // flat or ball end mill's closed forms cost little more than the box, and most lines the box
+    // lets through miss by the round ends).
+    if (!part.tori.empty() && boxLocal(part, q).isEmpty()) return Interval::empty();
     if (kind_ == SweepKind::Static) return staticPart(part, o, w);
     if (q.parallel) {
         // A line parallel to the move: the static interval stretched along it by the move.
@@ -728,6 +788,34 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
         out.lo = s.lo;
     }
     return out;
+}
+
+Interval MoveSweep::bound(const Line& line) const {
+    const Query q = toLocal(line);
+    Interval hull;
+    for (const Part& part : parts_) {
+        Interval range = boxLocal(part, q);
+        if (range.isEmpty()) continue;
+        if (q.w.x == 0.0 && q.w.y == 0.0 && kind_ != SweepKind::Static) {
+            // A line along the axis: at distance r from the axis of the tool at u, it is inside
+            // that tool only where R(z) >= r. r is at least the distance rMin from the swept axis,
+            // and {z : R(z) >= rMin} is one interval [zLo, zHi] (R is concave on a part), so the
+            // line is inside the sweep only at heights [zLo + min(0, fn), zHi + max(0, fn)].
+            const double fd = feedLocal_.x, fn = feedLocal_.z;
+            const double x = std::clamp(q.o.x, std::min(0.0, fd), std::max(0.0, fd));
+            const double rMin = std::hypot(q.o.x - x, q.o.y) - sweep_tol::kBoxSlack;
+            const Interval z = part.widerThan(rMin);
+            if (z.isEmpty()) continue;
+            const double zLo = z.lo + std::min(0.0, fn) - sweep_tol::kBoxSlack;
+            const double zHi = z.hi + std::max(0.0, fn) + sweep_tol::kBoxSlack;
+            const double v0 = (zLo - q.o.z) / q.w.z, v1 = (zHi - q.o.z) / q.w.z;
+            range = range.intersect(q.w.z > 0.0 ? Interval{v0, v1} : Interval{v1, v0});
+            if (range.isEmpty()) continue;
+        }
+        hull = hull.hull(range);
+    }
+    if (hull.isEmpty()) return hull;
+    return {hull.lo + q.vShift, hull.hi + q.vShift};
 }
 
 std::size_t MoveSweep::intersectParts(const Line& line, Interval* out) const {
