@@ -22,12 +22,16 @@ ToolFrame ToolFrame::make(const Vec3& axis, const Vec3& feed) {
     ToolFrame fr;
     fr.n = axis / len;
     const double flen = glm::length(feed);
-    const Vec3 nxf = glm::cross(fr.n, feed);
-    const double s = glm::length(nxf);
+    // Eq. (2) written as d = (f - (f.n) n) / |f - (f.n) n|, e = n x d: the same frame as
+    // e = n x f / |n x f|, d = e x n, but n x f loses its relative accuracy when f is within a
+    // hair of the axis. Projecting out n twice keeps d perpendicular to n to rounding however
+    // small the perpendicular part is (one projection leaves about eps |f| along n).
+    Vec3 fPerp = feed - glm::dot(feed, fr.n) * fr.n;
+    fPerp -= glm::dot(fPerp, fr.n) * fr.n;
+    const double s = glm::length(fPerp);
     if (flen > tol::kZeroMove && s > tol::kParallel * flen) {
-        // Eq. (2): e = n x f / |n x f|, d = e x n.
-        fr.e = nxf / s;
-        fr.d = glm::cross(fr.e, fr.n);
+        fr.d = fPerp / s;
+        fr.e = glm::cross(fr.n, fr.d);
         fr.plunge = false;
     } else {
         perpendicularPair(fr.n, fr.d, fr.e);

@@ -74,6 +74,19 @@ float toFloat(double v) {
     return float(std::clamp(v, -big, big));
 }
 
+/// Whether subtracting any interval inside `reach` could change the dexel: some segment overlaps
+/// reach's float ends the way DexelTile::subtract tests overlap. Float rounding is monotone, so an
+/// interval inside reach rounds to one inside these ends.
+bool reachesMaterial(const SegmentSpan& segs, const Interval& reach) {
+    if (reach.isEmpty()) return false;
+    const float lo = toFloat(reach.lo), hi = toFloat(reach.hi);
+    for (const Segment& s : segs) {
+        if (s.lo >= hi) return false;
+        if (s.hi > lo) return true;
+    }
+    return false;
+}
+
 /// Applies the moves `moves` (indices into the batch) to one tile, in order.
 void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeometry>& geoms,
                  const std::vector<std::uint32_t>& moves, bool removeShank, std::vector<TileMoveStats>& out) {
@@ -114,6 +127,11 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                 if (segs.empty() || double(segs[0].lo) > boxHi || double(segs[segs.size - 1].hi) < boxLo)
                     continue;
                 line.origin[ibx] = lattice.coord(axB, ib);
+                // Per dexel: a cheap bound of the sweep along this line against its material
+                // (most dexels under a finishing pass were cut down by the moves before).
+                Interval reach = g.cutting ? g.cutting->bound(line) : Interval::empty();
+                if (g.shank) reach = reach.hull(g.shank->bound(line));
+                if (!reachesMaterial(segs, reach)) continue;
                 ++st.visited;
                 double removed = 0.0;
                 if (g.cutting) {

@@ -99,6 +99,31 @@ struct MoveSweep::Part {
     std::vector<Circle> rims;              // general moves
     std::vector<ArcPiece> meridianArcs;    // horizontal moves
     std::vector<Circle> disks;             // horizontal moves
+    /// The heights where R(z) >= r, one interval since R is concave on the part.
+    Interval widerThan(double r) const {
+        Interval z;
+        for (const ProfilePiece& p : pieces) {
+            if (const auto* c = std::get_if<ConePiece>(&p)) {
+                if (std::max(c->r0, c->r1) < r) continue;
+                // R = r0 + k (z - z0) >= r on the piece.
+                Interval piece{c->z0, c->z1};
+                if (c->r1 > c->r0) piece.lo = std::max(c->z0, c->z0 + (r - c->r0) / coneSlope(*c));
+                else if (c->r1 < c->r0) piece.hi = std::min(c->z1, c->z0 + (r - c->r0) / coneSlope(*c));
+                z = z.hull(piece);
+            } else {
+                const ArcPiece& a = std::get<ArcPiece>(p);
+                const double out = r - a.rc;
+                if (out > a.rho) continue;
+                const double half = out <= 0.0 ? a.rho : std::sqrt(a.rho * a.rho - out * out);
+                const Interval piece = Interval{a.z0, a.z1}.intersect({a.zc - half, a.zc + half});
+                if (!piece.isEmpty()) z = z.hull(piece);
+            }
+        }
+        return z;
+    }
+    /// The swept part's extent along each of MoveSweep::boxAxes_ (coordinates from the start tip):
+    /// an oriented box holding the sweep.
+    Interval box[3];
 };
 
 /// A query line in the move's frame, with the per-line quantities every part shares.
@@ -149,34 +174,12 @@ LocalLine localLine(const Vec3& o, const Vec3& w) {
     return l;
 }
 
-/// A line parallel to the axis (A = 0) in a torus piece's slab: closed form, instead of the
-/// general bracketed search in intersectPiece.
-Interval torusAlongAxis(const ArcPiece& a, const LocalLine& l) {
-    const double rho = std::sqrt(l.C);
-    const double out = std::max(rho - a.rc, 0.0);
-    if (out > a.rho) return Interval::empty();
-    const double half = std::sqrt(a.rho * a.rho - out * out);
-    const double z0 = std::max(a.z0, a.zc - half), z1 = std::min(a.z1, a.zc + half);
-    if (z0 > z1) return Interval::empty();
-    double t0 = (z0 - l.z0) / l.zv, t1 = (z1 - l.z0) / l.zv;
-    if (t0 > t1) std::swap(t0, t1);
-    return {t0, t1};
-}
-
 /// The line o + v w inside the static part (the tool at one pose): the hull of its pieces'
 /// intervals, which is exact because the part is convex.
 Interval staticPart(const MoveSweep::Part& part, const Vec3& o, const Vec3& w) {
     const LocalLine l = localLine(o, w);
-    const bool alongAxis = l.A <= tol::kParallel * tol::kParallel && l.zv != 0.0;
     Interval hull;
-    for (const ProfilePiece& p : part.pieces) {
-        const ArcPiece* arc = std::get_if<ArcPiece>(&p);
-        if (arc && arc->rc > 0.0 && alongAxis) {
-            hull = hull.hull(torusAlongAxis(*arc, l));
-        } else {
-            hull = hull.hull(intersectPiece(p, l));
-        }
-    }
+    for (const ProfilePiece& p : part.pieces) hull = hull.hull(intersectPiece(p, l));
     return hull;
 }
 
@@ -206,6 +209,39 @@ inline Vec3 torusPoint(const GrazingTorus& t, double nx, double ny, double nz) {
 }
 
 
+/// A root of a function monotone on [a, b] whose values ga = g(a) and gb = g(b) are of opposite
+/// signs and not zero: Newton's method with the analytic slope, safeguarded by the sign-change
+/// bracket. A Newton step is taken only when it lands strictly inside the bracket and is at most
+/// half the step before it; otherwise the bracket is bisected. The first point is the secant
+/// (regula falsi) point of the bracket. Stops when a step or the bracket is at most `tol`.
+/// `gd(t, slope)` returns g(t) and writes g'(t).
+template <class GD>
+double bracketedNewton(GD&& gd, double a, double b, double ga, double gb, double tol) {
+    constexpr int kMaxSteps = 100;  // bisection alone halves a bracket of width 2 to 1e-13 in 45
+    double neg = ga < 0.0 ? a : b, pos = ga < 0.0 ? b : a;  // g(neg) < 0 < g(pos)
+    double t = a - ga * (b - a) / (gb - ga);
+    if (!(t > std::min(a, b) && t < std::max(a, b))) t = 0.5 * (a + b);
+    double step = std::abs(b - a), stepBefore = 2.0 * step;
+    for (int i = 0; i < kMaxSteps; ++i) {
+        double slope;
+        const double g = gd(t, slope);
+        if (g == 0.0) return t;
+        (g < 0.0 ? neg : pos) = t;
+        const double newton = t - g / slope;
+        const bool inside = slope != 0.0 && newton > std::min(neg, pos) && newton < std::max(neg, pos);
+        stepBefore = step;
+        if (inside && 2.0 * std::abs(g) <= std::abs(stepBefore * slope)) {
+            step = std::abs(newton - t);
+            t = newton;
+        } else {
+            t = 0.5 * (neg + pos);
+            step = 0.5 * std::abs(pos - neg);
+        }
+        if (step <= tol || std::abs(pos - neg) <= tol) return t;
+    }
+    return t;
+}
+
 /// The query quantities the torus solver needs: the local line, c = w x f, |c|^2, c . o, f.
 struct TorusLine {
     Vec3 o, w, c;
@@ -221,7 +257,8 @@ struct TorusLine {
 /// has exactly one maximum, where the grazing normal is c / |c|, and one minimum (-c / |c|): so
 /// each arc, split at those two points, falls into pieces where g is monotone and every root is
 /// bracketed by a sign change. That is Algorithm 1 with its extremum (fminbnd in the paper) in
-/// closed form; the roots are found by TOMS 748.
+/// closed form; the roots are found by Newton's method on the bracket (bracketedNewton), with
+/// TOMS 748 in the spine chart.
 ///
 /// Two charts of the curve keep the root finder well conditioned:
 ///  - the normal angle psi, N(psi) = cos(psi) q + sin(psi) e, on most of the curve;
@@ -279,6 +316,22 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
             return torusPoint(tor, -fn * cp / flen, sp, fd * cp / flen);
         };
         auto g = [&](double t) { return glm::dot(l.c, point(t)) - l.co; };
+        // g and dg/dt: with dpsi/dt = 2 / (1 + t^2), the grazing point P = k Nxy + (0, 0, zc + rho Nz)
+        // (k = rc / |Nxy| + rho, Nxy the normal's part across the axis) moves by
+        // dP/dpsi = dk Nxy + k dNxy/dpsi + rho dNz/dpsi, dk = -rc (Nxy . dNxy/dpsi) / |Nxy|^3.
+        auto gSlope = [&](double t, double& slope) {
+            double cp, sp;
+            normal(t, cp, sp);
+            const double nx = -fn * cp / flen, nz = fd * cp / flen;
+            const double dnx = fn * sp / flen, dnz = -fd * sp / flen;  // dny/dpsi = cp
+            const double nr2 = nx * nx + sp * sp, nr = std::sqrt(nr2);
+            const double k = tor.rc / nr + tor.rho;
+            const double dk = -tor.rc * (nx * dnx + sp * cp) / (nr2 * nr);
+            const Vec3 p(k * nx, k * sp, tor.zc + tor.rho * nz);
+            const Vec3 dp(dk * nx + k * dnx, dk * sp + k * cp, tor.rho * dnz);
+            slope = glm::dot(l.c, dp) * 2.0 / (1.0 + t * t);
+            return glm::dot(l.c, p) - l.co;
+        };
         // t of a normal direction (cos psi, sin psi) inside the arc.
         auto tOf = [&](double cx, double sy) {
             const double cosD = cx * arc.cosMid + sy * arc.sinMid;
@@ -317,7 +370,13 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
             const bool spineChart = useSpine && std::abs(sp) < kappa * std::abs(cp);
             double root;
             if (!spineChart) {
-                if (solve(g, ta, tb, ga, gb, root)) addCrossing(point(root));
+                if (ga == 0.0) {
+                    addCrossing(point(ta));
+                } else if (gb == 0.0) {
+                    addCrossing(point(tb));
+                } else if ((ga < 0.0) != (gb < 0.0)) {
+                    addCrossing(point(bracketedNewton(gSlope, ta, tb, ga, gb, sweep_tol::kAngleRoot)));
+                }
                 continue;
             }
             // The same stretch in the spine chart, parametrised without trigonometry by the
@@ -359,27 +418,18 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
         throw Error("tool '" + tool.description() + "' has " + std::to_string(tool.convexParts().size()) +
                     " convex parts; the sweep handles at most " + std::to_string(kMaxParts));
     feedLength_ = glm::length(f);
-    // Eq. (2) written as d = (f - (f.n) n) / |f - (f.n) n|, e = n x d (the same frame as
-    // e = n x f / |n x f|, d = e x n): projecting twice keeps d perpendicular to n and
-    // f = (d.f) d + (n.f) n to rounding even when f is within a hair of the axis, where n x f
-    // loses its relative accuracy.
     const Vec3& n = frame_.n;
     const double fn = glm::dot(f, n);
-    Vec3 fPerp = f - fn * n;
-    fPerp -= glm::dot(fPerp, n) * n;
-    const double fd = glm::length(fPerp);
     if (feedLength_ <= tol::kZeroMove) {
         kind_ = SweepKind::Static;
         feedLocal_ = Vec3(0.0);
-    } else if (fd <= tol::kParallel * feedLength_) {
+    } else if (frame_.plunge) {
         kind_ = SweepKind::Plunge;
         feedLocal_ = Vec3(0.0, 0.0, fn);
-        ToolFrame::perpendicularPair(n, frame_.d, frame_.e);
-        frame_.plunge = true;
     } else {
-        frame_.d = fPerp / fd;
-        frame_.e = glm::cross(n, frame_.d);
-        frame_.plunge = false;
+        // d.f as the length of f's part perpendicular to n (d is that part normalised): dotting f
+        // itself with d would add (n.f)(n.d), a rounding error large against a tiny d.f.
+        const double fd = glm::dot(f - fn * n, frame_.d);
         if (std::abs(fn) <= sweep_tol::kHorizontal * feedLength_) {
             kind_ = SweepKind::Horizontal;
             feedLocal_ = Vec3(fd, 0.0, 0.0);
@@ -388,7 +438,7 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
             feedLocal_ = Vec3(fd, 0.0, fn);
         }
     }
-    const double fnl = feedLocal_.z;
+    const double fd = feedLocal_.x, fnl = feedLocal_.z;
     const double flen = glm::length(feedLocal_);
 
     for (const ConvexPart& cp : tool.convexParts()) {
@@ -516,6 +566,22 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
         parts_.push_back(std::move(part));
     }
 
+    // The oriented boxes: e, and for a moving tool q across the feed and f / |f| along it (the
+    // shadow cylinder's cross-section is bounded in e and q); else d and n.
+    if (kind_ == SweepKind::General || kind_ == SweepKind::Horizontal)
+        boxAxes_ = {Vec3(0.0, 1.0, 0.0), Vec3(-fnl / flen, 0.0, fd / flen), feedLocal_ / flen};
+    else
+        boxAxes_ = {Vec3(0.0, 1.0, 0.0), Vec3(1.0, 0.0, 0.0), Vec3(0.0, 0.0, 1.0)};
+    for (Part& part : parts_) {
+        for (int i = 0; i < 3; ++i) {
+            const Vec3& a = boxAxes_[i];
+            const double xr = std::sqrt(a.x * a.x + a.y * a.y);
+            const double along = glm::dot(a, feedLocal_);
+            part.box[i] = {-partSupport(part.pieces, -a.z, xr) + std::min(0.0, along),
+                           partSupport(part.pieces, a.z, xr) + std::max(0.0, along)};
+        }
+    }
+
     // The box: the support function of the sweep in +-x, +-y, +-z is the part's support from the
     // start tip plus max(0, f . direction).
     for (int i = 0; i < 3; ++i) {
@@ -548,9 +614,28 @@ MoveSweep::Query MoveSweep::toLocal(const Line& line) const {
     return q;
 }
 
+Interval MoveSweep::boxLocal(const Part& part, const Query& q) const {
+    Interval range = Interval::all();
+    for (int i = 0; i < 3; ++i) {
+        const double oa = glm::dot(q.o, boxAxes_[i]), wa = glm::dot(q.w, boxAxes_[i]);
+        const double lo = part.box[i].lo - sweep_tol::kBoxSlack - oa, hi = part.box[i].hi + sweep_tol::kBoxSlack - oa;
+        if (wa == 0.0) {
+            if (lo > 0.0 || hi < 0.0) return Interval::empty();
+            continue;
+        }
+        const double v0 = lo / wa, v1 = hi / wa;
+        range = range.intersect(wa > 0.0 ? Interval{v0, v1} : Interval{v1, v0});
+    }
+    return range;
+}
+
 Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
     const Vec3& o = q.o;
     const Vec3& w = q.w;
+    // Early rejection by the oriented box: it pays only where the exact work is root finding (a
+    // flat or ball end mill's closed forms cost little more than the box, and most lines the box
+    // lets through miss by the round ends).
+    if (!part.tori.empty() && boxLocal(part, q).isEmpty()) return Interval::empty();
     if (kind_ == SweepKind::Static) return staticPart(part, o, w);
     if (q.parallel) {
         // A line parallel to the move: the static interval stretched along it by the move.
@@ -703,6 +788,34 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
         out.lo = s.lo;
     }
     return out;
+}
+
+Interval MoveSweep::bound(const Line& line) const {
+    const Query q = toLocal(line);
+    Interval hull;
+    for (const Part& part : parts_) {
+        Interval range = boxLocal(part, q);
+        if (range.isEmpty()) continue;
+        if (q.w.x == 0.0 && q.w.y == 0.0 && kind_ != SweepKind::Static) {
+            // A line along the axis: at distance r from the axis of the tool at u, it is inside
+            // that tool only where R(z) >= r. r is at least the distance rMin from the swept axis,
+            // and {z : R(z) >= rMin} is one interval [zLo, zHi] (R is concave on a part), so the
+            // line is inside the sweep only at heights [zLo + min(0, fn), zHi + max(0, fn)].
+            const double fd = feedLocal_.x, fn = feedLocal_.z;
+            const double x = std::clamp(q.o.x, std::min(0.0, fd), std::max(0.0, fd));
+            const double rMin = std::hypot(q.o.x - x, q.o.y) - sweep_tol::kBoxSlack;
+            const Interval z = part.widerThan(rMin);
+            if (z.isEmpty()) continue;
+            const double zLo = z.lo + std::min(0.0, fn) - sweep_tol::kBoxSlack;
+            const double zHi = z.hi + std::max(0.0, fn) + sweep_tol::kBoxSlack;
+            const double v0 = (zLo - q.o.z) / q.w.z, v1 = (zHi - q.o.z) / q.w.z;
+            range = range.intersect(q.w.z > 0.0 ? Interval{v0, v1} : Interval{v1, v0});
+            if (range.isEmpty()) continue;
+        }
+        hull = hull.hull(range);
+    }
+    if (hull.isEmpty()) return hull;
+    return {hull.lo + q.vShift, hull.hi + q.vShift};
 }
 
 std::size_t MoveSweep::intersectParts(const Line& line, Interval* out) const {

@@ -110,6 +110,17 @@ Interval intersectSphere(const ArcPiece& a, const LocalLine& l, const Interval& 
 // concave function of an affine map), so { g <= 0 } is one interval. Find the minimum by Brent's
 // method and the two ends by TOMS 748 on the brackets it leaves.
 Interval intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& slab) {
+    if (l.A <= tol::kParallel * tol::kParallel * l.zv * l.zv && l.zv != 0.0) {
+        // A line parallel to the axis (A = 0) at distance sqrt(C): inside where the profile
+        // circle is at least that far out, |z - zc| <= sqrt(rho^2 - (sqrt(C) - rc)^2), or over the
+        // whole slab when it runs inside the core (sqrt(C) <= rc). Closed form: the convex search
+        // below would look for a minimum of a function that is flat in the radial term.
+        const double out = std::sqrt(l.C) - a.rc;
+        if (out <= 0.0) return slab;
+        if (out > a.rho) return Interval::empty();
+        const double half = std::sqrt(a.rho * a.rho - out * out);
+        return slab.intersect(slabRange(l, a.zc - half, a.zc + half));
+    }
     const double rOuter = a.rc + a.rho;
     Interval range = slab.intersect(cylinderRange(l, rOuter));
     if (range.isEmpty()) return range;

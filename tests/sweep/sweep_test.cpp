@@ -233,3 +233,47 @@ TEST_CASE("sweep: the box holds the swept tool and touches it", "[sweep]") {
         CHECK(s.bounds().hi[i] == Approx(seen.hi[i]).margin(1e-3));
     }
 }
+
+TEST_CASE("sweep: the cheap bound holds every line's interval", "[sweep]") {
+    // bound() may only be wider than intersect() (which the oracle tests check): over random
+    // lines, each axis family and random directions, for every kind of move.
+    const Tool tools[] = {flatEndMill(6.0, {15.0, 25.0}), ballEndMill(6.0, {15.0, 25.0}),
+                          bullNoseEndMill(8.0, 2.0, {15.0, 25.0})};
+    const Vec3 tilted = glm::normalize(Vec3(0.3, -0.2, 1.0));
+    const struct {
+        Vec3 end, axis;
+    } moves[] = {{Vec3(10, 4, 0), kZ}, {Vec3(10, 4, -3), kZ}, {Vec3(0, 0, -5), kZ}, {Vec3(0, 0, 0), kZ},
+                 {Vec3(10, 4, -3), tilted}, {Vec3(0.4, 0, 0.1), kZ}};
+    std::uint64_t state = 12345;
+    auto uniform = [&state](double lo, double hi) {
+        state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+        return lo + (hi - lo) * double(state >> 11) * 0x1.0p-53;
+    };
+    for (const Tool& tool : tools) {
+        for (const auto& mv : moves) {
+            const MoveSweep s(tool, Vec3(1, 2, 3), Vec3(1, 2, 3) + mv.end, mv.axis);
+            int hits = 0;
+            for (int i = 0; i < 3000; ++i) {
+                Vec3 dir(0.0);
+                if (i % 4 == 3) dir = glm::normalize(Vec3(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)));
+                else dir[i % 4] = 1.0;
+                const Vec3 origin(uniform(-8, 16), uniform(-6, 12), uniform(-6, 12));
+                const Line line{origin - 50.0 * dir, dir};
+                const Interval exact = s.intersect(line), cheap = s.bound(line);
+                if (exact.isEmpty()) continue;
+                ++hits;
+                INFO(tool.description() << " line " << i);
+                REQUIRE(!cheap.isEmpty());
+                CHECK(cheap.lo <= exact.lo);
+                CHECK(cheap.hi >= exact.hi);
+            }
+            CHECK(hits > 200);
+        }
+    }
+    // Along the axis the bound is the profile's own height over the swept axis's nearest point: a
+    // ball (radius 3) moving horizontally, a z line 2 mm beside its path is inside from
+    // z = 3 - sqrt(9 - 4) above the tip, exactly where the sweep starts.
+    const MoveSweep ball(ballEndMill(6.0, {15.0, 25.0}), Vec3(0, 0, 0), Vec3(10, 0, 0), kZ);
+    const Interval cheap = ball.bound(Line{Vec3(5, 2, -10), kZ});
+    CHECK(cheap.lo == Approx(10 + 3 - std::sqrt(5.0)).margin(1e-8));
+}

@@ -327,6 +327,32 @@ TEST_CASE("a line lying in a face: the tool is closed, so the face's chord is in
     CHECK(wall[0].hi == Approx(43));
 }
 
+TEST_CASE("a torus piece meets a line parallel to its axis in closed form", "[tool]") {
+    // Bull-nose fillet: rc = 3, zc = 2, rho = 2, heights [0, 2] (the lower quarter).
+    const ProfilePiece fillet = ArcPiece{0.0, 2.0, 3.0, 2.0, 2.0};
+    auto along = [](double rho) {  // a line parallel to the axis, rho from it, going up
+        LocalLine l;
+        l.z0 = 0.0, l.zv = 1.0, l.A = 0.0, l.B = 0.0, l.C = rho * rho;
+        return l;
+    };
+    // rho = 4.6: 1.6 beyond the spine circle, so |z - 2| <= sqrt(4 - 2.56) = 1.2: z in [0.8, 2].
+    const Interval mid = intersectPiece(fillet, along(4.6));
+    CHECK(mid.lo == Approx(0.8).margin(1e-12));
+    CHECK(mid.hi == Approx(2.0).margin(1e-12));
+    // Inside the spine circle (rho < rc): the whole slab.
+    const Interval core = intersectPiece(fillet, along(1.0));
+    CHECK(core.lo == 0.0);
+    CHECK(core.hi == 2.0);
+    // Beyond the outer radius rc + rho = 5: nothing.
+    CHECK(intersectPiece(fillet, along(5.0 + 1e-9)).isEmpty());
+    // Going down the line: the same heights, so parameters [-2, -0.8].
+    LocalLine down = along(4.6);
+    down.zv = -1.0;
+    const Interval rev = intersectPiece(fillet, down);
+    CHECK(rev.lo == Approx(-2.0).margin(1e-12));
+    CHECK(rev.hi == Approx(-0.8).margin(1e-12));
+}
+
 TEST_CASE("profile radius and membership follow the builders' shapes", "[tool]") {
     for (const Reference& ref : referenceTools()) {
         INFO(ref.name);

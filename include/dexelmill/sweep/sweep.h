@@ -65,6 +65,10 @@ constexpr double kSpineChart = 1e-3;
 /// parameter (dimensionless, in [-1, 1]); a position error of about (rc + rho) times this.
 constexpr double kAngleRoot = 1e-13;
 
+/// Slack on the cheap bounds of a line's interval (bound(), the parts' boxes), in mm: keeps a
+/// grazing contact the exact solver finds from being cut off by the rounding of the bounds.
+constexpr double kBoxSlack = 1e-9;
+
 }  // namespace sweep_tol
 
 /// @brief How a move is swept, decided once per move from its feed f and tool axis n.
@@ -116,6 +120,11 @@ public:
     std::size_t intersectParts(const Line& line, Interval* out) const;
     /// @brief The swept material along `line`: the parts' intervals united, sorted, non-empty.
     std::vector<Interval> intersectAll(const Line& line) const;
+    /// @brief A cheap interval of `line` (unit direction) that holds every part's interval: the
+    /// line inside each part's oriented box in the move frame, and for a line parallel to the tool
+    /// axis the heights where the profile is at least as wide as the line's distance from the
+    /// swept axis. Empty when the line surely misses; a few dot products, no root finding.
+    Interval bound(const Line& line) const;
 
     /// The precomputed sweep of one convex part (defined in sweep.cpp).
     struct Part;
@@ -124,11 +133,15 @@ private:
     struct Query;
     Query toLocal(const Line& line) const;
     Interval intersectLocal(const Part& part, const Query& q) const;
+    Interval boxLocal(const Part& part, const Query& q) const;
 
     SweepKind kind_ = SweepKind::Static;
     ToolFrame frame_;
     Vec3 start_{0.0};
     Vec3 feedLocal_{0.0};  ///< f in the frame (d, e, n): (f.d, 0, f.n)
+    /// Axes of the parts' oriented boxes in the frame: e, and two spanning the d-n plane (across
+    /// and along the feed for a moving tool).
+    std::array<Vec3, 3> boxAxes_{};
     double feedLength_ = 0.0;
     Box bounds_;
     std::vector<Part> parts_;
