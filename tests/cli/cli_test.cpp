@@ -16,34 +16,40 @@ struct Run {
     std::string out, err;
 };
 
-fs::path scratch() {
-    const fs::path p = fs::temp_directory_path() / "dexelmill_cli_test";
-    fs::create_directories(p);
-    return p;
-}
-
 std::string slurp(const fs::path& p) {
     std::ifstream in(p);
     return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-/// Runs the CLI with `args` (shell words) in the scratch folder.
-Run cli(const std::string& args) {
-    const fs::path dir = scratch();
-    const std::string cmd = "cd '" + dir.string() + "' && '" + DEXELMILL_CLI_PATH + "' " + args + " > out.txt 2> err.txt";
-    const int status = std::system(cmd.c_str());
-    Run r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(dir / "out.txt");
-    r.err = slurp(dir / "err.txt");
-    return r;
-}
+/// Runs the CLI in a folder of its own (ctest runs test cases in parallel).
+class Cli {
+public:
+    explicit Cli(const std::string& name) : dir_(fs::temp_directory_path() / ("dexelmill_cli_" + name)) {
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    /// Runs `dexelmill ARGS` (shell words) in the folder.
+    Run operator()(const std::string& args) const {
+        const std::string cmd =
+            "cd '" + dir_.string() + "' && '" + DEXELMILL_CLI_PATH + "' " + args + " > out.txt 2> err.txt";
+        const int status = std::system(cmd.c_str());
+        Run r;
+        r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        r.out = slurp(dir_ / "out.txt");
+        r.err = slurp(dir_ / "err.txt");
+        return r;
+    }
+    void file(const std::string& name, const std::string& text) const { std::ofstream(dir_ / name) << text; }
+    const fs::path& dir() const { return dir_; }
 
-void file(const std::string& name, const std::string& text) { std::ofstream(scratch() / name) << text; }
+private:
+    fs::path dir_;
+};
 
 }  // namespace
 
 TEST_CASE("help and version explain themselves and exit 0", "[cli]") {
+    const Cli cli("help");
     Run r = cli("--help");
     CHECK(r.code == 0);
     CHECK_THAT(r.out, Contains("simulate") && Contains("info") && Contains("study") && Contains("mm"));
@@ -56,7 +62,8 @@ TEST_CASE("help and version explain themselves and exit 0", "[cli]") {
 }
 
 TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]") {
-    file("ok.ngc", "G21\nG0 X0 Y0 Z5\nG1 X5 F100\n");
+    const Cli cli("usage");
+    cli.file("ok.ngc", "G21\nG0 X0 Y0 Z5\nG1 X5 F100\n");
     CHECK(cli("").code == 2);
     CHECK(cli("frobnicate").code == 2);
     Run r = cli("simulate");
@@ -85,11 +92,12 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
 }
 
 TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
-    file("bad.ngc", "G21\nG0 X0 Y0 Z5\nG1 X1.2.3 F100\n");
+    const Cli cli("input");
+    cli.file("bad.ngc", "G21\nG0 X0 Y0 Z5\nG1 X1.2.3 F100\n");
     Run r = cli("simulate bad.ngc --tool flat:d=3 --stock box:0,0,0,10,10,10 -o part.obj");
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Contains("bad.ngc:3:") && Contains("error"));
-    CHECK_FALSE(fs::exists(scratch() / "part.obj"));
+    CHECK_FALSE(fs::exists(cli.dir() / "part.obj"));
     r = cli("simulate nowhere.ngc --tool flat:d=3");
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Contains("nowhere.ngc"));
@@ -98,8 +106,8 @@ TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
 }
 
 TEST_CASE("a successful run writes every output and a one-line summary in mm", "[cli]") {
-    file("slot.ngc", "G21 G90\nT1 M6\nG0 X5 Y15 Z15\nG1 Z7 F100\nG1 X35\nG0 Z15\nM30\n");
-    for (const char* f : {"part.ply", "part.vdb", "part.png", "report.json"}) fs::remove(scratch() / f);
+    const Cli cli("success");
+    cli.file("slot.ngc", "G21 G90\nT1 M6\nG0 X5 Y15 Z15\nG1 Z7 F100\nG1 X35\nG0 Z15\nM30\n");
     const Run r = cli("simulate slot.ngc --stock box:0,0,0,40,30,10 --tool 1=flat:d=6 --resolution 0.5 "
                       "-o part.ply --vdb part.vdb --png part.png --report report.json --quiet");
     CHECK(r.code == 0);
@@ -107,7 +115,7 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     CHECK(r.err.empty());  // --quiet
     for (const char* f : {"part.ply", "part.vdb", "part.png", "report.json"}) {
         INFO(f);
-        CHECK(fs::file_size(scratch() / f) > 100);
+        CHECK(fs::file_size(cli.dir() / f) > 100);
     }
     const Run info = cli("info part.vdb");
     CHECK(info.code == 0);
