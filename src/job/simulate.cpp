@@ -48,25 +48,6 @@ void checkOutputs(const SimulateOptions& o) {
         throw Error("output '" + o.pngPath + "': a picture is written as .png");
 }
 
-/// Appends `next` to `all`: moves, files and tool changes renumbered, tools merged (a later
-/// program's tool of the same number wins, with a note), diagnostics kept.
-void append(Program& all, Program&& next) {
-    const auto fileBase = std::uint32_t(all.path.files.size());
-    const std::size_t moveBase = all.path.moves.size();
-    for (std::string& f : next.path.files) all.path.files.push_back(std::move(f));
-    for (Move m : next.path.moves) {
-        m.source.file += fileBase;
-        all.path.moves.push_back(m);
-    }
-    for (ToolChange c : next.path.toolChanges) {
-        c.moveIndex += moveBase;
-        c.source.file += fileBase;
-        all.path.toolChanges.push_back(c);
-    }
-    for (auto& [n, t] : next.tools) all.tools.insert_or_assign(n, std::move(t));
-    for (Diagnostic& d : next.diagnostics) all.diagnostics.push_back(std::move(d));
-}
-
 /// The tools the cutting loop uses: the command line's over the program's; tool numbers nobody
 /// defines get the default tool, or the only tool there is (with a warning).
 ToolTable resolveTools(const SimulateOptions& o, Program& program) {
@@ -212,7 +193,7 @@ Simulation runSimulation(const SimulateOptions& o) {
         for (const std::string& in : o.inputs) {
             if (lowerExtension(in) == ".camotics")
                 throw Error("'" + in + "': a project must be the first input");
-            append(program, readProgram(in, gcode, apt));
+            program.append(readProgram(in, gcode, apt));
         }
     }
     sim.tools = resolveTools(o, program);

@@ -193,19 +193,7 @@ Program runProject(const Project& project, const GcodeOptions& options) {
         if (gcodeFiles.empty()) return;
         Program part = readGcodeFiles(gcodeFiles, o);
         gcodeFiles.clear();
-        const auto fileBase = std::uint32_t(program.path.files.size());
-        const std::size_t moveBase = program.path.moves.size();
-        program.path.files.insert(program.path.files.end(), part.path.files.begin(), part.path.files.end());
-        for (Move m : part.path.moves) {
-            m.source.file += fileBase;
-            program.path.moves.push_back(m);
-        }
-        for (ToolChange tc : part.path.toolChanges) {
-            tc.moveIndex += moveBase;
-            tc.source.file += fileBase;
-            program.path.toolChanges.push_back(tc);
-        }
-        program.diagnostics.insert(program.diagnostics.end(), part.diagnostics.begin(), part.diagnostics.end());
+        program.append(std::move(part));
     };
     for (const std::string& f : project.files) {
         const std::string text = detail::readTextFile(f);
@@ -214,21 +202,7 @@ Program runProject(const Project& project, const GcodeOptions& options) {
             AptOptions a;
             a.chordTolerance = o.chordTolerance;
             a.initialInches = o.initialInches;
-            Program part = parseApt(text, f, a);
-            const auto fileBase = std::uint32_t(program.path.files.size());
-            const std::size_t moveBase = program.path.moves.size();
-            program.path.files.push_back(f);
-            for (Move m : part.path.moves) {
-                m.source.file += fileBase;
-                program.path.moves.push_back(m);
-            }
-            for (ToolChange tc : part.path.toolChanges) {
-                tc.moveIndex += moveBase;
-                tc.source.file += fileBase;
-                program.path.toolChanges.push_back(tc);
-            }
-            for (auto& [n, t] : part.tools) program.tools.insert_or_assign(n, t);
-            program.diagnostics.insert(program.diagnostics.end(), part.diagnostics.begin(), part.diagnostics.end());
+            program.append(parseApt(text, f, a));
         } else {
             gcodeFiles.push_back(f);
         }

@@ -80,6 +80,25 @@ struct Program {
     ToolPath path;
     ToolTable tools;  ///< tools the program or project defines (APT CUTTER/, .camotics tools)
     std::vector<Diagnostic> diagnostics;
+
+    /// @brief Runs `next` after this program: its files, moves and tool changes are renumbered
+    /// onto the end of these, its tools replace same-numbered ones, its diagnostics follow.
+    void append(Program&& next) {
+        const auto fileBase = std::uint32_t(path.files.size());
+        const std::size_t moveBase = path.moves.size();
+        for (std::string& f : next.path.files) path.files.push_back(std::move(f));
+        for (Move m : next.path.moves) {
+            m.source.file += fileBase;
+            path.moves.push_back(m);
+        }
+        for (ToolChange c : next.path.toolChanges) {
+            c.moveIndex += moveBase;
+            c.source.file += fileBase;
+            path.toolChanges.push_back(c);
+        }
+        for (auto& [n, t] : next.tools) tools.insert_or_assign(n, std::move(t));
+        for (Diagnostic& d : next.diagnostics) diagnostics.push_back(std::move(d));
+    }
 };
 
 }  // namespace dexelmill
