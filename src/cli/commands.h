@@ -29,6 +29,8 @@ struct SimulateArgs {
     std::string families = "xyz";
     std::string output, vdb, png, report;
     double chordTolerance = 0.001;
+    double adaptivity = 0.0;
+    bool sharpEdges = false;
     int threads = 0;
     bool quiet = false;
 };

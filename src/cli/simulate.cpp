@@ -80,6 +80,9 @@ SimulateOptions toOptions(const SimulateArgs& a) {
         throw UsageError(std::string("--families: ") + e.what());
     }
     o.chordTolerance = a.chordTolerance;
+    if (!(a.adaptivity >= 0.0 && a.adaptivity <= 1.0)) throw UsageError("--adaptivity must lie in [0, 1]");
+    o.adaptivity = a.adaptivity;
+    o.sharpEdges = a.sharpEdges;
     o.meshPath = a.output;
     o.vdbPath = a.vdb;
     o.pngPath = a.png;
@@ -131,6 +134,9 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
     c->add_option("--vdb", a.vdb, "The part as an OpenVDB level set, PART.vdb");
     c->add_option("--png", a.png, "A shaded isometric picture of the part, PART.png");
     c->add_option("--report", a.report, "A JSON report: volumes, collisions, warnings, timings");
+    c->add_option("--adaptivity", a.adaptivity, "Mesh simplification from 0 (none) to 1")->capture_default_str();
+    c->add_flag("--sharp-edges", a.sharpEdges,
+                "Place mesh vertices on sharp edges and corners fitted to the exact dexel crossings");
     return c;
 }
 

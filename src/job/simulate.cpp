@@ -13,6 +13,7 @@
 #include "dexelmill/io/vdb_io.h"
 #include "dexelmill/path/camotics.h"
 #include "dexelmill/stock/cut.h"
+#include "dexelmill/surface/feature_snap.h"
 #include "dexelmill/surface/levelset.h"
 #include "dexelmill/surface/voxelize.h"
 
@@ -250,7 +251,14 @@ Simulation runSimulation(const SimulateOptions& o) {
     report.timingS.rebuild = seconds(t);
     t = Clock::now();
     if (o.progress) o.progress("mesh", 0, 1);
-    sim.mesh = meshLevelSet(sim.levelSet);
+    MeshOptions meshOptions;
+    meshOptions.adaptivity = o.adaptivity;
+    sim.mesh = meshLevelSet(sim.levelSet, meshOptions);
+    if (o.sharpEdges) {
+        if (o.adaptivity != 0.0 || stock.families().count() < 3)
+            throw Error("sharp edges need all three dexel families and adaptivity 0");
+        snapFeatures(sim.mesh, stock);
+    }
     const Mesh& mesh = sim.mesh;
     const MeshCheck check = checkMesh(mesh);
     report.meshVertices = mesh.vertices.size();

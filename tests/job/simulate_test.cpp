@@ -168,3 +168,19 @@ TEST_CASE("programs after a project replace its programs; its tools and stock st
     CHECK(r.stockVolumeMm3 == Approx(12000));
     CHECK(r.removedVolumeMm3 == Approx(kSlotVolume).epsilon(0.02));
 }
+
+TEST_CASE("sharp edges keep the slot's volume and a closed mesh", "[job]") {
+    const fs::path dir = scratch("sharp");
+    SimulateOptions o;
+    o.inputs = {write(dir / "slot.ngc", kSlot)};
+    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
+    o.defaultTool = flatEndMill(6, {20, 40});
+    o.resolution = 0.5;
+    o.sharpEdges = true;
+    const SimulateReport r = runSimulation(o).report;
+    CHECK(r.meshClosed);
+    // The snapped mesh encloses the dexel volume more closely than a plain mesh rounds edges.
+    CHECK(r.meshVolumeMm3 == Approx(r.finalVolumeMm3).epsilon(0.002));
+    o.families = FamilySet::parse("z");
+    CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains("three dexel families"));
+}

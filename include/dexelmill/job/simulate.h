@@ -46,6 +46,11 @@ struct SimulateOptions {
     FamilySet families = FamilySet::all();
     /// Largest distance between an arc and its chords.
     double chordTolerance = 0.001;
+    /// Mesh adaptivity in [0, 1] (openvdb volumeToMesh): 0 keeps one vertex per surface cell.
+    double adaptivity = 0.0;
+    /// Move mesh vertices onto sharp edges and corners fitted to the exact dexel crossings
+    /// (needs adaptivity 0 and all three families).
+    bool sharpEdges = false;
 
     /// Outputs; empty paths are not written. The mesh format follows the extension (.obj, .stl,
     /// .ply).
