@@ -232,7 +232,7 @@ private:
                                 const int i1 = int(std::floor((e + reach_) / h_ - 0.5));
                                 for (int blk = std::max(blockOf(i0), lastBlock);
                                      blk <= blockOf(i1); ++blk) {
-                                    p[a] = blk << kLeafLog2;
+                                    p[a] = blk * kLeafDim;
                                     marks_[blockIndex(blockOf(p[0]), blockOf(p[1]), blockOf(p[2]))]
                                         .store(1, std::memory_order_relaxed);
                                 }
@@ -276,7 +276,7 @@ private:
                                     p[b] = x;
                                     p[c] = y;
                                     for (int blk = blockOf(i0); blk <= blockOf(i1); ++blk) {
-                                        p[a] = blk << kLeafLog2;
+                                        p[a] = blk * kLeafDim;
                                         markPoint(p);
                                     }
                                 }
@@ -330,7 +330,7 @@ private:
         o[0] = int(index % blockN_[0]);
         o[1] = int((index / blockN_[0]) % blockN_[1]);
         o[2] = int(index / (std::size_t(blockN_[0]) * blockN_[1]));
-        for (int a = 0; a < 3; ++a) o[a] = (o[a] + blockLo_[a]) << kLeafLog2;
+        for (int a = 0; a < 3; ++a) o[a] = (o[a] + blockLo_[a]) * kLeafDim;
 
         constexpr int kSize = LeafT::SIZE;
         float invSq[kSize];        // sum over axes of d_a^-2
