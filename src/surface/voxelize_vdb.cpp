@@ -61,8 +61,9 @@ TriDexelStock stockFromLevelSet(const LevelSet& levelSet, const Lattice& lattice
         tbb::parallel_for(0, fam.tilesC(), [&](int tc) {
             // GridSampler keeps a reference to the accessor: it must outlive the sampler.
             const openvdb::FloatGrid::ConstAccessor accessor = grid->getConstAccessor();
-            openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler(
-                accessor, grid->transform());
+            openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor,
+                                        openvdb::tools::BoxSampler>
+                sampler(accessor, grid->transform());
             detail::TileRowSegments row(tc, fam.nb());
             const int icHi = std::min(fam.nc(), tc * kTile + kTile);
             for (int ic = tc * kTile; ic < icHi; ++ic) {
