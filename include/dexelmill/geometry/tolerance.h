@@ -26,4 +26,8 @@ constexpr double kSlope = 1e-9;
 /// Root finders stop when the bracket is this narrow relative to the problem scale (mm).
 constexpr double kRoot = 1e-12;
 
+/// A triangle whose doubled area |(b-a) x (c-a)| is at most this times its longest squared edge
+/// is degenerate (a sliver with all three vertices on one line, or a point).
+constexpr double kDegenerateTriangle = 1e-12;
+
 }  // namespace dexelmill::tol

@@ -8,15 +8,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "dexelmill/geometry/tolerance.h"
 #include "dexelmill/geometry/types.h"
 
 namespace dexelmill {
-
-namespace tol {
-/// A triangle whose doubled area |(b-a) x (c-a)| is at most this times its longest squared edge
-/// is degenerate (a sliver with all three vertices on one line, or a point).
-constexpr double kDegenerateTriangle = 1e-12;
-}  // namespace tol
 
 /// @brief An indexed triangle mesh in world coordinates (mm). Triangles are counter-clockwise
 /// seen from outside the solid, so the outward normal is (b - a) x (c - a).
