@@ -113,6 +113,9 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
         const SourceLocation loc = locate(text, e.byte > 0 ? e.byte - 1 : 0, fileName);
         const std::size_t at = std::min(text.size(), e.byte > 0 ? e.byte - 1 : 0);
         throw ParseError(loc, "invalid JSON in CAMotics project", std::string(text.substr(at, 20)));
+    } catch (const Json::exception& e) {
+        // Valid syntax the library still refuses, e.g. a number out of range.
+        throw ParseError({fileName, 0, 0}, std::string("unreadable JSON in CAMotics project: ") + e.what());
     }
     if (!j.is_object()) throw ParseError({fileName, 1, 1}, "a CAMotics project must be a JSON object");
     Project p;

@@ -104,3 +104,10 @@ TEST_CASE("readProgram: the bundled samples of every kind read", "[path][camotic
     CHECK(detectProgramKind("x.unknown", "PARTNO/X\nGOTO/1,2,3\n") == ProgramKind::Apt);
     CHECK(detectProgramKind("x.unknown", "G0 X1\n") == ProgramKind::Gcode);
 }
+
+TEST_CASE("camotics: a number JSON cannot hold is a ParseError, not a library exception", "[path][errors]") {
+    // Found by the libFuzzer smoke run: nlohmann::json throws out_of_range for it.
+    const std::string text = R"({"resolution": 5555555E5555555555555555555555555})";
+    CHECK_THROWS_AS(parseCamoticsProject(text, "big.camotics", "."), ParseError);
+    CHECK_THROWS_WITH(parseCamoticsProject(text, "big.camotics", "."), Catch::Matchers::Contains("big.camotics"));
+}
