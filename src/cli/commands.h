@@ -1,6 +1,7 @@
 // The subcommands of the dexelmill tool: option declarations and the code that runs them.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,9 @@ int runSimulate(const SimulateArgs& args);
 CLI::App* addStudy(CLI::App& app, StudyArgs& args);
 int runStudy(const StudyArgs& args);
 int runInfo(const std::string& file);
+
+/// @brief The whole of `text` as a finite number, or nothing.
+std::optional<double> parseNumber(const std::string& text);
 
 /// @brief The library's options for a typed simulate command.
 /// @throw UsageError for malformed values.

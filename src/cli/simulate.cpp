@@ -1,4 +1,5 @@
 // `dexelmill simulate`: options to SimulateOptions, run the job, print warnings and a summary.
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <sstream>
@@ -20,15 +21,9 @@ Box parseBox(const std::string& text) {
     std::stringstream s(text);
     std::string item;
     while (std::getline(s, item, ',')) {
-        std::size_t used = 0;
-        double x = 0;
-        try {
-            x = std::stod(item, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used == 0 || used != item.size()) throw UsageError("--stock box: '" + item + "' is not a number");
-        v.push_back(x);
+        const std::optional<double> x = parseNumber(item);
+        if (!x) throw UsageError("--stock box: '" + item + "' is not a number");
+        v.push_back(*x);
     }
     if (v.size() != 6) throw UsageError("--stock box: expected XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (6 numbers, mm)");
     const Box b{Vec3(v[0], v[1], v[2]), Vec3(v[3], v[4], v[5])};
@@ -38,6 +33,18 @@ Box parseBox(const std::string& text) {
 }
 
 }  // namespace
+
+std::optional<double> parseNumber(const std::string& text) {
+    std::size_t used = 0;
+    double v = 0.0;
+    try {
+        v = std::stod(text, &used);
+    } catch (const std::exception&) {
+        return std::nullopt;
+    }
+    if (used != text.size() || !std::isfinite(v)) return std::nullopt;
+    return v;
+}
 
 SimulateOptions toOptions(const SimulateArgs& a) {
     SimulateOptions o;

@@ -57,15 +57,9 @@ int runStudy(const StudyArgs& a) {
     }
     o.resolutions.clear();
     for (const std::string& r : splitList(a.resolutions)) {
-        std::size_t used = 0;
-        double h = 0;
-        try {
-            h = std::stod(r, &used);
-        } catch (const std::exception&) {
-            used = 0;
-        }
-        if (used == 0 || used != r.size() || !(h > 0)) throw UsageError("--resolutions: '" + r + "' is not a positive number");
-        o.resolutions.push_back(h);
+        const std::optional<double> h = parseNumber(r);
+        if (!h || !(*h > 0)) throw UsageError("--resolutions: '" + r + "' is not a positive number");
+        o.resolutions.push_back(*h);
     }
     o.familySets.clear();
     for (const std::string& f : splitList(a.familySets)) {
