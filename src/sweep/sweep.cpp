@@ -82,9 +82,10 @@ struct GrazingTorus {
 };
 
 /// A circle at height z, radius r where two faces meet at an angle (or a flat face of a
-/// horizontal move, as a disk).
+/// horizontal move, as a disk). For a rim, qc = fd z / |f| is the centre of its swept ellipse
+/// along q (see the rims in intersectLocal).
 struct Circle {
-    double z = 0.0, r = 0.0;
+    double z = 0.0, r = 0.0, qc = 0.0;
 };
 
 struct MoveSweep::Part {
@@ -212,16 +213,20 @@ inline Vec3 torusPoint(const GrazingTorus& t, double nx, double ny, double nz) {
 /// A root of a function monotone on [a, b] whose values ga = g(a) and gb = g(b) are of opposite
 /// signs and not zero: Newton's method with the analytic slope, safeguarded by the sign-change
 /// bracket. A Newton step is taken only when it lands strictly inside the bracket and is at most
-/// half the step before it; otherwise the bracket is bisected. The first point is the secant
-/// (regula falsi) point of the bracket. Stops when a step or the bracket is at most `tol`.
+/// half the step before it; otherwise the bracket is bisected. The first point is `t0` when it
+/// lies strictly inside the bracket, else the secant (regula falsi) point. Stops when a step or the
+/// bracket is at most `tol`, or when two Newton steps in a row show quadratic convergence that puts
+/// the next step below `tol` (the error after a Newton step of size s is about (s / s_before^2) s^2).
 /// `gd(t, slope)` returns g(t) and writes g'(t).
 template <class GD>
-double bracketedNewton(GD&& gd, double a, double b, double ga, double gb, double tol) {
+double bracketedNewton(GD&& gd, double a, double b, double ga, double gb, double t0, double tol) {
     constexpr int kMaxSteps = 100;  // bisection alone halves a bracket of width 2 to 1e-13 in 45
     double neg = ga < 0.0 ? a : b, pos = ga < 0.0 ? b : a;  // g(neg) < 0 < g(pos)
-    double t = a - ga * (b - a) / (gb - ga);
+    double t = t0;
+    if (!(t > std::min(a, b) && t < std::max(a, b))) t = a - ga * (b - a) / (gb - ga);
     if (!(t > std::min(a, b) && t < std::max(a, b))) t = 0.5 * (a + b);
     double step = std::abs(b - a), stepBefore = 2.0 * step;
+    bool newtonBefore = false;
     for (int i = 0; i < kMaxSteps; ++i) {
         double slope;
         const double g = gd(t, slope);
@@ -230,13 +235,16 @@ double bracketedNewton(GD&& gd, double a, double b, double ga, double gb, double
         const double newton = t - g / slope;
         const bool inside = slope != 0.0 && newton > std::min(neg, pos) && newton < std::max(neg, pos);
         stepBefore = step;
-        if (inside && 2.0 * std::abs(g) <= std::abs(stepBefore * slope)) {
+        const bool isNewton = inside && 2.0 * std::abs(g) <= std::abs(stepBefore * slope);
+        if (isNewton) {
             step = std::abs(newton - t);
             t = newton;
+            if (newtonBefore && step * step * step <= tol * stepBefore * stepBefore) return t;
         } else {
             t = 0.5 * (neg + pos);
             step = 0.5 * std::abs(pos - neg);
         }
+        newtonBefore = isNewton;
         if (step <= tol || std::abs(pos - neg) <= tol) return t;
     }
     return t;
@@ -345,10 +353,11 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
         // Split points: the extrema of g (N = +-c/|c|) and the chart boundaries |sin psi| =
         // kappa |cos psi| (normals at 45 degrees to the d-n plane).
         double ts[6];
+        bool extremum[6] = {};
         int m = 0;
         ts[m++] = -arc.T;
         for (double sgn : {1.0, -1.0})
-            if (inArc(sgn * cq, sgn * ce)) ts[m++] = tOf(sgn * cq, sgn * ce);
+            if (inArc(sgn * cq, sgn * ce)) extremum[m] = true, ts[m++] = tOf(sgn * cq, sgn * ce);
         if (useSpine) {
             const double cw = 1.0 / std::sqrt(1.0 + kappa * kappa), sw = kappa * cw;
             for (double sgn : {1.0, -1.0})
@@ -356,7 +365,24 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
         }
         ts[m++] = arc.T;
         for (int i = 2; i + 1 < m; ++i)  // insertion sort of the (at most 4) inner points
-            for (int j = i; j > 1 && ts[j - 1] > ts[j]; --j) std::swap(ts[j - 1], ts[j]);
+            for (int j = i; j > 1 && ts[j - 1] > ts[j]; --j) {
+                std::swap(ts[j - 1], ts[j]);
+                std::swap(extremum[j - 1], extremum[j]);
+            }
+
+        // A first guess at the root of a piece from an extremum te of g (value ge) to tb (value
+        // gb): fit g = A + B cos(psi - psi_e), exact for a sphere's outline (a circle) and close
+        // for a torus's, and solve it. Not a bracket: bracketedNewton checks it lies inside.
+        auto fittedRoot = [&](double te, double tb, double ge, double gb) {
+            double ce0, se0, cb0, sb0;
+            normal(te, ce0, se0);
+            normal(tb, cb0, sb0);
+            const double cosD = ce0 * cb0 + se0 * sb0, sinD = ce0 * sb0 - se0 * cb0;
+            const double B = (ge - gb) / (1.0 - cosD);
+            const double cr = std::clamp((B - ge) / B, -1.0, 1.0);  // cos(psi_root - psi_e) = -A / B
+            const double sr = std::copysign(std::sqrt(1.0 - cr * cr), sinD);
+            return tOf(ce0 * cr - se0 * sr, se0 * cr + ce0 * sr);
+        };
 
         double gPrev = glm::dot(l.c, arc.endLo) - l.co;
         for (int i = 0; i + 1 < m; ++i) {
@@ -375,7 +401,10 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
                 } else if (gb == 0.0) {
                     addCrossing(point(tb));
                 } else if ((ga < 0.0) != (gb < 0.0)) {
-                    addCrossing(point(bracketedNewton(gSlope, ta, tb, ga, gb, sweep_tol::kAngleRoot)));
+                    const double t0 = extremum[i]       ? fittedRoot(ta, tb, ga, gb)
+                                      : extremum[i + 1] ? fittedRoot(tb, ta, gb, ga)
+                                                        : kInf;
+                    addCrossing(point(bracketedNewton(gSlope, ta, tb, ga, gb, t0, sweep_tol::kAngleRoot)));
                 }
                 continue;
             }
@@ -440,6 +469,13 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
     }
     const double fd = feedLocal_.x, fnl = feedLocal_.z;
     const double flen = glm::length(feedLocal_);
+    if (kind_ == SweepKind::General) {
+        invF2_ = 1.0 / (flen * flen);
+        invFn_ = 1.0 / fnl;
+        kappa_ = std::abs(fnl) / flen;
+        qDir_ = Vec3(-fnl / flen, 0.0, fd / flen);
+    }
+    const auto rimAt = [&](double z, double r) { return Circle{z, r, fd * z / flen}; };
 
     for (const ConvexPart& cp : tool.convexParts()) {
         Part part;
@@ -546,15 +582,15 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
             // so they are harmless extra candidates.
             const auto* bottomArc = std::get_if<ArcPiece>(&bottom);
             if (rBottom > 0.0 && !(bottomArc && arcEndIsFlat(*bottomArc, part.z0)))
-                part.rims.push_back({part.z0, rBottom});
+                part.rims.push_back(rimAt(part.z0, rBottom));
             for (std::size_t i = 0; i + 1 < part.pieces.size(); ++i) {
                 const double zj = pieceZ1(part.pieces[i]);
                 const double sLeft = pieceSlope(part.pieces[i], zj), sRight = pieceSlope(part.pieces[i + 1], zj);
                 if (std::abs(sLeft - sRight) > tol::kSlope * std::max(1.0, std::abs(sLeft)))
-                    part.rims.push_back({zj, pieceRadius(part.pieces[i], zj)});
+                    part.rims.push_back(rimAt(zj, pieceRadius(part.pieces[i], zj)));
             }
             const auto* topArc = std::get_if<ArcPiece>(&top);
-            if (rTop > 0.0 && !(topArc && arcEndIsFlat(*topArc, part.z1))) part.rims.push_back({part.z1, rTop});
+            if (rTop > 0.0 && !(topArc && arcEndIsFlat(*topArc, part.z1))) part.rims.push_back(rimAt(part.z1, rTop));
         }
 
         if (kind_ == SweepKind::Horizontal) {
@@ -632,15 +668,20 @@ Interval MoveSweep::boxLocal(const Part& part, const Query& q) const {
 Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
     const Vec3& o = q.o;
     const Vec3& w = q.w;
-    // Early rejection by the oriented box: it pays only where the exact work is root finding (a
-    // flat or ball end mill's closed forms cost little more than the box, and most lines the box
-    // lets through miss by the round ends).
-    if (!part.tori.empty() && boxLocal(part, q).isEmpty()) return Interval::empty();
     if (kind_ == SweepKind::Static) return staticPart(part, o, w);
     if (q.parallel) {
         // A line parallel to the move: the static interval stretched along it by the move.
         return staticPart(part, o, w).hull(staticPart(part, o - feedLocal_, w));
     }
+    // Early rejection, seen along f: the part lies within rMax of its axis segment, whose ends
+    // project at signed distances g / |c| from the projected line (g = c . P - c . o). When both
+    // ends are farther than rMax on the same side, the line misses the shadow cylinder.
+    const double g0 = q.c.z * part.z0 - q.co, g1 = q.c.z * part.z1 - q.co;
+    const double reach = part.rMax + sweep_tol::kBoxSlack;
+    if ((g0 > 0.0) == (g1 > 0.0) && std::min(g0 * g0, g1 * g1) > reach * reach * q.c2) return Interval::empty();
+    // The oriented box pays only where the exact work is root finding (a flat or ball end mill's
+    // closed forms cost little more than the box).
+    if (!part.tori.empty() && boxLocal(part, q).isEmpty()) return Interval::empty();
 
     const double fd = feedLocal_.x, fn = feedLocal_.z;
     Extremes ex;
@@ -663,10 +704,11 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
             const double D = glm::dot(w, s.normal);
             if (std::abs(D) <= s.degenerate) continue;
             const Vec3 r = o - s.origin;
-            const double t = -glm::dot(r, q.c) / D;
+            const double invD = 1.0 / D;
+            const double t = -glm::dot(r, q.c) * invD;
             if (t < -sweep_tol::kParam || t > 1.0 + sweep_tol::kParam) continue;
-            const double v = -glm::dot(r, s.normal) / D;
-            const double u = glm::dot(r, glm::cross(w, s.span)) / D;
+            const double v = -glm::dot(r, s.normal) * invD;
+            const double u = glm::dot(r, glm::cross(w, s.span)) * invD;
             ex.add(v, u);
         }
 
@@ -711,17 +753,16 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
         } else {
             // Sphere: the grazing great circle perpendicular to f sweeps a cylinder of radius rho
             // about the centre's path (with the start and end spheres: a capsule).
-            const double f2 = fd * fd + fn * fn;
             for (const GrazingCapsule& cap : part.capsules) {
                 const Vec3 r(o.x, o.y, o.z - cap.zc);
                 const double rf = glm::dot(r, feedLocal_), wf = glm::dot(w, feedLocal_);
                 double r1, r2;
-                const int n = quadraticRoots(q.c2 / f2, glm::dot(r, w) - rf * wf / f2,
-                                             glm::dot(r, r) - rf * rf / f2 - cap.rho * cap.rho, r1, r2);
+                const int n = quadraticRoots(q.c2 * invF2_, glm::dot(r, w) - rf * wf * invF2_,
+                                             glm::dot(r, r) - rf * rf * invF2_ - cap.rho * cap.rho, r1, r2);
                 const double zSlack = sweep_tol::kParam * (cap.z1 - cap.z0);
                 for (int i = 0; i < n; ++i) {
                     const double v = i ? r2 : r1;
-                    const double u = (rf + v * wf) / f2;
+                    const double u = (rf + v * wf) * invF2_;
                     const double z = o.z + v * w.z - u * fn;  // height of the grazing point
                     if (z < cap.z0 - zSlack || z > cap.z1 + zSlack) continue;
                     ex.add(v, u);
@@ -729,8 +770,6 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
             }
 
             // Torus: Eq. (36) and Algorithm 1 (see torusCrossings).
-            const double flen = std::sqrt(f2);
-            const Vec3 qDir(-fn / flen, 0.0, fd / flen);
             if (!part.tori.empty()) {
                 const TorusLine tl{o, w, q.c, q.c2, q.co, feedLocal_};
                 for (const GrazingTorus& tor : part.tori) torusCrossings(tor, tl, ex);
@@ -739,23 +778,24 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
             // Rims: the sweep of a rim circle (radius r at height zr) is an elliptic cylinder.
             // Seen along f it is the ellipse with semi-axes r along e and r kappa along q,
             // kappa = |fn| / |f|, centred at q = fd zr / |f|. The projected line o + v w crosses it
-            // where, with dq = o.q - fd zr / |f| and a = kappa^2 w.e^2 + (w.q)^2,
+            // where, with dq = o.q - fd zr / |f| (the rim's qc) and a = kappa^2 w.e^2 + (w.q)^2,
             //   v = (-(kappa^2 o.e w.e + dq w.q) +- kappa sqrt(r^2 a - (o.e w.q - w.e dq)^2)) / a,
             // a form in which nothing cancels when the move is nearly horizontal (kappa -> 0).
             // The feed parameter follows from the axial row: u = (o.z + v w.z - zr) / fn.
-            const double kappa = std::abs(fn) / flen, kappa2 = kappa * kappa;
-            const double oq = glm::dot(o, qDir), wq = glm::dot(w, qDir);
+            const double kappa2 = kappa_ * kappa_;
+            const double oq = glm::dot(o, qDir_), wq = glm::dot(w, qDir_);
             const double a = kappa2 * w.y * w.y + wq * wq;
+            const double invA = 1.0 / a;
             for (const Circle& rim : part.rims) {
-                const double dq = oq - fd * rim.z / flen;
+                const double dq = oq - rim.qc;
                 const double cross = o.y * wq - w.y * dq;
                 const double disc = rim.r * rim.r * a - cross * cross;
                 if (disc < 0.0 || a == 0.0) continue;
                 const double b = kappa2 * o.y * w.y + dq * wq;
                 const double c = kappa2 * (o.y * o.y - rim.r * rim.r) + dq * dq;
-                const double qq = -(b + std::copysign(kappa * std::sqrt(disc), b));
-                const double roots[2] = {qq / a, qq != 0.0 ? c / qq : qq / a};
-                for (double v : roots) ex.add(v, (o.z + v * w.z - rim.z) / fn);
+                const double qq = -(b + std::copysign(kappa_ * std::sqrt(disc), b));
+                const double roots[2] = {qq * invA, qq != 0.0 ? c / qq : qq * invA};
+                for (double v : roots) ex.add(v, (o.z + v * w.z - rim.z) * invFn_);
             }
         }
     }
@@ -828,6 +868,11 @@ std::size_t MoveSweep::intersectParts(const Line& line, Interval* out) const {
 }
 
 Interval MoveSweep::intersect(const Line& line) const {
+    if (parts_.size() == 1) {
+        const Query q = toLocal(line);
+        const Interval iv = intersectLocal(parts_[0], q);
+        return iv.isEmpty() ? Interval::empty() : Interval{iv.lo + q.vShift, iv.hi + q.vShift};
+    }
     Interval parts[kMaxParts];
     const std::size_t n = intersectParts(line, parts);
     Interval hull;

@@ -62,8 +62,9 @@ QuadSolution solveQuadraticLE(double a, double b, double c) {
 /// The parameter range where the line's height lies in [z0, z1].
 Interval slabRange(const LocalLine& l, double z0, double z1) {
     if (l.zv == 0.0) return (l.z0 >= z0 && l.z0 <= z1) ? Interval::all() : Interval::empty();
-    double t0 = (z0 - l.z0) / l.zv;
-    double t1 = (z1 - l.z0) / l.zv;
+    const double inv = 1.0 / l.zv;
+    double t0 = (z0 - l.z0) * inv;
+    double t1 = (z1 - l.z0) * inv;
     if (t0 > t1) std::swap(t0, t1);
     return {t0, t1};
 }
@@ -79,6 +80,7 @@ Interval cylinderRange(const LocalLine& l, double r) {
 Interval intersectCone(const ConePiece& c, const LocalLine& l) {
     const Interval slab = slabRange(l, c.z0, c.z1);
     if (slab.isEmpty()) return slab;
+    if (c.r0 == c.r1) return cylinderRange(l, c.r0).intersect(slab);
     const double k = (c.r1 - c.r0) / (c.z1 - c.z0);
     const double alpha = c.r0 + k * (l.z0 - c.z0);
     const double beta = k * l.zv;

@@ -143,6 +143,11 @@ private:
     /// and along the feed for a moving tool).
     std::array<Vec3, 3> boxAxes_{};
     double feedLength_ = 0.0;
+    // Per-move constants of a General sweep's queries.
+    double invF2_ = 0.0;  ///< 1 / |f|^2
+    double invFn_ = 0.0;  ///< 1 / (n . f)
+    double kappa_ = 0.0;  ///< |n . f| / |f|
+    Vec3 qDir_{0.0};      ///< (-fn, 0, fd) / |f|: across the feed in the d-n plane
     Box bounds_;
     std::vector<Part> parts_;
 };
