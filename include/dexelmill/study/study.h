@@ -41,7 +41,8 @@ struct StudyRun {
     double volumeErrorMm3 = 0.0;                            ///< model minus reference
     /// Sample points in the exact part that the model calls empty, and the reverse, as volumes;
     /// the "far" counts only those more than one spacing from the model's surface (features
-    /// lost or invented, not boundary rounding).
+    /// lost or invented, not boundary rounding). Points within one spacing of the stock box's
+    /// faces are not counted: every family set rounds the block's own edges alike.
     double lostMm3 = 0.0, inventedMm3 = 0.0, lostFarMm3 = 0.0, inventedFarMm3 = 0.0;
     double seconds = 0.0;
     double peakMemoryMb = 0.0;
