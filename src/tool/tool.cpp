@@ -23,95 +23,26 @@ std::string num(double v) {
     return s.str();
 }
 
-/// The (at most two) intervals where a t^2 + 2 b t + c <= 0.
-struct QuadSolution {
-    Interval first, second;
-};
+/// Moves a height within `tol::kProfileJoint` of `target` onto it.
+double snap(double z, double target) {
+    return std::abs(z - target) <= tol::kProfileJoint ? target : z;
+}
 
-QuadSolution solveQuadraticLE(double a, double b, double c) {
-    QuadSolution out;
-    if (a == 0.0) {
-        if (b == 0.0) {
-            if (c <= 0.0) out.first = Interval::all();
-        } else if (b > 0.0) {
-            out.first = {-kInf, -c / (2.0 * b)};
-        } else {
-            out.first = {-c / (2.0 * b), kInf};
-        }
-        return out;
+/// The largest R of a piece over heights [z0, z1] within it.
+double maxRadiusOver(const ProfilePiece& p, double z0, double z1) {
+    const double ends = std::max(pieceRadius(p, z0), pieceRadius(p, z1));
+    if (const auto* a = std::get_if<ArcPiece>(&p)) {
+        if (z0 <= a->zc && a->zc <= z1) return a->rc + a->rho;
     }
-    const double disc = b * b - a * c;
-    if (disc < 0.0) {
-        if (a < 0.0) out.first = Interval::all();
-        return out;
-    }
-    // Stable roots: q = -(b + sign(b) sqrt(disc)); the roots are q / a and c / q.
-    const double q = -(b + std::copysign(std::sqrt(disc), b));
-    double r1 = q / a;
-    double r2 = q != 0.0 ? c / q : r1;
-    if (r1 > r2) std::swap(r1, r2);
-    if (a > 0.0) {
-        out.first = {r1, r2};
-    } else {
-        out.first = {-kInf, r1};
-        out.second = {r2, kInf};
-    }
-    return out;
+    return ends;
 }
 
-/// The parameter range where the line's height lies in [z0, z1].
-Interval slabRange(const LocalLine& l, double z0, double z1) {
-    if (l.zv == 0.0) return (l.z0 >= z0 && l.z0 <= z1) ? Interval::all() : Interval::empty();
-    const double inv = 1.0 / l.zv;
-    double t0 = (z0 - l.z0) * inv;
-    double t1 = (z1 - l.z0) * inv;
-    if (t0 > t1) std::swap(t0, t1);
-    return {t0, t1};
-}
-
-/// Line inside the cylinder rho <= r, as a parameter range (all, when the line is parallel to the
-/// axis and inside).
-Interval cylinderRange(const LocalLine& l, double r) {
-    const QuadSolution s = solveQuadraticLE(l.A, l.B, l.C - r * r);
-    return s.first;  // A >= 0, so a single interval
-}
-
-// Cone frustum or cylinder: rho(t)^2 <= (alpha + beta t)^2 with alpha + beta t >= 0.
-Interval intersectCone(const ConePiece& c, const LocalLine& l) {
-    const Interval slab = slabRange(l, c.z0, c.z1);
-    if (slab.isEmpty()) return slab;
-    if (c.r0 == c.r1) return cylinderRange(l, c.r0).intersect(slab);
-    const double k = (c.r1 - c.r0) / (c.z1 - c.z0);
-    const double alpha = c.r0 + k * (l.z0 - c.z0);
-    const double beta = k * l.zv;
-    const QuadSolution s =
-        solveQuadraticLE(l.A - beta * beta, l.B - alpha * beta, l.C - alpha * alpha);
-    // The valid nappe: R(z(t)) = alpha + beta t >= 0.
-    Interval nappe = Interval::all();
-    if (beta > 0.0) nappe.lo = -alpha / beta;
-    if (beta < 0.0) nappe.hi = -alpha / beta;
-    const Interval range = slab.intersect(nappe);
-    const Interval p1 = s.first.intersect(range);
-    const Interval p2 = s.second.intersect(range);
-    if (p2.isEmpty()) return p1;
-    if (p1.isEmpty()) return p2;
-    // Both pieces survive only when the line passes through the apex, where one of them shrinks
-    // to a point: keep the longer.
-    return p1.length() >= p2.length() ? p1 : p2;
-}
-
-// Sphere slab: rho^2 + (z - zc)^2 <= rho_s^2.
-Interval intersectSphere(const ArcPiece& a, const LocalLine& l, const Interval& slab) {
-    const double dz = l.z0 - a.zc;
-    const QuadSolution s = solveQuadraticLE(l.A + l.zv * l.zv, l.B + dz * l.zv,
-                                            l.C + dz * dz - a.rho * a.rho);
-    return s.first.intersect(slab);
-}
+}  // namespace
 
 // Torus slab: g(t) = rho(t) - R(z(t)) is convex on the slab (a norm of an affine map minus a
 // concave function of an affine map), so { g <= 0 } is one interval. Find the minimum by Brent's
 // method and the two ends by TOMS 748 on the brackets it leaves.
-Interval intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& slab) {
+Interval detail::intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& slab) {
     if (l.A <= tol::kParallel * tol::kParallel * l.zv * l.zv && l.zv != 0.0) {
         // A line parallel to the axis (A = 0) at distance sqrt(C): inside where the profile
         // circle is at least that far out, |z - zc| <= sqrt(rho^2 - (sqrt(C) - rc)^2), or over the
@@ -148,8 +79,14 @@ Interval intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& s
             g, range.lo, range.hi, std::numeric_limits<double>::digits / 2, iters);
         tMin = m.first;
         gMin = m.second;
-        if (gLo < gMin) { tMin = range.lo; gMin = gLo; }
-        if (gHi < gMin) { tMin = range.hi; gMin = gHi; }
+        if (gLo < gMin) {
+            tMin = range.lo;
+            gMin = gLo;
+        }
+        if (gHi < gMin) {
+            tMin = range.hi;
+            gMin = gHi;
+        }
     }
     if (gMin > 0.0) return Interval::empty();
     const auto stop = [](double x, double y) { return std::abs(y - x) <= tol::kRoot; };
@@ -159,7 +96,8 @@ Interval intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& s
             out.lo = tMin;
         } else {
             boost::uintmax_t iters = 100;
-            const auto r = boost::math::tools::toms748_solve(g, range.lo, tMin, gLo, gMin, stop, iters);
+            const auto r =
+                boost::math::tools::toms748_solve(g, range.lo, tMin, gLo, gMin, stop, iters);
             out.lo = 0.5 * (r.first + r.second);
         }
     }
@@ -168,28 +106,13 @@ Interval intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& s
             out.hi = tMin;
         } else {
             boost::uintmax_t iters = 100;
-            const auto r = boost::math::tools::toms748_solve(g, tMin, range.hi, gMin, gHi, stop, iters);
+            const auto r =
+                boost::math::tools::toms748_solve(g, tMin, range.hi, gMin, gHi, stop, iters);
             out.hi = 0.5 * (r.first + r.second);
         }
     }
     return out;
 }
-
-/// Moves a height within `tol::kProfileJoint` of `target` onto it.
-double snap(double z, double target) {
-    return std::abs(z - target) <= tol::kProfileJoint ? target : z;
-}
-
-/// The largest R of a piece over heights [z0, z1] within it.
-double maxRadiusOver(const ProfilePiece& p, double z0, double z1) {
-    const double ends = std::max(pieceRadius(p, z0), pieceRadius(p, z1));
-    if (const auto* a = std::get_if<ArcPiece>(&p)) {
-        if (z0 <= a->zc && a->zc <= z1) return a->rc + a->rho;
-    }
-    return ends;
-}
-
-}  // namespace
 
 LocalLine LocalLine::make(const ToolPose& pose, const Line& line) {
     const Vec3& w = line.dir;
@@ -208,20 +131,13 @@ LocalLine LocalLine::make(const ToolPose& pose, const Line& line) {
     return l;
 }
 
-Interval intersectPiece(const ProfilePiece& piece, const LocalLine& line) {
-    if (const auto* c = std::get_if<ConePiece>(&piece)) return intersectCone(*c, line);
-    const ArcPiece& a = std::get<ArcPiece>(piece);
-    const Interval slab = slabRange(line, a.z0, a.z1);
-    if (slab.isEmpty()) return slab;
-    return a.rc == 0.0 ? intersectSphere(a, line, slab) : intersectTorus(a, line, slab);
-}
-
 Tool::Tool(std::string description, std::vector<ProfilePiece> pieces, double cuttingLength)
     : description_(std::move(description)), pieces_(std::move(pieces)) {
     const std::string who = "tool '" + description_ + "': ";
     if (pieces_.empty()) throw Error(who + "the profile has no pieces");
     double z = std::visit([](auto& p) { return p.z0; }, pieces_.front());
-    if (!(z >= -tol::kProfileJoint)) throw Error(who + "the profile starts below the tip, at z = " + num(z));
+    if (!(z >= -tol::kProfileJoint))
+        throw Error(who + "the profile starts below the tip, at z = " + num(z));
     z = std::max(z, 0.0);
     bottom_ = z;
     for (std::size_t i = 0; i < pieces_.size(); ++i) {
@@ -230,29 +146,36 @@ Tool::Tool(std::string description, std::vector<ProfilePiece> pieces, double cut
             [&](auto& p) {
                 p.z0 = snap(p.z0, z);
                 if (p.z0 != z)
-                    throw Error(at + "starts at z = " + num(p.z0) + " but the previous piece ends at z = " + num(z));
+                    throw Error(at + "starts at z = " + num(p.z0) +
+                                " but the previous piece ends at z = " + num(z));
                 if (!(p.z1 > p.z0 + tol::kLength) || !std::isfinite(p.z1))
-                    throw Error(at + "has no height (z0 = " + num(p.z0) + ", z1 = " + num(p.z1) + ")");
+                    throw Error(at + "has no height (z0 = " + num(p.z0) + ", z1 = " + num(p.z1) +
+                                ")");
                 z = p.z1;
             },
             pieces_[i]);
         if (const auto* c = std::get_if<ConePiece>(&pieces_[i])) {
-            if (!(c->r0 >= 0.0) || !(c->r1 >= 0.0) || !std::isfinite(c->r0) || !std::isfinite(c->r1))
-                throw Error(at + "negative radius (r0 = " + num(c->r0) + ", r1 = " + num(c->r1) + ")");
+            if (!(c->r0 >= 0.0) || !(c->r1 >= 0.0) || !std::isfinite(c->r0) ||
+                !std::isfinite(c->r1))
+                throw Error(at + "negative radius (r0 = " + num(c->r0) + ", r1 = " + num(c->r1) +
+                            ")");
         } else {
             auto& a = std::get<ArcPiece>(pieces_[i]);
-            if (!(a.rho > 0.0) || !std::isfinite(a.rho)) throw Error(at + "arc radius must be positive, got " + num(a.rho));
-            if (!(a.rc >= 0.0)) throw Error(at + "arc centre is left of the axis (rc = " + num(a.rc) + ")");
+            if (!(a.rho > 0.0) || !std::isfinite(a.rho))
+                throw Error(at + "arc radius must be positive, got " + num(a.rho));
+            if (!(a.rc >= 0.0))
+                throw Error(at + "arc centre is left of the axis (rc = " + num(a.rc) + ")");
             a.z0 = std::max(a.z0, snap(a.z0, a.zc - a.rho));
             a.z1 = std::min(a.z1, snap(a.z1, a.zc + a.rho));
             if (a.z0 < a.zc - a.rho || a.z1 > a.zc + a.rho)
-                throw Error(at + "spans z = " + num(a.z0) + " .. " + num(a.z1) + ", outside its circle");
+                throw Error(at + "spans z = " + num(a.z0) + " .. " + num(a.z1) +
+                            ", outside its circle");
         }
     }
     totalLength_ = z;
     if (!(cuttingLength > bottom_) || cuttingLength > totalLength_ + tol::kProfileJoint)
-        throw Error(who + "cutting length " + num(cuttingLength) + " must lie in (" + num(bottom_) + ", " +
-                    num(totalLength_) + "]");
+        throw Error(who + "cutting length " + num(cuttingLength) + " must lie in (" + num(bottom_) +
+                    ", " + num(totalLength_) + "]");
     cuttingLength_ = std::min(cuttingLength, totalLength_);
 
     // Convex parts: split where R jumps (a step face) or where the slope increases (a concave
@@ -276,8 +199,8 @@ Tool::Tool(std::string description, std::vector<ProfilePiece> pieces, double cut
     for (const ProfilePiece& p : pieces_) {
         maxRadius_ = std::max(maxRadius_, maxRadiusOver(p, pieceZ0(p), pieceZ1(p)));
         if (pieceZ0(p) < cuttingLength_)
-            cuttingRadius_ = std::max(cuttingRadius_,
-                                      maxRadiusOver(p, pieceZ0(p), std::min(pieceZ1(p), cuttingLength_)));
+            cuttingRadius_ = std::max(
+                cuttingRadius_, maxRadiusOver(p, pieceZ0(p), std::min(pieceZ1(p), cuttingLength_)));
     }
     if (!(maxRadius_ > 0.0)) throw Error(who + "the profile has no positive radius");
 }
@@ -304,7 +227,8 @@ bool Tool::contains(const ToolPose& pose, const Vec3& p) const {
 
 Interval Tool::intersectPart(const ConvexPart& part, const LocalLine& line) const {
     Interval hull;
-    for (std::size_t i = part.first; i < part.last; ++i) hull = hull.hull(intersectPiece(pieces_[i], line));
+    for (std::size_t i = part.first; i < part.last; ++i)
+        hull = hull.hull(intersectPiece(pieces_[i], line));
     if (hull.isEmpty()) return hull;
     return {hull.lo + line.vShift, hull.hi + line.vShift};
 }
@@ -316,7 +240,8 @@ std::vector<Interval> Tool::intersect(const ToolPose& pose, const Line& line) co
         const Interval iv = intersectPart(part, local);
         if (!iv.isEmpty()) out.push_back(iv);
     }
-    std::sort(out.begin(), out.end(), [](const Interval& a, const Interval& b) { return a.lo < b.lo; });
+    std::sort(out.begin(), out.end(),
+              [](const Interval& a, const Interval& b) { return a.lo < b.lo; });
     std::vector<Interval> merged;
     for (const Interval& iv : out) {
         if (!merged.empty() && iv.lo <= merged.back().hi) {
@@ -332,7 +257,8 @@ Tool Tool::region(double z0, double z1) const {
     z0 = std::max(z0, bottom_);
     z1 = std::min(z1, totalLength_);
     if (!(z1 > z0 + tol::kLength))
-        throw Error("tool '" + description_ + "': region " + num(z0) + " .. " + num(z1) + " has no height");
+        throw Error("tool '" + description_ + "': region " + num(z0) + " .. " + num(z1) +
+                    " has no height");
     std::vector<ProfilePiece> clipped;
     for (const ProfilePiece& p : pieces_) {
         const double a = std::max(pieceZ0(p), z0), b = std::min(pieceZ1(p), z1);

@@ -6,30 +6,10 @@
 #include <vector>
 
 #include "dexelmill/geometry/types.h"
+#include "dexelmill/tool/line_query.h"
 #include "dexelmill/tool/profile.h"
 
 namespace dexelmill {
-
-/// @brief Where a tool is: the tip (cutter-location point) and the unit axis along which the tool
-/// extends from its tip.
-struct ToolPose {
-    Vec3 tip{0.0};
-    Vec3 axis{0.0, 0.0, 1.0};
-};
-
-/// @brief A line expressed in a tool's frame. Along the line, with parameter t = v - vShift,
-///   height above the tip   z(t)     = z0 + zv t
-///   squared axis distance  rho^2(t) = A t^2 + 2 B t + C.
-/// `vShift` is the parameter of the line point nearest the tip, so that the coefficients stay
-/// small however far the line's origin is from the tool.
-struct LocalLine {
-    double z0 = 0.0, zv = 0.0;
-    double A = 0.0, B = 0.0, C = 0.0;
-    double vShift = 0.0;
-
-    /// @brief The line `line` (unit direction) seen from a tool at `pose`.
-    static LocalLine make(const ToolPose& pose, const Line& line);
-};
 
 /// @brief A maximal run of pieces whose solid is convex (R concave and continuous over it).
 struct ConvexPart {
@@ -44,7 +24,7 @@ struct ConvexPart {
 /// tool. The part above `cuttingLength` is
 /// the shank: it does not cut, and material it meets is a collision.
 class Tool {
-public:
+  public:
     /// @brief Validates and takes a profile chain.
     /// @throw Error if the chain is empty, starts below the tip, has gaps or overlaps, a negative
     /// radius, a zero-height piece, an arc outside its circle, no positive radius, or if
@@ -88,7 +68,7 @@ public:
     /// @brief The lowest height of the solid: 0 for a whole tool, z0 for a region.
     double bottom() const { return bottom_; }
 
-private:
+  private:
     std::string description_;
     std::vector<ProfilePiece> pieces_;
     std::vector<ConvexPart> parts_;
@@ -98,10 +78,5 @@ private:
     double maxRadius_ = 0.0;
     double cuttingRadius_ = 0.0;
 };
-
-/// @brief The interval of the line inside one piece's slab solid { z in [z0, z1], rho <= R(z) }.
-/// Cones, cylinders and spheres in closed form; the torus by bracketed root finding on the convex
-/// function rho(t) - R(z(t)) (Boost.Math Brent minimisation, then TOMS 748).
-Interval intersectPiece(const ProfilePiece& piece, const LocalLine& line);
 
 }  // namespace dexelmill
