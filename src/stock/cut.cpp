@@ -87,6 +87,26 @@ bool reachesMaterial(const SegmentSpan& segs, const Interval& reach) {
     return false;
 }
 
+/// Where one sweep can reach in a tile: the dexels its box crosses, and its extent along them
+/// (relative to the lattice origin).
+struct SweepWindow {
+    int b0 = 0, b1 = -1, c0 = 0, c1 = -1;
+    double lo = 0.0, hi = -1.0;
+
+    SweepWindow() = default;
+    SweepWindow(const Lattice& lattice, Axis axB, Axis axC, int ia, double originA, const Box& box) {
+        const auto rb = lattice.indexRange(axB, box.lo[index(axB)], box.hi[index(axB)]);
+        const auto rc = lattice.indexRange(axC, box.lo[index(axC)], box.hi[index(axC)]);
+        b0 = rb[0], b1 = rb[1], c0 = rc[0], c1 = rc[1];
+        lo = box.lo[ia] - originA, hi = box.hi[ia] - originA;
+    }
+    /// Whether the box crosses dexel (ib, ic) where it has material (segs non-empty).
+    bool meets(int ib, int ic, const SegmentSpan& segs) const {
+        return ib >= b0 && ib <= b1 && ic >= c0 && ic <= c1 && double(segs[0].lo) <= hi &&
+               double(segs[segs.size - 1].hi) >= lo;
+    }
+};
+
 /// Applies the moves `moves` (indices into the batch) to one tile, in order.
 void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeometry>& geoms,
                  const std::vector<std::uint32_t>& moves, bool removeShank, std::vector<TileMoveStats>& out) {
@@ -117,6 +137,12 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
         const int c0 = std::max(rc[0], ic0), c1 = std::min(rc[1], ic1);
         if (b0 > b1 || c0 > c1) continue;
 
+        // The cutting part and the shank each bounded only where their own boxes reach: the shank
+        // mostly runs above the stock.
+        const SweepWindow cutWin =
+            g.cutting ? SweepWindow(lattice, axB, axC, ia, originA, g.cutting->bounds()) : SweepWindow();
+        const SweepWindow shankWin =
+            g.shank ? SweepWindow(lattice, axB, axC, ia, originA, g.shank->bounds()) : SweepWindow();
         TileMoveStats st;
         st.move = m;
         for (int ic = c0; ic <= c1; ++ic) {
@@ -129,18 +155,20 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                 line.origin[ibx] = lattice.coord(axB, ib);
                 // Per dexel: a cheap bound of the sweep along this line against its material
                 // (most dexels under a finishing pass were cut down by the moves before).
-                Interval reach = g.cutting ? g.cutting->bound(line) : Interval::empty();
-                if (g.shank) reach = reach.hull(g.shank->bound(line));
+                const bool cuts = g.cutting && cutWin.meets(ib, ic, segs);
+                const bool shank = g.shank && shankWin.meets(ib, ic, segs);
+                Interval reach = cuts ? g.cutting->bound(line) : Interval::empty();
+                if (shank) reach = reach.hull(g.shank->bound(line));
                 if (!reachesMaterial(segs, reach)) continue;
                 ++st.visited;
                 double removed = 0.0;
-                if (g.cutting) {
+                if (cuts) {
                     const std::size_t n = g.cutting->intersectParts(line, parts);
                     for (std::size_t k = 0; k < n; ++k)
                         if (!parts[k].isEmpty())
                             removed += tile.subtract(local, toFloat(parts[k].lo), toFloat(parts[k].hi));
                 }
-                if (g.shank) {
+                if (shank) {
                     const std::size_t n = g.shank->intersectParts(line, parts);
                     for (std::size_t k = 0; k < n; ++k) {
                         if (parts[k].isEmpty()) continue;

@@ -843,7 +843,8 @@ Interval MoveSweep::bound(const Line& line) const {
             // line is inside the sweep only at heights [zLo + min(0, fn), zHi + max(0, fn)].
             const double fd = feedLocal_.x, fn = feedLocal_.z;
             const double x = std::clamp(q.o.x, std::min(0.0, fd), std::max(0.0, fd));
-            const double rMin = std::hypot(q.o.x - x, q.o.y) - sweep_tol::kBoxSlack;
+            const double dx = q.o.x - x;  // mm-sized: no need for hypot's overflow care
+            const double rMin = std::sqrt(dx * dx + q.o.y * q.o.y) - sweep_tol::kBoxSlack;
             const Interval z = part.widerThan(rMin);
             if (z.isEmpty()) continue;
             const double zLo = z.lo + std::min(0.0, fn) - sweep_tol::kBoxSlack;
