@@ -15,8 +15,6 @@ namespace dexelmill {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
 std::string num(double v) {
     std::ostringstream s;
     s << v;
