@@ -56,9 +56,9 @@ constexpr double kParam = 1e-12;
 /// parameter ranges are united.
 constexpr double kTie = 1e-9;
 
-/// Below this |n.f| / |f| the stretch of a torus's grazing curve near the d-n plane is solved in
-/// the spine chart (see torusCrossings in sweep.cpp): the normal-angle chart resolves it only to
-/// about kAngleRoot / (|n.f| / |f|) there.
+/// Below this kappa = |n.f| / |f| the stretch of a torus's grazing curve near the d-n plane is
+/// solved in the spine chart (see torusCrossings in sweep.cpp): the normal-angle chart resolves it
+/// only to about kAngleRoot / kappa there.
 constexpr double kSpineChart = 1e-3;
 
 /// Root brackets on the torus's grazing curve stop at this width of the half-angle tangent
