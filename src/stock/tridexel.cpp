@@ -48,14 +48,14 @@ TriDexelStock TriDexelStock::fromBox(const Box& box, double h, FamilySet familie
         for (int tc = 0; tc < fam.tilesC(); ++tc) {
             for (int tb = 0; tb < fam.tilesB(); ++tb) {
                 // Tiles at the far edges hang over the lattice, and the last lattice line can lie
-                // past the box when its size is not a whole number of cells: those dexels miss
-                // the box and stay empty.
+                // past the box (or on its face) when its size is not a whole number of cells:
+                // those dexels miss the box's interior and stay empty.
                 for (int i = 0; i < DexelTile::kDexels; ++i) {
                     const int ib = tb * DexelTile::kTile + i % DexelTile::kTile;
                     const int ic = tc * DexelTile::kTile + i / DexelTile::kTile;
                     const bool inBox = ib < fam.nb() && ic < fam.nc() &&
-                                       stock.lattice_.coord(fam.axisB(), ib) <= box.hi[index(fam.axisB())] &&
-                                       stock.lattice_.coord(fam.axisC(), ic) <= box.hi[index(fam.axisC())];
+                                       stock.lattice_.coord(fam.axisB(), ib) < box.hi[index(fam.axisB())] &&
+                                       stock.lattice_.coord(fam.axisC(), ic) < box.hi[index(fam.axisC())];
                     counts[i] = inBox ? 1 : 0;
                 }
                 fam.tile(tb, tc).assign(counts, segs.data());
@@ -95,7 +95,7 @@ bool TriDexelStock::inside(Axis a, int i, int j, int k) const {
     const DexelFamily& fam = family(a);
     const float v = float((ijk[ax] + 0.5) * lattice_.h);
     for (const Segment& s : fam.segments(ijk[(ax + 1) % 3], ijk[(ax + 2) % 3]))
-        if (s.lo <= v && v <= s.hi) return true;
+        if (s.lo < v && v < s.hi) return true;
     return false;
 }
 

@@ -26,13 +26,19 @@ struct FamilySet {
 };
 
 /// @brief Three orthogonal families of dexels on one lattice (method.md section 7).
+///
+/// Open/closed convention (method.md section 5): the swept tool is closed (a line lying in one of
+/// its faces is cut along the face), so the material left is open: a segment [lo, hi] holds the
+/// points strictly between its ends. A lattice point on a floor or wall that lies exactly on a
+/// lattice plane is then empty for the dexel across the face (an end sits on it) and for the
+/// dexels lying in the face (cut) alike.
 class TriDexelStock {
 public:
     /// @brief A stock with no material on `lattice`, keeping `families`.
     TriDexelStock(const Lattice& lattice, FamilySet families = FamilySet::all());
 
-    /// @brief A solid box: the lattice tiles `box` with spacing h, and every dexel through the box
-    /// holds one segment spanning it.
+    /// @brief A solid box: the lattice tiles `box` with spacing h, and every dexel through the box's
+    /// interior holds one segment spanning it (a line on one of its faces holds nothing).
     static TriDexelStock fromBox(const Box& box, double h, FamilySet families = FamilySet::all());
 
     const Lattice& lattice() const { return lattice_; }
@@ -48,7 +54,8 @@ public:
 
     /// @brief Material volume measured by one family: h^2 times its segment lengths (mm^3).
     double volume(Axis a) const;
-    /// @brief Whether lattice point (i, j, k) is in material according to family a.
+    /// @brief Whether lattice point (i, j, k) is in material according to family a: strictly
+    /// inside one of its dexel's segments.
     bool inside(Axis a, int i, int j, int k) const;
     /// @brief Heap bytes held by all families.
     std::size_t memoryBytes() const;
