@@ -75,12 +75,21 @@ TEST_CASE("surface deviation converges as the spacing halves", "[study]") {
         CHECK(run.devMaxMm < run.h);
         CHECK(run.devRmsMm < 0.2 * run.h);
     }
-    // RMS error falls at least linearly as h halves (second order on smooth parts, first order at
-    // the sharp rims of the groove), and so does the volume error.
+    // The expected orders as h halves. The maximum is first order: it sits on the block's sharp
+    // edges, which a level-set mesh cuts off at a fixed fraction of h, so it halves. The RMS mixes
+    // that first-order band (a share of the vertices falling like h) with second-order smooth faces:
+    // an order between 1 and 2, here at least 1.25 (ratio 2^-1.25 = 0.42; measured 0.33 to 0.37).
+    // The volume error is second order (a midpoint rule over the faces; measured ratios 0.24 to
+    // 0.27): at least order 1.5, ratio 0.35.
     for (int i = 0; i + 1 < 3; ++i) {
-        INFO("from h " << res.runs[i].h << " to " << res.runs[i + 1].h);
-        CHECK(res.runs[i + 1].devRmsMm < 0.6 * res.runs[i].devRmsMm);
-        CHECK(std::abs(res.runs[i + 1].volumeErrorMm3) < 0.6 * std::abs(res.runs[i].volumeErrorMm3));
+        const StudyRun& coarse = res.runs[i];
+        const StudyRun& fine = res.runs[i + 1];
+        INFO("from h " << coarse.h << " to " << fine.h << ": max " << coarse.devMaxMm << " -> " << fine.devMaxMm
+                       << ", rms " << coarse.devRmsMm << " -> " << fine.devRmsMm << ", volume error "
+                       << coarse.volumeErrorMm3 << " -> " << fine.volumeErrorMm3);
+        CHECK(fine.devMaxMm / coarse.devMaxMm == Approx(0.5).margin(0.05));
+        CHECK(fine.devRmsMm < 0.42 * coarse.devRmsMm);
+        CHECK(std::abs(fine.volumeErrorMm3) < 0.35 * std::abs(coarse.volumeErrorMm3));
     }
     const std::string csv = studyCsv(res);
     CHECK(csv.find("h_mm,families,vertices,dev_max_mm") == 0);
