@@ -16,6 +16,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "dexelmill/job/simulate.h"
 #include "dexelmill/surface/levelset.h"
 #include "dexelmill/surface/mesh.h"
 
@@ -89,13 +90,6 @@ double procStatusBytes(const std::string& key) {
     return 0.0;
 }
 
-/// Resets VmHWM to the current resident size (Linux 4.0+); false if not possible.
-bool resetPeakRss() {
-    std::ofstream out("/proc/self/clear_refs");
-    out << "5";
-    return bool(out);
-}
-
 const TriDexelStock& freeformStock() {
     static const TriDexelStock stock = makeFreeformStock();
     return stock;
@@ -108,7 +102,7 @@ static void BM_SurfaceRebuildAndMesh512(benchmark::State& state) {
     double rebuildS = 0.0, meshS = 0.0, peak = 0.0, grid = 0.0, tris = 0.0, active = 0.0;
     for (auto _ : state) {
         const double before = procStatusBytes("VmRSS");
-        const bool peakOk = resetPeakRss();
+        const bool peakOk = resetPeakMemory();
         const auto t0 = std::chrono::steady_clock::now();
         LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "bench freeform"});
         const auto t1 = std::chrono::steady_clock::now();

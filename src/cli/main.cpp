@@ -53,7 +53,8 @@ int main(int argc, char** argv) {
         if (info->parsed()) return dexelmill::cli::runInfo(infoFile);
         if (studyCmd->parsed()) return dexelmill::cli::runStudy(study);
     } catch (const dexelmill::cli::UsageError& e) {
-        std::cerr << "dexelmill: " << e.what() << "\nRun 'dexelmill --help' for usage.\n";
+        const char* command = simulate->parsed() ? " simulate" : info->parsed() ? " info" : " study";
+        std::cerr << "dexelmill: " << e.what() << "\nRun 'dexelmill" << command << " --help' for usage.\n";
         return 2;
     } catch (const dexelmill::Error& e) {
         // ParseErrors already read "file:line:col: error: ..."; others get a prefix.

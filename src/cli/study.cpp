@@ -50,7 +50,12 @@ int runStudy(const StudyArgs& a) {
         throw UsageError("study: give either a program (or project) or --case NAME");
     o.job = toOptions(a.job);
     if (!a.caseName.empty()) {
-        StudyCase c = studyCase(a.caseName);
+        StudyCase c;
+        try {
+            c = studyCase(a.caseName);
+        } catch (const Error& e) {
+            throw UsageError(std::string("--case: ") + e.what());
+        }
         o.job.program = std::move(c.program);
         if (!o.job.stockBox && o.job.stockFile.empty()) o.job.stockBox = c.stock;
         o.job.inputs = {"case:" + c.name};
@@ -70,6 +75,7 @@ int runStudy(const StudyArgs& a) {
         }
     }
     if (o.resolutions.empty() || o.familySets.empty()) throw UsageError("study: --resolutions and --families need values");
+    if (a.maxVertices == 0) throw UsageError("--max-vertices: a study measures at least one vertex per run");
     o.maxVertices = a.maxVertices;
     o.samplePoints = a.samples;
     o.plyDeviationDir = a.plyDir;

@@ -1,6 +1,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <malloc.h>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -66,12 +67,14 @@ double chooseResolution(const Box& stock, double cells) {
     return decade;
 }
 
-double peakMemoryMb() {
-    // VmHWM: the peak resident set size, in kB.
+namespace {
+
+/// A "Vm...:" line of /proc/self/status in MiB (0 when unavailable).
+double procStatusMb(const char* key) {
     std::ifstream status("/proc/self/status");
-    std::string key;
-    while (status >> key) {
-        if (key == "VmHWM:") {
+    std::string word;
+    while (status >> word) {
+        if (word == key) {
             double kb = 0;
             status >> kb;
             return kb / 1024.0;
@@ -79,6 +82,20 @@ double peakMemoryMb() {
         status.ignore(4096, '\n');
     }
     return 0.0;
+}
+
+}  // namespace
+
+double peakMemoryMb() { return procStatusMb("VmHWM:"); }
+
+double currentMemoryMb() { return procStatusMb("VmRSS:"); }
+
+bool resetPeakMemory() {
+    malloc_trim(0);  // hand freed heap back first, so that the next peak is the next stage's own
+    std::ofstream out("/proc/self/clear_refs");
+    out << "5";  // 5: reset the peak resident set size (proc(5))
+    out.flush();
+    return bool(out);
 }
 
 }  // namespace dexelmill

@@ -30,11 +30,13 @@ public:
         for (int dy = -size / 2; dy <= size / 2; ++dy)
             for (int dx = -size / 2; dx <= size / 2; ++dx) put(x + dx, y + dy, c);
     }
-    void line(double x0, double y0, double x1, double y1, Rgb c, int width, bool dashed = false) {
+    /// A line `width` pixels wide; with `dash` > 0, drawn and left blank by turns every `dash` / 2
+    /// pixels along it.
+    void line(double x0, double y0, double x1, double y1, Rgb c, int width, int dash = 0) {
         const double len = std::hypot(x1 - x0, y1 - y0);
         const int n = std::max(1, int(len * 2));
         for (int i = 0; i <= n; ++i) {
-            if (dashed && (i / 16) % 2) continue;
+            if (dash > 0 && (i / dash) % 2) continue;
             const double t = double(i) / n;
             dot(int(std::lround(x0 + t * (x1 - x0))), int(std::lround(y0 + t * (y1 - y0))), c, width);
         }
@@ -83,27 +85,43 @@ void writeStudyPlot(const std::string& path, const StudyResult& result) {
     if (result.runs.empty()) throw Error("study plot: no runs to plot");
     const int W = 1000, H = 700, left = 110, right = 230, top = 60, bottom = 80;
     Canvas c(W, H);
+    // The statistics drawn per family set, each with its line style (dash period in pixels).
+    struct Stat {
+        const char* name;
+        double StudyRun::*value;
+        int dash;
+    };
+    const Stat stats[] = {{"max", &StudyRun::devMaxMm, 0}, {"p95", &StudyRun::devP95Mm, 24}, {"rms", &StudyRun::devRmsMm, 8}};
     double hMin = 1e300, hMax = 0, eMin = 1e300, eMax = 0;
+    std::vector<double> spacings;
     for (const StudyRun& r : result.runs) {
         hMin = std::min(hMin, r.h);
         hMax = std::max(hMax, r.h);
-        for (double e : {r.devMaxMm, r.devRmsMm})
-            if (e > 0) {
-                eMin = std::min(eMin, e);
-                eMax = std::max(eMax, e);
+        if (std::find(spacings.begin(), spacings.end(), r.h) == spacings.end()) spacings.push_back(r.h);
+        for (const Stat& st : stats)
+            if (r.*st.value > 0) {
+                eMin = std::min(eMin, r.*st.value);
+                eMax = std::max(eMax, r.*st.value);
             }
     }
     if (eMax <= 0) eMin = 1e-3, eMax = 1;
-    // Whole decades around the data.
-    const double lx0 = std::floor(std::log10(hMin)), lx1 = std::max(lx0 + 1, std::ceil(std::log10(hMax)));
+    // Spacings: the data with a margin of a third of a decade on the left and right. Errors: whole
+    // decades around the data.
+    const double lx0 = std::log10(hMin) - 1.0 / 3.0, lx1 = std::log10(hMax) + 1.0 / 3.0;
     const double ly0 = std::floor(std::log10(eMin)), ly1 = std::max(ly0 + 1, std::ceil(std::log10(eMax)));
     auto X = [&](double h) { return left + (std::log10(h) - lx0) / (lx1 - lx0) * (W - left - right); };
     auto Y = [&](double e) { return H - bottom - (std::log10(e) - ly0) / (ly1 - ly0) * (H - top - bottom); };
     const Rgb grid{225, 225, 225}, axis{60, 60, 60};
-    for (double d = lx0; d <= lx1; ++d) {
-        for (int m = 1; m < 10 && d + std::log10(m) <= lx1; ++m) c.line(X(m * std::pow(10, d)), top, X(m * std::pow(10, d)), H - bottom, grid, 1);
-        const std::string label = fmt(std::pow(10, d));
-        c.text(int(X(std::pow(10, d))) - Canvas::textWidth(label) / 2, H - bottom + 12, label, axis);
+    for (double d = std::floor(lx0); d <= lx1; ++d)
+        for (int m = 1; m < 10; ++m) {
+            const double x = m * std::pow(10, d);
+            if (std::log10(x) >= lx0 && std::log10(x) <= lx1) c.line(X(x), top, X(x), H - bottom, grid, 1);
+        }
+    // The x axis is labelled at the spacings studied, where the points are.
+    for (double h : spacings) {
+        const std::string label = fmt(h);
+        c.line(X(h), H - bottom, X(h), H - bottom + 6, axis, 1);
+        c.text(int(X(h)) - Canvas::textWidth(label) / 2, H - bottom + 12, label, axis);
     }
     for (double d = ly0; d <= ly1; ++d) {
         for (int m = 1; m < 10 && d + std::log10(m) <= ly1; ++m) c.line(left, Y(m * std::pow(10, d)), W - right, Y(m * std::pow(10, d)), grid, 1);
@@ -127,18 +145,19 @@ void writeStudyPlot(const std::string& path, const StudyResult& result) {
         for (const StudyRun& r : result.runs)
             if (r.families == families[f]) rs.push_back(&r);
         std::sort(rs.begin(), rs.end(), [](auto* a, auto* b) { return a->h < b->h; });
-        for (int kind = 0; kind < 2; ++kind) {
-            auto val = [&](const StudyRun* r) { return kind == 0 ? r->devMaxMm : r->devRmsMm; };
+        for (const Stat& st : stats) {
+            auto val = [&](const StudyRun* r) { return r->*st.value; };
             for (std::size_t i = 0; i < rs.size(); ++i) {
                 if (val(rs[i]) <= 0) continue;
                 c.dot(int(X(rs[i]->h)), int(Y(val(rs[i]))), col, 7);
                 if (i > 0 && val(rs[i - 1]) > 0)
-                    c.line(X(rs[i - 1]->h), Y(val(rs[i - 1])), X(rs[i]->h), Y(val(rs[i])), col, 2, kind == 1);
+                    c.line(X(rs[i - 1]->h), Y(val(rs[i - 1])), X(rs[i]->h), Y(val(rs[i])), col, 2, st.dash);
             }
-            c.line(W - right + 20, legendY + 6, W - right + 60, legendY + 6, col, 2, kind == 1);
-            c.text(W - right + 68, legendY, families[f] + (kind == 0 ? " max" : " rms"), axis);
+            c.line(W - right + 20, legendY + 6, W - right + 60, legendY + 6, col, 2, st.dash);
+            c.text(W - right + 68, legendY, families[f] + " " + st.name, axis);
             legendY += 24;
         }
+        legendY += 8;
     }
     writePng(path, c.image());
 }

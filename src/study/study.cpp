@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <random>
@@ -10,6 +11,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "dexelmill/error.h"
 #include "dexelmill/io/atomic_file.h"
@@ -99,12 +101,28 @@ StudyResult runStudy(const StudyOptions& o) {
     if (o.resolutions.empty() || o.familySets.empty()) throw Error("a study needs spacings and family sets");
     for (double h : o.resolutions)
         if (!(h > 0)) throw Error("study spacings must be positive");
+    if (!o.job.stockFile.empty())
+        throw Error(o.job.stockFile + ": a study measures against the exact part cut from a box stock; an STL or "
+                    "VDB stock is not supported (give the stock as box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX)");
+    if (!o.plyDeviationDir.empty()) {
+        std::error_code ec;
+        std::filesystem::create_directories(o.plyDeviationDir, ec);
+        if (ec) throw Error(o.plyDeviationDir + ": cannot create the folder for deviation meshes: " + ec.message());
+    }
+    // Each spacing and each family set once, however often it was listed.
     std::vector<double> hs = o.resolutions;
     std::sort(hs.begin(), hs.end(), std::greater<double>());
+    hs.erase(std::unique(hs.begin(), hs.end()), hs.end());
+    std::vector<FamilySet> familySets;
+    for (FamilySet f : o.familySets)
+        if (std::none_of(familySets.begin(), familySets.end(), [&](FamilySet g) { return g.mask == f.mask; }))
+            familySets.push_back(f);
+    // The measurements use the job's thread count too.
+    tbb::task_arena arena(o.job.threads > 0 ? o.job.threads : tbb::task_arena::automatic);
 
     StudyResult result;
     result.subject = o.job.inputs.empty() ? std::string("program in memory") : o.job.inputs.front();
-    const std::size_t total = hs.size() * o.familySets.size() + (o.exactVolumeMm3 ? 0 : 1);
+    const std::size_t total = hs.size() * familySets.size() + (o.exactVolumeMm3 ? 0 : 1);
     std::size_t done = 0;
     auto tick = [&](const char* stage) {
         if (o.progress) o.progress(stage, done, total);
@@ -130,19 +148,21 @@ StudyResult runStudy(const StudyOptions& o) {
     }
 
     for (double h : hs) {
-        for (FamilySet fams : o.familySets) {
+        for (FamilySet fams : familySets) {
             tick("study");
             const auto t0 = std::chrono::steady_clock::now();
             SimulateOptions job = o.job;
             job.resolution = h;
             job.families = fams;
             job.progress = nullptr;
+            resetPeakMemory();  // the peak of this run, not of the runs before it
+            const double memoryBefore = currentMemoryMb();
             const Simulation s = runSimulation(job);
             StudyRun run;
             run.h = h;
             run.families = fams.str();
             run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-            run.peakMemoryMb = s.report.peakMemoryMb;
+            run.peakMemoryMb = std::max(0.0, s.report.peakMemoryMb - memoryBefore);
             run.stockMemoryMb = double(s.report.stockMemoryBytes) / (1024.0 * 1024.0);
             // The model's part volume as its level set's mesh encloses it, so that every family set
             // is judged the same way (a lone family's dexel volume is its own measure).
@@ -154,11 +174,13 @@ StudyResult runStudy(const StudyOptions& o) {
             const std::vector<Vec3> normals = vertexNormals(s.mesh);
             const std::vector<std::size_t> picked = spreadIndices(s.mesh.vertices.size(), o.maxVertices);
             std::vector<double> dev(picked.size());
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, picked.size()), [&](const auto& r) {
-                for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                    const std::size_t v = picked[i];
-                    dev[i] = signedDistanceAlong(*oracle, s.mesh.vertices[v], normals[v], kSearchSpacings * h);
-                }
+            arena.execute([&] {
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, picked.size()), [&](const auto& r) {
+                    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                        const std::size_t v = picked[i];
+                        dev[i] = signedDistanceAlong(*oracle, s.mesh.vertices[v], normals[v], kSearchSpacings * h);
+                    }
+                });
             });
             run.vertices = dev.size();
             if (!dev.empty()) {
@@ -180,9 +202,12 @@ StudyResult runStudy(const StudyOptions& o) {
                 if (picked.size() == all.size()) {
                     for (std::size_t i = 0; i < picked.size(); ++i) all[picked[i]] = dev[i];
                 } else {
-                    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, all.size()), [&](const auto& r) {
-                        for (std::size_t v = r.begin(); v < r.end(); ++v)
-                            all[v] = signedDistanceAlong(*oracle, s.mesh.vertices[v], normals[v], kSearchSpacings * h);
+                    arena.execute([&] {
+                        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, all.size()), [&](const auto& r) {
+                            for (std::size_t v = r.begin(); v < r.end(); ++v)
+                                all[v] = signedDistanceAlong(*oracle, s.mesh.vertices[v], normals[v],
+                                                             kSearchSpacings * h);
+                        });
                     });
                 }
                 std::ostringstream name;
@@ -203,19 +228,21 @@ StudyResult runStudy(const StudyOptions& o) {
                 std::size_t lost = 0, invented = 0, lostFar = 0, inventedFar = 0;
             };
             std::vector<Counts> perPoint(pts.size());
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pts.size()), [&](const auto& r) {
-                for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                    const Vec3& p = pts[i];
-                    const double faceDistance = std::min({p.x - box.lo.x, box.hi.x - p.x, p.y - box.lo.y,
-                                                          box.hi.y - p.y, p.z - box.lo.z, box.hi.z - p.z});
-                    if (faceDistance < h) continue;
-                    const bool exact = oracle->inside(p);
-                    const double phi = s.levelSet.valueAt(p);
-                    const bool model = phi < 0;
-                    Counts& c = perPoint[i];
-                    if (exact && !model) c.lost = 1, c.lostFar = phi > h;
-                    if (!exact && model) c.invented = 1, c.inventedFar = phi < -h;
-                }
+            arena.execute([&] {
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pts.size()), [&](const auto& r) {
+                    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                        const Vec3& p = pts[i];
+                        const double faceDistance = std::min({p.x - box.lo.x, box.hi.x - p.x, p.y - box.lo.y,
+                                                              box.hi.y - p.y, p.z - box.lo.z, box.hi.z - p.z});
+                        if (faceDistance < h) continue;
+                        const bool exact = oracle->inside(p);
+                        const double phi = s.levelSet.valueAt(p);
+                        const bool model = phi < 0;
+                        Counts& c = perPoint[i];
+                        if (exact && !model) c.lost = 1, c.lostFar = phi > h;
+                        if (!exact && model) c.invented = 1, c.inventedFar = phi < -h;
+                    }
+                });
             });
             Counts sum;
             for (const Counts& c : perPoint) {

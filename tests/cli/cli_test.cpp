@@ -1,6 +1,7 @@
 // The dexelmill executable: exit codes, messages and outputs as a user sees them.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -89,6 +90,11 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
     CHECK(r.code == 2);
     r = cli("study --case tilted-slot --resolutions 1,zero");
     CHECK(r.code == 2);
+    r = cli("study --case nope");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("bull-undercut") && Contains("dexelmill study --help"));
+    r = cli("study --case v-carve --max-vertices 0");
+    CHECK(r.code == 2);
 }
 
 TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
@@ -123,4 +129,33 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     const Run prog = cli("info slot.ngc");
     CHECK(prog.code == 0);
     CHECK_THAT(prog.out, Contains("moves") && Contains("tool changes"));
+}
+
+TEST_CASE("a study writes its table, CSV, plot and deviation meshes", "[cli][study]") {
+    const Cli cli("study");
+    const Run r = cli("study --case tilted-slot --resolutions 2,1,2 --families z,xyz --csv s.csv --plot s.png "
+                      "--ply-deviation dev --max-vertices 500 --samples 2000 --quiet");
+    REQUIRE(r.code == 0);
+    CHECK_THAT(r.out, Contains("dev_max_mm") && Contains("reference volume"));
+    // One header and one row per (spacing, family set): the repeated spacing counts once.
+    const std::string csv = slurp(cli.dir() / "s.csv");
+    CHECK(std::count(csv.begin(), csv.end(), '\n') == 5);
+    CHECK_THAT(csv, Contains("h_mm,families") && Contains("\n2,z,") && Contains("\n1,xyz,"));
+    const std::string png = slurp(cli.dir() / "s.png");
+    CHECK(png.substr(1, 3) == "PNG");
+    int plys = 0;
+    for (const auto& e : fs::directory_iterator(cli.dir() / "dev")) {
+        INFO(e.path());
+        CHECK(slurp(e.path()).rfind("ply\n", 0) == 0);
+        ++plys;
+    }
+    CHECK(plys == 4);
+}
+
+TEST_CASE("a study refuses a stock it cannot measure against", "[cli][study][errors]") {
+    const Cli cli("study_stock");
+    cli.file("wedge.stl", "solid w\nendsolid w\n");
+    const Run r = cli("study --case v-carve --stock wedge.stl");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("wedge.stl") && Contains("box"));
 }

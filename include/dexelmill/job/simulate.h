@@ -141,7 +141,16 @@ std::string reportJson(const SimulateReport& report);
 /// rounded down to 1, 2 or 5 times a power of ten.
 double chooseResolution(const Box& stock, double cells = 400);
 
-/// @brief Peak resident memory of this process so far (MiB).
+/// @brief Peak resident memory of this process so far (MiB), or since resetPeakMemory.
 double peakMemoryMb();
+
+/// @brief Resident memory of this process now (MiB).
+double currentMemoryMb();
+
+/// @brief Starts peakMemoryMb afresh from the current resident size (Linux 4.0 and later, through
+/// /proc/self/clear_refs), after handing freed heap memory back to the system, so that one stage's
+/// peak can be measured on its own: its growth over currentMemoryMb() taken just after.
+/// @return false when the system does not allow it (peakMemoryMb then keeps the process's peak).
+bool resetPeakMemory();
 
 }  // namespace dexelmill

@@ -15,7 +15,8 @@ namespace dexelmill {
 
 /// @brief Point membership in "stock minus the union of the swept volumes", localised with a
 /// uniform grid of buckets over the stock so a query only visits the moves whose tool box
-/// overlaps its bucket.
+/// overlaps its bucket. The buckets are its own, not the cutting loop's dexel tiles: a mistake in
+/// the loop's localisation must not hide itself by dropping the same moves here.
 class MachinedSolidOracle {
 public:
     /// @param stock the stock box; the program's moves are taken from `path`, their tools from

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,7 +24,8 @@ struct StudyOptions {
     std::size_t maxVertices = 20000;
     /// Random points (fixed seed) for the lost and invented material counts.
     std::size_t samplePoints = 100000;
-    /// When set, a PLY mesh coloured by deviation is written per run into this folder.
+    /// When set, a PLY mesh coloured by deviation is written per run into this folder (made if
+    /// missing).
     std::string plyDeviationDir;
     /// Exact part volume when known (mm^3); otherwise a finer tri-dexel run is the reference.
     std::optional<double> exactVolumeMm3;
@@ -44,9 +46,9 @@ struct StudyRun {
     /// lost or invented, not boundary rounding). Points within one spacing of the stock box's
     /// faces are not counted: every family set rounds the block's own edges alike.
     double lostMm3 = 0.0, inventedMm3 = 0.0, lostFarMm3 = 0.0, inventedFarMm3 = 0.0;
-    double seconds = 0.0;
-    double peakMemoryMb = 0.0;
-    double stockMemoryMb = 0.0;
+    double seconds = 0.0;       ///< the run (cut, rebuild, mesh), not its measurement
+    double peakMemoryMb = 0.0;  ///< peak resident memory the run added to the process (MiB)
+    double stockMemoryMb = 0.0; ///< the tri-dexel stock's own memory (MiB)
 };
 
 struct StudyResult {
@@ -65,8 +67,8 @@ StudyResult runStudy(const StudyOptions& options);
 /// lost_mm3, invented_mm3, lost_far_mm3, invented_far_mm3, seconds, peak_memory_mb, stock_memory_mb.
 std::string studyCsv(const StudyResult& result);
 
-/// @brief A log-log PNG plot of the maximum and RMS deviation against spacing, one line pair per
-/// family set (written atomically).
+/// @brief A log-log PNG plot of the maximum, 95th percentile and RMS deviation against spacing,
+/// one colour per family set (written atomically).
 void writeStudyPlot(const std::string& path, const StudyResult& result);
 
 /// @brief A built-in study case: a program, its tools and stock, made in memory.
