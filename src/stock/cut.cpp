@@ -42,7 +42,7 @@ struct TileSlot {
 /// A tile's contribution to one move's statistics; lengths in mm summed over the tile's dexels.
 struct TileMoveStats {
     std::uint32_t move = 0;  ///< index within the batch
-    std::uint32_t visited = 0, changed = 0;
+    std::uint32_t bounded = 0, visited = 0, changed = 0;
     double removed = 0.0, shank = 0.0;
 };
 
@@ -153,6 +153,7 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                 if (segs.empty() || double(segs[0].lo) > boxHi || double(segs[segs.size - 1].hi) < boxLo)
                     continue;
                 line.origin[ibx] = lattice.coord(axB, ib);
+                ++st.bounded;
                 // Per dexel: a cheap bound of the sweep along this line against its material
                 // (most dexels under a finishing pass were cut down by the moves before).
                 const bool cuts = g.cutting && cutWin.meets(ib, ic, segs);
@@ -189,7 +190,7 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
             }
         }
         if (st.changed > 0) updateExtent(tile, slot);
-        if (st.visited > 0) out.push_back(st);
+        if (st.bounded > 0) out.push_back(st);
     }
 }
 
@@ -299,6 +300,7 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
         for (std::size_t t : active) {
             for (const TileMoveStats& s : tileStats[t]) {
                 MoveStats& ms = result.moves[m0 + s.move];
+                ms.bounded += s.bounded;
                 ms.visited += s.visited;
                 ms.changed += s.changed;
                 ms.removed += s.removed * cell;
@@ -313,6 +315,7 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
     for (std::size_t i = 0; i < nMoves; ++i) {
         const MoveStats& ms = result.moves[i];
         const Move& mv = path.moves[i];
+        result.bounded += ms.bounded;
         result.visited += ms.visited;
         result.changed += ms.changed;
         result.removedVolume += ms.removed;

@@ -142,7 +142,7 @@ TEST_CASE("cut: 1 and N threads give identical results bit for bit", "[stock][cu
                 const CutResult b = cutStock(parallel, path, tools, many);
                 CHECK(sameStock(serial, parallel));
                 REQUIRE(b.moves.size() == a.moves.size());
-                bool same = b.visited == a.visited && b.changed == a.changed && b.removedVolume == a.removedVolume &&
+                bool same = b.bounded == a.bounded && b.visited == a.visited && b.changed == a.changed && b.removedVolume == a.removedVolume &&
                             b.collisions.size() == a.collisions.size();
                 for (std::size_t i = 0; i < a.moves.size(); ++i)
                     same = same && b.moves[i].visited == a.moves[i].visited &&
@@ -252,6 +252,8 @@ TEST_CASE("cut: culling visits few dexels that do not change", "[stock][cut]") {
     const CutResult res = cutStock(stock, path, testTools());
     REQUIRE(res.moves[0].changed > 0);
     CHECK(double(res.moves[0].visited) / double(res.moves[0].changed) < 1.2);
+    CHECK(res.moves[0].bounded >= res.moves[0].visited);
+    CHECK(double(res.moves[0].bounded) / double(res.moves[0].changed) < 1.5);
     // Slot 16 x 4 plus two half disks of radius 2, 2 deep.
     CHECK(res.moves[0].removed == Approx((16.0 * 4.0 + M_PI * 4.0) * 2.0).epsilon(0.03));
 }

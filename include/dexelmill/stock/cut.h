@@ -50,7 +50,10 @@ struct CutOptions {
 
 /// @brief What one move did.
 struct MoveStats {
-    std::uint64_t visited = 0;   ///< dexels whose line was intersected with the move's sweep
+    /// dexels inside the move's box with material there, whose cheap bound (MoveSweep::bound) was
+    /// taken: the work of the localisation itself
+    std::uint64_t bounded = 0;
+    std::uint64_t visited = 0;   ///< dexels whose line was intersected with the move's sweep (exactly)
     std::uint64_t changed = 0;   ///< dexels that lost material
     double removed = 0.0;        ///< material removed (mm^3), mean over the stock's families
     double shankVolume = 0.0;    ///< material met by the shank region (mm^3), mean over families
@@ -74,6 +77,7 @@ struct CutCollision {
 struct CutResult {
     std::vector<MoveStats> moves;
     std::vector<CutCollision> collisions;
+    std::uint64_t bounded = 0;
     std::uint64_t visited = 0;
     std::uint64_t changed = 0;
     double removedVolume = 0.0;
