@@ -172,7 +172,11 @@ StudyResult runStudy(const StudyOptions& o) {
 
             // Surface deviation at an even spread of vertices.
             const std::vector<Vec3> normals = vertexNormals(s.mesh);
-            const std::vector<std::size_t> picked = spreadIndices(s.mesh.vertices.size(), o.maxVertices);
+            // A vertex of degenerate triangles only has no normal to search along: left out.
+            std::vector<std::size_t> picked = spreadIndices(s.mesh.vertices.size(), o.maxVertices);
+            picked.erase(std::remove_if(picked.begin(), picked.end(),
+                                        [&](std::size_t v) { return normals[v] == Vec3(0.0); }),
+                         picked.end());
             std::vector<double> dev(picked.size());
             arena.execute([&] {
                 tbb::parallel_for(tbb::blocked_range<std::size_t>(0, picked.size()), [&](const auto& r) {
@@ -199,14 +203,15 @@ StudyResult runStudy(const StudyOptions& o) {
             }
             if (!o.plyDeviationDir.empty()) {
                 std::vector<double> all(s.mesh.vertices.size(), 0.0);
-                if (picked.size() == all.size()) {
+                if (picked.size() == all.size()) {  // every vertex measured already
                     for (std::size_t i = 0; i < picked.size(); ++i) all[picked[i]] = dev[i];
                 } else {
                     arena.execute([&] {
                         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, all.size()), [&](const auto& r) {
                             for (std::size_t v = r.begin(); v < r.end(); ++v)
-                                all[v] = signedDistanceAlong(*oracle, s.mesh.vertices[v], normals[v],
-                                                             kSearchSpacings * h);
+                                if (normals[v] != Vec3(0.0))
+                                    all[v] = signedDistanceAlong(*oracle, s.mesh.vertices[v], normals[v],
+                                                                 kSearchSpacings * h);
                         });
                     });
                 }
