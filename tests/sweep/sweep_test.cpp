@@ -120,6 +120,9 @@ TEST_CASE("sweep: bull-nose ramp along a z dexel through the path", "[sweep]") {
     REQUIRE(!iv.isEmpty());
     CHECK(iv.lo == Approx(100.0 + floorZ).margin(kEps));
     CHECK(floorZ < -4.0 * 13.0 / 20.0);  // the torus goes deeper than the flat bottom here
+    // The top: the top face (height 20 above the tip, radius 5) is over the dexel from u = 1/4,
+    // where the tip has come down by 1.
+    CHECK(iv.hi == Approx(100.0 + 19.0).margin(kEps));
 }
 
 TEST_CASE("sweep: zero-length move is the static tool", "[sweep]") {
@@ -133,15 +136,18 @@ TEST_CASE("sweep: zero-length move is the static tool", "[sweep]") {
 }
 
 TEST_CASE("sweep: dexel parallel to a tilted tool axis", "[sweep]") {
-    // Axis tilted 30 degrees in the x-z plane, move along y (perpendicular to the axis). A line
-    // along the axis at distance 1 from it (offset along y, within the move) runs the full tool
-    // height, from the tip plane to the top plane.
+    // Axis tilted 30 degrees in the x-z plane, move along y (perpendicular to the axis). Lines
+    // along the axis through the swept axis, and 1 mm from it across the feed, run the full tool
+    // height, from the tip plane to the top plane; one 4 mm from it (past the radius 3) misses.
     const Tool flat = flatEndMill(6.0, {20.0, 20.0});
     const Vec3 n(0.5, 0.0, std::sqrt(3.0) / 2);
     const MoveSweep s(flat, Vec3(0, 0, 0), Vec3(0, 10, 0), n);
     CHECK(s.kind() == SweepKind::Horizontal);
     requireInterval(along(s, Vec3(0, 4, 0) - 50.0 * n, n), 50.0, 70.0);
     requireInterval(along(s, Vec3(0, 4, 0) + 50.0 * n, -n), 30.0, 50.0);
+    const Vec3 across(std::sqrt(3.0) / 2, 0.0, -0.5);  // perpendicular to n and to the feed
+    requireInterval(along(s, Vec3(0, 4, 0) + across - 50.0 * n, n), 50.0, 70.0);
+    CHECK(along(s, Vec3(0, 4, 0) + 4.0 * across - 50.0 * n, n).isEmpty());
     // The box in x: the top face's centre at x = 10 plus 3 cos(30 deg).
     CHECK(s.bounds().hi.x == Approx(10.0 + 3.0 * std::sqrt(3.0) / 2));
     CHECK(s.bounds().lo.x == Approx(-3.0 * std::sqrt(3.0) / 2));
