@@ -67,6 +67,35 @@ double signedDistanceAlong(const MachinedSolidOracle& oracle, const Vec3& p, con
     return in ? -d : d;
 }
 
+/// Distance from a point inside `box` to the nearest of its faces.
+double faceDistance(const Box& box, const Vec3& p) {
+    return std::min({p.x - box.lo.x, box.hi.x - p.x, p.y - box.lo.y, box.hi.y - p.y, p.z - box.lo.z, box.hi.z - p.z});
+}
+
+/// Statistics of signed deviations: largest and 95th percentile of the magnitudes, RMS, mean.
+struct DeviationStats {
+    double max = 0.0, rms = 0.0, p95 = 0.0, mean = 0.0;
+};
+
+DeviationStats deviationStats(const std::vector<double>& dev) {
+    DeviationStats st;
+    if (dev.empty()) return st;
+    std::vector<double> mag(dev.size());
+    double sum2 = 0, sum = 0;
+    for (std::size_t i = 0; i < dev.size(); ++i) {
+        mag[i] = std::abs(dev[i]);
+        sum2 += dev[i] * dev[i];
+        sum += dev[i];
+    }
+    st.max = *std::max_element(mag.begin(), mag.end());
+    st.rms = std::sqrt(sum2 / double(dev.size()));
+    st.mean = sum / double(dev.size());
+    const std::size_t k = mag.size() * 95 / 100;
+    std::nth_element(mag.begin(), mag.begin() + std::ptrdiff_t(k), mag.end());
+    st.p95 = mag[k];
+    return st;
+}
+
 std::vector<std::size_t> spreadIndices(std::size_t count, std::size_t most) {
     std::vector<std::size_t> idx;
     if (count == 0) return idx;
@@ -187,20 +216,16 @@ StudyResult runStudy(const StudyOptions& o) {
                 });
             });
             run.vertices = dev.size();
-            if (!dev.empty()) {
-                std::vector<double> mag(dev.size());
-                double sum2 = 0, sum = 0;
-                for (std::size_t i = 0; i < dev.size(); ++i) {
-                    mag[i] = std::abs(dev[i]);
-                    sum2 += dev[i] * dev[i];
-                    sum += dev[i];
-                }
-                run.devMaxMm = *std::max_element(mag.begin(), mag.end());
-                run.devRmsMm = std::sqrt(sum2 / double(dev.size()));
-                run.devMeanMm = sum / double(dev.size());
-                std::nth_element(mag.begin(), mag.begin() + std::ptrdiff_t(mag.size() * 95 / 100), mag.end());
-                run.devP95Mm = mag[mag.size() * 95 / 100];
-            }
+            const DeviationStats all = deviationStats(dev);
+            run.devMaxMm = all.max, run.devRmsMm = all.rms, run.devP95Mm = all.p95, run.devMeanMm = all.mean;
+            // The same away from the stock box's faces, whose own sharp edges every mesh rounds.
+            const Box& stockBox = s.report.stockBox;
+            std::vector<double> inner;
+            for (std::size_t i = 0; i < picked.size(); ++i)
+                if (faceDistance(stockBox, s.mesh.vertices[picked[i]]) >= h) inner.push_back(dev[i]);
+            run.innerVertices = inner.size();
+            const DeviationStats in = deviationStats(inner);
+            run.innerMaxMm = in.max, run.innerRmsMm = in.rms, run.innerP95Mm = in.p95;
             if (!o.plyDeviationDir.empty()) {
                 std::vector<double> all(s.mesh.vertices.size(), 0.0);
                 if (picked.size() == all.size()) {  // every vertex measured already
@@ -224,7 +249,7 @@ StudyResult runStudy(const StudyOptions& o) {
             // within one spacing of the stock's faces are left out: there every family set's mesh
             // rounds the block's own edges by about h / 2, which says nothing of the machining.
             std::mt19937_64 rng(20261122);
-            const Box box = s.report.stockBox;
+            const Box& box = stockBox;
             std::uniform_real_distribution<double> ux(box.lo.x, box.hi.x), uy(box.lo.y, box.hi.y),
                 uz(box.lo.z, box.hi.z);
             std::vector<Vec3> pts(o.samplePoints);
@@ -237,9 +262,7 @@ StudyResult runStudy(const StudyOptions& o) {
                 tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pts.size()), [&](const auto& r) {
                     for (std::size_t i = r.begin(); i < r.end(); ++i) {
                         const Vec3& p = pts[i];
-                        const double faceDistance = std::min({p.x - box.lo.x, box.hi.x - p.x, p.y - box.lo.y,
-                                                              box.hi.y - p.y, p.z - box.lo.z, box.hi.z - p.z});
-                        if (faceDistance < h) continue;
+                        if (faceDistance(box, p) < h) continue;
                         const bool exact = oracle->inside(p);
                         const double phi = s.levelSet.valueAt(p);
                         const bool model = phi < 0;
@@ -274,14 +297,15 @@ std::string studyCsv(const StudyResult& r) {
     s << std::setprecision(8);
     s << "h_mm,families,vertices,dev_max_mm,dev_rms_mm,dev_p95_mm,dev_max_h,dev_rms_h,dev_p95_h,dev_mean_mm,"
          "volume_mm3,volume_error_mm3,volume_error_rel,lost_mm3,invented_mm3,lost_far_mm3,invented_far_mm3,"
-         "seconds,peak_memory_mb,stock_memory_mb\n";
+         "seconds,peak_memory_mb,stock_memory_mb,inner_vertices,inner_max_mm,inner_rms_mm,inner_p95_mm\n";
     for (const StudyRun& x : r.runs) {
         s << x.h << ',' << x.families << ',' << x.vertices << ',' << x.devMaxMm << ',' << x.devRmsMm << ','
           << x.devP95Mm << ',' << x.devMaxMm / x.h << ',' << x.devRmsMm / x.h << ',' << x.devP95Mm / x.h << ','
           << x.devMeanMm << ',' << x.volumeMm3 << ',' << x.volumeErrorMm3 << ','
           << (r.referenceVolumeMm3 != 0 ? x.volumeErrorMm3 / r.referenceVolumeMm3 : 0.0) << ',' << x.lostMm3 << ','
           << x.inventedMm3 << ',' << x.lostFarMm3 << ',' << x.inventedFarMm3 << ',' << x.seconds << ','
-          << x.peakMemoryMb << ',' << x.stockMemoryMb << '\n';
+          << x.peakMemoryMb << ',' << x.stockMemoryMb << ',' << x.innerVertices << ',' << x.innerMaxMm << ','
+          << x.innerRmsMm << ',' << x.innerP95Mm << '\n';
     }
     return s.str();
 }

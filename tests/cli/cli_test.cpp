@@ -136,7 +136,7 @@ TEST_CASE("a study writes its table, CSV, plot and deviation meshes", "[cli][stu
     const Run r = cli("study --case tilted-slot --resolutions 2,1,2 --families z,xyz --csv s.csv --plot s.png "
                       "--ply-deviation dev --max-vertices 500 --samples 2000 --quiet");
     REQUIRE(r.code == 0);
-    CHECK_THAT(r.out, Contains("dev_max_mm") && Contains("reference volume"));
+    CHECK_THAT(r.out, Contains("inner_max") && Contains("reference volume") && Contains("deviations in mm"));
     // One header and one row per (spacing, family set): the repeated spacing counts once.
     const std::string csv = slurp(cli.dir() / "s.csv");
     CHECK(std::count(csv.begin(), csv.end(), '\n') == 5);
