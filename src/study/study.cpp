@@ -216,8 +216,9 @@ StudyResult runStudy(const StudyOptions& o) {
                 });
             });
             run.vertices = dev.size();
-            const DeviationStats all = deviationStats(dev);
-            run.devMaxMm = all.max, run.devRmsMm = all.rms, run.devP95Mm = all.p95, run.devMeanMm = all.mean;
+            const DeviationStats overall = deviationStats(dev);
+            run.devMaxMm = overall.max, run.devRmsMm = overall.rms, run.devP95Mm = overall.p95;
+            run.devMeanMm = overall.mean;
             // The same away from the stock box's faces, whose own sharp edges every mesh rounds.
             const Box& stockBox = s.report.stockBox;
             std::vector<double> inner;
