@@ -101,8 +101,8 @@ static void BM_SurfaceRebuildAndMesh512(benchmark::State& state) {
     const TriDexelStock& stock = freeformStock();
     double rebuildS = 0.0, meshS = 0.0, peak = 0.0, grid = 0.0, tris = 0.0, active = 0.0;
     for (auto _ : state) {
+        const bool peakOk = resetPeakMemory();  // trims the heap first: read the baseline after it
         const double before = procStatusBytes("VmRSS");
-        const bool peakOk = resetPeakMemory();
         const auto t0 = std::chrono::steady_clock::now();
         LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "bench freeform"});
         const auto t1 = std::chrono::steady_clock::now();
