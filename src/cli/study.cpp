@@ -31,12 +31,15 @@ CLI::App* addStudy(CLI::App& app, StudyArgs& a) {
         "exact machined part (brute-force membership): surface deviation (max, RMS, 95th percentile, in mm\n"
         "and in spacings), volume error, and material lost or invented.");
     addJobOptions(*c, a.job, false);
+    c->get_option("--stock")->description(
+        "box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (mm); the exact part is measured from a box stock only.\n"
+        "Default: the case's or the project's workpiece, else the program's extent.");
     c->add_option("--case", a.caseName, "A built-in case instead of a program: " + names);
     c->add_option("--resolutions", a.resolutions, "Lattice spacings in mm, comma-separated")->capture_default_str();
     c->add_option("--families", a.familySets, "Family sets to compare, comma-separated (z, xyz, x, xy, ...)")
         ->capture_default_str();
     c->add_option("--csv", a.csv, "One row per (spacing, family set)");
-    c->add_option("--plot", a.plot, "Log-log PNG plot of deviation against spacing");
+    c->add_option("--plot", a.plot, "Log-log PNG plot of deviation (away from the stock's faces) against spacing");
     c->add_option("--ply-deviation", a.plyDir, "Folder for PLY meshes coloured by deviation, one per run");
     c->add_option("--max-vertices", a.maxVertices, "Mesh vertices measured per run at most")->capture_default_str();
     c->add_option("--samples", a.samples, "Random points for the lost / invented material counts")
