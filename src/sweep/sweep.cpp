@@ -284,7 +284,7 @@ struct TorusLine {
 ///    turns by cos^2(s) / kappa per unit of psi. The charts meet where |sin psi| = sqrt(kappa)
 ///    |cos psi|, at |cos s| = sqrt(kappa) (about): there s turns by about one unit per unit of
 ///    psi, and the grazing point's climb up the torus as |cos s| falls, rho kappa / cos^2(s) per
-///    unit of s, is below rho. With the charts meeting at 45 degrees instead, a root found to
+///    unit of s, is at most about rho. With the charts meeting at 45 degrees instead, a root found to
 ///    kAngleRoot in psi was off by kAngleRoot / (2 kappa) in s: 2e-6 mm at kappa = 5e-9.
 void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
     const double fd = l.f.x, fn = l.f.z;
