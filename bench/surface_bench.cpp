@@ -10,8 +10,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <fstream>
-#include <string>
 #include <vector>
 
 #include <tbb/parallel_for.h>
@@ -82,13 +80,7 @@ TriDexelStock makeFreeformStock() {
     return stock;
 }
 
-/// A "Vm...:" line of /proc/self/status in bytes (0 if unavailable).
-double procStatusBytes(const std::string& key) {
-    std::ifstream in("/proc/self/status");
-    for (std::string line; std::getline(in, line);)
-        if (line.rfind(key + ":", 0) == 0) return std::stod(line.substr(key.size() + 1)) * 1024.0;
-    return 0.0;
-}
+constexpr double kMiB = 1024.0 * 1024.0;
 
 const TriDexelStock& freeformStock() {
     static const TriDexelStock stock = makeFreeformStock();
@@ -102,12 +94,12 @@ static void BM_SurfaceRebuildAndMesh512(benchmark::State& state) {
     double rebuildS = 0.0, meshS = 0.0, peak = 0.0, grid = 0.0, tris = 0.0, active = 0.0;
     for (auto _ : state) {
         const bool peakOk = resetPeakMemory();  // trims the heap first: read the baseline after it
-        const double before = procStatusBytes("VmRSS");
+        const double before = currentMemoryMb() * kMiB;
         const auto t0 = std::chrono::steady_clock::now();
         LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "bench freeform"});
         const auto t1 = std::chrono::steady_clock::now();
         // Later iterations reuse memory the allocator kept from the first: keep the largest.
-        if (peakOk) peak = std::max(peak, procStatusBytes("VmHWM") - before);
+        if (peakOk) peak = std::max(peak, peakMemoryMb() * kMiB - before);
         Mesh mesh = meshLevelSet(ls);
         const auto t2 = std::chrono::steady_clock::now();
         rebuildS = std::chrono::duration<double>(t1 - t0).count();
