@@ -57,6 +57,12 @@ TEST_CASE("every shared test program runs end to end with a closed mesh", "[job]
         // Programs without tools of their own get a 3 mm flat end mill with long flutes.
         o.defaultTool = flatEndMill(3, {60, 80});
         o.cellsAlongLongestSide = kPointsAlongLongestSide;
+        // The switchkins demos call a subroutine file that LinuxCNC keeps in its remap folder,
+        // which the testdata does not ship: a located error naming the call.
+        if (p.filename().string().find("_switchkins.ngc") != std::string::npos) {
+            CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains("undefined subroutine"));
+            continue;
+        }
         const bool fiveAxis = p.string().find("xyzac") != std::string::npos || p.filename() == "rotation.ngc";
         if (fiveAxis) {
             CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains("not supported yet"));
