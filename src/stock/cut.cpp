@@ -87,6 +87,14 @@ bool reachesMaterial(const SegmentSpan& segs, const Interval& reach) {
     return false;
 }
 
+/// Removes a swept interval from a dexel. The material left at a new end faces the cutter: its
+/// outward normal is the sweep's, reversed.
+double subtractHit(DexelTile& tile, int local, const LineHit& hit) {
+    return tile.subtract(local, toFloat(hit.range.lo), toFloat(hit.range.hi),
+                         PackedNormal::pack(-hit.normalLo, hit.sharpLo),
+                         PackedNormal::pack(-hit.normalHi, hit.sharpHi));
+}
+
 /// Where one sweep can reach in a tile: the dexels its box crosses, and its extent along them
 /// (relative to the lattice origin).
 struct SweepWindow {
@@ -123,7 +131,7 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
     Line line;
     line.dir = axisVector(a);
     line.origin[ia] = originA;
-    Interval parts[MoveSweep::kMaxParts];
+    LineHit parts[MoveSweep::kMaxParts];
 
     for (std::uint32_t m : moves) {
         if (slot.lo > slot.hi) break;  // no material left in the tile
@@ -166,16 +174,15 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                 if (cuts) {
                     const std::size_t n = g.cutting->intersectParts(line, parts);
                     for (std::size_t k = 0; k < n; ++k)
-                        if (!parts[k].isEmpty())
-                            removed += tile.subtract(local, toFloat(parts[k].lo), toFloat(parts[k].hi));
+                        if (!parts[k].isEmpty()) removed += subtractHit(tile, local, parts[k]);
                 }
                 if (shank) {
                     const std::size_t n = g.shank->intersectParts(line, parts);
                     for (std::size_t k = 0; k < n; ++k) {
                         if (parts[k].isEmpty()) continue;
-                        const float lo = toFloat(parts[k].lo), hi = toFloat(parts[k].hi);
+                        const float lo = toFloat(parts[k].range.lo), hi = toFloat(parts[k].range.hi);
                         if (removeShank) {
-                            const double met = tile.subtract(local, lo, hi);
+                            const double met = subtractHit(tile, local, parts[k]);
                             st.shank += met;
                             removed += met;
                         } else {

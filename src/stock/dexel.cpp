@@ -71,7 +71,7 @@ void DexelTile::assign(const std::uint16_t* counts, const Segment* segs) {
     releaseIfEmpty();
 }
 
-double DexelTile::subtract(int local, float lo, float hi) {
+double DexelTile::subtract(int local, float lo, float hi, PackedNormal atLo, PackedNormal atHi) {
     if (offset_.empty() || !(lo < hi)) return 0.0;
     const std::size_t n = count_[local];
     Segment* s = segs_.data() + offset_[local];
@@ -87,8 +87,8 @@ double DexelTile::subtract(int local, float lo, float hi) {
     // What survives of [first, last): a piece left of lo and a piece right of hi.
     Segment keep[2];
     std::size_t nKeep = 0;
-    if (s[first].lo < lo) keep[nKeep++] = {s[first].lo, lo};
-    if (s[last - 1].hi > hi) keep[nKeep++] = {hi, s[last - 1].hi};
+    if (s[first].lo < lo) keep[nKeep++] = {s[first].lo, lo, s[first].nlo, atLo};
+    if (s[last - 1].hi > hi) keep[nKeep++] = {hi, s[last - 1].hi, atHi, s[last - 1].nhi};
     const std::size_t newCount = n - (last - first) + nKeep;
     if (newCount > n) {
         grow(local, newCount);

@@ -42,7 +42,9 @@ TriDexelStock TriDexelStock::fromBox(const Box& box, double h, FamilySet familie
     for (int a = 0; a < 3; ++a) {
         if (!families.has(axisFromIndex(a))) continue;
         DexelFamily& fam = *stock.families3_[a];
-        const Segment full{0.0f, float(box.hi[a] - box.lo[a])};
+        // The box's faces across the family's axis, with their outward normals.
+        const Segment full{0.0f, float(box.hi[a] - box.lo[a]), PackedNormal::pack(-axisVector(axisFromIndex(a))),
+                           PackedNormal::pack(axisVector(axisFromIndex(a)))};
         std::vector<Segment> segs(DexelTile::kDexels, full);
         std::uint16_t counts[DexelTile::kDexels];
         for (int tc = 0; tc < fam.tilesC(); ++tc) {

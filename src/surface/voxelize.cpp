@@ -40,26 +40,40 @@ inline bool ownsEdge(const P2& from, const P2& to) {
 struct Hit {
     double t;
     int dir;  // +1 entering material along the line, -1 leaving
+    std::uint32_t triangle;
 };
 
+/// The outward unit normal of triangle t, turned if need be to point against the line (axis a)
+/// where the line enters the material and along it where it leaves: the triangles of a mesh that
+/// is not consistently oriented can face either way.
+PackedNormal hitNormal(const Mesh& mesh, const Hit& hit, int a, bool entering) {
+    Vec3 n = mesh.areaVector(hit.triangle);
+    if ((n[a] > 0.0) == entering) n = -n;
+    return PackedNormal::pack(n);
+}
+
 /// The segments of one dexel from its crossings; false when the winding did not return to 0.
-bool hitsToSegments(std::vector<Hit>& hits, double len, std::vector<Segment>& segs) {
+bool hitsToSegments(const Mesh& mesh, std::vector<Hit>& hits, double len, int a, std::vector<Segment>& segs) {
     std::sort(hits.begin(), hits.end(), [](const Hit& p, const Hit& q) {
         return p.t < q.t || (p.t == q.t && p.dir < q.dir);
     });
+    const Axis axis = axisFromIndex(a);
     int winding = 0;
-    double start = 0.0;
+    const Hit* start = nullptr;
     for (const Hit& hit : hits) {
         const int before = winding;
         winding += hit.dir;
-        if (before == 0 && winding != 0) start = hit.t;
-        if (before != 0 && winding == 0) detail::appendSegment(segs, start, hit.t, len);
+        if (before == 0 && winding != 0) start = &hit;
+        if (before != 0 && winding == 0)
+            detail::appendSegment(segs, start->t, hit.t, len, axis, hitNormal(mesh, *start, a, true),
+                                  hitNormal(mesh, hit, a, false));
     }
     if (winding == 0) return true;
     // Fall back to parity of the sorted crossings.
     segs.clear();
     for (std::size_t i = 0; i + 1 < hits.size(); i += 2)
-        detail::appendSegment(segs, hits[i].t, hits[i + 1].t, len);
+        detail::appendSegment(segs, hits[i].t, hits[i + 1].t, len, axis, hitNormal(mesh, hits[i], a, true),
+                              hitNormal(mesh, hits[i + 1], a, false));
     return false;
 }
 
@@ -146,7 +160,7 @@ MeshCastStats castMesh(const Mesh& mesh, TriDexelStock& stock) {
                         // Counter-clockwise across the line means the normal points along +a:
                         // the line leaves the solid there.
                         hits[std::size_t(ic - icLo) * fam.nb() + ib].push_back(
-                            {t3 - lat.origin[a], -sigma});
+                            {t3 - lat.origin[a], -sigma, std::uint32_t(t)});
                         ++found;
                     }
                 }
@@ -155,7 +169,7 @@ MeshCastStats castMesh(const Mesh& mesh, TriDexelStock& stock) {
                 for (int ib = 0; ib < fam.nb(); ++ib) {
                     std::vector<Hit>& h = hits[std::size_t(ic - icLo) * fam.nb() + ib];
                     if (h.empty()) continue;
-                    if (!hitsToSegments(h, len, row.at(ib, ic))) ++bad;
+                    if (!hitsToSegments(mesh, h, len, a, row.at(ib, ic))) ++bad;
                 }
             }
             detail::assignTileRow(fam, row);

@@ -21,6 +21,8 @@ constexpr double kCrossingTolerance = 1e-6;
 constexpr double kMinStep = 0.25;
 /// Steps are this fraction of |phi|: phi is a distance estimate, so this cannot jump a crossing.
 constexpr double kStepFactor = 0.8;
+/// Half the width of the central differences that give a crossing's normal, in voxels.
+constexpr double kGradientStep = 0.5;
 
 }  // namespace
 
@@ -73,6 +75,19 @@ TriDexelStock stockFromLevelSet(const LevelSet& levelSet, const Lattice& lattice
                         const Vec3 p = line.at(v);
                         return double(sampler.wsSample(openvdb::Vec3d(p.x, p.y, p.z)));
                     };
+                    // The outward normal at a crossing: the gradient of the interpolated
+                    // field, by central differences half a voxel wide.
+                    auto normalAt = [&](double v) {
+                        const Vec3 p = line.at(v);
+                        Vec3 g;
+                        for (int k = 0; k < 3; ++k) {
+                            openvdb::Vec3d lo(p.x, p.y, p.z), hi = lo;
+                            lo[k] -= kGradientStep * vs;
+                            hi[k] += kGradientStep * vs;
+                            g[k] = double(sampler.wsSample(hi)) - double(sampler.wsSample(lo));
+                        }
+                        return PackedNormal::pack(g);
+                    };
                     std::vector<Segment>& segs = row.at(ib, ic);
                     double v = 0.0, f = phi(v);
                     bool in = f < 0.0;
@@ -90,14 +105,14 @@ TriDexelStock stockFromLevelSet(const LevelSet& levelSet, const Lattice& lattice
                                 ((phi(mid) < 0.0) == in ? lo : hi) = mid;
                             }
                             const double x = 0.5 * (lo + hi);
-                            if (in) detail::appendSegment(segs, start, x, len);
+                            if (in) detail::appendSegment(segs, start, x, len, axis, normalAt(start), normalAt(x));
                             else start = x;
                             in = !in;
                         }
                         v = w;
                         f = g;
                     }
-                    if (in) detail::appendSegment(segs, start, len, len);
+                    if (in) detail::appendSegment(segs, start, len, len, axis, normalAt(start), {});
                 }
             }
             detail::assignTileRow(fam, row);

@@ -880,6 +880,16 @@ std::size_t MoveSweep::intersectParts(const Line& line, Interval* out) const {
     return parts_.size();
 }
 
+std::size_t MoveSweep::intersectParts(const Line& line, LineHit* out) const {
+    const Query q = toLocal(line);
+    for (std::size_t i = 0; i < parts_.size(); ++i) {
+        const Interval iv = intersectLocal(parts_[i], q);
+        out[i] = LineHit{};
+        if (!iv.isEmpty()) out[i].range = {iv.lo + q.vShift, iv.hi + q.vShift};
+    }
+    return parts_.size();
+}
+
 Interval MoveSweep::intersect(const Line& line) const {
     if (parts_.size() == 1) {
         const Query q = toLocal(line);

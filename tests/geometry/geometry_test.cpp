@@ -1,9 +1,12 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/frame.h"
+#include "dexelmill/geometry/packed_normal.h"
 #include "dexelmill/geometry/types.h"
 
 using namespace dexelmill;
@@ -69,4 +72,43 @@ TEST_CASE("parse errors carry file, line, column and the offending text", "[geom
     CHECK(std::string(e.what()) == "part.ngc:12:7: error: bad number: '1.2.3'");
     CHECK(e.where().line == 12);
     CHECK(SourceLocation{"a.apt", 3, 0}.str() == "a.apt:3");
+}
+
+TEST_CASE("packed normals: within the stated angle of the unit vector, flags kept", "[geometry]") {
+    std::mt19937_64 rng(7);
+    std::normal_distribution<double> gauss;
+    double worst = 0.0;
+    auto check = [&](const Vec3& v) {
+        const Vec3 u = glm::normalize(v);
+        const PackedNormal p = PackedNormal::pack(v);
+        REQUIRE(p.present());
+        REQUIRE_FALSE(p.sharp());
+        const Vec3 d = p.unpack();
+        REQUIRE(glm::length(d) == Approx(1.0).epsilon(1e-12));
+        worst = std::max(worst, std::acos(std::clamp(glm::dot(u, d), -1.0, 1.0)));
+    };
+    for (int i = 0; i < 1000000; ++i) check(Vec3(gauss(rng), gauss(rng), gauss(rng)));
+    // The octahedron's vertices and edge midpoints, where the fold meets itself.
+    for (int a = 0; a < 3; ++a)
+        for (double s : {1.0, -1.0}) {
+            Vec3 v(0.0);
+            v[a] = s;
+            check(v);
+            v[(a + 1) % 3] = -s;
+            check(v);
+        }
+    INFO("worst angle " << worst);
+    CHECK(worst <= PackedNormal::kMaxAngleError);
+    // Axis directions come back exactly: the box faces' normals.
+    CHECK(PackedNormal::pack(Vec3(0, 0, -1)).unpack() == Vec3(0, 0, -1));
+    CHECK(PackedNormal::pack(Vec3(1, 0, 0)).unpack() == Vec3(1, 0, 0));
+    // Sharp marks, flips, and "no normal".
+    const PackedNormal s = PackedNormal::pack(Vec3(1, 2, 3), true);
+    CHECK(s.sharp());
+    CHECK(s.flipped().sharp());
+    CHECK(glm::dot(s.flipped().unpack(), glm::normalize(Vec3(-1, -2, -3))) > 1.0 - 1e-7);
+    CHECK_FALSE(s.withSharp(false).sharp());
+    CHECK_FALSE(PackedNormal::pack(Vec3(0.0)).present());
+    CHECK_FALSE(PackedNormal::pack(Vec3(std::nan(""), 0, 1)).present());
+    CHECK(PackedNormal{}.unpack() == Vec3(0.0));
 }

@@ -39,42 +39,66 @@ TEST_CASE("family sets parse and print", "[stock]") {
 
 TEST_CASE("dexel subtraction agrees with a boolean reference model", "[stock]") {
     // The reference: a fine boolean array along one dexel, 1 cell per 1/64 mm, with every
-    // random endpoint on a cell boundary so both models are exact.
+    // random endpoint on a cell boundary so both models are exact. It also records the normal of
+    // every segment end: the box's faces at first, then the normal of the cut that made the end.
+    // A cut from a to b makes an end at a when it splits material there (cells a - 1 and a both
+    // in material before it), and one at b likewise; every other end keeps its normal.
     constexpr int kCells = 64 * 40;
     std::mt19937_64 rng(2024);
     std::uniform_int_distribution<int> cell(0, kCells);
     const Box box{Vec3(0.0), Vec3(40.0, 16.0 * 3, 16.0 * 2)};
     TriDexelStock stock = TriDexelStock::fromBox(box, 1.0, FamilySet::only(Axis::X));
     DexelFamily& fam = stock.family(Axis::X);
-    std::vector<std::vector<bool>> ref(std::size_t(fam.nb() * fam.nc()), std::vector<bool>(kCells, true));
+    const std::size_t dexels = std::size_t(fam.nb() * fam.nc());
+    std::vector<std::vector<bool>> ref(dexels, std::vector<bool>(kCells, true));
+    // endLo[k]: the normal of a segment starting at cell k; endHi[k]: of one ending after cell k.
+    std::vector<std::vector<PackedNormal>> endLo(dexels, std::vector<PackedNormal>(kCells));
+    std::vector<std::vector<PackedNormal>> endHi(dexels, std::vector<PackedNormal>(kCells));
+    for (std::size_t d = 0; d < dexels; ++d) {
+        endLo[d][0] = PackedNormal::pack(Vec3(-1, 0, 0));
+        endHi[d][kCells - 1] = PackedNormal::pack(Vec3(1, 0, 0));
+    }
+    std::normal_distribution<double> gauss;
     for (int op = 0; op < 20000; ++op) {
         const int ib = int(rng() % fam.nb()), ic = int(rng() % fam.nc());
         int a = cell(rng), b = cell(rng);
         if (a > b) std::swap(a, b);
         if (op % 7 == 0) b = std::min(kCells, a + 1 + int(rng() % 3));  // short cuts split dexels
-        auto& r = ref[std::size_t(ib + fam.nb() * ic)];
+        const std::size_t d = std::size_t(ib + fam.nb() * ic);
+        auto& r = ref[d];
+        const PackedNormal atLo = PackedNormal::pack(Vec3(gauss(rng), gauss(rng), gauss(rng)), op % 5 == 0);
+        const PackedNormal atHi = PackedNormal::pack(Vec3(gauss(rng), gauss(rng), gauss(rng)));
+        if (a > 0 && a < kCells && r[a - 1] && r[a]) endHi[d][a - 1] = atLo;
+        if (b > 0 && b < kCells && r[b - 1] && r[b]) endLo[d][b] = atHi;
         int removedCells = 0;
         for (int k = a; k < b; ++k) {
             removedCells += r[k];
             r[k] = false;
         }
-        const double removed = fam.subtract(ib, ic, float(a / 64.0), float(b / 64.0));
+        const double removed = fam.subtract(ib, ic, float(a / 64.0), float(b / 64.0), atLo, atHi);
         REQUIRE(removed == Approx(removedCells / 64.0).margin(1e-9));
     }
     for (int ic = 0; ic < fam.nc(); ++ic) {
         for (int ib = 0; ib < fam.nb(); ++ib) {
-            const auto& r = ref[std::size_t(ib + fam.nb() * ic)];
+            const std::size_t d = std::size_t(ib + fam.nb() * ic);
+            const auto& r = ref[d];
             std::vector<Segment> want;
             for (int k = 0; k < kCells; ++k) {
                 if (!r[k]) continue;
-                if (!want.empty() && want.back().hi == float(k / 64.0)) want.back().hi = float((k + 1) / 64.0);
-                else want.push_back({float(k / 64.0), float((k + 1) / 64.0)});
+                if (!want.empty() && want.back().hi == float(k / 64.0)) {
+                    want.back().hi = float((k + 1) / 64.0);
+                    want.back().nhi = endHi[d][k];
+                } else {
+                    want.push_back({float(k / 64.0), float((k + 1) / 64.0), endLo[d][k], endHi[d][k]});
+                }
             }
             const SegmentSpan got = fam.segments(ib, ic);
             REQUIRE(got.size == want.size());
             for (std::size_t s = 0; s < want.size(); ++s) {
                 CHECK(got[s].lo == want[s].lo);
                 CHECK(got[s].hi == want[s].hi);
+                CHECK(got[s].nlo == want[s].nlo);
+                CHECK(got[s].nhi == want[s].nhi);
             }
         }
     }
@@ -96,11 +120,13 @@ TEST_CASE("a box stock: one segment per dexel, equal volumes, inside everywhere"
     CHECK(l.dir == Vec3(0, 1, 0));
 }
 
-TEST_CASE("memory: one-segment dexels cost at most 16 bytes, empty tiles almost nothing", "[stock]") {
+TEST_CASE("memory: one-segment dexels cost at most 24 bytes, empty tiles almost nothing", "[stock]") {
+    // A segment is two float ends and two packed normals (16 bytes); a dexel adds its offset (4)
+    // and count (2), and a share of the tile header.
     TriDexelStock s = TriDexelStock::fromBox(Box{Vec3(0.0), Vec3(256.0)}, 1.0);
     const double perDexel = double(s.memoryBytes()) / double(s.dexelCount());
     INFO("bytes per one-segment dexel: " << perDexel);
-    CHECK(perDexel <= 16.0);
+    CHECK(perDexel <= 24.0);
     // Empty every z dexel: the tiles release their arrays.
     DexelFamily& z = s.family(Axis::Z);
     for (int ic = 0; ic < z.nc(); ++ic)

@@ -46,6 +46,21 @@ struct Line {
     Vec3 at(double v) const { return origin + v * dir; }
 };
 
+/// @brief The stretch of a line inside a solid with the solid's Hermite data at its ends: the
+/// interval of line parameters, and the solid's outward unit normal where the line enters (lo) and
+/// leaves (hi). An end on an edge or corner of the solid, where it has no single normal, is marked
+/// sharp, and its normal is then one from the edge's normal cone. An end whose normal is unknown
+/// has the zero vector. Empty when the range is.
+struct LineHit {
+    Interval range;
+    Vec3 normalLo{0.0};
+    Vec3 normalHi{0.0};
+    bool sharpLo = false;
+    bool sharpHi = false;
+
+    bool isEmpty() const { return range.isEmpty(); }
+};
+
 /// @brief An axis-aligned box. Empty when any lo > hi; the default is empty.
 struct Box {
     Vec3 lo{std::numeric_limits<double>::infinity()};

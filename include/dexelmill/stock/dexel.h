@@ -5,24 +5,31 @@
 /// Storage (docs/architecture.md): a family's dexels are grouped in tiles of kTile x kTile. A tile
 /// keeps every segment of its dexels in one contiguous array, with an offset per dexel (its
 /// capacity is the distance to the next offset) and a count. Endpoints are float, in mm along the
-/// ray, relative to the lattice origin: that is 8 bytes a segment, so a one-segment dexel costs 14
-/// bytes plus a share of the tile's fixed overhead. Floats hold about 7 significant digits: 1e-4 mm
-/// at 1.7 m from the origin, well below any practical lattice spacing. A tile with no material
-/// frees its arrays, so empty regions cost only the tile header.
+/// ray, relative to the lattice origin, each with the material's outward surface normal there
+/// packed in 32 bits (PackedNormal: the Hermite data the mesher places the surface with). That is
+/// 16 bytes a segment, so a one-segment dexel costs 22 bytes plus a share of the tile's fixed
+/// overhead. Floats hold about 7 significant digits: 1e-4 mm at 1.7 m from the origin, well below
+/// any practical lattice spacing. A tile with no material frees its arrays, so empty regions cost
+/// only the tile header.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "dexelmill/geometry/packed_normal.h"
 #include "dexelmill/stock/lattice.h"
 
 namespace dexelmill {
 
-/// @brief A material segment [lo, hi] along a dexel, mm relative to the lattice origin.
+/// @brief A material segment [lo, hi] along a dexel, mm relative to the lattice origin, with the
+/// material's outward unit normal at each end (pointing against the dexel's axis at lo, along it
+/// at hi, as a rule).
 struct Segment {
     float lo = 0.0f;
     float hi = 0.0f;
+    PackedNormal nlo;
+    PackedNormal nhi;
 };
 
 /// @brief A read-only view of a dexel's segments.
@@ -50,7 +57,10 @@ public:
     /// all segments concatenated in dexel order. Sorted and disjoint per dexel.
     void assign(const std::uint16_t* counts, const Segment* segs);
     /// @brief Removes [lo, hi] from a dexel. Returns the length of material removed (mm).
-    double subtract(int local, float lo, float hi);
+    /// A segment end the cut makes at lo takes the normal `atLo`, one made at hi takes `atHi`: the
+    /// outward normals of the material left there (the cutter's own, reversed). Ends that survive
+    /// keep theirs.
+    double subtract(int local, float lo, float hi, PackedNormal atLo = {}, PackedNormal atHi = {});
     /// @brief True when no dexel holds material.
     bool empty() const { return offset_.empty(); }
     /// @brief Sum of segment lengths (mm).
@@ -99,8 +109,8 @@ public:
     void setSegments(int ib, int ic, const Segment* segs, std::size_t count) {
         tile(ib / kTile, ic / kTile).setSegments(localIndex(ib, ic), segs, count);
     }
-    double subtract(int ib, int ic, float lo, float hi) {
-        return tile(ib / kTile, ic / kTile).subtract(localIndex(ib, ic), lo, hi);
+    double subtract(int ib, int ic, float lo, float hi, PackedNormal atLo = {}, PackedNormal atHi = {}) {
+        return tile(ib / kTile, ic / kTile).subtract(localIndex(ib, ic), lo, hi, atLo, atHi);
     }
     /// @brief Sum of all segment lengths (mm).
     double materialLength() const;

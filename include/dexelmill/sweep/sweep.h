@@ -118,6 +118,13 @@ public:
     /// @brief One interval per convex part, written to `out[0 .. partCount())`; empty ones included.
     /// @return partCount().
     std::size_t intersectParts(const Line& line, Interval* out) const;
+    /// @brief As intersectParts, with the Hermite data of each interval: the swept volume's outward
+    /// unit normal at both ends (LineHit). An end on a smooth piece of the envelope takes that
+    /// piece's normal: the tool's surface normal at the contact point. An end on a crease of the
+    /// swept part (a rim of the static tool, where two of its faces meet at an angle) is marked
+    /// sharp, with a normal from the crease's normal cone.
+    /// @return partCount().
+    std::size_t intersectParts(const Line& line, LineHit* out) const;
     /// @brief The swept material along `line`: the parts' intervals united, sorted, non-empty.
     std::vector<Interval> intersectAll(const Line& line) const;
     /// @brief A cheap interval of `line` (unit direction) that holds every part's interval: the

@@ -41,17 +41,29 @@ inline void assignTileRow(DexelFamily& fam, TileRowSegments& row) {
     }
 }
 
-/// @brief Appends [lo, hi] (clipped to [0, len]) to sorted segments, merging a touching one.
-inline void appendSegment(std::vector<Segment>& segs, double lo, double hi, double len) {
-    lo = std::max(lo, 0.0);
-    hi = std::min(hi, len);
+/// @brief Appends [lo, hi] (clipped to [0, len]) to sorted segments of a dexel along axis a, with
+/// the material's outward normals nlo and nhi at its ends, merging a touching one. An end on or
+/// clipped to the lattice's cell box takes the box face's normal.
+inline void appendSegment(std::vector<Segment>& segs, double lo, double hi, double len, Axis a,
+                          PackedNormal nlo, PackedNormal nhi) {
+    if (lo <= 0.0) {
+        lo = 0.0;
+        nlo = PackedNormal::pack(-axisVector(a));
+    }
+    if (hi >= len) {
+        hi = len;
+        nhi = PackedNormal::pack(axisVector(a));
+    }
     const float flo = float(lo), fhi = float(hi);
     if (!(fhi > flo)) return;
     if (!segs.empty() && segs.back().hi >= flo) {
-        segs.back().hi = std::max(segs.back().hi, fhi);
+        if (fhi > segs.back().hi) {
+            segs.back().hi = fhi;
+            segs.back().nhi = nhi;
+        }
         return;
     }
-    segs.push_back({flo, fhi});
+    segs.push_back({flo, fhi, nlo, nhi});
 }
 
 }  // namespace dexelmill::detail
