@@ -40,6 +40,11 @@ struct MeshCheck {
     std::size_t degenerateTriangles = 0;  ///< repeated index or (numerically) zero area
     std::size_t invalidIndices = 0;       ///< triangles with an index past the vertex list
     std::size_t unusedVertices = 0;       ///< vertices no triangle uses (allowed, reported)
+    /// Triangles facing against their own vertices: (b - a) x (c - a) has a negative dot product
+    /// with the sum of the three vertex normals, each the area-weighted mean direction of the
+    /// triangles around the vertex, of unit length. A fold shows as a dark crease in a picture and turns the
+    /// surface inside out locally.
+    std::size_t foldedTriangles = 0;
     double signedVolume = 0.0;            ///< mm^3, positive for outward-facing triangles
     double area = 0.0;                    ///< mm^2
 
@@ -48,14 +53,24 @@ struct MeshCheck {
         return boundaryEdges == 0 && nonManifoldEdges == 0 && misorientedEdges == 0 &&
                invalidIndices == 0 && triangleCount > 0;
     }
-    /// @brief closedManifold() and no degenerate triangles.
-    bool ok() const { return closedManifold() && degenerateTriangles == 0; }
+    /// @brief closedManifold(), no degenerate and no folded triangles.
+    bool ok() const { return closedManifold() && degenerateTriangles == 0 && foldedTriangles == 0; }
 };
 
-/// @brief Checks a mesh: edge manifoldness and orientation, degenerate triangles, volume, area.
+/// @brief Checks a mesh: edge manifoldness and orientation, degenerate and folded triangles,
+/// volume, area.
 /// A triangle is degenerate when two of its indices are equal or when |(b-a) x (c-a)| is at most
 /// tol::kDegenerateTriangle times its longest squared edge (a needle or a sliver of zero area).
 MeshCheck checkMesh(const Mesh& mesh);
+/// @brief checkMesh, also listing (in index order) the triangles foldedTriangles(mesh, minCosine)
+/// would: a mesher's check and its list of triangles to repair, in one pass.
+MeshCheck checkMesh(const Mesh& mesh, double minCosine, std::vector<std::uint32_t>& nearlyFolded);
+
+/// @brief The triangles checkMesh counts as folded, in index order (none if an index is invalid);
+/// with `minCosine` > 0 also those that face their vertices' normals at a cosine below it (which
+/// rounding the vertices to float, as mesh files do, might fold) and the degenerate ones: the
+/// triangles a mesher should repair.
+std::vector<std::uint32_t> foldedTriangles(const Mesh& mesh, double minCosine = 0.0);
 
 /// @brief The signed volume enclosed by the mesh (divergence theorem), mm^3.
 double meshVolume(const Mesh& mesh);
