@@ -349,28 +349,31 @@ private:
         bool in[kPad];
         // LeafNode offset of (x, y, z) within the leaf: x * 64 + y * 8 + z.
         constexpr int kStride[3] = {kLeafDim * kLeafDim, kLeafDim, 1};
+        // The padding ring is needed only to see the neighbours across a missing axis.
+        const int ring = axisCount_ < 3 ? 1 : 0;
+        const double minDistance = kMinDistance * h_;
         for (int ai = 0; ai < axisCount_; ++ai) {
             const int a = axes_[ai], b = (a + 1) % 3, c = (a + 2) % 3;
             const DexelFamily& fam = stock_.family(axisFromIndex(a));
-            for (int v = -1; v <= kLeafDim; ++v) {
-                for (int u = -1; u <= kLeafDim; ++u) {
+            for (int v = -ring; v < kLeafDim + ring; ++v) {
+                for (int u = -ring; u < kLeafDim + ring; ++u) {
                     const int ib = o[b] + u, ic = o[c] + v;
                     SegmentSpan segs;
                     if (ib >= 0 && ib < fam.nb() && ic >= 0 && ic < fam.nc())
                         segs = fam.segments(ib, ic);
-                    scanDexel(segs, o[a] - 1, h_, dist, in, kPad);
+                    scanDexel(segs, o[a] - ring, h_, dist, in, kLeafDim + 2 * ring);
                     const bool inner = u >= 0 && u < kLeafDim && v >= 0 && v < kLeafDim;
                     int q[3];
                     q[b] = u;
                     q[c] = v;
-                    for (int m = -1; m <= kLeafDim; ++m) {
+                    for (int m = -ring; m < kLeafDim + ring; ++m) {
                         q[a] = m;
                         const int pi = padIndex(q[0], q[1], q[2]);
-                        votes[pi] += in[m + 1];
-                        if (ai == 0) first[pi] = in[m + 1];
+                        votes[pi] += in[m + ring];
+                        if (ai == 0) first[pi] = in[m + ring];
                         if (!inner || m < 0 || m >= kLeafDim) continue;
                         const int off = u * kStride[b] + v * kStride[c] + m * kStride[a];
-                        const double d = std::max(dist[m + 1], kMinDistance * h_);
+                        const double d = std::max(dist[m + ring], minDistance);
                         if (d <= cutoff_) invSq[off] += float(1.0 / (d * d));
                     }
                 }
@@ -406,7 +409,7 @@ private:
         bool any = false;
         const float w2 = float(1.0 / (width_ * width_));
         for (int off = 0; off < kSize; ++off) {
-            const int x = off / (kLeafDim * kLeafDim), y = (off / kLeafDim) % kLeafDim, z = off % kLeafDim;
+            const int x = off >> (2 * kLeafLog2), y = (off >> kLeafLog2) & (kLeafDim - 1), z = off & (kLeafDim - 1);
             const bool inside = insideAt(padIndex(x, y, z));
             const float s = inside ? -1.0f : 1.0f;
             if (invSq[off] > w2) {
