@@ -1,0 +1,55 @@
+/// @file contour.h
+/// @brief The machined surface as a closed triangle mesh placed by the stock's Hermite data: the
+/// exact dexel crossings and the normals kept with them. This header does not include OpenVDB.
+#pragma once
+
+#include <cstddef>
+
+#include "dexelmill/stock/tridexel.h"
+#include "dexelmill/surface/levelset.h"
+#include "dexelmill/surface/mesh.h"
+
+namespace dexelmill {
+
+/// @brief Options of contourStock.
+struct ContourOptions {
+    /// Merging of flat regions, from 0 (every cell keeps its vertices) to 1 (triangles within 15
+    /// degrees of each other merge, moving the surface by at most 0.05 h); in between both limits
+    /// scale (mergeFlatRegions).
+    double adaptivity = 0.0;
+    /// Normals of one patch closer than this angle (radians) count as one smooth surface; a wider
+    /// spread resolves a sharp edge (two planes) or corner (three) at the point that fits the
+    /// crossings' tangent planes best.
+    double featureAngle = 0.6;
+};
+
+/// @brief What contourStock did.
+struct ContourStats {
+    std::size_t cells = 0;           ///< lattice cells the surface crosses
+    std::size_t patches = 0;         ///< surface patches (one vertex each)
+    std::size_t crossings = 0;       ///< edge crossings (one vertex each)
+    std::size_t exactCrossings = 0;  ///< of which dexel endpoints (the rest: interpolated)
+    std::size_t edgeVertices = 0;    ///< patch vertices placed on a sharp edge
+    std::size_t cornerVertices = 0;  ///< patch vertices placed on a sharp corner
+    std::size_t pulledBack = 0;      ///< patch vertices moved towards their loop to avoid a fold
+    std::size_t flipped = 0;         ///< chords flipped to run along a crease
+    std::size_t merged = 0;          ///< vertices merged away in flat regions (adaptivity)
+    MeshCheck check;                 ///< checkMesh of the mesh returned
+};
+
+/// @brief Contours the stock's level set with the stock's Hermite data.
+///
+/// The level set says which lattice cells the surface crosses (the signs at their corners); each
+/// cell edge with a sign change lies on a dexel, whose endpoint there is the exact crossing, with
+/// the material's normal. In each cell the crossings form loops, one per sheet of surface in the
+/// cell (the patches of marching cubes, with the asymptotic decider on ambiguous faces, so that
+/// neighbouring cells agree). Each patch gets one vertex inside its cell, where the tangent
+/// planes at its crossings meet best (a quadric error function solved by a truncated SVD, as in
+/// dual contouring, Ju et al. 2002), and is triangulated as a fan from that vertex to its
+/// crossings (as in extended marching cubes, Kobbelt et al. 2001). The mesh is closed and
+/// consistently oriented by construction; its vertices on cell edges are the exact crossings.
+/// @throw Error if the level set holds no grid or was not rebuilt from this stock's lattice.
+Mesh contourStock(const LevelSet& levelSet, const TriDexelStock& stock, const ContourOptions& options = {},
+                  ContourStats* stats = nullptr);
+
+}  // namespace dexelmill

@@ -1,0 +1,828 @@
+// Contouring a stock's level set with its Hermite data (contour.h).
+//
+// The work is split by OpenVDB leaf blocks (8^3 lattice points), in passes that each run in
+// parallel over the blocks and write to disjoint places, so the mesh is the same for any thread
+// count:
+//  1. count: per block, from the signs of the grid's values (read bit-parallel, a row of 9 bits
+//     along z at a time), the crossings on the edges its points own (the edge from a point along
+//     +x, +y or +z), and the configuration of every cell whose lower corner it holds and that the
+//     surface crosses (a mixed cell), with its patches and triangles;
+//  2. crossings: each owned crossing's position goes to the mesh, its normal to a side array;
+//  3. patches: each patch's vertex from its crossings (quadric error function);
+//  4. triangles: each patch's fan, with chords flipped along creases;
+//  5. folds: patch vertices of folded triangles are pulled back towards their loops.
+// Passes 2 to 4 read only what pass 1 stored per block: bit masks with prefix counts, which turn a
+// lattice point or cell into a mesh index, and the mixed cells' configurations.
+#include "dexelmill/surface/contour.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include <Eigen/Eigenvalues>
+#include <openvdb/openvdb.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "dexelmill/error.h"
+#include "dexelmill/geometry/packed_normal.h"
+#include "dexelmill/surface/levelset_vdb.h"
+#include "dexelmill/surface/simplify.h"
+#include "surface/detail/cell_table.h"
+
+namespace dexelmill {
+
+namespace {
+
+using detail::CellPatches;
+using openvdb::Coord;
+
+constexpr int kDim = 8;                      // OpenVDB leaf blocks are 8^3 lattice points
+constexpr int kCells = kDim * kDim * kDim;   // cells (by lower corner) per block
+static_assert(openvdb::FloatTree::LeafNodeType::DIM == kDim, "FloatTree leaves must be 8^3");
+
+/// A crossing is kept at least this fraction of h away from the lattice points at its edge's
+/// ends, so that crossings on different edges never coincide (a surface through a lattice point
+/// crosses all its edges there) and stay distinct after rounding to float in a mesh file. It moves
+/// a crossing by at most this much.
+constexpr double kCornerGap = 1e-3;
+
+/// A crossing this far (in h) on the material side of another's tangent plane reveals a convex
+/// crease. Well above the packed normals' error (1.3e-4 rad over at most sqrt(3) h: 2.3e-4 h), so
+/// a smooth concave patch never shows one.
+constexpr double kConvexGap = 1e-3;
+
+/// A triangle whose normal makes a cosine below this with the sum of its vertices' normals is
+/// treated as folded and repaired: rounding vertices to float (relative 6e-8, so 1e-4 mm at
+/// 1.7 m) turns a triangle h = 0.1 mm across by 1e-3 rad at most, below this margin.
+constexpr double kFoldMargin = 1e-2;
+
+/// Rounds of fold repair; after the last a patch vertex that still folds sits on its mass point.
+constexpr int kPullRounds = 8;
+
+/// Adaptivity 1 merges flat regions whose normals stay within this angle (15 degrees) and whose
+/// vertices stay within this fraction of h of the merged surface; smaller adaptivities scale both.
+constexpr double kMergeAngle = 0.2617993877991494;
+constexpr double kMergeDistance = 0.05;
+
+/// floor(i / 8) for negative i too.
+inline int blockOf(int i) { return i >> 3; }
+
+/// Local offset of a point in its block: x * 64 + y * 8 + z (OpenVDB's leaf order).
+inline int localOffset(int x, int y, int z) { return ((x & 7) << 6) | ((y & 7) << 3) | (z & 7); }
+
+/// Set bits of a word (a few shifts and adds, without the instruction older x86-64 CPUs lack).
+inline int popcount(std::uint64_t x) {
+    x = x - ((x >> 1) & 0x5555555555555555ull);
+    x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+    x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0full;
+    return int((x * 0x0101010101010101ull) >> 56);
+}
+
+inline int popcountBelow(std::uint64_t word, int bit) {
+    return popcount(word & ((std::uint64_t(1) << bit) - 1));
+}
+
+/// Per block: what it owns, and where its parts start in the mesh.
+struct Block {
+    Coord origin;
+    /// Whether each of the block's points is in material (bit = local offset).
+    std::uint64_t inside[8] = {};
+    /// Owned crossings: bit (axis * 512 + offset) for the edge from the point at `offset` along
+    /// the axis; and the crossings in the words before each word.
+    std::uint64_t owned[24] = {};
+    std::uint16_t ownedBefore[24] = {};
+    /// Cells (by lower corner) with surface in them; the mixed cells in the words before each.
+    std::uint64_t mixed[8] = {};
+    std::uint16_t mixedBefore[8] = {};
+    /// Per mixed cell in rank order: its corners in material (low byte) and its ambiguous faces
+    /// whose inside corners are joined (high byte).
+    std::vector<std::uint16_t> config;
+    /// Patches of the mixed cells before the n-th one, and in all (one more entry).
+    std::vector<std::uint16_t> patchBefore;
+    std::uint32_t crossings = 0, patches = 0, triangles = 0;
+    std::uint32_t crossingBase = 0, patchBase = 0, triangleBase = 0;
+
+    int rankOf(int off) const { return mixedBefore[off >> 6] + popcountBelow(mixed[off >> 6], off & 63); }
+    const CellPatches& patchesOf(int rank) const {
+        const std::uint16_t c = config[std::size_t(rank)];
+        return detail::cellPatches(std::uint8_t(c & 0xff), std::uint8_t(c >> 8));
+    }
+};
+
+/// A surface crossing on a lattice edge.
+struct Crossing {
+    Vec3 p{0.0};
+    PackedNormal n;  ///< the material's outward normal; absent when unknown
+    bool exact = false;
+};
+
+/// The face of a cell holding both of two of its edges (they are two edges of one face).
+int faceOfEdges(int e0, int e1) {
+    for (int face = 0; face < detail::kCellFaces; ++face) {
+        const std::array<int, 4> k = detail::faceCorners(face);
+        int found = 0;
+        for (int i = 0; i < 4; ++i) {
+            const int c0 = k[i], c1 = k[(i + 1) % 4];
+            for (int e : {e0, e1}) {
+                const int a = detail::edgeCorner(e, 0), b = detail::edgeCorner(e, 1);
+                if ((a == c0 && b == c1) || (a == c1 && b == c0)) ++found;
+            }
+        }
+        if (found == 2) return face;
+    }
+    return -1;
+}
+
+/// The same physical edge seen from the neighbour across `face`: the edge's index there.
+int edgeAcross(int edge, int face) {
+    const int a = face >> 1;
+    int c0 = detail::edgeCorner(edge, 0), c1 = detail::edgeCorner(edge, 1);
+    c0 ^= 1 << a;
+    c1 ^= 1 << a;
+    for (int e = 0; e < detail::kCellEdges; ++e) {
+        const int x = detail::edgeCorner(e, 0), y = detail::edgeCorner(e, 1);
+        if ((x == c0 && y == c1) || (x == c1 && y == c0)) return e;
+    }
+    return -1;
+}
+
+struct EdgeTables {
+    std::int8_t face[detail::kCellEdges][detail::kCellEdges];
+    std::int8_t across[detail::kCellEdges][detail::kCellFaces];
+    EdgeTables() {
+        for (int i = 0; i < detail::kCellEdges; ++i) {
+            for (int j = 0; j < detail::kCellEdges; ++j) face[i][j] = std::int8_t(i == j ? -1 : faceOfEdges(i, j));
+            for (int f = 0; f < detail::kCellFaces; ++f) across[i][f] = std::int8_t(edgeAcross(i, f));
+        }
+    }
+};
+
+const EdgeTables& edgeTables() {
+    static const EdgeTables t;
+    return t;
+}
+
+/// Where each edge of a cell starts (offset of its lower corner) and which axis it runs along.
+struct EdgeStart {
+    int dx, dy, dz, axis;
+};
+
+const std::array<EdgeStart, detail::kCellEdges>& edgeStarts() {
+    static const std::array<EdgeStart, detail::kCellEdges> t = [] {
+        std::array<EdgeStart, detail::kCellEdges> out{};
+        for (int e = 0; e < detail::kCellEdges; ++e) {
+            const int c = detail::edgeCorner(e, 0);
+            out[std::size_t(e)] = {c & 1, (c >> 1) & 1, (c >> 2) & 1, detail::edgeAxis(e)};
+        }
+        return out;
+    }();
+    return t;
+}
+
+class Contourer {
+public:
+    Contourer(const openvdb::FloatGrid& grid, const TriDexelStock& stock, const ContourOptions& options)
+        : grid_(grid), stock_(stock), lattice_(stock.lattice()), h_(lattice_.h) {
+        const double half = 0.5 * options.featureAngle;
+        singular_ = std::tan(half) * std::tan(half);
+        if (!(options.adaptivity >= 0.0 && options.adaptivity <= 1.0))
+            throw Error("contouring: adaptivity must lie in [0, 1], got " + std::to_string(options.adaptivity));
+        adaptivity_ = options.adaptivity;
+    }
+
+    Mesh run(ContourStats& stats) {
+        findBlocks();
+        countPass();
+        // Prefix sums: crossings first, then patch vertices, in block order.
+        std::uint64_t crossings = 0, patches = 0, triangles = 0, cells = 0;
+        for (Block& b : blocks_) {
+            b.crossingBase = std::uint32_t(crossings);
+            crossings += b.crossings;
+        }
+        for (Block& b : blocks_) {
+            b.patchBase = std::uint32_t(crossings + patches);
+            patches += b.patches;
+            b.triangleBase = std::uint32_t(triangles);
+            triangles += b.triangles;
+            cells += b.config.size();
+        }
+        if (crossings + patches > std::numeric_limits<std::uint32_t>::max() ||
+            triangles > std::numeric_limits<std::uint32_t>::max())
+            throw Error("contouring: the mesh would have more than 2^32 vertices or triangles; use a larger spacing");
+        mesh_.vertices.resize(crossings + patches);
+        mesh_.triangles.resize(triangles);
+        crossingNormal_.resize(crossings);
+        feature_.assign(patches, 0);
+        patchVertexBase_ = std::uint32_t(crossings);
+
+        std::atomic<std::size_t> exact{0}, edges{0}, corners{0}, flipped{0};
+        forSurfaceBlocks([&](std::size_t i) { crossingPass(i, exact); });
+        forSurfaceBlocks([&](std::size_t i) { patchPass(i, edges, corners); });
+        forSurfaceBlocks([&](std::size_t i) { flipPass(i, flipped); });
+        stats.cells = cells;
+        stats.crossings = crossings;
+        stats.patches = patches;
+        stats.exactCrossings = exact;
+        stats.edgeVertices = edges;
+        stats.cornerVertices = corners;
+        stats.flipped = flipped;
+        // Triangles that fold, nearly fold or have no area have their patch vertices pulled back.
+        std::vector<std::uint32_t> folded;
+        stats.check = checkMesh(mesh_, kFoldMargin, folded);
+        bool changed = false;
+        if (!folded.empty()) {
+            stats.pulledBack = repairFolds(folded);
+            changed = true;
+        }
+        if (adaptivity_ > 0.0) {
+            FlatMergeOptions merge;
+            merge.maxAngle = adaptivity_ * kMergeAngle;
+            merge.maxDistance = adaptivity_ * kMergeDistance * h_;
+            stats.merged = mergeFlatRegions(mesh_, merge);
+            changed = true;
+        }
+        if (changed) stats.check = checkMesh(mesh_);
+        return std::move(mesh_);
+    }
+
+private:
+    // ------------------------------------------------------------------ blocks
+
+    /// The blocks holding a cell's lower corner that may have surface: every grid leaf, and the
+    /// blocks below one (a cell at a block's upper faces reaches into the next block). Cells with
+    /// all corners in tiles have one sign: the flood fill puts leaves between inside and outside.
+    void findBlocks() {
+        std::vector<std::uint64_t> keys;
+        for (auto leaf = grid_.tree().cbeginLeaf(); leaf; ++leaf) {
+            const Coord o = leaf->origin();
+            for (int d = 0; d < 8; ++d)
+                keys.push_back(blockKey(o.offsetBy(-kDim * (d & 1), -kDim * ((d >> 1) & 1), -kDim * ((d >> 2) & 1))));
+        }
+        std::sort(keys.begin(), keys.end());
+        keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+        blocks_.resize(keys.size());
+        for (std::size_t i = 0; i < keys.size(); ++i) blocks_[i].origin = blockOrigin(keys[i]);
+        keys_ = std::move(keys);
+    }
+
+    static constexpr std::int64_t kKeyBias = std::int64_t(1) << 20;
+    static std::uint64_t blockKey(const Coord& origin) {
+        return (std::uint64_t(blockOf(origin.x()) + kKeyBias) << 42) | (std::uint64_t(blockOf(origin.y()) + kKeyBias) << 21) |
+               std::uint64_t(blockOf(origin.z()) + kKeyBias);
+    }
+    static Coord blockOrigin(std::uint64_t key) {
+        const int mask = (1 << 21) - 1;
+        return Coord(kDim * (int((key >> 42) & mask) - int(kKeyBias)), kDim * (int((key >> 21) & mask) - int(kKeyBias)),
+                     kDim * (int(key & mask) - int(kKeyBias)));
+    }
+    /// The block holding lattice point p; it exists for every point this code asks about (the
+    /// lower corner of a mixed cell, or of one of its edges with a crossing).
+    const Block& blockAt(const Coord& p) const {
+        const std::uint64_t key = blockKey(p);
+        return blocks_[std::size_t(std::lower_bound(keys_.begin(), keys_.end(), key) - keys_.begin())];
+    }
+
+    /// The blocks around one block (3 x 3 x 3, null where there is none), so that the lookups
+    /// of its cells and their neighbours need no search.
+    struct Around {
+        Coord origin;
+        const Block* near[27] = {};
+        const Block& at(const Coord& p) const {
+            const int i = (blockOf(p.x() - origin.x() + kDim) * 3 + blockOf(p.y() - origin.y() + kDim)) * 3 +
+                          blockOf(p.z() - origin.z() + kDim);
+            return *near[i];
+        }
+    };
+
+    Around around(const Block& b) const {
+        Around a;
+        a.origin = b.origin;
+        for (int i = 0; i < 27; ++i) {
+            const std::uint64_t key = blockKey(b.origin.offsetBy(kDim * (i / 9 - 1), kDim * (i / 3 % 3 - 1), kDim * (i % 3 - 1)));
+            const auto it = std::lower_bound(keys_.begin(), keys_.end(), key);
+            if (it != keys_.end() && *it == key) a.near[i] = &blocks_[std::size_t(it - keys_.begin())];
+        }
+        return a;
+    }
+
+    /// Calls f(block) in parallel for every block with a crossing or a patch.
+    template <class F>
+    void forSurfaceBlocks(F&& f) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks_.size(), 8), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i < r.end(); ++i)
+                if (blocks_[i].crossings > 0 || blocks_[i].patches > 0) f(i);
+        });
+    }
+
+    // ------------------------------------------------------------------ pass 1: counts
+
+    /// rows[x][y]: bit z set when lattice point origin + (x, y, z) is in material; x, y, z in 0..8.
+    using SignRows = std::uint16_t[kDim + 1][kDim + 1];
+
+    void readSigns(const openvdb::FloatGrid::ConstAccessor& acc, const Coord& origin, SignRows& rows) const {
+        for (auto& r : rows)
+            for (auto& v : r) v = 0;
+        for (int d = 0; d < 8; ++d) {
+            const int dx = d & 1, dy = (d >> 1) & 1, dz = (d >> 2) & 1;
+            const auto* leaf = acc.probeConstLeaf(origin.offsetBy(kDim * dx, kDim * dy, kDim * dz));
+            const float tile = leaf ? 0.0f : acc.getValue(origin.offsetBy(kDim * dx, kDim * dy, kDim * dz));
+            const float* data = leaf ? leaf->buffer().data() : nullptr;
+            const int x0 = dx ? kDim : 0, x1 = dx ? kDim : kDim - 1;
+            const int y0 = dy ? kDim : 0, y1 = dy ? kDim : kDim - 1;
+            const int z0 = dz ? kDim : 0, z1 = dz ? kDim : kDim - 1;
+            for (int x = x0; x <= x1; ++x)
+                for (int y = y0; y <= y1; ++y) {
+                    std::uint16_t bits = 0;
+                    for (int z = z0; z <= z1; ++z)
+                        if ((data ? data[localOffset(x, y, z)] : tile) < 0.0f) bits |= std::uint16_t(1u << z);
+                    rows[x][y] |= bits;
+                }
+        }
+    }
+
+    void countPass() {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks_.size(), 8), [&](const tbb::blocked_range<std::size_t>& r) {
+            const auto acc = grid_.getConstAccessor();
+            SignRows rows;
+            for (std::size_t i = r.begin(); i < r.end(); ++i) countBlock(blocks_[i], acc, rows);
+        });
+    }
+
+    void countBlock(Block& b, const openvdb::FloatGrid::ConstAccessor& acc, SignRows& rows) const {
+        readSigns(acc, b.origin, rows);
+        std::uint16_t any = 0, all = 0x1ff;
+        for (const auto& r : rows)
+            for (std::uint16_t v : r) any |= v, all &= v;
+        if (any == 0 || all == 0x1ff) return;  // one sign everywhere: no surface
+        std::uint32_t patches = 0, triangles = 0;
+        b.config.clear();
+        b.patchBefore.clear();
+        for (int x = 0; x < kDim; ++x) {
+            for (int y = 0; y < kDim; ++y) {
+                const std::uint64_t shift = std::uint64_t(y * kDim);
+                const std::uint16_t r00 = rows[x][y], r10 = rows[x + 1][y], r01 = rows[x][y + 1], r11 = rows[x + 1][y + 1];
+                b.inside[x] |= std::uint64_t(r00 & 0xff) << shift;
+                b.owned[x] |= std::uint64_t((r00 ^ r10) & 0xff) << shift;
+                b.owned[kDim + x] |= std::uint64_t((r00 ^ r01) & 0xff) << shift;
+                b.owned[2 * kDim + x] |= std::uint64_t((r00 ^ (r00 >> 1)) & 0xff) << shift;
+                const std::uint16_t both = r00 & r10 & r01 & r11, either = r00 | r10 | r01 | r11;
+                const std::uint16_t mixed = std::uint16_t(((either | (either >> 1)) & ~(both & (both >> 1))) & 0xff);
+                b.mixed[x] |= std::uint64_t(mixed) << shift;
+            }
+        }
+        // The mixed cells in rank order (offset order), with their configurations.
+        for (int w = 0; w < kCells / 64; ++w) {
+            std::uint64_t word = b.mixed[w];
+            while (word) {
+                const int off = w * 64 + __builtin_ctzll(word);
+                word &= word - 1;
+                const int x = off >> 6, y = (off >> 3) & 7, z = off & 7;
+                std::uint8_t inside = 0;
+                for (int k = 0; k < 8; ++k)
+                    inside |= std::uint8_t(((rows[x + (k & 1)][y + ((k >> 1) & 1)] >> (z + (k >> 2))) & 1u) << k);
+                const std::uint8_t joined = joinedFaces(acc, b.origin.offsetBy(x, y, z), inside);
+                b.config.push_back(std::uint16_t(inside | (joined << 8)));
+                b.patchBefore.push_back(std::uint16_t(patches));
+                const CellPatches& p = detail::cellPatches(inside, joined);
+                patches += p.count;
+                for (int k = 0; k < p.count; ++k) triangles += p.size[k];
+            }
+        }
+        b.patchBefore.push_back(std::uint16_t(patches));
+        std::uint32_t n = 0;
+        for (int w = 0; w < 24; ++w) {
+            b.ownedBefore[w] = std::uint16_t(n);
+            n += std::uint32_t(popcount(b.owned[w]));
+        }
+        std::uint16_t m = 0;
+        for (int w = 0; w < 8; ++w) {
+            b.mixedBefore[w] = m;
+            m = std::uint16_t(m + popcount(b.mixed[w]));
+        }
+        b.crossings = n;
+        b.patches = patches;
+        b.triangles = triangles;
+    }
+
+    /// The ambiguous faces of the cell at p whose inside corners the asymptotic decider joins.
+    static std::uint8_t joinedFaces(const openvdb::FloatGrid::ConstAccessor& acc, const Coord& p, std::uint8_t inside) {
+        const std::uint8_t ambiguous = detail::ambiguousFaces(inside);
+        if (!ambiguous) return 0;
+        float f[8];
+        for (int k = 0; k < 8; ++k) f[k] = acc.getValue(p.offsetBy(k & 1, (k >> 1) & 1, (k >> 2) & 1));
+        std::uint8_t joined = 0;
+        for (int face = 0; face < detail::kCellFaces; ++face) {
+            if (!((ambiguous >> face) & 1)) continue;
+            const std::array<int, 4> k = detail::faceCorners(face);
+            if (detail::insideJoinedAcrossFace(f[k[0]], f[k[1]], f[k[2]], f[k[3]])) joined |= std::uint8_t(1u << face);
+        }
+        return joined;
+    }
+
+    // ------------------------------------------------------------------ lookups
+
+    /// The mesh index of the crossing on the edge from lattice point p along axis a.
+    std::uint32_t crossingIndex(const Around& near, const Coord& p, int a) const {
+        const Block& b = near.at(p);
+        const int bit = a * kCells + localOffset(p.x(), p.y(), p.z());
+        return b.crossingBase + b.ownedBefore[bit >> 6] + std::uint32_t(popcountBelow(b.owned[bit >> 6], bit & 63));
+    }
+
+    /// The loop of patch k of the cell at p: its crossings' mesh indices, in order.
+    int loopOf(const Around& near, const Coord& p, const CellPatches& patches, int k, std::uint32_t* out) const {
+        const auto& starts = edgeStarts();
+        int at = 0;
+        for (int j = 0; j < k; ++j) at += patches.size[j];
+        const int len = patches.size[k];
+        for (int i = 0; i < len; ++i) {
+            const EdgeStart& e = starts[patches.edges[at + i]];
+            out[i] = crossingIndex(near, p.offsetBy(e.dx, e.dy, e.dz), e.axis);
+        }
+        return len;
+    }
+
+    // ------------------------------------------------------------------ pass 2: crossings
+
+    void crossingPass(std::size_t bi, std::atomic<std::size_t>& exactCount) {
+        const Block& b = blocks_[bi];
+        std::size_t exact = 0;
+        std::uint32_t at = b.crossingBase;
+        for (int a = 0; a < 3; ++a) {
+            for (int w = 0; w < kCells / 64; ++w) {
+                std::uint64_t word = b.owned[a * 8 + w];
+                while (word) {
+                    const int off = w * 64 + __builtin_ctzll(word);
+                    word &= word - 1;
+                    const Crossing c = findCrossing(b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7), a,
+                                                    testBit(b.inside, off));
+                    exact += c.exact;
+                    mesh_.vertices[at] = c.p;
+                    crossingNormal_[at] = c.n;
+                    ++at;
+                }
+            }
+        }
+        exactCount += exact;
+    }
+
+    static bool testBit(const std::uint64_t* words, int bit) { return (words[bit >> 6] >> (bit & 63)) & 1; }
+
+    /// The crossing on the edge from lattice point `lower` along axis a (in0: whether `lower` is
+    /// in material; the upper point is not, or the other way round): the dexel's end next to the
+    /// point in material (the end of the segment holding the lower point, or the start of the one
+    /// holding the upper point). With no dexel there (a family not kept) or one that disagrees
+    /// with the level set's vote, the field is interpolated linearly and the normal is unknown.
+    Crossing findCrossing(const Coord& lower, int a, bool in0) const {
+        const double t0 = (lower[a] + 0.5) * h_, t1 = t0 + h_;
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        Crossing x;
+        x.p = lattice_.point(lower.x(), lower.y(), lower.z());
+        double t = 0.0;
+        const Axis axis = axisFromIndex(a);
+        if (stock_.has(axis) && lower[b] >= 0 && lower[c] >= 0 && lower[b] < lattice_.n[b] && lower[c] < lattice_.n[c]) {
+            const SegmentSpan segs = stock_.family(axis).segments(lower[b], lower[c]);
+            if (in0) {
+                // The segment holding t0 ends in (t0, t1].
+                const Segment* s = std::partition_point(segs.begin(), segs.end(),
+                                                        [t0](const Segment& g) { return double(g.hi) < t0; });
+                if (s != segs.end() && double(s->lo) <= t0 && double(s->hi) <= t1) {
+                    t = s->hi;
+                    x.n = s->nhi;
+                    x.exact = true;
+                }
+            } else {
+                // The segment holding t1 starts in [t0, t1].
+                const Segment* s = std::partition_point(segs.begin(), segs.end(),
+                                                        [t1](const Segment& g) { return double(g.hi) <= t1; });
+                if (s != segs.end() && double(s->lo) <= t1 && double(s->lo) >= t0) {
+                    t = s->lo;
+                    x.n = s->nlo;
+                    x.exact = true;
+                }
+            }
+        }
+        if (!x.exact) {
+            const auto acc = grid_.getConstAccessor();
+            Coord upper = lower;
+            upper[a] += 1;
+            const double f0 = acc.getValue(lower), f1 = acc.getValue(upper);
+            t = t0 + h_ * f0 / (f0 - f1);
+        }
+        const double gap = kCornerGap * h_;
+        t = std::clamp(t, t0 + gap, t1 - gap);
+        x.p[a] = lattice_.origin[a] + t;
+        return x;
+    }
+
+    // ------------------------------------------------------------------ pass 3: patch vertices
+
+    void patchPass(std::size_t bi, std::atomic<std::size_t>& edgeCount, std::atomic<std::size_t>& cornerCount) {
+        const Block& b = blocks_[bi];
+        const Around near = around(b);
+        std::size_t edges = 0, corners = 0;
+        std::uint32_t loop[detail::kCellEdges];
+        std::uint32_t at = b.patchBase;
+        std::uint32_t tri = b.triangleBase;
+        int rank = 0;
+        for (int w = 0; w < kCells / 64; ++w) {
+            std::uint64_t word = b.mixed[w];
+            while (word) {
+                const int off = w * 64 + __builtin_ctzll(word);
+                word &= word - 1;
+                const CellPatches& patches = b.patchesOf(rank++);
+                const Coord p = b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7);
+                for (int k = 0; k < patches.count; ++k) {
+                    const int len = loopOf(near, p, patches, k, loop);
+                    int qefRank = 0;
+                    mesh_.vertices[at] = placeVertex(p, loop, len, qefRank);
+                    feature_[at - patchVertexBase_] = std::uint8_t(qefRank >= 2);
+                    edges += qefRank == 2;
+                    corners += qefRank == 3;
+                    // The fan; the flip pass turns chords along creases afterwards.
+                    for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[i], loop[i + 1 == len ? 0 : i + 1]};
+                    ++at;
+                }
+            }
+        }
+        edgeCount += edges;
+        cornerCount += corners;
+    }
+
+    Vec3 massPoint(const std::uint32_t* loop, int len) const {
+        Vec3 mass(0.0);
+        for (int i = 0; i < len; ++i) mass += mesh_.vertices[loop[i]];
+        return mass / double(len);
+    }
+
+    /// The vertex of a patch: where the tangent planes at its crossings meet best, within its
+    /// cell. Minimises sum_i (n_i . (x - p_i))^2 about the loop's mass point m by a truncated
+    /// SVD (the symmetric eigen-decomposition of A^T A): directions whose eigenvalue is below
+    /// tan^2(featureAngle / 2) times the largest are left at m. That keeps a smooth patch's
+    /// vertex on its mean plane, and puts an edge's on the crease line (rank 2) and a corner's on
+    /// the corner (rank 3). Crossings with no known normal, or marked sharp, add no plane.
+    ///
+    /// Every machined surface is the stock's boundary minus convex swept volumes, so its smooth
+    /// pieces are concave (seen from the material) and its convex creases are where two cuts
+    /// meet. A concave crease is one cutter's own edge (a pocket's floor-wall corner, a V-groove's
+    /// bottom): its tangent planes are that cutter's faces, and their meeting point is exact. A
+    /// convex crease may be cut lower by a third cut between the crossings that no lattice edge
+    /// saw (a cusp next to a wall's top, say): there the vertex is kept within the box of its
+    /// crossings rather than extrapolated past them. A crease is convex when a crossing lies on
+    /// the material side of another's tangent plane (by more than kConvexGap h).
+    Vec3 placeVertex(const Coord& p, const std::uint32_t* loop, int len, int& rank) const {
+        const Vec3 mass = massPoint(loop, len);
+        Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+        Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+        int planes = 0;
+        for (int i = 0; i < len; ++i) {
+            const PackedNormal pn = crossingNormal_[loop[i]];
+            if (!pn.present() || pn.sharp()) continue;
+            const Vec3 nv = pn.unpack();
+            const Eigen::Vector3d n(nv.x, nv.y, nv.z);
+            ata += n * n.transpose();
+            atb += n * glm::dot(nv, mesh_.vertices[loop[i]] - mass);
+            ++planes;
+        }
+        rank = 0;
+        Vec3 v = mass;
+        if (planes > 0) {
+            Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+            eig.computeDirect(ata);
+            const Eigen::Vector3d w = eig.eigenvalues();
+            const double wmax = w.maxCoeff();
+            Eigen::Vector3d sol = Eigen::Vector3d::Zero();
+            for (int k = 0; k < 3; ++k) {
+                if (!(w[k] > singular_ * wmax)) continue;
+                ++rank;
+                const Eigen::Vector3d vk = eig.eigenvectors().col(k);
+                sol += vk * (vk.dot(atb) / w[k]);
+            }
+            v = mass + Vec3(sol[0], sol[1], sol[2]);
+        }
+        Vec3 lo = lattice_.point(p.x(), p.y(), p.z());
+        Vec3 hi = lo + h_;
+        if (rank >= 2 && convexCrease(loop, len)) {
+            // The box of the crossings (they lie on the cell's edges, so inside the cell).
+            lo = hi = mesh_.vertices[loop[0]];
+            for (int i = 1; i < len; ++i) {
+                lo = glm::min(lo, mesh_.vertices[loop[i]]);
+                hi = glm::max(hi, mesh_.vertices[loop[i]]);
+            }
+        }
+        return glm::clamp(v, lo, hi);
+    }
+
+    /// Whether a patch's crossings span a convex crease: one lies on the material side of
+    /// another's tangent plane (the normals point out of the material).
+    bool convexCrease(const std::uint32_t* loop, int len) const {
+        const double gap = kConvexGap * h_;
+        for (int i = 0; i < len; ++i) {
+            const PackedNormal pn = crossingNormal_[loop[i]];
+            if (!pn.present() || pn.sharp()) continue;
+            const Vec3 n = pn.unpack();
+            for (int j = 0; j < len; ++j)
+                if (j != i && glm::dot(n, mesh_.vertices[loop[j]] - mesh_.vertices[loop[i]]) < -gap) return true;
+        }
+        return false;
+    }
+
+    // ------------------------------------------------------------------ pass 4: triangles
+
+    /// How well a triangle agrees with the Hermite data: the least cosine between its normal and
+    /// the normals of its crossings (1 when none has a known normal; -1 when it has no area).
+    double fit(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
+        const Vec3 n = glm::cross(mesh_.vertices[b] - mesh_.vertices[a], mesh_.vertices[c] - mesh_.vertices[a]);
+        const double len = glm::length(n);
+        if (!(len > 0.0)) return -1.0;
+        double worst = 1.0;
+        for (std::uint32_t i : {a, b, c}) {
+            if (i >= patchVertexBase_ || !crossingNormal_[i].present()) continue;
+            worst = std::min(worst, glm::dot(n, crossingNormal_[i].unpack()) / len);
+        }
+        return worst;
+    }
+
+    bool isFeature(std::uint32_t patchVertex) const { return feature_[patchVertex - patchVertexBase_] != 0; }
+
+    /// The cell whose lower corner is p: its patches and the mesh index of its first patch.
+    void cellAt(const Around& near, const Coord& p, const CellPatches*& patches, std::uint32_t& firstPatch) const {
+        const Block& b = near.at(p);
+        const int rank = b.rankOf(localOffset(p.x(), p.y(), p.z()));
+        patches = &b.patchesOf(rank);
+        firstPatch = b.patchBase + b.patchBefore[std::size_t(rank)];
+    }
+
+    /// Flips the fan chords of the block's feature patches that run across a crease (flipChord).
+    /// Each of the two cells sharing a chord decides alike and turns its own triangle.
+    void flipPass(std::size_t bi, std::atomic<std::size_t>& flippedCount) {
+        const Block& b = blocks_[bi];
+        const EdgeTables& tables = edgeTables();
+        std::size_t flipped = 0;
+        std::uint32_t loop[detail::kCellEdges];
+        std::uint32_t tri = b.triangleBase;
+        std::uint32_t patch = b.patchBase;
+        std::unique_ptr<Around> near;  // made for the first feature patch of the block
+        int rank = 0;
+        for (int w = 0; w < kCells / 64; ++w) {
+            std::uint64_t word = b.mixed[w];
+            while (word) {
+                const int off = w * 64 + __builtin_ctzll(word);
+                word &= word - 1;
+                const CellPatches& patches = b.patchesOf(rank++);
+                int start = 0;
+                for (int k = 0; k < patches.count; ++k, ++patch) {
+                    const int len = patches.size[k];
+                    const std::uint8_t* edges = &patches.edges[start];
+                    start += len;
+                    if (!isFeature(patch)) {
+                        tri += std::uint32_t(len);
+                        continue;
+                    }
+                    if (!near) near = std::make_unique<Around>(around(b));
+                    const Coord p = b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7);
+                    loopOf(*near, p, patches, k, loop);
+                    for (int i = 0; i < len; ++i, ++tri) {
+                        const int j = i + 1 == len ? 0 : i + 1;
+                        // The chord loop[i]-loop[j] lies on the face shared with the neighbour
+                        // whose patch holds the same two crossings.
+                        const int face = tables.face[edges[i]][edges[j]];
+                        Coord np = p;
+                        np[face >> 1] += (face & 1) ? 1 : -1;
+                        const CellPatches* other = nullptr;
+                        std::uint32_t otherFirst = 0;
+                        cellAt(*near, np, other, otherFirst);
+                        const int ok = other->patchOf[tables.across[edges[i]][face]];
+                        const std::uint32_t partner = otherFirst + std::uint32_t(ok);
+                        if (isFeature(partner) && flipChord(edges, len, i, *other, ok, face, patch, partner, loop)) {
+                            mesh_.triangles[tri] = {patch, loop[i], partner};
+                            flipped += patch < partner;
+                        }
+                    }
+                }
+            }
+        }
+        flippedCount += flipped;
+    }
+
+    /// Whether the chord loop[i]-loop[i+1] of this cell's patch (vertex `patch`) is flipped to
+    /// join `patch` with the neighbour's patch `partner` across `face`. Both cells ask the same
+    /// question of the same data and get the same answer: flip when the two new triangles agree
+    /// better with the normals at their crossings (across a crease each new triangle lies in the
+    /// plane of its one crossing), and when this chord is the first, in the order of the lattice
+    /// edges, of the chords the two patches share on the face (two flips would join the two
+    /// vertices twice).
+    bool flipChord(const std::uint8_t* edges, int len, int i, const CellPatches& otherPatches, int ok, int face,
+                   std::uint32_t patch, std::uint32_t partner, const std::uint32_t* loop) const {
+        const int j = (i + 1) % len;
+        const std::uint32_t xi = loop[i], xj = loop[j];
+        // Before: (patch, xi, xj) and (partner, xj, xi). After: (patch, xi, partner) and
+        // (partner, xj, patch).
+        const double before = std::min(fit(patch, xi, xj), fit(partner, xj, xi));
+        const double after = std::min(fit(patch, xi, partner), fit(partner, xj, patch));
+        if (!(after > before)) return false;
+        // Other chords of this patch on the same face that reach the same partner.
+        const EdgeTables& tables = edgeTables();
+        const std::uint64_t mine = std::min<std::uint64_t>(xi, xj);
+        for (int m = 0; m < len; ++m) {
+            if (m == i) continue;
+            const int n = (m + 1) % len;
+            if (tables.face[edges[m]][edges[n]] != face) continue;
+            const int oe = tables.across[edges[m]][face];
+            if (otherPatches.patchOf[oe] != ok) continue;
+            if (std::min<std::uint64_t>(loop[m], loop[n]) < mine) return false;
+        }
+        return true;
+    }
+
+    // ------------------------------------------------------------------ pass 5: folds
+
+    /// Folds: a triangle facing against its own vertices' normals (checkMesh's test). A patch
+    /// vertex of a folded triangle is pulled halfway back towards its loop's mass point, round
+    /// after round, until no triangle folds; after kPullRounds rounds it sits on the mass point.
+    /// Returns the number of patch vertices moved.
+    std::size_t repairFolds(std::vector<std::uint32_t> folded) {
+        std::vector<std::uint8_t> pulls(feature_.size(), 0);
+        std::size_t moved = 0;
+        for (int round = 0; round < kPullRounds && !folded.empty(); ++round) {
+            std::vector<std::uint32_t> pull;
+            for (std::uint32_t t : folded)
+                for (std::uint32_t v : mesh_.triangles[t])
+                    if (v >= patchVertexBase_) pull.push_back(v);
+            std::sort(pull.begin(), pull.end());
+            pull.erase(std::unique(pull.begin(), pull.end()), pull.end());
+            for (std::uint32_t v : pull) {
+                std::uint8_t& n = pulls[v - patchVertexBase_];
+                if (n++ == 0) ++moved;
+                const Vec3 mass = patchMassPoint(v);
+                Vec3& x = mesh_.vertices[v];
+                x = n + 1 >= kPullRounds ? mass : 0.5 * (x + mass);
+            }
+            folded = foldedTriangles(mesh_, kFoldMargin);
+        }
+        return moved;
+    }
+
+    /// The mass point of the loop of patch vertex v, found again from its cell.
+    Vec3 patchMassPoint(std::uint32_t v) const {
+        // The block: the last whose patches start at or before v.
+        const auto it = std::upper_bound(blocks_.begin(), blocks_.end(), v,
+                                         [](std::uint32_t x, const Block& b) { return x < b.patchBase; });
+        const Block& b = *(it - 1);
+        const std::uint32_t local = v - b.patchBase;
+        // The mixed cell: the last whose patches start at or before `local`.
+        const int rank = int(std::upper_bound(b.patchBefore.begin(), b.patchBefore.end() - 1, std::uint16_t(local)) -
+                             b.patchBefore.begin()) - 1;
+        int off = -1;
+        for (int w = 0, seen = 0; w < kCells / 64 && off < 0; ++w) {
+            const int n = popcount(b.mixed[w]);
+            if (seen + n > rank) {
+                std::uint64_t word = b.mixed[w];
+                for (int k = seen; k < rank; ++k) word &= word - 1;
+                off = w * 64 + __builtin_ctzll(word);
+            }
+            seen += n;
+        }
+        std::uint32_t loop[detail::kCellEdges];
+        const int len = loopOf(around(b), b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7), b.patchesOf(rank),
+                               int(local - b.patchBefore[std::size_t(rank)]), loop);
+        return massPoint(loop, len);
+    }
+
+    const openvdb::FloatGrid& grid_;
+    const TriDexelStock& stock_;
+    const Lattice& lattice_;
+    double h_;
+    double singular_ = 0.0;
+    double adaptivity_ = 0.0;
+    std::vector<Block> blocks_;
+    std::vector<std::uint64_t> keys_;
+    Mesh mesh_;
+    std::vector<PackedNormal> crossingNormal_;
+    std::vector<std::uint8_t> feature_;
+    std::uint32_t patchVertexBase_ = 0;
+};
+
+}  // namespace
+
+Mesh contourStock(const LevelSet& levelSet, const TriDexelStock& stock, const ContourOptions& options,
+                  ContourStats* stats) {
+    openvdb::FloatGrid::ConstPtr grid = gridOf(levelSet);
+    if (!grid) throw Error("contouring: the level set holds no grid");
+    const std::optional<Lattice> lat = levelSet.lattice();
+    const Lattice& own = stock.lattice();
+    if (!lat || lat->n != own.n || std::abs(lat->h - own.h) > 1e-12 * own.h ||
+        glm::length(lat->origin - own.origin) > 1e-9 * std::max(1.0, glm::length(own.origin)))
+        throw Error("contouring: the level set was not rebuilt from this stock's lattice");
+    ContourStats local;
+    Contourer c(*grid, stock, options);
+    Mesh mesh = c.run(local);
+    if (stats) *stats = local;
+    return mesh;
+}
+
+}  // namespace dexelmill
