@@ -31,6 +31,7 @@ struct SimulateArgs {
     std::string output, vdb, png, report;
     double chordTolerance = 0.001;
     double adaptivity = 0.0;
+    std::string mesher = "dexel";
     bool sharpEdges = false;
     int threads = 0;
     bool quiet = false;

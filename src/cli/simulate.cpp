@@ -89,7 +89,11 @@ SimulateOptions toOptions(const SimulateArgs& a) {
     o.chordTolerance = a.chordTolerance;
     if (!(a.adaptivity >= 0.0 && a.adaptivity <= 1.0)) throw UsageError("--adaptivity must lie in [0, 1]");
     o.adaptivity = a.adaptivity;
-    o.sharpEdges = a.sharpEdges;
+    if (a.mesher == "dexel") o.mesher = Mesher::Dexel;
+    else if (a.mesher == "vdb") o.mesher = Mesher::Vdb;
+    else throw UsageError("--mesher must be dexel or vdb, got '" + a.mesher + "'");
+    if (a.sharpEdges && o.mesher == Mesher::Vdb)
+        throw UsageError("--sharp-edges: volumeToMesh rounds sharp edges; the dexel mesher (the default) keeps them");
     o.meshPath = a.output;
     o.vdbPath = a.vdb;
     o.pngPath = a.png;
@@ -141,9 +145,14 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
     c->add_option("--vdb", a.vdb, "The part as an OpenVDB level set, PART.vdb");
     c->add_option("--png", a.png, "A shaded isometric picture of the part, PART.png");
     c->add_option("--report", a.report, "A JSON report: volumes, collisions, warnings, timings");
+    c->add_option("--mesher", a.mesher,
+                  "dexel: the surface placed from the dexels' exact crossings and normals, sharp edges kept;\n"
+                  "vdb: OpenVDB's volumeToMesh on the level set alone")
+        ->capture_default_str();
     c->add_option("--adaptivity", a.adaptivity, "Mesh simplification from 0 (none) to 1")->capture_default_str();
     c->add_flag("--sharp-edges", a.sharpEdges,
-                "Place mesh vertices on sharp edges and corners fitted to the exact dexel crossings");
+                "Kept for old scripts: the dexel mesher always places sharp edges and corners from the\n"
+                "exact dexel crossings");
     return c;
 }
 
@@ -177,12 +186,16 @@ int runSimulate(const SimulateArgs& args) {
             std::cerr << "dexelmill: " << r.collisions.size() - kPrintedDiagnostics << " more collisions\n";
     }
     const double pct = r.stockVolumeMm3 > 0 ? 100.0 * r.removedVolumeMm3 / r.stockVolumeMm3 : 0.0;
+    std::string meshState;
+    if (r.meshTriangles) {
+        meshState = r.meshClosed ? " (closed" : " (NOT closed";
+        meshState += r.meshFoldedTriangles ? ", " + std::to_string(r.meshFoldedTriangles) + " folded)" : ")";
+    }
     std::printf(
         "dexelmill: %zu moves, %zu tool changes; removed %.6g mm^3 (%.1f %% of the stock), part %.6g mm^3; "
         "h %.4g mm; %zu collisions, %zu warnings; mesh %zu triangles%s; %.2f s, %.0f MiB\n",
         r.moves, r.toolChanges, r.removedVolumeMm3, pct, r.finalVolumeMm3, r.resolutionMm, r.collisions.size(),
-        r.warnings.size(), r.meshTriangles, r.meshTriangles ? (r.meshClosed ? " (closed)" : " (NOT closed)") : "",
-        r.timingS.total, r.peakMemoryMb);
+        r.warnings.size(), r.meshTriangles, meshState.c_str(), r.timingS.total, r.peakMemoryMb);
     return 0;
 }
 

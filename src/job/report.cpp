@@ -46,10 +46,18 @@ std::string reportJson(const SimulateReport& r) {
     for (const ReportWarning& w : r.warnings)
         warnings.push_back({{"file", w.where.file}, {"line", w.where.line}, {"message", w.message}});
     j["warnings"] = warnings;
-    j["mesh"] = {{"vertices", r.meshVertices},
+    j["mesh"] = {{"mesher", r.mesher},
+                 {"vertices", r.meshVertices},
                  {"triangles", r.meshTriangles},
                  {"closed", r.meshClosed},
+                 {"folded_triangles", r.meshFoldedTriangles},
+                 {"degenerate_triangles", r.meshDegenerateTriangles},
                  {"volume_mm3", r.meshVolumeMm3}};
+    if (r.mesher == "dexel")
+        j["mesh"]["dexel_mesher"] = {{"exact_crossings", r.exactCrossings},
+                                     {"interpolated_crossings", r.interpolatedCrossings},
+                                     {"edge_vertices", r.edgeVertices},
+                                     {"corner_vertices", r.cornerVertices}};
     j["timing_s"] = {{"parse", r.timingS.parse}, {"cut", r.timingS.cut},   {"rebuild", r.timingS.rebuild},
                      {"mesh", r.timingS.mesh},   {"write", r.timingS.write}, {"total", r.timingS.total}};
     j["peak_memory_mb"] = r.peakMemoryMb;

@@ -5,6 +5,8 @@
 #include <set>
 #include <sstream>
 
+#include <tbb/task_arena.h>
+
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
 #include "dexelmill/io/atomic_file.h"
@@ -13,7 +15,7 @@
 #include "dexelmill/io/vdb_io.h"
 #include "dexelmill/path/camotics.h"
 #include "dexelmill/stock/cut.h"
-#include "dexelmill/surface/feature_snap.h"
+#include "dexelmill/surface/contour.h"
 #include "dexelmill/surface/levelset.h"
 #include "dexelmill/surface/voxelize.h"
 
@@ -160,9 +162,20 @@ LoadedStock loadStock(const SimulateOptions& o, const Program& program, const To
     return {TriDexelStock::fromBox(box, h, o.families), box};
 }
 
+Simulation runStages(const SimulateOptions& o);
+SimulateReport simulateInArena(const SimulateOptions& o);
+
 }  // namespace
 
 Simulation runSimulation(const SimulateOptions& o) {
+    // Every stage's parallel work runs in one arena of the requested size.
+    tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+    return arena.execute([&] { return runStages(o); });
+}
+
+namespace {
+
+Simulation runStages(const SimulateOptions& o) {
     const auto tStart = Clock::now();
     Simulation sim;
     SimulateReport& report = sim.report;
@@ -251,19 +264,31 @@ Simulation runSimulation(const SimulateOptions& o) {
     report.timingS.rebuild = seconds(t);
     t = Clock::now();
     if (o.progress) o.progress("mesh", 0, 1);
-    MeshOptions meshOptions;
-    meshOptions.adaptivity = o.adaptivity;
-    sim.mesh = meshLevelSet(sim.levelSet, meshOptions);
-    if (o.sharpEdges) {
-        if (o.adaptivity != 0.0 || stock.families().count() < 3)
-            throw Error("sharp edges need all three dexel families and adaptivity 0");
-        snapFeatures(sim.mesh, stock);
+    MeshCheck check;
+    if (o.mesher == Mesher::Dexel) {
+        ContourOptions contour;
+        contour.adaptivity = o.adaptivity;
+        ContourStats stats;
+        sim.mesh = contourStock(sim.levelSet, stock, contour, &stats);
+        check = stats.check;
+        report.mesher = "dexel";
+        report.exactCrossings = stats.exactCrossings;
+        report.interpolatedCrossings = stats.crossings - stats.exactCrossings;
+        report.edgeVertices = stats.edgeVertices;
+        report.cornerVertices = stats.cornerVertices;
+    } else {
+        MeshOptions meshOptions;
+        meshOptions.adaptivity = o.adaptivity;
+        sim.mesh = meshLevelSet(sim.levelSet, meshOptions);
+        check = checkMesh(sim.mesh);
+        report.mesher = "vdb";
     }
     const Mesh& mesh = sim.mesh;
-    const MeshCheck check = checkMesh(mesh);
     report.meshVertices = mesh.vertices.size();
     report.meshTriangles = mesh.triangles.size();
     report.meshClosed = check.closedManifold();
+    report.meshFoldedTriangles = check.foldedTriangles;
+    report.meshDegenerateTriangles = check.degenerateTriangles;
     report.meshVolumeMm3 = check.signedVolume;
     report.timingS.mesh = seconds(t);
     report.timingS.total = seconds(tStart);
@@ -271,9 +296,18 @@ Simulation runSimulation(const SimulateOptions& o) {
     return sim;
 }
 
+}  // namespace
+
 SimulateReport simulate(const SimulateOptions& o) {
+    tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+    return arena.execute([&] { return simulateInArena(o); });
+}
+
+namespace {
+
+SimulateReport simulateInArena(const SimulateOptions& o) {
     const auto tStart = Clock::now();
-    Simulation sim = runSimulation(o);
+    Simulation sim = runStages(o);
     SimulateReport& report = sim.report;
     const Mesh& mesh = sim.mesh;
 
@@ -297,5 +331,7 @@ SimulateReport simulate(const SimulateOptions& o) {
     }
     return report;
 }
+
+}  // namespace
 
 }  // namespace dexelmill

@@ -169,18 +169,31 @@ TEST_CASE("programs after a project replace its programs; its tools and stock st
     CHECK(r.removedVolumeMm3 == Approx(kSlotVolume).epsilon(0.02));
 }
 
-TEST_CASE("sharp edges keep the slot's volume and a closed mesh", "[job]") {
+TEST_CASE("the dexel mesher keeps the slot's volume, folds nothing, and works with one family", "[job]") {
     const fs::path dir = scratch("sharp");
     SimulateOptions o;
     o.inputs = {write(dir / "slot.ngc", kSlot)};
     o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
     o.defaultTool = flatEndMill(6, {20, 40});
     o.resolution = 0.5;
-    o.sharpEdges = true;
     const SimulateReport r = runSimulation(o).report;
+    CHECK(r.mesher == "dexel");
     CHECK(r.meshClosed);
-    // The snapped mesh encloses the dexel volume more closely than a plain mesh rounds edges.
-    CHECK(r.meshVolumeMm3 == Approx(r.finalVolumeMm3).epsilon(0.002));
+    CHECK(r.meshFoldedTriangles == 0);
+    CHECK(r.meshDegenerateTriangles == 0);
+    CHECK(r.interpolatedCrossings == 0);
+    CHECK(r.edgeVertices > 0);
+    // The mesh keeps the slot's sharp edges: it encloses the dexel volume to within 0.02 %.
+    CHECK(r.meshVolumeMm3 == Approx(r.finalVolumeMm3).epsilon(2e-4));
+    o.mesher = Mesher::Vdb;
+    const SimulateReport v = runSimulation(o).report;
+    CHECK(v.mesher == "vdb");
+    CHECK(v.meshClosed);
+    // volumeToMesh rounds the edges: farther from the dexel volume.
+    CHECK(std::abs(v.meshVolumeMm3 - v.finalVolumeMm3) > std::abs(r.meshVolumeMm3 - r.finalVolumeMm3));
+    o.mesher = Mesher::Dexel;
     o.families = FamilySet::parse("z");
-    CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains("three dexel families"));
+    const SimulateReport z = runSimulation(o).report;
+    CHECK(z.meshClosed);
+    CHECK(z.interpolatedCrossings > 0);
 }

@@ -75,21 +75,23 @@ TEST_CASE("surface deviation converges as the spacing halves", "[study]") {
         CHECK(run.devMaxMm < run.h);
         CHECK(run.devRmsMm < 0.2 * run.h);
     }
-    // The expected orders as h halves. The maximum is first order: it sits on the block's sharp
-    // edges, which a level-set mesh cuts off at a fixed fraction of h, so it halves. The RMS mixes
-    // that first-order band (a share of the vertices falling like h) with second-order smooth faces:
-    // an order between 1 and 2, here at least 1.25 (ratio 2^-1.25 = 0.42; measured 0.33 to 0.37).
-    // The volume error is second order (a midpoint rule over the faces; measured ratios 0.24 to
-    // 0.27): at least order 1.5, ratio 0.35.
+    // The expected orders as h halves. The block's own faces, edges and corners are exact, and
+    // the groove's face is second order; what is left is the rim where the groove meets the top
+    // face, a convex crease placed within the box of its crossings: an O(h) error in a band of
+    // cells whose share of the vertices falls like h. So the RMS falls at an order between 1 and 2
+    // (ratio below 0.5; measured 0.37 and 0.43), and the maximum, which sits on that rim where the
+    // lattice happens to leave the crease farthest from its crossings, stays below a tenth of h
+    // (measured 0.034, 0.097 and 0.063 h). The volume error is second order (measured ratios
+    // 0.23 and 0.36): below 0.4.
     for (int i = 0; i + 1 < 3; ++i) {
         const StudyRun& coarse = res.runs[i];
         const StudyRun& fine = res.runs[i + 1];
         INFO("from h " << coarse.h << " to " << fine.h << ": max " << coarse.devMaxMm << " -> " << fine.devMaxMm
                        << ", rms " << coarse.devRmsMm << " -> " << fine.devRmsMm << ", volume error "
                        << coarse.volumeErrorMm3 << " -> " << fine.volumeErrorMm3);
-        CHECK(fine.devMaxMm / coarse.devMaxMm == Approx(0.5).margin(0.05));
-        CHECK(fine.devRmsMm < 0.42 * coarse.devRmsMm);
-        CHECK(std::abs(fine.volumeErrorMm3) < 0.35 * std::abs(coarse.volumeErrorMm3));
+        CHECK(fine.devMaxMm < 0.1 * fine.h);
+        CHECK(fine.devRmsMm < 0.5 * coarse.devRmsMm);
+        CHECK(std::abs(fine.volumeErrorMm3) < 0.4 * std::abs(coarse.volumeErrorMm3));
     }
     const std::string csv = studyCsv(res);
     CHECK(csv.find("h_mm,families,vertices,dev_max_mm") == 0);
@@ -133,8 +135,9 @@ TEST_CASE("z-only dexels lose undercut wall material that three families keep", 
         INFO("h = " << z.h << ": inner max z " << z.innerMaxMm << ", xyz " << xyz.innerMaxMm << "; rms "
                     << z.innerRmsMm << ", " << xyz.innerRmsMm << "; p95 " << z.innerP95Mm << ", " << xyz.innerP95Mm);
         CHECK(z.innerVertices > 500);  // a quarter of the 4000 measured
-        CHECK(z.innerMaxMm > 1.2 * xyz.innerMaxMm);
-        CHECK(z.innerRmsMm > 1.3 * xyz.innerRmsMm);
+        // Measured with the dexel mesher: max 1.14 and 1.69 times, RMS 3.4 and 4.0 times.
+        CHECK(z.innerMaxMm > 1.1 * xyz.innerMaxMm);
+        CHECK(z.innerRmsMm > 3.0 * xyz.innerRmsMm);
     }
     CHECK(res.runs[2].innerP95Mm > 2.0 * res.runs[3].innerP95Mm);
 }

@@ -21,6 +21,12 @@
 
 namespace dexelmill {
 
+/// @brief How the part's surface is meshed.
+enum class Mesher {
+    Dexel,  ///< from the dexels' exact crossings and normals (contourStock)
+    Vdb     ///< openvdb::tools::volumeToMesh on the level set alone (meshLevelSet)
+};
+
 /// @brief What a simulation reads and writes. Lengths in mm.
 struct SimulateOptions {
     /// A `.camotics` project, or one or more programs (G-code or APT CL) run in order, or a
@@ -46,17 +52,16 @@ struct SimulateOptions {
     FamilySet families = FamilySet::all();
     /// Largest distance between an arc and its chords.
     double chordTolerance = 0.001;
-    /// Mesh adaptivity in [0, 1] (openvdb volumeToMesh): 0 keeps one vertex per surface cell.
+    /// The mesher.
+    Mesher mesher = Mesher::Dexel;
+    /// Mesh adaptivity in [0, 1]: 0 keeps every cell's vertices; higher values merge flat regions.
     double adaptivity = 0.0;
-    /// Move mesh vertices onto sharp edges and corners fitted to the exact dexel crossings
-    /// (needs adaptivity 0 and all three families).
-    bool sharpEdges = false;
 
     /// Outputs; empty paths are not written. The mesh format follows the extension (.obj, .stl,
     /// .ply).
     std::string meshPath, vdbPath, pngPath, reportPath;
 
-    /// Worker threads for cutting and rebuilding; 0 uses every core.
+    /// Worker threads for every stage (cutting, rebuilding, meshing, writing); 0 uses every core.
     int threads = 0;
 
     /// Called now and then from the calling thread with a stage name and the work done so far
@@ -103,9 +108,15 @@ struct SimulateReport {
     std::vector<ReportCollision> collisions;
     std::vector<ReportWarning> warnings;
 
+    std::string mesher;  ///< "dexel" or "vdb"
     std::size_t meshVertices = 0, meshTriangles = 0;
     bool meshClosed = false;
+    std::size_t meshFoldedTriangles = 0;      ///< MeshCheck::foldedTriangles
+    std::size_t meshDegenerateTriangles = 0;  ///< MeshCheck::degenerateTriangles
     double meshVolumeMm3 = 0.0;
+    /// The dexel mesher's edge crossings: dexel endpoints, and interpolated ones (no dexel along
+    /// the edge: a family not kept); its vertices on sharp edges and corners.
+    std::size_t exactCrossings = 0, interpolatedCrossings = 0, edgeVertices = 0, cornerVertices = 0;
 
     struct Timing {
         double parse = 0, cut = 0, rebuild = 0, mesh = 0, write = 0, total = 0;
