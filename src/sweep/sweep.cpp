@@ -1088,11 +1088,6 @@ void MoveSweep::hermite(std::size_t index, const Query& q, Interval local, const
         const Vec3 p = q.o + (hi ? local.hi : local.lo) * q.w;
         Vec3 n;  // the local normal
         bool sharp = false;
-        // The point of the static tool to look at, if any: where the end lies on it; or a crossing
-        // that only the start (or end) pose reaches, which lies on that static tool, and where the
-        // swept volume has a crease if the static tool has one (its faces meet the crossing's
-        // surface there at an angle); or, on a horizontal move, the point (0, p.e, p.n): seen along
-        // f the shadow cylinder is the profile at azimuth +-e with the flat faces.
         const bool onStatic = end.pose >= 0;
         const bool atStart = !onStatic && end.u1 <= creaseU_, atEnd = !onStatic && end.u0 >= 1.0 - creaseU_;
         const bool profileNormal = onStatic || kind_ == SweepKind::Horizontal;
@@ -1120,6 +1115,11 @@ void MoveSweep::hermite(std::size_t index, const Query& q, Interval local, const
             }
         }
         if (profileNormal || atStart || atEnd) {
+            // The static tool's normal where the end lies on it. A crossing that only the start (or
+            // end) pose reaches lies on that static tool too, and the swept volume has a crease
+            // there if the static tool has one (its faces meet the crossing's surface at an angle).
+            // On a horizontal move, the normal at (0, p.e, p.n): seen along f, the shadow cylinder
+            // is the profile at azimuth +-e with the flat faces.
             const Vec3 x = (onStatic ? end.pose == 1 : atEnd) ? p - feedLocal_
                            : onStatic || atStart                ? p
                                                                 : Vec3(0.0, p.y, p.z);
