@@ -2,6 +2,8 @@
 //
 //  BM_SweepQuery/<tool>/<move>: one move, every x, y and z lattice line (h = 0.1 mm) through the
 //    sweep's box is intersected with the sweep; the counter ns_per_query is the average.
+//  BM_SweepQueryNormals/<tool>/<move>: the same lines, each with the Hermite data (the normals at
+//    both ends of every part's interval), as the cutting loop asks for them.
 //  BM_Raster/<threads>/<h in um>: a 10,000-move ball-end finishing raster over a wavy surface on a
 //    40 x 40 x 10 mm stock (400 x 400 lattice at h = 0.1): moves per second, visited/changed
 //    (exact intersections per dexel that lost material) and bounded/changed (cheap bounds taken).
@@ -51,7 +53,10 @@ std::vector<Line> linesThrough(const Box& box, double h) {
     return lines;
 }
 
-void BM_SweepQuery(benchmark::State& state) {
+/// The lines of BM_SweepQuery, each intersected with the sweep by `query(sweep, line)`, which
+/// returns whether the line meets it.
+template <class Query>
+void sweepQuery(benchmark::State& state, Query&& query) {
     const Tool tool = benchTool(int(state.range(0)));
     const int moveKind = int(state.range(1));
     const Vec3 start(0.0);
@@ -65,11 +70,7 @@ void BM_SweepQuery(benchmark::State& state) {
     const std::vector<Line> lines = linesThrough(box, 0.1);
     std::size_t hits = 0;
     for (auto _ : state) {
-        for (const Line& l : lines) {
-            const Interval iv = sweep.intersect(l);
-            hits += !iv.isEmpty();
-            benchmark::DoNotOptimize(iv);
-        }
+        for (const Line& l : lines) hits += query(sweep, l);
     }
     state.SetLabel(std::string(kToolNames[state.range(0)]) + "/" + kMoveNames[moveKind]);
     state.counters["queries"] = double(lines.size());
@@ -78,7 +79,25 @@ void BM_SweepQuery(benchmark::State& state) {
                                                         benchmark::Counter::kIsIterationInvariantRate |
                                                             benchmark::Counter::kInvert);
 }
+
+void BM_SweepQuery(benchmark::State& state) {
+    sweepQuery(state, [](const MoveSweep& sweep, const Line& l) {
+        const Interval iv = sweep.intersect(l);
+        benchmark::DoNotOptimize(iv);
+        return !iv.isEmpty();
+    });
+}
 BENCHMARK(BM_SweepQuery)->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2}})->Unit(benchmark::kMicrosecond);
+
+void BM_SweepQueryNormals(benchmark::State& state) {
+    LineHit hits[MoveSweep::kMaxParts];
+    sweepQuery(state, [&hits](const MoveSweep& sweep, const Line& l) {
+        const std::size_t n = sweep.intersectParts(l, hits);
+        benchmark::DoNotOptimize(hits);
+        return n > 0 && !hits[0].isEmpty();
+    });
+}
+BENCHMARK(BM_SweepQueryNormals)->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2}})->Unit(benchmark::kMicrosecond);
 
 /// 100 passes along x at y steps of 0.4 mm, 100 moves of 0.4 mm each, following
 /// z = 6 + 2 sin(x / 5) cos(y / 7): 10,000 feed moves (and 99 link moves).

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <type_traits>
 
 #include <boost/math/tools/toms748_solve.hpp>
 
@@ -47,6 +49,19 @@ bool arcEndIsFlat(const ArcPiece& a, double z) {
     return std::abs(std::abs(z - a.zc) - a.rho) <= tol::kProfileJoint;
 }
 
+/// True when a flat face at height z (the piece's lowest or highest) meets the piece at an angle:
+/// a rim, or a cone's apex when the piece's radius there is 0.
+bool faceMeetsAtAngle(const ProfilePiece& piece, double z) {
+    const auto* a = std::get_if<ArcPiece>(&piece);
+    return !(a && arcEndIsFlat(*a, z));
+}
+
+/// True when the slope of the profile jumps at height zj, where `below` ends and `above` starts.
+bool slopeJumps(const ProfilePiece& below, const ProfilePiece& above, double zj) {
+    const double sBelow = pieceSlope(below, zj), sAbove = pieceSlope(above, zj);
+    return std::abs(sBelow - sAbove) > tol::kSlope * std::max(1.0, std::abs(sBelow));
+}
+
 }  // namespace
 
 /// A generator segment O + t S (t in [0, 1]) of a cone or cylinder that grazes, with N = S x f.
@@ -54,6 +69,7 @@ struct GrazingStrip {
     Vec3 origin{0.0};
     Vec3 span{0.0};
     Vec3 normal{0.0};
+    double outward = 0.0;     ///< normal * outward is the cone's outward unit normal along the generator
     double degenerate = 0.0;  ///< |w . N| at or below this: the line is parallel to the strip
 };
 
@@ -83,9 +99,65 @@ struct GrazingTorus {
 
 /// A circle at height z, radius r where two faces meet at an angle (or a flat face of a
 /// horizontal move, as a disk). For a rim, qc = fd z / |f| is the centre of its swept ellipse
-/// along q (see the rims in intersectLocal).
+/// along q (see the rims in intersectLocal), and (nr, nz) is a direction inside its cone of normals
+/// in the meridian plane (across the axis, along it): the sum of the two faces' unit normals.
 struct Circle {
     double z = 0.0, r = 0.0, qc = 0.0;
+    double nr = 0.0, nz = 0.0;
+};
+
+/// Where a crossing of a line with the boundary of a General move's shadow cylinder came from, so
+/// that the normal there can be found for the ends of the interval only: the kind of crossing and
+/// its index in the part's list of that kind, in one word (a traced query stores one per candidate
+/// end it finds).
+struct Source {
+    enum Kind : std::uint32_t { Strip, Capsule, Torus, Rim, None };
+    std::uint32_t code;
+
+    static constexpr Source of(Kind kind, std::uint32_t index) { return {std::uint32_t(kind) << 24 | index}; }
+    Kind kind() const { return Kind(code >> 24); }
+    std::uint32_t index() const { return code & 0xFFFFFFu; }
+};
+
+/// No crossing: plunges and horizontal moves need none for their normals, and a crossing tied with
+/// no other has none beside it.
+constexpr Source kNoSource = Source::of(Source::None, 0);
+
+/// The crossings found at one end of an interval, each with the feed parameter that reaches it:
+/// the first, and the last other one that tied with it (within kTie), or kNoSource. Tied crossings
+/// may be reached at very different feed parameters (on a nearly plunging move, the sweeps of a
+/// rim and of a torus's equator of the same radius nearly coincide). Left uninitialised by default
+/// (as is MoveSweep::EndTrace): a traced query writes what its ends use, and the Interval queries
+/// never build one.
+struct EndSources {
+    Source first, second;
+    double uFirst, uSecond;
+};
+
+/// A profile piece's side as the static tool's normals need it (staticNormal): its top height, a
+/// cone's meridian unit normal (across the axis, along it) or an arc's circle centre, and whether
+/// the slope jumps where the next piece starts (a rim).
+struct ProfileSide {
+    double z1 = 0.0;
+    bool arc = false;
+    double nr = 0.0, nz = 0.0;
+    double rc = 0.0, zc = 0.0, invRho = 0.0;  ///< an arc's circle: centre, 1 / radius
+    bool creaseAbove = false;
+};
+
+/// A part's flat end face for the static tool's normals: its radius, and whether it meets the side
+/// at an angle (a rim, or an apex when the radius is 0).
+struct EndFace {
+    double r = 0.0;
+    bool crease = false;
+};
+
+/// A convex part of the tool as its static normals need it (staticNormal): its heights, its pieces'
+/// sides and its end faces. Kept apart from MoveSweep::Part, which the Interval queries read.
+struct MoveSweep::StaticProfile {
+    double z0 = 0.0, z1 = 0.0;
+    std::vector<ProfileSide> sides;
+    EndFace bottomFace, topFace;
 };
 
 struct MoveSweep::Part {
@@ -137,29 +209,49 @@ struct MoveSweep::Query {
     bool parallel = false;
 };
 
+/// Where the two ends of a part's interval lie (intersectLocal<true>), for hermite.
+struct MoveSweep::EndTrace {
+    struct End {
+        int pose;            ///< 0 or 1: on the static tool at the start or end pose; -1: a crossing
+        EndSources sources;  ///< General moves: the crossings found there
+        double u0, u1;       ///< the feed parameters that put a tool point on the crossing
+    };
+    End lo, hi;
+};
+
 namespace {
 
 /// The candidate ends of a line's interval in the shadow cylinder: the lowest and highest line
 /// parameters found on its boundary, each with the range of feed parameters u that put a tool
-/// point there.
+/// point there. With kTrace, also where each came from, recorded in `lo` and `hi` (the Interval
+/// queries keep no sources).
+template <bool kTrace>
 struct Extremes {
+    struct NoSources {};
+    using Sources = std::conditional_t<kTrace, EndSources*, NoSources>;
+
     double vLo = kInf, vHi = -kInf;
     double loU0 = 0.0, loU1 = 0.0, hiU0 = 0.0, hiU1 = 0.0;
+    Sources lo{}, hi{};
 
     bool empty() const { return vLo > vHi; }
-    void add(double v, double u0, double u1) {
+    void add(double v, double u0, double u1, const Source& src) {
         if (v < vLo - sweep_tol::kTie) {
             vLo = v, loU0 = u0, loU1 = u1;
+            if constexpr (kTrace) lo->first = src, lo->uFirst = u0, lo->second = kNoSource;
         } else if (v <= vLo + sweep_tol::kTie) {
             vLo = std::min(vLo, v), loU0 = std::min(loU0, u0), loU1 = std::max(loU1, u1);
+            if constexpr (kTrace) lo->second = src, lo->uSecond = u0;
         }
         if (v > vHi + sweep_tol::kTie) {
             vHi = v, hiU0 = u0, hiU1 = u1;
+            if constexpr (kTrace) hi->first = src, hi->uFirst = u0, hi->second = kNoSource;
         } else if (v >= vHi - sweep_tol::kTie) {
             vHi = std::max(vHi, v), hiU0 = std::min(hiU0, u0), hiU1 = std::max(hiU1, u1);
+            if constexpr (kTrace) hi->second = src, hi->uSecond = u0;
         }
     }
-    void add(double v, double u) { add(v, u, u); }
+    void add(double v, double u, const Source& src) { add(v, u, u, src); }
 };
 
 /// The tool-frame line coefficients of the foundation's static queries (tool.h): height
@@ -286,7 +378,8 @@ struct TorusLine {
 ///    psi, and the grazing point's climb up the torus as |cos s| falls, rho kappa / cos^2(s) per
 ///    unit of s, is at most about rho. With the charts meeting at 45 degrees instead, a root found to
 ///    kAngleRoot in psi was off by kAngleRoot / (2 kappa) in s: 2e-6 mm at kappa = 5e-9.
-void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
+template <class Ex>
+void torusCrossings(const GrazingTorus& tor, std::uint32_t index, const TorusLine& l, Ex& ex) {
     const double fd = l.f.x, fn = l.f.z;
     const double flen = std::sqrt(fd * fd + fn * fn);
     const double kappa = std::abs(fn) / flen;
@@ -299,7 +392,8 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
     // G - o = v w - u f, so v = ((G - o) x f) . c / |c|^2 and u = ((G - o) x w) . c / |c|^2.
     auto addCrossing = [&](const Vec3& g) {
         const Vec3 go = g - l.o;
-        ex.add(glm::dot(glm::cross(go, l.f), l.c) / l.c2, glm::dot(glm::cross(go, l.w), l.c) / l.c2);
+        ex.add(glm::dot(glm::cross(go, l.f), l.c) / l.c2, glm::dot(glm::cross(go, l.w), l.c) / l.c2,
+               Source::of(Source::Torus, index));
     };
     const auto stop = [](double a, double b) { return std::abs(b - a) <= sweep_tol::kAngleRoot; };
     // A root of a monotone piece of g on [a, b] (values ga, gb), or nothing.
@@ -439,6 +533,102 @@ void torusCrossings(const GrazingTorus& tor, const TorusLine& l, Extremes& ex) {
         }
     }
 }
+
+/// The outward unit normal of the static part (the tool at one pose) at a point x of its boundary
+/// (tool frame), written to `n`. Returns whether x lies on a crease: within kCrease of a rim where
+/// two of its faces meet at an angle, or of a cone's apex. There `n` is the normalised mean of the
+/// two faces' normals (the axis at an apex), a normal from the crease's cone of normals.
+bool staticNormal(const MoveSweep::StaticProfile& part, const Vec3& x, Vec3& n) {
+    const std::vector<ProfileSide>& sides = part.sides;
+    const double rho2 = x.x * x.x + x.y * x.y;
+    // The outward unit normal of a piece's side at height z, at x's azimuth (meridianNormal). An
+    // arc's is the point less its circle's centre over the radius: no root for a sphere.
+    auto lateral = [&](const ProfileSide& s, double z) {
+        if (s.arc && s.rc == 0.0) return Vec3(x.x, x.y, z - s.zc) * s.invRho;
+        const double rho = std::sqrt(rho2);
+        if (!(rho > 0.0)) return s.arc ? Vec3(0.0, 0.0, z < s.zc ? -1.0 : 1.0) : Vec3(s.nr, 0.0, s.nz);  // on the axis
+        const double inv = 1.0 / rho;
+        if (!s.arc) return Vec3(s.nr * inv * x.x, s.nr * inv * x.y, s.nz);
+        // The circle's centre is rc across the axis in x's azimuth.
+        const double out = std::max(0.0, 1.0 - s.rc * inv) * s.invRho;
+        return Vec3(out * x.x, out * x.y, (z - s.zc) * s.invRho);
+    };
+    // The flat end face at height z (axial normal nz) whose rim `s` shares.
+    auto face = [&](const EndFace& f, const ProfileSide& s, double z, double nz) {
+        const Vec3 axial(0.0, 0.0, nz);
+        const double inner = f.r - sweep_tol::kCrease;
+        if (inner > 0.0 && rho2 <= inner * inner) {
+            n = axial;
+            return false;
+        }
+        if (!f.crease) {
+            n = lateral(s, z);
+            return false;
+        }
+        n = f.r <= sweep_tol::kCrease ? axial : glm::normalize(axial + lateral(s, z));
+        return true;
+    };
+    if (x.z <= part.z0 + sweep_tol::kCrease) return face(part.bottomFace, sides.front(), part.z0, -1.0);
+    if (x.z >= part.z1 - sweep_tol::kCrease) return face(part.topFace, sides.back(), part.z1, 1.0);
+    std::size_t i = 0;
+    while (i + 1 < sides.size() && x.z > sides[i].z1) ++i;
+    // The joint between pieces j and j + 1, when x is on it and the slope jumps there.
+    auto joint = [&](std::size_t j) {
+        const double zj = sides[j].z1;
+        if (!sides[j].creaseAbove || std::abs(x.z - zj) > sweep_tol::kCrease) return false;
+        n = glm::normalize(lateral(sides[j], zj) + lateral(sides[j + 1], zj));
+        return true;
+    };
+    if ((i > 0 && joint(i - 1)) || (i + 1 < sides.size() && joint(i))) return true;
+    n = lateral(sides[i], x.z);
+    return false;
+}
+
+/// The outward unit normal of a General move's swept volume at the point p (tool frame at the start
+/// pose) of the crossing `src` of the shadow cylinder's boundary, reached at feed parameter u, feed
+/// f = (fd, 0, fn), 1 / |f|^2 = invF2: the tool's normal at its grazing point p - u f, which is
+/// perpendicular to f.
+Vec3 crossingNormal(const MoveSweep::Part& part, const Vec3& f, double invF2, const Vec3& p, double u, Source src) {
+    switch (src.kind()) {
+    case Source::Strip: {
+        const GrazingStrip& s = part.strips[src.index()];
+        return s.normal * s.outward;
+    }
+    case Source::Capsule: {
+        // From the sphere centre's path to p, over the radius.
+        const GrazingCapsule& cap = part.capsules[src.index()];
+        const Vec3 r(p.x, p.y, p.z - cap.zc);
+        return (r - (glm::dot(r, f) * invF2) * f) * (1.0 / cap.rho);
+    }
+    case Source::Torus: {
+        // From the spine circle to the grazing point.
+        const GrazingTorus& t = part.tori[src.index()];
+        const Vec3 g = p - u * f;
+        const double rho = std::sqrt(g.x * g.x + g.y * g.y);
+        const double out = rho - t.rc;
+        return glm::normalize(Vec3(out * g.x, out * g.y, (g.z - t.zc) * rho));
+    }
+    case Source::Rim:
+    default: {
+        // The rim point (r cos a, r sin a, z) is p - u f. Its sine is p.e / r exactly (f has no e
+        // part); its cosine comes from u, whose error is about the rounding over |n.f| (u is the
+        // axial row's, (p.n - z) / fn). Each is taken where it is the better conditioned and the
+        // other follows from it.
+        const Circle& rim = part.rims[src.index()];
+        const double fd = f.x, fn = f.z;
+        const double invR = 1.0 / rim.r;
+        double c = (p.x - u * fd) * invR, s = p.y * invR;
+        if (std::abs(s) < std::abs(c)) c = std::copysign(std::sqrt(std::max(0.0, 1.0 - s * s)), c);
+        else s = std::copysign(std::sqrt(std::max(0.0, 1.0 - c * c)), s);
+        // Perpendicular to f and to the rim's tangent (-s, c, 0): in the meridian plane, fn across
+        // the axis and -c fd along it; of its two senses, the one inside the rim's cone of normals.
+        const double ar = fn, az = -c * fd;
+        const double sense = ar * rim.nr + az * rim.nz < 0.0 ? -1.0 : 1.0;
+        const double scale = sense / std::sqrt(ar * ar + az * az);
+        return Vec3(ar * c * scale, ar * s * scale, az * scale);
+    }
+    }
+}
 }  // namespace
 
 MoveSweep::MoveSweep(const Tool& tool, const Move& move) : MoveSweep(tool, move.start, move.end, move.axis) {}
@@ -459,6 +649,7 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
         throw Error("tool '" + tool.description() + "' has " + std::to_string(tool.convexParts().size()) +
                     " convex parts; the sweep handles at most " + std::to_string(kMaxParts));
     feedLength_ = glm::length(f);
+    creaseU_ = sweep_tol::kCrease / feedLength_;
     const Vec3& n = frame_.n;
     const double fn = glm::dot(f, n);
     if (feedLength_ <= tol::kZeroMove) {
@@ -487,7 +678,14 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
         kappa_ = std::abs(fnl) / flen;
         qDir_ = Vec3(-fnl / flen, 0.0, fd / flen);
     }
-    const auto rimAt = [&](double z, double r) { return Circle{z, r, fd * z / flen}; };
+    // A rim at height z, radius r between faces with meridian unit normals (nr0, nz0) below and
+    // (nr1, nz1) above.
+    const auto rimAt = [&](double z, double r, double nr0, double nz0, double nr1, double nz1) {
+        return Circle{z, r, fd * z / flen, nr0 + nr1, nz0 + nz1};
+    };
+    const auto sideNormal = [](const ProfilePiece& p, double z, double& nr, double& nz) {
+        meridianNormal(p, pieceRadius(p, z), z, nr, nz);
+    };
 
     for (const ConvexPart& cp : tool.convexParts()) {
         Part part;
@@ -498,6 +696,20 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
         const ProfilePiece& bottom = part.pieces.front();
         const ProfilePiece& top = part.pieces.back();
         const double rBottom = pieceRadius(bottom, part.z0), rTop = pieceRadius(top, part.z1);
+        StaticProfile& profile = staticProfiles_.emplace_back();
+        profile.z0 = part.z0, profile.z1 = part.z1;
+        for (std::size_t i = 0; i < part.pieces.size(); ++i) {
+            const ProfilePiece& p = part.pieces[i];
+            ProfileSide side;
+            side.z1 = pieceZ1(p);
+            if (const auto* a = std::get_if<ArcPiece>(&p))
+                side.arc = true, side.rc = a->rc, side.zc = a->zc, side.invRho = 1.0 / a->rho;
+            else meridianNormal(p, 0.0, 0.0, side.nr, side.nz);
+            side.creaseAbove = i + 1 < part.pieces.size() && slopeJumps(p, part.pieces[i + 1], side.z1);
+            profile.sides.push_back(side);
+        }
+        profile.bottomFace = {rBottom, faceMeetsAtAngle(bottom, part.z0)};
+        profile.topFace = {rTop, faceMeetsAtAngle(top, part.z1)};
 
         // The largest radius and the heights where it is reached (R is concave: an interval).
         part.rMax = -kInf;
@@ -538,6 +750,8 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
                     s.origin = c->r0 * radial + Vec3(0.0, 0.0, c->z0);
                     s.span = (c->r1 - c->r0) * radial + Vec3(0.0, 0.0, c->z1 - c->z0);
                     s.normal = glm::cross(s.span, feedLocal_);
+                    // The cone's outward normal (radial, -dR/dz) is perpendicular to S and f.
+                    s.outward = (glm::dot(s.normal, radial) < 0.0 ? -1.0 : 1.0) / glm::length(s.normal);
                     s.degenerate = tol::kParallel * glm::length(s.span) * flen;
                     if (glm::length(s.normal) > s.degenerate) part.strips.push_back(s);
                     if (sinPhi == 0.0) break;  // a single generator
@@ -592,17 +806,22 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
             // grazes where its cone of normals holds one perpendicular to f; its sweep is an
             // elliptic cylinder. Points of a rim that do not graze lie inside the shadow cylinder,
             // so they are harmless extra candidates.
-            const auto* bottomArc = std::get_if<ArcPiece>(&bottom);
-            if (rBottom > 0.0 && !(bottomArc && arcEndIsFlat(*bottomArc, part.z0)))
-                part.rims.push_back(rimAt(part.z0, rBottom));
+            double nr0, nz0, nr1, nz1;
+            if (rBottom > 0.0 && faceMeetsAtAngle(bottom, part.z0)) {
+                sideNormal(bottom, part.z0, nr1, nz1);
+                part.rims.push_back(rimAt(part.z0, rBottom, 0.0, -1.0, nr1, nz1));
+            }
             for (std::size_t i = 0; i + 1 < part.pieces.size(); ++i) {
                 const double zj = pieceZ1(part.pieces[i]);
-                const double sLeft = pieceSlope(part.pieces[i], zj), sRight = pieceSlope(part.pieces[i + 1], zj);
-                if (std::abs(sLeft - sRight) > tol::kSlope * std::max(1.0, std::abs(sLeft)))
-                    part.rims.push_back(rimAt(zj, pieceRadius(part.pieces[i], zj)));
+                if (!slopeJumps(part.pieces[i], part.pieces[i + 1], zj)) continue;
+                sideNormal(part.pieces[i], zj, nr0, nz0);
+                sideNormal(part.pieces[i + 1], zj, nr1, nz1);
+                part.rims.push_back(rimAt(zj, pieceRadius(part.pieces[i], zj), nr0, nz0, nr1, nz1));
             }
-            const auto* topArc = std::get_if<ArcPiece>(&top);
-            if (rTop > 0.0 && !(topArc && arcEndIsFlat(*topArc, part.z1))) part.rims.push_back(rimAt(part.z1, rTop));
+            if (rTop > 0.0 && faceMeetsAtAngle(top, part.z1)) {
+                sideNormal(top, part.z1, nr0, nz0);
+                part.rims.push_back(rimAt(part.z1, rTop, nr0, nz0, 0.0, 1.0));
+            }
         }
 
         if (kind_ == SweepKind::Horizontal) {
@@ -677,13 +896,22 @@ Interval MoveSweep::boxLocal(const Part& part, const Query& q) const {
     return range;
 }
 
-Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
+template <bool kTrace>
+Interval MoveSweep::intersectLocal(const Part& part, const Query& q, [[maybe_unused]] EndTrace* trace) const {
     const Vec3& o = q.o;
     const Vec3& w = q.w;
-    if (kind_ == SweepKind::Static) return staticPart(part, o, w);
+    if (kind_ == SweepKind::Static) {
+        if constexpr (kTrace) trace->lo.pose = trace->hi.pose = 0;
+        return staticPart(part, o, w);
+    }
     if (q.parallel) {
         // A line parallel to the move: the static interval stretched along it by the move.
-        return staticPart(part, o, w).hull(staticPart(part, o - feedLocal_, w));
+        const Interval first = staticPart(part, o, w), last = staticPart(part, o - feedLocal_, w);
+        if constexpr (kTrace) {
+            trace->lo.pose = first.isEmpty() || last.lo < first.lo ? 1 : 0;
+            trace->hi.pose = first.isEmpty() || last.hi > first.hi ? 1 : 0;
+        }
+        return first.hull(last);
     }
     // Early rejection, seen along f: the part lies within rMax of its axis segment, whose ends
     // project at signed distances g / |c| from the projected line (g = c . P - c . o). When both
@@ -696,7 +924,8 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
     if (!part.tori.empty() && boxLocal(part, q).isEmpty()) return Interval::empty();
 
     const double fd = feedLocal_.x, fn = feedLocal_.z;
-    Extremes ex;
+    Extremes<kTrace> ex;
+    if constexpr (kTrace) ex.lo = &trace->lo.sources, ex.hi = &trace->hi.sources;
 
     if (kind_ == SweepKind::Plunge) {
         // The shadow cylinder is rho = rMax; its point at height z is swept by the tool at u when
@@ -708,7 +937,7 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
             const double v = i ? r2 : r1;
             const double z = o.z + v * w.z;
             const double ua = (z - part.zMax1) / fn, ub = (z - part.zMax0) / fn;
-            ex.add(v, std::min(ua, ub), std::max(ua, ub));
+            ex.add(v, std::min(ua, ub), std::max(ua, ub), kNoSource);
         }
     } else {
         // Eq. (31): o + v w = O + t S + u f, solved by triple products with D = w . (S x f).
@@ -721,7 +950,7 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
             if (t < -sweep_tol::kParam || t > 1.0 + sweep_tol::kParam) continue;
             const double v = -glm::dot(r, s.normal) * invD;
             const double u = glm::dot(r, glm::cross(w, s.span)) * invD;
-            ex.add(v, u);
+            ex.add(v, u, Source::of(Source::Strip, std::uint32_t(&s - part.strips.data())));
         }
 
         if (kind_ == SweepKind::Horizontal) {
@@ -738,7 +967,7 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
                         const Vec3 p = o + v * w;
                         if (p.z < a.z0 - zSlack || p.z > a.z1 + zSlack) continue;
                         if (a.rc > 0.0 && side * p.y < a.rc) continue;  // the inner half: not the tool's
-                        ex.add(v, p.x / fd);
+                        ex.add(v, p.x / fd, kNoSource);
                     }
                     if (a.rc == 0.0) break;  // a sphere: one circle
                 }
@@ -751,7 +980,7 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
                     if (std::abs(o.z - disk.z) > tol::kLength || w.y == 0.0) continue;
                     for (double side : {1.0, -1.0}) {
                         const double v = (side * disk.r - o.y) / w.y;
-                        ex.add(v, (o.x + v * w.x) / fd);
+                        ex.add(v, (o.x + v * w.x) / fd, kNoSource);
                     }
                     continue;
                 }
@@ -760,7 +989,7 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
                 const double s2 = disk.r * disk.r - p.y * p.y;
                 if (s2 < 0.0) continue;
                 const double s = std::sqrt(s2);
-                ex.add(v, (p.x - s) / fd, (p.x + s) / fd);
+                ex.add(v, (p.x - s) / fd, (p.x + s) / fd, kNoSource);
             }
         } else {
             // Sphere: the grazing great circle perpendicular to f sweeps a cylinder of radius rho
@@ -777,14 +1006,15 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
                     const double u = (rf + v * wf) * invF2_;
                     const double z = o.z + v * w.z - u * fn;  // height of the grazing point
                     if (z < cap.z0 - zSlack || z > cap.z1 + zSlack) continue;
-                    ex.add(v, u);
+                    ex.add(v, u, Source::of(Source::Capsule, std::uint32_t(&cap - part.capsules.data())));
                 }
             }
 
             // Torus: Eq. (36) and Algorithm 1 (see torusCrossings).
             if (!part.tori.empty()) {
                 const TorusLine tl{o, w, q.c, q.c2, q.co, feedLocal_};
-                for (const GrazingTorus& tor : part.tori) torusCrossings(tor, tl, ex);
+                for (const GrazingTorus& tor : part.tori)
+                    torusCrossings(tor, std::uint32_t(&tor - part.tori.data()), tl, ex);
             }
 
             // Rims: the sweep of a rim circle (radius r at height zr) is an elliptic cylinder.
@@ -807,7 +1037,8 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
                 const double c = kappa2 * (o.y * o.y - rim.r * rim.r) + dq * dq;
                 const double qq = -(b + std::copysign(kappa_ * std::sqrt(disc), b));
                 const double roots[2] = {qq * invA, qq != 0.0 ? c / qq : qq * invA};
-                for (double v : roots) ex.add(v, (o.z + v * w.z - rim.z) * invFn_);
+                const Source src = Source::of(Source::Rim, std::uint32_t(&rim - part.rims.data()));
+                for (double v : roots) ex.add(v, (o.z + v * w.z - rim.z) * invFn_, src);
             }
         }
     }
@@ -827,19 +1058,78 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q) const {
     Interval out;
     if (ex.hiU1 >= 0.0 && ex.hiU0 <= 1.0) {
         out.hi = ex.vHi;
+        if constexpr (kTrace) trace->hi.pose = -1, trace->hi.u0 = ex.hiU0, trace->hi.u1 = ex.hiU1;
     } else {
-        const Interval& s = staticAt(ex.hiU0 > 1.0 ? 1 : 0);
+        const int pose = ex.hiU0 > 1.0 ? 1 : 0;
+        const Interval& s = staticAt(pose);
         if (s.isEmpty()) return s;
         out.hi = s.hi;
+        if constexpr (kTrace) trace->hi.pose = pose;
     }
     if (ex.loU1 >= 0.0 && ex.loU0 <= 1.0) {
         out.lo = ex.vLo;
+        if constexpr (kTrace) trace->lo.pose = -1, trace->lo.u0 = ex.loU0, trace->lo.u1 = ex.loU1;
     } else {
-        const Interval& s = staticAt(ex.loU0 > 1.0 ? 1 : 0);
+        const int pose = ex.loU0 > 1.0 ? 1 : 0;
+        const Interval& s = staticAt(pose);
         if (s.isEmpty()) return s;
         out.lo = s.lo;
+        if constexpr (kTrace) trace->lo.pose = pose;
     }
     return out;
+}
+
+void MoveSweep::hermite(std::size_t index, const Query& q, Interval local, const EndTrace& trace,
+                        LineHit& hit) const {
+    const Part& part = parts_[index];
+    const StaticProfile& profile = staticProfiles_[index];
+    for (const bool hi : {false, true}) {
+        const EndTrace::End& end = hi ? trace.hi : trace.lo;
+        const Vec3 p = q.o + (hi ? local.hi : local.lo) * q.w;
+        Vec3 n;  // the local normal
+        bool sharp = false;
+        const bool onStatic = end.pose >= 0;
+        const bool atStart = !onStatic && end.u1 <= creaseU_, atEnd = !onStatic && end.u0 >= 1.0 - creaseU_;
+        const bool profileNormal = onStatic || kind_ == SweepKind::Horizontal;
+        if (!profileNormal) {
+            if (kind_ == SweepKind::Plunge) {
+                // The shadow cylinder about the axis.
+                const double rho = std::sqrt(p.x * p.x + p.y * p.y);
+                n = rho > 0.0 ? Vec3(p.x, p.y, 0.0) * (1.0 / rho) : Vec3(1.0, 0.0, 0.0);
+            } else {
+                // The crossing's normal, and the one tied with it if any.
+                const EndSources& src = end.sources;
+                const int count = src.second.kind() == Source::None ? 1 : 2;
+                Vec3 tied[2];
+                for (int j = 0; j < count; ++j)
+                    tied[j] = crossingNormal(part, feedLocal_, invF2_, p, j ? src.uSecond : src.uFirst,
+                                             j ? src.second : src.first);
+                n = tied[0];
+                if (count == 2) {
+                    const Vec3 mean = tied[0] + tied[1];
+                    if (glm::dot(tied[0], tied[1]) < std::cos(sweep_tol::kCreaseAngle) && glm::dot(mean, mean) > 0.0) {
+                        sharp = true;
+                        n = glm::normalize(mean);
+                    }
+                }
+            }
+        }
+        if (profileNormal || atStart || atEnd) {
+            // The static tool's normal where the end lies on it. A crossing that only the start (or
+            // end) pose reaches lies on that static tool too, and the swept volume has a crease
+            // there if the static tool has one (its faces meet the crossing's surface at an angle).
+            // On a horizontal move, the normal at (0, p.e, p.n): seen along f, the shadow cylinder
+            // is the profile at azimuth +-e with the flat faces.
+            const Vec3 x = (onStatic ? end.pose == 1 : atEnd) ? p - feedLocal_
+                           : onStatic || atStart                ? p
+                                                                : Vec3(0.0, p.y, p.z);
+            Vec3 normal;
+            sharp = staticNormal(profile, x, normal) || sharp;
+            if (profileNormal) n = normal;
+        }
+        (hi ? hit.normalHi : hit.normalLo) = n.x * frame_.d + n.y * frame_.e + n.z * frame_.n;
+        (hi ? hit.sharpHi : hit.sharpLo) = sharp;
+    }
 }
 
 Interval MoveSweep::bound(const Line& line) const {
@@ -874,7 +1164,7 @@ Interval MoveSweep::bound(const Line& line) const {
 std::size_t MoveSweep::intersectParts(const Line& line, Interval* out) const {
     const Query q = toLocal(line);
     for (std::size_t i = 0; i < parts_.size(); ++i) {
-        const Interval iv = intersectLocal(parts_[i], q);
+        const Interval iv = intersectLocal<false>(parts_[i], q, nullptr);
         out[i] = iv.isEmpty() ? Interval::empty() : Interval{iv.lo + q.vShift, iv.hi + q.vShift};
     }
     return parts_.size();
@@ -883,9 +1173,15 @@ std::size_t MoveSweep::intersectParts(const Line& line, Interval* out) const {
 std::size_t MoveSweep::intersectParts(const Line& line, LineHit* out) const {
     const Query q = toLocal(line);
     for (std::size_t i = 0; i < parts_.size(); ++i) {
-        const Interval iv = intersectLocal(parts_[i], q);
-        out[i] = LineHit{};
-        if (!iv.isEmpty()) out[i].range = {iv.lo + q.vShift, iv.hi + q.vShift};
+        EndTrace trace;
+        const Interval iv = intersectLocal<true>(parts_[i], q, &trace);
+        LineHit& hit = out[i];
+        if (iv.isEmpty()) {
+            hit = LineHit{};
+            continue;
+        }
+        hit.range = {iv.lo + q.vShift, iv.hi + q.vShift};
+        hermite(i, q, iv, trace, hit);
     }
     return parts_.size();
 }
@@ -893,7 +1189,7 @@ std::size_t MoveSweep::intersectParts(const Line& line, LineHit* out) const {
 Interval MoveSweep::intersect(const Line& line) const {
     if (parts_.size() == 1) {
         const Query q = toLocal(line);
-        const Interval iv = intersectLocal(parts_[0], q);
+        const Interval iv = intersectLocal<false>(parts_[0], q, nullptr);
         return iv.isEmpty() ? Interval::empty() : Interval{iv.lo + q.vShift, iv.hi + q.vShift};
     }
     Interval parts[kMaxParts];

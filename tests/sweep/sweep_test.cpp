@@ -26,6 +26,31 @@ void requireInterval(const Interval& got, double lo, double hi) {
     CHECK(got.hi == Approx(hi).margin(kEps));
 }
 
+/// The hit of the world line through `origin` along `dir` with a sweep of a convex tool.
+LineHit hitAlong(const MoveSweep& s, const Vec3& origin, const Vec3& dir) {
+    LineHit hits[MoveSweep::kMaxParts];
+    REQUIRE(s.intersectParts(Line{origin, dir}, hits) == 1);
+    REQUIRE(!hits[0].isEmpty());
+    return hits[0];
+}
+
+/// Checks a unit normal against its expected value (any length; normalised here).
+void checkNormal(const Vec3& got, const Vec3& expected) {
+    const Vec3 e = glm::normalize(expected);
+    INFO("normal (" << got.x << ", " << got.y << ", " << got.z << "), expected (" << e.x << ", " << e.y << ", "
+                    << e.z << ")");
+    CHECK(glm::length(got - e) <= kEps);
+}
+
+/// Checks both ends of a hit: its interval, its normals, and that neither end is sharp.
+void checkSmooth(const LineHit& hit, double lo, double hi, const Vec3& normalLo, const Vec3& normalHi) {
+    requireInterval(hit.range, lo, hi);
+    checkNormal(hit.normalLo, normalLo);
+    checkNormal(hit.normalHi, normalHi);
+    CHECK(!hit.sharpLo);
+    CHECK(!hit.sharpHi);
+}
+
 }  // namespace
 
 TEST_CASE("sweep: flat end mill on a horizontal move", "[sweep]") {
@@ -282,4 +307,197 @@ TEST_CASE("sweep: the cheap bound holds every line's interval", "[sweep]") {
     const MoveSweep ball(ballEndMill(6.0, {15.0, 25.0}), Vec3(0, 0, 0), Vec3(10, 0, 0), kZ);
     const Interval cheap = ball.bound(Line{Vec3(5, 2, -10), kZ});
     CHECK(cheap.lo == Approx(10 + 3 - std::sqrt(5.0)).margin(1e-8));
+}
+
+// Hermite data: the swept volume's outward unit normal at both ends of a line's interval. Each
+// expected normal is derived in the comments from the geometry of the case.
+
+TEST_CASE("sweep normals: flat end mill on a horizontal move, floor, top and walls", "[sweep]") {
+    const Tool flat = flatEndMill(6.0, {20.0, 20.0});
+    const MoveSweep s(flat, Vec3(0, 0, 0), Vec3(10, 0, 0), kZ);
+    // A z dexel in the slot enters through the floor (the bottom faces, normal -z) and leaves
+    // through the top faces (+z).
+    checkSmooth(hitAlong(s, Vec3(5, 1, -100), kZ), 100.0, 120.0, -kZ, kZ);
+    // A y dexel across the slot: the walls are the cylinder's grazing generators at y = -+3.
+    checkSmooth(hitAlong(s, Vec3(5, -100, 5), Vec3(0, 1, 0)), 97.0, 103.0, Vec3(0, -1, 0), Vec3(0, 1, 0));
+    // A y dexel past the end meets only the end tool, at (12, -+sqrt(5)): the cylinder's normal
+    // points away from its axis at x = 10.
+    checkSmooth(hitAlong(s, Vec3(12, -100, 5), Vec3(0, 1, 0)), 100.0 - std::sqrt(5.0), 100.0 + std::sqrt(5.0),
+                Vec3(2, -std::sqrt(5.0), 0), Vec3(2, std::sqrt(5.0), 0));
+    // An x dexel along the move at y = 1 enters the start tool at x = -sqrt(8) and leaves the end
+    // tool at x = 10 + sqrt(8).
+    checkSmooth(hitAlong(s, Vec3(-100, 1, 5), Vec3(1, 0, 0)), 100.0 - std::sqrt(8.0), 110.0 + std::sqrt(8.0),
+                Vec3(-std::sqrt(8.0), 1, 0), Vec3(std::sqrt(8.0), 1, 0));
+}
+
+TEST_CASE("sweep normals: ball end mill ramp, the capsule", "[sweep]") {
+    // Ball D6 from (0,0,0) to (10,0,-5) (the interval case above): the z dexel at (5, 1) leaves
+    // the capsule at z = 1/2 - sqrt(10), at u = (13 - z) / 25, where the ball's centre is
+    // c(u) = (10u, 0, 3 - 5u); the normal points from c(u) to the point.
+    const Tool ball = ballEndMill(6.0, {20.0, 20.0});
+    const MoveSweep s(ball, Vec3(0, 0, 0), Vec3(10, 0, -5), kZ);
+    const double z = 0.5 - std::sqrt(10.0), u = (13.0 - z) / 25.0;
+    const Vec3 floorNormal = Vec3(5, 1, z) - Vec3(10 * u, 0, 3 - 5 * u);
+    CHECK(glm::length(floorNormal) == Approx(3.0));
+    CHECK(glm::dot(floorNormal, Vec3(10, 0, -5)) == Approx(0.0).margin(1e-12));  // grazing
+    // The top is the swept rim of the top face (radius 3): near (5, 1) it is z = 20 - 5 u(x, y)
+    // with u the first pose covering (x, y), u = (x - sqrt(9 - y^2)) / 10, so
+    // z = 20 - (x - sqrt(9 - y^2)) / 2 and the upward normal (-z_x, -z_y, 1) is
+    // (1/2, y / (2 sqrt(9 - y^2)), 1), at y = 1 proportional to (sqrt(8), 1, 2 sqrt(8)).
+    const Vec3 topNormal(std::sqrt(8.0), 1.0, 2.0 * std::sqrt(8.0));
+    checkSmooth(hitAlong(s, Vec3(5, 1, -100), kZ), 100.0 + z, 100.0 + 17.5 + std::sqrt(8.0) / 2, floorNormal,
+                topNormal);
+}
+
+TEST_CASE("sweep normals: flat end mill ramp, the swept bottom rim", "[sweep]") {
+    // Flat D6 from (0,0,0) to (10,0,-5). Near (5, 1) the floor is z(x, y) = -5 u(x, y) with u the
+    // last pose whose bottom disk covers (x, y): (x - 10u)^2 + y^2 = 9, u = (x + sqrt(9 - y^2)) / 10,
+    // so z = -(x + sqrt(9 - y^2)) / 2. The outward (downward) normal is (z_x, z_y, -1) =
+    // (-1/2, y / (2 sqrt(9 - y^2)), -1), at y = 1 proportional to (-sqrt(8), 1, -2 sqrt(8)). The
+    // top is the top rim's sweep, mirrored (see the ball ramp): (sqrt(8), 1, 2 sqrt(8)).
+    const Tool flat = flatEndMill(6.0, {20.0, 20.0});
+    const Vec3 floorNormal(-std::sqrt(8.0), 1.0, -2.0 * std::sqrt(8.0));
+    const Vec3 topNormal(std::sqrt(8.0), 1.0, 2.0 * std::sqrt(8.0));
+    const MoveSweep s(flat, Vec3(0, 0, 0), Vec3(10, 0, -5), kZ);
+    checkSmooth(hitAlong(s, Vec3(5, 1, -100), kZ), 100.0 - 2.5 - std::sqrt(8.0) / 2,
+                100.0 + 17.5 + std::sqrt(8.0) / 2, floorNormal, topNormal);
+    // Ascending, the same move reversed: the same set, the same normals.
+    const MoveSweep r(flat, Vec3(10, 0, -5), Vec3(0, 0, 0), kZ);
+    checkSmooth(hitAlong(r, Vec3(5, 1, -100), kZ), 100.0 - 2.5 - std::sqrt(8.0) / 2,
+                100.0 + 17.5 + std::sqrt(8.0) / 2, floorNormal, topNormal);
+}
+
+TEST_CASE("sweep normals: bull-nose ramp, the torus", "[sweep]") {
+    // Bull-nose D10 R2 from (0,0,0) to (20,0,-4) (the interval case above): the z dexel at (10, 0)
+    // leaves through the torus of the pose whose axis is 3 + s ahead of it, s = 2 / sqrt(26), at the
+    // point of the profile circle (centre 3 from the axis, 2 up) that is s further out: the normal
+    // is (-s, 0, -sqrt(4 - s^2)) / 2 (ahead of the dexel is +x, so outward is -x), and it is
+    // perpendicular to the feed: -20 s + 4 sqrt(4 - s^2) = 0 is the optimum's condition. The top:
+    // the top rim's sweep (radius 5), z = 20 - 4 u(x, y) with u = (x - sqrt(25 - y^2)) / 20, whose
+    // upward normal (-z_x, -z_y, 1) is (1/5, 0, 1) at y = 0.
+    const Tool bull = bullNoseEndMill(10.0, 2.0, {20.0, 20.0});
+    const MoveSweep s(bull, Vec3(0, 0, 0), Vec3(20, 0, -4), kZ);
+    const double sOpt = 2.0 / std::sqrt(26.0);
+    const double floorZ = 2.0 - std::sqrt(4.0 - sOpt * sOpt) - 4.0 * (13.0 + sOpt) / 20.0;
+    checkSmooth(hitAlong(s, Vec3(10, 0, -100), kZ), 100.0 + floorZ, 119.0, Vec3(-sOpt, 0, -std::sqrt(4 - sOpt * sOpt)),
+                Vec3(1, 0, 5));
+}
+
+TEST_CASE("sweep normals: plunge, the shadow cylinder is radial", "[sweep]") {
+    const Tool flat = flatEndMill(6.0, {20.0, 20.0});
+    for (bool plunge : {true, false}) {
+        const Vec3 a(0, 0, 10), b(0, 0, 0);
+        const MoveSweep s(flat, plunge ? a : b, plunge ? b : a, kZ);
+        // An x dexel at y = 1, z = 5 crosses the hole's wall at x = -+sqrt(8).
+        checkSmooth(hitAlong(s, Vec3(-100, 1, 5), Vec3(1, 0, 0)), 100.0 - std::sqrt(8.0), 100.0 + std::sqrt(8.0),
+                    Vec3(-std::sqrt(8.0), 1, 0), Vec3(std::sqrt(8.0), 1, 0));
+        // A z dexel in the hole: the lowest pose's bottom face and the highest pose's top face.
+        checkSmooth(hitAlong(s, Vec3(1, 1, -100), kZ), 100.0, 130.0, -kZ, kZ);
+    }
+}
+
+TEST_CASE("sweep normals: tilted tool axis (3+2)", "[sweep]") {
+    // Horizontal: a flat D6 on an axis tilted 30 degrees, moving along y. A line along the axis
+    // runs from the tip plane (normal -n) to the top plane (+n); a line across the axis and the
+    // feed, 5 up the axis, crosses the two walls (normals -+ across).
+    const Tool flat = flatEndMill(6.0, {20.0, 20.0});
+    const Vec3 n(0.5, 0.0, std::sqrt(3.0) / 2);
+    const Vec3 across(std::sqrt(3.0) / 2, 0.0, -0.5);
+    const MoveSweep h(flat, Vec3(0, 0, 0), Vec3(0, 10, 0), n);
+    checkSmooth(hitAlong(h, Vec3(0, 4, 0) - 50.0 * n, n), 50.0, 70.0, -n, n);
+    checkSmooth(hitAlong(h, Vec3(0, 4, 0) + 5.0 * n - 50.0 * across, across), 47.0, 53.0, -across, across);
+
+    // General: a ball D6 on a tilted axis, moving up and sideways. Its centre runs on
+    // c(u) = a + 3 n + u f. At c(1/2) the capsule's cross-section is the circle of radius 3 in the
+    // plane perpendicular to f. Along e (perpendicular to n and f) nothing else of the tool reaches
+    // farther: the line through c(1/2) along e meets the sweep in [-3, 3] around it, normals -+e.
+    // Along -q, q the unit vector across f towards n, the shank is above: the line's far end is
+    // the capsule's lowest line, c(1/2) - 3 q, with normal -q.
+    const Tool ball = ballEndMill(6.0, {20.0, 20.0});
+    const Vec3 t = glm::normalize(Vec3(0.3, -0.2, 1.0));
+    const Vec3 a(1, 2, 3), f(8, -3, 4);
+    const MoveSweep g(ball, a, a + f, t);
+    REQUIRE(g.kind() == SweepKind::General);
+    const Vec3 centre = a + 3.0 * t + 0.5 * f;
+    const Vec3 e = glm::normalize(glm::cross(t, f));
+    const Vec3 fu = glm::normalize(f);
+    const Vec3 q = glm::normalize(t - glm::dot(t, fu) * fu);
+    checkSmooth(hitAlong(g, centre - 50.0 * e, e), 47.0, 53.0, -e, e);
+    const LineHit down = hitAlong(g, centre + 50.0 * q, -q);
+    CHECK(down.range.hi == Approx(53.0).margin(kEps));
+    checkNormal(down.normalHi, -q);
+    CHECK(!down.sharpHi);
+}
+
+TEST_CASE("sweep normals: the static tool at the ends of a move", "[sweep]") {
+    const Tool ball = ballEndMill(6.0, {20.0, 20.0});
+    // Horizontal, a line along the move at y = 1, z = 2: it enters the start ball (centre
+    // (0, 0, 3)) at (-sqrt(7), 1, 2) and leaves the end ball (centre (10, 0, 3)) at
+    // (10 + sqrt(7), 1, 2); the normals point from the centres.
+    const MoveSweep h(ball, Vec3(0, 0, 0), Vec3(10, 0, 0), kZ);
+    checkSmooth(hitAlong(h, Vec3(-100, 1, 2), Vec3(1, 0, 0)), 100.0 - std::sqrt(7.0), 110.0 + std::sqrt(7.0),
+                Vec3(-std::sqrt(7.0), 1, -1), Vec3(std::sqrt(7.0), 1, -1));
+    // A ramp from (0,0,0) to (10,0,-5), a z dexel at (-2, 1), behind the start: the start ball
+    // covers it from z = 3 - sqrt(9 - 5) = 1 (normal (-2, 1, -2) / 3 from its centre), and the
+    // later poses only higher up (the lowest covered height 3 - 5u - sqrt(8 - (2 + 10u)^2) rises
+    // at u = 0 with slope 5). The top: the start tool's top face.
+    const MoveSweep r(ball, Vec3(0, 0, 0), Vec3(10, 0, -5), kZ);
+    checkSmooth(hitAlong(r, Vec3(-2, 1, -100), kZ), 101.0, 120.0, Vec3(-2, 1, -2), kZ);
+}
+
+TEST_CASE("sweep normals: ends on a crease are sharp", "[sweep]") {
+    const Tool flat = flatEndMill(6.0, {20.0, 20.0});
+    const double r2 = std::sqrt(2.0);
+    {
+        // The tool at rest: a line through its bottom rim at (3, 0, 0), into the tool along
+        // (-1, 0, 1): the lower end is on the rim, between the bottom face (-z) and the side (+x);
+        // it leaves through the side at x = -3 (6 further along x, at 6 sqrt(2)).
+        const MoveSweep s(flat, Vec3(0.0), Vec3(0.0), kZ);
+        const Vec3 dir = Vec3(-1, 0, 1) / r2;
+        const LineHit hit = hitAlong(s, Vec3(3, 0, 0) - 10.0 * dir, dir);
+        requireInterval(hit.range, 10.0, 10.0 + 6.0 * r2);
+        CHECK(hit.sharpLo);
+        checkNormal(hit.normalLo, Vec3(1, 0, -1));
+        CHECK(!hit.sharpHi);
+        checkNormal(hit.normalHi, Vec3(-1, 0, 0));
+    }
+    {
+        // A horizontal move and a line lying in the bottom face's plane: it crosses the slot's
+        // edges, where the floor meets the walls.
+        const MoveSweep s(flat, Vec3(0, 0, 0), Vec3(10, 0, 0), kZ);
+        const LineHit hit = hitAlong(s, Vec3(5, -100, 0), Vec3(0, 1, 0));
+        requireInterval(hit.range, 97.0, 103.0);
+        CHECK(hit.sharpLo);
+        CHECK(hit.sharpHi);
+        checkNormal(hit.normalLo, Vec3(0, -1, -1));
+        checkNormal(hit.normalHi, Vec3(0, 1, -1));
+    }
+    {
+        // A descending ramp: the start tool's bottom rim at its back, (-3, 0, 0), is reached by no
+        // later pose. A line through it into the start tool along (1, 0, 1) starts there on the
+        // crease between the start tool's bottom face and the swept rim: a normal from that cone
+        // has no y part and points back and down.
+        const MoveSweep s(flat, Vec3(0, 0, 0), Vec3(10, 0, -5), kZ);
+        const Vec3 dir = Vec3(1, 0, 1) / r2;
+        const LineHit hit = hitAlong(s, Vec3(-3, 0, 0) - 10.0 * dir, dir);
+        CHECK(hit.range.lo == Approx(10.0).margin(kEps));
+        CHECK(hit.sharpLo);
+        CHECK(glm::length(hit.normalLo) == Approx(1.0));
+        CHECK(hit.normalLo.y == Approx(0.0).margin(kEps));
+        CHECK(hit.normalLo.x < 0.0);
+        CHECK(hit.normalLo.z < 0.0);
+    }
+    {
+        // A V-bit (45 degrees) ramping gently, f = (10, 0, -1): the cone's generators at
+        // cos(phi) = -1/10 graze, and the apex's path is a crease of the sweep where their two
+        // strips meet. A z dexel through the apex's path at u = 1/2 starts there, at z = -1/2
+        // (other poses put the cone, z = -u + |5 - 10u|, higher). The two strips' normals,
+        // (-1/10, -+sqrt(0.99), -1) / sqrt(2), tie there: the mean has no y part.
+        const Tool vbit = chamferMill(0.0, M_PI / 4, 6.0, {20.0, 20.0});
+        const MoveSweep s(vbit, Vec3(0, 0, 0), Vec3(10, 0, -1), kZ);
+        const LineHit hit = hitAlong(s, Vec3(5, 0, -100), kZ);
+        CHECK(hit.range.lo == Approx(99.5).margin(kEps));
+        CHECK(hit.sharpLo);
+        checkNormal(hit.normalLo, Vec3(-0.1, 0, -1));
+    }
 }

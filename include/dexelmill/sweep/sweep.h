@@ -23,6 +23,13 @@
 /// the axis: Z is the cylinder of the largest radius), horizontal moves (the profile projected
 /// along f, with the flat faces), and lines parallel to the move (the static intervals at both
 /// ends, hulled). Non-convex tools are swept part by part; the parts' intervals are united.
+///
+/// Hermite data (intersectParts with LineHit): an end on the shadow cylinder's boundary takes the
+/// tool's normal at the grazing point there (perpendicular to f), an end on a static tool that
+/// tool's normal. The solver records where each candidate end came from, and the normals are found
+/// for the two chosen ends only; the Interval queries run the same solver without the record.
+/// An end is sharp on a crease of the static tool, where two tied crossings' normals differ, and
+/// where a crossing that only the start or end pose reaches lies on a crease of that static tool.
 #pragma once
 
 #include <array>
@@ -68,6 +75,16 @@ constexpr double kAngleRoot = 1e-13;
 /// Slack on the cheap bounds of a line's interval (bound(), the parts' boxes), in mm: keeps a
 /// grazing contact the exact solver finds from being cut off by the rounding of the bounds.
 constexpr double kBoxSlack = 1e-9;
+
+/// An end of an interval within this distance (mm) of a crease of the static tool (a rim where two
+/// of its faces meet at an angle, or a cone's apex) lies on the crease: the end is sharp.
+constexpr double kCrease = 1e-9;
+
+/// Two boundary crossings tied at an end of an interval (within kTie) whose normals differ by more
+/// than this angle (rad) meet at a crease of the swept volume: the end is sharp. About the
+/// resolution of the normals the stock keeps (PackedNormal::kMaxAngleError): a finer crease could
+/// not be told from a smooth surface there anyway.
+constexpr double kCreaseAngle = 1e-4;
 
 }  // namespace sweep_tol
 
@@ -135,11 +152,21 @@ public:
 
     /// The precomputed sweep of one convex part (defined in sweep.cpp).
     struct Part;
+    /// One convex part as the normals of its static tool need it (defined in sweep.cpp).
+    struct StaticProfile;
 
 private:
     struct Query;
+    struct EndTrace;
     Query toLocal(const Line& line) const;
-    Interval intersectLocal(const Part& part, const Query& q) const;
+    /// The part's interval of the query line in local parameters. With kTrace, also where each end
+    /// came from (`trace`), for endNormal; without it, `trace` is unused and nothing is recorded.
+    template <bool kTrace>
+    Interval intersectLocal(const Part& part, const Query& q, EndTrace* trace) const;
+    /// The Hermite data of part `index`'s interval `local` (local line parameters, non-empty), whose
+    /// ends intersectLocal<true> traced: the world-frame outward unit normals and sharp marks of
+    /// `hit` (its range is the caller's).
+    void hermite(std::size_t index, const Query& q, Interval local, const EndTrace& trace, LineHit& hit) const;
     Interval boxLocal(const Part& part, const Query& q) const;
 
     SweepKind kind_ = SweepKind::Static;
@@ -150,6 +177,7 @@ private:
     /// and along the feed for a moving tool).
     std::array<Vec3, 3> boxAxes_{};
     double feedLength_ = 0.0;
+    double creaseU_ = 0.0;  ///< kCrease / |f|: the feed parameters that close to 0 or 1 reach a static tool
     // Per-move constants of a General sweep's queries.
     double invF2_ = 0.0;  ///< 1 / |f|^2
     double invFn_ = 0.0;  ///< 1 / (n . f)
@@ -157,6 +185,7 @@ private:
     Vec3 qDir_{0.0};      ///< (-fn, 0, fd) / |f|: across the feed in the d-n plane
     Box bounds_;
     std::vector<Part> parts_;
+    std::vector<StaticProfile> staticProfiles_;  ///< one per part, for the normals of static ends
 };
 
 }  // namespace dexelmill

@@ -126,6 +126,29 @@ Interval intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& s
 
 }  // namespace detail
 
+/// @brief The outward unit normal of a piece's lateral surface at its point at distance `rho` from
+/// the axis and height `z`, in the meridian half-plane: `nr` across the axis (away from it), `nz`
+/// along it. A cone's is the same all along a generator, (1, -dR/dz) normalised; an arc's points
+/// from its circle's centre (rc, zc) to the point, which lies on the outer half (rho >= rc).
+inline void meridianNormal(const ProfilePiece& piece, double rho, double z, double& nr, double& nz) {
+    if (const auto* c = std::get_if<ConePiece>(&piece)) {
+        const double dr = c->r1 - c->r0, dz = c->z1 - c->z0;
+        const double inv = 1.0 / std::sqrt(dr * dr + dz * dz);
+        nr = dz * inv;
+        nz = -dr * inv;
+        return;
+    }
+    const ArcPiece& a = std::get<ArcPiece>(piece);
+    const double mr = std::max(0.0, rho - a.rc), mz = z - a.zc;
+    const double len = std::sqrt(mr * mr + mz * mz);
+    if (len == 0.0) {  // the circle's centre: no point of the surface; the equator's normal
+        nr = 1.0, nz = 0.0;
+        return;
+    }
+    nr = mr / len;
+    nz = mz / len;
+}
+
 /// @brief The interval of the line inside one piece's slab solid { z in [z0, z1], rho <= R(z) }.
 /// Cones, cylinders and spheres in closed form; the torus by bracketed root finding on the convex
 /// function rho(t) - R(z(t)) (Boost.Math Brent minimisation, then TOMS 748).
