@@ -90,9 +90,8 @@ bool reachesMaterial(const SegmentSpan& segs, const Interval& reach) {
 /// Removes a swept interval from a dexel. The material left at a new end faces the cutter: its
 /// outward normal is the sweep's, reversed.
 double subtractHit(DexelTile& tile, int local, const LineHit& hit) {
-    return tile.subtract(local, toFloat(hit.range.lo), toFloat(hit.range.hi),
-                         PackedNormal::pack(-hit.normalLo, hit.sharpLo),
-                         PackedNormal::pack(-hit.normalHi, hit.sharpHi));
+    return tile.subtract(local, toFloat(hit.range.lo), toFloat(hit.range.hi), -hit.normalLo, hit.sharpLo,
+                         -hit.normalHi, hit.sharpHi);
 }
 
 /// Where one sweep can reach in a tile: the dexels its box crosses, and its extent along them

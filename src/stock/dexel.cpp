@@ -71,7 +71,8 @@ void DexelTile::assign(const std::uint16_t* counts, const Segment* segs) {
     releaseIfEmpty();
 }
 
-double DexelTile::subtract(int local, float lo, float hi, PackedNormal atLo, PackedNormal atHi) {
+template <class NormalAt>
+double DexelTile::subtractImpl(int local, float lo, float hi, NormalAt&& normalAt) {
     if (offset_.empty() || !(lo < hi)) return 0.0;
     const std::size_t n = count_[local];
     Segment* s = segs_.data() + offset_[local];
@@ -87,8 +88,8 @@ double DexelTile::subtract(int local, float lo, float hi, PackedNormal atLo, Pac
     // What survives of [first, last): a piece left of lo and a piece right of hi.
     Segment keep[2];
     std::size_t nKeep = 0;
-    if (s[first].lo < lo) keep[nKeep++] = {s[first].lo, lo, s[first].nlo, atLo};
-    if (s[last - 1].hi > hi) keep[nKeep++] = {hi, s[last - 1].hi, atHi, s[last - 1].nhi};
+    if (s[first].lo < lo) keep[nKeep++] = {s[first].lo, lo, s[first].nlo, normalAt(false)};
+    if (s[last - 1].hi > hi) keep[nKeep++] = {hi, s[last - 1].hi, normalAt(true), s[last - 1].nhi};
     const std::size_t newCount = n - (last - first) + nKeep;
     if (newCount > n) {
         grow(local, newCount);
@@ -100,6 +101,17 @@ double DexelTile::subtract(int local, float lo, float hi, PackedNormal atLo, Pac
     count_[local] = std::uint16_t(newCount);
     if (newCount == 0) releaseIfEmpty();
     return removed;
+}
+
+double DexelTile::subtract(int local, float lo, float hi, PackedNormal atLo, PackedNormal atHi) {
+    return subtractImpl(local, lo, hi, [&](bool atHiEnd) { return atHiEnd ? atHi : atLo; });
+}
+
+double DexelTile::subtract(int local, float lo, float hi, const Vec3& atLo, bool sharpLo, const Vec3& atHi,
+                           bool sharpHi) {
+    return subtractImpl(local, lo, hi, [&](bool atHiEnd) {
+        return atHiEnd ? PackedNormal::pack(atHi, sharpHi) : PackedNormal::pack(atLo, sharpLo);
+    });
 }
 
 double DexelTile::materialLength() const {

@@ -20,6 +20,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "dexelmill/geometry/types.h"
 
@@ -43,19 +44,17 @@ struct PackedNormal {
     /// packs as "no normal".
     static PackedNormal pack(const Vec3& n, bool sharp = false) {
         const double l1 = std::abs(n.x) + std::abs(n.y) + std::abs(n.z);
-        if (!(l1 > 0.0) || !std::isfinite(l1)) return {};
-        double u = n.x / l1, v = n.y / l1;
-        if (n.z < 0.0) {  // fold the lower half over the diagonals
-            const double fu = (1.0 - std::abs(v)) * (u >= 0.0 ? 1.0 : -1.0);
-            const double fv = (1.0 - std::abs(u)) * (v >= 0.0 ? 1.0 : -1.0);
-            u = fu;
-            v = fv;
-        }
-        auto quantise = [](double c) {
-            const double q = std::round((c + 1.0) * 0.5 * kComponentMax);
-            return std::uint32_t(q < 0.0 ? 0.0 : (q > kComponentMax ? double(kComponentMax) : q));
-        };
-        return {kPresentBit | (sharp ? kSharpBit : 0u) | quantise(u) | (quantise(v) << kComponentBits)};
+        if (!(l1 > 0.0) || !(l1 < std::numeric_limits<double>::infinity())) return {};
+        const double u = n.x / l1, v = n.y / l1;
+        // The lower half folded over the diagonals (selected without a branch: the sign of n.z is
+        // as often one as the other).
+        const double fu = std::copysign(1.0 - std::abs(v), u), fv = std::copysign(1.0 - std::abs(u), v);
+        const bool lower = n.z < 0.0;
+        const double su = lower ? fu : u, sv = lower ? fv : v;
+        // (c + 1) / 2 * kComponentMax lies in [0, kComponentMax]: adding 0.5 and truncating rounds
+        // it to nearest.
+        auto quantise = [](double c) { return std::uint32_t((c + 1.0) * (0.5 * kComponentMax) + 0.5); };
+        return {kPresentBit | (sharp ? kSharpBit : 0u) | quantise(su) | (quantise(sv) << kComponentBits)};
     }
 
     /// @brief Whether a normal is stored.

@@ -61,6 +61,9 @@ public:
     /// outward normals of the material left there (the cutter's own, reversed). Ends that survive
     /// keep theirs.
     double subtract(int local, float lo, float hi, PackedNormal atLo = {}, PackedNormal atHi = {});
+    /// @brief subtract with the new ends' normals unpacked (any length; a zero vector means none):
+    /// they are packed only for the ends the cut actually makes.
+    double subtract(int local, float lo, float hi, const Vec3& atLo, bool sharpLo, const Vec3& atHi, bool sharpHi);
     /// @brief True when no dexel holds material.
     bool empty() const { return offset_.empty(); }
     /// @brief Sum of segment lengths (mm).
@@ -70,6 +73,8 @@ public:
 
 private:
     void grow(int local, std::size_t needed);
+    template <class NormalAt>
+    double subtractImpl(int local, float lo, float hi, NormalAt&& normalAt);
     void releaseIfEmpty();
 
     // offset_[i] .. offset_[i + 1] is dexel i's capacity; count_[i] the segments in use.
