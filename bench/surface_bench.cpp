@@ -2,9 +2,11 @@
 //
 //   ./build/dexelmill_bench --benchmark_filter=Surface
 //
-// Counters: rebuild_s and mesh_s (the last iteration), grid_MB (Tree::memUsage of the result),
-// rebuild_peak_MB (peak resident memory during the rebuild above the resident memory before it,
-// from VmHWM after resetting it through /proc/self/clear_refs) and peak_over_grid, their ratio.
+// Arguments: the mesher (vdb:0 the dexel mesher, vdb:1 volumeToMesh) and the threads.
+// Counters: rebuild_s and mesh_s (the last iteration; the mesh time includes the mesh's check),
+// grid_MB (Tree::memUsage of the result), peak_MB (peak resident memory of rebuild and mesh above
+// the resident memory before them, from VmHWM after resetting it through /proc/self/clear_refs),
+// triangles and folded triangles.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -13,8 +15,10 @@
 #include <vector>
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "dexelmill/job/simulate.h"
+#include "dexelmill/surface/contour.h"
 #include "dexelmill/surface/levelset.h"
 #include "dexelmill/surface/mesh.h"
 
@@ -89,36 +93,59 @@ const TriDexelStock& freeformStock() {
 
 }  // namespace
 
+// Arguments: mesher (0 dexel, 1 vdb) and threads.
 static void BM_SurfaceRebuildAndMesh512(benchmark::State& state) {
     const TriDexelStock& stock = freeformStock();
-    double rebuildS = 0.0, meshS = 0.0, peak = 0.0, grid = 0.0, tris = 0.0, active = 0.0;
+    const bool dexel = state.range(0) == 0;
+    tbb::task_arena arena(int(state.range(1)));
+    double rebuildS = 0.0, meshS = 0.0, peak = 0.0, grid = 0.0, tris = 0.0, active = 0.0, folded = 0.0;
     for (auto _ : state) {
         const bool peakOk = resetPeakMemory();  // trims the heap first: read the baseline after it
         const double before = currentMemoryMb() * kMiB;
-        const auto t0 = std::chrono::steady_clock::now();
-        LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "bench freeform"});
-        const auto t1 = std::chrono::steady_clock::now();
-        // Later iterations reuse memory the allocator kept from the first: keep the largest.
-        if (peakOk) peak = std::max(peak, peakMemoryMb() * kMiB - before);
-        Mesh mesh = meshLevelSet(ls);
-        const auto t2 = std::chrono::steady_clock::now();
-        rebuildS = std::chrono::duration<double>(t1 - t0).count();
-        meshS = std::chrono::duration<double>(t2 - t1).count();
-        grid = double(ls.memoryBytes());
-        active = double(ls.activeVoxelCount());
-        tris = double(mesh.triangles.size());
-        benchmark::DoNotOptimize(mesh);
+        arena.execute([&] {
+            const auto t0 = std::chrono::steady_clock::now();
+            LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "bench freeform"});
+            const auto t1 = std::chrono::steady_clock::now();
+            Mesh mesh;
+            MeshCheck check;
+            if (dexel) {
+                ContourStats stats;
+                mesh = contourStock(ls, stock, {}, &stats);
+                check = stats.check;
+            } else {
+                mesh = meshLevelSet(ls);
+                check = checkMesh(mesh);
+            }
+            const auto t2 = std::chrono::steady_clock::now();
+            // Later iterations reuse memory the allocator kept from the first: keep the largest.
+            if (peakOk) peak = std::max(peak, peakMemoryMb() * kMiB - before);
+            rebuildS = std::chrono::duration<double>(t1 - t0).count();
+            meshS = std::chrono::duration<double>(t2 - t1).count();
+            grid = double(ls.memoryBytes());
+            active = double(ls.activeVoxelCount());
+            tris = double(mesh.triangles.size());
+            folded = double(check.foldedTriangles);
+            benchmark::DoNotOptimize(mesh);
+        });
     }
     state.counters["rebuild_s"] = rebuildS;
     state.counters["mesh_s"] = meshS;
     state.counters["grid_MB"] = grid / 1e6;
-    state.counters["rebuild_peak_MB"] = peak / 1e6;
-    state.counters["peak_over_grid"] = grid > 0 ? peak / grid : 0.0;
+    state.counters["peak_MB"] = peak / 1e6;
     state.counters["active_voxels"] = active;
     state.counters["triangles"] = tris;
+    state.counters["folded"] = folded;
     state.counters["stock_MB"] = double(stock.memoryBytes()) / 1e6;
 }
-BENCHMARK(BM_SurfaceRebuildAndMesh512)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
+BENCHMARK(BM_SurfaceRebuildAndMesh512)
+    ->ArgNames({"vdb", "threads"})
+    ->Args({0, 1})
+    ->Args({0, 2})
+    ->Args({1, 1})
+    ->Args({1, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(3);
 
 static void BM_SurfaceMeshCheck512(benchmark::State& state) {
     const Mesh mesh = meshLevelSet(rebuildLevelSet(freeformStock()));

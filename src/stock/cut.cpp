@@ -87,6 +87,16 @@ bool reachesMaterial(const SegmentSpan& segs, const Interval& reach) {
     return false;
 }
 
+/// Whether a dexel parameter lies strictly inside one of the segments: where a subtraction ending
+/// there makes a new segment end (DexelTile::subtract's test).
+bool insideMaterial(const SegmentSpan& segs, float x) {
+    for (const Segment& s : segs) {
+        if (s.lo >= x) return false;
+        if (s.hi > x) return true;
+    }
+    return false;
+}
+
 /// Removes a swept interval from a dexel. The material left at a new end faces the cutter: its
 /// outward normal is the sweep's, reversed.
 double subtractHit(DexelTile& tile, int local, const LineHit& hit) {
@@ -170,13 +180,21 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                 if (!reachesMaterial(segs, reach)) continue;
                 ++st.visited;
                 double removed = 0.0;
+                // The Hermite data only for the interval ends that will become segment ends: those
+                // inside material. (A part's subtraction only removes material, so the ends flagged
+                // before it are a superset of those the next part makes.)
+                const MoveSweep::EndFilter makesEnds = [&](std::size_t, const Interval& range) {
+                    const SegmentSpan now = tile.segments(local);
+                    return (insideMaterial(now, toFloat(range.lo)) ? MoveSweep::kEndLo : 0u) |
+                           (insideMaterial(now, toFloat(range.hi)) ? MoveSweep::kEndHi : 0u);
+                };
                 if (cuts) {
-                    const std::size_t n = g.cutting->intersectParts(line, parts);
+                    const std::size_t n = g.cutting->intersectParts(line, parts, makesEnds);
                     for (std::size_t k = 0; k < n; ++k)
                         if (!parts[k].isEmpty()) removed += subtractHit(tile, local, parts[k]);
                 }
                 if (shank) {
-                    const std::size_t n = g.shank->intersectParts(line, parts);
+                    const std::size_t n = g.shank->intersectParts(line, parts, makesEnds);
                     for (std::size_t k = 0; k < n; ++k) {
                         if (parts[k].isEmpty()) continue;
                         const float lo = toFloat(parts[k].range.lo), hi = toFloat(parts[k].range.hi);

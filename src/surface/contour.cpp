@@ -57,9 +57,10 @@ constexpr double kCornerGap = 1e-3;
 constexpr double kConvexGap = 1e-3;
 
 /// A triangle whose normal makes a cosine below this with the sum of its vertices' normals is
-/// treated as folded and repaired: rounding vertices to float (relative 6e-8, so 1e-4 mm at
-/// 1.7 m) turns a triangle h = 0.1 mm across by 1e-3 rad at most, below this margin.
-constexpr double kFoldMargin = 1e-2;
+/// treated as folded and repaired: rounding vertices to float, as mesh files do (relative 6e-8,
+/// so 1e-4 mm at 1.7 m), turns a triangle a lattice cell across (1 mm at that size) by 1e-4 rad
+/// at most, a tenth of this margin.
+constexpr double kFoldMargin = 1e-3;
 
 /// Rounds of fold repair; after the last a patch vertex that still folds sits on its mass point.
 constexpr int kPullRounds = 8;
@@ -190,6 +191,7 @@ public:
         : grid_(grid), stock_(stock), lattice_(stock.lattice()), h_(lattice_.h) {
         const double half = 0.5 * options.featureAngle;
         singular_ = std::tan(half) * std::tan(half);
+        cosHalfFeature_ = std::cos(half);
         if (!(options.adaptivity >= 0.0 && options.adaptivity <= 1.0))
             throw Error("contouring: adaptivity must lie in [0, 1], got " + std::to_string(options.adaptivity));
         adaptivity_ = options.adaptivity;
@@ -198,6 +200,7 @@ public:
     Mesh run(ContourStats& stats) {
         findBlocks();
         countPass();
+        dropEmptyBlocks();
         // Prefix sums: crossings first, then patch vertices, in block order.
         std::uint64_t crossings = 0, patches = 0, triangles = 0, cells = 0;
         for (Block& b : blocks_) {
@@ -231,22 +234,19 @@ public:
         stats.edgeVertices = edges;
         stats.cornerVertices = corners;
         stats.flipped = flipped;
-        // Triangles that fold, nearly fold or have no area have their patch vertices pulled back.
-        std::vector<std::uint32_t> folded;
-        stats.check = checkMesh(mesh_, kFoldMargin, folded);
-        bool changed = false;
-        if (!folded.empty()) {
-            stats.pulledBack = repairFolds(folded);
-            changed = true;
-        }
+        // Only the mesh is needed from here on: free the rest before the check.
+        std::vector<PackedNormal>().swap(crossingNormal_);
+        std::vector<std::uint8_t>().swap(feature_);
+        std::vector<Block>().swap(blocks_);
+        std::vector<std::uint64_t>().swap(keys_);
+        stats.check = repairAndCheck(stats.pulledBack);
         if (adaptivity_ > 0.0) {
             FlatMergeOptions merge;
             merge.maxAngle = adaptivity_ * kMergeAngle;
             merge.maxDistance = adaptivity_ * kMergeDistance * h_;
             stats.merged = mergeFlatRegions(mesh_, merge);
-            changed = true;
+            stats.check = checkMesh(mesh_);
         }
-        if (changed) stats.check = checkMesh(mesh_);
         return std::move(mesh_);
     }
 
@@ -345,6 +345,23 @@ private:
         }
     }
 
+    /// Keeps the blocks with a crossing or a patch: every lookup asks for one of those.
+    void dropEmptyBlocks() {
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < blocks_.size(); ++i) {
+            if (blocks_[i].crossings == 0 && blocks_[i].patches == 0) continue;
+            if (kept != i) {
+                blocks_[kept] = std::move(blocks_[i]);
+                keys_[kept] = keys_[i];
+            }
+            ++kept;
+        }
+        blocks_.resize(kept);
+        blocks_.shrink_to_fit();
+        keys_.resize(kept);
+        keys_.shrink_to_fit();
+    }
+
     void countPass() {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks_.size(), 8), [&](const tbb::blocked_range<std::size_t>& r) {
             const auto acc = grid_.getConstAccessor();
@@ -376,6 +393,10 @@ private:
             }
         }
         // The mixed cells in rank order (offset order), with their configurations.
+        int mixedCells = 0;
+        for (int w = 0; w < kCells / 64; ++w) mixedCells += popcount(b.mixed[w]);
+        b.config.reserve(std::size_t(mixedCells));
+        b.patchBefore.reserve(std::size_t(mixedCells) + 1);
         for (int w = 0; w < kCells / 64; ++w) {
             std::uint64_t word = b.mixed[w];
             while (word) {
@@ -576,21 +597,46 @@ private:
     /// the material side of another's tangent plane (by more than kConvexGap h).
     Vec3 placeVertex(const Coord& p, const std::uint32_t* loop, int len, int& rank) const {
         const Vec3 mass = massPoint(loop, len);
-        Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-        Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+        Vec3 normal[detail::kCellEdges], offset[detail::kCellEdges];
+        Vec3 mean(0.0);
         int planes = 0;
         for (int i = 0; i < len; ++i) {
             const PackedNormal pn = crossingNormal_[loop[i]];
             if (!pn.present() || pn.sharp()) continue;
-            const Vec3 nv = pn.unpack();
-            const Eigen::Vector3d n(nv.x, nv.y, nv.z);
-            ata += n * n.transpose();
-            atb += n * glm::dot(nv, mesh_.vertices[loop[i]] - mass);
-            ++planes;
+            normal[planes] = pn.unpack();
+            offset[planes] = mesh_.vertices[loop[i]] - mass;
+            mean += normal[planes++];
         }
         rank = 0;
         Vec3 v = mass;
-        if (planes > 0) {
+        // A smooth patch: every normal within featureAngle / 2 of the mean. Then the second
+        // eigenvalue of A^T A is at most tan^2(featureAngle / 2) times the first (on the plane
+        // across the mean normal, sum (n_i . u)^2 <= k sin^2, while sum (n_i . mean)^2 >= k cos^2),
+        // so the truncated SVD keeps rank 1; the least-squares point is taken along the mean normal
+        // rather than the first eigenvector, without the eigen-decomposition.
+        const double meanLength = glm::length(mean);
+        bool smooth = planes > 0 && meanLength > 0.0;
+        if (smooth) {
+            mean /= meanLength;
+            for (int i = 0; i < planes && smooth; ++i) smooth = glm::dot(normal[i], mean) >= cosHalfFeature_;
+        }
+        if (smooth) {
+            double num = 0.0, den = 0.0;
+            for (int i = 0; i < planes; ++i) {
+                const double c = glm::dot(normal[i], mean);
+                num += c * glm::dot(normal[i], offset[i]);
+                den += c * c;
+            }
+            rank = 1;
+            v = mass + mean * (num / den);
+        } else if (planes > 0) {
+            Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+            Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+            for (int i = 0; i < planes; ++i) {
+                const Eigen::Vector3d n(normal[i].x, normal[i].y, normal[i].z);
+                ata += n * n.transpose();
+                atb += n * glm::dot(normal[i], offset[i]);
+            }
             Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
             eig.computeDirect(ata);
             const Eigen::Vector3d w = eig.eigenvalues();
@@ -741,56 +787,30 @@ private:
 
     // ------------------------------------------------------------------ pass 5: folds
 
-    /// Folds: a triangle facing against its own vertices' normals (checkMesh's test). A patch
-    /// vertex of a folded triangle is pulled halfway back towards its loop's mass point, round
-    /// after round, until no triangle folds; after kPullRounds rounds it sits on the mass point.
-    /// Returns the number of patch vertices moved.
-    std::size_t repairFolds(std::vector<std::uint32_t> folded) {
-        std::vector<std::uint8_t> pulls(feature_.size(), 0);
-        std::size_t moved = 0;
-        for (int round = 0; round < kPullRounds && !folded.empty(); ++round) {
-            std::vector<std::uint32_t> pull;
-            for (std::uint32_t t : folded)
-                for (std::uint32_t v : mesh_.triangles[t])
-                    if (v >= patchVertexBase_) pull.push_back(v);
-            std::sort(pull.begin(), pull.end());
-            pull.erase(std::unique(pull.begin(), pull.end()), pull.end());
-            for (std::uint32_t v : pull) {
-                std::uint8_t& n = pulls[v - patchVertexBase_];
-                if (n++ == 0) ++moved;
-                const Vec3 mass = patchMassPoint(v);
-                Vec3& x = mesh_.vertices[v];
-                x = n + 1 >= kPullRounds ? mass : 0.5 * (x + mass);
-            }
-            folded = foldedTriangles(mesh_, kFoldMargin);
-        }
-        return moved;
-    }
-
-    /// The mass point of the loop of patch vertex v, found again from its cell.
-    Vec3 patchMassPoint(std::uint32_t v) const {
-        // The block: the last whose patches start at or before v.
-        const auto it = std::upper_bound(blocks_.begin(), blocks_.end(), v,
-                                         [](std::uint32_t x, const Block& b) { return x < b.patchBase; });
-        const Block& b = *(it - 1);
-        const std::uint32_t local = v - b.patchBase;
-        // The mixed cell: the last whose patches start at or before `local`.
-        const int rank = int(std::upper_bound(b.patchBefore.begin(), b.patchBefore.end() - 1, std::uint16_t(local)) -
-                             b.patchBefore.begin()) - 1;
-        int off = -1;
-        for (int w = 0, seen = 0; w < kCells / 64 && off < 0; ++w) {
-            const int n = popcount(b.mixed[w]);
-            if (seen + n > rank) {
-                std::uint64_t word = b.mixed[w];
-                for (int k = seen; k < rank; ++k) word &= word - 1;
-                off = w * 64 + __builtin_ctzll(word);
-            }
-            seen += n;
-        }
-        std::uint32_t loop[detail::kCellEdges];
-        const int len = loopOf(around(b), b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7), b.patchesOf(rank),
-                               int(local - b.patchBefore[std::size_t(rank)]), loop);
-        return massPoint(loop, len);
+    /// The mesh's check, with folds repaired: a triangle facing against its own vertices'
+    /// normals (checkMesh's test), nearly so, or without area has its patch vertices pulled
+    /// halfway back towards their loops' mass points, round after round, until none is left; at
+    /// the last round they go onto the mass points. Crossings, which are exact, never move.
+    MeshCheck repairAndCheck(std::size_t& moved) {
+        FoldRepair repair;
+        repair.minCosine = kFoldMargin;
+        repair.rounds = kPullRounds;
+        repair.pull = [&](std::uint32_t v, int round, Vec3& x, const std::vector<std::uint32_t>& neighbours) {
+            if (v < patchVertexBase_) return false;
+            // The patch's loop: its crossings are the vertex's neighbours that are crossings
+            // (a flip trades a chord for a join with another patch vertex, keeping both ends).
+            Vec3 mass(0.0);
+            int n = 0;
+            for (std::uint32_t w : neighbours)
+                if (w < patchVertexBase_) mass += mesh_.vertices[w], ++n;
+            if (n == 0) return false;
+            mass /= double(n);
+            const Vec3 to = round + 1 >= kPullRounds ? mass : 0.5 * (x + mass);
+            if (to == x) return false;
+            x = to;
+            return true;
+        };
+        return repairAndCheckMesh(mesh_, repair, &moved);
     }
 
     const openvdb::FloatGrid& grid_;
@@ -798,6 +818,7 @@ private:
     const Lattice& lattice_;
     double h_;
     double singular_ = 0.0;
+    double cosHalfFeature_ = 1.0;
     double adaptivity_ = 0.0;
     std::vector<Block> blocks_;
     std::vector<std::uint64_t> keys_;

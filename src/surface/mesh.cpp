@@ -116,12 +116,23 @@ VertexCounts vertexPass(const Mesh& mesh, const Stars& stars, std::vector<glm::v
         tbb::blocked_range<std::size_t>(0, nv, 4096), VertexCounts{},
         [&](const tbb::blocked_range<std::size_t>& rv, VertexCounts c) {
             constexpr int kNext[3] = {1, 2, 0}, kPrev[3] = {2, 0, 1};
-            std::vector<std::uint64_t> around;  // (neighbour << 1) | (1 for v -> w, 0 for w -> v)
+            // The neighbours w > v reached by an edge leaving v (outs) and entering it (ins): on
+            // the stack for ordinary stars.
+            constexpr std::size_t kStack = 32;
+            std::uint32_t outStack[kStack], inStack[kStack];
+            std::vector<std::uint32_t> outHeap, inHeap;
             for (std::size_t v = rv.begin(); v < rv.end(); ++v) {
                 const std::uint32_t lo = stars.offset[v], hi = stars.offset[v + 1];
                 c.unused += lo == hi;
-                around.resize(2 * std::size_t(hi - lo));
-                std::size_t n = 0;
+                std::uint32_t* outs = outStack;
+                std::uint32_t* ins = inStack;
+                if (std::size_t(hi - lo) > kStack) {
+                    outHeap.resize(hi - lo);
+                    inHeap.resize(hi - lo);
+                    outs = outHeap.data();
+                    ins = inHeap.data();
+                }
+                std::size_t nOut = 0, nIn = 0;
                 Vec3 sum(0.0);
                 const Vec3& pv = mesh.vertices[v];
                 for (std::uint32_t i = lo; i < hi; ++i) {
@@ -131,23 +142,33 @@ VertexCounts vertexPass(const Mesh& mesh, const Stars& stars, std::vector<glm::v
                     const std::uint32_t out = t[kNext[k]], in = t[kPrev[k]];
                     // The area vector from this corner: the same for each of its corners.
                     sum += glm::cross(mesh.vertices[out] - pv, mesh.vertices[in] - pv);
-                    if (out > v) around[n++] = (std::uint64_t(out) << 1) | 1u;
-                    if (in > v) around[n++] = std::uint64_t(in) << 1;
+                    if (out > v) outs[nOut++] = out;
+                    if (in > v) ins[nIn++] = in;
                 }
-                around.resize(n);
                 const double l = glm::length(sum);
                 if (l > 0.0) normal[v] = glm::vec3(sum / l);
-                insertionSort(around.data(), around.data() + n);
-                for (std::size_t i = 0; i < around.size();) {
-                    std::size_t j = i, forward = 0;
-                    while (j < around.size() && (around[j] >> 1) == (around[i] >> 1)) forward += around[j++] & 1u;
-                    const std::size_t uses = j - i;
+                // Each distinct neighbour once: its uses in each direction.
+                auto count = [](const std::uint32_t* list, std::size_t n, std::uint32_t w) {
+                    std::size_t k = 0;
+                    for (std::size_t i = 0; i < n; ++i) k += list[i] == w;
+                    return k;
+                };
+                auto seenBefore = [](const std::uint32_t* list, std::size_t n, std::uint32_t w) {
+                    for (std::size_t i = 0; i < n; ++i)
+                        if (list[i] == w) return true;
+                    return false;
+                };
+                auto tally = [&](std::size_t forward, std::size_t backward) {
                     ++c.edges;
+                    const std::size_t uses = forward + backward;
                     if (uses == 1) ++c.boundary;
                     else if (uses > 2) ++c.nonManifold;
                     else if (forward != 1) ++c.misoriented;
-                    i = j;
-                }
+                };
+                for (std::size_t i = 0; i < nOut; ++i)
+                    if (!seenBefore(outs, i, outs[i])) tally(count(outs, nOut, outs[i]), count(ins, nIn, outs[i]));
+                for (std::size_t i = 0; i < nIn; ++i)
+                    if (!seenBefore(ins, i, ins[i]) && !seenBefore(outs, nOut, ins[i])) tally(0, count(ins, nIn, ins[i]));
             }
             return c;
         },
@@ -160,78 +181,159 @@ VertexCounts vertexPass(const Mesh& mesh, const Stars& stars, std::vector<glm::v
 
 /// What the pass over the triangles finds.
 struct TriangleCounts {
-    std::size_t degenerate = 0;
+    std::size_t degenerate = 0, folded = 0;
     double area = 0.0, volume6 = 0.0;
-    std::vector<std::uint32_t> folded;
+    /// Folded, nearly folded (with a margin) and degenerate triangles: the ones to repair.
+    std::vector<std::uint32_t> suspects;
 };
 
 /// One pass over the triangles: degenerate ones, area, six times the enclosed volume (about
-/// `centre`), and the folded ones (facing against the sum of their vertices' unit normals).
-/// Ranges are reduced in a fixed order, so the sums do not depend on the thread count.
+/// `centre`), the folded ones (facing against the sum of their vertices' unit normals), and the
+/// suspects (folded, degenerate, or with minCosine > 0 facing their vertices' normals at a cosine
+/// below it). Ranges are reduced in a fixed order, so the sums do not depend on the thread count.
+/// Adds triangle t to the sums of trianglePass.
+inline void addTriangle(const Mesh& mesh, const std::vector<glm::vec3>& normal, const Vec3& centre, double minCosine,
+                        std::size_t t, TriangleCounts& c) {
+    const Mesh::Triangle& tri = mesh.triangles[t];
+    const Vec3& a = mesh.vertices[tri[0]];
+    const Vec3& b = mesh.vertices[tri[1]];
+    const Vec3& d = mesh.vertices[tri[2]];
+    c.volume6 += glm::dot(a - centre, glm::cross(b - centre, d - centre));
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) {
+        ++c.degenerate;
+        c.suspects.push_back(std::uint32_t(t));
+        return;
+    }
+    const Vec3 areaVector = glm::cross(b - a, d - a);
+    const double twiceArea = glm::length(areaVector);
+    const double longest2 = std::max({glm::dot(b - a, b - a), glm::dot(d - b, d - b), glm::dot(a - d, a - d)});
+    if (!(twiceArea > tol::kDegenerateTriangle * longest2)) {
+        ++c.degenerate;
+        c.suspects.push_back(std::uint32_t(t));
+        return;
+    }
+    c.area += 0.5 * twiceArea;
+    const Vec3 sum = Vec3(normal[tri[0]]) + Vec3(normal[tri[1]]) + Vec3(normal[tri[2]]);
+    const double facing = glm::dot(areaVector, sum);
+    c.folded += facing < 0.0;
+    if (facing < 0.0 || (minCosine > 0.0 && facing < minCosine * twiceArea * glm::length(sum)))
+        c.suspects.push_back(std::uint32_t(t));
+}
+
 TriangleCounts trianglePass(const Mesh& mesh, const std::vector<glm::vec3>& normal, const Vec3& centre,
                             double minCosine = 0.0) {
     return tbb::parallel_deterministic_reduce(
         tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 8192), TriangleCounts{},
         [&](const tbb::blocked_range<std::size_t>& rt, TriangleCounts c) {
-            for (std::size_t t = rt.begin(); t < rt.end(); ++t) {
-                const Mesh::Triangle& tri = mesh.triangles[t];
-                const Vec3& a = mesh.vertices[tri[0]];
-                const Vec3& b = mesh.vertices[tri[1]];
-                const Vec3& d = mesh.vertices[tri[2]];
-                c.volume6 += glm::dot(a - centre, glm::cross(b - centre, d - centre));
-                if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) {
-                    ++c.degenerate;
-                    if (minCosine > 0.0) c.folded.push_back(std::uint32_t(t));
-                    continue;
-                }
-                const Vec3 areaVector = glm::cross(b - a, d - a);
-                const double twiceArea = glm::length(areaVector);
-                const double longest2 = std::max({glm::dot(b - a, b - a), glm::dot(d - b, d - b), glm::dot(a - d, a - d)});
-                if (!(twiceArea > tol::kDegenerateTriangle * longest2)) {
-                    ++c.degenerate;
-                    if (minCosine > 0.0) c.folded.push_back(std::uint32_t(t));
-                    continue;
-                }
-                c.area += 0.5 * twiceArea;
-                const Vec3 sum = Vec3(normal[tri[0]]) + Vec3(normal[tri[1]]) + Vec3(normal[tri[2]]);
-                const double facing = glm::dot(areaVector, sum);
-                if (facing < 0.0 || (minCosine > 0.0 && facing < minCosine * twiceArea * glm::length(sum)))
-                    c.folded.push_back(std::uint32_t(t));
-            }
+            for (std::size_t t = rt.begin(); t < rt.end(); ++t) addTriangle(mesh, normal, centre, minCosine, t, c);
             return c;
         },
         [](TriangleCounts a, const TriangleCounts& b) {
             a.degenerate += b.degenerate;
+            a.folded += b.folded;
             a.area += b.area;
             a.volume6 += b.volume6;
-            a.folded.insert(a.folded.end(), b.folded.begin(), b.folded.end());
+            a.suspects.insert(a.suspects.end(), b.suspects.begin(), b.suspects.end());
             return a;
         });
 }
 
-bool validIndices(const Mesh& mesh) {
-    const std::size_t nv = mesh.vertices.size();
-    for (const Mesh::Triangle& t : mesh.triangles)
-        if (t[0] >= nv || t[1] >= nv || t[2] >= nv) return false;
-    return true;
+/// The unit normal of vertex v from its star (zero without area around it).
+glm::vec3 starNormal(const Mesh& mesh, const Stars& stars, std::uint32_t v) {
+    Vec3 sum(0.0);
+    for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i) sum += mesh.areaVector(stars.corners[i] / 3);
+    const double l = glm::length(sum);
+    return l > 0.0 ? glm::vec3(sum / l) : glm::vec3(0.0f);
 }
 
-}  // namespace
-
-std::vector<std::uint32_t> foldedTriangles(const Mesh& mesh, double minCosine) {
-    if (!validIndices(mesh)) return {};
-    std::vector<glm::vec3> normal;
-    vertexPass(mesh, buildStars(mesh), normal);
-    return trianglePass(mesh, normal, Vec3(0.0), minCosine).folded;
+/// Whether triangle t folds, nearly folds or is degenerate (the test of trianglePass).
+/// The sums of trianglePass over some triangles, in their order.
+TriangleCounts triangleSums(const Mesh& mesh, const std::vector<glm::vec3>& normal, const Vec3& centre,
+                            const std::vector<std::uint32_t>& triangles) {
+    TriangleCounts c;
+    for (std::uint32_t t : triangles) addTriangle(mesh, normal, centre, 0.0, t, c);
+    return c;
 }
 
-MeshCheck checkMesh(const Mesh& mesh) {
-    std::vector<std::uint32_t> unused;
-    return checkMesh(mesh, 0.0, unused);
+bool suspect(const Mesh& mesh, const std::vector<glm::vec3>& normal, std::uint32_t t, double minCosine) {
+    const Mesh::Triangle& tri = mesh.triangles[t];
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) return true;
+    const Vec3& a = mesh.vertices[tri[0]];
+    const Vec3& b = mesh.vertices[tri[1]];
+    const Vec3& d = mesh.vertices[tri[2]];
+    const Vec3 areaVector = glm::cross(b - a, d - a);
+    const double twiceArea = glm::length(areaVector);
+    const double longest2 = std::max({glm::dot(b - a, b - a), glm::dot(d - b, d - b), glm::dot(a - d, a - d)});
+    if (!(twiceArea > tol::kDegenerateTriangle * longest2)) return true;
+    const Vec3 sum = Vec3(normal[tri[0]]) + Vec3(normal[tri[1]]) + Vec3(normal[tri[2]]);
+    return glm::dot(areaVector, sum) < minCosine * twiceArea * glm::length(sum);
 }
 
-MeshCheck checkMesh(const Mesh& mesh, double minCosine, std::vector<std::uint32_t>& nearlyFolded) {
-    nearlyFolded.clear();
+/// The local repair of repairAndCheckMesh: rounds of pulls on the suspects' vertices, testing again
+/// only the triangles around moved vertices and their neighbours.
+/// What a repair changed: the first position of every moved vertex and the first normal of every
+/// vertex whose normal was recomputed.
+struct RepairLog {
+    std::vector<std::pair<std::uint32_t, Vec3>> positions;
+    std::vector<std::pair<std::uint32_t, glm::vec3>> normals;
+};
+
+std::size_t pullBack(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& normal,
+                     std::vector<std::uint32_t> suspects, const FoldRepair& repair, RepairLog& log) {
+    std::vector<bool> moved(mesh.vertices.size(), false), renormalised(mesh.vertices.size(), false);
+    std::size_t count = 0;
+    for (int round = 0; round < repair.rounds && !suspects.empty(); ++round) {
+        std::vector<std::uint32_t> candidates;
+        for (std::uint32_t t : suspects)
+            for (std::uint32_t v : mesh.triangles[t]) candidates.push_back(v);
+        std::sort(candidates.begin(), candidates.end());
+        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+        std::vector<std::uint32_t> changed, neighbours;
+        for (std::uint32_t v : candidates) {
+            neighbours.clear();
+            for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i)
+                for (std::uint32_t w : mesh.triangles[stars.corners[i] / 3])
+                    if (w != v) neighbours.push_back(w);
+            std::sort(neighbours.begin(), neighbours.end());
+            neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
+            const Vec3 before = mesh.vertices[v];
+            if (!repair.pull(v, round, mesh.vertices[v], neighbours)) continue;
+            changed.push_back(v);
+            if (!moved[v]) {
+                moved[v] = true;
+                ++count;
+                log.positions.push_back({v, before});
+            }
+        }
+        if (changed.empty()) break;
+        // The normals that moved: the moved vertices' and their neighbours'.
+        std::vector<std::uint32_t> touched;
+        for (std::uint32_t v : changed)
+            for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i)
+                for (std::uint32_t w : mesh.triangles[stars.corners[i] / 3]) touched.push_back(w);
+        std::sort(touched.begin(), touched.end());
+        touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+        for (std::uint32_t w : touched) {
+            if (!renormalised[w]) {
+                renormalised[w] = true;
+                log.normals.push_back({w, normal[w]});
+            }
+            normal[w] = starNormal(mesh, stars, w);
+        }
+        // The triangles whose test may have changed: those around any touched vertex.
+        suspects.clear();
+        for (std::uint32_t w : touched)
+            for (std::uint32_t i = stars.offset[w]; i < stars.offset[w + 1]; ++i) suspects.push_back(stars.corners[i] / 3);
+        std::sort(suspects.begin(), suspects.end());
+        suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
+        suspects.erase(std::remove_if(suspects.begin(), suspects.end(),
+                                      [&](std::uint32_t t) { return !suspect(mesh, normal, t, repair.minCosine); }),
+                       suspects.end());
+    }
+    return count;
+}
+
+MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, std::size_t* moved) {
     MeshCheck r;
     r.vertexCount = mesh.vertices.size();
     r.triangleCount = mesh.triangles.size();
@@ -240,8 +342,9 @@ MeshCheck checkMesh(const Mesh& mesh, double minCosine, std::vector<std::uint32_
         if (t[0] >= nv || t[1] >= nv || t[2] >= nv) ++r.invalidIndices;
     if (r.invalidIndices > 0) return r;
 
+    const Stars stars = buildStars(mesh);
     std::vector<glm::vec3> normal;
-    const VertexCounts v = vertexPass(mesh, buildStars(mesh), normal);
+    const VertexCounts v = vertexPass(mesh, stars, normal);
     r.edgeCount = v.edges;
     r.boundaryEdges = v.boundary;
     r.nonManifoldEdges = v.nonManifold;
@@ -249,14 +352,47 @@ MeshCheck checkMesh(const Mesh& mesh, double minCosine, std::vector<std::uint32_
     r.unusedVertices = v.unused;
     // The volume about the bounding-box centre, so that far-off parts do not lose digits.
     const Vec3 centre = mesh.vertices.empty() ? Vec3(0.0) : mesh.bounds().center();
-    TriangleCounts t = trianglePass(mesh, normal, centre, minCosine);
+    TriangleCounts t = trianglePass(mesh, normal, centre, repair ? repair->minCosine : 0.0);
+    if (repair && !t.suspects.empty()) {
+        std::sort(t.suspects.begin(), t.suspects.end());
+        RepairLog log;
+        const std::size_t n = pullBack(*repairable, stars, normal, std::move(t.suspects), *repair, log);
+        if (moved) *moved = n;
+        // Vertices moved, the topology did not: the edge counts stand, and only the triangles
+        // around renormalised vertices (a superset of those around moved ones) changed. Their
+        // sums are taken out as they were and put back as they are.
+        std::vector<std::uint32_t> affected;
+        for (const auto& [w, old] : log.normals)
+            for (std::uint32_t i = stars.offset[w]; i < stars.offset[w + 1]; ++i) affected.push_back(stars.corners[i] / 3);
+        std::sort(affected.begin(), affected.end());
+        affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
+        const TriangleCounts now = triangleSums(mesh, normal, centre, affected);
+        auto swapLogged = [&] {
+            for (auto& [v, old] : log.positions) std::swap(repairable->vertices[v], old);
+            for (auto& [w, old] : log.normals) std::swap(normal[w], old);
+        };
+        swapLogged();  // back to the state before the repair
+        const TriangleCounts before = triangleSums(mesh, normal, centre, affected);
+        swapLogged();
+        t.degenerate = t.degenerate - before.degenerate + now.degenerate;
+        t.folded = t.folded - before.folded + now.folded;
+        t.area = t.area - before.area + now.area;
+        t.volume6 = t.volume6 - before.volume6 + now.volume6;
+    }
     r.degenerateTriangles = t.degenerate;
+    r.foldedTriangles = t.folded;
     r.area = t.area;
     r.signedVolume = t.volume6 / 6.0;
-    std::sort(t.folded.begin(), t.folded.end());
-    r.foldedTriangles = minCosine > 0.0 ? trianglePass(mesh, normal, centre).folded.size() : t.folded.size();
-    nearlyFolded = std::move(t.folded);
     return r;
+}
+
+}  // namespace
+
+MeshCheck checkMesh(const Mesh& mesh) { return check(nullptr, mesh, nullptr, nullptr); }
+
+MeshCheck repairAndCheckMesh(Mesh& mesh, const FoldRepair& repair, std::size_t* moved) {
+    if (moved) *moved = 0;
+    return check(&mesh, mesh, &repair, moved);
 }
 
 }  // namespace dexelmill

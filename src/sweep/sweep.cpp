@@ -1079,11 +1079,12 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q, [[maybe_unu
     return out;
 }
 
-void MoveSweep::hermite(std::size_t index, const Query& q, Interval local, const EndTrace& trace,
+void MoveSweep::hermite(std::size_t index, const Query& q, Interval local, const EndTrace& trace, unsigned ends,
                         LineHit& hit) const {
     const Part& part = parts_[index];
     const StaticProfile& profile = staticProfiles_[index];
     for (const bool hi : {false, true}) {
+        if (!(ends & (hi ? kEndHi : kEndLo))) continue;
         const EndTrace::End& end = hi ? trace.hi : trace.lo;
         const Vec3 p = q.o + (hi ? local.hi : local.lo) * q.w;
         Vec3 n;  // the local normal
@@ -1171,17 +1172,20 @@ std::size_t MoveSweep::intersectParts(const Line& line, Interval* out) const {
 }
 
 std::size_t MoveSweep::intersectParts(const Line& line, LineHit* out) const {
+    return intersectParts(line, out, [](std::size_t, const Interval&) { return kEndLo | kEndHi; });
+}
+
+std::size_t MoveSweep::intersectParts(const Line& line, LineHit* out, const EndFilter& wanted) const {
     const Query q = toLocal(line);
     for (std::size_t i = 0; i < parts_.size(); ++i) {
         EndTrace trace;
         const Interval iv = intersectLocal<true>(parts_[i], q, &trace);
         LineHit& hit = out[i];
-        if (iv.isEmpty()) {
-            hit = LineHit{};
-            continue;
-        }
+        hit = LineHit{};
+        if (iv.isEmpty()) continue;
         hit.range = {iv.lo + q.vShift, iv.hi + q.vShift};
-        hermite(i, q, iv, trace, hit);
+        const unsigned ends = wanted(i, hit.range);
+        if (ends) hermite(i, q, iv, trace, ends, hit);
     }
     return parts_.size();
 }

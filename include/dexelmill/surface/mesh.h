@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "dexelmill/geometry/tolerance.h"
@@ -62,15 +63,25 @@ struct MeshCheck {
 /// A triangle is degenerate when two of its indices are equal or when |(b-a) x (c-a)| is at most
 /// tol::kDegenerateTriangle times its longest squared edge (a needle or a sliver of zero area).
 MeshCheck checkMesh(const Mesh& mesh);
-/// @brief checkMesh, also listing (in index order) the triangles foldedTriangles(mesh, minCosine)
-/// would: a mesher's check and its list of triangles to repair, in one pass.
-MeshCheck checkMesh(const Mesh& mesh, double minCosine, std::vector<std::uint32_t>& nearlyFolded);
 
-/// @brief The triangles checkMesh counts as folded, in index order (none if an index is invalid);
-/// with `minCosine` > 0 also those that face their vertices' normals at a cosine below it (which
-/// rounding the vertices to float, as mesh files do, might fold) and the degenerate ones: the
-/// triangles a mesher should repair.
-std::vector<std::uint32_t> foldedTriangles(const Mesh& mesh, double minCosine = 0.0);
+/// @brief How repairAndCheckMesh repairs folds.
+struct FoldRepair {
+    /// Triangles facing their vertices' normals at a cosine below this are repaired too, as are
+    /// degenerate ones: a margin against rounding.
+    double minCosine = 0.0;
+    /// The most rounds of pulls.
+    int rounds = 8;
+    /// Called for every vertex of every triangle to repair, round after round, with the vertices
+    /// joined to it by an edge: may move the position, and returns whether it did. Only the
+    /// triangles around moved vertices and their neighbours are tested again.
+    std::function<bool(std::uint32_t vertex, int round, Vec3& position, const std::vector<std::uint32_t>& neighbours)>
+        pull;
+};
+
+/// @brief checkMesh, repairing on the way: the triangles that fold, nearly fold or have no area
+/// have their vertices moved by `repair.pull` until none is left or the rounds run out. The
+/// topology does not change. `moved` receives the number of vertices moved.
+MeshCheck repairAndCheckMesh(Mesh& mesh, const FoldRepair& repair, std::size_t* moved = nullptr);
 
 /// @brief The signed volume enclosed by the mesh (divergence theorem), mm^3.
 double meshVolume(const Mesh& mesh);

@@ -34,6 +34,7 @@
 
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "dexelmill/geometry/frame.h"
@@ -142,6 +143,13 @@ public:
     /// sharp, with a normal from the crease's normal cone.
     /// @return partCount().
     std::size_t intersectParts(const Line& line, LineHit* out) const;
+    /// Which ends of a part's interval want their Hermite data: kEndLo, kEndHi or both.
+    static constexpr unsigned kEndLo = 1, kEndHi = 2;
+    using EndFilter = std::function<unsigned(std::size_t part, const Interval& range)>;
+    /// @brief As intersectParts with LineHit, computing the Hermite data only of the ends `wanted`
+    /// asks for, once it has seen the part's interval (world line parameters); the other ends keep
+    /// a zero normal. A cutting loop asks only for the ends its subtraction will make.
+    std::size_t intersectParts(const Line& line, LineHit* out, const EndFilter& wanted) const;
     /// @brief The swept material along `line`: the parts' intervals united, sorted, non-empty.
     std::vector<Interval> intersectAll(const Line& line) const;
     /// @brief A cheap interval of `line` (unit direction) that holds every part's interval: the
@@ -165,8 +173,9 @@ private:
     Interval intersectLocal(const Part& part, const Query& q, EndTrace* trace) const;
     /// The Hermite data of part `index`'s interval `local` (local line parameters, non-empty), whose
     /// ends intersectLocal<true> traced: the world-frame outward unit normals and sharp marks of
-    /// `hit` (its range is the caller's).
-    void hermite(std::size_t index, const Query& q, Interval local, const EndTrace& trace, LineHit& hit) const;
+    /// `hit` at the ends in `ends` (kEndLo, kEndHi; its range is the caller's).
+    void hermite(std::size_t index, const Query& q, Interval local, const EndTrace& trace, unsigned ends,
+                 LineHit& hit) const;
     Interval boxLocal(const Part& part, const Query& q) const;
 
     SweepKind kind_ = SweepKind::Static;

@@ -1,0 +1,187 @@
+// checkMesh against a brute-force oracle that shares no code with it: every edge counted in an
+// ordered map, every vertex normal summed triangle by triangle, on closed meshes damaged at random
+// in every way the check names (fixed seeds).
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+
+#include "dexelmill/surface/mesh.h"
+
+using namespace dexelmill;
+
+namespace {
+
+/// A closed, outward-facing UV sphere: a pole vertex at each end, `rings` x `sectors` between.
+Mesh sphere(int rings, int sectors, double r) {
+    Mesh m;
+    m.vertices.push_back(Vec3(0, 0, r));
+    for (int i = 1; i < rings; ++i) {
+        const double th = M_PI * i / rings;
+        for (int j = 0; j < sectors; ++j) {
+            const double ph = 2 * M_PI * j / sectors;
+            m.vertices.push_back(r * Vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
+        }
+    }
+    m.vertices.push_back(Vec3(0, 0, -r));
+    const auto at = [&](int i, int j) { return std::uint32_t(1 + (i - 1) * sectors + (j % sectors)); };
+    const std::uint32_t south = std::uint32_t(m.vertices.size() - 1);
+    for (int j = 0; j < sectors; ++j) {
+        m.triangles.push_back({0, at(1, j), at(1, j + 1)});
+        for (int i = 1; i + 1 < rings; ++i) {
+            m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+            m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        }
+        m.triangles.push_back({at(rings - 1, j), south, at(rings - 1, j + 1)});
+    }
+    return m;
+}
+
+/// Triangles within 1e-5 (cosine) of facing across their vertices' normals, by the oracle.
+std::size_t& nearlyFoldedCount() {
+    static std::size_t n = 0;
+    return n;
+}
+std::size_t nearlyFolded(const MeshCheck&) { return nearlyFoldedCount(); }
+
+/// The oracle's count of what checkMesh reports.
+MeshCheck bruteForce(const Mesh& m) {
+    MeshCheck r;
+    r.vertexCount = m.vertices.size();
+    r.triangleCount = m.triangles.size();
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<int, int>> edges;  // (lo, hi) -> (lo->hi, hi->lo)
+    std::vector<bool> used(m.vertices.size(), false);
+    std::vector<Vec3> normal(m.vertices.size(), Vec3(0.0));
+    for (const Mesh::Triangle& t : m.triangles) {
+        const Vec3 a = m.vertices[t[0]], b = m.vertices[t[1]], c = m.vertices[t[2]];
+        const Vec3 n = glm::cross(b - a, c - a);
+        for (int k = 0; k < 3; ++k) {
+            used[t[k]] = true;
+            normal[t[k]] += n;
+            const std::uint32_t p = t[k], q = t[(k + 1) % 3];
+            if (p == q) continue;
+            auto& e = edges[{std::min(p, q), std::max(p, q)}];
+            (p < q ? e.first : e.second)++;
+        }
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
+            ++r.degenerateTriangles;
+            continue;
+        }
+        const double l2 = std::max({glm::dot(b - a, b - a), glm::dot(c - b, c - b), glm::dot(a - c, a - c)});
+        if (!(glm::length(n) > 1e-12 * l2)) ++r.degenerateTriangles;
+        r.area += 0.5 * glm::length(n);
+        r.signedVolume += glm::dot(a, glm::cross(b, c)) / 6.0;
+    }
+    for (const auto& [key, uses] : edges) {
+        ++r.edgeCount;
+        const int n = uses.first + uses.second;
+        if (n == 1) ++r.boundaryEdges;
+        else if (n > 2) ++r.nonManifoldEdges;
+        else if (uses.first != 1) ++r.misorientedEdges;
+    }
+    r.unusedVertices = std::size_t(std::count(used.begin(), used.end(), false));
+    for (Vec3& n : normal)
+        if (glm::length(n) > 0.0) n = glm::normalize(n);
+    nearlyFoldedCount() = 0;
+    for (const Mesh::Triangle& t : m.triangles) {
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+        const Vec3 a = m.vertices[t[0]], b = m.vertices[t[1]], c = m.vertices[t[2]];
+        const Vec3 area = glm::cross(b - a, c - a), sum = normal[t[0]] + normal[t[1]] + normal[t[2]];
+        const double l2 = std::max({glm::dot(b - a, b - a), glm::dot(c - b, c - b), glm::dot(a - c, a - c)});
+        if (!(glm::length(area) > 1e-12 * l2)) continue;  // degenerate: no facing to speak of
+        const double facing = glm::dot(area, sum), scale = glm::length(area) * glm::length(sum);
+        if (facing < -1e-5 * scale) ++r.foldedTriangles;
+        else if (facing < 1e-5 * scale) ++nearlyFoldedCount();
+    }
+    return r;
+}
+
+void compare(const MeshCheck& got, const MeshCheck& want) {
+    CHECK(got.edgeCount == want.edgeCount);
+    CHECK(got.boundaryEdges == want.boundaryEdges);
+    CHECK(got.nonManifoldEdges == want.nonManifoldEdges);
+    CHECK(got.misorientedEdges == want.misorientedEdges);
+    CHECK(got.degenerateTriangles == want.degenerateTriangles);
+    // checkMesh keeps unit vertex normals in float (7 digits): a triangle within 1e-5 of facing
+    // exactly across its normals may count either way.
+    CHECK(got.foldedTriangles >= want.foldedTriangles);
+    CHECK(got.foldedTriangles <= want.foldedTriangles + nearlyFolded(want));
+    CHECK(got.unusedVertices == want.unusedVertices);
+    CHECK(got.area == Approx(want.area).epsilon(1e-12));
+    // The enclosed volume is defined for closed meshes only (otherwise it depends on the origin).
+    if (want.closedManifold()) CHECK(got.signedVolume == Approx(want.signedVolume).epsilon(1e-9).margin(1e-9));
+}
+
+}  // namespace
+
+TEST_CASE("checkMesh: a closed sphere is ok", "[surface][mesh]") {
+    const Mesh m = sphere(12, 24, 5.0);
+    const MeshCheck c = checkMesh(m);
+    CHECK(c.ok());
+    compare(c, bruteForce(m));
+    CHECK(c.signedVolume > 0.0);
+}
+
+TEST_CASE("checkMesh: every kind of damage counted as a brute-force oracle counts it", "[surface][mesh]") {
+    std::mt19937_64 rng(42);
+    for (int trial = 0; trial < 200; ++trial) {
+        Mesh m = sphere(6 + int(rng() % 6), 8 + int(rng() % 10), 3.0);
+        const int damages = 1 + int(rng() % 4);
+        for (int d = 0; d < damages; ++d) {
+            const std::size_t t = rng() % m.triangles.size();
+            switch (rng() % 7) {
+                case 0: m.triangles.erase(m.triangles.begin() + std::ptrdiff_t(t)); break;  // a hole
+                case 1: std::swap(m.triangles[t][0], m.triangles[t][1]); break;            // misoriented
+                case 2: m.triangles.push_back(m.triangles[t]); break;                       // non-manifold
+                case 3: m.triangles[t][2] = m.triangles[t][1]; break;                       // repeated index
+                case 4: {  // a sliver: the third vertex on the first edge
+                    const std::uint32_t v = std::uint32_t(m.vertices.size());
+                    m.vertices.push_back(0.5 * (m.vertices[m.triangles[t][0]] + m.vertices[m.triangles[t][1]]));
+                    m.triangles.push_back({m.triangles[t][0], m.triangles[t][1], v});
+                    break;
+                }
+                case 5: m.vertices[m.triangles[t][0]] *= -0.2; break;  // a vertex pushed through: folds
+                default: m.vertices.push_back(Vec3(9.0)); break;      // unused
+            }
+        }
+        INFO("trial " << trial);
+        const MeshCheck got = checkMesh(m), want = bruteForce(m);
+        compare(got, want);
+    }
+}
+
+TEST_CASE("checkMesh: an index past the vertex list", "[surface][mesh]") {
+    Mesh m = sphere(6, 8, 1.0);
+    m.triangles[3][1] = 999;
+    const MeshCheck c = checkMesh(m);
+    CHECK(c.invalidIndices == 1);
+    CHECK_FALSE(c.ok());
+}
+
+TEST_CASE("repairAndCheckMesh: pulls fold vertices until none folds", "[surface][mesh]") {
+    Mesh m = sphere(10, 16, 4.0);
+    const std::vector<Vec3> original = m.vertices;
+    // Move three vertices across a neighbour, past it along the surface: the triangles between
+    // turn over.
+    for (std::uint32_t v : {20u, 45u, 77u}) m.vertices[v] = m.vertices[v + 1] + 1.5 * (m.vertices[v + 1] - m.vertices[v]);
+    REQUIRE(checkMesh(m).foldedTriangles > 0);
+    FoldRepair repair;
+    repair.minCosine = 1e-3;
+    repair.rounds = 8;
+    std::size_t calls = 0;
+    repair.pull = [&](std::uint32_t v, int, Vec3& x, const std::vector<std::uint32_t>& neighbours) {
+        ++calls;
+        CHECK(neighbours.size() >= 3);
+        if (x == original[v]) return false;
+        x = original[v];
+        return true;
+    };
+    std::size_t moved = 0;
+    const MeshCheck c = repairAndCheckMesh(m, repair, &moved);
+    CHECK(moved == 3);
+    CHECK(calls > 0);
+    CHECK(c.ok());
+    compare(c, bruteForce(m));
+}
