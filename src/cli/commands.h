@@ -44,7 +44,7 @@ struct StudyArgs {
     std::string resolutions = "2,1,0.5";
     std::string familySets = "z,xyz";
     std::string csv, plot, plyDir;
-    std::size_t maxVertices = 20000;
+    std::size_t surfacePoints = 20000;
     std::size_t samples = 100000;
 };
 

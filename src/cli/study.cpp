@@ -41,7 +41,9 @@ CLI::App* addStudy(CLI::App& app, StudyArgs& a) {
     c->add_option("--csv", a.csv, "One row per (spacing, family set)");
     c->add_option("--plot", a.plot, "Log-log PNG plot of deviation (away from the stock's faces) against spacing");
     c->add_option("--ply-deviation", a.plyDir, "Folder for PLY meshes coloured by deviation, one per run");
-    c->add_option("--max-vertices", a.maxVertices, "Mesh vertices measured per run at most")->capture_default_str();
+    c->add_option("--surface-points", a.surfacePoints,
+                  "Points measured per run, spread evenly over the mesh's triangles")
+        ->capture_default_str();
     c->add_option("--samples", a.samples, "Random points for the lost / invented material counts")
         ->capture_default_str();
     return c;
@@ -78,8 +80,8 @@ int runStudy(const StudyArgs& a) {
         }
     }
     if (o.resolutions.empty() || o.familySets.empty()) throw UsageError("study: --resolutions and --families need values");
-    if (a.maxVertices == 0) throw UsageError("--max-vertices: a study measures at least one vertex per run");
-    o.maxVertices = a.maxVertices;
+    if (a.surfacePoints == 0) throw UsageError("--surface-points: a study measures at least one point per run");
+    o.surfacePoints = a.surfacePoints;
     o.samplePoints = a.samples;
     o.plyDeviationDir = a.plyDir;
     ProgressBar bar(!a.job.quiet && ProgressBar::stderrIsTerminal());
@@ -91,7 +93,7 @@ int runStudy(const StudyArgs& a) {
     if (!a.plot.empty()) writeStudyPlot(a.plot, r);
     std::printf("study of %s; reference volume %.6g mm^3 (%s)\n", r.subject.c_str(), r.referenceVolumeMm3,
                 r.reference.c_str());
-    std::printf("deviations in mm; 'inner': vertices at least one spacing from the stock's faces\n");
+    std::printf("deviations in mm at points over the mesh; 'inner': those at least one spacing from the stock's faces\n");
     std::printf("%8s %-8s %11s %11s %11s %11s %11s %11s %13s %10s %13s %8s\n", "h_mm", "families", "max", "rms",
                 "p95", "inner_max", "inner_rms", "inner_p95", "vol_err_mm3", "lost_mm3", "invented_mm3", "time_s");
     for (const StudyRun& x : r.runs)

@@ -91,8 +91,8 @@ void writeStudyPlot(const std::string& path, const StudyResult& result) {
         double StudyRun::*value;
         int dash;
     };
-    // Over the vertices away from the stock's faces: the block's own edges, which every family set
-    // rounds alike, would otherwise set every maximum.
+    // Over the points away from the stock's faces: the block's own edges and the rims where cuts
+    // meet them would otherwise set every maximum.
     const Stat stats[] = {{"max", &StudyRun::innerMaxMm, 0}, {"p95", &StudyRun::innerP95Mm, 24}, {"rms", &StudyRun::innerRmsMm, 8}};
     double hMin = 1e300, hMax = 0, eMin = 1e300, eMax = 0;
     std::vector<double> spacings;
@@ -133,7 +133,7 @@ void writeStudyPlot(const std::string& path, const StudyResult& result) {
     c.line(left, top, left, H - bottom, axis, 2);
     c.line(left, H - bottom, W - right, H - bottom, axis, 2);
     c.text(left, 8, "surface deviation against lattice spacing: " + result.subject, axis);
-    c.text(left, 30, "(mesh vertices at least one spacing from the stock's faces)", axis);
+    c.text(left, 30, "(points on the mesh at least one spacing from the stock's faces)", axis);
     c.text((W - right + left) / 2 - 100, H - 36, "lattice spacing h (mm)", axis);
     c.text(12, top - 24, "deviation (mm)", axis);
 

@@ -96,13 +96,39 @@ DeviationStats deviationStats(const std::vector<double>& dev) {
     return st;
 }
 
-std::vector<std::size_t> spreadIndices(std::size_t count, std::size_t most) {
-    std::vector<std::size_t> idx;
-    if (count == 0) return idx;
-    const std::size_t n = std::min(count, most);
-    idx.reserve(n);
-    for (std::size_t i = 0; i < n; ++i) idx.push_back(i * count / n);
-    return idx;
+/// A point on the mesh and its triangle's unit normal.
+struct SurfacePoint {
+    Vec3 p, n;
+};
+
+/// `count` points uniform over the triangles' area (fixed seed), each with its triangle's normal;
+/// triangles without area are never picked.
+std::vector<SurfacePoint> surfacePoints(const Mesh& mesh, std::size_t count) {
+    std::vector<double> cumulative(mesh.triangles.size());
+    double total = 0.0;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        total += 0.5 * glm::length(mesh.areaVector(t));
+        cumulative[t] = total;
+    }
+    std::vector<SurfacePoint> out;
+    if (!(total > 0.0)) return out;
+    std::mt19937_64 rng(20261123);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    out.reserve(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::size_t t = std::min(mesh.triangles.size() - 1,
+                                       std::size_t(std::lower_bound(cumulative.begin(), cumulative.end(), unit(rng) * total) -
+                                                   cumulative.begin()));
+        double r1 = unit(rng), r2 = unit(rng);
+        if (r1 + r2 > 1.0) r1 = 1.0 - r1, r2 = 1.0 - r2;
+        const Mesh::Triangle& tri = mesh.triangles[t];
+        const Vec3 &a = mesh.vertices[tri[0]], &b = mesh.vertices[tri[1]], &c = mesh.vertices[tri[2]];
+        const Vec3 area = glm::cross(b - a, c - a);
+        const double l = glm::length(area);
+        if (!(l > 0.0)) continue;
+        out.push_back({a + r1 * (b - a) + r2 * (c - a), area / l});
+    }
+    return out;
 }
 
 void writeDeviationPly(const std::string& path, const Mesh& mesh, const std::vector<double>& deviation, double h) {
@@ -199,48 +225,38 @@ StudyResult runStudy(const StudyOptions& o) {
             run.volumeErrorMm3 = run.volumeMm3 - result.referenceVolumeMm3;
             if (!oracle) oracle.emplace(s.report.stockBox, s.program.path, s.tools, hs.back() / 2);
 
-            // Surface deviation at an even spread of vertices.
-            const std::vector<Vec3> normals = vertexNormals(s.mesh);
-            // A vertex of degenerate triangles only has no normal to search along: left out.
-            std::vector<std::size_t> picked = spreadIndices(s.mesh.vertices.size(), o.maxVertices);
-            picked.erase(std::remove_if(picked.begin(), picked.end(),
-                                        [&](std::size_t v) { return normals[v] == Vec3(0.0); }),
-                         picked.end());
-            std::vector<double> dev(picked.size());
+            // Surface deviation at points spread over the triangles, along their normals.
+            const std::vector<SurfacePoint> points = surfacePoints(s.mesh, o.surfacePoints);
+            std::vector<double> dev(points.size());
             arena.execute([&] {
-                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, picked.size()), [&](const auto& r) {
-                    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                        const std::size_t v = picked[i];
-                        dev[i] = signedDistanceAlong(*oracle, s.mesh.vertices[v], normals[v], kSearchSpacings * h);
-                    }
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size()), [&](const auto& r) {
+                    for (std::size_t i = r.begin(); i < r.end(); ++i)
+                        dev[i] = signedDistanceAlong(*oracle, points[i].p, points[i].n, kSearchSpacings * h);
                 });
             });
-            run.vertices = dev.size();
+            run.points = dev.size();
             const DeviationStats overall = deviationStats(dev);
             run.devMaxMm = overall.max, run.devRmsMm = overall.rms, run.devP95Mm = overall.p95;
             run.devMeanMm = overall.mean;
             // The same away from the stock box's faces, whose own sharp edges every mesh rounds.
             const Box& stockBox = s.report.stockBox;
             std::vector<double> inner;
-            for (std::size_t i = 0; i < picked.size(); ++i)
-                if (faceDistance(stockBox, s.mesh.vertices[picked[i]]) >= h) inner.push_back(dev[i]);
-            run.innerVertices = inner.size();
+            for (std::size_t i = 0; i < points.size(); ++i)
+                if (faceDistance(stockBox, points[i].p) >= h) inner.push_back(dev[i]);
+            run.innerPoints = inner.size();
             const DeviationStats in = deviationStats(inner);
             run.innerMaxMm = in.max, run.innerRmsMm = in.rms, run.innerP95Mm = in.p95;
             if (!o.plyDeviationDir.empty()) {
+                // The PLY colours every vertex: each measured along its own normal.
+                const std::vector<Vec3> normals = vertexNormals(s.mesh);
                 std::vector<double> all(s.mesh.vertices.size(), 0.0);
-                if (picked.size() == all.size()) {  // every vertex measured already
-                    for (std::size_t i = 0; i < picked.size(); ++i) all[picked[i]] = dev[i];
-                } else {
-                    arena.execute([&] {
-                        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, all.size()), [&](const auto& r) {
-                            for (std::size_t v = r.begin(); v < r.end(); ++v)
-                                if (normals[v] != Vec3(0.0))
-                                    all[v] = signedDistanceAlong(*oracle, s.mesh.vertices[v], normals[v],
-                                                                 kSearchSpacings * h);
-                        });
+                arena.execute([&] {
+                    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, all.size()), [&](const auto& r) {
+                        for (std::size_t v = r.begin(); v < r.end(); ++v)
+                            if (normals[v] != Vec3(0.0))
+                                all[v] = signedDistanceAlong(*oracle, s.mesh.vertices[v], normals[v], kSearchSpacings * h);
                     });
-                }
+                });
                 std::ostringstream name;
                 name << o.plyDeviationDir << "/deviation_h" << h << "_" << run.families << ".ply";
                 writeDeviationPly(name.str(), s.mesh, all, h);
@@ -296,16 +312,16 @@ StudyResult runStudy(const StudyOptions& o) {
 std::string studyCsv(const StudyResult& r) {
     std::ostringstream s;
     s << std::setprecision(8);
-    s << "h_mm,families,vertices,dev_max_mm,dev_rms_mm,dev_p95_mm,dev_max_h,dev_rms_h,dev_p95_h,dev_mean_mm,"
+    s << "h_mm,families,points,dev_max_mm,dev_rms_mm,dev_p95_mm,dev_max_h,dev_rms_h,dev_p95_h,dev_mean_mm,"
          "volume_mm3,volume_error_mm3,volume_error_rel,lost_mm3,invented_mm3,lost_far_mm3,invented_far_mm3,"
-         "seconds,peak_memory_mb,stock_memory_mb,inner_vertices,inner_max_mm,inner_rms_mm,inner_p95_mm\n";
+         "seconds,peak_memory_mb,stock_memory_mb,inner_points,inner_max_mm,inner_rms_mm,inner_p95_mm\n";
     for (const StudyRun& x : r.runs) {
-        s << x.h << ',' << x.families << ',' << x.vertices << ',' << x.devMaxMm << ',' << x.devRmsMm << ','
+        s << x.h << ',' << x.families << ',' << x.points << ',' << x.devMaxMm << ',' << x.devRmsMm << ','
           << x.devP95Mm << ',' << x.devMaxMm / x.h << ',' << x.devRmsMm / x.h << ',' << x.devP95Mm / x.h << ','
           << x.devMeanMm << ',' << x.volumeMm3 << ',' << x.volumeErrorMm3 << ','
           << (r.referenceVolumeMm3 != 0 ? x.volumeErrorMm3 / r.referenceVolumeMm3 : 0.0) << ',' << x.lostMm3 << ','
           << x.inventedMm3 << ',' << x.lostFarMm3 << ',' << x.inventedFarMm3 << ',' << x.seconds << ','
-          << x.peakMemoryMb << ',' << x.stockMemoryMb << ',' << x.innerVertices << ',' << x.innerMaxMm << ','
+          << x.peakMemoryMb << ',' << x.stockMemoryMb << ',' << x.innerPoints << ',' << x.innerMaxMm << ','
           << x.innerRmsMm << ',' << x.innerP95Mm << '\n';
     }
     return s.str();

@@ -93,7 +93,7 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
     r = cli("study --case nope");
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Contains("bull-undercut") && Contains("dexelmill study --help"));
-    r = cli("study --case v-carve --max-vertices 0");
+    r = cli("study --case v-carve --surface-points 0");
     CHECK(r.code == 2);
 }
 
@@ -134,7 +134,7 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
 TEST_CASE("a study writes its table, CSV, plot and deviation meshes", "[cli][study]") {
     const Cli cli("study");
     const Run r = cli("study --case tilted-slot --resolutions 2,1,2 --families z,xyz --csv s.csv --plot s.png "
-                      "--ply-deviation dev --max-vertices 500 --samples 2000 --quiet");
+                      "--ply-deviation dev --surface-points 500 --samples 2000 --quiet");
     REQUIRE(r.code == 0);
     CHECK_THAT(r.out, Contains("inner_max") && Contains("reference volume") && Contains("deviations in mm"));
     // One header and one row per (spacing, family set): the repeated spacing counts once.

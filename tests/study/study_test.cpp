@@ -59,7 +59,7 @@ TEST_CASE("surface deviation converges as the spacing halves", "[study]") {
     o.job.stockBox = Box{Vec3(0.0), Vec3(30, 20, 10)};
     o.resolutions = {1.0, 0.5, 0.25};
     o.familySets = {FamilySet::all()};
-    o.maxVertices = 4000;
+    o.surfacePoints = 4000;
     o.samplePoints = 20000;
     // The exact volume: the block minus the groove (a half-cylinder of radius 4 below z = 11,
     // cut off at z = 10... i.e. the circular segment below z = 10, plus nothing above) along 30.
@@ -94,7 +94,7 @@ TEST_CASE("surface deviation converges as the spacing halves", "[study]") {
         CHECK(std::abs(fine.volumeErrorMm3) < 0.4 * std::abs(coarse.volumeErrorMm3));
     }
     const std::string csv = studyCsv(res);
-    CHECK(csv.find("h_mm,families,vertices,dev_max_mm") == 0);
+    CHECK(csv.find("h_mm,families,points,dev_max_mm") == 0);
     CHECK(std::count(csv.begin(), csv.end(), '\n') == 4);
 }
 
@@ -109,7 +109,7 @@ TEST_CASE("z-only dexels lose undercut wall material that three families keep", 
     o.job.stockBox = c.stock;
     o.resolutions = {1.0, 0.5};
     o.familySets = {FamilySet::only(Axis::Z), FamilySet::all()};
-    o.maxVertices = 4000;
+    o.surfacePoints = 4000;
     o.samplePoints = 200000;
     o.exactVolumeMm3 = 0.0;  // not measured here
     const StudyResult res = runStudy(o);
@@ -134,7 +134,7 @@ TEST_CASE("z-only dexels lose undercut wall material that three families keep", 
         const StudyRun& xyz = res.runs[i + 1];
         INFO("h = " << z.h << ": inner max z " << z.innerMaxMm << ", xyz " << xyz.innerMaxMm << "; rms "
                     << z.innerRmsMm << ", " << xyz.innerRmsMm << "; p95 " << z.innerP95Mm << ", " << xyz.innerP95Mm);
-        CHECK(z.innerVertices > 500);  // a quarter of the 4000 measured
+        CHECK(z.innerPoints > 500);  // a quarter of the 4000 measured
         // Measured with the dexel mesher: max 1.14 and 1.69 times, RMS 3.4 and 4.0 times.
         CHECK(z.innerMaxMm > 1.1 * xyz.innerMaxMm);
         CHECK(z.innerRmsMm > 3.0 * xyz.innerRmsMm);

@@ -1,7 +1,7 @@
 /// @file study.h
 /// @brief Accuracy studies: run the main job once per (spacing, dexel family set) and measure each
-/// result against the exact machined solid (MachinedSolidOracle): surface deviation of the mesh,
-/// volume error, and material the model loses or invents.
+/// result against the exact machined solid (MachinedSolidOracle): surface deviation of the mesh (at
+/// points spread evenly over its triangles), volume error, and material the model loses or invents.
 #pragma once
 
 #include <functional>
@@ -20,8 +20,10 @@ struct StudyOptions {
     SimulateOptions job;
     std::vector<double> resolutions{2.0, 1.0, 0.5};  ///< mm, any order
     std::vector<FamilySet> familySets{FamilySet::only(Axis::Z), FamilySet::all()};
-    /// Mesh vertices measured per run at most (an even spread over the mesh).
-    std::size_t maxVertices = 20000;
+    /// Points measured per run on the mesh: uniform over the triangles' area, a fixed seed. (The
+    /// dexel mesher's vertices on cell edges are exact crossings: the faces between are what a
+    /// person sees and what is measured.)
+    std::size_t surfacePoints = 20000;
     /// Random points (fixed seed) for the lost and invented material counts.
     std::size_t samplePoints = 100000;
     /// When set, a PLY mesh coloured by deviation is written per run into this folder (made if
@@ -36,13 +38,13 @@ struct StudyOptions {
 struct StudyRun {
     double h = 0.0;
     std::string families;
-    std::size_t vertices = 0;  ///< mesh vertices measured
+    std::size_t points = 0;  ///< surface points measured (along their triangle's normal)
     double devMaxMm = 0.0, devRmsMm = 0.0, devP95Mm = 0.0;  ///< |signed distance| statistics
     double devMeanMm = 0.0;                                 ///< signed mean (+ = extra material)
-    /// The same statistics over the measured vertices at least one spacing from the stock box's
-    /// faces: the machined surfaces, without the block's own edges that every mesh rounds by
-    /// about 0.65 h (and without the rims where a cut meets the stock's faces).
-    std::size_t innerVertices = 0;
+    /// The same statistics over the measured points at least one spacing from the stock box's
+    /// faces: the machined surfaces, without the block's own edges (which volumeToMesh rounds by
+    /// about 0.65 h) and without the rims where a cut meets the stock's faces.
+    std::size_t innerPoints = 0;
     double innerMaxMm = 0.0, innerRmsMm = 0.0, innerP95Mm = 0.0;
     double volumeMm3 = 0.0;                                 ///< the model's part volume
     double volumeErrorMm3 = 0.0;                            ///< model minus reference
@@ -67,14 +69,14 @@ struct StudyResult {
 /// @throw Error as the job does, or if the lists are empty.
 StudyResult runStudy(const StudyOptions& options);
 
-/// @brief One row per run: h_mm, families, vertices, dev_max_mm, dev_rms_mm, dev_p95_mm,
+/// @brief One row per run: h_mm, families, points, dev_max_mm, dev_rms_mm, dev_p95_mm,
 /// dev_max_h, dev_rms_h, dev_p95_h, dev_mean_mm, volume_mm3, volume_error_mm3, volume_error_rel,
 /// lost_mm3, invented_mm3, lost_far_mm3, invented_far_mm3, seconds, peak_memory_mb, stock_memory_mb,
-/// inner_vertices, inner_max_mm, inner_rms_mm, inner_p95_mm.
+/// inner_points, inner_max_mm, inner_rms_mm, inner_p95_mm.
 std::string studyCsv(const StudyResult& result);
 
 /// @brief A log-log PNG plot of the maximum, 95th percentile and RMS deviation against spacing over
-/// the vertices away from the stock's faces (StudyRun::inner*), one colour per family set (written
+/// the points away from the stock's faces (StudyRun::inner*), one colour per family set (written
 /// atomically).
 void writeStudyPlot(const std::string& path, const StudyResult& result);
 
