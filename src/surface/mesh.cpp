@@ -187,10 +187,6 @@ struct TriangleCounts {
     std::vector<std::uint32_t> suspects;
 };
 
-/// One pass over the triangles: degenerate ones, area, six times the enclosed volume (about
-/// `centre`), the folded ones (facing against the sum of their vertices' unit normals), and the
-/// suspects (folded, degenerate, or with minCosine > 0 facing their vertices' normals at a cosine
-/// below it). Ranges are reduced in a fixed order, so the sums do not depend on the thread count.
 /// Adds triangle t to the sums of trianglePass.
 inline void addTriangle(const Mesh& mesh, const std::vector<glm::vec3>& normal, const Vec3& centre, double minCosine,
                         std::size_t t, TriangleCounts& c) {
@@ -220,6 +216,10 @@ inline void addTriangle(const Mesh& mesh, const std::vector<glm::vec3>& normal, 
         c.suspects.push_back(std::uint32_t(t));
 }
 
+/// One pass over the triangles: degenerate ones, area, six times the enclosed volume (about
+/// `centre`), the folded ones (facing against the sum of their vertices' unit normals), and the
+/// suspects (folded, degenerate, or with minCosine > 0 facing their vertices' normals at a cosine
+/// below it). Ranges are reduced in a fixed order, so the sums do not depend on the thread count.
 TriangleCounts trianglePass(const Mesh& mesh, const std::vector<glm::vec3>& normal, const Vec3& centre,
                             double minCosine = 0.0) {
     return tbb::parallel_deterministic_reduce(
@@ -269,8 +269,6 @@ bool suspect(const Mesh& mesh, const std::vector<glm::vec3>& normal, std::uint32
     return glm::dot(areaVector, sum) < minCosine * twiceArea * glm::length(sum);
 }
 
-/// The local repair of repairAndCheckMesh: rounds of pulls on the suspects' vertices, testing again
-/// only the triangles around moved vertices and their neighbours.
 /// What a repair changed: the first position of every moved vertex and the first normal of every
 /// vertex whose normal was recomputed.
 struct RepairLog {
@@ -278,8 +276,11 @@ struct RepairLog {
     std::vector<std::pair<std::uint32_t, glm::vec3>> normals;
 };
 
+/// The local repair of repairAndCheckMesh: rounds of pulls on the suspects' vertices, testing again
+/// only the triangles around moved vertices and their neighbours. Leaves in `suspects` the
+/// triangles that are still suspect, and returns the number of vertices moved.
 std::size_t pullBack(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& normal,
-                     std::vector<std::uint32_t> suspects, const FoldRepair& repair, RepairLog& log) {
+                     std::vector<std::uint32_t>& suspects, const FoldRepair& repair, RepairLog& log) {
     std::vector<bool> moved(mesh.vertices.size(), false), renormalised(mesh.vertices.size(), false);
     std::size_t count = 0;
     for (int round = 0; round < repair.rounds && !suspects.empty(); ++round) {
@@ -330,10 +331,75 @@ std::size_t pullBack(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& nor
                                       [&](std::uint32_t t) { return !suspect(mesh, normal, t, repair.minCosine); }),
                        suspects.end());
     }
+    if (suspects.empty() || !repair.candidates) return count;
+
+    // The last resort: each vertex of a triangle still suspect tries the candidate positions it is
+    // offered, and keeps the one that leaves the fewest suspect triangles around it and its
+    // neighbours (their normals follow the move).
+    std::vector<std::uint32_t> candidates, neighbours, ring;
+    for (std::uint32_t t : suspects)
+        for (std::uint32_t v : mesh.triangles[t]) candidates.push_back(v);
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+    std::vector<Vec3> offered;
+    for (std::uint32_t v : candidates) {
+        neighbours.clear();
+        for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i)
+            for (std::uint32_t w : mesh.triangles[stars.corners[i] / 3])
+                if (w != v) neighbours.push_back(w);
+        std::sort(neighbours.begin(), neighbours.end());
+        neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
+        offered.clear();
+        repair.candidates(v, neighbours, offered);
+        if (offered.empty()) continue;
+        ring.clear();
+        for (std::uint32_t w : neighbours)
+            for (std::uint32_t i = stars.offset[w]; i < stars.offset[w + 1]; ++i) ring.push_back(stars.corners[i] / 3);
+        std::sort(ring.begin(), ring.end());
+        ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+        auto place = [&](const Vec3& x) {
+            mesh.vertices[v] = x;
+            normal[v] = starNormal(mesh, stars, v);
+            for (std::uint32_t w : neighbours) normal[w] = starNormal(mesh, stars, w);
+            std::size_t n = 0;
+            for (std::uint32_t t : ring) n += suspect(mesh, normal, t, repair.minCosine);
+            return n;
+        };
+        const Vec3 start = mesh.vertices[v];
+        const glm::vec3 startNormal = normal[v];
+        std::vector<glm::vec3> startNormals;
+        for (std::uint32_t w : neighbours) startNormals.push_back(normal[w]);
+        Vec3 best = start;
+        std::size_t fewest = place(start);
+        for (const Vec3& x : offered) {
+            if (fewest == 0) break;
+            const std::size_t n = place(x);
+            if (n < fewest) fewest = n, best = x;
+        }
+        if (best != start) {
+            if (!moved[v]) {
+                moved[v] = true;
+                ++count;
+                log.positions.push_back({v, start});
+            }
+            for (std::size_t k = 0; k < neighbours.size(); ++k)
+                if (!renormalised[neighbours[k]])
+                    renormalised[neighbours[k]] = true, log.normals.push_back({neighbours[k], startNormals[k]});
+            if (!renormalised[v]) renormalised[v] = true, log.normals.push_back({v, startNormal});
+            suspects.insert(suspects.end(), ring.begin(), ring.end());
+        }
+        place(best);
+    }
+    std::sort(suspects.begin(), suspects.end());
+    suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
+    suspects.erase(std::remove_if(suspects.begin(), suspects.end(),
+                                  [&](std::uint32_t t) { return !suspect(mesh, normal, t, repair.minCosine); }),
+                   suspects.end());
     return count;
 }
 
-MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, std::size_t* moved) {
+MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, std::size_t* moved,
+                std::vector<std::uint32_t>* unrepaired) {
     MeshCheck r;
     r.vertexCount = mesh.vertices.size();
     r.triangleCount = mesh.triangles.size();
@@ -356,8 +422,9 @@ MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, st
     if (repair && !t.suspects.empty()) {
         std::sort(t.suspects.begin(), t.suspects.end());
         RepairLog log;
-        const std::size_t n = pullBack(*repairable, stars, normal, std::move(t.suspects), *repair, log);
+        const std::size_t n = pullBack(*repairable, stars, normal, t.suspects, *repair, log);
         if (moved) *moved = n;
+        if (unrepaired) *unrepaired = t.suspects;
         // Vertices moved, the topology did not: the edge counts stand, and only the triangles
         // around renormalised vertices (a superset of those around moved ones) changed. Their
         // sums are taken out as they were and put back as they are.
@@ -388,11 +455,13 @@ MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, st
 
 }  // namespace
 
-MeshCheck checkMesh(const Mesh& mesh) { return check(nullptr, mesh, nullptr, nullptr); }
+MeshCheck checkMesh(const Mesh& mesh) { return check(nullptr, mesh, nullptr, nullptr, nullptr); }
 
-MeshCheck repairAndCheckMesh(Mesh& mesh, const FoldRepair& repair, std::size_t* moved) {
+MeshCheck repairAndCheckMesh(Mesh& mesh, const FoldRepair& repair, std::size_t* moved,
+                             std::vector<std::uint32_t>* unrepaired) {
     if (moved) *moved = 0;
-    return check(&mesh, mesh, &repair, moved);
+    if (unrepaired) unrepaired->clear();
+    return check(&mesh, mesh, &repair, moved, unrepaired);
 }
 
 }  // namespace dexelmill

@@ -185,3 +185,41 @@ TEST_CASE("repairAndCheckMesh: pulls fold vertices until none folds", "[surface]
     CHECK(c.ok());
     compare(c, bruteForce(m));
 }
+
+TEST_CASE("repairAndCheckMesh: the last resort takes the candidate that mends the fold", "[surface][mesh]") {
+    Mesh m = sphere(10, 16, 4.0);
+    const std::vector<Vec3> original = m.vertices;
+    const std::uint32_t bad = 45;
+    m.vertices[bad] = m.vertices[bad + 1] + 1.5 * (m.vertices[bad + 1] - m.vertices[bad]);
+    REQUIRE(checkMesh(m).foldedTriangles > 0);
+    FoldRepair repair;
+    repair.minCosine = 1e-3;
+    repair.pull = [](std::uint32_t, int, Vec3&, const std::vector<std::uint32_t>&) { return false; };
+
+    SECTION("no candidate mends it: nothing moves, and the folds are listed") {
+        repair.candidates = [&](std::uint32_t v, const std::vector<std::uint32_t>&, std::vector<Vec3>& out) {
+            out.push_back(m.vertices[v] + Vec3(0.0, 0.0, 1e-3));
+        };
+        std::size_t moved = 9;
+        std::vector<std::uint32_t> unrepaired;
+        const MeshCheck c = repairAndCheckMesh(m, repair, &moved, &unrepaired);
+        CHECK(c.foldedTriangles > 0);
+        compare(c, bruteForce(m));
+        CHECK(unrepaired.size() >= c.foldedTriangles);
+    }
+    SECTION("one candidate, among worse ones, is the vertex's true place") {
+        repair.candidates = [&](std::uint32_t v, const std::vector<std::uint32_t>&, std::vector<Vec3>& out) {
+            out.push_back(m.vertices[v] + Vec3(0.0, 0.0, 1e-3));
+            out.push_back(original[v]);
+            out.push_back(Vec3(0.0));
+        };
+        std::size_t moved = 0;
+        std::vector<std::uint32_t> unrepaired;
+        const MeshCheck c = repairAndCheckMesh(m, repair, &moved, &unrepaired);
+        CHECK(c.ok());
+        compare(c, bruteForce(m));
+        CHECK(unrepaired.empty());
+        CHECK(moved >= 1);
+        CHECK(m.vertices[bad] == original[bad]);
+    }
+}

@@ -76,12 +76,19 @@ struct FoldRepair {
     /// triangles around moved vertices and their neighbours are tested again.
     std::function<bool(std::uint32_t vertex, int round, Vec3& position, const std::vector<std::uint32_t>& neighbours)>
         pull;
+    /// May be empty. Called after the last round for every vertex of a triangle still to repair,
+    /// with its neighbours: appends positions to try. The vertex goes to the one (or stays where it
+    /// is) that leaves the fewest triangles to repair around it and its neighbours.
+    std::function<void(std::uint32_t vertex, const std::vector<std::uint32_t>& neighbours, std::vector<Vec3>& positions)>
+        candidates;
 };
 
 /// @brief checkMesh, repairing on the way: the triangles that fold, nearly fold or have no area
 /// have their vertices moved by `repair.pull` until none is left or the rounds run out. The
-/// topology does not change. `moved` receives the number of vertices moved.
-MeshCheck repairAndCheckMesh(Mesh& mesh, const FoldRepair& repair, std::size_t* moved = nullptr);
+/// topology does not change. `moved` receives the number of vertices moved, and `unrepaired` the
+/// triangles that still fold, nearly fold or have no area after the last round.
+MeshCheck repairAndCheckMesh(Mesh& mesh, const FoldRepair& repair, std::size_t* moved = nullptr,
+                             std::vector<std::uint32_t>* unrepaired = nullptr);
 
 /// @brief The signed volume enclosed by the mesh (divergence theorem), mm^3.
 double meshVolume(const Mesh& mesh);
