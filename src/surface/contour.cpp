@@ -8,9 +8,10 @@
 //     +x, +y or +z), and the configuration of every cell whose lower corner it holds and that the
 //     surface crosses (a mixed cell), with its patches and triangles;
 //  2. crossings: each owned crossing's position goes to the mesh, its normal to a side array;
-//  3. patches: each patch's vertex from its crossings (quadric error function);
-//  4. triangles: each patch's fan, with chords flipped along creases;
-//  5. folds: patch vertices of folded triangles are pulled back towards their loops.
+//  3. patches: each patch's vertex from its crossings (quadric error function), and its fan;
+//  4. flips: the fan chords of feature patches that cross a crease are turned to run along it;
+// then the mesh is checked, and the vertices of folded triangles are pulled back towards their
+// loops (repairAndCheckMesh), and with adaptivity flat regions are merged (mergeFlatRegions).
 // Passes 2 to 4 read only what pass 1 stored per block: bit masks with prefix counts, which turn a
 // lattice point or cell into a mesh index, and the mixed cells' configurations.
 #include "dexelmill/surface/contour.h"
@@ -18,7 +19,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -61,6 +61,15 @@ constexpr double kConvexGap = 1e-3;
 /// so 1e-4 mm at 1.7 m), turns a triangle a lattice cell across (1 mm at that size) by 1e-4 rad
 /// at most, a tenth of this margin.
 constexpr double kFoldMargin = 1e-3;
+
+/// A flip's new triangles must face within acos(this) (87 degrees) of the pair they replace. Across
+/// a crease each lies in one face, whose normal is half the crease's turn from the pair's: this
+/// admits creases up to 174 degrees sharp.
+constexpr double kFlipFacing = 0.05;
+
+/// How far from a loop's mass point towards a crossing, or the midpoint of two, the last resort of
+/// fold repair tries its candidate positions.
+constexpr double kCandidateReach[] = {0.5, 0.9};
 
 /// Rounds of fold repair; after the last a patch vertex that still folds sits on its mass point.
 constexpr int kPullRounds = 8;
@@ -240,6 +249,11 @@ public:
         std::vector<Block>().swap(blocks_);
         std::vector<std::uint64_t>().swap(keys_);
         stats.check = repairAndCheck(stats.pulledBack);
+        if (stats.check.foldedTriangles + stats.check.degenerateTriangles > 0 && unflip(unrepaired_) > 0) {
+            std::size_t more = 0;
+            stats.check = repairAndCheck(more);
+            stats.pulledBack += more;
+        }
         if (adaptivity_ > 0.0) {
             FlatMergeOptions merge;
             merge.maxAngle = adaptivity_ * kMergeAngle;
@@ -679,6 +693,11 @@ private:
 
     // ------------------------------------------------------------------ pass 4: triangles
 
+    /// Twice the area vector of a triangle.
+    Vec3 area(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
+        return glm::cross(mesh_.vertices[b] - mesh_.vertices[a], mesh_.vertices[c] - mesh_.vertices[a]);
+    }
+
     /// How well a triangle agrees with the Hermite data: the least cosine between its normal and
     /// the normals of its crossings (1 when none has a known normal; -1 when it has no area).
     double fit(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
@@ -761,7 +780,7 @@ private:
     /// better with the normals at their crossings (across a crease each new triangle lies in the
     /// plane of its one crossing), and when this chord is the first, in the order of the lattice
     /// edges, of the chords the two patches share on the face (two flips would join the two
-    /// vertices twice).
+    /// vertices twice), and when neither new triangle faces against the pair it replaces.
     bool flipChord(const std::uint8_t* edges, int len, int i, const CellPatches& otherPatches, int ok, int face,
                    std::uint32_t patch, std::uint32_t partner, const std::uint32_t* loop) const {
         const int j = (i + 1) % len;
@@ -771,6 +790,11 @@ private:
         const double before = std::min(fit(patch, xi, xj), fit(partner, xj, xi));
         const double after = std::min(fit(patch, xi, partner), fit(partner, xj, patch));
         if (!(after > before)) return false;
+        // The new pair must face the way the old pair does, by more than a sliver's margin: a flip
+        // never turns a triangle over, nor makes one that stands edge-on to the surface there.
+        const Vec3 quad = area(patch, xi, xj) + area(partner, xj, xi);
+        for (const Vec3& n : {area(patch, xi, partner), area(partner, xj, patch)})
+            if (!(glm::dot(n, quad) > kFlipFacing * glm::length(n) * glm::length(quad))) return false;
         // Other chords of this patch on the same face that reach the same partner.
         const EdgeTables& tables = edgeTables();
         const std::uint64_t mine = std::min<std::uint64_t>(xi, xj);
@@ -810,7 +834,62 @@ private:
             x = to;
             return true;
         };
-        return repairAndCheckMesh(mesh_, repair, &moved);
+        // Still folded after the last round: points of the loop's hull, towards each crossing
+        // and each pair of crossings from the mass point. Convex combinations of the crossings,
+        // which lie on the cell's edges, stay inside the cell.
+        repair.candidates = [&](std::uint32_t v, const std::vector<std::uint32_t>& neighbours, std::vector<Vec3>& out) {
+            if (v < patchVertexBase_) return;
+            std::vector<Vec3> loop;
+            for (std::uint32_t w : neighbours)
+                if (w < patchVertexBase_) loop.push_back(mesh_.vertices[w]);
+            if (loop.empty()) return;
+            Vec3 mass(0.0);
+            for (const Vec3& c : loop) mass += c;
+            mass /= double(loop.size());
+            out.push_back(mass);
+            for (std::size_t i = 0; i < loop.size(); ++i) {
+                for (double t : kCandidateReach) out.push_back(mass + t * (loop[i] - mass));
+                for (std::size_t j = i + 1; j < loop.size(); ++j)
+                    for (double t : kCandidateReach) out.push_back(mass + t * (0.5 * (loop[i] + loop[j]) - mass));
+            }
+        };
+        return repairAndCheckMesh(mesh_, repair, &moved, &unrepaired_);
+    }
+
+    /// Undoes the flips that made any of `triangles`, which the repair could not mend: a flip is
+    /// judged with the vertices where pass 3 put them, and a later pull can turn one of its
+    /// triangles over. The pair (patch, xi, partner), (partner, xj, patch) goes back to the fan
+    /// triangles (patch, xi, xj), (partner, xj, xi). Returns the number of pairs undone.
+    std::size_t unflip(const std::vector<std::uint32_t>& triangles) {
+        auto isFlip = [&](const Mesh::Triangle& t) { return t[0] >= patchVertexBase_ && t[2] >= patchVertexBase_; };
+        // Each flipped triangle's partner triangle is the one that runs the other way along the
+        // join of the two patch vertices.
+        std::vector<std::pair<std::uint64_t, std::uint32_t>> wanted;
+        for (std::uint32_t t : triangles) {
+            const Mesh::Triangle& tri = mesh_.triangles[t];
+            if (isFlip(tri)) wanted.push_back({std::uint64_t(tri[2]) << 32 | tri[0], t});
+        }
+        if (wanted.empty()) return 0;
+        std::sort(wanted.begin(), wanted.end());
+        wanted.erase(std::unique(wanted.begin(), wanted.end()), wanted.end());
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+        for (std::uint32_t t = 0; t < mesh_.triangles.size(); ++t) {
+            const Mesh::Triangle& tri = mesh_.triangles[t];
+            if (!isFlip(tri)) continue;
+            const std::uint64_t key = std::uint64_t(tri[0]) << 32 | tri[2];
+            auto it = std::lower_bound(wanted.begin(), wanted.end(), std::make_pair(key, std::uint32_t(0)));
+            if (it != wanted.end() && it->first == key) pairs.push_back({std::min(it->second, t), std::max(it->second, t)});
+        }
+        std::sort(pairs.begin(), pairs.end());
+        pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+        for (const auto& [a, b] : pairs) {
+            Mesh::Triangle& t1 = mesh_.triangles[a];
+            Mesh::Triangle& t2 = mesh_.triangles[b];
+            const std::uint32_t xi = t1[1], xj = t2[1];
+            t1[2] = xj;
+            t2[2] = xi;
+        }
+        return pairs.size();
     }
 
     const openvdb::FloatGrid& grid_;
@@ -826,6 +905,7 @@ private:
     std::vector<PackedNormal> crossingNormal_;
     std::vector<std::uint8_t> feature_;
     std::uint32_t patchVertexBase_ = 0;
+    std::vector<std::uint32_t> unrepaired_;
 };
 
 }  // namespace

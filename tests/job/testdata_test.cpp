@@ -46,7 +46,7 @@ std::vector<fs::path> programs(const fs::path& root) {
 
 }  // namespace
 
-TEST_CASE("every shared test program runs end to end with a closed mesh", "[job][testdata]") {
+TEST_CASE("every shared test program runs end to end with a closed mesh without folds", "[job][testdata]") {
     if (!test::haveSharedData()) return;
     const std::vector<fs::path> all = programs(test::sharedData());
     REQUIRE(all.size() >= 25);
@@ -72,6 +72,8 @@ TEST_CASE("every shared test program runs end to end with a closed mesh", "[job]
         CHECK(s.report.moves > 0);
         CHECK(s.report.meshTriangles > 0);
         CHECK(s.report.meshClosed);
+        CHECK(s.report.meshFoldedTriangles == 0);
+        CHECK(s.report.meshDegenerateTriangles == 0);
         CHECK(s.report.finalVolumeMm3 > 0);
         CHECK(s.report.finalVolumeMm3 <= s.report.stockVolumeMm3);
     }

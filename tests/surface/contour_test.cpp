@@ -306,3 +306,17 @@ TEST_CASE("contour: adaptivity merges flat regions and keeps the mesh closed", "
         CHECK(d.max <= measureFaces(full, part, 3.0).max + adaptivity * 0.05 + 1e-9);
     }
 }
+
+TEST_CASE("contour: the block's own faces, edges and corners are exact", "[surface][contour]") {
+    // A size that is not a whole number of cells: the far faces fall anywhere between lattice
+    // planes.
+    const Box box{Vec3(-3.1, 2.05, 0.3), Vec3(9.37, 13.9, 7.77)};
+    const Part part{box, {}};
+    const Result r = contourPart(part, 0.7);
+    INFO(summary("block", r));
+    CHECK(r.check.ok());
+    CHECK(r.stats.cornerVertices == 8);
+    // Exact up to the dexels' float endpoints: about 6e-8 of the distance from the lattice origin.
+    CHECK(r.faces.max <= 1e-6);
+    CHECK(r.check.signedVolume == Approx(box.volume()).epsilon(1e-7));
+}
