@@ -128,7 +128,11 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
                   "A bare SPEC serves every tool number nothing else defines.");
     c->add_option("--chord-tolerance", a.chordTolerance, "Largest arc-to-chord distance when arcs are linearised (mm)")
         ->capture_default_str();
-    c->add_option("--threads", a.threads, "Worker threads; 0 uses every core")->capture_default_str();
+    c->add_option("--mesher", a.mesher,
+                  "dexel: the surface placed from the dexels' exact crossings and normals, sharp edges kept;\n"
+                  "vdb: OpenVDB's volumeToMesh on the level set alone")
+        ->capture_default_str();
+    c->add_option("--threads", a.threads, "Worker threads for every stage; 0 uses every core")->capture_default_str();
     c->add_flag("-q,--quiet", a.quiet, "No progress bar and no warnings on stderr; only the final summary");
 }
 
@@ -145,11 +149,10 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
     c->add_option("--vdb", a.vdb, "The part as an OpenVDB level set, PART.vdb");
     c->add_option("--png", a.png, "A shaded isometric picture of the part, PART.png");
     c->add_option("--report", a.report, "A JSON report: volumes, collisions, warnings, timings");
-    c->add_option("--mesher", a.mesher,
-                  "dexel: the surface placed from the dexels' exact crossings and normals, sharp edges kept;\n"
-                  "vdb: OpenVDB's volumeToMesh on the level set alone")
+    c->add_option("--adaptivity", a.adaptivity,
+                  "Merging of flat regions, from 0 (none) to 1 (triangles within 15 degrees merge,\n"
+                  "moving the surface by at most 0.05 spacings); the mesh stays closed")
         ->capture_default_str();
-    c->add_option("--adaptivity", a.adaptivity, "Mesh simplification from 0 (none) to 1")->capture_default_str();
     c->add_flag("--sharp-edges", a.sharpEdges,
                 "Kept for old scripts: the dexel mesher always places sharp edges and corners from the\n"
                 "exact dexel crossings");
