@@ -44,6 +44,11 @@ constexpr double kArcRadiusFit = 0.002;
 constexpr double kG83RapidDelta = 0.010 * kInch;
 constexpr double kG73Clearance = 0.002 * kInch;
 
+/// The deepest nesting of an expression: brackets, unary signs, function arguments and the
+/// right-associative ** each add a level. LinuxCNC's own parser stops far sooner; the limit keeps
+/// the recursive reader within a few hundred kilobytes of stack.
+constexpr int kMaxExpressionDepth = 1000;
+
 /// Hot warning kinds, counted without building strings.
 enum HotKind { kHotFeed, kHotSpeed, kHotCount };
 
@@ -819,7 +824,26 @@ private:
     }
 
     // ---- real values and expressions ----
+    /// Counts one level of expression nesting while it lives; fails past kMaxExpressionDepth.
+    class Nesting {
+    public:
+        Nesting(const Interpreter& self, int& depth, std::size_t i) : depth_(depth) {
+            if (++depth_ > kMaxExpressionDepth) {
+                --depth_;
+                self.fail(int(i) + 1, "expression nested deeper than " + std::to_string(kMaxExpressionDepth) + " levels",
+                          self.tokenAt(int(i) + 1));
+            }
+        }
+        ~Nesting() { --depth_; }
+        Nesting(const Nesting&) = delete;
+        Nesting& operator=(const Nesting&) = delete;
+
+    private:
+        int& depth_;
+    };
+
     double readRealValue(std::size_t& i) {
+        const Nesting nesting(*this, depth_, i);
         i = skipSpaces(line_, i);
         if (i >= line_.size()) fail(int(i) + 1, "missing value at end of line", tokenAt(int(i)));
         const char c = line_[i];
@@ -945,6 +969,7 @@ private:
     }
 
     double parseExpression(std::size_t& i, int minPrec) {
+        const Nesting nesting(*this, depth_, i);
         double lhs = readRealValue(i);
         while (true) {
             int code = 0;
@@ -1863,6 +1888,7 @@ private:
     int curFile_ = -1;
     int curLineNo_ = 0;
     std::string_view line_;
+    int depth_ = 0;  ///< expression nesting now (Nesting)
     std::size_t blocks_ = 0;
 
     // Machine state.

@@ -312,6 +312,49 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
     CHECK(sizeof(cases) / sizeof(cases[0]) >= 30);
 }
 
+TEST_CASE("gcode: expressions nested past the limit are a located error, not a stack overflow",
+          "[path][gcode][errors]") {
+    struct Deep {
+        const char* what;
+        std::string text;
+        int column;  // where the level past the limit starts
+    };
+    const int limit = 1000;
+    const Deep cases[] = {
+        {"unary signs", "G1 X" + std::string(40000, '-') + "1\n", 5 + limit},
+        {"brackets", "G1 X" + std::string(20000, '[') + "1\n", 0},
+        {"powers", "#1 = [1" + [] {
+             std::string s;
+             for (int k = 0; k < 100000; ++k) s += "**1";
+             return s;
+         }() + "]\n", 0},
+        {"functions", "#1 = " + [] {
+             std::string s;
+             for (int k = 0; k < 5000; ++k) s += "ABS[";
+             return s;
+         }() + "1\n", 0},
+    };
+    for (const Deep& c : cases) {
+        INFO(c.what);
+        try {
+            parseGcode(c.text, "deep.ngc");
+            FAIL("no error");
+        } catch (const ParseError& e) {
+            CHECK(e.where().file == "deep.ngc");
+            CHECK(e.where().line == 1);
+            if (c.column) CHECK(e.where().column == c.column);
+            CHECK(e.message().find("nested deeper than 1000") != std::string::npos);
+        }
+    }
+    // Within the limit the value is read as written.
+    const std::string fine = "G1 X" + std::string(400, '[') + "-7" + std::string(400, ']') + "\n";
+    GcodeOptions options;
+    options.startPosition = Vec3(0.0);
+    const Program p = parseGcode(fine, "fine.ngc", options);
+    REQUIRE_FALSE(p.path.moves.empty());
+    CHECK(p.path.moves.back().end.x == Approx(-7.0));
+}
+
 TEST_CASE("gcode: arcs are split within the chord tolerance and end exactly", "[path][gcode]") {
     for (double tol : {0.001, 0.01, 0.1}) {
         GcodeOptions o;
