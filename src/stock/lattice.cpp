@@ -41,9 +41,12 @@ std::array<int, 2> Lattice::indexRange(Axis a, double lo, double hi) const {
     // coord(i) = origin + (i + 1/2) h >= lo  <=>  i >= (lo - origin) / h - 1/2
     const double first = std::ceil((lo - origin[ax]) / h - 0.5);
     const double last = std::floor((hi - origin[ax]) / h - 0.5);
-    const int f = int(std::max(first, 0.0));
-    const int l = int(std::min(last, double(n[ax] - 1)));
-    return {f, l};
+    // Clamped to the lattice in double before the conversion, so that a range far outside it (a
+    // move to X2e8, say) or not a number at all is an empty or clipped range, never an overflow.
+    if (!(first <= last)) return {0, -1};
+    const double f = std::min(std::max(first, 0.0), double(n[ax]));
+    const double l = std::max(std::min(last, double(n[ax] - 1)), -1.0);
+    return {int(f), int(l)};
 }
 
 }  // namespace dexelmill

@@ -293,3 +293,79 @@ TEST_CASE("cut: a floor and a wall exactly on lattice lines: the three families 
     CHECK(stock.inside(Axis::X, iWall + 1, 20, 18));
 }
 
+
+TEST_CASE("cut: a move far past the stock cuts what the move clipped to the stock cuts", "[stock][cut]") {
+    // Issue 15: G1 X2e8 crashed the cutting loop (an index past int at small spacings). The stock is 20 x 20 x 10;
+    // the near moves already start and end with the tool (radius 2) clear of it, and the far
+    // moves run along the same lines.
+    const double h = 0.25;
+    struct Case {
+        const char* what;
+        Vec3 nearStart, nearEnd, farStart, farEnd;
+    };
+    const Case cases[] = {
+        {"along +x", Vec3(5, 7.3, 6), Vec3(40, 7.3, 6), Vec3(5, 7.3, 6), Vec3(2e9, 7.3, 6)},
+        {"along -y", Vec3(12.1, 15, 7.5), Vec3(12.1, -20, 7.5), Vec3(12.1, 15, 7.5), Vec3(12.1, -2e9, 7.5)},
+        {"oblique, both ends far", Vec3(-30, -25, 6.5), Vec3(30, 35, 6.5), Vec3(-30 - 1e9, -25 - 1e9, 6.5),
+         Vec3(30 + 1e9, 35 + 1e9, 6.5)},
+        {"down through the floor", Vec3(9, 9, 20), Vec3(9, 9, -20), Vec3(9, 9, 20), Vec3(9, 9, -1e9)},
+    };
+    for (const Case& c : cases) {
+        INFO(c.what);
+        auto run = [&](const Vec3& start, const Vec3& end) {
+            ToolPath path;
+            path.files.push_back("far.nc");
+            Move m;
+            m.start = start;
+            m.end = end;
+            m.tool = 1;
+            m.source = SourceRef{0, 1};
+            path.moves.push_back(m);
+            TriDexelStock stock = TriDexelStock::fromBox(kStockBox, h);
+            const CutResult r = cutStock(stock, path, testTools());
+            return std::make_pair(std::move(stock), r.removedVolume);
+        };
+        const auto [nearStock, nearVolume] = run(c.nearStart, c.nearEnd);
+        const auto [farStock, farVolume] = run(c.farStart, c.farEnd);
+        REQUIRE(nearVolume > 10.0);
+        // Ends within kEnd of each other move the volume by at most kEnd times the faces the cut
+        // makes (under 1,000 mm^2 here), about 3e-5 of it.
+        const double kEnd = 1e-5;
+        CHECK(std::abs(farVolume - nearVolume) <= kEnd * 1000.0);
+        // Every dexel has the same segments, to the sweep's stated accuracy (coordinates of 1e9
+        // mm carry 1e-7 mm of rounding into the sweep's frame).
+        double worst = 0.0;
+        std::size_t differentCounts = 0;
+        for (int ax = 0; ax < 3; ++ax) {
+            const DexelFamily& fa = nearStock.family(axisFromIndex(ax));
+            const DexelFamily& fb = farStock.family(axisFromIndex(ax));
+            for (int ic = 0; ic < fa.nc(); ++ic)
+                for (int ib = 0; ib < fa.nb(); ++ib) {
+                    const SegmentSpan sa = fa.segments(ib, ic), sb = fb.segments(ib, ic);
+                    if (sa.size != sb.size) {
+                        ++differentCounts;
+                        continue;
+                    }
+                    for (std::size_t k = 0; k < sa.size; ++k)
+                        worst = std::max({worst, std::abs(double(sa[k].lo) - double(sb[k].lo)),
+                                          std::abs(double(sa[k].hi) - double(sb[k].hi))});
+                }
+        }
+        CHECK(differentCounts == 0);
+        CHECK(worst <= kEnd);
+    }
+    SECTION("a move wholly far away, as after G1 X2e9, removes nothing") {
+        for (const Vec3& far : {Vec3(2e9, 5, 5), Vec3(-2e9, 5, 5), Vec3(5, 3e9, 5), Vec3(5, 5, -3e9)}) {
+            ToolPath path;
+            path.files.push_back("far.nc");
+            Move m;
+            m.start = far;
+            m.end = far + Vec3(0, 0, 1);
+            m.tool = 1;
+            m.source = SourceRef{0, 1};
+            path.moves.push_back(m);
+            TriDexelStock stock = TriDexelStock::fromBox(kStockBox, h);
+            CHECK(cutStock(stock, path, testTools()).removedVolume == 0.0);
+        }
+    }
+}
