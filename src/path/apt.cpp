@@ -225,7 +225,7 @@ private:
         if (w == "FROM") {
             const auto v = numbers(s);
             if (v.size() != 3 && v.size() != 6) fail(s, "FROM needs x,y,z[,i,j,k]");
-            pos_ = toPart(Vec3(v[0], v[1], v[2]) * scale_);
+            pos_ = reachable(toPart(Vec3(v[0], v[1], v[2]) * scale_), s);
             if (v.size() == 6) axis_ = axisOf(s, v[3], v[4], v[5]);
             havePos_ = true;
             return;
@@ -363,7 +363,14 @@ private:
             fail(s, "tool " + std::to_string(tool_) + " has no CUTTER (missing CUTTER)");
     }
 
+    /// A position the program names, checked against kMaxCoordinateMm.
+    Vec3 reachable(const Vec3& p, const Statement& s) const {
+        if (!withinReach(p)) fail(s, "position " + detail::formatPoint(p) + " mm is beyond the 1e9 mm a program may reach");
+        return p;
+    }
+
     void emit(const Vec3& to, bool rapid, const Statement& s) {
+        reachable(to, s);
         Move m;
         m.start = pos_;
         m.end = to;
@@ -379,7 +386,7 @@ private:
         const auto v = numbers(s);
         if (v.size() != 3 && v.size() != 6) fail(s, "GOTO needs x,y,z or x,y,z,i,j,k");
         requireTool(s);
-        const Vec3 p = toPart(Vec3(v[0], v[1], v[2]) * scale_);
+        const Vec3 p = reachable(toPart(Vec3(v[0], v[1], v[2]) * scale_), s);
         if (v.size() == 6) axis_ = axisOf(s, v[3], v[4], v[5]);
         const bool rapid = rapidNext_;
         rapidNext_ = false;

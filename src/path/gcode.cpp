@@ -1434,6 +1434,9 @@ private:
     void emit(const Vec3& target, bool rapid) {
         if (!std::isfinite(target.x) || !std::isfinite(target.y) || !std::isfinite(target.z))
             fail(0, "move to a non-finite position", std::string(line_.substr(0, 40)));
+        if (!withinReach(target))
+            fail(0, "move to " + detail::formatPoint(target) + " mm, beyond the 1e9 mm a program may reach",
+                 std::string(line_.substr(0, 40)));
         if (out_.path.moves.size() >= opt_.maxMoves)
             fail(0, "program makes more than " + std::to_string(opt_.maxMoves) + " moves",
                  std::string(line_.substr(0, 40)));

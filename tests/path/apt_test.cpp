@@ -85,6 +85,9 @@ TEST_CASE("apt: malformed programs give a parse error with file:line:col and the
     const Case cases[] = {
         {"GOTO/1,2,3\n", 1, "missing CUTTER", "GOTO"},
         {"CUTTER/6\nGOTO/1,2\n", 2, "GOTO needs", "GOTO/1,2"},
+        {"CUTTER/6\nFROM/0,0,5\nGOTO/10,0,-1\nGOTO/1E200,0,-1\n", 4, "beyond the 1e9 mm", "GOTO"},
+        {"CUTTER/6\nFROM/0,-2E9,5\n", 2, "beyond the 1e9 mm", "FROM"},
+        {"CUTTER/6\nFROM/0,0,5\nGODLTA/0,0,-3E9\n", 3, "beyond the 1e9 mm", "GODLTA"},
         {"CUTTER/6\nGOTO/1,2,3x\n", 2, "bad number", "3X"},
         {"CUTTER/-6\n", 1, "positive", "-6"},
         {"CUTTER/6\nFROM/1,0,0\nCIRCLE/0,0,0,0,0,1\nGOTO/3,3,0\n", 4, "not on the circle", "GOTO"},

@@ -275,6 +275,8 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
         {"unknown G-code", "G7.7 X1\n", 1, 1, "unsupported G-code", "G7.7"},
         {"threading", "G33 Z-1 K1\n", 1, 1, "unsupported motion", "G33"},
         {"rotary axis", "G0 X1 A10\n", 1, 7, "rotary", "A10"},
+        {"position beyond reach", "G1 X2000000000\n", 1, 0, "beyond the 1e9 mm", "G1 X2000000000"},
+        {"inch position beyond reach", "G20 G1 Y-40000000\n", 1, 0, "beyond the 1e9 mm", "Y-40000000"},
         {"unknown word", "G0 X1 E5\n", 1, 7, "unknown word", "E5"},
         {"axis words without motion mode", "X10\n", 1, 1, "no motion mode", "X10"},
         {"cycle R below Z", "G0 Z5\nG81 X1 Y1 Z2 R-1\n", 2, 14, "R plane below", "R"},

@@ -3,6 +3,7 @@
 /// loop consumes. Positions in mm in the part frame.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -13,6 +14,16 @@
 #include "dexelmill/tool/tool.h"
 
 namespace dexelmill {
+
+/// @brief The largest coordinate (mm) a program may reach; readers reject a position beyond it
+/// with a located error. The cutting loop clips any move to the stock exactly; this bound keeps the
+/// rounding of the move's coordinates (1e-7 mm at 1e9 mm) below the sweep's accuracy.
+constexpr double kMaxCoordinateMm = 1e9;
+
+/// @brief Whether every coordinate of p is finite and within kMaxCoordinateMm.
+inline bool withinReach(const Vec3& p) {
+    return std::abs(p.x) <= kMaxCoordinateMm && std::abs(p.y) <= kMaxCoordinateMm && std::abs(p.z) <= kMaxCoordinateMm;
+}
 
 /// @brief Where a move came from: an index into ToolPath::files and a 1-based line (0: none).
 struct SourceRef {

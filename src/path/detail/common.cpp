@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -94,6 +95,12 @@ std::string directoryOf(const std::string& path) {
 std::string joinPath(const std::string& dir, const std::string& name) {
     if (dir.empty() || (!name.empty() && name[0] == '/')) return name;
     return dir + "/" + name;
+}
+
+std::string formatPoint(const Vec3& p) {
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "(%.6g, %.6g, %.6g)", p.x, p.y, p.z);
+    return buf;
 }
 
 }  // namespace dexelmill::detail

@@ -5,6 +5,8 @@
 #include <string>
 #include <string_view>
 
+#include "dexelmill/geometry/types.h"
+
 namespace dexelmill::detail {
 
 /// @brief The whole file as a string.
@@ -23,5 +25,8 @@ inline char upper(char c) { return (c >= 'a' && c <= 'z') ? char(c - 'a' + 'A') 
 /// @brief The directory part of a path ("" for none), and a path joined to a directory.
 std::string directoryOf(const std::string& path);
 std::string joinPath(const std::string& dir, const std::string& name);
+
+/// @brief A point as "(x, y, z)", six significant digits each.
+std::string formatPoint(const Vec3& p);
 
 }  // namespace dexelmill::detail
