@@ -14,6 +14,25 @@ public:
     explicit Error(const std::string& message) : std::runtime_error(message) {}
 };
 
+/// @brief Text from an input file made safe to print: control bytes (below 0x20 but tab, and 0x7f)
+/// become \xNN, so that a NUL or an escape sequence neither cuts nor garbles a message.
+inline std::string printable(const std::string& text) {
+    static const char hex[] = "0123456789abcdef";
+    std::string out;
+    out.reserve(text.size());
+    for (const char ch : text) {
+        const auto c = static_cast<unsigned char>(ch);
+        if ((c < 0x20 && c != '\t') || c == 0x7f) {
+            out += "\\x";
+            out += hex[c >> 4];
+            out += hex[c & 15];
+        } else {
+            out += ch;
+        }
+    }
+    return out;
+}
+
 /// @brief A place in an input file. Lines and columns count from 1; 0 means "unknown".
 struct SourceLocation {
     std::string file;
@@ -49,8 +68,8 @@ public:
 private:
     static std::string format(const SourceLocation& where, const std::string& message,
                               const std::string& offending) {
-        std::string s = where.str() + ": error: " + message;
-        if (!offending.empty()) s += ": '" + offending + "'";
+        std::string s = where.str() + ": error: " + printable(message);
+        if (!offending.empty()) s += ": '" + printable(offending) + "'";
         return s;
     }
 

@@ -174,7 +174,7 @@ int runSimulate(const SimulateArgs& args) {
         std::size_t shown = 0;
         for (const ReportWarning& w : r.warnings) {
             if (shown++ == kPrintedDiagnostics) break;
-            std::cerr << where(w.where) << ": warning: " << w.message << "\n";
+            std::cerr << where(w.where) << ": warning: " << printable(w.message) << "\n";
         }
         if (r.warnings.size() > kPrintedDiagnostics)
             std::cerr << "dexelmill: " << r.warnings.size() - kPrintedDiagnostics << " more warnings"

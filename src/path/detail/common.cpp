@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -79,12 +80,25 @@ bool parseUnsignedDecimal(std::string_view s, std::size_t& pos, double& value) {
 }
 
 std::string readTextFile(const std::string& path) {
+    // Only regular files: a directory reads as nothing, and /dev/zero or a FIFO never ends.
+    std::error_code ec;
+    const std::filesystem::file_status st = std::filesystem::status(path, ec);
+    if (ec || !std::filesystem::exists(st)) throw Error("cannot open '" + path + "': no such file");
+    if (std::filesystem::is_directory(st)) throw Error("'" + path + "' is a directory, not a program file");
+    if (!std::filesystem::is_regular_file(st))
+        throw Error("'" + path + "' is not a regular file (a device, pipe or socket); programs are read from files");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw Error("cannot open '" + path + "'");
     std::ostringstream ss;
     ss << in.rdbuf();
     if (in.bad()) throw Error("cannot read '" + path + "'");
-    return ss.str();
+    std::string text = ss.str();
+    // A UTF-8 byte-order mark, as Windows editors write it, is not part of the text.
+    if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);
+    // Lone CR line ends (old Mac editors) become LF; CRLF stays, and the readers drop its CR.
+    for (std::size_t i = text.find('\r'); i != std::string::npos; i = text.find('\r', i + 1))
+        if (i + 1 == text.size() || text[i + 1] != '\n') text[i] = '\n';
+    return text;
 }
 
 std::string directoryOf(const std::string& path) {

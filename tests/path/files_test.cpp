@@ -1,0 +1,120 @@
+// Program files as users have them: byte-order marks, every kind of line end, control bytes in
+// messages, and paths that are not files (issue 15).
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "dexelmill/error.h"
+#include "dexelmill/path/camotics.h"
+
+using namespace dexelmill;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A folder of its own under the system's temporary folder, removed at the end.
+class Folder {
+public:
+    explicit Folder(const std::string& name) : dir_(fs::temp_directory_path() / ("dexelmill_files_" + name)) {
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    ~Folder() {
+        std::error_code ec;
+        fs::remove_all(dir_, ec);
+    }
+    std::string write(const std::string& name, const std::string& bytes) const {
+        const fs::path p = dir_ / name;
+        std::ofstream(p, std::ios::binary) << bytes;
+        return p.string();
+    }
+    std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+private:
+    fs::path dir_;
+};
+
+/// The moves of a program as text, to compare two readings.
+std::string movesOf(const Program& p) {
+    std::string s;
+    for (const Move& m : p.path.moves)
+        s += std::to_string(m.end.x) + "," + std::to_string(m.end.y) + "," + std::to_string(m.end.z) + ":" +
+             std::to_string(m.source.line) + ";";
+    return s;
+}
+
+std::string errorOf(const std::string& path) {
+    try {
+        readProgram(path);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "no error";
+}
+
+}  // namespace
+
+TEST_CASE("files: a byte-order mark and CR, LF or CRLF line ends read alike", "[path][files]") {
+    const Folder dir("line_ends");
+    const std::string lines[] = {"G21 G90", "G0 X0 Y0 Z5", "G1 Z-1", "G1 X10 Y4", "G1 X3 (comment)", "M2"};
+    auto join = [&](const std::string& end) {
+        std::string s;
+        for (const std::string& l : lines) s += l + end;
+        return s;
+    };
+    const Program lf = readProgram(dir.write("lf.ngc", join("\n")));
+    REQUIRE(lf.path.moves.size() == 3);  // the first G0 only sets the unknown start
+    CHECK(lf.path.moves.back().source.line == 5);
+    const std::string bom = "\xEF\xBB\xBF";
+    for (const auto& [name, text] : {std::pair<std::string, std::string>{"crlf.ngc", join("\r\n")},
+                                     {"cr.ngc", join("\r")},
+                                     {"bom.ngc", bom + join("\n")},
+                                     {"bom_crlf.ngc", bom + join("\r\n")},
+                                     {"bom_cr.ngc", bom + join("\r")}}) {
+        INFO(name);
+        CHECK(movesOf(readProgram(dir.write(name, text))) == movesOf(lf));
+    }
+    // APT and a project alike.
+    const std::string apt = "UNITS/MM\rCUTTER/6\rFROM/0,0,5\rGOTO/10,0,-1\rGOTO/10,8,-1\r";
+    const Program a = readProgram(dir.write("part.apt", bom + apt));
+    REQUIRE(a.path.moves.size() == 2);
+    CHECK(a.path.moves.back().source.line == 5);
+    dir.write("p.ngc", join("\r\n"));
+    const Program project =
+        readProgram(dir.write("p.camotics", bom + "{\r\"units\": \"metric\",\r\"files\": [\"p.ngc\"]\r}\r"));
+    CHECK(movesOf(project) == movesOf(lf));
+    // A column after a byte-order mark counts from the first character the user sees.
+    try {
+        readProgram(dir.write("bad.ngc", bom + "G1 X1 @\n"));
+        FAIL("no error");
+    } catch (const ParseError& e) {
+        CHECK(e.where().line == 1);
+        CHECK(e.where().column == 7);
+    }
+}
+
+TEST_CASE("files: what is not a regular file is refused before it is read", "[path][files]") {
+    const Folder dir("not_files");
+    fs::create_directories(dir.path("folder.ngc"));
+    CHECK_THAT(errorOf(dir.path("folder.ngc")), Catch::Matchers::Contains("is a directory"));
+    CHECK_THAT(errorOf(dir.path("missing.ngc")), Catch::Matchers::Contains("no such file"));
+    if (fs::exists("/dev/zero"))
+        CHECK_THAT(errorOf("/dev/zero"), Catch::Matchers::Contains("not a regular file"));
+    // A project that lists a folder says so, rather than running no moves.
+    dir.write("p.camotics", "{\"files\": [\"folder.ngc\"]}");
+    CHECK_THAT(errorOf(dir.path("p.camotics")), Catch::Matchers::Contains("is a directory"));
+}
+
+TEST_CASE("files: control bytes in a message are escaped, and NUL does not cut it", "[path][files]") {
+    const Folder dir("control");
+    const std::string nul(4096, '\0');
+    const std::string message = errorOf(dir.write("nul.ngc", nul));
+    CHECK_THAT(message, Catch::Matchers::Contains("'\\x00"));
+    CHECK(message.find('\0') == std::string::npos);
+    const std::string esc = errorOf(dir.write("esc.ngc", "G1 X1 \x1b[31m\n"));
+    CHECK_THAT(esc, Catch::Matchers::Contains("\\x1b"));
+    CHECK(esc.find('\x1b') == std::string::npos);
+    CHECK(printable("a\tb\x7f") == "a\tb\\x7f");
+}
