@@ -322,6 +322,10 @@ private:
             spec.params.push_back((k == 4 || k == 5) ? v[k] : v[k] * scale_);
         spec.where = loc(s);
         if (!(spec.params[0] > 0)) fail(s.args[0], "CUTTER diameter must be positive");
+        if (v.size() >= 2 && !(v[1] >= 0)) fail(s.args[1], "CUTTER corner radius must not be negative");
+        if (v.size() == 2 && v[1] > 0.5 * v[0] + kCutterRounding * v[0])
+            fail(s.args[1], "CUTTER corner radius exceeds half the diameter");
+        if (v.size() == 7 && !(v[6] >= 0)) fail(s.args[6], "CUTTER height must not be negative");
         pending_ = spec;
         if (tool_ != 0 && !cutters_.count(tool_)) cutters_[tool_] = spec, pending_.reset();
     }
@@ -422,6 +426,7 @@ private:
         Circle c;
         c.centre = toPart(Vec3(v[0], v[1], v[2]) * scale_);
         c.axis = axisOf(s, v[3], v[4], v[5]);
+        if (v.size() >= 7 && !(v[6] > 0)) fail(s.args[6], "CIRCLE radius must be positive");
         c.radius = v.size() >= 7 ? v[6] * scale_ : -1.0;
         circle_ = c;
         circleWhere_ = loc(s);

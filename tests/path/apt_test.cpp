@@ -90,6 +90,9 @@ TEST_CASE("apt: malformed programs give a parse error with file:line:col and the
         {"CUTTER/6\nFROM/0,0,5\nGODLTA/0,0,-3E9\n", 3, "beyond the 1e9 mm", "GODLTA"},
         {"CUTTER/6\nGOTO/1,2,3x\n", 2, "bad number", "3X"},
         {"CUTTER/-6\n", 1, "positive", "-6"},
+        {"CUTTER/6,-1\n", 1, "corner radius must not be negative", "-1"},
+        {"CUTTER/6,3.5\n", 1, "exceeds half the diameter", "3.5"},
+        {"CUTTER/6\nFROM/5,0,0\nCIRCLE/0,0,0,0,0,1,0\nGOTO/0,5,0\n", 3, "CIRCLE radius must be positive", "0"},
         {"CUTTER/6\nFROM/1,0,0\nCIRCLE/0,0,0,0,0,1\nGOTO/3,3,0\n", 4, "not on the circle", "GOTO"},
         {"CUTTER/6\nFROM/1,0,0\nCIRCLE/0,0,0,0,0,1\n", 3, "truncated", ""},
         {"CUTTER/6\nGOTO/1,2,$\n", 2, "truncated", "GOTO"},
@@ -97,7 +100,8 @@ TEST_CASE("apt: malformed programs give a parse error with file:line:col and the
         {"CUTTER/6\nCYCLE/DRILL,RAPTO,1\n", 2, "without FEDTO", "CYCLE"},
         {"CUTTER/6\nCSYS/1,0,0\n", 2, "12 numbers", "CSYS"},
         {"UNITS/FURLONGS\n", 1, "unknown units", "FURLONGS"},
-        {"CUTTER/6,0,3,0,0,0,-5\nLOAD/TOOL,1\n", 1, "no real tool", ""},
+        {"CUTTER/6,0,3,0,0,0,-5\nLOAD/TOOL,1\n", 1, "height must not be negative", "-5"},
+        {"CUTTER/6,2,5,2,0,0,10\nLOAD/TOOL,1\n", 1, "no real tool", ""},
     };
     for (const Case& c : cases) {
         INFO(c.text);
