@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <set>
 #include <sstream>
 
@@ -152,6 +153,15 @@ LoadedStock loadStock(const SimulateOptions& o, const Program& program, const To
     if (h <= 0) {
         h = chooseResolution(box, o.cellsAlongLongestSide);
         report.resolutionChosen = true;
+        if (project && project->unusableResolution) {
+            ReportWarning w;
+            w.where.file = project->file;
+            char text[160];
+            std::snprintf(text, sizeof text, "project resolution %g mm is not positive: using %g mm, chosen from the stock",
+                          *project->unusableResolution, h);
+            w.message = text;
+            notes.push_back(w);
+        }
     }
     const Lattice lattice = Lattice::fromBox(box, h);
     if (lattice.pointCount() > 4.0e10)

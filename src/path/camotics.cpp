@@ -127,6 +127,10 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
         p.metric = units == "metric";
         const double s = p.metric ? 1.0 : kInch;
         p.resolution = number(j, "resolution", "project", fileName, 0.0) * s;
+        if (j.contains("resolution") && !(p.resolution > 0)) {
+            p.unusableResolution = p.resolution;
+            p.resolution = 0.0;
+        }
         p.resolutionMode = j.value("resolution-mode", std::string());
         if (j.contains("tools")) {
             const Json& tools = j.at("tools");

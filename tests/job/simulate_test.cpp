@@ -169,6 +169,31 @@ TEST_CASE("programs after a project replace its programs; its tools and stock st
     CHECK(r.removedVolumeMm3 == Approx(kSlotVolume).epsilon(0.02));
 }
 
+TEST_CASE("a project resolution that is not positive is replaced with a warning that says so", "[job][errors]") {
+    const fs::path dir = scratch("bad_resolution");
+    write(dir / "own.ngc", "G21 G90\nT1\nG0 X5 Y5 Z5\nG1 Z-1 F100\nG1 X15\n");
+    for (const char* value : {"0", "-1"}) {
+        INFO(value);
+        const std::string project = write(dir / "p.camotics", std::string(R"({
+          "resolution": )") + value + R"(,
+          "tools": {"1": {"units": "metric", "shape": "cylindrical", "length": 20, "diameter": 6}},
+          "workpiece": {"automatic": false, "bounds": {"min": [0, 0, 0], "max": [40, 30, 10]}},
+          "files": ["own.ngc"]
+        })");
+        SimulateOptions o;
+        o.inputs = {project};
+        const SimulateReport r = runSimulation(o).report;
+        CHECK(r.resolutionChosen);
+        CHECK(r.resolutionMm == Approx(chooseResolution(Box{Vec3(0.0), Vec3(40, 30, 10)})));
+        bool said = false;
+        for (const ReportWarning& w : r.warnings)
+            said = said || (w.where.file == project &&
+                            w.message.find(std::string("resolution ") + value + " mm is not positive") != std::string::npos &&
+                            w.message.find("using ") != std::string::npos);
+        CHECK(said);
+    }
+}
+
 TEST_CASE("the dexel mesher keeps the slot's volume, folds nothing, and works with one family", "[job]") {
     const fs::path dir = scratch("sharp");
     SimulateOptions o;

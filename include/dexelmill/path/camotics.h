@@ -3,6 +3,7 @@
 /// resolution; and readProgram, which opens any program file by its kind.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -31,7 +32,9 @@ struct Project {
     ToolTable tools;               ///< tools by number, mm
     ProjectWorkpiece workpiece;
     std::vector<std::string> files;  ///< program files, resolved relative to the project
-    double resolution = 0.0;       ///< mm; 0 when absent
+    double resolution = 0.0;       ///< mm; 0 when absent or not positive
+    /// The resolution as written when it is not positive (mm): the job chooses one and says so.
+    std::optional<double> unusableResolution;
     std::string resolutionMode;    ///< "low", "medium", "high", "manual"... as written
     std::vector<Diagnostic> diagnostics;
 };
