@@ -1,6 +1,7 @@
 // `dexelmill simulate`: options to SimulateOptions, run the job, print warnings and a summary.
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <sstream>
 
@@ -104,6 +105,21 @@ SimulateOptions toOptions(const SimulateArgs& a) {
 
 namespace {
 
+/// A number the option must have, checked as CLI11 reads it: the message names the value and what
+/// is allowed (CLI11's own ranges print the largest double in full).
+CLI::Validator numberCheck(bool zeroAllowed) {
+    return CLI::Validator(
+        [zeroAllowed](std::string& text) -> std::string {
+            char* end = nullptr;
+            const double v = std::strtod(text.c_str(), &end);
+            if (end == text.c_str() || *end != '\0') return "'" + text + "' is not a number";
+            if (!std::isfinite(v) || v < 0 || (v == 0 && !zeroAllowed))
+                return std::string("must be ") + (zeroAllowed ? "0 or more" : "positive") + ", got " + text;
+            return {};
+        },
+        zeroAllowed ? "NONNEGATIVE" : "POSITIVE");
+}
+
 std::string where(const ReportLocation& l) {
     if (l.file.empty()) return "dexelmill";
     return l.line > 0 ? l.file + ":" + std::to_string(l.line) : l.file;
@@ -127,12 +143,15 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
                   "      optional ,length=L (cutting length) ,total=T (stick-out); mm, degrees.\n"
                   "A bare SPEC serves every tool number nothing else defines.");
     c->add_option("--chord-tolerance", a.chordTolerance, "Largest arc-to-chord distance when arcs are linearised (mm)")
+        ->check(numberCheck(false))
         ->capture_default_str();
     c->add_option("--mesher", a.mesher,
                   "dexel: the surface placed from the dexels' exact crossings and normals, sharp edges kept;\n"
                   "vdb: OpenVDB's volumeToMesh on the level set alone")
         ->capture_default_str();
-    c->add_option("--threads", a.threads, "Worker threads for every stage; 0 uses every core")->capture_default_str();
+    c->add_option("--threads", a.threads, "Worker threads for every stage; 0 uses every core")
+        ->check(numberCheck(true))
+        ->capture_default_str();
     c->add_flag("-q,--quiet", a.quiet, "No progress bar and no warnings on stderr; only the final summary");
 }
 
@@ -142,7 +161,8 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
         "Cut the stock with the programs and write the part.\n"
         "Inputs are a CAMotics .camotics project or G-code / APT CL programs run in order.");
     addJobOptions(*c, a, true);
-    c->add_option("--resolution", a.resolution, "Lattice spacing in mm. Default: chosen from the stock, and printed.");
+    c->add_option("--resolution", a.resolution, "Lattice spacing in mm. Default: chosen from the stock, and printed.")
+        ->check(numberCheck(false));
     c->add_option("--families", a.families, "Dexel families to keep: xyz, z, x, y, xy, xz or yz")
         ->capture_default_str();
     c->add_option("-o,--output", a.output, "Mesh of the part: PART.obj, PART.stl or PART.ply");

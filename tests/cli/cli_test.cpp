@@ -95,6 +95,18 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
     CHECK_THAT(r.err, Contains("bull-undercut") && Contains("dexelmill study --help"));
     r = cli("study --case v-carve --surface-points 0");
     CHECK(r.code == 2);
+    // Values an option cannot take name the option and the value, not an internal field.
+    for (const auto& [args, says] : {std::pair<const char*, const char*>{"--chord-tolerance 0", "--chord-tolerance: must be positive, got 0"},
+                                     {"--resolution 0", "--resolution: must be positive, got 0"},
+                                     {"--resolution -0.5", "--resolution: must be positive, got -0.5"},
+                                     {"--resolution 1x", "'1x' is not a number"},
+                                     {"--threads -3", "--threads: must be 0 or more, got -3"}}) {
+        INFO(args);
+        r = cli(std::string("simulate ok.ngc --tool flat:d=3 ") + args);
+        CHECK(r.code == 2);
+        CHECK_THAT(r.err, Contains(says));
+        CHECK_THAT(r.err, !Contains("Options::"));
+    }
 }
 
 TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
