@@ -61,6 +61,7 @@ std::string reportJson(const SimulateReport& r) {
     j["timing_s"] = {{"parse", r.timingS.parse}, {"cut", r.timingS.cut},   {"rebuild", r.timingS.rebuild},
                      {"mesh", r.timingS.mesh},   {"write", r.timingS.write}, {"total", r.timingS.total}};
     j["peak_memory_mb"] = r.peakMemoryMb;
+    j["threads_started"] = r.threadsStarted;
     j["stock_memory_mb"] = double(r.stockMemoryBytes) / (1024.0 * 1024.0);
     return j.dump(2) + "\n";
 }
@@ -77,26 +78,31 @@ double chooseResolution(const Box& stock, double cells) {
 
 namespace {
 
-/// A "Vm...:" line of /proc/self/status in MiB (0 when unavailable).
-double procStatusMb(const char* key) {
+/// The number on a "Key:" line of /proc/self/status (0 when unavailable).
+double procStatus(const char* key) {
     std::ifstream status("/proc/self/status");
     std::string word;
     while (status >> word) {
         if (word == key) {
-            double kb = 0;
-            status >> kb;
-            return kb / 1024.0;
+            double value = 0;
+            status >> value;
+            return value;
         }
         status.ignore(4096, '\n');
     }
     return 0.0;
 }
 
+/// A "Vm...:" line of /proc/self/status (kB) in MiB.
+double procStatusMb(const char* key) { return procStatus(key) / 1024.0; }
+
 }  // namespace
 
 double peakMemoryMb() { return procStatusMb("VmHWM:"); }
 
 double currentMemoryMb() { return procStatusMb("VmRSS:"); }
+
+std::size_t processThreadCount() { return std::size_t(procStatus("Threads:")); }
 
 bool resetPeakMemory() {
     malloc_trim(0);  // hand freed heap back first, so that the next peak is the next stage's own

@@ -185,8 +185,15 @@ Simulation runSimulation(const SimulateOptions& o) {
 
 namespace {
 
+/// The threads the process started since it had `before` (none if it has fewer now).
+std::size_t threadsSince(std::size_t before) {
+    const std::size_t now = processThreadCount();
+    return now > before ? now - before : 0;
+}
+
 Simulation runStages(const SimulateOptions& o) {
     const auto tStart = Clock::now();
+    const std::size_t threadsBefore = processThreadCount();
     Simulation sim;
     SimulateReport& report = sim.report;
     report.version = DEXELMILL_VERSION;
@@ -303,6 +310,7 @@ Simulation runStages(const SimulateOptions& o) {
     report.timingS.mesh = seconds(t);
     report.timingS.total = seconds(tStart);
     report.peakMemoryMb = peakMemoryMb();
+    report.threadsStarted = threadsSince(threadsBefore);
     return sim;
 }
 
@@ -317,6 +325,7 @@ namespace {
 
 SimulateReport simulateInArena(const SimulateOptions& o) {
     const auto tStart = Clock::now();
+    const std::size_t threadsBefore = processThreadCount();
     Simulation sim = runStages(o);
     SimulateReport& report = sim.report;
     const Mesh& mesh = sim.mesh;
@@ -335,6 +344,7 @@ SimulateReport simulateInArena(const SimulateOptions& o) {
     report.timingS.write = seconds(t);
     report.timingS.total = seconds(tStart);
     report.peakMemoryMb = peakMemoryMb();
+    report.threadsStarted = threadsSince(threadsBefore);
     if (!o.reportPath.empty()) {
         const std::string text = reportJson(report);
         writeStreamAtomically(o.reportPath, [&](std::ostream& out) { out << text; });

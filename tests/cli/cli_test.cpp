@@ -123,6 +123,28 @@ TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
     CHECK(r.code == 1);
 }
 
+TEST_CASE("--threads N holds in every stage: the job starts at most N - 1 workers", "[cli][threads]") {
+    // A fresh process per run, so that the workers counted are the job's: TBB starts one only when
+    // an arena of the job asks for it (cutting, rebuild, meshing, checks and writing all run in
+    // arenas of the requested size).
+    const Cli cli("threads");
+    std::string raster = "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\n";
+    for (int k = 0; k <= 40; ++k) raster += "G1 Y" + std::to_string(k) + "\nG1 X" + (k % 2 ? "0" : "40") + "\n";
+    cli.file("raster.ngc", raster);
+    for (int threads : {1, 2}) {
+        INFO("--threads " << threads);
+        const std::string report = "r" + std::to_string(threads) + ".json";
+        const Run r = cli("simulate raster.ngc --stock box:-5,-5,-5,45,45,0 --tool 1=ball:d=4 --resolution 0.1 "
+                          "--png part.png -o part.stl -q --threads " + std::to_string(threads) + " --report " + report);
+        REQUIRE(r.code == 0);
+        const std::string json = slurp(cli.dir() / report);
+        const std::size_t at = json.find("\"threads_started\": ");
+        REQUIRE(at != std::string::npos);
+        const int started = std::atoi(json.c_str() + at + 19);
+        CHECK(started <= threads - 1);
+    }
+}
+
 TEST_CASE("a successful run writes every output and a one-line summary in mm", "[cli]") {
     const Cli cli("success");
     cli.file("slot.ngc", "G21 G90\nT1 M6\nG0 X5 Y15 Z15\nG1 Z7 F100\nG1 X35\nG0 Z15\nM30\n");

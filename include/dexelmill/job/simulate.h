@@ -122,6 +122,10 @@ struct SimulateReport {
         double parse = 0, cut = 0, rebuild = 0, mesh = 0, write = 0, total = 0;
     } timingS;
     double peakMemoryMb = 0.0;
+    /// Threads the process started while the job ran: TBB's workers, which start only when a
+    /// stage's arena asks for them. In a fresh process with `threads` = N, at most N - 1; 0 when
+    /// an earlier job in the same process already started them.
+    std::size_t threadsStarted = 0;
     std::size_t stockMemoryBytes = 0;
 };
 
@@ -154,6 +158,9 @@ double chooseResolution(const Box& stock, double cells = 400);
 
 /// @brief Peak resident memory of this process so far (MiB), or since resetPeakMemory.
 double peakMemoryMb();
+
+/// @brief The threads of this process now (0 when the system does not say).
+std::size_t processThreadCount();
 
 /// @brief Resident memory of this process now (MiB).
 double currentMemoryMb();
