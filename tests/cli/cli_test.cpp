@@ -123,7 +123,7 @@ TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
     CHECK(r.code == 1);
 }
 
-TEST_CASE("--threads N holds in every stage: the job starts at most N - 1 workers", "[cli][threads]") {
+TEST_CASE("every stage honours --threads N: the job starts at most N - 1 workers", "[cli][threads]") {
     // A fresh process per run, so that the workers counted are the job's: TBB starts one only when
     // an arena of the job asks for it (cutting, rebuild, meshing, checks and writing all run in
     // arenas of the requested size).
