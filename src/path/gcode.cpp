@@ -617,7 +617,9 @@ private:
             return pc + 1;
         case OKind::Repeat: {
             pos = skipSpaces(line_, pos);
+            const int countCol = int(pos) + 1;
             const double v = readRealValue(pos);
+            chargeRepeats(v, countCol, "repeat");
             const long count = std::lround(v);
             if (count <= 0) return li.match + 1;
             frameCounters()[pc] = count;
@@ -673,6 +675,18 @@ private:
             if (readRealValue(pos) != 0.0) return k + 1;
             k = b.match;
         }
+    }
+
+    /// A loop about to run `count` times executes at least one block per pass (its end line): a
+    /// count the block limit cannot cover stops here, before any pass runs, rather than after
+    /// the passes have filled memory with moves.
+    void chargeRepeats(double count, int col, const char* what) {
+        if (!std::isfinite(count)) fail(col, std::string(what) + " count is not finite", tokenAt(col));
+        if (count > double(opt_.maxBlocks - std::min(blocks_, opt_.maxBlocks)))
+            fail(col,
+                 std::string(what) + " count " + tokenAt(col) + " exceeds the " + std::to_string(opt_.maxBlocks) +
+                     " blocks a program may execute",
+                 tokenAt(col));
     }
 
     std::unordered_map<int, long>& frameCounters() {
@@ -1368,7 +1382,10 @@ private:
         if (!b.has('P')) fail(0, "M98 without P program number", "M98");
         const double p = b.get('P');
         long repeats = 1;
-        if (b.has('L')) repeats = std::lround(b.get('L'));
+        if (b.has('L')) {
+            chargeRepeats(b.get('L'), b.col['L' - 'A'], "M98 L");
+            repeats = std::lround(b.get('L'));
+        }
         if (repeats <= 0) return pc + 1;
         const long pn = std::lround(p);
         std::string label = std::to_string(pn);

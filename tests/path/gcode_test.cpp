@@ -292,6 +292,10 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
         {"N word late", "G0 N10 X1\n", 1, 4, "N word", "N10"},
         {"stray character", "G0 X1 @\n", 1, 7, "unexpected character", "@"},
         {"GOTO to missing line", "GOTO 99\n", 1, 0, "missing N99", ""},
+        {"repeat count past the block limit", "o1 repeat [200000]\nG0 X1\no1 endrepeat\n", 1, 11,
+         "exceeds the 100000 blocks", "[200000]"},
+        {"M98 L past the block limit", "M98 P5 L200000\nM30\nO5\nG0 X1\nM99\n", 1, 8, "exceeds the 100000 blocks",
+         "L200000"},
     };
     for (const Malformed& c : cases) {
         INFO(c.what << ": " << c.text);
