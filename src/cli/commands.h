@@ -34,6 +34,7 @@ struct SimulateArgs {
     std::string mesher = "dexel";
     bool sharpEdges = false;
     int threads = 0;
+    std::string maxMemory;
     bool quiet = false;
 };
 

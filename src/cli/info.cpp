@@ -4,6 +4,7 @@
 
 #include "commands.h"
 #include "dexelmill/io/vdb_io.h"
+#include "dexelmill/job/memory.h"
 #include "dexelmill/path/camotics.h"
 #include "dexelmill/surface/levelset.h"
 
@@ -82,7 +83,9 @@ int runInfo(const std::string& file) {
         printProgram(runProject(project));
         return 0;
     }
-    printProgram(readProgram(file));
+    GcodeOptions gcode;
+    gcode.maxMoves = movesThatFit(memoryBudget(), gcode.maxMoves);
+    printProgram(readProgram(file, gcode));
     return 0;
 }
 

@@ -2,12 +2,15 @@
 // else. Exit codes: 0 success, 1 an input or processing error, 2 a usage error.
 #include <cstdio>
 #include <iostream>
+#include <new>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
 
 #include "commands.h"
 #include "dexelmill/error.h"
+#include "dexelmill/job/memory.h"
+#include "dexelmill/job/simulate.h"
 
 namespace {
 
@@ -61,6 +64,12 @@ int main(int argc, char** argv) {
         const std::string msg = e.what();
         if (dynamic_cast<const dexelmill::ParseError*>(&e)) std::cerr << msg << "\n";
         else std::cerr << "dexelmill: error: " << msg << "\n";
+        return 1;
+    } catch (const std::bad_alloc&) {
+        // The job checks its big allocations beforehand; this is what slipped past the estimates.
+        std::cerr << "dexelmill: error: out of memory after a peak of " << dexelmill::formatBytes(dexelmill::peakMemoryMb() * 1024.0 * 1024.0)
+                  << " (the budget: " << dexelmill::formatBytes(double(dexelmill::memoryBudget().bytes))
+                  << "); try a larger --resolution or fewer --families\n";
         return 1;
     } catch (const std::exception& e) {
         std::cerr << "dexelmill: error: " << e.what() << "\n";

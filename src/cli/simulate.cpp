@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "dexelmill/job/memory.h"
 #include "dexelmill/job/simulate.h"
 #include "dexelmill/tool/spec.h"
 #include "progress.h"
@@ -100,6 +101,13 @@ SimulateOptions toOptions(const SimulateArgs& a) {
     o.pngPath = a.png;
     o.reportPath = a.report;
     o.threads = a.threads;
+    if (!a.maxMemory.empty()) {
+        try {
+            o.maxMemoryBytes = parseMemorySize(a.maxMemory);
+        } catch (const Error& e) {
+            throw UsageError(std::string("--max-memory: ") + e.what());
+        }
+    }
     return o;
 }
 
@@ -152,6 +160,9 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
     c->add_option("--threads", a.threads, "Worker threads for every stage; 0 uses every core")
         ->check(numberCheck(true))
         ->capture_default_str();
+    c->add_option("--max-memory", a.maxMemory,
+                  "The most memory the job may use, e.g. 4G or 512M. Default: the least of ulimit -v, the\n"
+                  "cgroup's limit and the memory available; a job that will not fit stops before it starts");
     c->add_flag("-q,--quiet", a.quiet, "No progress bar and no warnings on stderr; only the final summary");
 }
 

@@ -14,6 +14,7 @@
 #include "dexelmill/io/mesh_io.h"
 #include "dexelmill/io/picture.h"
 #include "dexelmill/io/vdb_io.h"
+#include "dexelmill/job/memory.h"
 #include "dexelmill/path/camotics.h"
 #include "dexelmill/stock/cut.h"
 #include "dexelmill/surface/contour.h"
@@ -164,9 +165,22 @@ LoadedStock loadStock(const SimulateOptions& o, const Program& program, const To
         }
     }
     const Lattice lattice = Lattice::fromBox(box, h);
-    if (lattice.pointCount() > 4.0e10)
-        throw Error("a spacing of " + std::to_string(h) + " mm gives " + std::to_string(lattice.pointCount()) +
-                    " lattice points for this stock; use a larger --resolution");
+    // The stock's dexels and, at the least, the level set and mesh of the block's own faces.
+    const MemoryBudget budget = memoryBudget(o.maxMemoryBytes);
+    const double dexels = stockBytes(lattice, o.families);
+    const double faces = kSurfaceBytesPerCrossing * boxCrossings(lattice);
+    const double base = double(residentBytes());
+    if (base + dexels + faces > double(budget.bytes)) {
+        char text[512];
+        std::snprintf(text, sizeof text,
+                      "a spacing of %g mm on this %g x %g x %g mm stock needs about %s (its dexels %s, the level "
+                      "set and mesh of the block's faces alone %s), more than the %s this job may use (%s); a "
+                      "spacing of %g mm or more fits, or set --max-memory",
+                      h, size.x, size.y, size.z, formatBytes(base + dexels + faces).c_str(),
+                      formatBytes(dexels).c_str(), formatBytes(faces).c_str(), formatBytes(double(budget.bytes)).c_str(),
+                      budget.source.c_str(), spacingThatFits(h, dexels + faces, double(budget.bytes) - base));
+        throw Error(text);
+    }
     if (fromStl) return {stockFromMesh(*fromStl, lattice, o.families), box};
     if (fromVdb) return {stockFromLevelSet(*fromVdb, lattice, o.families), box};
     return {TriDexelStock::fromBox(box, h, o.families), box};
@@ -184,6 +198,25 @@ Simulation runSimulation(const SimulateOptions& o) {
 }
 
 namespace {
+
+/// Before the rebuild: the level set and mesh of the cut part, from its crossings, must fit.
+void checkSurfaceFits(const TriDexelStock& stock, std::size_t maxMemoryBytes) {
+    const MemoryBudget budget = memoryBudget(maxMemoryBytes);
+    const double crossings = stockCrossings(stock);
+    const double need = kSurfaceBytesPerCrossing * crossings;
+    const double base = double(residentBytes());
+    if (base + need <= double(budget.bytes)) return;
+    const double h = stock.lattice().h;
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "the cut part's surface crosses %.4g lattice edges at a spacing of %g mm: its level set and mesh "
+                  "need about %s on top of the %s in use, more than the %s this job may use (%s); a spacing of "
+                  "%g mm or more fits, or set --max-memory",
+                  crossings, h, formatBytes(need).c_str(), formatBytes(base).c_str(),
+                  formatBytes(double(budget.bytes)).c_str(), budget.source.c_str(),
+                  spacingThatFits(h, base + need, double(budget.bytes)));
+    throw Error(text);
+}
 
 /// The threads the process started since it had `before` (none if it has fewer now).
 std::size_t threadsSince(std::size_t before) {
@@ -206,6 +239,8 @@ Simulation runStages(const SimulateOptions& o) {
     auto t = Clock::now();
     GcodeOptions gcode;
     gcode.chordTolerance = o.chordTolerance;
+    // The moves a program makes (its loops included) must fit in memory.
+    gcode.maxMoves = movesThatFit(memoryBudget(o.maxMemoryBytes), gcode.maxMoves);
     AptOptions apt;
     apt.chordTolerance = o.chordTolerance;
     std::optional<Project> project;
@@ -270,6 +305,7 @@ Simulation runStages(const SimulateOptions& o) {
     report.finalVolumeMm3 = stock.volume(measure);
     report.removedVolumeMm3 = report.stockVolumeMm3 - report.finalVolumeMm3;
     report.stockMemoryBytes = stock.memoryBytes();
+    checkSurfaceFits(stock, o.maxMemoryBytes);
 
     // Rebuild and mesh.
     t = Clock::now();

@@ -121,6 +121,12 @@ double DexelTile::materialLength() const {
     return sum;
 }
 
+std::size_t DexelTile::segmentCount() const {
+    std::size_t n = 0;
+    for (std::uint16_t c : count_) n += c;
+    return n;
+}
+
 std::size_t DexelTile::memoryBytes() const {
     return sizeof(*this) + offset_.capacity() * sizeof(std::uint32_t) +
            count_.capacity() * sizeof(std::uint16_t) + segs_.capacity() * sizeof(Segment);
@@ -138,6 +144,12 @@ double DexelFamily::materialLength() const {
     double sum = 0.0;
     for (const DexelTile& t : tiles_) sum += t.materialLength();
     return sum;
+}
+
+std::size_t DexelFamily::segmentCount() const {
+    std::size_t n = 0;
+    for (const DexelTile& t : tiles_) n += t.segmentCount();
+    return n;
 }
 
 std::size_t DexelFamily::memoryBytes() const {

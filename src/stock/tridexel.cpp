@@ -108,6 +108,13 @@ std::size_t TriDexelStock::memoryBytes() const {
     return sum;
 }
 
+std::size_t TriDexelStock::segmentCount() const {
+    std::size_t sum = 0;
+    for (const auto& f : families3_)
+        if (f) sum += f->segmentCount();
+    return sum;
+}
+
 std::size_t TriDexelStock::dexelCount() const {
     std::size_t sum = 0;
     for (const auto& f : families3_)

@@ -64,6 +64,11 @@ struct SimulateOptions {
     /// Worker threads for every stage (cutting, rebuilding, meshing, writing); 0 uses every core.
     int threads = 0;
 
+    /// The most memory the job may use (bytes); 0 takes it from the system (memoryBudget). The
+    /// job checks the program's moves, the stock and the surface against it before it builds
+    /// them, and stops with the figures and a spacing that fits.
+    std::size_t maxMemoryBytes = 0;
+
     /// Called now and then from the calling thread with a stage name and the work done so far
     /// out of `total` (moves while cutting). May be empty.
     std::function<void(const char* stage, std::size_t done, std::size_t total)> progress;

@@ -70,6 +70,8 @@ public:
     double materialLength() const;
     /// @brief Heap bytes held (capacity, not size).
     std::size_t memoryBytes() const;
+    /// @brief Segments held by all dexels.
+    std::size_t segmentCount() const;
 
 private:
     void grow(int local, std::size_t needed);
@@ -120,6 +122,7 @@ public:
     /// @brief Sum of all segment lengths (mm).
     double materialLength() const;
     std::size_t memoryBytes() const;
+    std::size_t segmentCount() const;
 
 private:
     Axis axis_;

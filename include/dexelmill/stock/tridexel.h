@@ -61,6 +61,8 @@ public:
     std::size_t memoryBytes() const;
     /// @brief Number of dexels in the kept families.
     std::size_t dexelCount() const;
+    /// @brief Segments in the kept families (each has two ends on the surface).
+    std::size_t segmentCount() const;
 
 private:
     Lattice lattice_;

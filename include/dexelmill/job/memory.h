@@ -1,0 +1,64 @@
+/// @file memory.h
+/// @brief How much memory a job may use, and how much it will need: checked before the work that
+/// would need it, so that a job too big for the machine stops at once with the figures, never with
+/// an allocator's message.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "dexelmill/stock/lattice.h"
+#include "dexelmill/stock/tridexel.h"
+
+namespace dexelmill {
+
+/// @brief The memory this process may use, and what sets it.
+struct MemoryBudget {
+    std::size_t bytes = 0;
+    /// "--max-memory", "the address-space limit (ulimit -v)", "the cgroup's memory.max" or
+    /// "the memory available (MemAvailable)".
+    std::string source;
+};
+
+/// @brief The budget: `maxBytes` when it is not 0, else the least of the address-space limit, the
+/// cgroup's limit and the memory available now plus what the process already holds.
+MemoryBudget memoryBudget(std::size_t maxBytes = 0);
+
+/// @brief The resident memory of this process now (bytes; 0 when the system does not say).
+std::size_t residentBytes();
+
+/// @brief Reads a size such as "4G", "512M", "1.5GiB" or "800000000" (bytes; K, M, G and T are
+/// powers of 1024). @throw Error for anything else.
+std::size_t parseMemorySize(const std::string& text);
+
+/// @brief "1.23 GiB", "456 MiB".
+std::string formatBytes(double bytes);
+
+/// @brief The most moves whose list fits in what the budget leaves free (the list doubles as it
+/// grows, so half of it), and never more than `limit`.
+std::size_t movesThatFit(const MemoryBudget& budget, std::size_t limit);
+
+/// @brief Memory the rebuild and the mesh take per surface crossing of a lattice edge: the level
+/// set's narrow band, the dexel mesher's blocks and the mesh (four triangles per crossing) with
+/// its check. Measured as the peak less the stock and the process before the rebuild on bear,
+/// heart and scorpion (0.2 to 1.2 million crossings): 228 to 240 bytes.
+constexpr double kSurfaceBytesPerCrossing = 256.0;
+
+/// @brief Bytes of a fresh stock on `lattice` with the families kept: per dexel its offset,
+/// count and one segment, per tile its bookkeeping.
+double stockBytes(const Lattice& lattice, FamilySet families);
+
+/// @brief The lattice edges crossing the surface of the box the lattice covers: the fewest
+/// crossings any part cut from it can have, counted on the faces, for the families' directions
+/// (a missing family's crossings are interpolated, and meshed all the same).
+double boxCrossings(const Lattice& lattice);
+
+/// @brief The crossings of a cut stock: two per segment, scaled to all three directions when
+/// families are missing.
+double stockCrossings(const TriDexelStock& stock);
+
+/// @brief The finest spacing (rounded up to two significant digits) at which `need` bytes,
+/// measured at spacing h and growing as h^-2, fall within `room` bytes.
+double spacingThatFits(double h, double need, double room);
+
+}  // namespace dexelmill

@@ -1,0 +1,127 @@
+#include "dexelmill/job/memory.h"
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <string>
+
+#include "dexelmill/error.h"
+#include "dexelmill/path/toolpath.h"
+
+namespace dexelmill {
+
+namespace {
+
+/// The kB figure of a "Key:" line of a /proc file (0 when unavailable).
+double procKb(const char* file, const char* key) {
+    std::ifstream in(file);
+    std::string word;
+    while (in >> word) {
+        if (word == key) {
+            double kb = 0;
+            in >> kb;
+            return kb;
+        }
+        in.ignore(4096, '\n');
+    }
+    return 0.0;
+}
+
+/// The cgroup's memory limit (v2 memory.max, else v1 memory.limit_in_bytes); 0 for none.
+std::size_t cgroupLimit() {
+    for (const char* f : {"/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"}) {
+        std::ifstream in(f);
+        std::string text;
+        if (!(in >> text) || text == "max") continue;
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        // v1 reports "no limit" as a huge page-rounded number.
+        if (end != text.c_str() && v > 0 && v < 1e18) return std::size_t(v);
+    }
+    return 0;
+}
+
+}  // namespace
+
+std::size_t residentBytes() { return std::size_t(procKb("/proc/self/status", "VmRSS:") * 1024.0); }
+
+MemoryBudget memoryBudget(std::size_t maxBytes) {
+    if (maxBytes > 0) return {maxBytes, "--max-memory"};
+    MemoryBudget b{std::numeric_limits<std::size_t>::max(), "no limit the system states"};
+    auto take = [&](std::size_t bytes, const char* source) {
+        if (bytes > 0 && bytes < b.bytes) b = {bytes, source};
+    };
+    rlimit as{};
+    if (getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY)
+        take(std::size_t(as.rlim_cur), "the address-space limit (ulimit -v)");
+    take(cgroupLimit(), "the cgroup's memory.max");
+    const double available = procKb("/proc/meminfo", "MemAvailable:") * 1024.0;
+    if (available > 0) take(std::size_t(available) + residentBytes(), "the memory available (MemAvailable)");
+    return b;
+}
+
+std::size_t parseMemorySize(const std::string& text) {
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    std::string unit(end ? end : "");
+    for (char& c : unit) c = char(std::toupper(static_cast<unsigned char>(c)));
+    double scale = 0.0;
+    if (unit.empty() || unit == "B") scale = 1.0;
+    else if (unit == "K" || unit == "KB" || unit == "KIB") scale = 1024.0;
+    else if (unit == "M" || unit == "MB" || unit == "MIB") scale = 1024.0 * 1024.0;
+    else if (unit == "G" || unit == "GB" || unit == "GIB") scale = 1024.0 * 1024.0 * 1024.0;
+    else if (unit == "T" || unit == "TB" || unit == "TIB") scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
+    if (end == text.c_str() || scale == 0.0 || !std::isfinite(v) || !(v > 0) || v * scale > 1e18)
+        throw Error("'" + text + "' is not a memory size (for example 4G, 512M or 800000000)");
+    return std::size_t(v * scale);
+}
+
+std::string formatBytes(double bytes) {
+    char buf[48];
+    if (bytes >= 1024.0 * 1024.0 * 1024.0) std::snprintf(buf, sizeof buf, "%.3g GiB", bytes / (1024.0 * 1024.0 * 1024.0));
+    else std::snprintf(buf, sizeof buf, "%.3g MiB", bytes / (1024.0 * 1024.0));
+    return buf;
+}
+
+std::size_t movesThatFit(const MemoryBudget& budget, std::size_t limit) {
+    const double free = double(budget.bytes) - double(residentBytes());
+    return std::size_t(std::min(double(limit), std::max(0.0, free / (2.0 * sizeof(Move)))));
+}
+
+double stockBytes(const Lattice& lattice, FamilySet families) {
+    // A tile of 16 x 16 dexels: 257 offsets, 256 counts and, fresh, one segment per dexel.
+    constexpr double kTileDexels = 256.0;
+    const double perDexel = (257.0 * sizeof(std::uint32_t) + kTileDexels * sizeof(std::uint16_t) +
+                             kTileDexels * sizeof(Segment) + sizeof(DexelTile)) / kTileDexels;
+    const double nx = lattice.n[0], ny = lattice.n[1], nz = lattice.n[2];
+    double dexels = 0.0;
+    if (families.has(Axis::X)) dexels += ny * nz;
+    if (families.has(Axis::Y)) dexels += nz * nx;
+    if (families.has(Axis::Z)) dexels += nx * ny;
+    return dexels * perDexel;
+}
+
+double boxCrossings(const Lattice& lattice) {
+    const double nx = lattice.n[0], ny = lattice.n[1], nz = lattice.n[2];
+    return 2.0 * (ny * nz + nz * nx + nx * ny);
+}
+
+double stockCrossings(const TriDexelStock& stock) {
+    const int kept = stock.families().count();
+    if (kept == 0) return 0.0;
+    return 2.0 * double(stock.segmentCount()) * 3.0 / kept;
+}
+
+double spacingThatFits(double h, double need, double room) {
+    if (!(room > 0)) return std::numeric_limits<double>::infinity();
+    const double raw = h * std::sqrt(std::max(1.0, need / room));
+    const double decade = std::pow(10.0, std::floor(std::log10(raw)) - 1.0);
+    return std::ceil(raw / decade * (1.0 - 1e-12)) * decade;
+}
+
+}  // namespace dexelmill

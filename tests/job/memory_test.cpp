@@ -1,0 +1,143 @@
+// The job's memory budget and estimates: sizes as users write them, the estimates against what a
+// fresh stock really holds, and jobs too big for their budget stopped before they start, with a
+// spacing that then fits.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "dexelmill/error.h"
+#include "dexelmill/job/memory.h"
+#include "dexelmill/job/simulate.h"
+#include "dexelmill/tool/builders.h"
+
+using namespace dexelmill;
+
+TEST_CASE("memory: sizes as users write them", "[job][memory]") {
+    CHECK(parseMemorySize("4G") == 4ull << 30);
+    CHECK(parseMemorySize("512M") == 512ull << 20);
+    CHECK(parseMemorySize("1.5GiB") == (3ull << 30) / 2);
+    CHECK(parseMemorySize("64k") == 64ull << 10);
+    CHECK(parseMemorySize("800000000") == 800000000ull);
+    for (const char* bad : {"", "G", "4X", "-1G", "0", "nan", "1e30T"}) {
+        INFO(bad);
+        CHECK_THROWS_AS(parseMemorySize(bad), Error);
+    }
+    const MemoryBudget given = memoryBudget(123456789);
+    CHECK(given.bytes == 123456789);
+    CHECK(given.source == "--max-memory");
+    const MemoryBudget system = memoryBudget();
+    CHECK(system.bytes > residentBytes());
+}
+
+TEST_CASE("memory: a fresh stock's estimates against the stock itself", "[job][memory]") {
+    for (const auto& [box, h, families] :
+         {std::tuple<Box, double, const char*>{Box{Vec3(0.0), Vec3(40, 30, 10)}, 0.5, "xyz"},
+          {Box{Vec3(-3, 2, 1), Vec3(17.3, 9.9, 4.4)}, 0.13, "xyz"},
+          {Box{Vec3(0.0), Vec3(40, 30, 10)}, 0.25, "z"},
+          {Box{Vec3(0.0), Vec3(100, 7, 3)}, 0.2, "xy"}}) {
+        INFO(families << " at " << h);
+        const FamilySet set = FamilySet::parse(families);
+        const TriDexelStock stock = TriDexelStock::fromBox(box, h, set);
+        // Every dexel of a fresh box holds one segment, whose two ends are the box's crossings;
+        // when the box is not a whole number of cells, the last row of lattice lines may miss it.
+        if (set.count() == 3) {
+            const Lattice& l = stock.lattice();
+            const double edgeRows = 2.0 / std::min({l.n[0], l.n[1], l.n[2]});
+            CHECK(stockCrossings(stock) <= boxCrossings(l));
+            CHECK(stockCrossings(stock) >= (1.0 - edgeRows) * boxCrossings(l));
+        }
+        // The estimate is what the tiles hold, within the rounding of partial tiles at the edges.
+        const double est = stockBytes(stock.lattice(), set);
+        CHECK(est >= 0.7 * double(stock.memoryBytes()));
+        CHECK(est <= 1.3 * double(stock.memoryBytes()));
+    }
+}
+
+TEST_CASE("memory: the spacing that fits", "[job][memory]") {
+    for (const auto& [h, need, room] : {std::tuple<double, double, double>{0.01, 8e9, 4e9}, {0.5, 1e6, 1e9},
+                                        {0.2947, 9.3e7, 2.4e7}, {1.0, 1e12, 3e9}}) {
+        const double fit = spacingThatFits(h, need, room);
+        INFO(h << " " << need << " " << room << " -> " << fit);
+        // need grows as h^-2: at the spacing returned it fits, and at 1 % less than it, it would
+        // not, unless the spacing given fitted already.
+        CHECK(need * (h / fit) * (h / fit) <= room * (1 + 1e-12));
+        if (need > room) CHECK(need * (h / (0.99 * fit * 0.95)) * (h / (0.99 * fit * 0.95)) > room);
+        else CHECK(fit == Approx(h).epsilon(0.1));
+    }
+}
+
+TEST_CASE("memory: a job too big for its budget stops before it starts, with a spacing that fits",
+          "[job][memory][errors]") {
+    SimulateOptions o;
+    ToolPath path;
+    path.files.push_back("slot.nc");
+    Move m;
+    m.start = Vec3(2, 15, 8);
+    m.end = Vec3(38, 15, 8);
+    m.tool = 1;
+    m.source = SourceRef{0, 1};
+    path.moves.push_back(m);
+    Program program;
+    program.path = path;
+    o.program = program;
+    o.inputs = {"slot.nc"};
+    o.defaultTool = flatEndMill(6.0, {20.0, 30.0});
+    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
+    o.resolution = 0.02;
+    o.maxMemoryBytes = residentBytes() + (200ull << 20);
+    std::string message;
+    try {
+        runSimulation(o);
+    } catch (const Error& e) {
+        message = e.what();
+    }
+    INFO(message);
+    REQUIRE_THAT(message, Catch::Matchers::Contains("more than the 200 MiB") ||
+                              Catch::Matchers::Contains("this job may use (--max-memory)"));
+    const std::string key = "a spacing of ";
+    const std::size_t at = message.rfind(key);
+    REQUIRE(at != std::string::npos);
+    const double fits = std::stod(message.substr(at + key.size()));
+    CHECK(fits > o.resolution);
+    o.resolution = fits;
+    o.maxMemoryBytes = residentBytes() + (260ull << 20);  // room for what the estimates leave out
+    const SimulateReport r = runSimulation(o).report;
+    CHECK(r.meshClosed);
+}
+
+TEST_CASE("memory: a cut part whose surface will not fit stops before the rebuild", "[job][memory][errors]") {
+    // Ten slots through a 10 mm block: their walls give the part about three times the crossings
+    // of the block's faces, which alone fit in the budget.
+    ToolPath path;
+    path.files.push_back("slots.nc");
+    for (int k = 0; k < 10; ++k) {
+        Move m;
+        m.start = Vec3(-2, 1.5 + 3.0 * k, -1);
+        m.end = Vec3(42, 1.5 + 3.0 * k, -1);
+        m.tool = 1;
+        m.source = SourceRef{0, k + 1};
+        path.moves.push_back(m);
+    }
+    Program program;
+    program.path = path;
+    SimulateOptions o;
+    o.program = program;
+    o.inputs = {"slots.nc"};
+    o.defaultTool = flatEndMill(1.5, {20.0, 30.0});
+    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
+    o.resolution = 0.1;
+    const Lattice lattice = Lattice::fromBox(*o.stockBox, o.resolution);
+    o.maxMemoryBytes = residentBytes() + std::size_t(stockBytes(lattice, o.families) +
+                                                     1.3 * kSurfaceBytesPerCrossing * boxCrossings(lattice));
+    try {
+        runSimulation(o);
+        FAIL("no error");
+    } catch (const Error& e) {
+        INFO(e.what());
+        CHECK_THAT(e.what(), Catch::Matchers::Contains("the cut part's surface crosses") &&
+                                 Catch::Matchers::Contains("a spacing of 0.1 mm") &&
+                                 Catch::Matchers::Contains("mm or more fits"));
+    }
+}
