@@ -271,6 +271,12 @@ Simulation runStages(const SimulateOptions& o) {
                                               [](const Move& m) { return m.rapid; }));
     report.toolChanges = program.path.toolChanges.size();
     std::vector<ReportWarning> notes;
+    if (program.path.moves.empty()) {
+        ReportWarning w;
+        if (!o.inputs.empty()) w.where.file = o.inputs.back();
+        w.message = "the program makes no moves (empty, or only comments and settings): the part is the stock";
+        notes.push_back(w);
+    }
     LoadedStock loaded = loadStock(o, program, tools, project ? &*project : nullptr, report, notes);
     sim.stock.emplace(std::move(loaded.stock));
     TriDexelStock& stock = *sim.stock;

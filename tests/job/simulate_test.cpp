@@ -169,6 +169,24 @@ TEST_CASE("programs after a project replace its programs; its tools and stock st
     CHECK(r.removedVolumeMm3 == Approx(kSlotVolume).epsilon(0.02));
 }
 
+TEST_CASE("a program without moves says so", "[job][errors]") {
+    const fs::path dir = scratch("no_moves");
+    for (const char* text : {"", "(only a comment)\n\n%\n", "G21 G90 M3 S1000\n"}) {
+        INFO("'" << text << "'");
+        SimulateOptions o;
+        o.inputs = {write(dir / "p.ngc", text)};
+        o.defaultTool = flatEndMill(3.0, {20.0, 30.0});
+        o.stockBox = Box{Vec3(0.0), Vec3(10, 10, 5)};
+        o.resolution = 0.5;
+        const SimulateReport r = runSimulation(o).report;
+        CHECK(r.moves == 0);
+        bool said = false;
+        for (const ReportWarning& w : r.warnings)
+            said = said || (w.where.file == o.inputs[0] && w.message.find("no moves") != std::string::npos);
+        CHECK(said);
+    }
+}
+
 TEST_CASE("a project resolution that is not positive is replaced with a warning that says so", "[job][errors]") {
     const fs::path dir = scratch("bad_resolution");
     write(dir / "own.ngc", "G21 G90\nT1\nG0 X5 Y5 Z5\nG1 Z-1 F100\nG1 X15\n");
