@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Short libFuzzer run of every reader target, for CI.
+# Short libFuzzer run of every target (the readers, and the whole pipeline on a small block), for CI.
 # Usage: tests/fuzz/smoke.sh BUILD_DIR   (a build configured with clang and -DDEXELMILL_BUILD_FUZZ=ON)
 # Each target runs at most ~20 s on a seed corpus made from tests/data and tests/data/path.
 set -euo pipefail
@@ -19,11 +19,12 @@ seed() {  # seed NAME PATTERN...
     [ -n "$(ls -A "$work/$name")" ] || printf 'G0 X0\n' > "$work/$name/seed"
 }
 seed gcode_fuzz '*.ngc' '*.nc' '*.gcode'
+seed pipeline_fuzz '*.ngc' '*.nc' '*.gcode'
 seed apt_fuzz '*.apt'
 seed camotics_fuzz '*.camotics'
 
 status=0
-for target in gcode_fuzz apt_fuzz camotics_fuzz; do
+for target in gcode_fuzz apt_fuzz camotics_fuzz pipeline_fuzz; do
     exe="$build/$target"
     if [ ! -x "$exe" ]; then echo "missing $exe" >&2; status=1; continue; fi
     echo "== $target"
