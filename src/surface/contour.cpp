@@ -93,6 +93,13 @@ inline int popcount(std::uint64_t x) {
     return int((x * 0x0101010101010101ull) >> 56);
 }
 
+/// Calls f(offset) for every set bit of words[0 .. n), in increasing offset order.
+template <class F>
+void forEachSetBit(const std::uint64_t* words, int n, F&& f) {
+    for (int w = 0; w < n; ++w)
+        for (std::uint64_t word = words[w]; word; word &= word - 1) f(w * 64 + __builtin_ctzll(word));
+}
+
 inline int popcountBelow(std::uint64_t word, int bit) {
     return popcount(word & ((std::uint64_t(1) << bit) - 1));
 }
@@ -411,23 +418,18 @@ private:
         for (int w = 0; w < kCells / 64; ++w) mixedCells += popcount(b.mixed[w]);
         b.config.reserve(std::size_t(mixedCells));
         b.patchBefore.reserve(std::size_t(mixedCells) + 1);
-        for (int w = 0; w < kCells / 64; ++w) {
-            std::uint64_t word = b.mixed[w];
-            while (word) {
-                const int off = w * 64 + __builtin_ctzll(word);
-                word &= word - 1;
-                const int x = off >> 6, y = (off >> 3) & 7, z = off & 7;
-                std::uint8_t inside = 0;
-                for (int k = 0; k < 8; ++k)
-                    inside |= std::uint8_t(((rows[x + (k & 1)][y + ((k >> 1) & 1)] >> (z + (k >> 2))) & 1u) << k);
-                const std::uint8_t joined = joinedFaces(acc, b.origin.offsetBy(x, y, z), inside);
-                b.config.push_back(std::uint16_t(inside | (joined << 8)));
-                b.patchBefore.push_back(std::uint16_t(patches));
-                const CellPatches& p = detail::cellPatches(inside, joined);
-                patches += p.count;
-                for (int k = 0; k < p.count; ++k) triangles += p.size[k];
-            }
-        }
+        forEachSetBit(b.mixed, kCells / 64, [&](int off) {
+            const int x = off >> 6, y = (off >> 3) & 7, z = off & 7;
+            std::uint8_t inside = 0;
+            for (int k = 0; k < 8; ++k)
+                inside |= std::uint8_t(((rows[x + (k & 1)][y + ((k >> 1) & 1)] >> (z + (k >> 2))) & 1u) << k);
+            const std::uint8_t joined = joinedFaces(acc, b.origin.offsetBy(x, y, z), inside);
+            b.config.push_back(std::uint16_t(inside | (joined << 8)));
+            b.patchBefore.push_back(std::uint16_t(patches));
+            const CellPatches& p = detail::cellPatches(inside, joined);
+            patches += p.count;
+            for (int k = 0; k < p.count; ++k) triangles += p.size[k];
+        });
         b.patchBefore.push_back(std::uint16_t(patches));
         std::uint32_t n = 0;
         for (int w = 0; w < 24; ++w) {
@@ -488,19 +490,14 @@ private:
         std::size_t exact = 0;
         std::uint32_t at = b.crossingBase;
         for (int a = 0; a < 3; ++a) {
-            for (int w = 0; w < kCells / 64; ++w) {
-                std::uint64_t word = b.owned[a * 8 + w];
-                while (word) {
-                    const int off = w * 64 + __builtin_ctzll(word);
-                    word &= word - 1;
-                    const Crossing c = findCrossing(b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7), a,
-                                                    testBit(b.inside, off));
-                    exact += c.exact;
-                    mesh_.vertices[at] = c.p;
-                    crossingNormal_[at] = c.n;
-                    ++at;
-                }
-            }
+            forEachSetBit(b.owned + a * 8, kCells / 64, [&](int off) {
+                const Crossing c = findCrossing(b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7), a,
+                                                testBit(b.inside, off));
+                exact += c.exact;
+                mesh_.vertices[at] = c.p;
+                crossingNormal_[at] = c.n;
+                ++at;
+            });
         }
         exactCount += exact;
     }
@@ -564,26 +561,21 @@ private:
         std::uint32_t at = b.patchBase;
         std::uint32_t tri = b.triangleBase;
         int rank = 0;
-        for (int w = 0; w < kCells / 64; ++w) {
-            std::uint64_t word = b.mixed[w];
-            while (word) {
-                const int off = w * 64 + __builtin_ctzll(word);
-                word &= word - 1;
-                const CellPatches& patches = b.patchesOf(rank++);
-                const Coord p = b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7);
-                for (int k = 0; k < patches.count; ++k) {
-                    const int len = loopOf(near, p, patches, k, loop);
-                    int qefRank = 0;
-                    mesh_.vertices[at] = placeVertex(p, loop, len, qefRank);
-                    feature_[at - patchVertexBase_] = std::uint8_t(qefRank >= 2);
-                    edges += qefRank == 2;
-                    corners += qefRank == 3;
-                    // The fan; the flip pass turns chords along creases afterwards.
-                    for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[i], loop[i + 1 == len ? 0 : i + 1]};
-                    ++at;
-                }
+        forEachSetBit(b.mixed, kCells / 64, [&](int off) {
+            const CellPatches& patches = b.patchesOf(rank++);
+            const Coord p = b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7);
+            for (int k = 0; k < patches.count; ++k) {
+                const int len = loopOf(near, p, patches, k, loop);
+                int qefRank = 0;
+                mesh_.vertices[at] = placeVertex(p, loop, len, qefRank);
+                feature_[at - patchVertexBase_] = std::uint8_t(qefRank >= 2);
+                edges += qefRank == 2;
+                corners += qefRank == 3;
+                // The fan; the flip pass turns chords along creases afterwards.
+                for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[i], loop[i + 1 == len ? 0 : i + 1]};
+                ++at;
             }
-        }
+        });
         edgeCount += edges;
         cornerCount += corners;
     }
@@ -733,44 +725,39 @@ private:
         std::uint32_t patch = b.patchBase;
         std::unique_ptr<Around> near;  // made for the first feature patch of the block
         int rank = 0;
-        for (int w = 0; w < kCells / 64; ++w) {
-            std::uint64_t word = b.mixed[w];
-            while (word) {
-                const int off = w * 64 + __builtin_ctzll(word);
-                word &= word - 1;
-                const CellPatches& patches = b.patchesOf(rank++);
-                int start = 0;
-                for (int k = 0; k < patches.count; ++k, ++patch) {
-                    const int len = patches.size[k];
-                    const std::uint8_t* edges = &patches.edges[start];
-                    start += len;
-                    if (!isFeature(patch)) {
-                        tri += std::uint32_t(len);
-                        continue;
-                    }
-                    if (!near) near = std::make_unique<Around>(around(b));
-                    const Coord p = b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7);
-                    loopOf(*near, p, patches, k, loop);
-                    for (int i = 0; i < len; ++i, ++tri) {
-                        const int j = i + 1 == len ? 0 : i + 1;
-                        // The chord loop[i]-loop[j] lies on the face shared with the neighbour
-                        // whose patch holds the same two crossings.
-                        const int face = tables.face[edges[i]][edges[j]];
-                        Coord np = p;
-                        np[face >> 1] += (face & 1) ? 1 : -1;
-                        const CellPatches* other = nullptr;
-                        std::uint32_t otherFirst = 0;
-                        cellAt(*near, np, other, otherFirst);
-                        const int ok = other->patchOf[tables.across[edges[i]][face]];
-                        const std::uint32_t partner = otherFirst + std::uint32_t(ok);
-                        if (isFeature(partner) && flipChord(edges, len, i, *other, ok, face, patch, partner, loop)) {
-                            mesh_.triangles[tri] = {patch, loop[i], partner};
-                            flipped += patch < partner;
-                        }
+        forEachSetBit(b.mixed, kCells / 64, [&](int off) {
+            const CellPatches& patches = b.patchesOf(rank++);
+            int start = 0;
+            for (int k = 0; k < patches.count; ++k, ++patch) {
+                const int len = patches.size[k];
+                const std::uint8_t* edges = &patches.edges[start];
+                start += len;
+                if (!isFeature(patch)) {
+                    tri += std::uint32_t(len);
+                    continue;
+                }
+                if (!near) near = std::make_unique<Around>(around(b));
+                const Coord p = b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7);
+                loopOf(*near, p, patches, k, loop);
+                for (int i = 0; i < len; ++i, ++tri) {
+                    const int j = i + 1 == len ? 0 : i + 1;
+                    // The chord loop[i]-loop[j] lies on the face shared with the neighbour
+                    // whose patch holds the same two crossings.
+                    const int face = tables.face[edges[i]][edges[j]];
+                    Coord np = p;
+                    np[face >> 1] += (face & 1) ? 1 : -1;
+                    const CellPatches* other = nullptr;
+                    std::uint32_t otherFirst = 0;
+                    cellAt(*near, np, other, otherFirst);
+                    const int ok = other->patchOf[tables.across[edges[i]][face]];
+                    const std::uint32_t partner = otherFirst + std::uint32_t(ok);
+                    if (isFeature(partner) && flipChord(edges, len, i, *other, ok, face, patch, partner, loop)) {
+                        mesh_.triangles[tri] = {patch, loop[i], partner};
+                        flipped += patch < partner;
                     }
                 }
             }
-        }
+        });
         flippedCount += flipped;
     }
 
