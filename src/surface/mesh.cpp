@@ -269,94 +269,77 @@ bool suspect(const Mesh& mesh, const std::vector<glm::vec3>& normal, std::uint32
     return glm::dot(areaVector, sum) < minCosine * twiceArea * glm::length(sum);
 }
 
+/// Sorts a list of indices and drops repeats.
+void sortUnique(std::vector<std::uint32_t>& v) {
+    std::sort(v.begin(), v.end());
+    v.erase(std::unique(v.begin(), v.end()), v.end());
+}
+
+/// The vertices of some triangles, each once.
+std::vector<std::uint32_t> verticesOf(const Mesh& mesh, const std::vector<std::uint32_t>& triangles) {
+    std::vector<std::uint32_t> out;
+    for (std::uint32_t t : triangles)
+        for (std::uint32_t v : mesh.triangles[t]) out.push_back(v);
+    sortUnique(out);
+    return out;
+}
+
+/// The triangles around any of some vertices, each once.
+std::vector<std::uint32_t> trianglesAround(const Stars& stars, const std::vector<std::uint32_t>& vertices) {
+    std::vector<std::uint32_t> out;
+    for (std::uint32_t v : vertices)
+        for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i) out.push_back(stars.corners[i] / 3);
+    sortUnique(out);
+    return out;
+}
+
+/// The vertices joined to v by an edge, each once, into `out`.
+void neighboursOf(const Mesh& mesh, const Stars& stars, std::uint32_t v, std::vector<std::uint32_t>& out) {
+    out.clear();
+    for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i)
+        for (std::uint32_t w : mesh.triangles[stars.corners[i] / 3])
+            if (w != v) out.push_back(w);
+    sortUnique(out);
+}
+
 /// What a repair changed: the first position of every moved vertex and the first normal of every
 /// vertex whose normal was recomputed.
 struct RepairLog {
     std::vector<std::pair<std::uint32_t, Vec3>> positions;
     std::vector<std::pair<std::uint32_t, glm::vec3>> normals;
+    std::vector<bool> moved, renormalised;
+
+    explicit RepairLog(std::size_t vertices) : moved(vertices, false), renormalised(vertices, false) {}
+    void position(std::uint32_t v, const Vec3& first) {
+        if (!moved[v]) moved[v] = true, positions.push_back({v, first});
+    }
+    void normal(std::uint32_t v, const glm::vec3& first) {
+        if (!renormalised[v]) renormalised[v] = true, normals.push_back({v, first});
+    }
 };
 
-/// The local repair of repairAndCheckMesh: rounds of pulls on the suspects' vertices, testing again
-/// only the triangles around moved vertices and their neighbours. Leaves in `suspects` the
-/// triangles that are still suspect, and returns the number of vertices moved.
-std::size_t pullBack(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& normal,
-                     std::vector<std::uint32_t>& suspects, const FoldRepair& repair, RepairLog& log) {
-    std::vector<bool> moved(mesh.vertices.size(), false), renormalised(mesh.vertices.size(), false);
-    std::size_t count = 0;
-    for (int round = 0; round < repair.rounds && !suspects.empty(); ++round) {
-        std::vector<std::uint32_t> candidates;
-        for (std::uint32_t t : suspects)
-            for (std::uint32_t v : mesh.triangles[t]) candidates.push_back(v);
-        std::sort(candidates.begin(), candidates.end());
-        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-        std::vector<std::uint32_t> changed, neighbours;
-        for (std::uint32_t v : candidates) {
-            neighbours.clear();
-            for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i)
-                for (std::uint32_t w : mesh.triangles[stars.corners[i] / 3])
-                    if (w != v) neighbours.push_back(w);
-            std::sort(neighbours.begin(), neighbours.end());
-            neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
-            const Vec3 before = mesh.vertices[v];
-            if (!repair.pull(v, round, mesh.vertices[v], neighbours)) continue;
-            changed.push_back(v);
-            if (!moved[v]) {
-                moved[v] = true;
-                ++count;
-                log.positions.push_back({v, before});
-            }
-        }
-        if (changed.empty()) break;
-        // The normals that moved: the moved vertices' and their neighbours'.
-        std::vector<std::uint32_t> touched;
-        for (std::uint32_t v : changed)
-            for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i)
-                for (std::uint32_t w : mesh.triangles[stars.corners[i] / 3]) touched.push_back(w);
-        std::sort(touched.begin(), touched.end());
-        touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-        for (std::uint32_t w : touched) {
-            if (!renormalised[w]) {
-                renormalised[w] = true;
-                log.normals.push_back({w, normal[w]});
-            }
-            normal[w] = starNormal(mesh, stars, w);
-        }
-        // The triangles whose test may have changed: those around any touched vertex.
-        suspects.clear();
-        for (std::uint32_t w : touched)
-            for (std::uint32_t i = stars.offset[w]; i < stars.offset[w + 1]; ++i) suspects.push_back(stars.corners[i] / 3);
-        std::sort(suspects.begin(), suspects.end());
-        suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
-        suspects.erase(std::remove_if(suspects.begin(), suspects.end(),
-                                      [&](std::uint32_t t) { return !suspect(mesh, normal, t, repair.minCosine); }),
-                       suspects.end());
-    }
-    if (suspects.empty() || !repair.candidates) return count;
+/// Keeps the triangles of `triangles` that are still suspect.
+void keepSuspects(const Mesh& mesh, const std::vector<glm::vec3>& normal, double minCosine,
+                  std::vector<std::uint32_t>& triangles) {
+    triangles.erase(std::remove_if(triangles.begin(), triangles.end(),
+                                   [&](std::uint32_t t) { return !suspect(mesh, normal, t, minCosine); }),
+                    triangles.end());
+}
 
-    // The last resort: each vertex of a triangle still suspect tries the candidate positions it is
-    // offered, and keeps the one that leaves the fewest suspect triangles around it and its
-    // neighbours (their normals follow the move).
-    std::vector<std::uint32_t> candidates, neighbours, ring;
-    for (std::uint32_t t : suspects)
-        for (std::uint32_t v : mesh.triangles[t]) candidates.push_back(v);
-    std::sort(candidates.begin(), candidates.end());
-    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+/// The last resort of pullBack: each vertex of a triangle still suspect tries the candidate
+/// positions it is offered, and keeps the one that leaves the fewest suspect triangles around it
+/// and its neighbours (their normals follow the move).
+void tryCandidates(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& normal,
+                   std::vector<std::uint32_t>& suspects, const FoldRepair& repair, RepairLog& log) {
+    std::vector<std::uint32_t> neighbours;
     std::vector<Vec3> offered;
-    for (std::uint32_t v : candidates) {
-        neighbours.clear();
-        for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i)
-            for (std::uint32_t w : mesh.triangles[stars.corners[i] / 3])
-                if (w != v) neighbours.push_back(w);
-        std::sort(neighbours.begin(), neighbours.end());
-        neighbours.erase(std::unique(neighbours.begin(), neighbours.end()), neighbours.end());
+    std::vector<glm::vec3> startNormals;
+    for (std::uint32_t v : verticesOf(mesh, suspects)) {
+        neighboursOf(mesh, stars, v, neighbours);
         offered.clear();
         repair.candidates(v, neighbours, offered);
         if (offered.empty()) continue;
-        ring.clear();
-        for (std::uint32_t w : neighbours)
-            for (std::uint32_t i = stars.offset[w]; i < stars.offset[w + 1]; ++i) ring.push_back(stars.corners[i] / 3);
-        std::sort(ring.begin(), ring.end());
-        ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+        const std::vector<std::uint32_t> ring = trianglesAround(stars, neighbours);
         auto place = [&](const Vec3& x) {
             mesh.vertices[v] = x;
             normal[v] = starNormal(mesh, stars, v);
@@ -367,7 +350,7 @@ std::size_t pullBack(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& nor
         };
         const Vec3 start = mesh.vertices[v];
         const glm::vec3 startNormal = normal[v];
-        std::vector<glm::vec3> startNormals;
+        startNormals.clear();
         for (std::uint32_t w : neighbours) startNormals.push_back(normal[w]);
         Vec3 best = start;
         std::size_t fewest = place(start);
@@ -377,25 +360,44 @@ std::size_t pullBack(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& nor
             if (n < fewest) fewest = n, best = x;
         }
         if (best != start) {
-            if (!moved[v]) {
-                moved[v] = true;
-                ++count;
-                log.positions.push_back({v, start});
-            }
-            for (std::size_t k = 0; k < neighbours.size(); ++k)
-                if (!renormalised[neighbours[k]])
-                    renormalised[neighbours[k]] = true, log.normals.push_back({neighbours[k], startNormals[k]});
-            if (!renormalised[v]) renormalised[v] = true, log.normals.push_back({v, startNormal});
+            log.position(v, start);
+            log.normal(v, startNormal);
+            for (std::size_t k = 0; k < neighbours.size(); ++k) log.normal(neighbours[k], startNormals[k]);
             suspects.insert(suspects.end(), ring.begin(), ring.end());
         }
         place(best);
     }
-    std::sort(suspects.begin(), suspects.end());
-    suspects.erase(std::unique(suspects.begin(), suspects.end()), suspects.end());
-    suspects.erase(std::remove_if(suspects.begin(), suspects.end(),
-                                  [&](std::uint32_t t) { return !suspect(mesh, normal, t, repair.minCosine); }),
-                   suspects.end());
-    return count;
+    sortUnique(suspects);
+    keepSuspects(mesh, normal, repair.minCosine, suspects);
+}
+
+/// The local repair of repairAndCheckMesh: rounds of pulls on the suspects' vertices, testing again
+/// only the triangles around moved vertices and their neighbours, then the candidates' last
+/// resort. Leaves in `suspects` the triangles that are still suspect.
+void pullBack(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& normal, std::vector<std::uint32_t>& suspects,
+              const FoldRepair& repair, RepairLog& log) {
+    std::vector<std::uint32_t> neighbours;
+    for (int round = 0; round < repair.rounds && !suspects.empty(); ++round) {
+        std::vector<std::uint32_t> changed;
+        for (std::uint32_t v : verticesOf(mesh, suspects)) {
+            neighboursOf(mesh, stars, v, neighbours);
+            const Vec3 before = mesh.vertices[v];
+            if (!repair.pull(v, round, mesh.vertices[v], neighbours)) continue;
+            changed.push_back(v);
+            log.position(v, before);
+        }
+        if (changed.empty()) break;
+        // The normals that moved: the moved vertices' and their neighbours'.
+        const std::vector<std::uint32_t> touched = verticesOf(mesh, trianglesAround(stars, changed));
+        for (std::uint32_t w : touched) {
+            log.normal(w, normal[w]);
+            normal[w] = starNormal(mesh, stars, w);
+        }
+        // The triangles whose test may have changed: those around any touched vertex.
+        suspects = trianglesAround(stars, touched);
+        keepSuspects(mesh, normal, repair.minCosine, suspects);
+    }
+    if (!suspects.empty() && repair.candidates) tryCandidates(mesh, stars, normal, suspects, repair, log);
 }
 
 MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, std::size_t* moved,
@@ -421,18 +423,16 @@ MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, st
     TriangleCounts t = trianglePass(mesh, normal, centre, repair ? repair->minCosine : 0.0);
     if (repair && !t.suspects.empty()) {
         std::sort(t.suspects.begin(), t.suspects.end());
-        RepairLog log;
-        const std::size_t n = pullBack(*repairable, stars, normal, t.suspects, *repair, log);
-        if (moved) *moved = n;
+        RepairLog log(mesh.vertices.size());
+        pullBack(*repairable, stars, normal, t.suspects, *repair, log);
+        if (moved) *moved = log.positions.size();
         if (unrepaired) *unrepaired = t.suspects;
         // Vertices moved, the topology did not: the edge counts stand, and only the triangles
         // around renormalised vertices (a superset of those around moved ones) changed. Their
         // sums are taken out as they were and put back as they are.
-        std::vector<std::uint32_t> affected;
-        for (const auto& [w, old] : log.normals)
-            for (std::uint32_t i = stars.offset[w]; i < stars.offset[w + 1]; ++i) affected.push_back(stars.corners[i] / 3);
-        std::sort(affected.begin(), affected.end());
-        affected.erase(std::unique(affected.begin(), affected.end()), affected.end());
+        std::vector<std::uint32_t> renormalised;
+        for (const auto& [w, old] : log.normals) renormalised.push_back(w);
+        const std::vector<std::uint32_t> affected = trianglesAround(stars, renormalised);
         const TriangleCounts now = triangleSums(mesh, normal, centre, affected);
         auto swapLogged = [&] {
             for (auto& [v, old] : log.positions) std::swap(repairable->vertices[v], old);
