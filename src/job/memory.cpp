@@ -1,5 +1,6 @@
 #include "dexelmill/job/memory.h"
 
+#include <malloc.h>
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -17,15 +18,15 @@ namespace dexelmill {
 
 namespace {
 
-/// The kB figure of a "Key:" line of a /proc file (0 when unavailable).
-double procKb(const char* file, const char* key) {
+/// The number on a "Key:" line of a /proc file (0 when unavailable).
+double procNumber(const char* file, const char* key) {
     std::ifstream in(file);
     std::string word;
     while (in >> word) {
         if (word == key) {
-            double kb = 0;
-            in >> kb;
-            return kb;
+            double value = 0;
+            in >> value;
+            return value;
         }
         in.ignore(4096, '\n');
     }
@@ -48,7 +49,21 @@ std::size_t cgroupLimit() {
 
 }  // namespace
 
-std::size_t residentBytes() { return std::size_t(procKb("/proc/self/status", "VmRSS:") * 1024.0); }
+double peakMemoryMb() { return procNumber("/proc/self/status", "VmHWM:") / 1024.0; }
+
+double currentMemoryMb() { return procNumber("/proc/self/status", "VmRSS:") / 1024.0; }
+
+std::size_t processThreadCount() { return std::size_t(procNumber("/proc/self/status", "Threads:")); }
+
+bool resetPeakMemory() {
+    malloc_trim(0);  // hand freed heap back first, so that the next peak is the next stage's own
+    std::ofstream out("/proc/self/clear_refs");
+    out << "5";  // 5: reset the peak resident set size (proc(5))
+    out.flush();
+    return bool(out);
+}
+
+std::size_t residentBytes() { return std::size_t(procNumber("/proc/self/status", "VmRSS:") * 1024.0); }
 
 MemoryBudget memoryBudget(std::size_t maxBytes) {
     if (maxBytes > 0) return {maxBytes, "--max-memory"};
@@ -60,7 +75,7 @@ MemoryBudget memoryBudget(std::size_t maxBytes) {
     if (getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY)
         take(std::size_t(as.rlim_cur), "the address-space limit (ulimit -v)");
     take(cgroupLimit(), "the cgroup's memory.max");
-    const double available = procKb("/proc/meminfo", "MemAvailable:") * 1024.0;
+    const double available = procNumber("/proc/meminfo", "MemAvailable:") * 1024.0;
     if (available > 0) take(std::size_t(available) + residentBytes(), "the memory available (MemAvailable)");
     return b;
 }

@@ -1,7 +1,5 @@
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <malloc.h>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -74,42 +72,6 @@ double chooseResolution(const Box& stock, double cells) {
     for (double m : {5.0, 2.0, 1.0})
         if (m * decade <= raw) return m * decade;
     return decade;
-}
-
-namespace {
-
-/// The number on a "Key:" line of /proc/self/status (0 when unavailable).
-double procStatus(const char* key) {
-    std::ifstream status("/proc/self/status");
-    std::string word;
-    while (status >> word) {
-        if (word == key) {
-            double value = 0;
-            status >> value;
-            return value;
-        }
-        status.ignore(4096, '\n');
-    }
-    return 0.0;
-}
-
-/// A "Vm...:" line of /proc/self/status (kB) in MiB.
-double procStatusMb(const char* key) { return procStatus(key) / 1024.0; }
-
-}  // namespace
-
-double peakMemoryMb() { return procStatusMb("VmHWM:"); }
-
-double currentMemoryMb() { return procStatusMb("VmRSS:"); }
-
-std::size_t processThreadCount() { return std::size_t(procStatus("Threads:")); }
-
-bool resetPeakMemory() {
-    malloc_trim(0);  // hand freed heap back first, so that the next peak is the next stage's own
-    std::ofstream out("/proc/self/clear_refs");
-    out << "5";  // 5: reset the peak resident set size (proc(5))
-    out.flush();
-    return bool(out);
 }
 
 }  // namespace dexelmill

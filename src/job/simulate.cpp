@@ -116,8 +116,9 @@ Box guessStock(const ToolPath& path, const ToolTable& tools, double marginPercen
     return box;
 }
 
-LoadedStock loadStock(const SimulateOptions& o, const Program& program, const ToolTable& tools,
-                      const Project* project, SimulateReport& report, std::vector<ReportWarning>& notes) {
+LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, const Program& program,
+                      const ToolTable& tools, const Project* project, SimulateReport& report,
+                      std::vector<ReportWarning>& notes) {
     Box box;
     std::optional<LevelSet> fromVdb;
     std::optional<Mesh> fromStl;
@@ -166,7 +167,6 @@ LoadedStock loadStock(const SimulateOptions& o, const Program& program, const To
     }
     const Lattice lattice = Lattice::fromBox(box, h);
     // The stock's dexels and, at the least, the level set and mesh of the block's own faces.
-    const MemoryBudget budget = memoryBudget(o.maxMemoryBytes);
     const double dexels = stockBytes(lattice, o.families);
     const double faces = kSurfaceBytesPerCrossing * boxCrossings(lattice);
     const double base = double(residentBytes());
@@ -200,8 +200,7 @@ Simulation runSimulation(const SimulateOptions& o) {
 namespace {
 
 /// Before the rebuild: the level set and mesh of the cut part, from its crossings, must fit.
-void checkSurfaceFits(const TriDexelStock& stock, std::size_t maxMemoryBytes) {
-    const MemoryBudget budget = memoryBudget(maxMemoryBytes);
+void checkSurfaceFits(const TriDexelStock& stock, const MemoryBudget& budget) {
     const double crossings = stockCrossings(stock);
     const double need = kSurfaceBytesPerCrossing * crossings;
     const double base = double(residentBytes());
@@ -240,7 +239,8 @@ Simulation runStages(const SimulateOptions& o) {
     GcodeOptions gcode;
     gcode.chordTolerance = o.chordTolerance;
     // The moves a program makes (its loops included) must fit in memory.
-    gcode.maxMoves = movesThatFit(memoryBudget(o.maxMemoryBytes), gcode.maxMoves);
+    const MemoryBudget budget = memoryBudget(o.maxMemoryBytes);
+    gcode.maxMoves = movesThatFit(budget, gcode.maxMoves);
     AptOptions apt;
     apt.chordTolerance = o.chordTolerance;
     std::optional<Project> project;
@@ -277,7 +277,7 @@ Simulation runStages(const SimulateOptions& o) {
         w.message = "the program makes no moves (empty, or only comments and settings): the part is the stock";
         notes.push_back(w);
     }
-    LoadedStock loaded = loadStock(o, program, tools, project ? &*project : nullptr, report, notes);
+    LoadedStock loaded = loadStock(o, budget, program, tools, project ? &*project : nullptr, report, notes);
     sim.stock.emplace(std::move(loaded.stock));
     TriDexelStock& stock = *sim.stock;
     report.stockBox = loaded.box;
@@ -311,7 +311,7 @@ Simulation runStages(const SimulateOptions& o) {
     report.finalVolumeMm3 = stock.volume(measure);
     report.removedVolumeMm3 = report.stockVolumeMm3 - report.finalVolumeMm3;
     report.stockMemoryBytes = stock.memoryBytes();
-    checkSurfaceFits(stock, o.maxMemoryBytes);
+    checkSurfaceFits(stock, budget);
 
     // Rebuild and mesh.
     t = Clock::now();

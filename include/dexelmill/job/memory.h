@@ -1,5 +1,6 @@
 /// @file memory.h
-/// @brief How much memory a job may use, and how much it will need: checked before the work that
+/// @brief The process's memory and threads as the system reports them; how much memory a job may
+/// use, and how much it will need: checked before the work that
 /// would need it, so that a job too big for the machine stops at once with the figures, never with
 /// an allocator's message.
 #pragma once
@@ -26,6 +27,22 @@ MemoryBudget memoryBudget(std::size_t maxBytes = 0);
 
 /// @brief The resident memory of this process now (bytes; 0 when the system does not say).
 std::size_t residentBytes();
+
+/// @brief Peak resident memory of this process so far (MiB), or since resetPeakMemory.
+double peakMemoryMb();
+
+/// @brief The threads of this process now (0 when the system does not say).
+std::size_t processThreadCount();
+
+/// @brief Resident memory of this process now (MiB).
+double currentMemoryMb();
+
+/// @brief Starts peakMemoryMb afresh from the current resident size (Linux 4.0 and later, through
+/// /proc/self/clear_refs), after handing freed heap memory back to the system, so that one stage's
+/// peak can be measured on its own: its growth over currentMemoryMb() taken just after.
+/// @return false when the system does not allow it (peakMemoryMb then keeps the process's peak).
+bool resetPeakMemory();
+
 
 /// @brief Reads a size such as "4G", "512M", "1.5GiB" or "800000000" (bytes; K, M, G and T are
 /// powers of 1024). @throw Error for anything else.

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "dexelmill/geometry/types.h"
+#include "dexelmill/job/memory.h"
 #include "dexelmill/path/toolpath.h"
 #include "dexelmill/stock/tridexel.h"
 #include "dexelmill/surface/levelset.h"
@@ -160,20 +161,5 @@ std::string reportJson(const SimulateReport& report);
 /// @brief A default lattice spacing for a stock box: its longest side divided by `cells` (about),
 /// rounded down to 1, 2 or 5 times a power of ten.
 double chooseResolution(const Box& stock, double cells = 400);
-
-/// @brief Peak resident memory of this process so far (MiB), or since resetPeakMemory.
-double peakMemoryMb();
-
-/// @brief The threads of this process now (0 when the system does not say).
-std::size_t processThreadCount();
-
-/// @brief Resident memory of this process now (MiB).
-double currentMemoryMb();
-
-/// @brief Starts peakMemoryMb afresh from the current resident size (Linux 4.0 and later, through
-/// /proc/self/clear_refs), after handing freed heap memory back to the system, so that one stage's
-/// peak can be measured on its own: its growth over currentMemoryMb() taken just after.
-/// @return false when the system does not allow it (peakMemoryMb then keeps the process's peak).
-bool resetPeakMemory();
 
 }  // namespace dexelmill
