@@ -3,8 +3,9 @@
 /// interpreter of NIST, Kramer et al. 2000, and LinuxCNC's G-code documentation); Fanuc macro
 /// forms (IF ... THEN/GOTO, WHILE ... DOn/ENDn, M98/M99) follow the Fanuc programming manuals.
 ///
-/// The text is split into lines once; a prescan indexes O-word structures (sub, loops, if chains)
-/// and Fanuc program numbers, so that flow jumps are table lookups. Each executed line is parsed
+/// Each file's text is split into lines once (detail::SourceFile, which also finds the O-word
+/// lines); the O-word structures (sub, loops, if chains) and Fanuc program numbers are paired
+/// before the file runs, so that flow jumps are table lookups. Each executed line is parsed
 /// into a Block (one value per letter, the G and M codes, parameter assignments) and executed in
 /// the RS274/NGC order of execution.
 #include "dexelmill/path/gcode.h"
@@ -13,7 +14,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <fstream>
 #include <memory>
 #include <unordered_map>
 
@@ -21,6 +21,7 @@
 #include "dexelmill/tool/builders.h"
 #include "path/detail/arc.h"
 #include "path/detail/diagnostics.h"
+#include "path/detail/gcode_source.h"
 #include "path/detail/text.h"
 
 namespace dexelmill {
@@ -53,39 +54,17 @@ constexpr int kMaxExpressionDepth = 1000;
 enum HotKind { kHotFeed, kHotSpeed, kHotCount };
 
 // ---------------------------------------------------------------------------------------------
-// Lines and O-word structure.
+// Subprograms.
 
-enum class OKind {
-    None, Label, Sub, EndSub, Call, Do, While, EndWhile, If, ElseIf, Else, EndIf, Repeat,
-    EndRepeat, Break, Continue, Return,
-    FanucWhile, FanucEnd
-};
-
-struct LineInfo {
-    std::string_view text;
-    int number = 0;      ///< 1-based line number in the file
-    OKind okind = OKind::None;
-    std::string label;   ///< O-word label, normalised (lower case name or number)
-    std::size_t argPos = 0;  ///< where the O-word's arguments start in text
-    int match = -1;      ///< sub: endsub; do: while; while: endwhile; if/elseif/else: next branch;
-                         ///< repeat: endrepeat; endwhile/endrepeat/while-tail: the head
-    int endIf = -1;      ///< if-chain members: the endif
-    bool whileIsTail = false;
-};
+using detail::OKind;
+using detail::OWord;
+using detail::SourceFile;
+using detail::skipSpaces;
 
 struct Sub {
     int file = 0;
     int start = 0;  ///< line index of `sub` or of the Fanuc program number
     int end = -1;   ///< line index of `endsub`; -1 for Fanuc programs (end at M99)
-};
-
-struct SourceFile {
-    std::string name;
-    std::string text;  ///< owned copy when read from disk or when the caller's view may die
-    std::vector<LineInfo> lines;
-    std::unordered_map<long, int> nLines;  ///< N number -> line index (Fanuc GOTO)
-    bool startsWithPercent = false;
-    std::uint32_t pathIndex = 0;  ///< index in ToolPath::files
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -181,7 +160,7 @@ public:
     }
 
     void loadToolTable(const std::string& path) {
-        const std::string text = detail::readTextFile(path);
+        const std::string text = detail::readFile(opt_.files, path);
         for (const ToolTableEntry& e : parseLinuxCncToolTable(text, path, opt_.toolTableInches)) {
             SourceLocation where{path, e.line, 0};
             if (e.diameter > 0.0) {
@@ -198,14 +177,12 @@ public:
     }
 
     void run(std::string name, std::string text) {
-        files_.push_back(std::make_unique<SourceFile>());
+        files_.push_back(std::make_unique<SourceFile>(std::move(name), std::move(text)));
         SourceFile& f = *files_.back();
-        f.name = std::move(name);
-        f.text = std::move(text);
         const int index = int(files_.size() - 1);
-        out_.path.files.push_back(f.name);
+        out_.path.files.push_back(f.name());
         f.pathIndex = std::uint32_t(out_.path.files.size() - 1);
-        prescan(f);
+        matchStructures(f);
         execute(index);
     }
 
@@ -221,7 +198,7 @@ private:
     SourceLocation where(int col = 0) const {
         SourceLocation loc;
         if (curFile_ >= 0) {
-            loc.file = files_[curFile_]->name;
+            loc.file = files_[curFile_]->name();
             loc.line = curLineNo_;
         }
         loc.column = col;
@@ -253,162 +230,26 @@ private:
             diags_.repeat(hot_[kind]);
     }
 
-    // ---- prescan ----
-    static std::size_t skipSpaces(std::string_view s, std::size_t i) {
-        while (i < s.size() && (s[i] == ' ' || s[i] == '\t')) ++i;
-        return i;
-    }
-
-    void prescan(SourceFile& f) {
-        std::string_view all(f.text);
-        // One allocation for the line table and, as a first guess, one move per line.
-        const std::size_t lineCount = std::size_t(std::count(all.begin(), all.end(), '\n')) + 1;
-        f.lines.reserve(lineCount);
-        out_.path.moves.reserve(out_.path.moves.size() + lineCount);
-        std::size_t pos = 0;
-        int number = 0;
-        bool seenContent = false;
-        while (pos <= all.size()) {
-            std::size_t e = all.find('\n', pos);
-            if (e == std::string_view::npos) e = all.size();
-            std::string_view line = all.substr(pos, e - pos);
-            if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-            ++number;
-            LineInfo li;
-            li.text = line;
-            li.number = number;
-            f.lines.push_back(li);
-            if (!seenContent) {
-                const std::size_t i = skipSpaces(line, 0);
-                if (i < line.size()) {
-                    seenContent = true;
-                    f.startsWithPercent = line[i] == '%';
-                }
-            }
-            if (e == all.size()) break;
-            pos = e + 1;
-        }
-        // O-words, N numbers and Fanuc WHILE/END.
-        for (std::size_t k = 0; k < f.lines.size(); ++k) classify(f, int(k));
-        matchStructures(f);
-    }
-
-    void classify(SourceFile& f, int k) {
-        LineInfo& li = f.lines[std::size_t(k)];
-        std::string_view s = li.text;
-        std::size_t i = skipSpaces(s, 0);
-        if (i < s.size() && s[i] == '/') i = skipSpaces(s, i + 1);
-        if (i < s.size() && upper(s[i]) == 'N') {
-            std::size_t j = i + 1;
-            long n = 0;
-            bool digits = false;
-            while (j < s.size() && std::isdigit(static_cast<unsigned char>(s[j]))) {
-                if (n < 100000000) n = n * 10 + (s[j] - '0');
-                ++j;
-                digits = true;
-            }
-            if (digits) {
-                f.nLines.emplace(n, k);
-                i = skipSpaces(s, j);
-            }
-        }
-        if (i >= s.size()) return;
-        const char c = upper(s[i]);
-        if (c == ':' || (c == 'O' && i + 1 < s.size() &&
-                         (s[i + 1] == '<' || std::isdigit(static_cast<unsigned char>(s[i + 1]))))) {
-            std::size_t j = i + 1;
-            std::string label;
-            if (s[j] == '<') {
-                const std::size_t close = s.find('>', j);
-                if (close == std::string_view::npos) return;  // reported when executed
-                for (std::size_t t = j + 1; t < close; ++t)
-                    if (s[t] != ' ' && s[t] != '\t')
-                        label += char(std::tolower(static_cast<unsigned char>(s[t])));
-                j = close + 1;
-            } else {
-                while (j < s.size() && std::isdigit(static_cast<unsigned char>(s[j]))) ++j;
-                // Numbers: "O0097" and "O97" are the same program.
-                std::size_t t = i + 1;
-                while (t + 1 < j && s[t] == '0') ++t;
-                label = std::string(s.substr(t, j - t));
-                if (label.empty()) label = "0";
-            }
-            j = skipSpaces(s, j);
-            std::size_t kwEnd = j;
-            while (kwEnd < s.size() && std::isalpha(static_cast<unsigned char>(s[kwEnd]))) ++kwEnd;
-            std::string kw;
-            for (std::size_t t = j; t < kwEnd; ++t)
-                kw += char(std::tolower(static_cast<unsigned char>(s[t])));
-            static const std::pair<const char*, OKind> kws[] = {
-                {"sub", OKind::Sub},         {"endsub", OKind::EndSub},
-                {"call", OKind::Call},       {"do", OKind::Do},
-                {"while", OKind::While},     {"endwhile", OKind::EndWhile},
-                {"if", OKind::If},           {"elseif", OKind::ElseIf},
-                {"else", OKind::Else},       {"endif", OKind::EndIf},
-                {"repeat", OKind::Repeat},   {"endrepeat", OKind::EndRepeat},
-                {"break", OKind::Break},     {"continue", OKind::Continue},
-                {"return", OKind::Return}};
-            li.okind = OKind::Label;
-            li.label = label;
-            li.argPos = j;
-            for (const auto& [name, kind] : kws)
-                if (kw == name) {
-                    li.okind = kind;
-                    li.argPos = kwEnd;
-                }
-            return;
-        }
-        // Fanuc macro loops: WHILE [..] DOn / ENDn.
-        auto startsWith = [&](const char* w) {
-            std::size_t t = i;
-            for (; *w; ++w, ++t)
-                if (t >= s.size() || upper(s[t]) != *w) return false;
-            return true;
-        };
-        if (startsWith("WHILE")) {
-            li.okind = OKind::FanucWhile;
-            li.argPos = i + 5;
-            // The loop number follows "DO" at the end.
-            std::size_t d = s.size();
-            while (d > 0 && !(upper(s[d - 1]) == 'O' && d >= 2 && upper(s[d - 2]) == 'D')) --d;
-            if (d > 0) {
-                std::size_t t = skipSpaces(s, d);
-                std::size_t u = t;
-                while (u < s.size() && std::isdigit(static_cast<unsigned char>(s[u]))) ++u;
-                li.label = std::string(s.substr(t, u - t));
-            }
-        } else if (startsWith("END") && i + 3 < s.size() &&
-                   std::isdigit(static_cast<unsigned char>(s[i + 3]))) {
-            li.okind = OKind::FanucEnd;
-            std::size_t u = i + 3;
-            while (u < s.size() && std::isdigit(static_cast<unsigned char>(s[u]))) ++u;
-            li.label = std::string(s.substr(i + 3, u - i - 3));
-        }
-    }
-
+    // ---- structure ----
     [[noreturn]] void failAt(const SourceFile& f, int k, const std::string& message) {
-        SourceLocation loc{f.name, f.lines[std::size_t(k)].number, 1};
-        throw ParseError(loc, message, std::string(f.lines[std::size_t(k)].text.substr(0, 40)));
+        SourceLocation loc{f.name(), SourceFile::lineNumber(k), 1};
+        throw ParseError(loc, message, std::string(f.line(k).substr(0, 40)));
     }
 
     int findForward(const SourceFile& f, int from, const std::string& label,
                     std::initializer_list<OKind> kinds, int stopAt = -1) {
-        const int n = stopAt < 0 ? int(f.lines.size()) : stopAt;
-        for (int k = from + 1; k < n; ++k) {
-            const LineInfo& li = f.lines[std::size_t(k)];
-            if (li.okind == OKind::None || li.label != label) continue;
+        const int n = stopAt < 0 ? f.lineCount() : stopAt;
+        for (auto it = f.owords().upper_bound(from); it != f.owords().end() && it->first < n; ++it) {
+            if (it->second.label != label) continue;
             for (OKind kind : kinds)
-                if (li.okind == kind) return k;
+                if (it->second.kind == kind) return it->first;
         }
         return -1;
     }
 
     void matchStructures(SourceFile& f) {
-        const int n = int(f.lines.size());
-        std::vector<std::string> openDo;
-        for (int k = 0; k < n; ++k) {
-            LineInfo& li = f.lines[std::size_t(k)];
-            switch (li.okind) {
+        for (auto& [k, li] : f.owords()) {
+            switch (li.kind) {
             case OKind::Sub: {
                 const int e = findForward(f, k, li.label, {OKind::EndSub});
                 if (e < 0) failAt(f, k, "subroutine without endsub (unterminated subroutine)");
@@ -426,8 +267,8 @@ private:
                 const int e = findForward(f, k, li.label, {OKind::While});
                 if (e < 0) failAt(f, k, "do without its while (unterminated loop)");
                 li.match = e;
-                f.lines[std::size_t(e)].whileIsTail = true;
-                f.lines[std::size_t(e)].match = k;
+                f.owords().at(e).whileIsTail = true;
+                f.owords().at(e).match = k;
                 break;
             }
             case OKind::While:
@@ -436,14 +277,14 @@ private:
                     const int e = findForward(f, k, li.label, {OKind::EndWhile});
                     if (e < 0) failAt(f, k, "while without endwhile (unterminated loop)");
                     li.match = e;
-                    f.lines[std::size_t(e)].match = k;
+                    f.owords().at(e).match = k;
                 }
                 break;
             case OKind::Repeat: {
                 const int e = findForward(f, k, li.label, {OKind::EndRepeat});
                 if (e < 0) failAt(f, k, "repeat without endrepeat (unterminated loop)");
                 li.match = e;
-                f.lines[std::size_t(e)].match = k;
+                f.owords().at(e).match = k;
                 break;
             }
             case OKind::If: {
@@ -451,7 +292,7 @@ private:
                 if (endif < 0) failAt(f, k, "if without endif (unterminated if)");
                 int cur = k;
                 while (true) {
-                    LineInfo& c = f.lines[std::size_t(cur)];
+                    OWord& c = f.owords().at(cur);
                     c.endIf = endif;
                     const int next =
                         findForward(f, cur, li.label, {OKind::ElseIf, OKind::Else}, endif);
@@ -464,7 +305,7 @@ private:
             case OKind::ElseIf:
             case OKind::Else:
             case OKind::EndIf:
-                if (li.endIf < 0 && li.okind != OKind::EndIf)
+                if (li.endIf < 0 && li.kind != OKind::EndIf)
                     failAt(f, k, "else/elseif without if");
                 break;
             case OKind::EndWhile:
@@ -474,23 +315,16 @@ private:
             case OKind::EndSub:
                 break;
             case OKind::FanucWhile: {
-                int e = -1;
-                for (int t = k + 1; t < n; ++t)
-                    if (f.lines[std::size_t(t)].okind == OKind::FanucEnd &&
-                        f.lines[std::size_t(t)].label == li.label) {
-                        e = t;
-                        break;
-                    }
+                const int e = findForward(f, k, li.label, {OKind::FanucEnd});
                 if (e < 0) failAt(f, k, "WHILE ... DO without END (unterminated loop)");
                 li.match = e;
-                f.lines[std::size_t(e)].match = k;
+                f.owords().at(e).match = k;
                 break;
             }
             default:
                 break;
             }
         }
-        (void)openDo;
     }
 
     // ---- execution loop ----
@@ -502,16 +336,15 @@ private:
         while (true) {
             // Subroutine calls may switch to a subroutine file and back.
             SourceFile& f = *files_[std::size_t(curFile_)];
-            if (pc >= int(f.lines.size())) break;
+            if (pc >= f.lineCount()) break;
             if (++blocks_ > opt_.maxBlocks) {
-                curLineNo_ = f.lines[std::size_t(pc)].number;
+                curLineNo_ = SourceFile::lineNumber(pc);
                 fail(1, "program does not terminate: more than " +
                             std::to_string(opt_.maxBlocks) + " blocks executed",
-                     std::string(f.lines[std::size_t(pc)].text.substr(0, 40)));
+                     std::string(f.line(pc).substr(0, 40)));
             }
-            const LineInfo& li = f.lines[std::size_t(pc)];
-            curLineNo_ = li.number;
-            line_ = li.text;
+            curLineNo_ = SourceFile::lineNumber(pc);
+            line_ = f.line(pc);
             // '%' lines: the first opens the program, a later one ends it.
             {
                 const std::size_t i = skipSpaces(line_, 0);
@@ -520,7 +353,7 @@ private:
                         ++pc;
                         continue;
                     }
-                    if (!sawPercent && f.startsWithPercent) {
+                    if (!sawPercent && f.startsWithPercent()) {
                         sawPercent = true;
                         ++pc;
                         continue;
@@ -539,14 +372,14 @@ private:
         if (!ended) {
             const SourceFile& f = *files_[std::size_t(curFile_)];
             // Report at the last line that holds anything.
-            std::size_t last = f.lines.size();
-            while (last > 0 && skipSpaces(f.lines[last - 1].text, 0) >= f.lines[last - 1].text.size()) --last;
-            const std::string lastText = last ? std::string(f.lines[last - 1].text.substr(0, 40)) : std::string();
-            curLineNo_ = last ? f.lines[last - 1].number : 0;
+            int last = f.lineCount();
+            while (last > 0 && skipSpaces(f.line(last - 1), 0) >= f.line(last - 1).size()) --last;
+            const std::string lastText = last ? std::string(f.line(last - 1).substr(0, 40)) : std::string();
+            curLineNo_ = last ? SourceFile::lineNumber(last - 1) : 0;
             line_ = {};
             if (!frames_.empty())
                 fail(1, "file ends inside a subroutine (missing M99 or endsub)", lastText);
-            if (f.startsWithPercent)
+            if (f.startsWithPercent())
                 fail(1, "file ends without its closing '%' (truncated file?)", lastText);
         }
         frames_.clear();
@@ -555,13 +388,12 @@ private:
     static constexpr int kEndProgram = -2;
 
     int executeLine(SourceFile& f, int pc) {
-        const LineInfo& li = f.lines[std::size_t(pc)];
         std::size_t i = skipSpaces(line_, 0);
         if (i < line_.size() && line_[i] == '/') {
             if (!opt_.runDeletedBlocks) return pc + 1;
             warn("block delete '/': the block runs (block delete switch off)", "block delete", int(i) + 1);
         }
-        if (li.okind != OKind::None) return executeOWord(f, pc);
+        if (f.oword(pc)) return executeOWord(f, pc);
         Block b;
         pending_.clear();
         int fanucJump = -1;
@@ -572,7 +404,7 @@ private:
 
     // ---- O-words ----
     int executeOWord(SourceFile& f, int pc) {
-        const LineInfo& li = f.lines[std::size_t(pc)];
+        const OWord& li = *f.oword(pc);
         std::size_t pos = li.argPos;
         auto condition = [&]() {
             pos = skipSpaces(line_, pos);
@@ -582,7 +414,7 @@ private:
             checkRestIsComment(pos);
             return v != 0.0;
         };
-        switch (li.okind) {
+        switch (li.kind) {
         case OKind::Label:
             checkRestIsComment(pos);
             return pc + 1;
@@ -633,15 +465,16 @@ private:
         case OKind::Break:
         case OKind::Continue: {
             // The innermost loop with this label around pc.
-            for (int k = pc - 1; k >= 0; --k) {
-                const LineInfo& h = f.lines[std::size_t(k)];
+            const auto& owords = f.owords();
+            for (auto it = std::make_reverse_iterator(owords.lower_bound(pc)); it != owords.rend(); ++it) {
+                const auto& [k, h] = *it;
                 if (h.label != li.label) continue;
-                if (h.okind == OKind::Do || (h.okind == OKind::While && !h.whileIsTail) ||
-                    h.okind == OKind::Repeat) {
+                if (h.kind == OKind::Do || (h.kind == OKind::While && !h.whileIsTail) ||
+                    h.kind == OKind::Repeat) {
                     const int end = h.match;
-                    if (li.okind == OKind::Break) return end + 1;
-                    if (h.okind == OKind::Do) return end;  // test the condition
-                    if (h.okind == OKind::While) return k;
+                    if (li.kind == OKind::Break) return end + 1;
+                    if (h.kind == OKind::Do) return end;  // test the condition
+                    if (h.kind == OKind::While) return k;
                     long& c = frameCounters()[k];
                     return --c > 0 ? k + 1 : end + 1;
                 }
@@ -663,11 +496,11 @@ private:
 
     int nextBranch(SourceFile& f, int k) {
         while (true) {
-            const LineInfo& b = f.lines[std::size_t(k)];
-            curLineNo_ = b.number;
-            line_ = b.text;
-            if (b.okind == OKind::EndIf) return k + 1;
-            if (b.okind == OKind::Else) return k + 1;
+            const OWord& b = f.owords().at(k);
+            curLineNo_ = SourceFile::lineNumber(k);
+            line_ = f.line(k);
+            if (b.kind == OKind::EndIf) return k + 1;
+            if (b.kind == OKind::Else) return k + 1;
             // elseif
             std::size_t pos = skipSpaces(line_, b.argPos);
             if (pos >= line_.size() || line_[pos] != '[')
@@ -708,7 +541,7 @@ private:
         }
     }
 
-    int callSub(const LineInfo& li, int pc, std::size_t pos) {
+    int callSub(const OWord& li, int pc, std::size_t pos) {
         auto it = subs_.find(li.label);
         if (it == subs_.end()) {
             loadSubroutineFile(li.label);
@@ -746,23 +579,19 @@ private:
     /// LinuxCNC looks for an undefined subroutine `o<name>` in the file `name.ngc` of the
     /// subroutine path; here: the folder of the calling file.
     void loadSubroutineFile(const std::string& label) {
-        const std::string dir = detail::directoryOf(files_[std::size_t(curFile_)]->name);
+        const std::string dir = detail::directoryOf(files_[std::size_t(curFile_)]->name());
         const std::string path = detail::joinPath(dir, label + ".ngc");
-        std::ifstream probe(path);
-        if (!probe) return;
-        probe.close();
+        std::optional<std::string> text = detail::readFileIfAny(opt_.files, path);
+        if (!text) return;
         const int saved = curFile_;
         const int savedLine = curLineNo_;
         const std::string_view savedText = line_;
-        auto file = std::make_unique<SourceFile>();
-        file->name = path;
-        file->text = detail::readTextFile(path);
-        files_.push_back(std::move(file));
+        files_.push_back(std::make_unique<SourceFile>(path, std::move(*text)));
         SourceFile& f = *files_.back();
-        out_.path.files.push_back(f.name);
+        out_.path.files.push_back(f.name());
         f.pathIndex = std::uint32_t(out_.path.files.size() - 1);
         curFile_ = int(files_.size() - 1);
-        prescan(f);
+        matchStructures(f);
         curFile_ = saved;
         curLineNo_ = savedLine;
         line_ = savedText;
@@ -1082,10 +911,9 @@ private:
                     const int jcol = int(i) + 1;
                     const long target = std::lround(readRealValue(i));
                     if (!cond) return false;
-                    auto it = f.nLines.find(target);
-                    if (it == f.nLines.end())
+                    fanucJump = f.lineOfN(target);
+                    if (fanucJump < 0)
                         fail(jcol, "GOTO to a missing N" + std::to_string(target), tokenAt(jcol));
-                    fanucJump = it->second;
                     return true;
                 }
                 fail(col, "IF needs THEN or GOTO", tokenAt(col));
@@ -1096,10 +924,9 @@ private:
                     i += 2;
                     const int jcol = int(i) + 1;
                     const long target = std::lround(readRealValue(i));
-                    auto it = f.nLines.find(target);
-                    if (it == f.nLines.end())
+                    fanucJump = f.lineOfN(target);
+                    if (fanucJump < 0)
                         fail(jcol, "GOTO to a missing N" + std::to_string(target), tokenAt(jcol));
-                    fanucJump = it->second;
                     return true;
                 }
                 fail(col, "unknown word", tokenAt(col));
@@ -2008,7 +1835,7 @@ Program readGcode(const std::string& path, const GcodeOptions& options) {
     Program program;
     Interpreter interp(options, program);
     if (!options.toolTableFile.empty()) interp.loadToolTable(options.toolTableFile);
-    interp.run(path, detail::readTextFile(path));
+    interp.run(path, detail::readFile(options.files, path));
     interp.finish();
     return program;
 }
@@ -2017,7 +1844,7 @@ Program readGcodeFiles(const std::vector<std::string>& paths, const GcodeOptions
     Program program;
     Interpreter interp(options, program);
     if (!options.toolTableFile.empty()) interp.loadToolTable(options.toolTableFile);
-    for (const std::string& p : paths) interp.run(p, detail::readTextFile(p));
+    for (const std::string& p : paths) interp.run(p, detail::readFile(options.files, p));
     interp.finish();
     return program;
 }

@@ -50,6 +50,9 @@ struct GcodeOptions {
     /// so no move sweeps from a guessed origin through the stock (one warning says so). LinuxCNC
     /// itself starts wherever the machine is, commonly (0, 0, 0).
     std::optional<Vec3> startPosition;
+    /// Where named files are read from: the tool table, subroutine files, the files of
+    /// readGcodeFiles and of a project (runProject). Empty: the file system.
+    FileSource files;
 };
 
 /// @brief Interprets G-code text.

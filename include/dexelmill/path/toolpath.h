@@ -5,7 +5,9 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -111,5 +113,10 @@ struct Program {
         for (Diagnostic& d : next.diagnostics) diagnostics.push_back(std::move(d));
     }
 };
+
+/// @brief Where the readers get the text of a file they are told to read (a project's programs,
+/// subroutine files, tool tables): returns the file's text, or std::nullopt when there is no such
+/// file. An empty FileSource reads the file system. Tests and fuzz targets give a map instead.
+using FileSource = std::function<std::optional<std::string>(const std::string& path)>;
 
 }  // namespace dexelmill

@@ -92,13 +92,33 @@ std::string readTextFile(const std::string& path) {
     std::ostringstream ss;
     ss << in.rdbuf();
     if (in.bad()) throw Error("cannot read '" + path + "'");
-    std::string text = ss.str();
+    return normaliseText(ss.str());
+}
+
+std::string normaliseText(std::string text) {
     // A UTF-8 byte-order mark, as Windows editors write it, is not part of the text.
     if (text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);
     // Lone CR line ends (old Mac editors) become LF; CRLF stays, and the readers drop its CR.
     for (std::size_t i = text.find('\r'); i != std::string::npos; i = text.find('\r', i + 1))
         if (i + 1 == text.size() || text[i + 1] != '\n') text[i] = '\n';
     return text;
+}
+
+std::optional<std::string> readFileIfAny(const FileSource& files, const std::string& path) {
+    if (files) {
+        std::optional<std::string> text = files(path);
+        if (text) return normaliseText(std::move(*text));
+        return std::nullopt;
+    }
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) return std::nullopt;
+    return readTextFile(path);
+}
+
+std::string readFile(const FileSource& files, const std::string& path) {
+    std::optional<std::string> text = readFileIfAny(files, path);
+    if (!text) throw Error("cannot open '" + path + "': no such file");
+    return std::move(*text);
 }
 
 std::string directoryOf(const std::string& path) {
