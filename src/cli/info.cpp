@@ -5,6 +5,7 @@
 #include "commands.h"
 #include "dexelmill/io/vdb_io.h"
 #include "dexelmill/job/memory.h"
+#include "dexelmill/job/simulate.h"
 #include "dexelmill/path/camotics.h"
 #include "dexelmill/surface/levelset.h"
 
@@ -71,6 +72,7 @@ int runInfo(const std::string& file) {
         if (!ls.source().empty()) std::printf("%-14s %s\n", "source", ls.source().c_str());
         return 0;
     }
+    const GcodeOptions gcode = jobGcodeOptions(SimulateOptions().chordTolerance, memoryBudget());
     if (endsWith(file, ".camotics")) {
         const Project project = readCamoticsProject(file);
         std::printf("%-14s CAMotics project, %s units\n", "kind", project.metric ? "metric" : "imperial");
@@ -80,11 +82,9 @@ int runInfo(const std::string& file) {
         else
             printBox("workpiece", project.workpiece.bounds);
         if (project.resolution > 0) std::printf("%-14s %.6g mm\n", "resolution", project.resolution);
-        printProgram(runProject(project));
+        printProgram(runProject(project, gcode));
         return 0;
     }
-    GcodeOptions gcode;
-    gcode.maxMoves = movesThatFit(memoryBudget(), gcode.maxMoves);
     printProgram(readProgram(file, gcode));
     return 0;
 }

@@ -197,6 +197,14 @@ Simulation runSimulation(const SimulateOptions& o) {
     return arena.execute([&] { return runStages(o); });
 }
 
+GcodeOptions jobGcodeOptions(double chordTolerance, const MemoryBudget& budget) {
+    GcodeOptions gcode;
+    gcode.chordTolerance = chordTolerance;
+    // The moves a program makes (its loops included) must fit in memory.
+    gcode.maxMoves = movesThatFit(budget, gcode.maxMoves);
+    return gcode;
+}
+
 namespace {
 
 /// Before the rebuild: the level set and mesh of the cut part, from its crossings, must fit.
@@ -236,11 +244,9 @@ Simulation runStages(const SimulateOptions& o) {
 
     // Parse.
     auto t = Clock::now();
-    GcodeOptions gcode;
-    gcode.chordTolerance = o.chordTolerance;
-    // The moves a program makes (its loops included) must fit in memory.
     const MemoryBudget budget = memoryBudget(o.maxMemoryBytes);
-    gcode.maxMoves = movesThatFit(budget, gcode.maxMoves);
+    GcodeOptions gcode = jobGcodeOptions(o.chordTolerance, budget);
+    gcode.files = o.files;
     AptOptions apt;
     apt.chordTolerance = o.chordTolerance;
     std::optional<Project> project;
@@ -250,7 +256,7 @@ Simulation runStages(const SimulateOptions& o) {
     } else if (lowerExtension(o.inputs[0]) == ".camotics") {
         // A project, and optionally programs that replace its own (its tools, workpiece and
         // resolution still apply).
-        project = readCamoticsProject(o.inputs[0]);
+        project = readCamoticsProject(o.inputs[0], o.files);
         if (o.inputs.size() > 1) project->files.assign(o.inputs.begin() + 1, o.inputs.end());
         for (const std::string& f : project->files)
             if (lowerExtension(f) == ".camotics") throw Error("'" + f + "': only the first input may be a project");

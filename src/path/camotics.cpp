@@ -185,8 +185,8 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
     return p;
 }
 
-Project readCamoticsProject(const std::string& path) {
-    return parseCamoticsProject(detail::readTextFile(path), path, detail::directoryOf(path));
+Project readCamoticsProject(const std::string& path, const FileSource& files) {
+    return parseCamoticsProject(detail::readFile(files, path), path, detail::directoryOf(path));
 }
 
 Program runProject(const Project& project, const GcodeOptions& options) {
@@ -203,7 +203,7 @@ Program runProject(const Project& project, const GcodeOptions& options) {
         program.append(std::move(part));
     };
     for (const std::string& f : project.files) {
-        const std::string text = detail::readTextFile(f);
+        const std::string text = detail::readFile(o.files, f);
         if (detectProgramKind(f, text) == ProgramKind::Apt) {
             flush();
             AptOptions a;
@@ -286,7 +286,7 @@ ProgramKind detectProgramKind(const std::string& path, std::string_view text) {
 }
 
 Program readProgram(const std::string& path, const GcodeOptions& gcode, const AptOptions& apt) {
-    const std::string text = detail::readTextFile(path);
+    const std::string text = detail::readFile(gcode.files, path);
     switch (detectProgramKind(path, text)) {
     case ProgramKind::Camotics: {
         const Project project = parseCamoticsProject(text, path, detail::directoryOf(path));

@@ -2,12 +2,17 @@
 // messages, and paths that are not files (issue 15).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "dexelmill/error.h"
 #include "dexelmill/path/camotics.h"
+#include "dexelmill/path/gcode.h"
 
 using namespace dexelmill;
 namespace fs = std::filesystem;
@@ -117,4 +122,41 @@ TEST_CASE("files: control bytes in a message are escaped, and NUL does not cut i
     CHECK_THAT(esc, Catch::Matchers::Contains("\\x1b"));
     CHECK(esc.find('\x1b') == std::string::npos);
     CHECK(printable("a\tb\x7f") == "a\tb\\x7f");
+}
+
+TEST_CASE("files: a FileSource serves a project's programs, subroutine files and tool tables", "[path][files]") {
+    // The same project read from disk and from a map gives the same moves.
+    const std::map<std::string, std::string> files = {
+        {"p.camotics", "{\"units\": \"metric\", \"files\": [\"a.ngc\", \"b.apt\"]}"},
+        {"a.ngc", "G21 G90\nG0 X0 Y0 Z5\no<step> call [3]\nM2\n"},
+        {"step.ngc", "o<step> sub\nG1 X#1 Z-1 F100\no<step> endsub\n"},
+        {"b.apt", "\xEF\xBB\xBF" "CUTTER/6\rFROM/0,0,5\rGOTO/4,0,-1\r"},
+        {"tools.tbl", "T1 P1 D6 Z0 ;six\n"},
+    };
+    const Folder dir("source");
+    for (const auto& [name, text] : files) dir.write(name, text);
+    const Program fromDisk = readProgram(dir.path("p.camotics"));
+
+    std::vector<std::string> asked;
+    GcodeOptions options;
+    options.files = [&](const std::string& path) -> std::optional<std::string> {
+        asked.push_back(path);
+        const auto it = files.find(path);
+        if (it == files.end()) return std::nullopt;
+        return it->second;
+    };
+    const Program fromMap = readProgram("p.camotics", options);
+    REQUIRE(fromMap.path.moves.size() == 2);  // the subroutine's G1 and the APT GOTO
+    CHECK(movesOf(fromMap) == movesOf(fromDisk));
+    // The subroutine file was looked up beside its caller, in the map; the BOM and CR of the APT
+    // file were normalised as on disk.
+    CHECK(std::count(asked.begin(), asked.end(), "step.ngc") == 1);
+
+    options.toolTableFile = "tools.tbl";
+    CHECK(parseGcode("T1 M6\n", "t.ngc", options).tools.count(1) == 1);
+    options.toolTableFile = "none.tbl";
+    CHECK_THROWS_WITH(parseGcode("T1 M6\n", "t.ngc", options), Catch::Matchers::Contains("'none.tbl': no such file"));
+    // A program that names a missing file says which.
+    options.toolTableFile.clear();
+    CHECK_THROWS_WITH(readGcodeFiles({"a.ngc", "gone.ngc"}, options), Catch::Matchers::Contains("'gone.ngc'"));
 }

@@ -14,6 +14,7 @@
 
 #include "dexelmill/geometry/types.h"
 #include "dexelmill/job/memory.h"
+#include "dexelmill/path/gcode.h"
 #include "dexelmill/path/toolpath.h"
 #include "dexelmill/stock/tridexel.h"
 #include "dexelmill/surface/levelset.h"
@@ -35,6 +36,8 @@ struct SimulateOptions {
     std::vector<std::string> inputs;
     /// A program already in memory (used instead of `inputs` when set, e.g. by studies).
     std::optional<Program> program;
+    /// Where the inputs and the files they name are read from. Empty: the file system.
+    FileSource files;
 
     /// The stock: a box, or a file (STL or VDB) ray-cast into tri-dexels. With neither, the
     /// project's workpiece, else the programs' cutting extent with a margin.
@@ -149,6 +152,10 @@ struct Simulation {
 /// are then incomplete).
 /// @throw Error (ParseError with a location for bad programs) on any input or processing error.
 Simulation runSimulation(const SimulateOptions& options);
+
+/// @brief How a job reads G-code: the chord tolerance, the reader's own limits, and no more
+/// moves than `budget` holds. `simulate`, `info` and the fuzz targets all read with these.
+GcodeOptions jobGcodeOptions(double chordTolerance, const MemoryBudget& budget);
 
 /// @brief Runs the whole job: runSimulation, then writes the requested files.
 /// @throw Error as runSimulation, or when a file cannot be written; no output file is then left

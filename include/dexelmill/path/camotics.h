@@ -48,11 +48,12 @@ struct Project {
 Project parseCamoticsProject(std::string_view text, const std::string& fileName,
                              const std::string& directory);
 
-/// @brief Reads a `.camotics` project file.
+/// @brief Reads a `.camotics` project file, from `files` when it is given.
 /// @throw Error if the file cannot be read; ParseError as parseCamoticsProject.
-Project readCamoticsProject(const std::string& path);
+Project readCamoticsProject(const std::string& path, const FileSource& files = {});
 
-/// @brief Runs a project's programs in order (T changes the tool, as in CAMotics) and returns
+/// @brief Runs a project's programs in order (T changes the tool, as in CAMotics), read from
+/// `options.files`, and returns
 /// them as one program whose tools are the project's tools. Tools the programs call but the
 /// project does not define give a warning.
 Program runProject(const Project& project, const GcodeOptions& options = {});
@@ -73,7 +74,7 @@ enum class ProgramKind { Gcode, Apt, Camotics };
 ProgramKind detectProgramKind(const std::string& path, std::string_view text);
 
 /// @brief Reads any program file: G-code, APT CL, or a CAMotics project (whose programs run in
-/// order with the project's tools).
+/// order with the project's tools). Files are read from `gcode.files`.
 /// @throw Error if the file cannot be read; ParseError for malformed input.
 Program readProgram(const std::string& path, const GcodeOptions& gcode = {},
                     const AptOptions& apt = {});
