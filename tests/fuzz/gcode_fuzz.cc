@@ -1,20 +1,19 @@
-// libFuzzer target: the G-code reader must either read a program or throw dexelmill::Error.
+// libFuzzer target: the G-code reader, with the command line's limits, must either read a program
+// or throw dexelmill::Error. Subroutine files come from the input (harness.h).
 #include <cstddef>
 #include <cstdint>
 #include <string_view>
 
 #include "dexelmill/error.h"
 #include "dexelmill/path/gcode.h"
+#include "harness.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    dexelmill::GcodeOptions options;
-    options.chordTolerance = 0.01;
-    options.maxBlocks = 20000;
-    options.maxArcSegments = 20000;
-    options.maxMoves = 200000;
-    options.maxCallDepth = 16;
+    const auto files = fuzz::splitFiles(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.ngc");
+    dexelmill::GcodeOptions options = fuzz::gcodeOptions();
+    options.files = fuzz::sourceOf(files);
     try {
-        dexelmill::parseGcode(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz.ngc", options);
+        dexelmill::parseGcode(files.at("fuzz.ngc"), "fuzz.ngc", options);
     } catch (const dexelmill::Error&) {
     }
     return 0;
