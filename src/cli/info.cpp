@@ -72,7 +72,8 @@ int runInfo(const std::string& file) {
         if (!ls.source().empty()) std::printf("%-14s %s\n", "source", ls.source().c_str());
         return 0;
     }
-    const GcodeOptions gcode = jobGcodeOptions(SimulateOptions().chordTolerance, memoryBudget());
+    const MemoryBudget budget = memoryBudget();
+    const GcodeOptions gcode = jobGcodeOptions(SimulateOptions().chordTolerance, budget);
     if (endsWith(file, ".camotics")) {
         const Project project = readCamoticsProject(file);
         std::printf("%-14s CAMotics project, %s units\n", "kind", project.metric ? "metric" : "imperial");
@@ -85,7 +86,7 @@ int runInfo(const std::string& file) {
         printProgram(runProject(project, gcode));
         return 0;
     }
-    printProgram(readProgram(file, gcode));
+    printProgram(readProgram(file, gcode, jobAptOptions(SimulateOptions().chordTolerance, budget)));
     return 0;
 }
 

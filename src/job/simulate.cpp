@@ -197,12 +197,34 @@ Simulation runSimulation(const SimulateOptions& o) {
     return arena.execute([&] { return runStages(o); });
 }
 
+namespace {
+
+/// Why a job allows no more than `limit` moves, when the memory budget sets it.
+std::string movesReason(const MemoryBudget& budget, std::size_t limit, std::size_t readerLimit) {
+    if (limit >= readerLimit) return {};
+    return "the moves of a longer program would not fit in the memory this job may use, " + formatBytes(double(budget.bytes)) +
+           " (" + budget.source + ")";
+}
+
+}  // namespace
+
 GcodeOptions jobGcodeOptions(double chordTolerance, const MemoryBudget& budget) {
     GcodeOptions gcode;
     gcode.chordTolerance = chordTolerance;
     // The moves a program makes (its loops included) must fit in memory.
-    gcode.maxMoves = movesThatFit(budget, gcode.maxMoves);
+    const std::size_t readerLimit = gcode.maxMoves;
+    gcode.maxMoves = movesThatFit(budget, readerLimit);
+    gcode.maxMovesReason = movesReason(budget, gcode.maxMoves, readerLimit);
     return gcode;
+}
+
+AptOptions jobAptOptions(double chordTolerance, const MemoryBudget& budget) {
+    AptOptions apt;
+    apt.chordTolerance = chordTolerance;
+    const std::size_t readerLimit = apt.maxMoves;
+    apt.maxMoves = movesThatFit(budget, readerLimit);
+    apt.maxMovesReason = movesReason(budget, apt.maxMoves, readerLimit);
+    return apt;
 }
 
 namespace {
@@ -247,8 +269,7 @@ Simulation runStages(const SimulateOptions& o) {
     const MemoryBudget budget = memoryBudget(o.maxMemoryBytes);
     GcodeOptions gcode = jobGcodeOptions(o.chordTolerance, budget);
     gcode.files = o.files;
-    AptOptions apt;
-    apt.chordTolerance = o.chordTolerance;
+    const AptOptions apt = jobAptOptions(o.chordTolerance, budget);
     std::optional<Project> project;
     Program& program = sim.program;
     if (o.program) {

@@ -375,6 +375,7 @@ private:
 
     void emit(const Vec3& to, bool rapid, const Statement& s) {
         reachable(to, s);
+        if (out_.path.moves.size() >= opt_.maxMoves) fail(s, detail::tooManyMoves(opt_.maxMoves, opt_.maxMovesReason));
         Move m;
         m.start = pos_;
         m.end = to;

@@ -209,6 +209,8 @@ Program runProject(const Project& project, const GcodeOptions& options) {
             AptOptions a;
             a.chordTolerance = o.chordTolerance;
             a.initialInches = o.initialInches;
+            a.maxMoves = o.maxMoves - std::min(o.maxMoves, program.path.moves.size());
+            a.maxMovesReason = o.maxMovesReason;
             program.append(parseApt(text, f, a));
         } else {
             gcodeFiles.push_back(f);

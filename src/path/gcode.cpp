@@ -1282,8 +1282,7 @@ private:
             fail(0, "move to " + detail::formatPoint(target) + " mm, beyond the 1e9 mm a program may reach",
                  std::string(line_.substr(0, 40)));
         if (out_.path.moves.size() >= opt_.maxMoves)
-            fail(0, "program makes more than " + std::to_string(opt_.maxMoves) + " moves",
-                 std::string(line_.substr(0, 40)));
+            fail(0, detail::tooManyMoves(opt_.maxMoves, opt_.maxMovesReason), std::string(line_.substr(0, 40)));
         for (int a = 0; a < 3; ++a) known_[a] = known_[a] || target[a] != mpos_[a];
         if (!positionKnown_) {
             // Where the machine starts is not in the program: moves until X, Y and Z have all

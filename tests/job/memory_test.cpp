@@ -5,11 +5,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <optional>
 #include <string>
 
 #include "dexelmill/error.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/job/simulate.h"
+#include "dexelmill/path/gcode.h"
 #include "dexelmill/tool/builders.h"
 
 using namespace dexelmill;
@@ -148,4 +151,40 @@ TEST_CASE("memory: a cut part whose surface will not fit stops before the rebuil
                                  Catch::Matchers::Contains("a spacing of 0.1 mm") &&
                                  Catch::Matchers::Contains("mm or more fits"));
     }
+}
+
+TEST_CASE("memory: a program whose moves will not fit stops in the reader, which says why", "[job][memory][errors]") {
+    // A loop of 100,000 moves (G-code) and 20,000 GOTOs (APT), against a budget that leaves room
+    // for a few thousand moves.
+    const std::map<std::string, std::string> files = {
+        {"loop.ngc", "G21 G90\nG0 X0 Y0 Z5\no1 repeat [100000]\nG1 X1\nG1 X0\no1 endrepeat\nM2\n"},
+        {"long.apt", [] {
+             std::string t = "CUTTER/6\nFROM/0,0,5\n";
+             for (int i = 0; i < 20000; ++i) t += "GOTO/" + std::to_string(i % 7) + ",0,-1\n";
+             return t;
+         }()},
+    };
+    for (const std::string input : {"loop.ngc", "long.apt"}) {
+        INFO(input);
+        SimulateOptions o;
+        o.inputs = {input};
+        o.files = [&](const std::string& path) -> std::optional<std::string> {
+            const auto it = files.find(path);
+            if (it == files.end()) return std::nullopt;
+            return it->second;
+        };
+        o.stockBox = Box{Vec3(-10.0), Vec3(10.0)};
+        o.resolution = 1.0;
+        o.defaultTool = flatEndMill(6.0);
+        o.maxMemoryBytes = residentBytes() + (std::size_t(1) << 20);
+        CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains(input + ":") &&
+                                                Catch::Matchers::Contains("program makes more than") &&
+                                                Catch::Matchers::Contains("would not fit in the memory this job may use") &&
+                                                Catch::Matchers::Contains("(--max-memory)"));
+    }
+    // Without a budget that binds, the reader's own limit speaks, and says nothing of memory.
+    GcodeOptions g;
+    g.maxMoves = 3;
+    CHECK_THROWS_WITH(parseGcode(files.at("loop.ngc"), "loop.ngc", g),
+                      Catch::Matchers::Contains("more than 3 moves") && !Catch::Matchers::Contains("memory"));
 }

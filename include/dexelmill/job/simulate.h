@@ -14,6 +14,7 @@
 
 #include "dexelmill/geometry/types.h"
 #include "dexelmill/job/memory.h"
+#include "dexelmill/path/apt.h"
 #include "dexelmill/path/gcode.h"
 #include "dexelmill/path/toolpath.h"
 #include "dexelmill/stock/tridexel.h"
@@ -156,6 +157,8 @@ Simulation runSimulation(const SimulateOptions& options);
 /// @brief How a job reads G-code: the chord tolerance, the reader's own limits, and no more
 /// moves than `budget` holds. `simulate`, `info` and the fuzz targets all read with these.
 GcodeOptions jobGcodeOptions(double chordTolerance, const MemoryBudget& budget);
+/// @brief The same for APT CL.
+AptOptions jobAptOptions(double chordTolerance, const MemoryBudget& budget);
 
 /// @brief Runs the whole job: runSimulation, then writes the requested files.
 /// @throw Error as runSimulation, or when a file cannot be written; no output file is then left

@@ -24,6 +24,11 @@ struct AptOptions {
     bool initialInches = false;
     /// Most chords one arc may become.
     std::size_t maxArcSegments = 1'000'000;
+    /// Most moves a program may make before the reader refuses it.
+    std::size_t maxMoves = 200'000'000;
+    /// What set maxMoves, for the message when a program reaches it (empty: the reader's own
+    /// limit). A job sets it to the memory budget that holds that many moves.
+    std::string maxMovesReason;
 };
 
 /// @brief Interprets APT CL text.

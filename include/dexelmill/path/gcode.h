@@ -45,6 +45,9 @@ struct GcodeOptions {
     std::size_t maxArcSegments = 1'000'000;
     /// Most moves a program may make (loops and repeats included) before the reader refuses it.
     std::size_t maxMoves = 200'000'000;
+    /// What set maxMoves, for the message when a program reaches it (empty: the reader's own
+    /// limit). A job sets it to the memory budget that holds that many moves.
+    std::string maxMovesReason;
     /// Where the machine is when the program starts (machine coordinates, mm). Unset, the start
     /// is unknown: moves only establish the position until X, Y and Z have all been programmed,
     /// so no move sweeps from a guessed origin through the stock (one warning says so). LinuxCNC

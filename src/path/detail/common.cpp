@@ -131,6 +131,12 @@ std::string joinPath(const std::string& dir, const std::string& name) {
     return dir + "/" + name;
 }
 
+std::string tooManyMoves(std::size_t limit, const std::string& reason) {
+    std::string m = "program makes more than " + std::to_string(limit) + " moves";
+    if (!reason.empty()) m += ": " + reason;
+    return m;
+}
+
 std::string formatPoint(const Vec3& p) {
     char buf[96];
     std::snprintf(buf, sizeof buf, "(%.6g, %.6g, %.6g)", p.x, p.y, p.z);

@@ -40,6 +40,10 @@ inline char upper(char c) { return (c >= 'a' && c <= 'z') ? char(c - 'a' + 'A') 
 std::string directoryOf(const std::string& path);
 std::string joinPath(const std::string& dir, const std::string& name);
 
+/// @brief The message for a program that makes more than `limit` moves; `reason` says what set
+/// the limit (empty: the reader's own).
+std::string tooManyMoves(std::size_t limit, const std::string& reason);
+
 /// @brief A point as "(x, y, z)", six significant digits each.
 std::string formatPoint(const Vec3& p);
 
