@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 #include "dexelmill/error.h"
@@ -52,8 +53,8 @@ MachinedSolidOracle::MachinedSolidOracle(const Box& stock, const ToolPath& path,
     for (std::size_t i = 0; i < moves_.size(); ++i) {
         int lo[3], hi[3];
         for (int a = 0; a < 3; ++a) {
-            lo[a] = std::clamp(int(std::floor((moves_[i].bounds.lo[a] - stock_.lo[a]) / bucketSize_[a])), 0, nb_[a] - 1);
-            hi[a] = std::clamp(int(std::floor((moves_[i].bounds.hi[a] - stock_.lo[a]) / bucketSize_[a])), 0, nb_[a] - 1);
+            lo[a] = bucketAlong(a, moves_[i].bounds.lo[a]);
+            hi[a] = bucketAlong(a, moves_[i].bounds.hi[a]);
         }
         for (int z = lo[2]; z <= hi[2]; ++z)
             for (int y = lo[1]; y <= hi[1]; ++y)
@@ -63,10 +64,16 @@ MachinedSolidOracle::MachinedSolidOracle(const Box& stock, const ToolPath& path,
     }
 }
 
+int MachinedSolidOracle::bucketAlong(int a, double v) const {
+    // Clamped in double before the conversion: a move may reach 1e9 mm, far past int's range
+    // of buckets.
+    const double b = std::floor((v - stock_.lo[a]) / bucketSize_[a]);
+    return int(std::clamp(b, 0.0, double(nb_[a] - 1)));
+}
+
 std::size_t MachinedSolidOracle::bucketOf(const Vec3& p) const {
     int idx[3];
-    for (int a = 0; a < 3; ++a)
-        idx[a] = std::clamp(int(std::floor((p[a] - stock_.lo[a]) / bucketSize_[a])), 0, nb_[a] - 1);
+    for (int a = 0; a < 3; ++a) idx[a] = bucketAlong(a, p[a]);
     return std::size_t(idx[0]) + std::size_t(nb_[0]) * (idx[1] + std::size_t(nb_[1]) * idx[2]);
 }
 
@@ -75,11 +82,12 @@ bool MachinedSolidOracle::inSweep(const MoveRef& m, const Vec3& p) const {
     const Vec3 q0 = p - m.start;
     // Dense samples of u, then a golden-section refinement around the best one.
     const double len = std::sqrt(glm::dot(m.feed, m.feed));
-    const int n = std::max(1, int(std::ceil(len / step_)));
+    // 64-bit: a move across the stock from 1e9 mm away has more samples than int counts.
+    const std::int64_t n = std::max<std::int64_t>(1, std::int64_t(std::ceil(len / step_)));
     double best = 1e300;
-    int bestK = 0;
-    for (int k = 0; k <= n; ++k) {
-        const double g = outside(*m.tool, m.axis, q0 - (double(k) / n) * m.feed);
+    std::int64_t bestK = 0;
+    for (std::int64_t k = 0; k <= n; ++k) {
+        const double g = outside(*m.tool, m.axis, q0 - (double(k) / double(n)) * m.feed);
         if (g <= 0) return true;
         if (g < best) {
             best = g;
@@ -87,7 +95,7 @@ bool MachinedSolidOracle::inSweep(const MoveRef& m, const Vec3& p) const {
         }
     }
     if (n == 1 && len == 0) return false;
-    double a = double(std::max(bestK - 1, 0)) / n, b = double(std::min(bestK + 1, n)) / n;
+    double a = double(std::max<std::int64_t>(bestK - 1, 0)) / double(n), b = double(std::min(bestK + 1, n)) / double(n);
     const double phi = 0.5 * (std::sqrt(5.0) - 1);
     double c = b - phi * (b - a), d = a + phi * (b - a);
     double gc = outside(*m.tool, m.axis, q0 - c * m.feed), gd = outside(*m.tool, m.axis, q0 - d * m.feed);

@@ -227,7 +227,9 @@ private:
                         int lastBlock = std::numeric_limits<int>::min();
                         for (const Segment& s : fam.segments(ib, ic)) {
                             for (double e : {double(s.lo), double(s.hi)}) {
-                                // Points (i + 1/2) h within reach_ of e.
+                                // Points (i + 1/2) h within reach_ of e. Segment ends never leave
+                                // the stock's box (cuts only remove), so these indexes lie within
+                                // the lattice's n, which Lattice::fromBox keeps below INT_MAX / 2.
                                 const int i0 = int(std::ceil((e - reach_) / h_ - 0.5));
                                 const int i1 = int(std::floor((e + reach_) / h_ - 0.5));
                                 for (int blk = std::max(blockOf(i0), lastBlock);

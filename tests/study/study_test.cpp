@@ -53,6 +53,18 @@ TEST_CASE("the machined-solid oracle agrees with a groove written by hand", "[st
     CHECK(inside > 5000);
 }
 
+TEST_CASE("the oracle takes a move from as far as a program may reach", "[study]") {
+    // The move's box spans 1e9 mm, far more buckets than an int counts: they are clamped to the
+    // stock before any conversion. Points off the move's path are decided without sampling it.
+    Program far = groove();
+    far.path.moves[0].start = Vec3(-1e9, 10, 7);
+    far.path.moves[0].end = Vec3(1e9, 10, 7);
+    const MachinedSolidOracle oracle(Box{Vec3(0.0), Vec3(30, 20, 10)}, far.path, far.tools, 0.5);
+    CHECK(oracle.inside(Vec3(15, 2, 5)));
+    CHECK(oracle.inside(Vec3(1, 19, 9)));
+    CHECK_FALSE(oracle.inside(Vec3(15, 2, 12)));
+}
+
 TEST_CASE("surface deviation converges as the spacing halves", "[study]") {
     StudyOptions o;
     o.job.program = groove();

@@ -42,6 +42,7 @@ private:
     };
     bool inSweep(const MoveRef& m, const Vec3& p) const;
     std::size_t bucketOf(const Vec3& p) const;
+    int bucketAlong(int axis, double v) const;
 
     Box stock_;
     double step_;
