@@ -50,6 +50,9 @@ TEST_CASE("gcode source: lines without their ends, O-word lines and N numbers", 
     CHECK(f.oword(9)->kind == OKind::Label);
     CHECK(f.oword(9)->label == "100");
 
+    // Every line but the blank one holds more than a comment.
+    CHECK(f.contentLines() == 10);
+    CHECK(SourceFile("c.ngc", "(a)\n  ; b\n\n\t\nG0 X1 (c)\n").contentLines() == 1);
     CHECK(f.lineOfN(10) == 1);
     CHECK(f.lineOfN(20) == 5);
     CHECK(f.lineOfN(30) == -1);

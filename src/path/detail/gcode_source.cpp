@@ -16,13 +16,14 @@ SourceFile::SourceFile(std::string name, std::string text) : name_(std::move(nam
         starts_.push_back(e + 1);
     starts_.push_back(text_.size() + 1);
     hasOWord_.assign(starts_.size() - 1, false);
+    bool seenContent = false;
     for (int k = 0; k < lineCount(); ++k) {
         const std::string_view s = line(k);
         const std::size_t i = skipSpaces(s, 0);
-        if (i < s.size()) {
-            startsWithPercent_ = s[i] == '%';
-            break;
-        }
+        if (i == s.size()) continue;
+        if (!seenContent) startsWithPercent_ = s[i] == '%';
+        seenContent = true;
+        if (s[i] != '(' && s[i] != ';') ++contentLines_;
     }
     // O-words, N numbers and Fanuc WHILE/END.
     for (int k = 0; k < lineCount(); ++k) classify(k);

@@ -66,6 +66,9 @@ public:
     }
     /// @brief The first line with content is '%' (the program is wrapped in '%' lines).
     bool startsWithPercent() const { return startsWithPercent_; }
+    /// @brief Lines that hold more than spaces and a comment: a first guess at the moves the file
+    /// makes, which blank and comment lines do not inflate.
+    std::size_t contentLines() const { return contentLines_; }
 
     std::uint32_t pathIndex = 0;  ///< index in ToolPath::files
 
@@ -81,6 +84,7 @@ private:
     std::map<int, OWord> owords_;
     std::unordered_map<long, int> nLines_;  ///< N number -> line index (Fanuc GOTO)
     bool startsWithPercent_ = false;
+    std::size_t contentLines_ = 0;
 };
 
 /// @brief Index of the first character at or after i that is not a space or a tab.
