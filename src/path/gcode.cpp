@@ -402,7 +402,10 @@ private:
         pending_.clear();
         int fanucJump = -1;
         if (!parseBlock(b, fanucJump, f, pc)) return pc + 1;  // IF false / comment-only
-        if (fanucJump != -1) return fanucJump;
+        if (fanucJump != -1) {
+            if (fanucJump <= pc) backEdge(pc);
+            return fanucJump;
+        }
         return executeBlock(b, f, pc);
     }
 
@@ -429,7 +432,7 @@ private:
             if (frames_.empty() || frames_.back().fanuc)
                 fail(1, "endsub/return outside a subroutine call", std::string(line_.substr(0, 40)));
             pos = skipSpaces(line_, pos);
-            if (pos < line_.size() && line_[pos] == '[') named_["_value"] = readRealValue(pos);
+            if (pos < line_.size() && line_[pos] == '[') storeNamed(named_, "_value", readRealValue(pos));
             return popFrame();
         }
         case OKind::Call:
@@ -437,9 +440,14 @@ private:
         case OKind::Do:
             return pc + 1;
         case OKind::While:
-            if (li.whileIsTail) return condition() ? li.match + 1 : pc + 1;
+            if (li.whileIsTail) {
+                if (!condition()) return pc + 1;
+                backEdge(pc);
+                return li.match + 1;
+            }
             return condition() ? pc + 1 : li.match + 1;
         case OKind::EndWhile:
+            backEdge(pc);
             return li.match;  // back to the head, which tests again
         case OKind::If: {
             if (condition()) return pc + 1;
@@ -478,7 +486,10 @@ private:
                     const int end = h.match;
                     if (li.kind == OKind::Break) return end + 1;
                     if (h.kind == OKind::Do) return end;  // test the condition
-                    if (h.kind == OKind::While) return k;
+                    if (h.kind == OKind::While) {
+                        backEdge(pc);
+                        return k;
+                    }
                     long& c = frameCounters()[k];
                     return --c > 0 ? k + 1 : end + 1;
                 }
@@ -492,6 +503,7 @@ private:
         }
         case OKind::FanucEnd:
             if (li.match < 0) fail(1, "END without WHILE", std::string(line_.substr(0, 40)));
+            backEdge(pc);
             return li.match;
         default:
             return pc + 1;
@@ -572,9 +584,10 @@ private:
         fr.savedNumbered = true;
         for (int k = 1; k <= 30; ++k) {
             fr.saved[std::size_t(k)] = params_[std::size_t(k)];
-            params_[std::size_t(k)] = args[std::size_t(k)];
+            store(params_[std::size_t(k)], args[std::size_t(k)]);
         }
         frames_.push_back(std::move(fr));
+        ++flowEpoch_;
         const Sub& s = it->second;
         curFile_ = s.file;
         return s.start + 1;
@@ -605,10 +618,89 @@ private:
     int popFrame() {
         Frame fr = std::move(frames_.back());
         frames_.pop_back();
+        ++flowEpoch_;
         curFile_ = fr.file;
         if (fr.savedNumbered)
-            for (int k = 1; k <= 30; ++k) params_[std::size_t(k)] = fr.saved[std::size_t(k)];
+            for (int k = 1; k <= 30; ++k) store(params_[std::size_t(k)], fr.saved[std::size_t(k)]);
         return fr.returnLine;
+    }
+
+    // ---- endless loops ----
+    /// What a loop's conditions can read: the parameters (the numbered ones also hold the work
+    /// offsets, the coordinate system and G92), named and local ones, the position in the program
+    /// frame (#5420..#5422) and the tool (#5400); and which subroutine activation runs.
+    struct LoopState {
+        std::uint64_t paramWrites = 0;
+        std::uint64_t flowEpoch = 0;
+        int tool = 0;
+        Vec3 position;
+        bool operator==(const LoopState& o) const {
+            return paramWrites == o.paramWrites && flowEpoch == o.flowEpoch && tool == o.tool && position == o.position;
+        }
+    };
+    /// The program frame as an affine map (units, offsets, tilted plane): the images of the
+    /// origin and the unit points. Taken only while the rest of LoopState stays put.
+    using FrameMap = std::array<Vec3, 4>;
+    struct LoopWatch {
+        LoopState last;
+        std::optional<FrameMap> frame;
+        int unchangedPasses = 0;
+    };
+
+    FrameMap frameMap() const {
+        FrameMap m;
+        m[0] = toProgram(Vec3(0.0)) / units_;
+        for (int a = 0; a < 3; ++a) {
+            Vec3 e(0.0);
+            e[a] = 1.0;
+            m[std::size_t(a) + 1] = toProgram(e) / units_;
+        }
+        return m;
+    }
+
+    /// At the jump from line pc back to its loop's head. The interpreter is deterministic, and
+    /// the path a pass takes through the loop depends only on what LoopState and the frame hold.
+    /// If two passes in a row change none of it, whatever else they changed (a modal code, an
+    /// offset taken from a parameter) the next pass sets again to the same value, so the whole
+    /// state repeats and the loop would run until the block limit: it stops here instead.
+    void backEdge(int pc) {
+        const LoopState now{paramWrites_, flowEpoch_, toolInSpindle_, mpos_};
+        const std::uint64_t key = (std::uint64_t(std::uint32_t(curFile_)) << 32) | std::uint32_t(pc);
+        // The innermost loop takes most back edges: its watch is kept at hand (references to
+        // an unordered_map's elements survive rehashing).
+        if (key != lastLoopKey_ || !lastLoop_) {
+            const auto [it, first] = loops_.try_emplace(key, LoopWatch{now, std::nullopt, 0});
+            lastLoopKey_ = key;
+            lastLoop_ = &it->second;
+            if (first) return;
+        }
+        LoopWatch& w = *lastLoop_;
+        if (!(w.last == now)) {
+            // The common case, a loop that counts: no need to look at the frame.
+            w.last = now;
+            w.frame.reset();
+            w.unchangedPasses = 0;
+            return;
+        }
+        const FrameMap frame = frameMap();
+        // A pass whose frame was not taken counts as one that changed it.
+        w.unchangedPasses = w.frame && *w.frame == frame ? w.unchangedPasses + 1 : 0;
+        w.frame = frame;
+        if (w.unchangedPasses >= 2)
+            fail(1, "program does not terminate: this loop ran twice without changing a parameter, the "
+                    "position or the tool, so it would run forever",
+                 std::string(line_.substr(0, 40)));
+    }
+
+    /// Writes a parameter, counting the writes that change it (LoopState).
+    void store(double& slot, double v) {
+        if (!(slot == v)) ++paramWrites_;
+        slot = v;
+    }
+    void storeNamed(std::unordered_map<std::string, double>& table, const std::string& name, double v) {
+        const auto [it, created] = table.try_emplace(name, v);
+        if (created) ++paramWrites_;
+        else store(it->second, v);
     }
 
     // ---- parameters ----
@@ -634,14 +726,14 @@ private:
     void setParam(const ParamRef& r, double v) {
         if (!r.name.empty()) {
             if (!frames_.empty() && !frames_.back().fanuc && r.name[0] != '_')
-                frames_.back().locals[r.name] = v;
+                storeNamed(frames_.back().locals, r.name, v);
             else
-                named_[r.name] = v;
+                storeNamed(named_, r.name, v);
             return;
         }
         if (r.index == 3000)
             fail(r.col, "the program raises alarm #3000 = " + std::to_string(v), "#3000");
-        params_[std::size_t(r.index)] = v;
+        store(params_[std::size_t(r.index)], v);
     }
 
     ParamRef readParamRef(std::size_t& i) {
@@ -1234,6 +1326,7 @@ private:
         fr.repeatsLeft = repeats - 1;
         fr.fanuc = true;
         frames_.push_back(std::move(fr));
+        ++flowEpoch_;
         return it->second.start + 1;
     }
 
@@ -1246,6 +1339,7 @@ private:
         if (!fr.fanuc) fail(0, "M99 inside an O-word subroutine", "M99");
         if (fr.repeatsLeft > 0) {
             --fr.repeatsLeft;
+            ++flowEpoch_;
             return fr.subStart;
         }
         return popFrame();
@@ -1265,7 +1359,7 @@ private:
         static const int codes[] = {540, 550, 560, 570, 580, 590, 591, 592, 593};
         for (int k = 0; k < 9; ++k)
             if (codes[k] == code) coordSys_ = k;
-        params_[5220] = coordSys_ + 1;
+        store(params_[5220], coordSys_ + 1);
     }
 
     void changeTool(int tool) {
@@ -1373,7 +1467,7 @@ private:
                     g5x_[std::size_t(cs)][a] = v;
                 else
                     g5x_[std::size_t(cs)][a] = mpos_[a] - g92_[a] - v;
-                params_[std::size_t(5221 + 20 * cs + a)] = g5x_[std::size_t(cs)][a] / units_;
+                store(params_[std::size_t(5221 + 20 * cs + a)], g5x_[std::size_t(cs)][a] / units_);
             }
             return true;
         }
@@ -1398,7 +1492,7 @@ private:
         }
         case 281: case 301: {
             const int base = code == 281 ? 5161 : 5181;
-            for (int a = 0; a < 3; ++a) params_[std::size_t(base + a)] = mpos_[a] / units_;
+            for (int a = 0; a < 3; ++a) store(params_[std::size_t(base + a)], mpos_[a] / units_);
             return false;
         }
         case 520: case 920: {  // G52, G92
@@ -1413,7 +1507,7 @@ private:
                     g92_[a] = mpos_[a] - g5x_[std::size_t(coordSys_)][a] - v;
                 else
                     g92_[a] = v;
-                params_[std::size_t(5211 + a)] = g92_[a] / units_;
+                store(params_[std::size_t(5211 + a)], g92_[a] / units_);
             }
             // Offsets that change under a tilted plane would need the plane's frame.
             if (twp_ && g92_ != before)
@@ -1424,7 +1518,7 @@ private:
         case 921: case 922:
             g92_ = Vec3(0.0);
             if (code == 921)
-                for (int a = 0; a < 3; ++a) params_[std::size_t(5211 + a)] = 0.0;
+                for (int a = 0; a < 3; ++a) store(params_[std::size_t(5211 + a)], 0.0);
             return false;
         case 923:
             for (int a = 0; a < 3; ++a) g92_[a] = params_[std::size_t(5211 + a)] * units_;
@@ -1763,6 +1857,11 @@ private:
     Mat3 twpRot_;
     Vec3 twpOrigin_{0.0};
     int toolInSpindle_ = 0;
+    std::uint64_t paramWrites_ = 0;  ///< writes that changed a parameter
+    std::uint64_t flowEpoch_ = 0;    ///< subroutine calls, returns and repeats so far
+    std::unordered_map<std::uint64_t, LoopWatch> loops_;  ///< by file and back-edge line
+    std::uint64_t lastLoopKey_ = 0;
+    LoopWatch* lastLoop_ = nullptr;
     int selectedTool_ = 0;
     bool haveChanged_ = false;
     bool cycleIlFlag_ = false;

@@ -263,7 +263,15 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
         {"unterminated if", "o2 if [1]\nG1 X1\n", 1, 1, "unterminated if", "o2 if"},
         {"recursion without end", "o<r> sub\no<r> call\no<r> endsub\nG0 X0\no<r> call\nM2\n", 2, 1, "recursion", "o<r> call"},
         {"M98 recursion", "M98 P7\nM30\nO7\nM98 P7\nM99\n", 4, 0, "recursion", "M98"},
-        {"endless loop", "o1 while [1]\nG0 X1\no1 endwhile\n", 2, 1, "does not terminate", "G0 X1"},
+        {"endless loop", "o1 while [1]\nG0 X1\no1 endwhile\n", 3, 1, "ran twice without changing", "o1 endwhile"},
+        {"endless do loop", "#1 = 0\no1 do\n#1 = 0\no1 while [#1 LT 10]\n", 4, 1, "ran twice without changing",
+         "o1 while"},
+        {"endless Fanuc loop", "WHILE [1] DO1\nG0 X1\nEND1\n", 3, 1, "ran twice without changing", "END1"},
+        {"endless GOTO", "N10 G0 X1\nGOTO 10\n", 2, 1, "ran twice without changing", "GOTO 10"},
+        {"endless continue", "o1 while [1]\no1 continue\no1 endwhile\n", 2, 1, "ran twice without changing",
+         "o1 continue"},
+        {"loop that counts for ever", "#1 = 0\no1 while [1]\n#1 = [#1 + 1]\no1 endwhile\n", 2, 1,
+         "more than 100000 blocks", "o1 while"},
         {"division by zero", "#1 = [1 / 0]\n", 1, 9, "division by zero", "/ 0"},
         {"MOD by zero", "#1 = [5 MOD 0]\n", 1, 9, "MOD by zero", "MOD"},
         {"sqrt of negative", "#1 = SQRT[-1]\n", 1, 6, "domain", "SQRT"},
@@ -359,6 +367,33 @@ TEST_CASE("gcode: expressions nested past the limit are a located error, not a s
     const Program p = parseGcode(fine, "fine.ngc", options);
     REQUIRE_FALSE(p.path.moves.empty());
     CHECK(p.path.moves.back().end.x == Approx(-7.0));
+}
+
+TEST_CASE("gcode: loops that end are not taken for endless ones", "[path][gcode]") {
+    // Each loop changes something its condition can read in every pass, though not always a
+    // numbered parameter or by a plain assignment; each must run to its end.
+    const struct {
+        const char* what;
+        const char* text;
+        std::size_t moves;
+    } loops[] = {
+        {"position only", "o1 while [#5420 LT 5]\nG91 G1 X1\nG90\no1 endwhile\nM2\n", 5},
+        {"there and back, and a counter", "#1 = 0\no1 while [#1 LT 4]\nG1 X10\nG1 X0\n#1 = [#1 + 1]\no1 endwhile\n", 8},
+        {"a named global written by a sub", "#<_n> = 0\no<s> sub\n#<_n> = [#<_n> + 1]\no<s> endsub\n"
+                                            "o1 while [#<_n> LT 3]\nG1 X#<_n>\no<s> call\no1 endwhile\n", 3},
+        {"a work offset", "o1 while [#5221 LT 3]\nG10 L2 P1 X[#5221 + 1]\nG1 X0\no1 endwhile\n", 3},
+        {"the tool", "o1 while [#5400 LT 3]\nT[#5400 + 1] M6\nG1 Z-#5400\no1 endwhile\n", 3},
+        {"Fanuc GOTO with a counter", "#1 = 0\nN10 G1 X#1\n#1 = [#1 + 1]\nIF [#1 LT 4] GOTO 10\n", 4},
+        {"a mode set after the move", "o1 while [#5420 LT 3]\nG1 X1\nG91\no1 endwhile\n", 3},
+    };
+    for (const auto& l : loops) {
+        INFO(l.what);
+        GcodeOptions options = linuxcnc();
+        options.maxBlocks = 10000;
+        Program p;
+        REQUIRE_NOTHROW(p = parseGcode(l.text, "loop.ngc", options));
+        CHECK(p.path.moves.size() == l.moves);
+    }
 }
 
 TEST_CASE("gcode: arcs are split within the chord tolerance and end exactly", "[path][gcode]") {
