@@ -33,6 +33,7 @@
 #include "dexelmill/surface/levelset_vdb.h"
 #include "dexelmill/surface/simplify.h"
 #include "surface/detail/cell_table.h"
+#include "surface/detail/pages.h"
 
 namespace dexelmill {
 
@@ -233,6 +234,9 @@ public:
         if (crossings + patches > std::numeric_limits<std::uint32_t>::max() ||
             triangles > std::numeric_limits<std::uint32_t>::max())
             throw Error("contouring: the mesh would have more than 2^32 vertices or triangles; use a larger spacing");
+        detail::reservePopulated(mesh_.vertices, crossings + patches);
+        detail::reservePopulated(mesh_.triangles, triangles);
+        detail::reservePopulated(crossingNormal_, crossings);
         mesh_.vertices.resize(crossings + patches);
         mesh_.triangles.resize(triangles);
         crossingNormal_.resize(crossings);
@@ -279,6 +283,7 @@ private:
     /// all corners in tiles have one sign: the flood fill puts leaves between inside and outside.
     void findBlocks() {
         std::vector<std::uint64_t> keys;
+        detail::reservePopulated(keys, 8 * grid_.tree().leafCount());
         for (auto leaf = grid_.tree().cbeginLeaf(); leaf; ++leaf) {
             const Coord o = leaf->origin();
             for (int d = 0; d < 8; ++d)
@@ -286,6 +291,7 @@ private:
         }
         std::sort(keys.begin(), keys.end());
         keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+        detail::reservePopulated(blocks_, keys.size());
         blocks_.resize(keys.size());
         for (std::size_t i = 0; i < keys.size(); ++i) blocks_[i].origin = blockOrigin(keys[i]);
         keys_ = std::move(keys);
