@@ -2,15 +2,24 @@
 /// @brief The line table and O-word lines of a G-code file.
 #include "path/detail/gcode_source.h"
 
+#include <algorithm>
 #include <cctype>
+#include <limits>
+#include <string>
 #include <utility>
 
+#include "dexelmill/error.h"
 #include "path/detail/text.h"
 
 namespace dexelmill::detail {
 
 SourceFile::SourceFile(std::string name, std::string text) : name_(std::move(name)), text_(std::move(text)) {
+    // Lines are counted in int, as everywhere in the reader: checked before the table is built.
+    const auto newlines = std::size_t(std::count(text_.begin(), text_.end(), '\n'));
+    if (newlines >= std::size_t(std::numeric_limits<int>::max()))
+        throw Error("'" + name_ + "' has more than " + std::to_string(std::numeric_limits<int>::max()) + " lines");
     // The text always ends the last line, so that line k ends at starts_[k + 1] - 1.
+    starts_.reserve(newlines + 2);
     starts_.push_back(0);
     for (std::size_t e = text_.find('\n'); e != std::string::npos; e = text_.find('\n', e + 1))
         starts_.push_back(e + 1);
