@@ -1761,6 +1761,21 @@ private:
             p[ic] = c;
             return toMachine(p);
         };
+        // The whole depth is known before the first move: a bottom out of reach, or more pecks
+        // than an arc may have chords, stops here rather than after filling memory with pecks.
+        const Vec3 bottom = at(aa + double(repeats) * da, bb + double(repeats) * db, cc);
+        if (!std::isfinite(cc) || !withinReach(bottom))
+            fail(b.has(cl) ? b.col[cl - 'A'] : 0,
+                 "canned cycle bottom " + detail::formatPoint(bottom) + " mm is beyond the 1e9 mm a program may reach",
+                 b.has(cl) ? tokenAt(b.col[cl - 'A']) : std::string(1, cl));
+        if (mode == 730 || mode == 830) {
+            const double pecks = std::ceil((r - cc) / q);
+            if (pecks > double(opt_.maxArcSegments))
+                fail(b.has('Q') ? b.col['Q' - 'A'] : 0,
+                     "peck depth Q makes " + std::to_string(std::llround(std::min(pecks, 1e18))) + " pecks, more than the " +
+                         std::to_string(opt_.maxArcSegments) + " a cycle may make",
+                     b.has('Q') ? tokenAt(b.col['Q' - 'A']) : "Q");
+        }
         if (oldcc < r) {
             emit(at(pp[ia], pp[ib], r), true);
             oldcc = r;
