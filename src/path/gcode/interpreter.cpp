@@ -1,0 +1,104 @@
+/// @file interpreter.cpp
+/// @brief Setting up the interpreter, running files, and its errors and warnings.
+#include "path/gcode/interpreter.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "dexelmill/error.h"
+#include "dexelmill/tool/builders.h"
+#include "path/detail/text.h"
+
+namespace dexelmill::detail::gcode {
+
+Interpreter::Interpreter(const GcodeOptions& options, Program& out) : opt_(options), out_(out) {
+    params_.assign(kNumParams, 0.0);
+    units_ = options.initialInches ? kInch : 1.0;
+    const double len = glm::length(options.initialToolAxis);
+    if (!(len > 0.0) || !std::isfinite(len))
+        throw Error("GcodeOptions::initialToolAxis must be a non-zero finite vector");
+    baseAxis_ = options.initialToolAxis / len;
+    axis_ = baseAxis_;
+    if (!(options.chordTolerance > 0.0))
+        throw Error("GcodeOptions::chordTolerance must be positive");
+    hot_.fill(kNone);
+    if (options.startPosition) {
+        mpos_ = *options.startPosition;
+        known_[0] = known_[1] = known_[2] = positionKnown_ = true;
+    }
+}
+
+void Interpreter::loadToolTable(const std::string& path) {
+    const std::string text = detail::readFile(opt_.files, path);
+    for (const ToolTableEntry& e : parseLinuxCncToolTable(text, path, opt_.toolTableInches)) {
+        SourceLocation where{path, e.line, 0};
+        if (e.diameter > 0.0) {
+            out_.tools.insert_or_assign(e.tool, flatEndMill(e.diameter));
+            diags_.note(where,
+                        "tool table: T" + std::to_string(e.tool) +
+                            " taken as a flat end mill of its diameter",
+                        "tool table shape");
+        } else {
+            diags_.warn(where, "tool table: T" + std::to_string(e.tool) +
+                                   " has no diameter; no tool shape defined");
+        }
+    }
+}
+
+void Interpreter::run(std::string name, std::string text) {
+    files_.push_back(std::make_unique<SourceFile>(std::move(name), std::move(text)));
+    SourceFile& f = *files_.back();
+    const int index = int(files_.size() - 1);
+    out_.path.files.push_back(f.name());
+    f.pathIndex = std::uint32_t(out_.path.files.size() - 1);
+    matchStructures(f);
+    // One move per line that may make one, as a first guess: growing a list of millions of
+    // moves by doubling costs a fifth of the reading time.
+    const std::size_t room = opt_.maxMoves - std::min(opt_.maxMoves, out_.path.moves.size());
+    out_.path.moves.reserve(out_.path.moves.size() + std::min(f.contentLines(), room));
+    execute(index);
+}
+
+void Interpreter::fail(int col, const std::string& message, std::string offending) const {
+    throw ParseError(where(col), message, std::move(offending));
+}
+
+SourceLocation Interpreter::where(int col) const {
+    SourceLocation loc;
+    if (curFile_ >= 0) {
+        loc.file = files_[curFile_]->name();
+        loc.line = curLineNo_;
+    }
+    loc.column = col;
+    return loc;
+}
+
+std::string Interpreter::tokenAt(int col, std::size_t maxLen) const {
+    if (col <= 0 || std::size_t(col) > line_.size()) return std::string(line_.substr(0, maxLen));
+    const std::size_t b = std::size_t(col - 1);
+    const bool grouped = line_[b] == '[' || line_[b] == '#' || line_[b] == '(';
+    std::size_t e = b + 1;
+    while (e < line_.size() && e - b < maxLen) {
+        const char ch = line_[e];
+        if (ch == ' ' || ch == '\t') break;
+        if (!grouped && std::isalpha(static_cast<unsigned char>(ch)) &&
+            !std::isalpha(static_cast<unsigned char>(line_[e - 1])))
+            break;
+        ++e;
+    }
+    return std::string(line_.substr(b, e - b));
+}
+
+void Interpreter::warn(const std::string& message, const std::string& key, int col) {
+    diags_.warn(where(col), message, key);
+}
+
+void Interpreter::hot(HotKind kind, const char* message) {
+    if (hot_[kind] == kNone)
+        hot_[kind] = diags_.warn(where(), message);
+    else
+        diags_.repeat(hot_[kind]);
+}
+
+}  // namespace dexelmill::detail::gcode

@@ -1,0 +1,372 @@
+/// @file interpreter.h
+/// @brief The RS274/NGC interpreter behind parseGcode: its state and the blocks, parameters and
+/// frames it works on. Its parts are defined by job: interpreter.cpp (set-up, errors), flow.cpp
+/// (O-word structure, the execution loop, subroutines, endless loops), expressions.cpp
+/// (parameters and expressions), blocks.cpp (block parsing, modal groups, Fanuc calls) and
+/// motion.cpp (coordinates, non-modal codes, the tilted work plane, motion, canned cycles).
+/// Semantics follow LinuxCNC's interpreter (the RS274/NGC interpreter of NIST, Kramer et al.
+/// 2000, and LinuxCNC's G-code documentation); Fanuc macro forms (IF ... THEN/GOTO, WHILE ...
+/// DOn/ENDn, M98/M99) follow the Fanuc programming manuals.
+///
+/// Each file's text is split into lines once (SourceFile, which also finds the O-word lines);
+/// the O-word structures (sub, loops, if chains) and Fanuc program numbers are paired before the
+/// file runs, so that flow jumps are table lookups. Each executed line is parsed into a Block (one
+/// value per letter, the G and M codes, parameter assignments) and executed in the RS274/NGC
+/// order of execution.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include "dexelmill/path/gcode.h"
+#include "path/detail/diagnostics.h"
+#include "path/detail/gcode_source.h"
+
+namespace dexelmill::detail::gcode {
+
+inline constexpr double kInch = 25.4;
+inline constexpr double kPi = 3.14159265358979323846;
+inline constexpr double kDeg = kPi / 180.0;
+/// LinuxCNC parameters #1..#5602 (and Fanuc system variables below #10000).
+inline constexpr int kNumParams = 10000;
+/// An arc's radius to its end may differ from its radius to its start by this much (mm) and
+/// this fraction before the arc is rejected (LinuxCNC uses similar limits).
+inline constexpr double kArcRadiusAbsTol = 0.02;
+inline constexpr double kArcRadiusRelTol = 0.001;
+/// An R-form arc whose chord exceeds the diameter by less than this (mm) is a half circle.
+inline constexpr double kArcRadiusFit = 0.002;
+/// Peck clearances of G83 and G73 (LinuxCNC: 0.010 inch and 0.002 inch).
+inline constexpr double kG83RapidDelta = 0.010 * kInch;
+inline constexpr double kG73Clearance = 0.002 * kInch;
+
+/// The deepest nesting of an expression: brackets, unary signs, function arguments and the
+/// right-associative ** each add a level. LinuxCNC's own parser stops far sooner; the limit keeps
+/// the recursive reader within a few hundred kilobytes of stack.
+inline constexpr int kMaxExpressionDepth = 1000;
+
+/// Hot warning kinds, counted without building strings.
+enum HotKind { kHotFeed, kHotSpeed, kHotCount };
+
+/// A subroutine (O-word sub) or a Fanuc program (O number).
+struct Sub {
+    int file = 0;
+    int start = 0;  ///< line index of `sub` or of the Fanuc program number
+    int end = -1;   ///< line index of `endsub`; -1 for Fanuc programs (end at M99)
+};
+
+/// One line's words, as parsed.
+struct Block {
+    std::uint32_t mask = 0;  ///< letters present (bit = letter - 'A')
+    std::uint32_t used = 0;  ///< letters that took effect
+    double val[26];
+    int col[26] = {};
+    int g[16];
+    int gcol[16];
+    int ng = 0;
+    int m[8];
+    int mcol[8];
+    int nm = 0;
+
+    bool has(char c) const { return mask & (1u << (c - 'A')); }
+    double get(char c) {
+        used |= 1u << (c - 'A');
+        return val[c - 'A'];
+    }
+    void use(char c) { used |= 1u << (c - 'A'); }
+    bool hasG(int code) const {
+        for (int i = 0; i < ng; ++i)
+            if (g[i] == code) return true;
+        return false;
+    }
+};
+
+/// A parameter a line names: #n, #<name>.
+struct ParamRef {
+    int index = 0;     ///< numbered parameter, when name is empty
+    std::string name;  ///< named parameter, lower case
+    int col = 0;
+};
+
+/// A subroutine call in progress.
+struct Frame {
+    int file = 0;
+    int returnLine = 0;     ///< line to continue at after return
+    int subStart = 0;       ///< first line of the body (Fanuc repeats)
+    long repeatsLeft = 0;   ///< Fanuc M98 L repeats still to run
+    bool fanuc = false;
+    bool savedNumbered = false;
+    std::array<double, 31> saved{};  ///< #1..#30 of the caller (O-call)
+    std::unordered_map<std::string, double> locals;
+    std::unordered_map<int, long> repeatCounters;
+};
+
+/// A 3 x 3 matrix by columns (the tilted work plane's rotation).
+struct Mat3 {
+    Vec3 c0{1, 0, 0}, c1{0, 1, 0}, c2{0, 0, 1};  ///< columns
+    Vec3 operator*(const Vec3& p) const { return c0 * p.x + c1 * p.y + c2 * p.z; }
+    Vec3 transposeTimes(const Vec3& p) const {
+        return {glm::dot(c0, p), glm::dot(c1, p), glm::dot(c2, p)};
+    }
+    Mat3 operator*(const Mat3& o) const { return {(*this) * o.c0, (*this) * o.c1, (*this) * o.c2}; }
+};
+
+/// The rotation by `angle` (radians) about axis 0, 1 or 2.
+inline Mat3 rotation(int axis, double angle) {
+    const double c = std::cos(angle), s = std::sin(angle);
+    Mat3 r;
+    if (axis == 0) {
+        r.c1 = {0, c, s};
+        r.c2 = {0, -s, c};
+    } else if (axis == 1) {
+        r.c0 = {c, 0, -s};
+        r.c2 = {s, 0, c};
+    } else {
+        r.c0 = {c, s, 0};
+        r.c1 = {-s, c, 0};
+    }
+    return r;
+}
+
+/// The interpreter: one per reading, fed one or more files in turn (they share the machine).
+class Interpreter {
+public:
+    Interpreter(const GcodeOptions& options, Program& out);
+
+    void loadToolTable(const std::string& path);
+
+    void run(std::string name, std::string text);
+
+    void finish() { diags_.appendTo(out_.diagnostics); }
+
+private:
+    static constexpr std::size_t kNone = std::size_t(-1);
+
+    // ---- errors and diagnostics ----
+    [[noreturn]] void fail(int col, const std::string& message, std::string offending = {}) const;
+    SourceLocation where(int col = 0) const;
+    /// The text of a token starting at column col (1-based) of the current line.
+    std::string tokenAt(int col, std::size_t maxLen = 24) const;
+    void warn(const std::string& message, const std::string& key = {}, int col = 0);
+    void hot(HotKind kind, const char* message);
+
+    // ---- structure ----
+    [[noreturn]] void failAt(const SourceFile& f, int k, const std::string& message);
+
+    int findForward(const SourceFile& f, int from, const std::string& label,
+                    std::initializer_list<OKind> kinds, int stopAt = -1);
+
+    void matchStructures(SourceFile& f);
+
+    // ---- execution loop ----
+    void execute(int file);
+
+    static constexpr int kEndProgram = -2;
+
+    int executeLine(SourceFile& f, int pc);
+
+    // ---- O-words ----
+    int executeOWord(SourceFile& f, int pc);
+
+    int nextBranch(SourceFile& f, int k);
+
+    /// A loop about to run `count` times executes at least one block per pass (its end line): a
+    /// count the block limit cannot cover stops here, before any pass runs, rather than after
+    /// the passes have filled memory with moves.
+    void chargeRepeats(double count, int col, const char* what);
+
+    std::unordered_map<int, long>& frameCounters();
+
+    void checkRestIsComment(std::size_t pos);
+
+    int callSub(const OWord& li, int pc, std::size_t pos);
+
+    /// LinuxCNC looks for an undefined subroutine `o<name>` in the file `name.ngc` of the
+    /// subroutine path; here: the folder of the calling file.
+    void loadSubroutineFile(const std::string& label);
+
+    int popFrame();
+
+    // ---- endless loops ----
+    /// What a loop's conditions can read: the parameters (the numbered ones also hold the work
+    /// offsets, the coordinate system and G92), named and local ones, the position in the program
+    /// frame (#5420..#5422) and the tool (#5400); and which subroutine activation runs.
+    struct LoopState {
+        std::uint64_t paramWrites = 0;
+        std::uint64_t flowEpoch = 0;
+        int tool = 0;
+        Vec3 position;
+        bool operator==(const LoopState& o) const {
+            return paramWrites == o.paramWrites && flowEpoch == o.flowEpoch && tool == o.tool && position == o.position;
+        }
+    };
+    /// The program frame as an affine map (units, offsets, tilted plane): the images of the
+    /// origin and the unit points. Taken only while the rest of LoopState stays put.
+    using FrameMap = std::array<Vec3, 4>;
+    struct LoopWatch {
+        LoopState last;
+        std::optional<FrameMap> frame;
+        int unchangedPasses = 0;
+    };
+
+    FrameMap frameMap() const;
+
+    /// At the jump from line pc back to its loop's head. The interpreter is deterministic, and
+    /// the path a pass takes through the loop depends only on what LoopState and the frame hold.
+    /// If two passes in a row change none of it, whatever else they changed (a modal code, an
+    /// offset taken from a parameter) the next pass sets again to the same value, so the whole
+    /// state repeats and the loop would run until the block limit: it stops here instead.
+    void backEdge(int pc);
+
+    /// Writes a parameter, counting the writes that change it (LoopState).
+    void store(double& slot, double v);
+    void storeNamed(std::unordered_map<std::string, double>& table, const std::string& name, double v);
+
+    // ---- parameters ----
+    double getParam(const ParamRef& r);
+    void setParam(const ParamRef& r, double v);
+
+    ParamRef readParamRef(std::size_t& i);
+
+    // ---- real values and expressions ----
+    /// Counts one level of expression nesting while it lives; fails past kMaxExpressionDepth.
+    class Nesting {
+    public:
+        Nesting(const Interpreter& self, int& depth, std::size_t i) : depth_(depth) {
+            if (++depth_ > kMaxExpressionDepth) {
+                --depth_;
+                self.fail(int(i) + 1, "expression nested deeper than " + std::to_string(kMaxExpressionDepth) + " levels",
+                          self.tokenAt(int(i) + 1));
+            }
+        }
+        ~Nesting() { --depth_; }
+        Nesting(const Nesting&) = delete;
+        Nesting& operator=(const Nesting&) = delete;
+
+    private:
+        int& depth_;
+    };
+
+    double readRealValue(std::size_t& i);
+
+    double readFunction(std::size_t& i);
+
+    /// Binary operator at i: returns precedence (1 lowest .. 5 highest) and code, 0 if none.
+    int peekOperator(std::size_t i, int& code, std::size_t& len);
+
+    double parseExpression(std::size_t& i, int minPrec);
+
+    // ---- block parsing ----
+    /// @return false when the line has nothing to execute (e.g. a Fanuc IF that is false).
+    bool parseBlock(Block& b, int& fanucJump, SourceFile& f, int pc);
+
+    // ---- modal groups ----
+    static int gGroup(int code);
+
+    int executeBlock(Block& b, SourceFile& f, int pc);
+
+    static char firstAxisLetter(const Block& b);
+
+    static std::string codeText(int code);
+
+    int callFanuc(Block& b, int pc);
+
+    int returnFanuc(SourceFile&, int);
+
+    // ---- coordinates ----
+    Vec3 offset() const { return g5x_[std::size_t(coordSys_)] + g92_; }
+    Vec3 toMachine(const Vec3& p) const;
+    Vec3 toProgram(const Vec3& m) const;
+
+    void setCoordSystem(int code);
+
+    void changeTool(int tool);
+
+    void emit(const Vec3& target, bool rapid);
+
+    /// The program-frame target of the axis words (unspecified axes keep their place).
+    Vec3 targetOf(Block& b, const Vec3& from, bool incremental);
+
+    void checkRotary(Block& b, bool incremental);
+
+    // ---- non-modal codes ----
+    bool executeNonModal(int code, Block& b, int motion);
+
+    // ---- tilted work plane (G68.2 / G53.x / G69) ----
+    void defineTwp(Block& b);
+
+    void orientTool(int code, Block& b);
+
+    void cancelTwp();
+
+    // ---- motion ----
+    void executeMotion(int mode, Block& b, bool g53, int motionCol);
+
+    void arc(bool clockwise, Block& b, int motionCol);
+
+    static bool samePlanePoint(const Vec3& a, const Vec3& b, int p0, int p1);
+
+    // ---- canned cycles ----
+    void cycle(int mode, Block& b);
+
+    const GcodeOptions& opt_;
+    Program& out_;
+    detail::DiagnosticCollector diags_;
+    std::array<std::size_t, kHotCount> hot_;
+    std::vector<std::unique_ptr<SourceFile>> files_;
+    std::unordered_map<std::string, Sub> subs_;
+    std::unordered_map<std::string, Sub> programs_;
+    std::vector<Frame> frames_;
+    std::unordered_map<int, long> topCounters_;
+    std::vector<double> params_;
+    std::unordered_map<std::string, double> named_;
+    std::vector<std::pair<ParamRef, double>> pending_;
+    std::vector<Vec3> arcPts_;
+
+    int curFile_ = -1;
+    int curLineNo_ = 0;
+    std::string_view line_;
+    int depth_ = 0;  ///< expression nesting now (Nesting)
+    std::size_t blocks_ = 0;
+
+    // Machine state.
+    double units_ = 1.0;
+    int plane_ = 17;
+    bool absolute_ = true;
+    bool arcAbsolute_ = false;
+    int motion_ = 800;
+    int prevMotion_ = 800;
+    int retract_ = 980;
+    int coordSys_ = 0;
+    std::array<Vec3, 9> g5x_{};
+    Vec3 g92_{0.0};
+    Vec3 mpos_{0.0};
+    /// Which coordinates of the position the program has set, and whether all three are.
+    bool known_[3] = {false, false, false};
+    bool positionKnown_ = false;
+    double rotary_[3] = {0, 0, 0};
+    Vec3 baseAxis_{0, 0, 1};
+    Vec3 axis_{0, 0, 1};
+    bool twp_ = false;
+    Mat3 twpRot_;
+    Vec3 twpOrigin_{0.0};
+    int toolInSpindle_ = 0;
+    std::uint64_t paramWrites_ = 0;  ///< writes that changed a parameter
+    std::uint64_t flowEpoch_ = 0;    ///< subroutine calls, returns and repeats so far
+    std::unordered_map<std::uint64_t, LoopWatch> loops_;  ///< by file and back-edge line
+    std::uint64_t lastLoopKey_ = 0;
+    LoopWatch* lastLoop_ = nullptr;
+    int selectedTool_ = 0;
+    bool haveChanged_ = false;
+    bool cycleIlFlag_ = false;
+    bool cycleActive_ = false;
+    double cycleIl_ = 0, cycleCc_ = 0, cycleR_ = 0, cycleQ_ = 0;
+};
+
+}  // namespace dexelmill::detail::gcode

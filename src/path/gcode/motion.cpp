@@ -1,0 +1,494 @@
+/// @file motion.cpp
+/// @brief Coordinates and offsets, non-modal codes, the tilted work plane, motion (lines, arcs,
+/// helices) and canned cycles.
+#include "path/gcode/interpreter.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "path/detail/arc.h"
+#include "path/detail/text.h"
+
+namespace dexelmill::detail::gcode {
+
+Vec3 Interpreter::toMachine(const Vec3& p) const {
+    return offset() + (twp_ ? twpOrigin_ + twpRot_ * p : p);
+}
+
+Vec3 Interpreter::toProgram(const Vec3& m) const {
+    const Vec3 w = m - offset();
+    return twp_ ? twpRot_.transposeTimes(w - twpOrigin_) : w;
+}
+
+void Interpreter::setCoordSystem(int code) {
+    static const int codes[] = {540, 550, 560, 570, 580, 590, 591, 592, 593};
+    for (int k = 0; k < 9; ++k)
+        if (codes[k] == code) coordSys_ = k;
+    store(params_[5220], coordSys_ + 1);
+}
+
+void Interpreter::changeTool(int tool) {
+    if (tool == toolInSpindle_ && haveChanged_) return;
+    haveChanged_ = true;
+    toolInSpindle_ = tool;
+    ToolChange tc;
+    tc.moveIndex = out_.path.moves.size();
+    tc.tool = tool;
+    tc.source = {files_[std::size_t(curFile_)]->pathIndex, curLineNo_};
+    out_.path.toolChanges.push_back(tc);
+}
+
+void Interpreter::emit(const Vec3& target, bool rapid) {
+    if (!std::isfinite(target.x) || !std::isfinite(target.y) || !std::isfinite(target.z))
+        fail(0, "move to a non-finite position", std::string(line_.substr(0, 40)));
+    if (!withinReach(target))
+        fail(0, "move to " + detail::formatPoint(target) + " mm, beyond the 1e9 mm a program may reach",
+             std::string(line_.substr(0, 40)));
+    if (out_.path.moves.size() >= opt_.maxMoves)
+        fail(0, detail::tooManyMoves(opt_.maxMoves, opt_.maxMovesReason), std::string(line_.substr(0, 40)));
+    for (int a = 0; a < 3; ++a) known_[a] = known_[a] || target[a] != mpos_[a];
+    if (!positionKnown_) {
+        // Where the machine starts is not in the program: moves until X, Y and Z have all
+        // been given only establish the position, rather than sweep from a guessed origin.
+        positionKnown_ = known_[0] && known_[1] && known_[2];
+        warn("the start position is unknown until X, Y and Z are all programmed: this move only sets "
+             "the position and is not simulated",
+             "unknown start");
+        mpos_ = target;
+        return;
+    }
+    Move m;
+    m.start = mpos_;
+    m.end = target;
+    m.axis = axis_;
+    m.tool = toolInSpindle_;
+    m.rapid = rapid;
+    m.source = {files_[std::size_t(curFile_)]->pathIndex, curLineNo_};
+    out_.path.moves.push_back(m);
+    mpos_ = target;
+}
+
+Vec3 Interpreter::targetOf(Block& b, const Vec3& from, bool incremental) {
+    Vec3 t = from;
+    static const char letters[3] = {'X', 'Y', 'Z'};
+    for (int a = 0; a < 3; ++a)
+        if (b.has(letters[a])) {
+            const double v = b.get(letters[a]) * units_;
+            t[a] = incremental ? from[a] + v : v;
+            known_[a] = true;
+        }
+    checkRotary(b, incremental);
+    return t;
+}
+
+void Interpreter::checkRotary(Block& b, bool incremental) {
+    for (int a = 0; a < 3; ++a) {
+        const char c = char('A' + a);
+        if (!b.has(c)) continue;
+        const double v = b.get(c);
+        const double target = incremental ? rotary_[a] + v : v;
+        if (std::abs(target - rotary_[a]) > 1e-9)
+            fail(b.col[a], "A/B/C rotary axes are not supported yet (rotary motion)", tokenAt(b.col[a]));
+    }
+    for (char c : {'U', 'V', 'W'})
+        if (b.has(c)) fail(b.col[c - 'A'], "U/V/W axes are not supported", tokenAt(b.col[c - 'A']));
+}
+
+bool Interpreter::executeNonModal(int code, Block& b, int motion) {
+    const bool anyXYZ = b.has('X') || b.has('Y') || b.has('Z');
+    auto axisConflict = [&]() {
+        if (motion >= 0 && motion != 800 && anyXYZ)
+            fail(b.col[firstAxisLetter(b) - 'A'],
+                 "axis words used by both G" + codeText(code) + " and a motion",
+                 tokenAt(b.col[firstAxisLetter(b) - 'A']));
+    };
+    switch (code) {
+    case 100: {  // G10
+        axisConflict();
+        if (!b.has('L')) fail(0, "G10 without L", "G10");
+        const int l = int(std::lround(b.get('L')));
+        if (l == 1 || l == 10 || l == 11) {
+            for (char c : {'P', 'X', 'Y', 'Z', 'R', 'I', 'J', 'Q', 'D'})
+                if (b.has(c)) b.use(c);
+            warn("G10 L" + std::to_string(l) + " (tool table edit) ignored", "G10 L1");
+            return true;
+        }
+        if (l != 2 && l != 20) fail(b.col['L' - 'A'], "unsupported G10 L" + std::to_string(l), tokenAt(b.col['L' - 'A']));
+        if (!b.has('P')) fail(0, "G10 L" + std::to_string(l) + " without P", "G10");
+        const int p = int(std::lround(b.get('P')));
+        if (p < 0 || p > 9) fail(b.col['P' - 'A'], "G10 P out of range 0..9", tokenAt(b.col['P' - 'A']));
+        const int cs = p == 0 ? coordSys_ : p - 1;
+        if (b.has('R') && b.get('R') != 0.0)
+            fail(b.col['R' - 'A'], "G10 R (XY rotation of a coordinate system) is not supported", tokenAt(b.col['R' - 'A']));
+        checkRotary(b, false);
+        static const char letters[3] = {'X', 'Y', 'Z'};
+        if (l == 20 && twp_) fail(0, "G10 L20 with an active G68.2 is not supported", "G10");
+        for (int a = 0; a < 3; ++a) {
+            if (!b.has(letters[a])) continue;
+            const double v = b.get(letters[a]) * units_;
+            if (l == 2)
+                g5x_[std::size_t(cs)][a] = v;
+            else
+                g5x_[std::size_t(cs)][a] = mpos_[a] - g92_[a] - v;
+            store(params_[std::size_t(5221 + 20 * cs + a)], g5x_[std::size_t(cs)][a] / units_);
+        }
+        return true;
+    }
+    case 280: case 300: {  // G28, G30: via the given point to the stored position
+        axisConflict();
+        const int base = code == 280 ? 5161 : 5181;
+        Vec3 home(params_[std::size_t(base)], params_[std::size_t(base + 1)], params_[std::size_t(base + 2)]);
+        home *= units_;
+        const Vec3 pp = toProgram(mpos_);
+        if (anyXYZ) {
+            const Vec3 via = targetOf(b, pp, !absolute_);
+            emit(toMachine(via), true);
+            Vec3 end = mpos_;
+            for (int a = 0; a < 3; ++a)
+                if (b.has(char('X' + a))) end[a] = home[a];
+            emit(end, true);
+        } else {
+            checkRotary(b, !absolute_);
+            emit(home, true);
+        }
+        return true;
+    }
+    case 281: case 301: {
+        const int base = code == 281 ? 5161 : 5181;
+        for (int a = 0; a < 3; ++a) store(params_[std::size_t(base + a)], mpos_[a] / units_);
+        return false;
+    }
+    case 520: case 920: {  // G52, G92
+        axisConflict();
+        checkRotary(b, false);
+        static const char letters[3] = {'X', 'Y', 'Z'};
+        const Vec3 before = g92_;
+        for (int a = 0; a < 3; ++a) {
+            if (!b.has(letters[a])) continue;
+            const double v = b.get(letters[a]) * units_;
+            if (code == 920)
+                g92_[a] = mpos_[a] - g5x_[std::size_t(coordSys_)][a] - v;
+            else
+                g92_[a] = v;
+            store(params_[std::size_t(5211 + a)], g92_[a] / units_);
+        }
+        // Offsets that change under a tilted plane would need the plane's frame.
+        if (twp_ && g92_ != before)
+            fail(0, "G52/G92 changing the offset under an active G68.2 is not supported",
+                 "G" + codeText(code));
+        return true;
+    }
+    case 921: case 922:
+        g92_ = Vec3(0.0);
+        if (code == 921)
+            for (int a = 0; a < 3; ++a) store(params_[std::size_t(5211 + a)], 0.0);
+        return false;
+    case 923:
+        for (int a = 0; a < 3; ++a) g92_[a] = params_[std::size_t(5211 + a)] * units_;
+        return false;
+    default:
+        return false;
+    }
+}
+
+void Interpreter::defineTwp(Block& b) {
+    const int p = b.has('P') ? int(std::lround(b.get('P'))) : 0;
+    if (p != 0) fail(b.col['P' - 'A'], "G68.2 P" + std::to_string(p) + " is not supported (only P0, Euler angles)", tokenAt(b.col['P' - 'A']));
+    int q = b.has('Q') ? int(std::lround(b.get('Q'))) : 313;
+    const int d0 = q / 100, d1 = (q / 10) % 10, d2 = q % 10;
+    if (q < 111 || q > 333 || d0 < 1 || d0 > 3 || d1 < 1 || d1 > 3 || d2 < 1 || d2 > 3 || d0 == d1 || d1 == d2)
+        fail(b.has('Q') ? b.col['Q' - 'A'] : 0, "G68.2 Q must name an Euler order such as 313 or 121", "Q" + std::to_string(q));
+    const double ai = b.has('I') ? b.get('I') * kDeg : 0.0;
+    const double aj = b.has('J') ? b.get('J') * kDeg : 0.0;
+    const double ak = b.has('K') ? b.get('K') * kDeg : 0.0;
+    Mat3 r = rotation(d0 - 1, ai) * rotation(d1 - 1, aj) * rotation(d2 - 1, ak);
+    if (b.has('R')) r = r * rotation(2, b.get('R') * kDeg);
+    // The origin is given in the current (untilted) work coordinates.
+    Vec3 origin(0.0);
+    static const char letters[3] = {'X', 'Y', 'Z'};
+    for (int a = 0; a < 3; ++a)
+        if (b.has(letters[a])) origin[a] = b.get(letters[a]) * units_;
+    if (twp_) fail(0, "G68.2 while a tilted plane is active: cancel it with G69 first", "G68.2");
+    twp_ = true;
+    twpRot_ = r;
+    twpOrigin_ = origin;
+    diags_.note(where(), "G68.2 tilted work plane: coordinates are rotated; the tool axis "
+                         "follows on G53.1/G53.3/G53.6",
+                "twp");
+}
+
+void Interpreter::orientTool(int code, Block& b) {
+    if (!twp_) fail(0, "G" + codeText(code) + " without an active G68.2 plane", "G" + codeText(code));
+    if (b.has('P')) b.use('P');
+    axis_ = glm::normalize(twpRot_ * Vec3(0, 0, 1));
+    if (code == 533) {
+        const Vec3 pp = toProgram(mpos_);
+        const Vec3 t = targetOf(b, pp, false);
+        emit(toMachine(t), true);
+    }
+}
+
+void Interpreter::cancelTwp() {
+    twp_ = false;
+    twpRot_ = Mat3{};
+    twpOrigin_ = Vec3(0.0);
+    axis_ = baseAxis_;
+    coordSys_ = 0;
+}
+
+void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
+    switch (mode) {
+    case 0: case 10: {
+        Vec3 target;
+        if (g53) {
+            if (!absolute_ && (b.has('X') || b.has('Y') || b.has('Z')))
+                fail(0, "G53 in incremental mode (G91)", "G53");
+            target = mpos_;
+            static const char letters[3] = {'X', 'Y', 'Z'};
+            for (int a = 0; a < 3; ++a)
+                if (b.has(letters[a])) target[a] = b.get(letters[a]) * units_;
+            checkRotary(b, false);
+        } else {
+            target = toMachine(targetOf(b, toProgram(mpos_), !absolute_));
+        }
+        emit(target, mode == 0);
+        return;
+    }
+    case 20: case 30:
+        arc(mode == 20, b, motionCol);
+        return;
+    case 730: case 810: case 820: case 830: case 850: case 890:
+        cycle(mode, b);
+        return;
+    default:
+        fail(motionCol, "unsupported motion G" + codeText(mode), "G" + codeText(mode));
+    }
+}
+
+void Interpreter::arc(bool clockwise, Block& b, int motionCol) {
+    int p0, p1, p2;
+    char o0, o1;
+    if (plane_ == 17) { p0 = 0; p1 = 1; p2 = 2; o0 = 'I'; o1 = 'J'; }
+    else if (plane_ == 18) { p0 = 2; p1 = 0; p2 = 1; o0 = 'K'; o1 = 'I'; }
+    else { p0 = 1; p1 = 2; p2 = 0; o0 = 'J'; o1 = 'K'; }
+    const Vec3 s = toProgram(mpos_);
+    const Vec3 e = targetOf(b, s, !absolute_);
+    const int arcCol = motionCol;
+    double c0, c1;
+    const bool rForm = b.has('R');
+    double turns = 1.0;
+    if (b.has('P')) {
+        turns = b.get('P');
+        if (turns < 1 || std::abs(turns - std::nearbyint(turns)) > 1e-6 || turns > 1e6)
+            fail(b.col['P' - 'A'], "arc P (turns) must be a positive integer", tokenAt(b.col['P' - 'A']));
+    }
+    if (rForm) {
+        if (b.has(o0) || b.has(o1)) fail(b.col['R' - 'A'], "arc with both R and I/J/K", tokenAt(b.col['R' - 'A']));
+        const double r = b.get('R') * units_;
+        const double dx = e[p0] - s[p0], dy = e[p1] - s[p1];
+        const double d = std::hypot(dx, dy);
+        if (d < 1e-9) fail(b.col['R' - 'A'], "R-form arc with the same start and end point", tokenAt(b.col['R' - 'A']));
+        const double half = d / 2;
+        double h2 = r * r - half * half;
+        if (h2 < 0) {
+            if (half - std::abs(r) > kArcRadiusFit)
+                fail(b.col['R' - 'A'], "arc radius too small to reach the end point", tokenAt(b.col['R' - 'A']));
+            h2 = 0;
+        }
+        const double h = std::sqrt(h2);
+        const double tx = dx / d, ty = dy / d;
+        // Left normal of the chord: the centre of a short counter-clockwise arc.
+        const double nx = -ty, ny = tx;
+        double sign = clockwise ? -1.0 : 1.0;
+        if (r < 0) sign = -sign;
+        c0 = s[p0] + dx / 2 + sign * h * nx;
+        c1 = s[p1] + dy / 2 + sign * h * ny;
+    } else {
+        if (!b.has(o0) && !b.has(o1))
+            fail(arcCol, std::string("arc without ") + o0 + "/" + o1 + " or R", tokenAt(motionCol));
+        const double i0 = b.has(o0) ? b.get(o0) * units_ : 0.0;
+        const double i1 = b.has(o1) ? b.get(o1) * units_ : 0.0;
+        if (arcAbsolute_) {
+            // G90.1: the centre in program coordinates (of the plane axes).
+            c0 = i0;
+            c1 = i1;
+        } else {
+            c0 = s[p0] + i0;
+            c1 = s[p1] + i1;
+        }
+    }
+    const double rs = std::hypot(s[p0] - c0, s[p1] - c1);
+    const double re = std::hypot(e[p0] - c0, e[p1] - c1);
+    if (rs < 1e-9) fail(motionCol, "arc of zero radius", tokenAt(motionCol));
+    if (std::abs(rs - re) > kArcRadiusAbsTol && std::abs(rs - re) > kArcRadiusRelTol * rs)
+        fail(rForm ? b.col['R' - 'A'] : motionCol,
+             "radius to end of arc differs from radius to start (" + std::to_string(re) + " vs " +
+                 std::to_string(rs) + " mm)",
+             tokenAt(rForm ? b.col['R' - 'A'] : motionCol, 60));
+    const double as = std::atan2(s[p1] - c1, s[p0] - c0);
+    const double ae = std::atan2(e[p1] - c1, e[p0] - c0);
+    // The sweep in (0, 2 pi] in the direction of travel; coinciding ends make a full circle.
+    double sweep = 2 * kPi;
+    if (!samePlanePoint(s, e, p0, p1)) {
+        sweep = std::fmod(clockwise ? as - ae : ae - as, 2 * kPi);
+        if (sweep <= 0) sweep += 2 * kPi;
+    }
+    sweep += 2 * kPi * (turns - 1);
+    if (clockwise) sweep = -sweep;
+    detail::ArcSpec spec;
+    Vec3 axes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    spec.u = axes[p0];
+    spec.v = axes[p1];
+    spec.w = axes[p2];
+    spec.centre = c0 * spec.u + c1 * spec.v;
+    spec.startAngle = as;
+    spec.sweep = sweep;
+    spec.startRadius = rs;
+    spec.endRadius = re;
+    spec.startHeight = s[p2];
+    spec.endHeight = e[p2];
+    const std::size_t n = detail::arcSegments(std::max(rs, re), sweep, opt_.chordTolerance, opt_.maxArcSegments);
+    if (n == 0) fail(motionCol, "arc needs more chords than allowed at this tolerance", tokenAt(motionCol));
+    arcPts_.clear();
+    detail::arcPoints(spec, n, arcPts_);
+    arcPts_.back() = e;
+    for (const Vec3& p : arcPts_) emit(toMachine(p), false);
+}
+
+bool Interpreter::samePlanePoint(const Vec3& a, const Vec3& b, int p0, int p1) {
+    return std::abs(a[p0] - b[p0]) < 1e-9 && std::abs(a[p1] - b[p1]) < 1e-9;
+}
+
+void Interpreter::cycle(int mode, Block& b) {
+    int ia, ib, ic;  // in-plane axes and the cycle (drill) axis
+    if (plane_ == 17) { ia = 0; ib = 1; ic = 2; }
+    else if (plane_ == 18) { ia = 2; ib = 0; ic = 1; }
+    else { ia = 1; ib = 2; ic = 0; }
+    const char cl = char('X' + ic);
+    const char al = char('X' + ia), bl = char('X' + ib);
+    const bool newCycle = prevMotion_ != mode || !cycleActive_;
+    double ccWord;
+    if (b.has(cl)) ccWord = b.get(cl) * units_;
+    else if (!newCycle) ccWord = cycleCc_;
+    else fail(0, std::string("canned cycle without ") + cl + " depth", "G" + codeText(mode));
+    double rWord;
+    if (b.has('R')) rWord = b.get('R') * units_;
+    else if (!newCycle) rWord = cycleR_;
+    else fail(0, "canned cycle without R plane", "G" + codeText(mode));
+    double q = cycleQ_;
+    if (mode == 730 || mode == 830) {
+        if (b.has('Q')) q = b.get('Q') * units_;
+        else if (newCycle) fail(0, "G73/G83 without Q peck depth", "G" + codeText(mode));
+        if (!(q > 0)) fail(b.col['Q' - 'A'], "Q peck depth must be positive", tokenAt(b.col['Q' - 'A']));
+    }
+    if (mode == 820 || mode == 890) {
+        if (b.has('P')) b.use('P');
+        else if (newCycle) fail(0, "G82/G89 without P dwell", "G" + codeText(mode));
+        warn("dwell in canned cycle ignored (time is not simulated)", "cycle dwell");
+    }
+    long repeats = 1;
+    if (b.has('L')) {
+        const double l = b.get('L');
+        if (l < 0 || std::abs(l - std::nearbyint(l)) > 1e-6 || l > 1e7) fail(b.col['L' - 'A'], "L repeat must be a non-negative integer", tokenAt(b.col['L' - 'A']));
+        repeats = long(std::nearbyint(l));
+    }
+    checkRotary(b, !absolute_);
+    Vec3 pp = toProgram(mpos_);
+    if (!cycleIlFlag_) {
+        cycleIl_ = pp[ic];
+        cycleIlFlag_ = true;
+    }
+    double oldcc = cycleIl_;
+    double r, cc, aa, bb, da = 0, db = 0;
+    if (absolute_) {
+        r = rWord;
+        cc = ccWord;
+        aa = b.has(al) ? b.get(al) * units_ : pp[ia];
+        bb = b.has(bl) ? b.get(bl) * units_ : pp[ib];
+    } else {
+        if (b.has(al)) da = b.get(al) * units_;
+        if (b.has(bl)) db = b.get(bl) * units_;
+        r = rWord + oldcc;
+        cc = r + ccWord;
+        aa = pp[ia];
+        bb = pp[ib];
+    }
+    if (r < cc) fail(b.has('R') ? b.col['R' - 'A'] : 0, "R plane below the cycle's bottom", "R");
+    auto at = [&](double a, double bv, double c) {
+        Vec3 p;
+        p[ia] = a;
+        p[ib] = bv;
+        p[ic] = c;
+        return toMachine(p);
+    };
+    // The whole depth is known before the first move: a bottom out of reach, or more pecks
+    // than an arc may have chords, stops here rather than after filling memory with pecks.
+    const Vec3 bottom = at(aa + double(repeats) * da, bb + double(repeats) * db, cc);
+    if (!std::isfinite(cc) || !withinReach(bottom))
+        fail(b.has(cl) ? b.col[cl - 'A'] : 0,
+             "canned cycle bottom " + detail::formatPoint(bottom) + " mm is beyond the 1e9 mm a program may reach",
+             b.has(cl) ? tokenAt(b.col[cl - 'A']) : std::string(1, cl));
+    if (mode == 730 || mode == 830) {
+        const double pecks = std::ceil((r - cc) / q);
+        if (pecks > double(opt_.maxArcSegments))
+            fail(b.has('Q') ? b.col['Q' - 'A'] : 0,
+                 "peck depth Q makes " + std::to_string(std::llround(std::min(pecks, 1e18))) + " pecks, more than the " +
+                     std::to_string(opt_.maxArcSegments) + " a cycle may make",
+                 b.has('Q') ? tokenAt(b.col['Q' - 'A']) : "Q");
+    }
+    if (oldcc < r) {
+        emit(at(pp[ia], pp[ib], r), true);
+        oldcc = r;
+    }
+    const double clear = retract_ == 990 ? r : oldcc;
+    for (long rep = 0; rep < repeats; ++rep) {
+        aa += da;
+        bb += db;
+        emit(at(aa, bb, oldcc), true);
+        if (oldcc != r) emit(at(aa, bb, r), true);
+        switch (mode) {
+        case 810: case 820:
+            emit(at(aa, bb, cc), false);
+            emit(at(aa, bb, clear), true);
+            break;
+        case 850: case 890:
+            emit(at(aa, bb, cc), false);
+            emit(at(aa, bb, r), false);
+            if (clear != r) emit(at(aa, bb, clear), true);
+            break;
+        case 830: {
+            double depth = r - q;
+            std::size_t guard = 0;
+            for (; depth > cc; depth -= q) {
+                if (++guard > opt_.maxArcSegments) fail(0, "too many pecks", "Q");
+                emit(at(aa, bb, depth), false);
+                emit(at(aa, bb, r), true);
+                emit(at(aa, bb, depth + kG83RapidDelta), true);
+            }
+            emit(at(aa, bb, cc), false);
+            emit(at(aa, bb, clear), true);
+            break;
+        }
+        case 730: {
+            double depth = r - q;
+            std::size_t guard = 0;
+            for (; depth > cc; depth -= q) {
+                if (++guard > opt_.maxArcSegments) fail(0, "too many pecks", "Q");
+                emit(at(aa, bb, depth), false);
+                emit(at(aa, bb, depth + kG73Clearance), true);
+            }
+            emit(at(aa, bb, cc), false);
+            emit(at(aa, bb, clear), true);
+            break;
+        }
+        }
+        oldcc = clear;
+    }
+    cycleActive_ = true;
+    cycleCc_ = ccWord;
+    cycleR_ = rWord;
+    cycleQ_ = q;
+}
+
+}  // namespace dexelmill::detail::gcode
