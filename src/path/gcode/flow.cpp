@@ -257,7 +257,9 @@ int Interpreter::executeOWord(SourceFile& f, int pc) {
         const auto& owords = f.owords();
         for (auto it = std::make_reverse_iterator(owords.lower_bound(pc)); it != owords.rend(); ++it) {
             const auto& [k, h] = *it;
-            if (h.label != li.label) continue;
+            // A loop of that label that ended before pc does not hold it: a break there would
+            // jump to just after that loop's end, which may be the break itself.
+            if (h.label != li.label || h.match < pc) continue;
             if (h.kind == OKind::Do || (h.kind == OKind::While && !h.whileIsTail) ||
                 h.kind == OKind::Repeat) {
                 const int end = h.match;
