@@ -131,8 +131,8 @@ private:
 
     void compact() {
         std::vector<std::uint32_t> remap(mesh_.vertices.size(), ~0u);
-        std::vector<Vec3> vertices;
-        std::vector<Mesh::Triangle> triangles;
+        decltype(mesh_.vertices) vertices;
+        decltype(mesh_.triangles) triangles;
         for (std::uint32_t t = 0; t < mesh_.triangles.size(); ++t) {
             if (!alive_[t]) continue;
             Mesh::Triangle tri = mesh_.triangles[t];

@@ -175,7 +175,7 @@ TEST_CASE("checkMesh: an index past the vertex list", "[surface][mesh]") {
 
 TEST_CASE("repairAndCheckMesh: pulls fold vertices until none folds", "[surface][mesh]") {
     Mesh m = sphere(10, 16, 4.0);
-    const std::vector<Vec3> original = m.vertices;
+    const auto original = m.vertices;
     // Move three vertices across a neighbour, past it along the surface: the triangles between
     // turn over.
     for (std::uint32_t v : {20u, 45u, 77u}) m.vertices[v] = m.vertices[v + 1] + 1.5 * (m.vertices[v + 1] - m.vertices[v]);
@@ -201,7 +201,7 @@ TEST_CASE("repairAndCheckMesh: pulls fold vertices until none folds", "[surface]
 
 TEST_CASE("repairAndCheckMesh: the last resort takes the candidate that mends the fold", "[surface][mesh]") {
     Mesh m = sphere(10, 16, 4.0);
-    const std::vector<Vec3> original = m.vertices;
+    const auto original = m.vertices;
     const std::uint32_t bad = 45;
     m.vertices[bad] = m.vertices[bad + 1] + 1.5 * (m.vertices[bad + 1] - m.vertices[bad]);
     REQUIRE(checkMesh(m).foldedTriangles > 0);

@@ -22,8 +22,8 @@ constexpr std::size_t kPopulateBytes = std::size_t(4) << 20;
 
 /// @brief Reserves room for n elements and, for a large buffer, has the kernel fault its pages in
 /// at once, so that the resize or the writes that follow do not fault page by page.
-template <class T>
-void reservePopulated(std::vector<T>& v, std::size_t n) {
+template <class T, class A>
+void reservePopulated(std::vector<T, A>& v, std::size_t n) {
     v.reserve(n);
 #if defined(__linux__) && defined(MADV_POPULATE_WRITE)
     const std::size_t bytes = n * sizeof(T);
