@@ -20,8 +20,8 @@ for name in gcode apt camotics pipeline; do
     echo "== $target"
     # A fixed seed keeps CI repeatable: a new finding shows up in a developer's longer runs,
     # not as a flaky red CI. The timeout allows for the command line's block limit: an endless
-    # loop stops after 50 million blocks, 2.4 s in a release build and over a minute under the
-    # sanitizers.
+    # loop that keeps counting stops after 50 million blocks, 2.4 s in a release build and over a
+    # minute under the sanitizers.
     "$exe" -seed=1 -max_total_time=15 -timeout=300 -rss_limit_mb=2048 -print_final_stats=1 \
         -artifact_prefix="$work/" "$work/$target" || { status=1; cp "$work"/crash-* "$work"/timeout-* "$work"/oom-* . 2>/dev/null || true; }
 done
