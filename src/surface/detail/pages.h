@@ -31,13 +31,8 @@ void reservePopulated(std::vector<T, A>& v, std::size_t n) {
     const auto page = std::uintptr_t(sysconf(_SC_PAGESIZE));
     const auto first = (reinterpret_cast<std::uintptr_t>(v.data()) + page - 1) & ~(page - 1);
     const auto last = (reinterpret_cast<std::uintptr_t>(v.data()) + bytes) & ~(page - 1);
-    if (last <= first) return;
-    // Small pages: when malloc asked for transparent huge pages (the tool's heap.cpp), each huge
-    // page of a large buffer may wait for the kernel to compact memory, and on the hood at 1 mm
-    // that made populating the mesh twice as slow.
-    (void)madvise(reinterpret_cast<void*>(first), last - first, MADV_NOHUGEPAGE);
     // Failure (an older kernel, no memory to populate now) only means the faults come later.
-    (void)madvise(reinterpret_cast<void*>(first), last - first, MADV_POPULATE_WRITE);
+    if (last > first) (void)madvise(reinterpret_cast<void*>(first), last - first, MADV_POPULATE_WRITE);
 #endif
 }
 
