@@ -8,7 +8,6 @@
 #include <CLI/CLI.hpp>
 
 #include "commands.h"
-#include "heap.h"
 #include "dexelmill/error.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/job/simulate.h"
@@ -26,7 +25,6 @@ const char* kDescription =
 }  // namespace
 
 int main(int argc, char** argv) {
-    dexelmill::cli::restartWithHugePages(argv);
     CLI::App app{kDescription, "dexelmill"};
     app.set_version_flag("--version", std::string("dexelmill ") + DEXELMILL_VERSION);
     app.require_subcommand(1);
