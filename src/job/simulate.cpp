@@ -199,32 +199,29 @@ Simulation runSimulation(const SimulateOptions& o) {
 
 namespace {
 
-/// Why a job allows no more than `limit` moves, when the memory budget sets it.
-std::string movesReason(const MemoryBudget& budget, std::size_t limit, std::size_t readerLimit) {
-    if (limit >= readerLimit) return {};
-    return "the moves of a longer program would not fit in the memory this job may use, " + formatBytes(double(budget.bytes)) +
-           " (" + budget.source + ")";
+/// Limits a reader's moves to what the memory budget holds, and says so in the reader's message
+/// when the budget is what sets the limit. Options: GcodeOptions or AptOptions.
+template <class Options>
+Options readerOptions(double chordTolerance, const MemoryBudget& budget) {
+    Options o;
+    o.chordTolerance = chordTolerance;
+    // The moves a program makes (its loops included) must fit in memory.
+    const std::size_t readerLimit = o.maxMoves;
+    o.maxMoves = movesThatFit(budget, readerLimit);
+    if (o.maxMoves < readerLimit)
+        o.maxMovesReason = "the moves of a longer program would not fit in the memory this job may use, " +
+                           formatBytes(double(budget.bytes)) + " (" + budget.source + ")";
+    return o;
 }
 
 }  // namespace
 
 GcodeOptions jobGcodeOptions(double chordTolerance, const MemoryBudget& budget) {
-    GcodeOptions gcode;
-    gcode.chordTolerance = chordTolerance;
-    // The moves a program makes (its loops included) must fit in memory.
-    const std::size_t readerLimit = gcode.maxMoves;
-    gcode.maxMoves = movesThatFit(budget, readerLimit);
-    gcode.maxMovesReason = movesReason(budget, gcode.maxMoves, readerLimit);
-    return gcode;
+    return readerOptions<GcodeOptions>(chordTolerance, budget);
 }
 
 AptOptions jobAptOptions(double chordTolerance, const MemoryBudget& budget) {
-    AptOptions apt;
-    apt.chordTolerance = chordTolerance;
-    const std::size_t readerLimit = apt.maxMoves;
-    apt.maxMoves = movesThatFit(budget, readerLimit);
-    apt.maxMovesReason = movesReason(budget, apt.maxMoves, readerLimit);
-    return apt;
+    return readerOptions<AptOptions>(chordTolerance, budget);
 }
 
 namespace {
