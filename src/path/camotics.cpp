@@ -13,6 +13,7 @@
 #include "dexelmill/error.h"
 #include "dexelmill/tool/builders.h"
 #include "path/detail/text.h"
+#include "path/gcode/texts.h"
 
 namespace dexelmill {
 
@@ -193,17 +194,18 @@ Program runProject(const Project& project, const GcodeOptions& options) {
     GcodeOptions o = options;
     o.initialInches = !project.metric;
     o.toolChangeOnT = true;
-    std::vector<std::string> gcodeFiles;
+    // Each program is read once: the text read to tell its kind goes on to its reader.
+    std::vector<detail::gcode::NamedText> gcodeFiles;
     Program program;
     // Runs of G-code files share one machine; an APT file stands alone.
     auto flush = [&]() {
         if (gcodeFiles.empty()) return;
-        Program part = readGcodeFiles(gcodeFiles, o);
+        Program part = detail::gcode::runTexts(std::move(gcodeFiles), o);
         gcodeFiles.clear();
         program.append(std::move(part));
     };
     for (const std::string& f : project.files) {
-        const std::string text = detail::readFile(o.files, f);
+        std::string text = detail::readFile(o.files, f);
         if (detectProgramKind(f, text) == ProgramKind::Apt) {
             flush();
             AptOptions a;
@@ -213,7 +215,7 @@ Program runProject(const Project& project, const GcodeOptions& options) {
             a.maxMovesReason = o.maxMovesReason;
             program.append(parseApt(text, f, a));
         } else {
-            gcodeFiles.push_back(f);
+            gcodeFiles.push_back({f, std::move(text)});
         }
     }
     flush();

@@ -9,6 +9,7 @@
 #include "dexelmill/error.h"
 #include "path/detail/text.h"
 #include "path/gcode/interpreter.h"
+#include "path/gcode/texts.h"
 
 namespace dexelmill {
 
@@ -68,32 +69,28 @@ std::vector<ToolTableEntry> parseLinuxCncToolTable(std::string_view text,
     return out;
 }
 
-Program parseGcode(std::string_view text, const std::string& fileName,
-                   const GcodeOptions& options) {
+Program detail::gcode::runTexts(std::vector<NamedText> files, const GcodeOptions& options) {
     Program program;
     Interpreter interp(options, program);
     if (!options.toolTableFile.empty()) interp.loadToolTable(options.toolTableFile);
-    interp.run(fileName, std::string(text));
+    for (NamedText& f : files) interp.run(std::move(f.name), std::move(f.text));
     interp.finish();
     return program;
+}
+
+Program parseGcode(std::string_view text, const std::string& fileName,
+                   const GcodeOptions& options) {
+    return detail::gcode::runTexts({{fileName, std::string(text)}}, options);
 }
 
 Program readGcode(const std::string& path, const GcodeOptions& options) {
-    Program program;
-    Interpreter interp(options, program);
-    if (!options.toolTableFile.empty()) interp.loadToolTable(options.toolTableFile);
-    interp.run(path, detail::readFile(options.files, path));
-    interp.finish();
-    return program;
+    return readGcodeFiles({path}, options);
 }
 
 Program readGcodeFiles(const std::vector<std::string>& paths, const GcodeOptions& options) {
-    Program program;
-    Interpreter interp(options, program);
-    if (!options.toolTableFile.empty()) interp.loadToolTable(options.toolTableFile);
-    for (const std::string& p : paths) interp.run(p, detail::readFile(options.files, p));
-    interp.finish();
-    return program;
+    std::vector<detail::gcode::NamedText> files;
+    for (const std::string& p : paths) files.push_back({p, detail::readFile(options.files, p)});
+    return detail::gcode::runTexts(std::move(files), options);
 }
 
 }  // namespace dexelmill
