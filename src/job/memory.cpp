@@ -51,7 +51,7 @@ std::size_t cgroupLimit() {
 
 double peakMemoryMb() { return procNumber("/proc/self/status", "VmHWM:") / 1024.0; }
 
-double currentMemoryMb() { return procNumber("/proc/self/status", "VmRSS:") / 1024.0; }
+double currentMemoryMb() { return double(residentBytes()) / (1024.0 * 1024.0); }
 
 std::size_t processThreadCount() { return std::size_t(procNumber("/proc/self/status", "Threads:")); }
 
