@@ -18,19 +18,6 @@ namespace {
 
 constexpr int kTile = DexelTile::kTile;
 
-/// A tool split at its cutting length: the part that cuts and the shank above it (if any).
-struct ToolRegions {
-    std::optional<Tool> cutting;
-    std::optional<Tool> shank;
-};
-
-/// One move's sweeps and the box that holds both.
-struct MoveGeometry {
-    std::optional<MoveSweep> cutting;
-    std::optional<MoveSweep> shank;
-    Box box;
-};
-
 /// One tile of one family, with the extent of its material along the family's axis (relative
 /// to the lattice origin; empty when lo > hi). The extent only shrinks while cutting.
 struct TileSlot {
@@ -220,14 +207,9 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
 
 }  // namespace
 
-CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools, const CutOptions& options) {
-    const std::size_t nMoves = path.moves.size();
-    CutResult result;
-    result.moves.resize(nMoves);
-
-    // Each tool used, split at its cutting length.
+std::map<int, ToolRegions> toolRegions(const ToolPath& path, const ToolTable& tools) {
     std::map<int, ToolRegions> regions;
-    for (std::size_t i = 0; i < nMoves; ++i) {
+    for (std::size_t i = 0; i < path.moves.size(); ++i) {
         const Move& mv = path.moves[i];
         if (regions.count(mv.tool)) continue;
         const auto it = tools.find(mv.tool);
@@ -245,6 +227,24 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
                         std::to_string(MoveSweep::kMaxParts) + " convex parts");
         regions.emplace(mv.tool, std::move(r));
     }
+    return regions;
+}
+
+MoveGeometry::MoveGeometry(const ToolRegions& regions, const Move& move) {
+    cutting.emplace(*regions.cutting, move);
+    box = cutting->bounds();
+    if (regions.shank) {
+        shank.emplace(*regions.shank, move);
+        box.expand(shank->bounds());
+    }
+}
+
+CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools, const CutOptions& options) {
+    const std::size_t nMoves = path.moves.size();
+    CutResult result;
+    result.moves.resize(nMoves);
+
+    const std::map<int, ToolRegions> regions = toolRegions(path, tools);
 
     // Every tile of every kept family, with its material extent.
     std::vector<TileSlot> slots;
@@ -283,14 +283,7 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
         arena.execute([&] {
             tbb::parallel_for(m0, m1, [&](std::size_t i) {
                 const Move& mv = path.moves[i];
-                const ToolRegions& r = regions.at(mv.tool);
-                MoveGeometry& g = geoms[i - m0];
-                g.cutting.emplace(*r.cutting, mv);
-                g.box = g.cutting->bounds();
-                if (r.shank) {
-                    g.shank.emplace(*r.shank, mv);
-                    g.box.expand(g.shank->bounds());
-                }
+                geoms[i - m0] = MoveGeometry(regions.at(mv.tool), mv);
             });
         });
         // Bucket the moves by the tiles their boxes overlap, in program order.

@@ -24,10 +24,13 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <map>
+#include <optional>
 #include <vector>
 
 #include "dexelmill/path/toolpath.h"
 #include "dexelmill/stock/tridexel.h"
+#include "dexelmill/sweep/sweep.h"
 
 namespace dexelmill {
 
@@ -82,6 +85,29 @@ struct CutResult {
     std::uint64_t changed = 0;
     double removedVolume = 0.0;
     double shankVolume = 0.0;
+};
+
+/// @brief A tool split at its cutting length: the part that cuts (heights [bottom, cutting length])
+/// and the shank above it, if there is one.
+struct ToolRegions {
+    std::optional<Tool> cutting;
+    std::optional<Tool> shank;
+};
+
+/// @brief The regions of every tool `path` uses, by tool number.
+/// @throw Error if a move uses a tool that is not in `tools` (naming the move and its source) or
+/// a region has more convex parts than the sweep handles.
+std::map<int, ToolRegions> toolRegions(const ToolPath& path, const ToolTable& tools);
+
+/// @brief One move's sweeps: its cutting part's, its shank's if the tool has one, and the box
+/// that holds both.
+struct MoveGeometry {
+    std::optional<MoveSweep> cutting;
+    std::optional<MoveSweep> shank;
+    Box box;
+
+    MoveGeometry() = default;
+    MoveGeometry(const ToolRegions& regions, const Move& move);
 };
 
 /// @brief Applies every move of `path`, in order, to `stock`.
