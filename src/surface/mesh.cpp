@@ -381,9 +381,13 @@ void pullBack(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& normal, st
             log.normal(w, normal[w]);
             normal[w] = starNormal(mesh, stars, w);
         }
-        // The triangles whose test may have changed: those around any touched vertex.
-        suspects = trianglesAround(stars, touched);
-        keepSuspects(mesh, normal, repair.minCosine, suspects);
+        // The triangles whose test may have changed: those around any touched vertex; and the
+        // suspects no pull touched, which must not be forgotten.
+        std::vector<std::uint32_t> again = trianglesAround(stars, touched);
+        again.insert(again.end(), suspects.begin(), suspects.end());
+        sortUnique(again);
+        keepSuspects(mesh, normal, repair.minCosine, again);
+        suspects.swap(again);
     }
     if (!suspects.empty() && repair.candidates) tryCandidates(mesh, stars, normal, suspects, repair, log);
 }

@@ -199,6 +199,34 @@ TEST_CASE("repairAndCheckMesh: pulls fold vertices until none folds", "[surface]
     compare(c, bruteForce(m));
 }
 
+TEST_CASE("repairAndCheckMesh: a fold no pull can mend stays listed while others are mended", "[surface][mesh]") {
+    // Two folds far apart; the pull only knows how to mend the first. The second must still be
+    // listed as unrepaired (it used to be dropped once the first one's vertices moved).
+    Mesh m = sphere(10, 16, 4.0);
+    const auto original = m.vertices;
+    const std::uint32_t mendable = 20, stuck = 77;
+    for (std::uint32_t v : {mendable, stuck})
+        m.vertices[v] = m.vertices[v + 1] + 1.5 * (m.vertices[v + 1] - m.vertices[v]);
+    REQUIRE(checkMesh(m).foldedTriangles > 0);
+    FoldRepair repair;
+    repair.pull = [&](std::uint32_t v, int, Vec3& x, const std::vector<std::uint32_t>&) {
+        if (v != mendable || x == original[v]) return false;
+        x = original[v];
+        return true;
+    };
+    std::vector<std::uint32_t> unrepaired;
+    const MeshCheck c = repairAndCheckMesh(m, repair, nullptr, &unrepaired);
+    CHECK(m.vertices[mendable] == original[mendable]);
+    const MeshCheck brute = bruteForce(m);
+    compare(c, brute);
+    REQUIRE(brute.foldedTriangles > 0);
+    CHECK(unrepaired.size() >= brute.foldedTriangles);
+    bool touchesStuck = false;
+    for (std::uint32_t t : unrepaired)
+        for (std::uint32_t v : m.triangles[t]) touchesStuck |= v == stuck;
+    CHECK(touchesStuck);
+}
+
 TEST_CASE("repairAndCheckMesh: the last resort takes the candidate that mends the fold", "[surface][mesh]") {
     Mesh m = sphere(10, 16, 4.0);
     const auto original = m.vertices;
