@@ -31,6 +31,8 @@ struct SimulateArgs {
     std::string output, vdb, png, report;
     double chordTolerance = 0.001;
     double adaptivity = 0.0;
+    int refineRounds = 0;
+    double refineTolerance = 0.002;
     std::string mesher = "dexel";
     bool sharpEdges = false;
     int threads = 0;

@@ -91,6 +91,8 @@ SimulateOptions toOptions(const SimulateArgs& a) {
     o.chordTolerance = a.chordTolerance;
     if (!(a.adaptivity >= 0.0 && a.adaptivity <= 1.0)) throw UsageError("--adaptivity must lie in [0, 1]");
     o.adaptivity = a.adaptivity;
+    o.refineRounds = a.refineRounds;
+    o.refineTolerance = a.refineTolerance;
     if (a.mesher == "dexel") o.mesher = Mesher::Dexel;
     else if (a.mesher == "vdb") o.mesher = Mesher::Vdb;
     else throw UsageError("--mesher must be dexel or vdb, got '" + a.mesher + "'");
@@ -183,6 +185,17 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
     c->add_option("--adaptivity", a.adaptivity,
                   "Merging of flat regions, from 0 (none) to 1 (triangles within 15 degrees merge,\n"
                   "moving the surface by at most 0.05 spacings); the mesh stays closed")
+        ->capture_default_str();
+    c->add_option("--refine", a.refineRounds,
+                  "Rounds of refinement against the exact part: edges whose midpoints lie off it are split\n"
+                  "at the surface the moves' sweeps cut there (catches cusps finer than the spacing);\n"
+                  "0 keeps the mesher's mesh. Needs a box stock")
+        ->check(CLI::Range(0, 8))
+        ->capture_default_str();
+    c->add_option("--refine-tolerance", a.refineTolerance,
+                  "Refinement splits an edge whose midpoint lies farther than this off the exact part\n"
+                  "(in spacings)")
+        ->check(numberCheck(false))
         ->capture_default_str();
     c->add_flag("--sharp-edges", a.sharpEdges,
                 "Kept for old scripts: the dexel mesher always places sharp edges and corners from the\n"

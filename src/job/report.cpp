@@ -56,8 +56,15 @@ std::string reportJson(const SimulateReport& r) {
                                      {"interpolated_crossings", r.interpolatedCrossings},
                                      {"edge_vertices", r.edgeVertices},
                                      {"corner_vertices", r.cornerVertices}};
-    j["timing_s"] = {{"parse", r.timingS.parse}, {"cut", r.timingS.cut},   {"rebuild", r.timingS.rebuild},
-                     {"mesh", r.timingS.mesh},   {"write", r.timingS.write}, {"total", r.timingS.total}};
+    if (r.refineRounds > 0)
+        j["mesh"]["refine"] = {{"rounds", r.refineRounds},
+                               {"midpoints_cut", r.refineQueries},
+                               {"edges_split", r.refineSplit},
+                               {"splits_refused", r.refineRefused},
+                               {"midpoints_without_crossing", r.refineNoCrossing}};
+    j["timing_s"] = {{"parse", r.timingS.parse}, {"cut", r.timingS.cut},     {"rebuild", r.timingS.rebuild},
+                     {"mesh", r.timingS.mesh},   {"refine", r.timingS.refine}, {"write", r.timingS.write},
+                     {"total", r.timingS.total}};
     j["peak_memory_mb"] = r.peakMemoryMb;
     j["threads_started"] = r.threadsStarted;
     j["stock_memory_mb"] = double(r.stockMemoryBytes) / (1024.0 * 1024.0);

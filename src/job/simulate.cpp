@@ -16,6 +16,7 @@
 #include "dexelmill/io/vdb_io.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/path/camotics.h"
+#include "dexelmill/refine/refine.h"
 #include "dexelmill/stock/cut.h"
 #include "dexelmill/surface/contour.h"
 #include "dexelmill/surface/levelset.h"
@@ -92,6 +93,7 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
 struct LoadedStock {
     TriDexelStock stock;
     Box box;
+    bool isBox = true;  ///< the stock is the box itself (not a file cast into the lattice)
 };
 
 /// A stock box from the program when none is given: its cutting moves' extent (CAMotics'
@@ -181,9 +183,9 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
                       budget.source.c_str(), spacingThatFits(h, dexels + faces, double(budget.bytes) - base));
         throw Error(text);
     }
-    if (fromStl) return {stockFromMesh(*fromStl, lattice, o.families), box};
-    if (fromVdb) return {stockFromLevelSet(*fromVdb, lattice, o.families), box};
-    return {TriDexelStock::fromBox(box, h, o.families), box};
+    if (fromStl) return {stockFromMesh(*fromStl, lattice, o.families), box, false};
+    if (fromVdb) return {stockFromLevelSet(*fromVdb, lattice, o.families), box, false};
+    return {TriDexelStock::fromBox(box, h, o.families), box, true};
 }
 
 Simulation runStages(const SimulateOptions& o);
@@ -366,6 +368,31 @@ Simulation runStages(const SimulateOptions& o) {
         check = checkMesh(sim.mesh);
         report.mesher = "vdb";
     }
+    report.timingS.mesh = seconds(t);
+
+    // Refine against the exact part.
+    if (o.refineRounds > 0 && !loaded.isBox) {
+        ReportWarning w;
+        w.where.file = o.stockFile;
+        w.message = "--refine needs a box stock: the mesh of a stock from a file is not refined";
+        report.warnings.push_back(w);
+    } else if (o.refineRounds > 0) {
+        t = Clock::now();
+        if (o.progress) o.progress("refine", 0, 1);
+        RefineOptions refine;
+        refine.rounds = o.refineRounds;
+        refine.tolerance = o.refineTolerance * stock.lattice().h;
+        refine.window = 0.5 * stock.lattice().h;
+        RefineStats stats;
+        refineMesh(sim.mesh, report.stockBox, program.path, tools, refine, &stats);
+        check = stats.check;
+        report.refineRounds = o.refineRounds;
+        report.refineQueries = stats.queries;
+        report.refineSplit = stats.split;
+        report.refineRefused = stats.refused;
+        report.refineNoCrossing = stats.noCrossing;
+        report.timingS.refine = seconds(t);
+    }
     const Mesh& mesh = sim.mesh;
     report.meshVertices = mesh.vertices.size();
     report.meshTriangles = mesh.triangles.size();
@@ -373,7 +400,6 @@ Simulation runStages(const SimulateOptions& o) {
     report.meshFoldedTriangles = check.foldedTriangles;
     report.meshDegenerateTriangles = check.degenerateTriangles;
     report.meshVolumeMm3 = check.signedVolume;
-    report.timingS.mesh = seconds(t);
     report.timingS.total = seconds(tStart);
     report.peakMemoryMb = peakMemoryMb();
     report.threadsStarted = threadsSince(threadsBefore);

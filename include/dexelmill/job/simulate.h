@@ -61,6 +61,12 @@ struct SimulateOptions {
     Mesher mesher = Mesher::Dexel;
     /// Mesh adaptivity in [0, 1]: 0 keeps every cell's vertices; higher values merge flat regions.
     double adaptivity = 0.0;
+    /// Rounds of refinement against the exact part (refineMesh); 0 keeps the mesher's mesh. Needs a
+    /// box stock: with a file stock it is skipped, with a warning.
+    int refineRounds = 0;
+    /// Refinement splits an edge whose midpoint lies farther than this many spacings off the exact
+    /// part.
+    double refineTolerance = 0.002;
 
     /// Outputs; empty paths are not written. The mesh format follows the extension (.obj, .stl,
     /// .ply).
@@ -127,9 +133,13 @@ struct SimulateReport {
     /// The dexel mesher's edge crossings: dexel endpoints, and interpolated ones (no dexel along
     /// the edge: a family not kept); its vertices on sharp edges and corners.
     std::size_t exactCrossings = 0, interpolatedCrossings = 0, edgeVertices = 0, cornerVertices = 0;
+    /// Refinement (RefineStats): rounds asked for, edge midpoints cut, edges split, splits refused,
+    /// midpoints without a crossing.
+    int refineRounds = 0;
+    std::size_t refineQueries = 0, refineSplit = 0, refineRefused = 0, refineNoCrossing = 0;
 
     struct Timing {
-        double parse = 0, cut = 0, rebuild = 0, mesh = 0, write = 0, total = 0;
+        double parse = 0, cut = 0, rebuild = 0, mesh = 0, refine = 0, write = 0, total = 0;
     } timingS;
     double peakMemoryMb = 0.0;
     /// Threads the process started while the job ran: TBB's workers, which start only when a

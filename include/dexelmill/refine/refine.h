@@ -1,0 +1,63 @@
+/// @file refine.h
+/// @brief The mesh brought closer to the exact part between the lattice's lines.
+///
+/// The dexel mesher puts its vertices on the lattice's crossings, which are exact, but between two
+/// lattice lines a triangle is flat: a cusp left by passes closer together than the spacing, or the
+/// rounded top of a wall, falls between them and is lost (README, Accuracy). Refinement asks the
+/// sweep itself what lies there. Each mesh edge is tested at its midpoint: a short stretch of the
+/// coordinate axis nearest the edge's normal, through the midpoint, is cut exactly as the stock's
+/// dexels are (the stock box minus every move's swept tool, MoveSweep), and the surface crossing
+/// there is the exact part's. An edge whose midpoint is farther than a tolerance from that crossing
+/// is split there, and its triangles are split with it (into two, three or four, the same way on
+/// both sides of every edge, so the mesh stays closed). Rounds repeat on the new edges.
+///
+/// Error bound: every new vertex lies on the exact part's surface to the sweep's accuracy (1e-6 mm)
+/// and the float storage of nothing (the windows are cut in double). Between vertices the surface
+/// is still linear, so what remains is the chord error of the finer edges, and features narrower
+/// than the edges the last round left.
+///
+/// A split is not made where it would fold a triangle against the one it splits, leave a sliver,
+/// or where the window holds no crossing of the right orientation (the surface is farther than the
+/// window from the midpoint: a crease the edge cuts across, or the block's outside). Where the
+/// refined mesh folds against its vertices' normals (checkMesh), the splits around the fold are
+/// refused and the round is made again, so the refined mesh has no fold the mesher's had not.
+#pragma once
+
+#include <cstddef>
+
+#include "dexelmill/geometry/types.h"
+#include "dexelmill/path/toolpath.h"
+#include "dexelmill/surface/mesh.h"
+#include "dexelmill/tool/tool.h"
+
+namespace dexelmill {
+
+/// @brief Options of refineMesh.
+struct RefineOptions {
+    /// Rounds of splitting; 0 leaves the mesh as it is.
+    int rounds = 2;
+    /// An edge is split where its midpoint is farther than this from the exact surface (mm).
+    double tolerance = 1e-3;
+    /// How far from the midpoint the crossing is looked for, each way along the axis (mm).
+    double window = 0.5;
+    /// Whether the shank's sweep removes material too (CutOptions::removeShankMaterial).
+    bool removeShankMaterial = true;
+};
+
+/// @brief What refineMesh did.
+struct RefineStats {
+    std::size_t queries = 0;      ///< edge midpoints cut exactly
+    std::size_t split = 0;        ///< edges split (one new vertex each)
+    std::size_t noCrossing = 0;   ///< midpoints with no crossing of the right side in the window
+    std::size_t refused = 0;      ///< splits given up: a piece would fold or be a sliver
+    MeshCheck check;              ///< checkMesh of the refined mesh
+};
+
+/// @brief Splits the edges of `mesh` whose midpoints lie off the exact part (`stock` minus the
+/// sweeps of `path` with `tools`), at the exact part's surface (see the file comment). Runs in the
+/// caller's task arena.
+/// @throw Error if a move uses a tool that is not in `tools`.
+void refineMesh(Mesh& mesh, const Box& stock, const ToolPath& path, const ToolTable& tools,
+                const RefineOptions& options = {}, RefineStats* stats = nullptr);
+
+}  // namespace dexelmill

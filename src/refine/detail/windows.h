@@ -1,0 +1,34 @@
+/// @file windows.h
+/// @brief Short stretches of coordinate axes cut exactly: where the exact part's surface crosses
+/// them (the refinement's queries).
+#pragma once
+
+#include <vector>
+
+#include "dexelmill/geometry/types.h"
+#include "dexelmill/path/toolpath.h"
+#include "dexelmill/tool/tool.h"
+
+namespace dexelmill::detail {
+
+/// @brief A stretch [-reach, reach] of the coordinate axis `axis` through `point`, and which way
+/// the surface sought there faces: with `outward` true the part's outward normal points along
+/// +axis (the crossing is where material ends going up the axis), otherwise along -axis.
+struct Window {
+    Vec3 point{0.0};
+    int axis = 2;
+    bool outward = true;
+};
+
+/// @brief For each window, the offset along its axis from its point to the nearest crossing of the
+/// exact part's surface that faces its way, within [-reach, reach]; NaN where there is none. The
+/// part is `stock` (its open interior) minus the closed sweep of every move's cutting part, and of
+/// its shank when `removeShank`: the solids the cutting loop subtracts, cut in double precision.
+/// The moves are taken in batches, and each batch's sweeps are shared by the windows they reach, so
+/// memory does not grow with the program. Runs in the caller's task arena; the answers do not
+/// depend on the thread count.
+/// @throw Error if a move uses a tool that is not in `tools`.
+std::vector<double> exactCrossings(const std::vector<Window>& windows, double reach, const Box& stock,
+                                   const ToolPath& path, const ToolTable& tools, bool removeShank);
+
+}  // namespace dexelmill::detail

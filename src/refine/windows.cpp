@@ -1,0 +1,232 @@
+#include "refine/detail/windows.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <utility>
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include "dexelmill/stock/cut.h"
+
+namespace dexelmill::detail {
+
+namespace {
+
+/// Windows cut at once: their material lists take kChunk x sizeof(Material) bytes (about 150 MB).
+constexpr std::size_t kChunk = std::size_t(1) << 22;
+/// Moves whose sweeps are built at once and shared by the buckets.
+constexpr std::size_t kBatch = 4096;
+/// Buckets per side of a window in the bucket grid (a bucket is kBucketReach x 2 reach wide).
+constexpr double kBucketReach = 8.0;
+/// The most buckets the grid may have (its dense index takes 4 bytes each).
+constexpr double kMaxBuckets = double(std::size_t(1) << 22);
+
+/// The material left on one window: up to kPieces disjoint intervals, offsets from the window's
+/// point along its axis, in increasing order. A float offset within reach (half a spacing) is
+/// exact to about 1e-8 of the reach, far below the sweep's own accuracy.
+struct Material {
+    static constexpr int kPieces = 4;
+    std::array<float, kPieces> lo{}, hi{};
+    std::uint8_t count = 0;
+    bool overflow = false;  ///< more pieces than kept: the window gives no answer
+
+    /// Removes the closed interval [a, b]: what is left of each piece is open at a and b.
+    void subtract(float a, float b) {
+        if (overflow || !(a <= b)) return;
+        std::array<float, kPieces> nlo{}, nhi{};
+        int n = 0;
+        for (int i = 0; i < count; ++i) {
+            if (hi[i] <= a || lo[i] >= b) {  // untouched
+                if (n == kPieces) return void(overflow = true);
+                nlo[n] = lo[i], nhi[n] = hi[i], ++n;
+                continue;
+            }
+            if (lo[i] < a) {
+                if (n == kPieces) return void(overflow = true);
+                nlo[n] = lo[i], nhi[n] = a, ++n;
+            }
+            if (hi[i] > b) {
+                if (n == kPieces) return void(overflow = true);
+                nlo[n] = b, nhi[n] = hi[i], ++n;
+            }
+        }
+        lo = nlo, hi = nhi, count = std::uint8_t(n);
+    }
+};
+
+/// The stock box's open interior along a window, clipped to [-reach, reach].
+Material stockMaterial(const Window& w, float reach, const Box& stock) {
+    Material m;
+    for (int a = 0; a < 3; ++a)
+        if (a != w.axis && !(w.point[a] > stock.lo[a] && w.point[a] < stock.hi[a])) return m;
+    const double lo = std::max(double(-reach), stock.lo[w.axis] - w.point[w.axis]);
+    const double hi = std::min(double(reach), stock.hi[w.axis] - w.point[w.axis]);
+    if (lo < hi) {
+        m.lo[0] = lo == -reach ? -reach : float(lo);
+        m.hi[0] = hi == reach ? reach : float(hi);
+        m.count = 1;
+    }
+    return m;
+}
+
+/// The crossing nearest the window's point facing its way (NaN if none): a piece's upper end for
+/// an outward +axis normal, its lower end otherwise. The window's own ends are not crossings.
+double nearestCrossing(const Window& w, const Material& m, float reach) {
+    if (m.overflow) return std::numeric_limits<double>::quiet_NaN();
+    double best = std::numeric_limits<double>::quiet_NaN();
+    for (int i = 0; i < m.count; ++i) {
+        const float end = w.outward ? m.hi[i] : m.lo[i];
+        if (end == reach || end == -reach) continue;
+        if (!(std::abs(double(end)) >= std::abs(best))) best = end;
+    }
+    return best;
+}
+
+/// The grid of buckets the windows of one chunk fall in.
+struct Buckets {
+    Vec3 origin{0.0};
+    double size = 1.0;
+    std::array<int, 3> n{1, 1, 1};
+    std::vector<std::int32_t> index;  ///< dense cell -> run of windows, or -1
+    std::vector<std::uint32_t> order;  ///< windows sorted by cell
+    std::vector<std::size_t> runStart;  ///< runs of `order`, one per non-empty cell (+ end)
+
+    int cellCoord(int a, double x) const {
+        return std::clamp(int(std::floor((x - origin[a]) / size)), 0, n[a] - 1);
+    }
+    std::size_t cell(const std::array<int, 3>& c) const {
+        return std::size_t(c[0]) + std::size_t(n[0]) * (std::size_t(c[1]) + std::size_t(n[1]) * std::size_t(c[2]));
+    }
+};
+
+Buckets bucketWindows(const std::vector<Window>& windows, std::size_t w0, std::size_t w1, double reach) {
+    Buckets b;
+    Box box;
+    for (std::size_t i = w0; i < w1; ++i) box.expand(windows[i].point);
+    b.origin = box.lo;
+    const Vec3 span = box.size() + Vec3(1e-9);
+    b.size = std::max(kBucketReach * 2.0 * reach, 1e-6);
+    while ((std::ceil(span.x / b.size) * std::ceil(span.y / b.size) * std::ceil(span.z / b.size)) > kMaxBuckets)
+        b.size *= 2.0;
+    for (int a = 0; a < 3; ++a) b.n[a] = std::max(1, int(std::ceil(span[a] / b.size)));
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(w1 - w0);
+    tbb::parallel_for(w0, w1, [&](std::size_t i) {
+        const Vec3& p = windows[i].point;
+        keyed[i - w0] = {b.cell({b.cellCoord(0, p.x), b.cellCoord(1, p.y), b.cellCoord(2, p.z)}), std::uint32_t(i)};
+    });
+    tbb::parallel_sort(keyed.begin(), keyed.end());
+    b.index.assign(b.cell({b.n[0] - 1, b.n[1] - 1, b.n[2] - 1}) + 1, -1);
+    b.order.resize(keyed.size());
+    for (std::size_t k = 0; k < keyed.size(); ++k) {
+        b.order[k] = keyed[k].second;
+        if (k == 0 || keyed[k].first != keyed[k - 1].first) {
+            b.index[keyed[k].first] = std::int32_t(b.runStart.size());
+            b.runStart.push_back(k);
+        }
+    }
+    b.runStart.push_back(keyed.size());
+    return b;
+}
+
+/// Subtracts one sweep from a window's material, if its cheap bound reaches the window.
+void subtractSweep(const MoveSweep& sweep, const Line& line, float reach, Material& m) {
+    const Interval bound = sweep.bound(line);
+    if (bound.isEmpty() || bound.hi < -reach || bound.lo > reach) return;
+    Interval parts[MoveSweep::kMaxParts];
+    const std::size_t n = sweep.intersectParts(line, parts);
+    for (std::size_t k = 0; k < n; ++k) {
+        const Interval& r = parts[k];
+        if (r.isEmpty() || r.hi < -reach || r.lo > reach) continue;
+        // Rounded outwards to float: the sweep is closed, and 1e-8 of a reach is far below its
+        // accuracy.
+        const float lo = std::nextafter(float(std::max(r.lo, -2.0 * reach)), -std::numeric_limits<float>::infinity());
+        const float hi = std::nextafter(float(std::min(r.hi, 2.0 * reach)), std::numeric_limits<float>::infinity());
+        m.subtract(lo, hi);
+    }
+}
+
+}  // namespace
+
+std::vector<double> exactCrossings(const std::vector<Window>& windows, double reach, const Box& stock,
+                                   const ToolPath& path, const ToolTable& tools, bool removeShank) {
+    std::vector<double> out(windows.size(), std::numeric_limits<double>::quiet_NaN());
+    if (windows.empty()) return out;
+    const float freach = float(reach);
+    const std::map<int, ToolRegions> regions = toolRegions(path, tools);
+    std::vector<Material> material;
+    std::vector<MoveGeometry> geoms;
+    std::vector<std::vector<std::uint32_t>> runMoves;
+    std::vector<std::size_t> active;
+
+    for (std::size_t w0 = 0; w0 < windows.size(); w0 += kChunk) {
+        const std::size_t w1 = std::min(windows.size(), w0 + kChunk);
+        const Buckets b = bucketWindows(windows, w0, w1, reach);
+        material.resize(w1 - w0);
+        tbb::parallel_for(w0, w1, [&](std::size_t i) { material[i - w0] = stockMaterial(windows[i], freach, stock); });
+        runMoves.assign(b.runStart.size() - 1, {});
+
+        for (std::size_t m0 = 0; m0 < path.moves.size(); m0 += kBatch) {
+            const std::size_t m1 = std::min(path.moves.size(), m0 + kBatch);
+            geoms.resize(m1 - m0);
+            tbb::parallel_for(m0, m1, [&](std::size_t i) {
+                geoms[i - m0] = MoveGeometry(regions.at(path.moves[i].tool), path.moves[i]);
+            });
+            // Each move to the runs of windows its box (grown by the reach) overlaps, in order.
+            active.clear();
+            for (std::size_t i = m0; i < m1; ++i) {
+                const Box& box = geoms[i - m0].box;
+                std::array<int, 3> c0{}, c1{};
+                bool misses = false;
+                for (int a = 0; a < 3; ++a) {
+                    const double lo = box.lo[a] - reach, hi = box.hi[a] + reach;
+                    const double far = b.origin[a] + b.n[a] * b.size;
+                    if (hi < b.origin[a] || lo > far) misses = true;
+                    c0[a] = b.cellCoord(a, lo), c1[a] = b.cellCoord(a, hi);
+                }
+                if (misses) continue;
+                for (int z = c0[2]; z <= c1[2]; ++z)
+                    for (int y = c0[1]; y <= c1[1]; ++y)
+                        for (int x = c0[0]; x <= c1[0]; ++x) {
+                            const std::int32_t run = b.index[b.cell({x, y, z})];
+                            if (run < 0) continue;
+                            if (runMoves[std::size_t(run)].empty()) active.push_back(std::size_t(run));
+                            runMoves[std::size_t(run)].push_back(std::uint32_t(i - m0));
+                        }
+            }
+            tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t k) {
+                const std::size_t run = active[k];
+                for (std::size_t j = b.runStart[run]; j < b.runStart[run + 1]; ++j) {
+                    const std::uint32_t wi = b.order[j];
+                    const Window& w = windows[wi];
+                    Material& m = material[wi - w0];
+                    Line line;
+                    line.origin = w.point;
+                    line.dir = Vec3(0.0);
+                    line.dir[w.axis] = 1.0;
+                    for (std::uint32_t mi : runMoves[run]) {
+                        if (m.count == 0 || m.overflow) break;
+                        const MoveGeometry& g = geoms[mi];
+                        bool near = true;
+                        for (int a = 0; a < 3; ++a) {
+                            const double lo = g.box.lo[a] - (a == w.axis ? reach : 0.0);
+                            const double hi = g.box.hi[a] + (a == w.axis ? reach : 0.0);
+                            if (w.point[a] < lo || w.point[a] > hi) near = false;
+                        }
+                        if (!near) continue;
+                        if (g.cutting) subtractSweep(*g.cutting, line, freach, m);
+                        if (g.shank && removeShank) subtractSweep(*g.shank, line, freach, m);
+                    }
+                }
+                runMoves[run].clear();
+            });
+        }
+        tbb::parallel_for(w0, w1, [&](std::size_t i) { out[i] = nearestCrossing(windows[i], material[i - w0], freach); });
+    }
+    return out;
+}
+
+}  // namespace dexelmill::detail
