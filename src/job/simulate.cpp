@@ -383,10 +383,23 @@ Simulation runStages(const SimulateOptions& o) {
         refine.rounds = o.refineRounds;
         refine.tolerance = o.refineTolerance * stock.lattice().h;
         refine.window = 0.5 * stock.lattice().h;
+        refine.memoryBytes = std::max(0.0, double(budget.bytes) - double(residentBytes()));
         RefineStats stats;
         refineMesh(sim.mesh, report.stockBox, program.path, tools, refine, &stats);
         check = stats.check;
-        report.refineRounds = o.refineRounds;
+        if (stats.roundNeeded > 0.0) {
+            char text[400];
+            std::snprintf(text, sizeof text,
+                          "--refine %d: stopped after %d round(s): the next would need about %s on top of the %s "
+                          "in use, more than the %s this job may use (%s)",
+                          o.refineRounds, stats.rounds, formatBytes(stats.roundNeeded).c_str(),
+                          formatBytes(double(residentBytes())).c_str(), formatBytes(double(budget.bytes)).c_str(),
+                          budget.source.c_str());
+            ReportWarning w;
+            w.message = text;
+            report.warnings.push_back(w);
+        }
+        report.refineRounds = stats.rounds;
         report.refineQueries = stats.queries;
         report.refineSplit = stats.split;
         report.refineRefused = stats.refused;

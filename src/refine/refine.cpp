@@ -306,6 +306,11 @@ void refineMesh(Mesh& mesh, const Box& stock, const ToolPath& path, const ToolTa
     std::size_t firstNew = 0;
     bool checked = false;
     for (int round = 0; round < options.rounds && !mesh.empty(); ++round) {
+        const double need = kRoundBytesPerTriangle * double(mesh.triangles.size());
+        if (options.memoryBytes > 0.0 && need > options.memoryBytes) {
+            st.roundNeeded = need;
+            break;
+        }
         const EdgeTable edges = buildEdges(mesh);
         // The first round tests every edge; later rounds only the edges the last one made (the
         // others were within the tolerance, or refused).
@@ -313,6 +318,7 @@ void refineMesh(Mesh& mesh, const Box& stock, const ToolPath& path, const ToolTa
         for (std::size_t e = 0; e < edges.ends.size(); ++e) candidate[e] = edges.ends[e][1] >= firstNew;
         const std::size_t before = mesh.vertices.size();
         checked = true;
+        ++st.rounds;
         if (refineRound(mesh, edges, candidate, stock, path, tools, options, st, st.check) == 0) break;
         firstNew = before;
     }

@@ -12,6 +12,7 @@
 
 #include "dexelmill/io/mesh_io.h"
 #include "dexelmill/job/simulate.h"
+#include "dexelmill/refine/refine.h"
 #include "dexelmill/tool/builders.h"
 #include "support/face_deviation.h"
 
@@ -180,4 +181,31 @@ TEST_CASE("refine: a stock from a file is not refined, and the report says why",
     for (const ReportWarning& w : s.report.warnings) warned |= w.message.find("--refine needs a box stock") != std::string::npos;
     CHECK(warned);
     fs::remove_all(dir);
+}
+
+TEST_CASE("refine: a round that would not fit in memory is not started", "[refine]") {
+    const Simulation plain = runSimulation(job(passesProgram(), 0));
+    Mesh mesh = plain.mesh;
+    RefineOptions o;
+    o.rounds = 2;
+    o.tolerance = 0.002 * kH;
+    o.window = 0.5 * kH;
+    // Room for the first round only: the second starts from a mesh with more triangles.
+    o.memoryBytes = kRoundBytesPerTriangle * double(mesh.triangles.size()) * 1.01;
+    RefineStats stats;
+    refineMesh(mesh, kStock, plain.program.path, plain.tools, o, &stats);
+    CHECK(stats.rounds == 1);
+    CHECK(stats.split > 0);
+    CHECK(stats.roundNeeded > o.memoryBytes);
+    CHECK(stats.check.ok());
+
+    // No room at all: the mesh is left as it is, and checked.
+    Mesh untouched = plain.mesh;
+    o.memoryBytes = 1.0;
+    RefineStats none;
+    refineMesh(untouched, kStock, plain.program.path, plain.tools, o, &none);
+    CHECK(none.rounds == 0);
+    CHECK(none.roundNeeded > 0.0);
+    CHECK(untouched.triangles.size() == plain.mesh.triangles.size());
+    CHECK(none.check.ok());
 }

@@ -42,7 +42,15 @@ struct RefineOptions {
     double window = 0.5;
     /// Whether the shank's sweep removes material too (CutOptions::removeShankMaterial).
     bool removeShankMaterial = true;
+    /// The most memory a round may add (bytes; 0: no limit). A round that would need more, by
+    /// kRoundBytesPerTriangle, is not started: the mesh keeps the rounds done so far.
+    double memoryBytes = 0.0;
 };
+
+/// Working memory of a round per triangle of the mesh it starts from (bytes): the edge table, the
+/// windows and their material, the split mesh built beside the old one and its check. An upper
+/// figure: bear's first round measured about 290.
+constexpr double kRoundBytesPerTriangle = 400.0;
 
 /// @brief What refineMesh did.
 struct RefineStats {
@@ -50,6 +58,9 @@ struct RefineStats {
     std::size_t split = 0;        ///< edges split (one new vertex each)
     std::size_t noCrossing = 0;   ///< midpoints with no crossing of the right side in the window
     std::size_t refused = 0;      ///< splits given up: a piece would fold or be a sliver
+    int rounds = 0;               ///< rounds made (fewer than asked when one split nothing)
+    /// The memory the first round not started for lack of it would have needed (bytes), or 0.
+    double roundNeeded = 0.0;
     MeshCheck check;              ///< checkMesh of the refined mesh
 };
 
