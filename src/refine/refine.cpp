@@ -9,7 +9,6 @@
 #include <vector>
 
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include "refine/detail/windows.h"
 
@@ -35,29 +34,53 @@ struct EdgeTable {
     std::vector<std::array<std::uint32_t, 2>> triangles;  ///< kNone where not exactly two
 };
 
+/// The edge table from the directed edges grouped by their first vertex: an edge's owner is its
+/// slot going up in vertex index (or its only slot), and its twin the slot going back. An edge
+/// with more than one slot each way, or none back, keeps no triangles (it is never split).
 EdgeTable buildEdges(const Mesh& mesh) {
     const std::size_t slots = 3 * mesh.triangles.size();
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(slots);
-    tbb::parallel_for(std::size_t(0), mesh.triangles.size(), [&](std::size_t t) {
-        const Mesh::Triangle& tri = mesh.triangles[t];
-        for (int k = 0; k < 3; ++k) {
-            const std::uint32_t a = tri[k], b = tri[(k + 1) % 3];
-            keyed[3 * t + k] = {(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b), std::uint32_t(3 * t + k)};
-        }
+    const auto from = [&](std::size_t s) { return mesh.triangles[s / 3][s % 3]; };
+    const auto to = [&](std::size_t s) { return mesh.triangles[s / 3][(s % 3 + 1) % 3]; };
+    // Slots by first vertex (counting sort).
+    std::vector<std::uint32_t> start(mesh.vertices.size() + 1, 0), bySource(slots);
+    for (std::size_t s = 0; s < slots; ++s) ++start[from(s) + 1];
+    for (std::size_t v = 0; v < mesh.vertices.size(); ++v) start[v + 1] += start[v];
+    {
+        std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+        for (std::size_t s = 0; s < slots; ++s) bySource[fill[from(s)]++] = std::uint32_t(s);
+    }
+    // Per slot: its twin (kNone if none or several) and whether another slot runs the same way.
+    std::vector<std::uint32_t> twin(slots, kNone);
+    std::vector<char> shared(slots, 0);
+    tbb::parallel_for(std::size_t(0), slots, [&](std::size_t s) {
+        const std::uint32_t a = from(s), b = to(s);
+        if (a == b) return void(shared[s] = 1);  // a corner repeated: no edge to split
+        std::size_t back = 0;
+        for (std::uint32_t i = start[b]; i < start[b + 1]; ++i)
+            if (to(bySource[i]) == a) twin[s] = bySource[i], ++back;
+        for (std::uint32_t i = start[a]; i < start[a + 1]; ++i)
+            if (bySource[i] != s && to(bySource[i]) == b) shared[s] = 1;
+        if (back != 1) twin[s] = kNone, shared[s] = 1;
     });
-    tbb::parallel_sort(keyed.begin(), keyed.end());
+    // Owners number the edges in slot order; the others take their twin's number.
     EdgeTable e;
     e.edgeOf.resize(slots);
-    for (std::size_t i = 0; i < slots;) {
-        std::size_t j = i;
-        while (j < slots && keyed[j].first == keyed[i].first) ++j;
-        const std::uint32_t id = std::uint32_t(e.ends.size());
-        e.ends.push_back({std::uint32_t(keyed[i].first >> 32), std::uint32_t(keyed[i].first)});
-        e.triangles.push_back(j - i == 2 ? std::array<std::uint32_t, 2>{keyed[i].second / 3, keyed[i + 1].second / 3}
-                                         : std::array<std::uint32_t, 2>{kNone, kNone});
-        for (std::size_t k = i; k < j; ++k) e.edgeOf[keyed[k].second] = id;
-        i = j;
-    }
+    const auto owner = [&](std::size_t s) { return from(s) < to(s) || twin[s] == kNone; };
+    std::uint32_t edges = 0;
+    for (std::size_t s = 0; s < slots; ++s)
+        if (owner(s)) e.edgeOf[s] = edges++;
+    e.ends.resize(edges);
+    e.triangles.resize(edges);
+    tbb::parallel_for(std::size_t(0), slots, [&](std::size_t s) {
+        if (!owner(s)) {
+            e.edgeOf[s] = e.edgeOf[twin[s]];
+            return;
+        }
+        const std::uint32_t id = e.edgeOf[s];
+        e.ends[id] = {std::min(from(s), to(s)), std::max(from(s), to(s))};
+        e.triangles[id] = shared[s] ? std::array<std::uint32_t, 2>{kNone, kNone}
+                                    : std::array<std::uint32_t, 2>{std::uint32_t(s / 3), twin[s] / 3};
+    });
     return e;
 }
 
@@ -139,11 +162,11 @@ std::size_t buildPieces(const Mesh& mesh, const EdgeTable& edges, const std::vec
         refined.vertices.push_back(at[e]);
         ++added;
     }
-    std::array<Local, 4> pieces;
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    // Each split triangle's pieces: the first replaces it, the others go after the old triangles,
+    // in triangle order (counted first, so that both passes run in parallel).
+    const auto pieces = [&](std::size_t t, std::array<Local, 4>& out, std::array<std::uint32_t, 6>& ids) {
         unsigned bits = 0;
         std::array<Vec3, 6> p;
-        std::array<std::uint32_t, 6> ids;
         for (int k = 0; k < 3; ++k) {
             const std::uint32_t e = edges.edgeOf[3 * t + k];
             ids[k] = mesh.triangles[t][k];
@@ -152,15 +175,31 @@ std::size_t buildPieces(const Mesh& mesh, const EdgeTable& edges, const std::vec
             p[3 + k] = split[e] ? at[e] : Vec3(0.0);
             if (split[e]) bits |= 1u << k;
         }
-        if (!bits) continue;
-        const int count = splitPieces(p, bits, unit(mesh.areaVector(t)), pieces);
+        return bits ? splitPieces(p, bits, unit(mesh.areaVector(t)), out) : 0;
+    };
+    const std::size_t nt = mesh.triangles.size();
+    std::vector<std::uint32_t> extra(nt + 1, 0);
+    tbb::parallel_for(std::size_t(0), nt, [&](std::size_t t) {
+        std::array<Local, 4> out;
+        std::array<std::uint32_t, 6> ids;
+        const int count = pieces(t, out, ids);
+        extra[t + 1] = count > 1 ? std::uint32_t(count - 1) : 0;
+    });
+    for (std::size_t t = 0; t < nt; ++t) extra[t + 1] += extra[t];
+    refined.triangles.resize(nt + extra[nt]);
+    parent.resize(nt + extra[nt]);
+    tbb::parallel_for(std::size_t(0), nt, [&](std::size_t t) {
+        std::array<Local, 4> out;
+        std::array<std::uint32_t, 6> ids;
+        const int count = pieces(t, out, ids);
+        if (count == 0) return;
         const auto piece = [&](const Local& l) { return Mesh::Triangle{ids[l[0]], ids[l[1]], ids[l[2]]}; };
-        refined.triangles[t] = piece(pieces[0]);
+        refined.triangles[t] = piece(out[0]);
         for (int i = 1; i < count; ++i) {
-            refined.triangles.push_back(piece(pieces[i]));
-            parent.push_back(std::uint32_t(t));
+            refined.triangles[nt + extra[t] + i - 1] = piece(out[i]);
+            parent[nt + extra[t] + i - 1] = std::uint32_t(t);
         }
-    }
+    });
     return added;
 }
 
@@ -179,22 +218,29 @@ std::size_t refineRound(Mesh& mesh, const EdgeTable& edges, const std::vector<ch
                         const ToolPath& path, const ToolTable& tools, const RefineOptions& o, RefineStats& stats,
                         MeshCheck& check) {
     const std::size_t nEdges = edges.ends.size();
+    // One window per candidate edge, along the axis nearest its two triangles' mean normal.
     std::vector<std::uint32_t> asked;
-    std::vector<detail::Window> windows;
-    for (std::size_t e = 0; e < nEdges; ++e) {
-        if (!candidate[e] || edges.triangles[e][0] == kNone) continue;
+    for (std::size_t e = 0; e < nEdges; ++e)
+        if (candidate[e] && edges.triangles[e][0] != kNone) asked.push_back(std::uint32_t(e));
+    std::vector<detail::Window> windows(asked.size());
+    std::vector<char> facing(asked.size(), 0);
+    tbb::parallel_for(std::size_t(0), asked.size(), [&](std::size_t i) {
+        const std::uint32_t e = asked[i];
         const Vec3 n = unit(mesh.areaVector(edges.triangles[e][0])) + unit(mesh.areaVector(edges.triangles[e][1]));
         int axis = 0;
         for (int a = 1; a < 3; ++a)
             if (std::abs(n[a]) > std::abs(n[axis])) axis = a;
-        if (!(std::abs(n[axis]) > 0.0)) continue;  // the two triangles face apart: a fin, left alone
-        detail::Window w;
-        w.point = 0.5 * (mesh.vertices[edges.ends[e][0]] + mesh.vertices[edges.ends[e][1]]);
-        w.axis = axis;
-        w.outward = n[axis] > 0.0;
-        windows.push_back(w);
-        asked.push_back(std::uint32_t(e));
-    }
+        if (!(std::abs(n[axis]) > 0.0)) return;  // the two triangles face apart: a fin, left alone
+        windows[i].point = 0.5 * (mesh.vertices[edges.ends[e][0]] + mesh.vertices[edges.ends[e][1]]);
+        windows[i].axis = axis;
+        windows[i].outward = n[axis] > 0.0;
+        facing[i] = 1;
+    });
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < asked.size(); ++i)
+        if (facing[i]) asked[kept] = asked[i], windows[kept] = windows[i], ++kept;
+    asked.resize(kept);
+    windows.resize(kept);
     stats.queries += windows.size();
     const std::vector<double> offsets =
         detail::exactCrossings(windows, o.window, stock, path, tools, o.removeShankMaterial);

@@ -132,6 +132,34 @@ Buckets bucketWindows(const std::vector<Window>& windows, std::size_t w0, std::s
     return b;
 }
 
+/// Where one region of a tool can reach on one move, for a test cheaper than the sweep's bound:
+/// the region is the solid of revolution about the axis n between heights zlo and zhi above the
+/// tip, no wider than r, and the tip runs from a to a + f.
+struct SweepReach {
+    Vec3 a{0.0}, f{0.0}, n{0.0, 0.0, 1.0};
+    double r = 0.0, zlo = 0.0, zhi = 0.0;
+
+    SweepReach() = default;
+    SweepReach(const Tool& region, const Move& move)
+        : a(move.start), f(move.feed()), n(glm::normalize(move.axis)), r(region.maxRadius()),
+          zlo(region.bottom()), zhi(region.totalLength()) {}
+
+    /// Whether the swept region may come within `slack` of q: q's height along n lies within the
+    /// heights the region sweeps, and its distance from the tip's path, across n, is at most r
+    /// (both widened by the slack). Exact rounding aside, never false where the sweep reaches.
+    bool mayReach(const Vec3& q, double slack) const {
+        const Vec3 d = q - a;
+        const double z = glm::dot(d, n), fz = glm::dot(f, n);
+        if (z < std::min(0.0, fz) + zlo - slack || z > std::max(0.0, fz) + zhi + slack) return false;
+        const Vec3 dp = d - z * n, fp = f - fz * n;
+        const double ff = glm::dot(fp, fp);
+        const double u = ff > 0.0 ? std::clamp(glm::dot(dp, fp) / ff, 0.0, 1.0) : 0.0;
+        const Vec3 off = dp - u * fp;
+        const double reach = r + slack;
+        return glm::dot(off, off) <= reach * reach;
+    }
+};
+
 /// Subtracts one sweep from a window's material, if its cheap bound reaches the window.
 void subtractSweep(const MoveSweep& sweep, const Line& line, float reach, Material& m) {
     const Interval bound = sweep.bound(line);
@@ -159,6 +187,9 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
     const std::map<int, ToolRegions> regions = toolRegions(path, tools);
     std::vector<Material> material;
     std::vector<MoveGeometry> geoms;
+    std::vector<SweepReach> cutReach, shankReach;
+    // The slack of the cheap test: the window's half-length, and a margin for its own rounding.
+    const double slack = reach * (1.0 + 1e-9) + 1e-9;
     std::vector<std::vector<std::uint32_t>> runMoves;
     std::vector<std::size_t> active;
 
@@ -172,8 +203,13 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
         for (std::size_t m0 = 0; m0 < path.moves.size(); m0 += kBatch) {
             const std::size_t m1 = std::min(path.moves.size(), m0 + kBatch);
             geoms.resize(m1 - m0);
+            cutReach.resize(m1 - m0);
+            shankReach.resize(m1 - m0);
             tbb::parallel_for(m0, m1, [&](std::size_t i) {
-                geoms[i - m0] = MoveGeometry(regions.at(path.moves[i].tool), path.moves[i]);
+                const ToolRegions& r = regions.at(path.moves[i].tool);
+                geoms[i - m0] = MoveGeometry(r, path.moves[i]);
+                cutReach[i - m0] = SweepReach(*r.cutting, path.moves[i]);
+                if (r.shank) shankReach[i - m0] = SweepReach(*r.shank, path.moves[i]);
             });
             // Each move to the runs of windows its box (grown by the reach) overlaps, in order.
             active.clear();
@@ -217,8 +253,9 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
                             if (w.point[a] < lo || w.point[a] > hi) near = false;
                         }
                         if (!near) continue;
-                        if (g.cutting) subtractSweep(*g.cutting, line, freach, m);
-                        if (g.shank && removeShank) subtractSweep(*g.shank, line, freach, m);
+                        if (g.cutting && cutReach[mi].mayReach(w.point, slack)) subtractSweep(*g.cutting, line, freach, m);
+                        if (g.shank && removeShank && shankReach[mi].mayReach(w.point, slack))
+                            subtractSweep(*g.shank, line, freach, m);
                     }
                 }
                 runMoves[run].clear();
