@@ -179,6 +179,55 @@ void subtractSweep(const MoveSweep& sweep, const Line& line, float reach, Materi
 
 }  // namespace
 
+SweptCells::SweptCells(const Box& stock, const ToolPath& path, const ToolTable& tools, double cell,
+                       double margin) {
+    origin_ = stock.lo;
+    const Vec3 span = stock.size() + Vec3(1e-9);
+    size_ = std::max(cell, 1e-6);
+    while ((std::ceil(span.x / size_) * std::ceil(span.y / size_) * std::ceil(span.z / size_)) > kMaxBuckets)
+        size_ *= 2.0;
+    for (int a = 0; a < 3; ++a) n_[a] = std::max(1, int(std::ceil(span[a] / size_)));
+    marked_.assign(std::size_t(n_[0]) * std::size_t(n_[1]) * std::size_t(n_[2]), 0);
+    const auto at = [&](int a, double x) { return std::clamp(int(std::floor((x - origin_[a]) / size_)), 0, n_[a] - 1); };
+    for (const Move& mv : path.moves) {
+        const auto it = tools.find(mv.tool);
+        if (it == tools.end()) continue;  // exactCrossings reports it
+        const Tool& tool = it->second;
+        // The tool's axis segment at both ends of the move, grown by its widest radius.
+        const Vec3 n = glm::normalize(mv.axis);
+        Box box;
+        for (const Vec3& tip : {mv.start, mv.end})
+            for (double z : {tool.bottom(), tool.totalLength()}) box.expand(tip + z * n);
+        const double grow = tool.maxRadius() + margin;
+        bool outside = false;
+        std::array<int, 3> c0{}, c1{};
+        for (int a = 0; a < 3; ++a) {
+            const double lo = box.lo[a] - grow, hi = box.hi[a] + grow;
+            if (hi < stock.lo[a] || lo > stock.hi[a]) outside = true;
+            c0[a] = at(a, lo), c1[a] = at(a, hi);
+        }
+        if (outside) continue;
+        for (int z = c0[2]; z <= c1[2]; ++z)
+            for (int y = c0[1]; y <= c1[1]; ++y)
+                for (int x = c0[0]; x <= c1[0]; ++x)
+                    marked_[std::size_t(x) + std::size_t(n_[0]) * (std::size_t(y) + std::size_t(n_[1]) * std::size_t(z))] = 1;
+    }
+}
+
+bool SweptCells::reached(const Vec3& p) const {
+    std::array<int, 3> c{};
+    for (int a = 0; a < 3; ++a) {
+        const double x = std::floor((p[a] - origin_[a]) / size_);
+        if (!(x >= 0.0 && x < n_[a])) return true;
+        c[a] = int(x);
+    }
+    return marked_[std::size_t(c[0]) + std::size_t(n_[0]) * (std::size_t(c[1]) + std::size_t(n_[1]) * std::size_t(c[2]))] != 0;
+}
+
+double stockCrossing(const Window& window, double reach, const Box& stock) {
+    return nearestCrossing(window, stockMaterial(window, float(reach), stock), float(reach));
+}
+
 std::vector<double> exactCrossings(const std::vector<Window>& windows, double reach, const Box& stock,
                                    const ToolPath& path, const ToolTable& tools, bool removeShank) {
     std::vector<double> out(windows.size(), std::numeric_limits<double>::quiet_NaN());

@@ -147,14 +147,21 @@ TEST_CASE("refine: the result does not depend on the thread count", "[refine]") 
 }
 
 TEST_CASE("refine: an uncut block and zero rounds are left as they are", "[refine]") {
-    // Only rapids far above the block: the mesh is the block's faces, whose midpoints are exact.
+    // Only rapids far above the block: the mesh is the block's faces, whose midpoints are exact
+    // (and no sweep comes near them, so none is even cut).
     const std::string above = "G21 G90\nT1 M6\nG0 X5 Y5 Z30\nG0 X30 Y30 Z30\nM30\n";
     const Simulation plain = runSimulation(job(above, 0));
     const Simulation refined = runSimulation(job(above, 3));
-    CHECK(refined.report.refineQueries > 0);
     CHECK(refined.report.refineSplit == 0);
-    CHECK(refined.mesh.triangles.size() == plain.mesh.triangles.size());
     CHECK(refined.report.meshClosed);
+    REQUIRE(refined.mesh.triangles.size() == plain.mesh.triangles.size());
+    CHECK(std::equal(refined.mesh.vertices.begin(), refined.mesh.vertices.end(), plain.mesh.vertices.begin()));
+    // The same block with its top face crossed by one pass: only the pass's region is tested.
+    const std::string one = "G21 G90\nT1 M6\nG0 X5 Y16 Z12\nG1 Z8 F500\nG1 X27\nG0 Z12\nM30\n";
+    const Simulation pass = runSimulation(job(one, 1));
+    CHECK(pass.report.refineQueries > 0);
+    CHECK(pass.report.refineQueries < pass.report.meshTriangles / 4);
+    CHECK(pass.report.meshClosed);
 
     const Simulation none = runSimulation(job(passesProgram(), 0));
     CHECK(none.report.refineRounds == 0);

@@ -54,7 +54,7 @@ constexpr double kRoundBytesPerTriangle = 400.0;
 
 /// @brief What refineMesh did.
 struct RefineStats {
-    std::size_t queries = 0;      ///< edge midpoints cut exactly
+    std::size_t queries = 0;      ///< edge midpoints tested (cut exactly where a sweep comes near)
     std::size_t split = 0;        ///< edges split (one new vertex each)
     std::size_t noCrossing = 0;   ///< midpoints with no crossing of the right side in the window
     std::size_t refused = 0;      ///< splits given up: a piece would fold or be a sliver

@@ -3,6 +3,7 @@
 /// them (the refinement's queries).
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "dexelmill/geometry/types.h"
@@ -19,6 +20,28 @@ struct Window {
     int axis = 2;
     bool outward = true;
 };
+
+/// @brief A coarse grid of the cells that some move's swept tool (cutting part or shank, whether
+/// or not it removes material) may come near: where a window outside them finds only the stock.
+class SweptCells {
+public:
+    /// @brief Cells of about `cell` mm over `stock` (coarser if there would be too many), marked
+    /// where a conservative box of a move's swept regions, grown by `margin`, overlaps them.
+    SweptCells(const Box& stock, const ToolPath& path, const ToolTable& tools, double cell, double margin);
+    /// @brief Whether some sweep may come within the margin of p (always true outside the grid).
+    bool reached(const Vec3& p) const;
+
+private:
+    Vec3 origin_{0.0};
+    double size_ = 1.0;
+    std::array<int, 3> n_{1, 1, 1};
+    std::vector<char> marked_;
+};
+
+/// @brief The offset along a window's axis to the nearest crossing of the stock box's surface
+/// facing its way, within [-reach, reach], NaN if none: exactCrossings' answer for a window no
+/// sweep reaches.
+double stockCrossing(const Window& window, double reach, const Box& stock);
 
 /// @brief For each window, the offset along its axis from its point to the nearest crossing of the
 /// exact part's surface that faces its way, within [-reach, reach]; NaN where there is none. The
