@@ -58,7 +58,8 @@ std::string reportJson(const SimulateReport& r) {
                                      {"corner_vertices", r.cornerVertices}};
     if (r.refineRounds > 0)
         j["mesh"]["refine"] = {{"rounds", r.refineRounds},
-                               {"midpoints_cut", r.refineQueries},
+                               {"points_tested", r.refineQueries},
+                               {"vertices_snapped", r.refineSnapped},
                                {"edges_split", r.refineSplit},
                                {"splits_refused", r.refineRefused},
                                {"midpoints_without_crossing", r.refineNoCrossing}};

@@ -402,6 +402,7 @@ Simulation runStages(const SimulateOptions& o) {
         report.refineRounds = stats.rounds;
         report.refineQueries = stats.queries;
         report.refineSplit = stats.split;
+        report.refineSnapped = stats.snapped;
         report.refineRefused = stats.refused;
         report.refineNoCrossing = stats.noCrossing;
         report.timingS.refine = seconds(t);

@@ -23,6 +23,9 @@ using detail::EdgeTable;
 using detail::kNoTriangle;
 using detail::Local;
 
+/// Rings around a fold within which the snapped vertices go back, at most.
+constexpr int kSnapRings = 3;
+
 Vec3 unit(const Vec3& v) {
     const double n = glm::length(v);
     return n > 0.0 ? v / n : Vec3(0.0);
@@ -65,6 +68,106 @@ MeshCheck foldedTriangles(Mesh& mesh, std::vector<std::uint32_t>& folded) {
     none.rounds = 0;
     none.pull = [](std::uint32_t, int, Vec3&, const std::vector<std::uint32_t>&) { return false; };
     return repairAndCheckMesh(mesh, none, nullptr, &folded);
+}
+
+/// The offsets along their axes from the windows' points to the exact part's surface facing their
+/// way (NaN where there is none within reach): windows no sweep comes near (`cells`) find the
+/// stock box alone and are answered here; the others are cut by the moves.
+std::vector<double> exactOffsets(const std::vector<detail::Window>& windows, const detail::SweptCells& cells,
+                                 const Box& stock, const ToolPath& path, const ToolTable& tools,
+                                 const RefineOptions& o) {
+    std::vector<double> offsets(windows.size(), 0.0);
+    std::vector<char> nearSweep(windows.size(), 0);
+    tbb::parallel_for(std::size_t(0), windows.size(), [&](std::size_t i) {
+        nearSweep[i] = cells.reached(windows[i].point);
+        if (!nearSweep[i]) offsets[i] = detail::stockCrossing(windows[i], o.window, stock);
+    });
+    std::vector<std::uint32_t> cutIndex;
+    std::vector<detail::Window> cut;
+    for (std::size_t i = 0; i < windows.size(); ++i)
+        if (nearSweep[i]) cutIndex.push_back(std::uint32_t(i)), cut.push_back(windows[i]);
+    const std::vector<double> exact = detail::exactCrossings(cut, o.window, stock, path, tools, o.removeShankMaterial);
+    for (std::size_t k = 0; k < cutIndex.size(); ++k) offsets[cutIndex[k]] = exact[k];
+    return offsets;
+}
+
+/// The window along the coordinate axis nearest `normal`, facing its way; false if it has no
+/// direction.
+bool windowAlong(const Vec3& point, const Vec3& normal, detail::Window& w) {
+    int axis = 0;
+    for (int a = 1; a < 3; ++a)
+        if (std::abs(normal[a]) > std::abs(normal[axis])) axis = a;
+    if (!(std::abs(normal[axis]) > 0.0)) return false;
+    w.point = point;
+    w.axis = axis;
+    w.outward = normal[axis] > 0.0;
+    return true;
+}
+
+/// Moves the mesh's vertices that lie off the exact part onto it, along the coordinate axis
+/// nearest their normals: the mesher puts a vertex on a sharp edge where the planes of its
+/// crossings meet, and a cusp the lattice did not see may have cut that corner away. (Vertices on
+/// the lattice's crossings are exact already and stay.) Only vertices some sweep comes near, whose
+/// triangles are all in `active`, are tested. Where the moved mesh folds, the moves around the fold
+/// are undone, one ring farther each pass. Returns the number of vertices moved.
+std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, const detail::SweptCells& cells,
+                         const Box& stock, const ToolPath& path, const ToolTable& tools, const RefineOptions& o,
+                         RefineStats& st) {
+    std::vector<Vec3> normal(mesh.vertices.size(), Vec3(0.0));
+    for (std::uint32_t t : active) {
+        const Vec3 a = mesh.areaVector(t);
+        for (std::uint32_t v : mesh.triangles[t]) normal[v] += a;
+    }
+    std::vector<std::uint32_t> asked;
+    for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
+        if (normal[v] != Vec3(0.0) && cells.reached(mesh.vertices[v])) asked.push_back(v);
+    std::vector<detail::Window> windows(asked.size());
+    std::vector<char> facing(asked.size(), 0);
+    tbb::parallel_for(std::size_t(0), asked.size(), [&](std::size_t i) {
+        facing[i] = windowAlong(mesh.vertices[asked[i]], normal[asked[i]], windows[i]);
+    });
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < asked.size(); ++i)
+        if (facing[i]) asked[kept] = asked[i], windows[kept] = windows[i], ++kept;
+    asked.resize(kept);
+    windows.resize(kept);
+    st.queries += kept;
+    const std::vector<double> offsets = exactOffsets(windows, cells, stock, path, tools, o);
+
+    std::vector<std::pair<std::uint32_t, Vec3>> moved;  // vertex, old position
+    std::vector<std::int32_t> movedIndex(mesh.vertices.size(), -1);
+    for (std::size_t i = 0; i < asked.size(); ++i) {
+        if (!(std::abs(offsets[i]) > o.tolerance)) continue;  // within it, or no crossing (NaN)
+        const std::uint32_t v = asked[i];
+        movedIndex[v] = std::int32_t(moved.size());
+        moved.push_back({v, mesh.vertices[v]});
+        mesh.vertices[v][windows[i].axis] += offsets[i];
+    }
+    std::vector<std::uint32_t> folded;
+    for (int pass = 0; !moved.empty(); ++pass) {
+        foldedTriangles(mesh, folded);
+        if (folded.empty()) break;
+        std::vector<char> near(mesh.vertices.size(), 0);
+        for (std::uint32_t t : folded)
+            for (std::uint32_t v : mesh.triangles[t]) near[v] = 1;
+        for (int ring = 0; ring < std::min(pass, kSnapRings); ++ring) {
+            std::vector<char> grown = near;
+            for (std::uint32_t t : active) {
+                const Mesh::Triangle& tri = mesh.triangles[t];
+                if (near[tri[0]] || near[tri[1]] || near[tri[2]]) grown[tri[0]] = grown[tri[1]] = grown[tri[2]] = 1;
+            }
+            near.swap(grown);
+        }
+        std::size_t back = 0;
+        for (const auto& [v, old] : moved)
+            if (near[v] && mesh.vertices[v] != old) mesh.vertices[v] = old, ++back;
+        st.snapRefused += back;
+        if (back == 0 && pass >= kSnapRings) break;  // the folds are not the moves' doing
+    }
+    std::size_t done = 0;
+    for (const auto& [v, old] : moved) done += mesh.vertices[v] != old;
+    st.snapped += done;
+    return done;
 }
 
 /// One round of refinement on the active triangles of a mesh (local indices i into `active`).
@@ -138,37 +241,24 @@ private:
         for (std::size_t e = 0; e < nEdges; ++e)
             if (edges_.ends[e][1] >= firstNew && edges_.triangles[e][0] != kNoTriangle) asked.push_back(std::uint32_t(e));
         std::vector<detail::Window> windows(asked.size());
-        std::vector<char> facing(asked.size(), 0), nearSweep(asked.size(), 0);
-        std::vector<double> offsets(asked.size(), 0.0);
+        std::vector<char> facing(asked.size(), 0);
         tbb::parallel_for(std::size_t(0), asked.size(), [&](std::size_t i) {
             const std::uint32_t e = asked[i];
             const Vec3 n = unit(mesh_.areaVector(active_[edges_.triangles[e][0]])) +
                            unit(mesh_.areaVector(active_[edges_.triangles[e][1]]));
-            int axis = 0;
-            for (int a = 1; a < 3; ++a)
-                if (std::abs(n[a]) > std::abs(n[axis])) axis = a;
-            if (!(std::abs(n[axis]) > 0.0)) return;  // the two triangles face apart: a fin, left alone
-            detail::Window& w = windows[i];
-            w.point = 0.5 * (mesh_.vertices[edges_.ends[e][0]] + mesh_.vertices[edges_.ends[e][1]]);
-            w.axis = axis;
-            w.outward = n[axis] > 0.0;
-            facing[i] = 1;
-            // A window no sweep comes near finds the stock box alone: answered here.
-            nearSweep[i] = cells.reached(w.point);
-            if (!nearSweep[i]) offsets[i] = detail::stockCrossing(w, o_.window, stock);
+            const Vec3 mid = 0.5 * (mesh_.vertices[edges_.ends[e][0]] + mesh_.vertices[edges_.ends[e][1]]);
+            // Two triangles facing apart (a fin) give no direction: left alone.
+            facing[i] = windowAlong(mid, n, windows[i]);
         });
-        std::vector<std::uint32_t> cutIndex;
-        std::vector<detail::Window> cut;
-        for (std::size_t i = 0; i < asked.size(); ++i) {
-            stats.queries += facing[i] != 0;
-            if (facing[i] && nearSweep[i]) cutIndex.push_back(std::uint32_t(i)), cut.push_back(windows[i]);
-        }
-        const std::vector<double> exact =
-            detail::exactCrossings(cut, o_.window, stock, path, tools, o_.removeShankMaterial);
-        for (std::size_t k = 0; k < cutIndex.size(); ++k) offsets[cutIndex[k]] = exact[k];
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < asked.size(); ++i)
+            if (facing[i]) asked[kept] = asked[i], windows[kept] = windows[i], ++kept;
+        asked.resize(kept);
+        windows.resize(kept);
+        stats.queries += kept;
+        const std::vector<double> offsets = exactOffsets(windows, cells, stock, path, tools, o_);
 
         for (std::size_t i = 0; i < asked.size(); ++i) {
-            if (!facing[i]) continue;
             const double d = offsets[i];
             if (std::isnan(d)) {
                 ++stats.noCrossing;
@@ -329,6 +419,11 @@ void refineMesh(Mesh& mesh, const Box& stock, const ToolPath& path, const ToolTa
     RefineStats& st = stats ? *stats : local;
     std::size_t firstNew = 0;
     bool checked = false;
+    if (options.rounds > 0 && !mesh.empty() &&
+        !(options.memoryBytes > 0.0 && kRoundBytesPerTriangle * double(mesh.triangles.size()) > options.memoryBytes)) {
+        const detail::SweptCells cells(stock, path, tools, 8.0 * options.window, options.window);
+        snapVertices(mesh, activeTriangles(mesh, cells), cells, stock, path, tools, options, st);
+    }
     for (int round = 0; round < options.rounds && !mesh.empty(); ++round) {
         const double need = kRoundBytesPerTriangle * double(mesh.triangles.size());
         if (options.memoryBytes > 0.0 && need > options.memoryBytes) {

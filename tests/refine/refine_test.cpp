@@ -125,15 +125,18 @@ TEST_CASE("refine: ball passes come out with the cusps the lattice cannot see", 
     // Measured: 0.0011 % before and after (the mesher's is already within its crossings' reach).
     CHECK(errorAfter <= 1e-4);  // the issue's 0.01 %
 
-    // The mesher's vertices come first and stay where they were; every new one lies on the exact
+    // The mesher's vertices come first; every one refinement moved or made lies on the exact
     // part's surface (to the sweep's 1e-6 mm, with a margin for the oracle's own bisection).
     REQUIRE(refined.mesh.vertices.size() > plain.mesh.vertices.size());
-    for (std::size_t v = 0; v < plain.mesh.vertices.size(); ++v)
-        REQUIRE(refined.mesh.vertices[v] == plain.mesh.vertices[v]);
-    std::size_t off = 0;
-    for (std::size_t v = plain.mesh.vertices.size(); v < refined.mesh.vertices.size(); ++v)
+    std::size_t off = 0, moved = 0;
+    for (std::size_t v = 0; v < refined.mesh.vertices.size(); ++v) {
+        if (v < plain.mesh.vertices.size() && refined.mesh.vertices[v] == plain.mesh.vertices[v]) continue;
+        moved += v < plain.mesh.vertices.size();
         off += !onSurface(part, refined.mesh.vertices[v], 1e-5);
+    }
+    INFO(moved << " of the mesher's vertices moved");
     CHECK(off == 0);
+    CHECK(moved == refined.report.refineSnapped);
 }
 
 TEST_CASE("refine: the result does not depend on the thread count", "[refine]") {
@@ -160,7 +163,8 @@ TEST_CASE("refine: an uncut block and zero rounds are left as they are", "[refin
     const std::string one = "G21 G90\nT1 M6\nG0 X5 Y16 Z12\nG1 Z8 F500\nG1 X27\nG0 Z12\nM30\n";
     const Simulation pass = runSimulation(job(one, 1));
     CHECK(pass.report.refineQueries > 0);
-    CHECK(pass.report.refineQueries < pass.report.meshTriangles / 4);
+    // Every vertex and edge tested would be about twice the triangles.
+    CHECK(pass.report.refineQueries < pass.report.meshTriangles / 2);
     CHECK(pass.report.meshClosed);
 
     const Simulation none = runSimulation(job(passesProgram(), 0));

@@ -133,10 +133,10 @@ struct SimulateReport {
     /// The dexel mesher's edge crossings: dexel endpoints, and interpolated ones (no dexel along
     /// the edge: a family not kept); its vertices on sharp edges and corners.
     std::size_t exactCrossings = 0, interpolatedCrossings = 0, edgeVertices = 0, cornerVertices = 0;
-    /// Refinement (RefineStats): rounds made, edge midpoints cut, edges split, splits refused,
-    /// midpoints without a crossing.
+    /// Refinement (RefineStats): rounds made, vertices and midpoints tested, vertices moved onto
+    /// the part, edges split, splits refused, midpoints without a crossing.
     int refineRounds = 0;
-    std::size_t refineQueries = 0, refineSplit = 0, refineRefused = 0, refineNoCrossing = 0;
+    std::size_t refineQueries = 0, refineSnapped = 0, refineSplit = 0, refineRefused = 0, refineNoCrossing = 0;
 
     struct Timing {
         double parse = 0, cut = 0, rebuild = 0, mesh = 0, refine = 0, write = 0, total = 0;

@@ -4,23 +4,26 @@
 /// The dexel mesher puts its vertices on the lattice's crossings, which are exact, but between two
 /// lattice lines a triangle is flat: a cusp left by passes closer together than the spacing, or the
 /// rounded top of a wall, falls between them and is lost (README, Accuracy). Refinement asks the
-/// sweep itself what lies there. Each mesh edge is tested at its midpoint: a short stretch of the
-/// coordinate axis nearest the edge's normal, through the midpoint, is cut exactly as the stock's
-/// dexels are (the stock box minus every move's swept tool, MoveSweep), and the surface crossing
-/// there is the exact part's. An edge whose midpoint is farther than a tolerance from that crossing
-/// is split there, and its triangles are split with it (into two, three or four, the same way on
-/// both sides of every edge, so the mesh stays closed). Rounds repeat on the new edges.
+/// sweep itself what lies there, on windows: short stretches of the coordinate axis nearest the
+/// surface's normal, cut exactly as the stock's dexels are (the stock box minus every move's swept
+/// tool, MoveSweep). The surface crossing found on a window is the exact part's.
 ///
-/// Error bound: every new vertex lies on the exact part's surface to the sweep's accuracy (1e-6 mm)
-/// and the float storage of nothing (the windows are cut in double). Between vertices the surface
-/// is still linear, so what remains is the chord error of the finer edges, and features narrower
-/// than the edges the last round left.
+///  1. The mesher's vertices are tested where they are. One placed on a sharp edge where its
+///     crossings' planes meet may sit on a corner that a cusp the lattice did not see has cut
+///     away: it moves onto the part. (Vertices on crossings are exact and stay.)
+///  2. Each edge is tested at its midpoint. One farther than a tolerance from the crossing there
+///     is split at it, and its triangles with it (into two, three or four, the same way on both
+///     sides of every edge, so the mesh stays closed). Later rounds test only the new edges.
 ///
-/// A split is not made where it would fold a triangle against the one it splits, leave a sliver,
-/// or where the window holds no crossing of the right orientation (the surface is farther than the
-/// window from the midpoint: a crease the edge cuts across, or the block's outside). Where the
-/// refined mesh folds against its vertices' normals (checkMesh), the splits around the fold are
-/// refused and the round is made again, so the refined mesh has no fold the mesher's had not.
+/// Error bound: every moved or new vertex lies on the exact part's surface to the sweep's
+/// accuracy (1e-6 mm; the windows are cut in double and kept as float offsets within half a
+/// spacing, about 1e-8 mm). Between vertices the surface is still linear, so what remains is the
+/// chord error of the finer edges, and features narrower than the edges the last round left.
+///
+/// Nothing folds: a split is not made where a piece would face away from the triangle it splits or
+/// be a sliver; where the mesh then folds against its vertices' normals (checkMesh), the moves and
+/// splits around the fold are undone. A window with no crossing of the right orientation (the
+/// surface is farther than half a spacing: a crease the edge cuts across) changes nothing.
 #pragma once
 
 #include <cstddef>
@@ -54,7 +57,9 @@ constexpr double kRoundBytesPerTriangle = 400.0;
 
 /// @brief What refineMesh did.
 struct RefineStats {
-    std::size_t queries = 0;      ///< edge midpoints tested (cut exactly where a sweep comes near)
+    std::size_t queries = 0;      ///< vertices and edge midpoints tested (cut where a sweep comes near)
+    std::size_t snapped = 0;      ///< mesher's vertices moved onto the exact part
+    std::size_t snapRefused = 0;  ///< vertex moves undone because the mesh folded there
     std::size_t split = 0;        ///< edges split (one new vertex each)
     std::size_t noCrossing = 0;   ///< midpoints with no crossing of the right side in the window
     std::size_t refused = 0;      ///< splits given up: a piece would fold or be a sliver
