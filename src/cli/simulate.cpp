@@ -159,6 +159,17 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
                   "dexel: the surface placed from the dexels' exact crossings and normals, sharp edges kept;\n"
                   "vdb: OpenVDB's volumeToMesh on the level set alone")
         ->capture_default_str();
+    c->add_option("--refine", a.refineRounds,
+                  "Rounds of refinement against the exact part (catches cusps finer than the spacing):\n"
+                  "vertices and edge midpoints off it move to, or are split at, the surface the moves'\n"
+                  "sweeps cut there. 0 keeps the mesher's mesh. Needs a box stock; costs time")
+        ->check(CLI::Range(0, 8))
+        ->capture_default_str();
+    c->add_option("--refine-tolerance", a.refineTolerance,
+                  "Refinement splits an edge whose midpoint lies farther than this off the exact part\n"
+                  "(in spacings)")
+        ->check(numberCheck(false))
+        ->capture_default_str();
     c->add_option("--threads", a.threads, "Worker threads for every stage; 0 uses every core")
         ->check(numberCheck(true))
         ->capture_default_str();
@@ -185,17 +196,6 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
     c->add_option("--adaptivity", a.adaptivity,
                   "Merging of flat regions, from 0 (none) to 1 (triangles within 15 degrees merge,\n"
                   "moving the surface by at most 0.05 spacings); the mesh stays closed")
-        ->capture_default_str();
-    c->add_option("--refine", a.refineRounds,
-                  "Rounds of refinement against the exact part: edges whose midpoints lie off it are split\n"
-                  "at the surface the moves' sweeps cut there (catches cusps finer than the spacing);\n"
-                  "0 keeps the mesher's mesh. Needs a box stock")
-        ->check(CLI::Range(0, 8))
-        ->capture_default_str();
-    c->add_option("--refine-tolerance", a.refineTolerance,
-                  "Refinement splits an edge whose midpoint lies farther than this off the exact part\n"
-                  "(in spacings)")
-        ->check(numberCheck(false))
         ->capture_default_str();
     c->add_flag("--sharp-edges", a.sharpEdges,
                 "Kept for old scripts: the dexel mesher always places sharp edges and corners from the\n"
