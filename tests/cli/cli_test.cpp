@@ -100,7 +100,9 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
                                      {"--resolution 0", "--resolution: must be positive, got 0"},
                                      {"--resolution -0.5", "--resolution: must be positive, got -0.5"},
                                      {"--resolution 1x", "'1x' is not a number"},
-                                     {"--threads -3", "--threads: must be 0 or more, got -3"}}) {
+                                     {"--threads -3", "--threads: must be 0 or more, got -3"},
+                                     {"--refine 9", "--refine"},
+                                     {"--refine-tolerance 0", "--refine-tolerance: must be positive, got 0"}}) {
         INFO(args);
         r = cli(std::string("simulate ok.ngc --tool flat:d=3 ") + args);
         CHECK(r.code == 2);
@@ -160,6 +162,12 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     const Run info = cli("info part.vdb");
     CHECK(info.code == 0);
     CHECK_THAT(info.out, Contains("level set") && Contains("0.5 mm"));
+    // Refinement: its figures in the report, and the same part.
+    const Run refined = cli("simulate slot.ngc --stock box:0,0,0,40,30,10 --tool 1=flat:d=6 --resolution 0.5 "
+                            "--refine 1 --report refined.json --quiet");
+    CHECK(refined.code == 0);
+    const std::string report = slurp(cli.dir() / "refined.json");
+    CHECK_THAT(report, Contains("\"refine\"") && Contains("\"points_tested\"") && Contains("\"edges_split\""));
     const Run prog = cli("info slot.ngc");
     CHECK(prog.code == 0);
     CHECK_THAT(prog.out, Contains("moves") && Contains("tool changes"));

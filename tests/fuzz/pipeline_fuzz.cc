@@ -1,8 +1,8 @@
 // libFuzzer target for the whole pipeline: a G-code program (and any subroutine files after
-// "//@file NAME" lines, harness.h) is read, cut from a small block on a coarse lattice, rebuilt
-// and meshed, on one thread, by the job the command line runs with `--max-memory 1G`. It must
-// either give a closed mesh with no degenerate triangles or throw dexelmill::Error; anything else
-// aborts.
+// "//@file NAME" lines, harness.h) is read, cut from a small block on a coarse lattice, rebuilt,
+// meshed and refined once against the exact part, on one thread, by the job the command line runs
+// with `--max-memory 1G --refine 1`. It must either give a closed mesh with no degenerate triangles
+// or throw dexelmill::Error; anything else aborts.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -23,6 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     job.resolution = 0.5;
     job.defaultTool = ballEndMill(3.0, {10.0, 20.0});
     job.threads = 1;
+    job.refineRounds = 1;
     job.maxMemoryBytes = fuzz::kMemory;
     try {
         const Simulation s = runSimulation(job);
