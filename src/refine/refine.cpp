@@ -135,11 +135,9 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
     const std::vector<double> offsets = exactOffsets(windows, cells, stock, path, tools, o);
 
     std::vector<std::pair<std::uint32_t, Vec3>> moved;  // vertex, old position
-    std::vector<std::int32_t> movedIndex(mesh.vertices.size(), -1);
     for (std::size_t i = 0; i < asked.size(); ++i) {
         if (!(std::abs(offsets[i]) > o.tolerance)) continue;  // within it, or no crossing (NaN)
         const std::uint32_t v = asked[i];
-        movedIndex[v] = std::int32_t(moved.size());
         moved.push_back({v, mesh.vertices[v]});
         mesh.vertices[v][windows[i].axis] += offsets[i];
     }
