@@ -37,7 +37,7 @@ namespace dexelmill {
 
 /// @brief Options of refineMesh.
 struct RefineOptions {
-    /// Rounds of splitting; 0 leaves the mesh as it is.
+    /// Rounds of splitting; 0 leaves the mesh as it is (1 or more also snaps the vertices first).
     int rounds = 2;
     /// An edge is split where its midpoint is farther than this from the exact surface (mm).
     double tolerance = 1e-3;
@@ -51,8 +51,8 @@ struct RefineOptions {
 };
 
 /// Working memory of a round per triangle of the mesh it starts from (bytes): the edge table, the
-/// windows and their material, the split mesh built beside the old one and its check. An upper
-/// figure: bear's first round measured about 290.
+/// windows and their material, the pieces and the fold check. An upper figure: bear's first round
+/// (with the snap) measured about 250.
 constexpr double kRoundBytesPerTriangle = 400.0;
 
 /// @brief What refineMesh did.
@@ -69,9 +69,10 @@ struct RefineStats {
     MeshCheck check;              ///< checkMesh of the refined mesh
 };
 
-/// @brief Splits the edges of `mesh` whose midpoints lie off the exact part (`stock` minus the
-/// sweeps of `path` with `tools`), at the exact part's surface (see the file comment). Runs in the
-/// caller's task arena.
+/// @brief Moves the vertices of `mesh` that lie off the exact part (`stock` minus the sweeps of
+/// `path` with `tools`) onto it, then splits the edges whose midpoints lie off it at its surface,
+/// round after round (see the file comment). Runs in the caller's task arena; the result does not
+/// depend on the thread count.
 /// @throw Error if a move uses a tool that is not in `tools`.
 void refineMesh(Mesh& mesh, const Box& stock, const ToolPath& path, const ToolTable& tools,
                 const RefineOptions& options = {}, RefineStats* stats = nullptr);
