@@ -413,6 +413,10 @@ MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, st
     // The volume about the bounding-box centre, so that far-off parts do not lose digits.
     const Vec3 centre = mesh.vertices.empty() ? Vec3(0.0) : mesh.bounds().center();
     TriangleCounts t = trianglePass(mesh, normal, centre, repair ? repair->minCosine : 0.0);
+    if (!repair && unrepaired) {
+        std::sort(t.suspects.begin(), t.suspects.end());
+        *unrepaired = t.suspects;
+    }
     if (repair && !t.suspects.empty()) {
         std::sort(t.suspects.begin(), t.suspects.end());
         RepairLog log(mesh.vertices.size());
@@ -447,7 +451,10 @@ MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, st
 
 }  // namespace
 
-MeshCheck checkMesh(const Mesh& mesh) { return check(nullptr, mesh, nullptr, nullptr, nullptr); }
+MeshCheck checkMesh(const Mesh& mesh, std::vector<std::uint32_t>* folded) {
+    if (folded) folded->clear();
+    return check(nullptr, mesh, nullptr, nullptr, folded);
+}
 
 MeshCheck repairAndCheckMesh(Mesh& mesh, const FoldRepair& repair, std::size_t* moved,
                              std::vector<std::uint32_t>* unrepaired) {

@@ -173,6 +173,19 @@ TEST_CASE("checkMesh: an index past the vertex list", "[surface][mesh]") {
     CHECK_FALSE(c.ok());
 }
 
+TEST_CASE("checkMesh lists the folded triangles it counts", "[surface][mesh]") {
+    Mesh m = sphere(10, 16, 4.0);
+    std::vector<std::uint32_t> folded{7};
+    CHECK(checkMesh(m, &folded).foldedTriangles == 0);
+    CHECK(folded.empty());
+    for (std::uint32_t v : {20u, 77u}) m.vertices[v] = m.vertices[v + 1] + 1.5 * (m.vertices[v + 1] - m.vertices[v]);
+    const MeshCheck c = checkMesh(m, &folded);
+    REQUIRE(c.foldedTriangles > 0);
+    CHECK(folded.size() == c.foldedTriangles + c.degenerateTriangles);
+    CHECK(std::is_sorted(folded.begin(), folded.end()));
+    compare(c, bruteForce(m));
+}
+
 TEST_CASE("repairAndCheckMesh: pulls fold vertices until none folds", "[surface][mesh]") {
     Mesh m = sphere(10, 16, 4.0);
     const auto original = m.vertices;

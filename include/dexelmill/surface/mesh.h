@@ -89,7 +89,8 @@ struct MeshCheck {
 /// volume, area.
 /// A triangle is degenerate when two of its indices are equal or when |(b-a) x (c-a)| is at most
 /// tol::kDegenerateTriangle times its longest squared edge (a needle or a sliver of zero area).
-MeshCheck checkMesh(const Mesh& mesh);
+/// `folded`, when given, receives the folded and degenerate triangles (in increasing order).
+MeshCheck checkMesh(const Mesh& mesh, std::vector<std::uint32_t>* folded = nullptr);
 
 /// @brief How repairAndCheckMesh repairs folds.
 struct FoldRepair {
