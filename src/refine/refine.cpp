@@ -61,15 +61,6 @@ std::vector<std::uint32_t> activeTriangles(const Mesh& mesh, const detail::Swept
     return active;
 }
 
-/// The triangles of `mesh` that fold against their vertices' normals, or have no area (checkMesh),
-/// and the check itself.
-MeshCheck foldedTriangles(Mesh& mesh, std::vector<std::uint32_t>& folded) {
-    FoldRepair none;
-    none.rounds = 0;
-    none.pull = [](std::uint32_t, int, Vec3&, const std::vector<std::uint32_t>&) { return false; };
-    return repairAndCheckMesh(mesh, none, nullptr, &folded);
-}
-
 /// The offsets along their axes from the windows' points to the exact part's surface facing their
 /// way (NaN where there is none within reach): windows no sweep comes near (`cells`) find the
 /// stock box alone and are answered here; the others are cut by the moves.
@@ -104,6 +95,26 @@ bool windowAlong(const Vec3& point, const Vec3& normal, detail::Window& w) {
     return true;
 }
 
+/// The windows of the items in `asked`, built in parallel: `along(item, point, normal)` gives each
+/// item's point and normal. Items whose normal has no direction are dropped from `asked`, so the
+/// two lists stay in step.
+template <class Along>
+std::vector<detail::Window> windowsFor(std::vector<std::uint32_t>& asked, const Along& along) {
+    std::vector<detail::Window> windows(asked.size());
+    std::vector<char> facing(asked.size(), 0);
+    tbb::parallel_for(std::size_t(0), asked.size(), [&](std::size_t i) {
+        Vec3 point(0.0), normal(0.0);
+        along(asked[i], point, normal);
+        facing[i] = windowAlong(point, normal, windows[i]);
+    });
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < asked.size(); ++i)
+        if (facing[i]) asked[kept] = asked[i], windows[kept] = windows[i], ++kept;
+    asked.resize(kept);
+    windows.resize(kept);
+    return windows;
+}
+
 /// Moves the mesh's vertices that lie off the exact part onto it, along the coordinate axis
 /// nearest their normals: the mesher puts a vertex on a sharp edge where the planes of its
 /// crossings meet, and a cusp the lattice did not see may have cut that corner away. (Vertices on
@@ -121,17 +132,11 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
     std::vector<std::uint32_t> asked;
     for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
         if (normal[v] != Vec3(0.0) && cells.reached(mesh.vertices[v])) asked.push_back(v);
-    std::vector<detail::Window> windows(asked.size());
-    std::vector<char> facing(asked.size(), 0);
-    tbb::parallel_for(std::size_t(0), asked.size(), [&](std::size_t i) {
-        facing[i] = windowAlong(mesh.vertices[asked[i]], normal[asked[i]], windows[i]);
+    const std::vector<detail::Window> windows = windowsFor(asked, [&](std::uint32_t v, Vec3& point, Vec3& n) {
+        point = mesh.vertices[v];
+        n = normal[v];
     });
-    std::size_t kept = 0;
-    for (std::size_t i = 0; i < asked.size(); ++i)
-        if (facing[i]) asked[kept] = asked[i], windows[kept] = windows[i], ++kept;
-    asked.resize(kept);
-    windows.resize(kept);
-    st.queries += kept;
+    st.queries += windows.size();
     const std::vector<double> offsets = exactOffsets(windows, cells, stock, path, tools, o);
 
     std::vector<std::pair<std::uint32_t, Vec3>> moved;  // vertex, old position
@@ -143,7 +148,7 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
     }
     std::vector<std::uint32_t> folded;
     for (int pass = 0; !moved.empty(); ++pass) {
-        foldedTriangles(mesh, folded);
+        checkMesh(mesh, &folded);
         if (folded.empty()) break;
         std::vector<char> near(mesh.vertices.size(), 0);
         for (std::uint32_t t : folded)
@@ -192,7 +197,7 @@ public:
         std::size_t added = 0;
         for (;;) {
             added = apply();
-            check = foldedTriangles(mesh_, folded);
+            check = checkMesh(mesh_, &folded);
             if (folded.empty() || added == 0) break;
             std::vector<char> corner(mesh_.vertices.size(), 0);
             for (std::uint32_t t : folded) {
@@ -200,10 +205,9 @@ public:
                 const std::uint32_t parent = parentOf(t);
                 for (std::uint32_t v : parent == kNoTriangle ? mesh_.triangles[t] : oldTriangle(parent)) corner[v] = 1;
             }
-            undo();
             std::size_t refused = 0;
             for (std::uint32_t i = 0; i < active_.size(); ++i) {
-                const Mesh::Triangle& tri = mesh_.triangles[active_[i]];
+                const Mesh::Triangle& tri = oldTriangle(i);
                 if (!corner[tri[0]] && !corner[tri[1]] && !corner[tri[2]]) continue;
                 for (int k = 0; k < 3; ++k) {
                     const std::uint32_t e = edges_.edgeOf[3 * i + k];
@@ -215,11 +219,8 @@ public:
                 }
             }
             stats.refused += refused;
-            if (refused == 0) {
-                added = apply();  // nothing of this round's making folds: keep it as it is
-                check = foldedTriangles(mesh_, folded);
-                break;
-            }
+            if (refused == 0) break;  // nothing of this round's making folds: keep it as it is
+            undo();
             settle(work, stats);
         }
         stats.split += added;
@@ -238,22 +239,13 @@ private:
         std::vector<std::uint32_t> asked;
         for (std::size_t e = 0; e < nEdges; ++e)
             if (edges_.ends[e][1] >= firstNew && edges_.triangles[e][0] != kNoTriangle) asked.push_back(std::uint32_t(e));
-        std::vector<detail::Window> windows(asked.size());
-        std::vector<char> facing(asked.size(), 0);
-        tbb::parallel_for(std::size_t(0), asked.size(), [&](std::size_t i) {
-            const std::uint32_t e = asked[i];
-            const Vec3 n = unit(mesh_.areaVector(active_[edges_.triangles[e][0]])) +
-                           unit(mesh_.areaVector(active_[edges_.triangles[e][1]]));
-            const Vec3 mid = 0.5 * (mesh_.vertices[edges_.ends[e][0]] + mesh_.vertices[edges_.ends[e][1]]);
-            // Two triangles facing apart (a fin) give no direction: left alone.
-            facing[i] = windowAlong(mid, n, windows[i]);
+        // Two triangles facing apart (a fin) give no direction: left alone.
+        const std::vector<detail::Window> windows = windowsFor(asked, [&](std::uint32_t e, Vec3& point, Vec3& n) {
+            n = unit(mesh_.areaVector(active_[edges_.triangles[e][0]])) +
+                unit(mesh_.areaVector(active_[edges_.triangles[e][1]]));
+            point = 0.5 * (mesh_.vertices[edges_.ends[e][0]] + mesh_.vertices[edges_.ends[e][1]]);
         });
-        std::size_t kept = 0;
-        for (std::size_t i = 0; i < asked.size(); ++i)
-            if (facing[i]) asked[kept] = asked[i], windows[kept] = windows[i], ++kept;
-        asked.resize(kept);
-        windows.resize(kept);
-        stats.queries += kept;
+        stats.queries += windows.size();
         const std::vector<double> offsets = exactOffsets(windows, cells, stock, path, tools, o_);
 
         for (std::size_t i = 0; i < asked.size(); ++i) {
@@ -322,7 +314,7 @@ private:
 
     /// The triangle local i was before apply().
     const Mesh::Triangle& oldTriangle(std::uint32_t i) const {
-        return applied_ ? replaced_[slotOf_[i]] : mesh_.triangles[active_[i]];
+        return applied_ && slotOf_[i] != kNoTriangle ? replaced_[slotOf_[i]] : mesh_.triangles[active_[i]];
     }
 
     /// The local triangle a triangle of the split mesh comes from (kNoTriangle: not this round's).
@@ -359,7 +351,7 @@ private:
         for (std::size_t j = 0; j < n; ++j) extra[j + 1] += extra[j];
         replaced_.resize(n);
         splitGlobal_.resize(n);
-        slotOf_.assign(active_.size(), 0);
+        slotOf_.assign(active_.size(), kNoTriangle);
         for (std::size_t j = 0; j < n; ++j) {
             slotOf_[splitLocal_[j]] = std::uint32_t(j);
             splitGlobal_[j] = active_[splitLocal_[j]];
@@ -404,7 +396,7 @@ private:
     std::vector<std::uint32_t> newVertex_;      ///< per edge
     std::vector<std::uint32_t> splitLocal_;     ///< split local triangles, in order
     std::vector<std::uint32_t> splitGlobal_;    ///< their mesh indices (increasing)
-    std::vector<std::uint32_t> slotOf_;         ///< local triangle -> index in splitLocal_
+    std::vector<std::uint32_t> slotOf_;         ///< local triangle -> index in splitLocal_, or kNoTriangle
     std::vector<Mesh::Triangle> replaced_;      ///< their triangles before apply()
     std::vector<std::uint32_t> appendedParent_; ///< per appended triangle, its local parent
 };
