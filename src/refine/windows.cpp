@@ -23,8 +23,6 @@ constexpr std::size_t kBatch = 4096;
 /// The bucket grid's cells are this many windows long (kBucketReach x 2 reach); 3 and 5 measured
 /// no different on bear.
 constexpr double kBucketReach = 8.0;
-/// The most buckets the grid may have (its dense index takes 4 bytes each).
-constexpr double kMaxBuckets = double(std::size_t(1) << 22);
 
 /// The material left on one window: up to kPieces disjoint intervals, offsets from the window's
 /// point along its axis, in increasing order. A float offset within reach (half a spacing) is
@@ -89,38 +87,25 @@ double nearestCrossing(const Window& w, const Material& m, float reach) {
 
 /// The grid of buckets the windows of one chunk fall in.
 struct Buckets {
-    Vec3 origin{0.0};
-    double size = 1.0;
-    std::array<int, 3> n{1, 1, 1};
+    CoarseGrid grid;
     std::vector<std::int32_t> index;  ///< dense cell -> run of windows, or -1
     std::vector<std::uint32_t> order;  ///< windows sorted by cell
     std::vector<std::size_t> runStart;  ///< runs of `order`, one per non-empty cell (+ end)
-
-    int cellCoord(int a, double x) const {
-        return std::clamp(int(std::floor((x - origin[a]) / size)), 0, n[a] - 1);
-    }
-    std::size_t cell(const std::array<int, 3>& c) const {
-        return std::size_t(c[0]) + std::size_t(n[0]) * (std::size_t(c[1]) + std::size_t(n[1]) * std::size_t(c[2]));
-    }
 };
 
 Buckets bucketWindows(const std::vector<Window>& windows, std::size_t w0, std::size_t w1, double reach) {
     Buckets b;
     Box box;
     for (std::size_t i = w0; i < w1; ++i) box.expand(windows[i].point);
-    b.origin = box.lo;
-    const Vec3 span = box.size() + Vec3(1e-9);
-    b.size = std::max(kBucketReach * 2.0 * reach, 1e-6);
-    while ((std::ceil(span.x / b.size) * std::ceil(span.y / b.size) * std::ceil(span.z / b.size)) > kMaxBuckets)
-        b.size *= 2.0;
-    for (int a = 0; a < 3; ++a) b.n[a] = std::max(1, int(std::ceil(span[a] / b.size)));
+    b.grid = CoarseGrid(box, kBucketReach * 2.0 * reach);
+    const CoarseGrid& g = b.grid;
     std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(w1 - w0);
     tbb::parallel_for(w0, w1, [&](std::size_t i) {
         const Vec3& p = windows[i].point;
-        keyed[i - w0] = {b.cell({b.cellCoord(0, p.x), b.cellCoord(1, p.y), b.cellCoord(2, p.z)}), std::uint32_t(i)};
+        keyed[i - w0] = {g.index({g.coord(0, p.x), g.coord(1, p.y), g.coord(2, p.z)}), std::uint32_t(i)};
     });
     tbb::parallel_sort(keyed.begin(), keyed.end());
-    b.index.assign(b.cell({b.n[0] - 1, b.n[1] - 1, b.n[2] - 1}) + 1, -1);
+    b.index.assign(g.cellCount(), -1);
     b.order.resize(keyed.size());
     for (std::size_t k = 0; k < keyed.size(); ++k) {
         b.order[k] = keyed[k].second;
@@ -180,16 +165,27 @@ void subtractSweep(const MoveSweep& sweep, const Line& line, float reach, Materi
 
 }  // namespace
 
-SweptCells::SweptCells(const Box& stock, const ToolPath& path, const ToolTable& tools, double cell,
-                       double margin) {
-    origin_ = stock.lo;
-    const Vec3 span = stock.size() + Vec3(1e-9);
-    size_ = std::max(cell, 1e-6);
-    while ((std::ceil(span.x / size_) * std::ceil(span.y / size_) * std::ceil(span.z / size_)) > kMaxBuckets)
-        size_ *= 2.0;
-    for (int a = 0; a < 3; ++a) n_[a] = std::max(1, int(std::ceil(span[a] / size_)));
-    marked_.assign(std::size_t(n_[0]) * std::size_t(n_[1]) * std::size_t(n_[2]), 0);
-    const auto at = [&](int a, double x) { return std::clamp(int(std::floor((x - origin_[a]) / size_)), 0, n_[a] - 1); };
+CoarseGrid::CoarseGrid(const Box& box, double cell) : origin(box.lo), size(std::max(cell, 1e-6)) {
+    const Vec3 span = box.size() + Vec3(1e-9);
+    while (std::ceil(span.x / size) * std::ceil(span.y / size) * std::ceil(span.z / size) > kMaxCells) size *= 2.0;
+    for (int a = 0; a < 3; ++a) n[a] = std::max(1, int(std::ceil(span[a] / size)));
+}
+
+int CoarseGrid::coord(int a, double x) const {
+    return std::clamp(int(std::floor((x - origin[a]) / size)), 0, n[a] - 1);
+}
+
+bool CoarseGrid::overlap(const Box& box, double grow, std::array<int, 3>& c0, std::array<int, 3>& c1) const {
+    for (int a = 0; a < 3; ++a) {
+        const double lo = box.lo[a] - grow, hi = box.hi[a] + grow;
+        if (hi < origin[a] || lo > origin[a] + n[a] * size) return false;
+        c0[a] = coord(a, lo), c1[a] = coord(a, hi);
+    }
+    return true;
+}
+
+SweptCells::SweptCells(const Box& stock, const ToolPath& path, const ToolTable& tools, double cell, double margin)
+    : grid_(stock, cell), marked_(grid_.cellCount(), 0) {
     for (const Move& mv : path.moves) {
         const auto it = tools.find(mv.tool);
         if (it == tools.end()) continue;  // exactCrossings reports it
@@ -199,30 +195,22 @@ SweptCells::SweptCells(const Box& stock, const ToolPath& path, const ToolTable& 
         Box box;
         for (const Vec3& tip : {mv.start, mv.end})
             for (double z : {tool.bottom(), tool.totalLength()}) box.expand(tip + z * n);
-        const double grow = tool.maxRadius() + margin;
-        bool outside = false;
         std::array<int, 3> c0{}, c1{};
-        for (int a = 0; a < 3; ++a) {
-            const double lo = box.lo[a] - grow, hi = box.hi[a] + grow;
-            if (hi < stock.lo[a] || lo > stock.hi[a]) outside = true;
-            c0[a] = at(a, lo), c1[a] = at(a, hi);
-        }
-        if (outside) continue;
+        if (!grid_.overlap(box, tool.maxRadius() + margin, c0, c1)) continue;
         for (int z = c0[2]; z <= c1[2]; ++z)
             for (int y = c0[1]; y <= c1[1]; ++y)
-                for (int x = c0[0]; x <= c1[0]; ++x)
-                    marked_[std::size_t(x) + std::size_t(n_[0]) * (std::size_t(y) + std::size_t(n_[1]) * std::size_t(z))] = 1;
+                for (int x = c0[0]; x <= c1[0]; ++x) marked_[grid_.index({x, y, z})] = 1;
     }
 }
 
 bool SweptCells::reached(const Vec3& p) const {
     std::array<int, 3> c{};
     for (int a = 0; a < 3; ++a) {
-        const double x = std::floor((p[a] - origin_[a]) / size_);
-        if (!(x >= 0.0 && x < n_[a])) return true;
+        const double x = std::floor((p[a] - grid_.origin[a]) / grid_.size);
+        if (!(x >= 0.0 && x < grid_.n[a])) return true;
         c[a] = int(x);
     }
-    return marked_[std::size_t(c[0]) + std::size_t(n_[0]) * (std::size_t(c[1]) + std::size_t(n_[1]) * std::size_t(c[2]))] != 0;
+    return marked_[grid_.index(c)] != 0;
 }
 
 double stockCrossing(const Window& window, double reach, const Box& stock) {
@@ -264,20 +252,12 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
             // Each move to the runs of windows its box (grown by the reach) overlaps, in order.
             active.clear();
             for (std::size_t i = m0; i < m1; ++i) {
-                const Box& box = geoms[i - m0].box;
                 std::array<int, 3> c0{}, c1{};
-                bool misses = false;
-                for (int a = 0; a < 3; ++a) {
-                    const double lo = box.lo[a] - reach, hi = box.hi[a] + reach;
-                    const double far = b.origin[a] + b.n[a] * b.size;
-                    if (hi < b.origin[a] || lo > far) misses = true;
-                    c0[a] = b.cellCoord(a, lo), c1[a] = b.cellCoord(a, hi);
-                }
-                if (misses) continue;
+                if (!b.grid.overlap(geoms[i - m0].box, reach, c0, c1)) continue;
                 for (int z = c0[2]; z <= c1[2]; ++z)
                     for (int y = c0[1]; y <= c1[1]; ++y)
                         for (int x = c0[0]; x <= c1[0]; ++x) {
-                            const std::int32_t run = b.index[b.cell({x, y, z})];
+                            const std::int32_t run = b.index[b.grid.index({x, y, z})];
                             if (run < 0) continue;
                             if (runMoves[std::size_t(run)].empty()) active.push_back(std::size_t(run));
                             runMoves[std::size_t(run)].push_back(std::uint32_t(i - m0));
