@@ -1,0 +1,130 @@
+// Exact point-to-mesh distance against a brute-force oracle that shares no code with it: every
+// triangle is tried, and each triangle's nearest point comes from the plane's normal equations
+// (a 2 x 2 solve in the triangle's own parameters) when that lands inside, else from the three
+// three edges, each by a ternary search on its convex distance function.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "dexelmill/compare/mesh_distance.h"
+
+using namespace dexelmill;
+
+namespace {
+
+/// min over t in [0, 1] of |a + t (b - a) - p|, by ternary search on the convex function.
+double oracleSegment(const Vec3& p, const Vec3& a, const Vec3& b) {
+    auto f = [&](double t) { return glm::length(a + t * (b - a) - p); };
+    double lo = 0.0, hi = 1.0;
+    for (int i = 0; i < 100; ++i) {
+        const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
+        if (f(m1) < f(m2)) hi = m2;
+        else lo = m1;
+    }
+    return std::min({f(0.0), f(1.0), f(0.5 * (lo + hi))});
+}
+
+double oracleTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 u = b - a, v = c - a, w = p - a;
+    const double uu = glm::dot(u, u), uv = glm::dot(u, v), vv = glm::dot(v, v);
+    const double det = uu * vv - uv * uv;
+    double best = std::min({oracleSegment(p, a, b), oracleSegment(p, b, c), oracleSegment(p, c, a)});
+    if (det > 1e-18 * uu * vv) {
+        const double wu = glm::dot(w, u), wv = glm::dot(w, v);
+        const double s = (vv * wu - uv * wv) / det, t = (uu * wv - uv * wu) / det;
+        if (s >= 0.0 && t >= 0.0 && s + t <= 1.0) best = std::min(best, glm::length(a + s * u + t * v - p));
+    }
+    return best;
+}
+
+double oracleMesh(const Mesh& m, const Vec3& p) {
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& t : m.triangles)
+        best = std::min(best, oracleTriangle(p, m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]));
+    return best;
+}
+
+/// A soup of random triangles in a 10 mm cube, some of them slivers, needles and points.
+Mesh soup(std::mt19937_64& rng, int n) {
+    std::uniform_real_distribution<double> u(0.0, 10.0), small(-0.3, 0.3);
+    Mesh m;
+    for (int i = 0; i < n; ++i) {
+        const Vec3 a(u(rng), u(rng), u(rng));
+        Vec3 b = a + Vec3(small(rng), small(rng), small(rng)) * 5.0;
+        Vec3 c = a + Vec3(small(rng), small(rng), small(rng)) * 5.0;
+        if (i % 17 == 3) c = a + 0.5 * (b - a);  // collinear
+        if (i % 23 == 5) b = c = a;               // a point
+        if (i % 29 == 7) b = a;                   // a segment
+        const auto base = std::uint32_t(m.vertices.size());
+        m.vertices.push_back(a);
+        m.vertices.push_back(b);
+        m.vertices.push_back(c);
+        m.triangles.push_back({base, base + 1, base + 2});
+    }
+    return m;
+}
+
+}  // namespace
+
+TEST_CASE("mesh distance: equals the brute-force minimum over every triangle", "[compare][distance]") {
+    for (std::uint64_t seed : {1u, 2u, 3u}) {
+        std::mt19937_64 rng(seed);
+        const Mesh m = soup(rng, 300);
+        const MeshDistance index(m);
+        REQUIRE(index.triangleCount() == 300);
+        std::uniform_real_distribution<double> u(-5.0, 15.0);
+        for (int i = 0; i < 200; ++i) {
+            const Vec3 p(u(rng), u(rng), u(rng));
+            const MeshDistance::Nearest n = index.nearest(p);
+            const double expected = oracleMesh(m, p);
+            INFO("seed " << seed << " point " << p.x << " " << p.y << " " << p.z);
+            CHECK(n.distance == Approx(expected).margin(1e-9));
+            // The point it names is on the triangle it names, at that distance.
+            const auto& t = m.triangles[n.triangle];
+            CHECK(oracleTriangle(n.point, m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]) <= 1e-9);
+            CHECK(glm::length(n.point - p) == Approx(n.distance).margin(1e-12));
+        }
+    }
+}
+
+TEST_CASE("mesh distance: points on the surface, at vertices and far away", "[compare][distance]") {
+    // A unit cube's 12 triangles.
+    Mesh m;
+    for (int i = 0; i < 8; ++i) m.vertices.emplace_back(double(i & 1), double((i >> 1) & 1), double((i >> 2) & 1));
+    const std::uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : f) {
+        m.triangles.push_back({q[0], q[1], q[2]});
+        m.triangles.push_back({q[0], q[2], q[3]});
+    }
+    const MeshDistance index(m);
+    CHECK(index.distance(Vec3(0.5, 0.5, 0.5)) == Approx(0.5));
+    CHECK(index.distance(Vec3(0.5, 0.25, 0.9)) == Approx(0.1));
+    CHECK(index.distance(Vec3(0.3, 0.7, 1.0)) == 0.0);
+    CHECK(index.distance(Vec3(1.0, 1.0, 1.0)) == 0.0);
+    CHECK(index.distance(Vec3(2.0, 2.0, 2.0)) == Approx(std::sqrt(3.0)));
+    CHECK(index.distance(Vec3(0.5, -3.0, 4.0)) == Approx(std::sqrt(18.0)));
+    CHECK(index.distance(Vec3(1e6, 0.5, 0.5)) == Approx(1e6 - 1.0));
+    // A point straight above an edge's midpoint, and one inside near a corner.
+    CHECK(index.distance(Vec3(0.5, -1.0, -1.0)) == Approx(std::sqrt(2.0)));
+    CHECK(index.distance(Vec3(0.95, 0.9, 0.98)) == Approx(0.02));
+}
+
+TEST_CASE("mesh distance: empty and one-triangle meshes", "[compare][distance][degenerate]") {
+    const MeshDistance none{Mesh{}};
+    CHECK(std::isinf(none.distance(Vec3(0.0))));
+    Mesh one;
+    one.vertices = {Vec3(0.0), Vec3(2.0, 0.0, 0.0), Vec3(0.0, 2.0, 0.0)};
+    one.triangles = {{0, 1, 2}};
+    const MeshDistance index(one);
+    CHECK(index.distance(Vec3(0.5, 0.5, 3.0)) == Approx(3.0));
+    CHECK(index.distance(Vec3(-1.0, -1.0, 0.0)) == Approx(std::sqrt(2.0)));
+    CHECK(index.distance(Vec3(2.0, 2.0, 0.0)) == Approx(std::sqrt(2.0)));
+    // Every triangle a point: the distance to the nearest of them.
+    Mesh points;
+    points.vertices = {Vec3(1.0, 1.0, 1.0), Vec3(4.0, 1.0, 1.0)};
+    points.triangles = {{0, 0, 0}, {1, 1, 1}};
+    CHECK(MeshDistance(points).distance(Vec3(3.0, 1.0, 1.0)) == Approx(1.0));
+}
