@@ -4,6 +4,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <string>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -30,8 +31,43 @@ struct TileSlot {
 struct TileMoveStats {
     std::uint32_t move = 0;  ///< index within the batch
     std::uint32_t bounded = 0, visited = 0, changed = 0;
-    double removed = 0.0, shank = 0.0;
+    double removed = 0.0, shank = 0.0, design = 0.0;
 };
+
+/// What a tile needs to watch the design: its dexels' design material, and the depth below which
+/// a stretch is not kept.
+struct DesignWatch {
+    const DexelTile* tile = nullptr;
+    double depth = 0.0;
+};
+
+/// The material of `segs` inside [lo, hi] that the design's segments `design` keep: returns its
+/// length, and appends to `out` (with only the dexel's [lo, hi] filled in) the pieces where the
+/// design's segment reaches farther than `depth` beyond some point of the piece on both sides.
+double designOverlap(const SegmentSpan& segs, const SegmentSpan& design, float lo, float hi, double depth,
+                     const DesignStretch& at, std::vector<DesignStretch>& out) {
+    double sum = 0.0;
+    for (const Segment& s : segs) {
+        if (s.lo >= hi) break;
+        if (s.hi <= lo) continue;
+        const float x0 = std::max(s.lo, lo), x1 = std::min(s.hi, hi);
+        for (const Segment& d : design) {
+            if (d.lo >= x1) break;
+            if (d.hi <= x0) continue;
+            const float p = std::max(x0, d.lo), q = std::min(x1, d.hi);
+            sum += double(q) - double(p);
+            // The point of [p, q] farthest inside d along the line: d's midpoint, clamped.
+            const double t = std::clamp(0.5 * (double(d.lo) + double(d.hi)), double(p), double(q));
+            if (std::min(t - double(d.lo), double(d.hi) - t) > depth) {
+                DesignStretch piece = at;
+                piece.lo = p;
+                piece.hi = q;
+                out.push_back(piece);
+            }
+        }
+    }
+    return sum;
+}
 
 void updateExtent(const DexelTile& tile, TileSlot& slot) {
     slot.lo = std::numeric_limits<float>::infinity();
@@ -113,7 +149,8 @@ struct SweepWindow {
 
 /// Applies the moves `moves` (indices into the batch) to one tile, in order.
 void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeometry>& geoms,
-                 const std::vector<std::uint32_t>& moves, bool removeShank, std::vector<TileMoveStats>& out) {
+                 const std::vector<std::uint32_t>& moves, bool removeShank, const DesignWatch& design,
+                 std::vector<TileMoveStats>& out, std::vector<DesignStretch>& stretches) {
     const Lattice& lattice = stock.lattice();
     const Axis a = axisFromIndex(slot.family);
     DexelFamily& fam = stock.family(a);
@@ -175,10 +212,23 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                     return (insideMaterial(now, toFloat(range.lo)) ? MoveSweep::kEndLo : 0u) |
                            (insideMaterial(now, toFloat(range.hi)) ? MoveSweep::kEndHi : 0u);
                 };
+                // Before a removal: the design's material it takes.
+                DesignStretch at;
+                at.move = m, at.family = a, at.ib = ib, at.ic = ic;
+                auto watch = [&](const LineHit& hit) {
+                    if (!design.tile) return;
+                    const SegmentSpan kept = design.tile->segments(local);
+                    if (kept.empty()) return;
+                    st.design += designOverlap(tile.segments(local), kept, toFloat(hit.range.lo),
+                                               toFloat(hit.range.hi), design.depth, at, stretches);
+                };
                 if (cuts) {
                     const std::size_t n = g.cutting->intersectParts(line, parts, makesEnds);
-                    for (std::size_t k = 0; k < n; ++k)
-                        if (!parts[k].isEmpty()) removed += subtractHit(tile, local, parts[k]);
+                    for (std::size_t k = 0; k < n; ++k) {
+                        if (parts[k].isEmpty()) continue;
+                        watch(parts[k]);
+                        removed += subtractHit(tile, local, parts[k]);
+                    }
                 }
                 if (shank) {
                     const std::size_t n = g.shank->intersectParts(line, parts, makesEnds);
@@ -186,6 +236,7 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                         if (parts[k].isEmpty()) continue;
                         const float lo = toFloat(parts[k].range.lo), hi = toFloat(parts[k].range.hi);
                         if (removeShank) {
+                            watch(parts[k]);
                             const double met = subtractHit(tile, local, parts[k]);
                             st.shank += met;
                             removed += met;
@@ -273,8 +324,26 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
         options.batchMoves > 0 ? options.batchMoves : std::max<std::size_t>(64, (nMoves + 99) / 100);
     std::vector<std::vector<std::uint32_t>> tileMoves(slots.size());
     std::vector<std::vector<TileMoveStats>> tileStats(slots.size());
+    std::vector<std::vector<DesignStretch>> tileStretches(slots.size());
+    if (options.design) {
+        const TriDexelStock& d = *options.design;
+        if (d.lattice().n != lattice.n || d.lattice().h != lattice.h || d.lattice().origin != lattice.origin)
+            throw Error("cutting: the design is not cast on the stock's lattice");
+        for (int a = 0; a < 3; ++a)
+            if (stock.has(axisFromIndex(a)) && !d.has(axisFromIndex(a)))
+                throw Error("cutting: the design lacks the stock's " + std::string(1, "xyz"[a]) + " dexels");
+    }
+    auto watchOf = [&](const TileSlot& s) {
+        DesignWatch w;
+        if (options.design) {
+            w.tile = &options.design->family(axisFromIndex(s.family)).tile(s.tb, s.tc);
+            w.depth = options.designDepth;
+        }
+        return w;
+    };
     std::vector<std::size_t> active;
     std::vector<MoveGeometry> geoms;
+    std::vector<DesignStretch> batchStretches;
 
     for (std::size_t m0 = 0; m0 < nMoves; m0 += batch) {
         const std::size_t m1 = std::min(nMoves, m0 + batch);
@@ -310,7 +379,8 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
         arena.execute([&] {
             tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t k) {
                 const std::size_t t = active[k];
-                processTile(stock, slots[t], geoms, tileMoves[t], options.removeShankMaterial, tileStats[t]);
+                processTile(stock, slots[t], geoms, tileMoves[t], options.removeShankMaterial, watchOf(slots[t]),
+                            tileStats[t], tileStretches[t]);
             });
         });
         // Reduce in tile order: the same sums in the same order for any thread count.
@@ -322,10 +392,21 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
                 ms.changed += s.changed;
                 ms.removed += s.removed * cell;
                 ms.shankVolume += s.shank * cell;
+                ms.designRemoved[std::size_t(slots[t].family)] += s.design * lattice.h * lattice.h;
+            }
+            for (DesignStretch& d : tileStretches[t]) {
+                d.move += std::uint32_t(m0);
+                batchStretches.push_back(d);
             }
             tileStats[t].clear();
             tileMoves[t].clear();
+            tileStretches[t].clear();
         }
+        // By move, then family and dexel (tiles come in family order, dexels within a tile in order).
+        std::stable_sort(batchStretches.begin(), batchStretches.end(),
+                         [](const DesignStretch& x, const DesignStretch& y) { return x.move < y.move; });
+        result.designStretches.insert(result.designStretches.end(), batchStretches.begin(), batchStretches.end());
+        batchStretches.clear();
         if (options.progress) options.progress(m1, nMoves);
     }
 

@@ -21,6 +21,7 @@
 ///    it, to show what the flutes alone would have cut).
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -49,6 +50,12 @@ struct CutOptions {
     /// Called after each batch with (moves done, total moves), on the calling thread, with the
     /// same sequence of values whatever the thread count.
     std::function<void(std::size_t done, std::size_t total)> progress;
+    /// The design part, cast on the stock's lattice (same families or more), or null. With it,
+    /// every removal is intersected with the design's material on the same dexel: its length goes
+    /// into MoveStats::designRemoved, and the stretches that may lie deeper inside the design than
+    /// `designDepth` (mm) go into CutResult::designStretches.
+    const TriDexelStock* design = nullptr;
+    double designDepth = 0.01;
 };
 
 /// @brief What one move did.
@@ -60,6 +67,21 @@ struct MoveStats {
     std::uint64_t changed = 0;   ///< dexels that lost material
     double removed = 0.0;        ///< material removed (mm^3), mean over the stock's families
     double shankVolume = 0.0;    ///< material met by the shank region (mm^3), mean over families
+    /// Design material removed (mm^3) as each family measures it (CutOptions::design); 0 for
+    /// families the stock does not keep. A layer thinner than the spacing is measured exactly only
+    /// by the family across it, so the families are not averaged.
+    std::array<double, 3> designRemoved{0.0, 0.0, 0.0};
+};
+
+/// @brief A stretch of one dexel where a move removed material the design keeps, and which may lie
+/// deeper inside the design than CutOptions::designDepth: along the dexel the design's material
+/// reaches farther than that beyond some point of the stretch on both sides. (The distance to the
+/// design's surface is at most the distance along any line, so the other stretches cannot.)
+struct DesignStretch {
+    std::uint32_t move = 0;
+    Axis family = Axis::Z;
+    int ib = 0, ic = 0;  ///< the dexel's lattice indexes across the family's axis (DexelFamily::axisB, axisC)
+    float lo = 0.0f, hi = 0.0f;  ///< along the dexel, relative to the lattice origin
 };
 
 /// @brief The kinds of collision the cutting loop reports.
@@ -85,6 +107,8 @@ struct CutResult {
     std::uint64_t changed = 0;
     double removedVolume = 0.0;
     double shankVolume = 0.0;
+    /// With CutOptions::design: the stretches that may gouge, by move, then family, then dexel.
+    std::vector<DesignStretch> designStretches;
 };
 
 /// @brief A tool split at its cutting length: the part that cuts (heights [bottom, cutting length])
