@@ -98,6 +98,10 @@ SimulateOptions toOptions(const SimulateArgs& a) {
     else throw UsageError("--mesher must be dexel or vdb, got '" + a.mesher + "'");
     if (a.sharpEdges && o.mesher == Mesher::Vdb)
         throw UsageError("--sharp-edges: volumeToMesh rounds sharp edges; the dexel mesher (the default) keeps them");
+    if (a.gougeCsv.size() && a.design.empty()) throw UsageError("--gouge-csv needs --design PART.stl");
+    o.designPath = a.design;
+    o.gougeTolerance = a.gougeTolerance;
+    o.gougeCsvPath = a.gougeCsv;
     o.meshPath = a.output;
     o.vdbPath = a.vdb;
     o.pngPath = a.png;
@@ -193,6 +197,18 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
     c->add_option("--vdb", a.vdb, "The part as an OpenVDB level set, PART.vdb");
     c->add_option("--png", a.png, "A shaded isometric picture of the part, PART.png");
     c->add_option("--report", a.report, "A JSON report: volumes, collisions, warnings, timings");
+    c->add_option("--design", a.design,
+                  "The design part, PART.stl (closed, in the program's frame): every move that removes\n"
+                  "material it keeps is checked, and those cutting deeper than --gouge-tolerance are\n"
+                  "reported as gouges, by file and line");
+    c->add_option("--gouge-tolerance", a.gougeTolerance,
+                  "A move gouges when it removes design material farther than this inside the design's\n"
+                  "surface (mm)")
+        ->check(numberCheck(true))
+        ->capture_default_str();
+    c->add_option("--gouge-csv", a.gougeCsv,
+                  "The gouges as GOUGES.csv, deepest first: move, file, line, tool, depth_mm, volume_mm3,\n"
+                  "x, y, z, rapid (needs --design)");
     c->add_option("--adaptivity", a.adaptivity,
                   "Merging of flat regions, from 0 (none) to 1 (triangles within 15 degrees merge,\n"
                   "moving the surface by at most 0.05 spacings); the mesh stays closed")
@@ -231,6 +247,15 @@ int runSimulate(const SimulateArgs& args) {
         }
         if (r.collisions.size() > kPrintedDiagnostics)
             std::cerr << "dexelmill: " << r.collisions.size() - kPrintedDiagnostics << " more collisions\n";
+        shown = 0;
+        for (const ReportGouge& g : r.gouges) {
+            if (shown++ == kPrintedDiagnostics) break;
+            std::fprintf(stderr, "%s: gouge: %smove %zu (T%d) cuts %.4g mm into the design, %.4g mm^3, deepest at (%.4f, %.4f, %.4f)\n",
+                         where(g.where).c_str(), g.rapid ? "rapid " : "", g.move + 1, g.tool,
+                         g.depthMm, g.volumeMm3, g.point.x, g.point.y, g.point.z);
+        }
+        if (r.gouges.size() > kPrintedDiagnostics)
+            std::cerr << "dexelmill: " << r.gouges.size() - kPrintedDiagnostics << " more gouges\n";
     }
     const double pct = r.stockVolumeMm3 > 0 ? 100.0 * r.removedVolumeMm3 / r.stockVolumeMm3 : 0.0;
     std::string meshState;
@@ -238,11 +263,18 @@ int runSimulate(const SimulateArgs& args) {
         meshState = r.meshClosed ? " (closed" : " (NOT closed";
         meshState += r.meshFoldedTriangles ? ", " + std::to_string(r.meshFoldedTriangles) + " folded)" : ")";
     }
+    std::string gouges;
+    if (!r.designFile.empty()) {
+        char text[160];
+        std::snprintf(text, sizeof text, "%zu gouges (deepest %.4g mm, tolerance %.4g mm), ", r.gouges.size(),
+                      r.gouges.empty() ? 0.0 : r.gouges.front().depthMm, r.gougeToleranceMm);
+        gouges = text;
+    }
     std::printf(
         "dexelmill: %zu moves, %zu tool changes; removed %.6g mm^3 (%.1f %% of the stock), part %.6g mm^3; "
-        "h %.4g mm; %zu collisions, %zu warnings; mesh %zu triangles%s; %.2f s, %.0f MiB\n",
+        "h %.4g mm; %zu collisions, %s%zu warnings; mesh %zu triangles%s; %.2f s, %.0f MiB\n",
         r.moves, r.toolChanges, r.removedVolumeMm3, pct, r.finalVolumeMm3, r.resolutionMm, r.collisions.size(),
-        r.warnings.size(), r.meshTriangles, meshState.c_str(), r.timingS.total, r.peakMemoryMb);
+        gouges.c_str(), r.warnings.size(), r.meshTriangles, meshState.c_str(), r.timingS.total, r.peakMemoryMb);
     return 0;
 }
 

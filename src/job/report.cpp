@@ -40,6 +40,23 @@ std::string reportJson(const SimulateReport& r) {
                               {"kind", c.kind},
                               {"volume_mm3", c.volumeMm3}});
     j["collisions"] = collisions;
+    if (!r.designFile.empty()) {
+        json gouges = json::array();
+        for (const ReportGouge& g : r.gouges)
+            gouges.push_back({{"move", g.move},
+                              {"file", g.where.file},
+                              {"line", g.where.line},
+                              {"tool", g.tool},
+                              {"rapid", g.rapid},
+                              {"depth_mm", g.depthMm},
+                              {"volume_mm3", g.volumeMm3},
+                              {"point_mm", {g.point.x, g.point.y, g.point.z}}});
+        j["design"] = {{"file", r.designFile},
+                       {"gouge_tolerance_mm", r.gougeToleranceMm},
+                       {"gouge_count", r.gouges.size()},
+                       {"worst_gouge_mm", r.gouges.empty() ? 0.0 : r.gouges.front().depthMm},
+                       {"gouges", gouges}};
+    }
     json warnings = json::array();
     for (const ReportWarning& w : r.warnings)
         warnings.push_back({{"file", w.where.file}, {"line", w.where.line}, {"message", w.message}});
@@ -63,13 +80,29 @@ std::string reportJson(const SimulateReport& r) {
                                {"edges_split", r.refineSplit},
                                {"splits_refused", r.refineRefused},
                                {"midpoints_without_crossing", r.refineNoCrossing}};
-    j["timing_s"] = {{"parse", r.timingS.parse}, {"cut", r.timingS.cut},     {"rebuild", r.timingS.rebuild},
+    j["timing_s"] = {{"parse", r.timingS.parse}, {"design", r.timingS.design}, {"cut", r.timingS.cut},     {"rebuild", r.timingS.rebuild},
                      {"mesh", r.timingS.mesh},   {"refine", r.timingS.refine}, {"write", r.timingS.write},
                      {"total", r.timingS.total}};
     j["peak_memory_mb"] = r.peakMemoryMb;
     j["threads_started"] = r.threadsStarted;
     j["stock_memory_mb"] = double(r.stockMemoryBytes) / (1024.0 * 1024.0);
     return j.dump(2) + "\n";
+}
+
+std::string gougeCsv(const SimulateReport& r) {
+    auto quoted = [](const std::string& text) {
+        std::string q = "\"";
+        for (char c : text) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+        return q + "\"";
+    };
+    std::string out = "move,file,line,tool,depth_mm,volume_mm3,x,y,z,rapid\n";
+    char row[256];
+    for (const ReportGouge& g : r.gouges) {
+        std::snprintf(row, sizeof row, ",%d,%d,%.6f,%.6f,%.6f,%.6f,%.6f,%d\n", g.where.line, g.tool, g.depthMm,
+                      g.volumeMm3, g.point.x, g.point.y, g.point.z, g.rapid ? 1 : 0);
+        out += std::to_string(g.move) + "," + quoted(g.where.file) + row;
+    }
+    return out;
 }
 
 double chooseResolution(const Box& stock, double cells) {

@@ -68,6 +68,14 @@ struct SimulateOptions {
     /// part.
     double refineTolerance = 0.002;
 
+    /// The design part (a closed STL in the program's frame), or empty. With it, every move that
+    /// removes material the design keeps, deeper than `gougeTolerance` (mm, as distance inside the
+    /// design's surface), is reported as a gouge (SimulateReport::gouges).
+    std::string designPath;
+    double gougeTolerance = 0.01;
+    /// A CSV of the gouges, one row per gouging move; needs designPath.
+    std::string gougeCsvPath;
+
     /// Outputs; empty paths are not written. The mesh format follows the extension (.obj, .stl,
     /// .ply).
     std::string meshPath, vdbPath, pngPath, reportPath;
@@ -99,6 +107,17 @@ struct ReportCollision {
     double volumeMm3 = 0.0;
 };
 
+/// @brief A move that cut into the design (Gouge), with its place and tool.
+struct ReportGouge {
+    std::size_t move = 0;  ///< 0-based index into the program's moves
+    ReportLocation where;
+    int tool = 0;
+    bool rapid = false;
+    double depthMm = 0.0;
+    double volumeMm3 = 0.0;
+    Vec3 point{0.0};
+};
+
 /// @brief A warning from a reader or the cutting loop.
 struct ReportWarning {
     ReportLocation where;
@@ -124,6 +143,12 @@ struct SimulateReport {
     std::vector<ReportCollision> collisions;
     std::vector<ReportWarning> warnings;
 
+    /// The design comparison, when a design was given: its file, the tolerance, and the gouges
+    /// deepest first.
+    std::string designFile;
+    double gougeToleranceMm = 0.0;
+    std::vector<ReportGouge> gouges;
+
     std::string mesher;  ///< "dexel" or "vdb"
     std::size_t meshVertices = 0, meshTriangles = 0;
     bool meshClosed = false;
@@ -139,7 +164,7 @@ struct SimulateReport {
     std::size_t refineQueries = 0, refineSnapped = 0, refineSplit = 0, refineRefused = 0, refineNoCrossing = 0;
 
     struct Timing {
-        double parse = 0, cut = 0, rebuild = 0, mesh = 0, refine = 0, write = 0, total = 0;
+        double parse = 0, design = 0, cut = 0, rebuild = 0, mesh = 0, refine = 0, write = 0, total = 0;
     } timingS;
     double peakMemoryMb = 0.0;
     /// Threads the process started while the job ran: TBB's workers, which start only when a
@@ -177,6 +202,11 @@ SimulateReport simulate(const SimulateOptions& options);
 
 /// @brief The report as JSON text (the fields of SimulateReport, snake_case, units in the names).
 std::string reportJson(const SimulateReport& report);
+
+/// @brief The gouges as CSV text: a header row, then one row per gouging move, deepest first:
+/// move (0-based), file, line, tool, depth_mm, volume_mm3, x, y, z (the deepest point, mm), rapid
+/// (1 for a rapid move). Text fields are quoted.
+std::string gougeCsv(const SimulateReport& report);
 
 /// @brief A default lattice spacing for a stock box: its longest side divided by `cells` (about),
 /// rounded down to 1, 2 or 5 times a power of ten.

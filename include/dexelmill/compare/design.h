@@ -1,0 +1,66 @@
+/// @file design.h
+/// @brief The design part, for comparing what the program cuts with it: its solid cast on the
+/// stock's lattice, which the cutting loop watches (CutOptions::design), and its exact distance,
+/// which measures how deep each move cut into it.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "dexelmill/compare/mesh_distance.h"
+#include "dexelmill/geometry/types.h"
+#include "dexelmill/stock/cut.h"
+#include "dexelmill/stock/tridexel.h"
+#include "dexelmill/surface/voxelize.h"
+
+namespace dexelmill {
+
+/// @brief A design part ready for the comparison.
+struct DesignPart {
+    explicit DesignPart(TriDexelStock dexels);
+    ~DesignPart();
+    DesignPart(DesignPart&&) noexcept;
+    DesignPart& operator=(DesignPart&&) noexcept;
+
+    std::string file;
+    Box bounds;                   ///< the design mesh's bounding box (mm)
+    TriDexelStock dexels;         ///< its solid on the stock's lattice
+    MeshCastStats cast;           ///< what casting met: unpaired dexels mean an open mesh
+    /// The exact distance to the design's surface. Inside the design (where the dexels hold
+    /// material) it is the depth.
+    std::unique_ptr<MeshDistance> distance;
+};
+
+/// @brief Reads a design (a closed STL, binary or ASCII) and casts it on `lattice`.
+/// @throw Error naming the file for another format, an unreadable or empty file, or an STL that
+/// does not hold a solid.
+DesignPart loadDesign(const std::string& path, const Lattice& lattice, FamilySet families = FamilySet::all());
+
+/// @brief A move that removed material the design keeps, deeper than the tolerance.
+struct Gouge {
+    std::size_t move = 0;        ///< 0-based index into the path's moves
+    double depth = 0.0;          ///< mm: the deepest point's distance inside the design's surface
+    /// mm^3 of design material the move removed (MoveStats::designRemoved), as the z family
+    /// measures it (x's, else y's, without z dexels)
+    double volume = 0.0;
+    Vec3 point{0.0};             ///< the deepest point found
+};
+
+/// @brief How far below the deepest point of a move's cut into the design findGouges may stop
+/// (mm): a quarter of the tolerance, and at least a micrometre.
+double depthBound(double tolerance);
+
+/// @brief The gouges a cut made, in move order: for every move with design stretches
+/// (CutResult::designStretches, from a cut with CutOptions::design = &design.dexels and
+/// designDepth = tolerance), the deepest point of its stretches, kept if deeper than `tolerance`.
+///
+/// Depths are exact distances to the design's triangles (MeshDistance). Along a stretch the depth
+/// changes by at most the distance moved, so a branch and bound over pieces of the stretches,
+/// started from samples half a spacing apart, finds a point within depthBound(tolerance) of the
+/// deepest one. So every move that cuts deeper than tolerance + depthBound is reported, none that
+/// cuts at most `tolerance` deep is, and the reported depth is that of a real point of the cut.
+std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, const CutResult& cut, double tolerance);
+
+}  // namespace dexelmill

@@ -1,0 +1,227 @@
+// Gouges against a design, through the job: programs whose cuts into the design are known by hand
+// (planar faces, flat end mills), so every depth, volume and line below is an analytic answer.
+// The designs are written here as ASCII STL, polygon by polygon, sharing no code with the project.
+#include <catch2/catch.hpp>
+
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "dexelmill/error.h"
+#include "dexelmill/compare/design.h"
+#include "dexelmill/job/simulate.h"
+#include "dexelmill/tool/builders.h"
+
+using namespace dexelmill;
+namespace fs = std::filesystem;
+
+namespace {
+
+using P2 = std::array<double, 2>;
+
+/// The solid swept by a polygon in the (x, z) plane along y from y0 to y1, as ASCII STL facets
+/// facing out. The polygon is counter-clockwise seen with x to the right and z up, and every
+/// vertex is visible from the first (the caps are fans from it).
+std::string prismFacets(const std::vector<P2>& xz, double y0, double y1) {
+    std::ostringstream s;
+    s.precision(17);
+    auto facet = [&](const std::array<double, 3>& a, const std::array<double, 3>& b, const std::array<double, 3>& c) {
+        s << " facet normal 0 0 0\n  outer loop\n";
+        for (const auto& p : {a, b, c}) s << "   vertex " << p[0] << " " << p[1] << " " << p[2] << "\n";
+        s << "  endloop\n endfacet\n";
+    };
+    const std::size_t n = xz.size();
+    auto at = [&](std::size_t i, double y) { return std::array<double, 3>{xz[i % n][0], y, xz[i % n][1]}; };
+    // Counter-clockwise in (x, z) is clockwise seen from +y: the cap at y1 faces +y with the
+    // order reversed, the cap at y0 faces -y as given.
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+        facet(at(0, y0), at(i, y0), at(i + 1, y0));
+        facet(at(0, y1), at(i + 1, y1), at(i, y1));
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+        facet(at(i, y0), at(i, y1), at(i + 1, y1));
+        facet(at(i, y0), at(i + 1, y1), at(i + 1, y0));
+    }
+    return s.str();
+}
+
+std::string writeStl(const fs::path& p, const std::string& facets) {
+    std::ofstream(p) << "solid design\n" << facets << "endsolid design\n";
+    return p.string();
+}
+
+fs::path scratch(const std::string& name) {
+    const fs::path p = fs::temp_directory_path() / ("dexelmill_test_design_" + name);
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+}
+
+/// The stock of every case: 40 x 40 x 10 mm, top at z = 0, at a spacing of 0.25 mm.
+const Box kStock{Vec3(0.0, 0.0, -10.0), Vec3(40.0, 40.0, 0.0)};
+constexpr double kH = 0.25;
+
+SimulateOptions job(const std::string& program, const std::string& design, double flatDiameter) {
+    SimulateOptions o;
+    o.inputs = {"part.ngc"};
+    o.files = [program](const std::string& path) -> std::optional<std::string> {
+        if (path == "part.ngc") return program;
+        return std::nullopt;
+    };
+    o.stockBox = kStock;
+    o.tools.emplace(1, flatEndMill(flatDiameter, {20.0, 40.0}));
+    o.resolution = kH;
+    o.designPath = design;
+    o.threads = 2;
+    return o;
+}
+
+/// An L-shaped design: full height for x < 30, a floor at z = -5.1 for x in [30, 40].
+std::vector<P2> lShape() { return {{0, -10}, {40, -10}, {40, -5.1}, {30, -5.1}, {30, 0}, {0, 0}}; }
+
+// Line 5: the wall pass along y at x = 35 (the cutter spans x 30..40) and z = -5: above the floor
+// and tangent to the wall at x = 30, no gouge. Line 9: the floor pass at z = -5.2, 0.1 mm into the
+// floor. Line 13: a rapid along the same line at z = -7. (The plunges, at y = -10, miss the stock.)
+const char* kPocket =
+    "G21 G90\n"
+    "T1 M6\n"
+    "G0 X35 Y-10 Z5\n"
+    "G1 Z-5 F500\nG1 Y50\nG0 Z5\nG0 Y-10\n"
+    "G1 Z-5.2\nG1 Y50\nG0 Z5\nG0 Y-10\n"
+    "G0 Z-7\nG0 Y50\nG0 Z5\n"
+    "M30\n";
+
+}  // namespace
+
+TEST_CASE("gouges: a floor cut 0.1 mm too deep, and a rapid through the design", "[compare][design][job]") {
+    const fs::path dir = scratch("pocket");
+    const std::string design = writeStl(dir / "l.stl", prismFacets(lShape(), -1.0, 41.0));
+    const SimulateReport r = simulate(job(kPocket, design, 10.0));
+    REQUIRE(r.gouges.size() == 2);
+    // Deepest first: the rapid, 1.9 mm below the floor at -5.1, over the 10 x 40 mm floor from
+    // -7 to -5.2 (what the floor pass left).
+    const ReportGouge& rapid = r.gouges[0];
+    CHECK(rapid.where.line == 13);
+    CHECK(rapid.rapid);
+    CHECK(rapid.depthMm == Approx(1.9).margin(1e-3));
+    CHECK(rapid.volumeMm3 == Approx(10.0 * 40.0 * 1.8).epsilon(1e-5));
+    const ReportGouge& floor = r.gouges[1];
+    CHECK(floor.where.line == 9);
+    CHECK_FALSE(floor.rapid);
+    CHECK(floor.tool == 1);
+    CHECK(floor.depthMm == Approx(0.1).margin(1e-3));
+    CHECK(floor.volumeMm3 == Approx(10.0 * 40.0 * 0.1).epsilon(1e-4));
+    CHECK(floor.point.z == Approx(-5.2).margin(1e-3));
+    CHECK(floor.point.x >= 30.0);
+    // The wall pass (line 5) is no gouge; the report names the design and the tolerance.
+    CHECK(r.designFile == design);
+    CHECK(r.gougeToleranceMm == 0.01);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("gouges: a slot through a boss the design keeps", "[compare][design][job]") {
+    const fs::path dir = scratch("boss");
+    // A base below z = -6 and a boss x 15..25, y 15..25, z -5..-1, apart from it.
+    std::string facets = prismFacets({{0, -10}, {40, -10}, {40, -6}, {0, -6}}, 0.0, 40.0);
+    facets += prismFacets({{15, -5}, {25, -5}, {25, -1}, {15, -1}}, 15.0, 25.0);
+    const std::string design = writeStl(dir / "boss.stl", facets);
+    // A D4 slot along x at y = 20, z = -2: through the boss's top millimetre, 10 x 4 x 1 mm.
+    const std::string program = "G21 G90\nT1 M6\nG0 X-5 Y20 Z5\nG1 Z-2 F300\nG1 X45\nG0 Z5\nM30\n";
+    const SimulateReport r = simulate(job(program, design, 4.0));
+    REQUIRE(r.gouges.size() == 1);
+    CHECK(r.gouges[0].where.line == 5);
+    CHECK(r.gouges[0].depthMm == Approx(1.0).margin(1e-3));
+    CHECK(r.gouges[0].volumeMm3 == Approx(40.0).epsilon(1e-4));
+    CHECK(r.gouges[0].point.x >= 15.0);
+    CHECK(r.gouges[0].point.x <= 25.0);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("gouges: shallower than the tolerance is not reported", "[compare][design][job]") {
+    const fs::path dir = scratch("tolerance");
+    // The floor at -5.195: the pass at -5.2 cuts 0.005 mm into it.
+    const std::string design =
+        writeStl(dir / "l.stl", prismFacets({{0, -10}, {40, -10}, {40, -5.195}, {30, -5.195}, {30, 0}, {0, 0}}, -1, 41));
+    const std::string program = "G21 G90\nT1 M6\nG0 X35 Y-10 Z5\nG1 Z-5.2 F500\nG1 Y50\nG0 Z5\nM30\n";
+    SimulateOptions o = job(program, design, 10.0);
+    CHECK(simulate(o).gouges.empty());
+    o.gougeTolerance = 0.001;
+    const SimulateReport r = simulate(o);
+    REQUIRE(r.gouges.size() == 1);
+    CHECK(r.gouges[0].depthMm == Approx(0.005).margin(1e-3));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("gouges: the same for any thread count, and written as CSV", "[compare][design][job]") {
+    const fs::path dir = scratch("threads");
+    const std::string design = writeStl(dir / "l.stl", prismFacets(lShape(), -1.0, 41.0));
+    SimulateOptions o = job(kPocket, design, 10.0);
+    o.gougeCsvPath = (dir / "gouges.csv").string();
+    std::vector<SimulateReport> runs;
+    for (int threads : {1, 3}) {
+        o.threads = threads;
+        runs.push_back(simulate(o));
+    }
+    REQUIRE(runs[0].gouges.size() == runs[1].gouges.size());
+    for (std::size_t i = 0; i < runs[0].gouges.size(); ++i) {
+        CHECK(runs[0].gouges[i].move == runs[1].gouges[i].move);
+        CHECK(runs[0].gouges[i].depthMm == runs[1].gouges[i].depthMm);
+        CHECK(runs[0].gouges[i].volumeMm3 == runs[1].gouges[i].volumeMm3);
+    }
+    std::ifstream in(dir / "gouges.csv");
+    std::string header, first;
+    std::getline(in, header);
+    std::getline(in, first);
+    CHECK(header == "move,file,line,tool,depth_mm,volume_mm3,x,y,z,rapid");
+    CHECK(first.rfind(std::to_string(runs[1].gouges[0].move) + ",\"part.ngc\",13,1,1.9", 0) == 0);
+    CHECK(first.substr(first.size() - 2) == ",1");
+    fs::remove_all(dir);
+}
+
+TEST_CASE("gouges: a design that cannot be read, and a CSV without a design", "[compare][design][job]") {
+    const fs::path dir = scratch("errors");
+    SimulateOptions o = job(kPocket, (dir / "part.obj").string(), 10.0);
+    CHECK_THROWS_WITH(simulate(o), Catch::Contains("part.obj") && Catch::Contains("STL"));
+    o.designPath = (dir / "missing.stl").string();
+    CHECK_THROWS_WITH(simulate(o), Catch::Contains("missing.stl"));
+    o.designPath.clear();
+    o.gougeCsvPath = (dir / "g.csv").string();
+    CHECK_THROWS_WITH(simulate(o), Catch::Contains("--design"));
+    CHECK_FALSE(fs::exists(dir / "g.csv"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("gouges: the deepest point between samples is found within the stated bound", "[compare][design]") {
+    const fs::path dir = scratch("peak");
+    // A 10 mm cube. Along the line y = z = 5 the depth is min(x, 10 - x): a peak of 5 at x = 5,
+    // which the samples half a spacing apart (h = 2) from x = 0.3 miss by 0.19 mm.
+    const std::string design = writeStl(dir / "cube.stl", prismFacets({{0, 0}, {10, 0}, {10, 10}, {0, 10}}, 0.0, 10.0));
+    const Lattice lattice = Lattice::fromBox(Box{Vec3(0.0), Vec3(10.0)}, 2.0);
+    const DesignPart part = loadDesign(design, lattice);
+    CutResult cut;
+    cut.moves.resize(3);
+    cut.moves[0].designRemoved = {1.0, 2.0, 3.0};
+    // Move 0: the stretch through the peak, and a shallower one (y = 3: at most 3 deep).
+    cut.designStretches.push_back({0, Axis::X, 2, 2, 0.3f, 9.1f});
+    cut.designStretches.push_back({0, Axis::X, 1, 2, 0.3f, 9.1f});
+    // Move 2: a stretch along z at x = y = 9, 1 mm from two faces: at most 1 deep.
+    cut.designStretches.push_back({2, Axis::Z, 4, 4, 2.0f, 8.0f});
+    const double tolerance = 0.01;
+    std::vector<Gouge> gouges = findGouges(part, lattice, cut, tolerance);
+    REQUIRE(gouges.size() == 2);
+    CHECK(gouges[0].move == 0);
+    CHECK(gouges[0].depth <= 5.0 + 1e-12);
+    CHECK(gouges[0].depth >= 5.0 - depthBound(tolerance));
+    CHECK(gouges[0].point.y == 5.0);
+    CHECK(gouges[0].point.x == Approx(5.0).margin(depthBound(tolerance)));
+    CHECK(gouges[0].volume == 3.0);  // the z family's measure
+    CHECK(gouges[1].move == 2);
+    CHECK(gouges[1].depth == Approx(1.0).margin(1e-12));
+    // A tolerance above both depths reports nothing.
+    CHECK(findGouges(part, lattice, cut, 5.5).empty());
+    fs::remove_all(dir);
+}
