@@ -21,6 +21,10 @@ namespace {
 /// point found by more than this (mm), or a quarter of the tolerance if that is larger.
 constexpr double kMinDepthBound = 1e-3;
 
+/// A float's rounding is 6e-8 of its value; a stated stock may be this much (relative to the
+/// design's largest coordinate) smaller than an STL design's box and still hold it.
+constexpr double kFloatSlack = 1e-6;
+
 std::string lowerExtension(const std::string& path) {
     const std::size_t dot = path.find_last_of('.');
     std::string ext = dot == std::string::npos ? std::string() : path.substr(dot);
@@ -35,10 +39,15 @@ DesignPart::~DesignPart() = default;
 DesignPart::DesignPart(DesignPart&&) noexcept = default;
 DesignPart& DesignPart::operator=(DesignPart&&) noexcept = default;
 
-DesignPart loadDesign(const std::string& path, const Lattice& lattice, FamilySet families) {
+Mesh readDesign(const std::string& path) {
     if (lowerExtension(path) != ".stl")
         throw Error("'" + path + "': a design must be an STL file (.stl, binary or ASCII)");
-    const Mesh mesh = readStl(path);
+    Mesh mesh = readStl(path);
+    if (mesh.empty()) throw Error("'" + path + "': the design has no triangles");
+    return mesh;
+}
+
+DesignPart loadDesign(const Mesh& mesh, const std::string& path, const Lattice& lattice, FamilySet families) {
     MeshCastStats cast;
     DesignPart d(stockFromMesh(mesh, lattice, families, &cast));
     d.cast = cast;
@@ -46,9 +55,51 @@ DesignPart loadDesign(const std::string& path, const Lattice& lattice, FamilySet
     d.bounds = mesh.bounds();
     if (d.dexels.volume(d.dexels.has(Axis::Z) ? Axis::Z : (d.dexels.has(Axis::X) ? Axis::X : Axis::Y)) <= 0.0)
         throw Error("'" + path + "': the design holds no material inside the stock's box");
-
     d.distance = std::make_unique<MeshDistance>(mesh);
     return d;
+}
+
+DesignPart loadDesign(const std::string& path, const Lattice& lattice, FamilySet families) {
+    return loadDesign(readDesign(path), path, lattice, families);
+}
+
+Box designStockBox(const Box& design, const std::optional<StatedStock>& stated, std::string& note) {
+    char text[400];
+    if (!stated) {
+        std::snprintf(text, sizeof text,
+                      "no --stock: the stock is the design's bounding box, x %g .. %g, y %g .. %g, z %g .. %g mm",
+                      design.lo.x, design.hi.x, design.lo.y, design.hi.y, design.lo.z, design.hi.z);
+        note = text;
+        return design;
+    }
+    const Vec3 need = design.size(), size = stated->size;
+    // STL stores single floats: the design's box is known to a few float roundings of its largest
+    // coordinate.
+    const double slack = kFloatSlack * std::max({glm::length(design.lo), glm::length(design.hi), 1.0});
+    for (int k = 0; k < 3; ++k)
+        if (size[k] < need[k] - slack) {
+            std::snprintf(text, sizeof text,
+                          "%s:%d: the stated stock (%g x %g x %g mm) is smaller than the design (%g x %g x %g mm) "
+                          "along %c: give --stock",
+                          stated->where.file.c_str(), stated->where.line, size.x, size.y, size.z, need.x, need.y,
+                          need.z, "xyz"[k]);
+            throw Error(text);
+        }
+    Box box;
+    const Vec3 c = design.center();
+    box.lo.x = c.x - 0.5 * size.x, box.hi.x = c.x + 0.5 * size.x;
+    box.lo.y = c.y - 0.5 * size.y, box.hi.y = c.y + 0.5 * size.y;
+    const bool topAtZero = design.hi.z <= slack && design.lo.z >= -size.z - slack;
+    box.hi.z = topAtZero ? 0.0 : design.lo.z + size.z;
+    box.lo.z = box.hi.z - size.z;
+    std::snprintf(text, sizeof text,
+                  "no --stock: the stock is the %g x %g x %g mm the program states (%s:%d), around the design: "
+                  "x %g .. %g, y %g .. %g, z %g .. %g mm (%s)",
+                  size.x, size.y, size.z, stated->where.file.c_str(), stated->where.line, box.lo.x, box.hi.x,
+                  box.lo.y, box.hi.y, box.lo.z, box.hi.z,
+                  topAtZero ? "top at z = 0" : "bottom on the design's bottom");
+    note = text;
+    return box;
 }
 
 double depthBound(double tolerance) { return std::max(0.25 * tolerance, kMinDepthBound); }
@@ -68,11 +119,22 @@ std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, 
     };
     std::vector<Deepest> deepest(groups.size() - 1);
     tbb::parallel_for(std::size_t(0), groups.size() - 1, [&](std::size_t g) {
-        // An interval [t0, t1] of one stretch's coordinate with the depths at its ends. The
-        // distance to a surface changes by at most the distance moved, so no point of it is deeper
-        // than (f0 + f1 + (t1 - t0)) / 2.
+        // An interval [t0, t1] of one stretch's coordinate, with the depths at its ends and the
+        // triangles nearest there, and a bound on the depth of any point between. Two bounds hold:
+        // - the depth changes by at most the distance moved, so no point is deeper than
+        //   (f0 + f1 + (t1 - t0)) / 2;
+        // - the depth is at most the distance to any one triangle, which is convex along a line
+        //   (a triangle is convex), so it is at most the larger of that triangle's distances at the
+        //   ends: max(f0, distance from the far end to the triangle nearest t0), and likewise from
+        //   t1. Where one face is nearest along the whole piece (a floor cut too deep) this bound
+        //   is the ends' depth, and the piece needs no splitting.
+        struct Sample {
+            double t, f;
+            std::uint32_t triangle;
+        };
         struct Piece {
-            double bound, t0, t1, f0, f1;
+            double bound;
+            Sample s0, s1;
             std::size_t stretch;
             bool operator<(const Piece& o) const { return bound < o.bound; }
         };
@@ -86,38 +148,40 @@ std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, 
             return p;
         };
         Deepest& best = deepest[g];
-        auto depthAt = [&](std::size_t i, double t) {
+        auto sample = [&](std::size_t i, double t) {
             const Vec3 p = pointOf(i, t);
-            const double d = design.distance->distance(p);
-            if (d > best.depth) best.depth = d, best.point = p;
-            return d;
+            const MeshDistance::Nearest n = design.distance->nearest(p);
+            if (n.distance > best.depth) best.depth = n.distance, best.point = p;
+            return Sample{t, n.distance, n.triangle};
         };
         std::priority_queue<Piece> queue;
-        auto push = [&](std::size_t i, double t0, double t1, double f0, double f1) {
-            const double bound = 0.5 * (f0 + f1 + (t1 - t0));
-            if (bound > best.depth + eps) queue.push({bound, t0, t1, f0, f1, i});
+        auto push = [&](std::size_t i, const Sample& s0, const Sample& s1) {
+            double bound = 0.5 * (s0.f + s1.f + (s1.t - s0.t));
+            if (bound > best.depth + eps) {
+                bound = std::min(bound, std::max(s0.f, design.distance->distanceTo(pointOf(i, s1.t), s0.triangle)));
+                bound = std::min(bound, std::max(s1.f, design.distance->distanceTo(pointOf(i, s0.t), s1.triangle)));
+            }
+            if (bound > best.depth + eps) queue.push({bound, s0, s1, i});
         };
         // Start from samples half a spacing apart, then split the piece that could hold the
         // deepest point until none can beat the deepest sample by more than eps.
         for (std::size_t i = groups[g]; i < groups[g + 1]; ++i) {
             const double lo = double(stretches[i].lo), hi = double(stretches[i].hi);
             const int steps = std::max(1, int(std::ceil((hi - lo) / (0.5 * lattice.h))));
-            double t0 = lo, f0 = depthAt(i, lo);
+            Sample s0 = sample(i, lo);
             for (int k = 1; k <= steps; ++k) {
-                const double t1 = k == steps ? hi : lo + (hi - lo) * k / steps;
-                const double f1 = depthAt(i, t1);
-                push(i, t0, t1, f0, f1);
-                t0 = t1, f0 = f1;
+                const Sample s1 = sample(i, k == steps ? hi : lo + (hi - lo) * k / steps);
+                push(i, s0, s1);
+                s0 = s1;
             }
         }
         while (!queue.empty()) {
             const Piece piece = queue.top();
             queue.pop();
             if (!(piece.bound > best.depth + eps)) break;
-            const double tm = 0.5 * (piece.t0 + piece.t1);
-            const double fm = depthAt(piece.stretch, tm);
-            push(piece.stretch, piece.t0, tm, piece.f0, fm);
-            push(piece.stretch, tm, piece.t1, fm, piece.f1);
+            const Sample mid = sample(piece.stretch, 0.5 * (piece.s0.t + piece.s1.t));
+            push(piece.stretch, piece.s0, mid);
+            push(piece.stretch, mid, piece.s1);
         }
     });
     // Volumes as the report measures them: the z family's, else x's, else y's.

@@ -119,8 +119,15 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
     }
     corners_.resize(3 * n);
     original_ = order;
+    slot_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) slot_[order[i]] = std::uint32_t(i);
     for (std::size_t i = 0; i < n; ++i)
         for (int k = 0; k < 3; ++k) corners_[3 * i + std::size_t(k)] = mesh.vertices[mesh.triangles[order[i]][std::size_t(k)]];
+}
+
+double MeshDistance::distanceTo(const Vec3& p, std::uint32_t triangle) const {
+    const std::size_t i = slot_.at(triangle);
+    return glm::length(closestPointOnTriangle(p, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]) - p);
 }
 
 MeshDistance::Nearest MeshDistance::nearest(const Vec3& p) const {

@@ -127,7 +127,7 @@ Box guessStock(const ToolPath& path, const ToolTable& tools, double marginPercen
 }
 
 LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, const Program& program,
-                      const ToolTable& tools, const Project* project, SimulateReport& report,
+                      const ToolTable& tools, const Project* project, const Mesh* design, SimulateReport& report,
                       std::vector<ReportWarning>& notes) {
     Box box;
     std::optional<LevelSet> fromVdb;
@@ -148,12 +148,24 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
         if (box.isEmpty()) throw Error("stock '" + o.stockFile + "' holds no material");
     } else if (project && !project->workpiece.automatic && !project->workpiece.bounds.isEmpty()) {
         box = project->workpiece.bounds;
+    } else if (design) {
+        ReportWarning w;
+        box = designStockBox(design->bounds(), program.statedStock, w.message);
+        notes.push_back(w);
     } else {
         const double margin = project ? project->workpiece.marginPercent : 5.0;
         box = guessStock(program.path, tools, margin);
         if (!project) {
             ReportWarning w;
             w.message = "no --stock given: using the program's cutting extent plus 5 %";
+            if (program.statedStock) {
+                const StatedStock& st = *program.statedStock;
+                char text[200];
+                std::snprintf(text, sizeof text, "; the program states a %g x %g x %g mm stock (%s:%d) without "
+                              "placing it: --design PART.stl places it around the design", st.size.x, st.size.y,
+                              st.size.z, st.where.file.c_str(), st.where.line);
+                w.message += text;
+            }
             notes.push_back(w);
         }
     }
@@ -176,18 +188,19 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
         }
     }
     const Lattice lattice = Lattice::fromBox(box, h);
-    // The stock's dexels and, at the least, the level set and mesh of the block's own faces.
-    const double dexels = stockBytes(lattice, o.families);
+    // The stock's dexels (and the design's, cast on the same lattice) and, at the least, the level
+    // set and mesh of the block's own faces.
+    const double dexels = (design ? 2.0 : 1.0) * stockBytes(lattice, o.families);
     const double faces = kSurfaceBytesPerCrossing * boxCrossings(lattice);
     const double base = double(residentBytes());
     if (base + dexels + faces > double(budget.bytes)) {
         char text[512];
         std::snprintf(text, sizeof text,
-                      "a spacing of %g mm on this %g x %g x %g mm stock needs about %s (its dexels %s, the level "
+                      "a spacing of %g mm on this %g x %g x %g mm stock needs about %s (its dexels%s %s, the level "
                       "set and mesh of the block's faces alone %s), more than the %s this job may use (%s); a "
                       "spacing of %g mm or more fits, or set --max-memory",
                       h, size.x, size.y, size.z, formatBytes(base + dexels + faces).c_str(),
-                      formatBytes(dexels).c_str(), formatBytes(faces).c_str(), formatBytes(double(budget.bytes)).c_str(),
+                      design ? " and the design's" : "", formatBytes(dexels).c_str(), formatBytes(faces).c_str(), formatBytes(double(budget.bytes)).c_str(),
                       budget.source.c_str(), spacingThatFits(h, dexels + faces, double(budget.bytes) - base));
         throw Error(text);
     }
@@ -311,7 +324,16 @@ Simulation runStages(const SimulateOptions& o) {
         w.message = "the program makes no moves (empty, or only comments and settings): the part is the stock";
         notes.push_back(w);
     }
-    LoadedStock loaded = loadStock(o, budget, program, tools, project ? &*project : nullptr, report, notes);
+    // The design's mesh first: with no stock given, its box is the stock's.
+    std::optional<Mesh> designMesh;
+    if (!o.designPath.empty()) {
+        t = Clock::now();
+        if (o.progress) o.progress("design", 0, 1);
+        designMesh = readDesign(o.designPath);
+        report.timingS.design = seconds(t);
+    }
+    LoadedStock loaded = loadStock(o, budget, program, tools, project ? &*project : nullptr,
+                                   designMesh ? &*designMesh : nullptr, report, notes);
     sim.stock.emplace(std::move(loaded.stock));
     TriDexelStock& stock = *sim.stock;
     report.stockBox = loaded.box;
@@ -327,10 +349,10 @@ Simulation runStages(const SimulateOptions& o) {
 
     // The design, on the stock's lattice.
     std::optional<DesignPart> design;
-    if (!o.designPath.empty()) {
+    if (designMesh) {
         t = Clock::now();
-        if (o.progress) o.progress("design", 0, 1);
-        design.emplace(loadDesign(o.designPath, stock.lattice(), o.families));
+        design.emplace(loadDesign(*designMesh, o.designPath, stock.lattice(), o.families));
+        designMesh.reset();
         if (design->cast.unpairedDexels > 0) {
             ReportWarning w;
             w.where.file = o.designPath;
@@ -340,7 +362,7 @@ Simulation runStages(const SimulateOptions& o) {
         }
         report.designFile = o.designPath;
         report.gougeToleranceMm = o.gougeTolerance;
-        report.timingS.design = seconds(t);
+        report.timingS.design += seconds(t);
     }
 
     // Cut.

@@ -263,11 +263,37 @@ private:
             finished_ = true;
             return;
         }
+        if (w == "INSERT" && statedStock(s)) return;
         if (w == "PARTNO" || w == "INSERT" || w == "PPRINT" || w == "REMARK")
             return warnKind(s, w + " text ignored");
         if (w == "SELECT") return warnKind(s, "SELECT/TOOL (tool preselection) ignored");
         if (w.empty()) fail(s, "statement without a major word");
         warnKind(s, "statement " + w + " ignored");
+    }
+
+    /// CAMWorks states the stock's size as `INSERT/Stock Size X350. Y150. Z10.5` (in the program's
+    /// units, any case and spacing): records it and returns true; other text returns false.
+    bool statedStock(const Statement& s) {
+        if (s.args.empty()) return false;
+        std::string t;
+        for (char c : s.args[0].text)
+            if (c != ' ' && c != '\t') t += upper(c);
+        if (t.rfind("STOCKSIZE", 0) != 0) return false;
+        std::size_t i = 9;
+        Vec3 size(0.0);
+        for (int k = 0; k < 3; ++k) {
+            if (i >= t.size() || t[i] != "XYZ"[k]) return false;
+            const char* begin = t.c_str() + i + 1;
+            char* end = nullptr;
+            const double v = std::strtod(begin, &end);
+            if (end == begin) return false;
+            if (!(v > 0.0) || !std::isfinite(v)) fail(s, "a stated stock size must be positive");
+            size[k] = v * scale_;
+            i = std::size_t(end - t.c_str());
+        }
+        if (i != t.size()) return false;
+        out_.statedStock = StatedStock{size, loc(s)};
+        return true;
     }
 
     void warnKind(const Statement& s, const std::string& message) {

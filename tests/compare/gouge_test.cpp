@@ -225,3 +225,42 @@ TEST_CASE("gouges: the deepest point between samples is found within the stated 
     CHECK(findGouges(part, lattice, cut, 5.5).empty());
     fs::remove_all(dir);
 }
+
+TEST_CASE("gouges: the stock a design implies, with and without a stated size", "[compare][design]") {
+    const Box design{Vec3(2.0, 2.0, -30.0), Vec3(117.0, 117.0, -19.0)};
+    std::string note;
+    const Box plain = designStockBox(design, std::nullopt, note);
+    CHECK(plain.lo == design.lo);
+    CHECK(plain.hi == design.hi);
+    CHECK(note.find("bounding box") != std::string::npos);
+    // A stated 119 x 119 x 30 mm: centred in x and y, top at the work zero.
+    StatedStock stated{Vec3(119.0, 119.0, 30.0), {"p.apt", 4, 1}};
+    const Box placed = designStockBox(design, stated, note);
+    CHECK(placed.lo == Vec3(0.0, 0.0, -30.0));
+    CHECK(placed.hi == Vec3(119.0, 119.0, 0.0));
+    CHECK(note.find("p.apt:4") != std::string::npos);
+    CHECK(note.find("top at z = 0") != std::string::npos);
+    // A design above the work zero keeps its bottom.
+    const Box raised{Vec3(0.0, 0.0, 1.0), Vec3(10.0, 10.0, 5.0)};
+    const Box up = designStockBox(raised, StatedStock{Vec3(10.0, 12.0, 6.0), {"p.apt", 4, 1}}, note);
+    CHECK(up.lo == Vec3(0.0, -1.0, 1.0));
+    CHECK(up.hi == Vec3(10.0, 11.0, 7.0));
+    // A stated size smaller than the design is an error at its line.
+    CHECK_THROWS_WITH(designStockBox(design, StatedStock{Vec3(119.0, 100.0, 30.0), {"p.apt", 4, 1}}, note),
+                      Catch::Contains("p.apt:4") && Catch::Contains("along y"));
+}
+
+TEST_CASE("gouges: with no stock given, the stock is the design's box", "[compare][design][job]") {
+    const fs::path dir = scratch("stockless");
+    const std::string design = writeStl(dir / "l.stl", prismFacets(lShape(), 0.0, 40.0));
+    SimulateOptions o = job(kPocket, design, 10.0);
+    o.stockBox.reset();
+    const SimulateReport r = simulate(o);
+    CHECK(r.stockBox.lo == Vec3(0.0, 0.0, -10.0));
+    CHECK(r.stockBox.hi == Vec3(40.0, 40.0, 0.0));
+    bool said = false;
+    for (const ReportWarning& w : r.warnings) said |= w.message.find("design's bounding box") != std::string::npos;
+    CHECK(said);
+    CHECK(r.gouges.size() == 2);
+    fs::remove_all(dir);
+}

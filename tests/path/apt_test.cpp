@@ -117,3 +117,27 @@ TEST_CASE("apt: malformed programs give a parse error with file:line:col and the
         }
     }
 }
+
+TEST_CASE("apt: a stock size stated as CAMWorks' INSERT/Stock Size", "[path][apt]") {
+    const Program p = parseApt("INSERT/Stock Size X350. Y150. Z10.5\nCUTTER/6\nFROM/0,0,10\nGOTO/1,0,10\n", "s.apt");
+    REQUIRE(p.statedStock);
+    CHECK(p.statedStock->size == Vec3(350.0, 150.0, 10.5));
+    CHECK(p.statedStock->where.file == "s.apt");
+    CHECK(p.statedStock->where.line == 1);
+    CHECK_FALSE(hasDiagnostic(p, "INSERT text ignored"));
+    // Any case and spacing; inch programs in mm; the last statement wins.
+    const Program q = parseApt("UNITS/INCHES\nINSERT/stock size x1 y2. z 0.5\nINSERT/STOCK SIZE X2 Y3 Z1\n"
+                               "CUTTER/0.25\nFROM/0,0,1\nGOTO/1,0,1\n", "q.apt");
+    REQUIRE(q.statedStock);
+    CHECK(q.statedStock->size.x == Approx(50.8));
+    CHECK(q.statedStock->size.y == Approx(76.2));
+    CHECK(q.statedStock->size.z == Approx(25.4));
+    CHECK(q.statedStock->where.line == 3);
+    // Other text stays an ignored INSERT; a size that is not positive is an error at its line.
+    for (const char* text : {"INSERT/Stock Size X350. Y150.\n", "INSERT/Stock Size X1 Y2 Z3 mm\n", "INSERT/Stock\n"}) {
+        const Program r = parseApt(std::string(text) + "CUTTER/6\nFROM/0,0,10\nGOTO/1,0,10\n", "r.apt");
+        CHECK_FALSE(r.statedStock);
+        CHECK(hasDiagnostic(r, "INSERT text ignored"));
+    }
+    CHECK_THROWS_WITH(parseApt("INSERT/Stock Size X0 Y2 Z3\n", "z.apt"), Catch::Contains("z.apt:1") && Catch::Contains("positive"));
+}

@@ -6,11 +6,13 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "dexelmill/compare/mesh_distance.h"
 #include "dexelmill/geometry/types.h"
+#include "dexelmill/path/toolpath.h"
 #include "dexelmill/stock/cut.h"
 #include "dexelmill/stock/tridexel.h"
 #include "dexelmill/surface/voxelize.h"
@@ -33,10 +35,25 @@ struct DesignPart {
     std::unique_ptr<MeshDistance> distance;
 };
 
-/// @brief Reads a design (a closed STL, binary or ASCII) and casts it on `lattice`.
-/// @throw Error naming the file for another format, an unreadable or empty file, or an STL that
-/// does not hold a solid.
+/// @brief Reads a design's mesh (a closed STL, binary or ASCII).
+/// @throw Error naming the file for another format, or an unreadable or empty file.
+Mesh readDesign(const std::string& path);
+
+/// @brief Casts a design read by readDesign from `path` on `lattice`.
+/// @throw Error naming the file when the design holds no material inside the lattice's box.
+DesignPart loadDesign(const Mesh& mesh, const std::string& path, const Lattice& lattice,
+                      FamilySet families = FamilySet::all());
+
+/// @brief readDesign, then loadDesign.
 DesignPart loadDesign(const std::string& path, const Lattice& lattice, FamilySet families = FamilySet::all());
+
+/// @brief The stock a design implies when none is given: the design's bounding box, or, when the
+/// program states a stock size (StatedStock) at least as large, a box of that size around it:
+/// centred on the design in x and y; in z with its top at z = 0 (the CAM convention of the work
+/// zero on the stock's top) when the design lies within that height below z = 0, else with its
+/// bottom on the design's bottom. `note` receives a sentence saying which.
+/// @throw Error when a stated side is smaller than the design's.
+Box designStockBox(const Box& design, const std::optional<StatedStock>& stated, std::string& note);
 
 /// @brief A move that removed material the design keeps, deeper than the tolerance.
 struct Gouge {

@@ -37,6 +37,9 @@ public:
     /// @brief The distance from p to the mesh (mm).
     double distance(const Vec3& p) const { return nearest(p).distance; }
 
+    /// @brief The distance from p to one triangle of the mesh (by its index in the mesh given).
+    double distanceTo(const Vec3& p, std::uint32_t triangle) const;
+
     std::size_t triangleCount() const { return corners_.size() / 3; }
 
 private:
@@ -48,6 +51,7 @@ private:
     std::vector<Node> nodes_;
     std::vector<Vec3> corners_;           ///< three corners per triangle slot, in hierarchy order
     std::vector<std::uint32_t> original_;  ///< each slot's index in the input mesh
+    std::vector<std::uint32_t> slot_;      ///< each input triangle's slot
 };
 
 }  // namespace dexelmill

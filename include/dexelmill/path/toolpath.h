@@ -88,11 +88,19 @@ struct ToolPath {
 /// @brief Tools by number.
 using ToolTable = std::map<int, Tool>;
 
+/// @brief A stock size a program states without placing it, such as CAMWorks' APT
+/// `INSERT/Stock Size X350. Y150. Z10.5`.
+struct StatedStock {
+    Vec3 size{0.0};  ///< mm
+    SourceLocation where;
+};
+
 /// @brief Everything a reader returns.
 struct Program {
     ToolPath path;
     ToolTable tools;  ///< tools the program or project defines (APT CUTTER/, .camotics tools)
     std::vector<Diagnostic> diagnostics;
+    std::optional<StatedStock> statedStock;  ///< the last one stated
 
     /// @brief Runs `next` after this program: its files, moves and tool changes are renumbered
     /// onto the end of these, its tools replace same-numbered ones, its diagnostics follow.
@@ -111,6 +119,7 @@ struct Program {
         }
         for (auto& [n, t] : next.tools) tools.insert_or_assign(n, std::move(t));
         for (Diagnostic& d : next.diagnostics) diagnostics.push_back(std::move(d));
+        if (next.statedStock) statedStock = std::move(next.statedStock);
     }
 };
 
