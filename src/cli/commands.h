@@ -29,7 +29,7 @@ struct SimulateArgs {
     double resolution = 0.0;
     std::string families = "xyz";
     std::string output, vdb, png, report;
-    std::string design, gougeCsv;
+    std::string design, designTransform, gougeCsv;
     double gougeTolerance = 0.01;
     double chordTolerance = 0.001;
     double adaptivity = 0.0;

@@ -34,6 +34,31 @@ Box parseBox(const std::string& text) {
     return b;
 }
 
+/// --design-transform: 12 numbers, the rows of [m | t], or 3, a translation.
+Affine parseTransform(const std::string& text) {
+    std::vector<double> v;
+    std::stringstream s(text);
+    std::string item;
+    while (std::getline(s, item, ',')) {
+        const std::optional<double> x = parseNumber(item);
+        if (!x) throw UsageError("--design-transform: '" + item + "' is not a number");
+        v.push_back(*x);
+    }
+    Affine a;
+    if (v.size() == 3) {
+        a.t = Vec3(v[0], v[1], v[2]);
+    } else if (v.size() == 12) {
+        for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) a.m[std::size_t(r)][std::size_t(c)] = v[std::size_t(4 * r + c)];
+            a.t[r] = v[std::size_t(4 * r + 3)];
+        }
+    } else {
+        throw UsageError("--design-transform: expected TX,TY,TZ or the 3 rows of a 3 x 4 matrix, M11,M12,M13,TX,"
+                         "M21,...,TZ (12 numbers)");
+    }
+    return a;
+}
+
 }  // namespace
 
 std::optional<double> parseNumber(const std::string& text) {
@@ -100,6 +125,10 @@ SimulateOptions toOptions(const SimulateArgs& a) {
         throw UsageError("--sharp-edges: volumeToMesh rounds sharp edges; the dexel mesher (the default) keeps them");
     if (a.gougeCsv.size() && a.design.empty()) throw UsageError("--gouge-csv needs --design PART.stl");
     o.designPath = a.design;
+    if (!a.designTransform.empty()) {
+        if (a.design.empty()) throw UsageError("--design-transform needs --design PART.stl");
+        o.designTransform = parseTransform(a.designTransform);
+    }
     o.gougeTolerance = a.gougeTolerance;
     o.gougeCsvPath = a.gougeCsv;
     o.meshPath = a.output;
@@ -201,6 +230,9 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
                   "The design part, PART.stl (closed, in the program's frame): every move that removes\n"
                   "material it keeps is checked, and those cutting deeper than --gouge-tolerance are\n"
                   "reported as gouges, by file and line");
+    c->add_option("--design-transform", a.designTransform,
+                  "Places a design drawn in another frame: TX,TY,TZ (mm), or the rows of a 3 x 4 matrix\n"
+                  "[M | T], M11,M12,M13,TX,M21,M22,M23,TY,M31,M32,M33,TZ: p -> M p + T");
     c->add_option("--gouge-tolerance", a.gougeTolerance,
                   "A move gouges when it removes design material farther than this inside the design's\n"
                   "surface (mm)")

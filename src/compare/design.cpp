@@ -39,11 +39,18 @@ DesignPart::~DesignPart() = default;
 DesignPart::DesignPart(DesignPart&&) noexcept = default;
 DesignPart& DesignPart::operator=(DesignPart&&) noexcept = default;
 
-Mesh readDesign(const std::string& path) {
+Mesh readDesign(const std::string& path, const std::optional<Affine>& place) {
     if (lowerExtension(path) != ".stl")
         throw Error("'" + path + "': a design must be an STL file (.stl, binary or ASCII)");
+    if (place && !(std::abs(place->determinant()) > 0.0))
+        throw Error("'" + path + "': the design transform flattens the design (its determinant is 0)");
     Mesh mesh = readStl(path);
     if (mesh.empty()) throw Error("'" + path + "': the design has no triangles");
+    if (place) {
+        for (Vec3& v : mesh.vertices) v = place->apply(v);
+        if (place->determinant() < 0.0)
+            for (Mesh::Triangle& tri : mesh.triangles) std::swap(tri[1], tri[2]);
+    }
     return mesh;
 }
 

@@ -329,7 +329,7 @@ Simulation runStages(const SimulateOptions& o) {
     if (!o.designPath.empty()) {
         t = Clock::now();
         if (o.progress) o.progress("design", 0, 1);
-        designMesh = readDesign(o.designPath);
+        designMesh = readDesign(o.designPath, o.designTransform);
         report.timingS.design = seconds(t);
     }
     LoadedStock loaded = loadStock(o, budget, program, tools, project ? &*project : nullptr,

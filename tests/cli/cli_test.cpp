@@ -102,7 +102,12 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
                                      {"--resolution 1x", "'1x' is not a number"},
                                      {"--threads -3", "--threads: must be 0 or more, got -3"},
                                      {"--refine 9", "--refine"},
-                                     {"--refine-tolerance 0", "--refine-tolerance: must be positive, got 0"}}) {
+                                     {"--refine-tolerance 0", "--refine-tolerance: must be positive, got 0"},
+                                     {"--gouge-csv g.csv", "--gouge-csv needs --design"},
+                                     {"--design-transform 1,2,3", "--design-transform needs --design"},
+                                     {"--design d.stl --design-transform 1,2", "TX,TY,TZ or the 3 rows"},
+                                     {"--design d.stl --design-transform 1,2,z", "'z' is not a number"},
+                                     {"--gouge-tolerance -1", "--gouge-tolerance"}}) {
         INFO(args);
         r = cli(std::string("simulate ok.ngc --tool flat:d=3 ") + args);
         CHECK(r.code == 2);

@@ -264,3 +264,36 @@ TEST_CASE("gouges: with no stock given, the stock is the design's box", "[compar
     CHECK(r.gouges.size() == 2);
     fs::remove_all(dir);
 }
+
+TEST_CASE("gouges: a design in another frame, placed by a transform", "[compare][design][job]") {
+    const fs::path dir = scratch("transform");
+    // The L-shaped design of the pocket case, mirrored in x (x -> 40 - x) and then shifted by
+    // (0, 0, 100): the map back, p -> diag(-1, 1, 1) p + (40, 0, -100), mirrors, so its faces are
+    // reversed to face out again.
+    // Mirroring reverses the polygon's turn: walk it backwards from the same first vertex.
+    const std::vector<P2> l = lShape();
+    std::vector<P2> mirrored;
+    for (std::size_t i = 0; i < l.size(); ++i) {
+        const P2& p = l[(l.size() - i) % l.size()];
+        mirrored.push_back({40.0 - p[0], p[1] + 100.0});
+    }
+    const std::string design = writeStl(dir / "m.stl", prismFacets(mirrored, -1.0, 41.0));
+    SimulateOptions o = job(kPocket, design, 10.0);
+    CHECK_THROWS_WITH(simulate(o), Catch::Contains("no material inside"));  // unplaced, it misses the stock
+    Affine back;
+    back.m = {{{-1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}}};
+    back.t = Vec3(40.0, 0.0, -100.0);
+    o.designTransform = back;
+    const SimulateReport r = simulate(o);
+    REQUIRE(r.gouges.size() == 2);
+    CHECK(r.gouges[0].where.line == 13);
+    CHECK(r.gouges[0].depthMm == Approx(1.9).margin(1e-3));
+    CHECK(r.gouges[1].where.line == 9);
+    CHECK(r.gouges[1].depthMm == Approx(0.1).margin(1e-3));
+    CHECK(r.gouges[1].volumeMm3 == Approx(40.0).epsilon(1e-4));
+    // A map that flattens the design is refused.
+    back.m[2] = {0.0, 0.0, 0.0};
+    o.designTransform = back;
+    CHECK_THROWS_WITH(simulate(o), Catch::Contains("m.stl") && Catch::Contains("determinant"));
+    fs::remove_all(dir);
+}

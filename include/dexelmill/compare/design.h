@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "dexelmill/compare/mesh_distance.h"
+#include "dexelmill/geometry/affine.h"
 #include "dexelmill/geometry/types.h"
 #include "dexelmill/path/toolpath.h"
 #include "dexelmill/stock/cut.h"
@@ -35,9 +36,11 @@ struct DesignPart {
     std::unique_ptr<MeshDistance> distance;
 };
 
-/// @brief Reads a design's mesh (a closed STL, binary or ASCII).
-/// @throw Error naming the file for another format, or an unreadable or empty file.
-Mesh readDesign(const std::string& path);
+/// @brief Reads a design's mesh (a closed STL, binary or ASCII) and places it with `place`. A map
+/// that mirrors (negative determinant) would turn the faces inside out, so their order is reversed.
+/// @throw Error naming the file for another format, an unreadable or empty file, or a map that
+/// flattens the design (determinant 0).
+Mesh readDesign(const std::string& path, const std::optional<Affine>& place = std::nullopt);
 
 /// @brief Casts a design read by readDesign from `path` on `lattice`.
 /// @throw Error naming the file when the design holds no material inside the lattice's box.

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "dexelmill/geometry/affine.h"
 #include "dexelmill/geometry/types.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/path/apt.h"
@@ -72,6 +73,8 @@ struct SimulateOptions {
     /// removes material the design keeps, deeper than `gougeTolerance` (mm, as distance inside the
     /// design's surface), is reported as a gouge (SimulateReport::gouges).
     std::string designPath;
+    /// Places the design in the program's frame when its file is in another.
+    std::optional<Affine> designTransform;
     double gougeTolerance = 0.01;
     /// A CSV of the gouges, one row per gouging move; needs designPath.
     std::string gougeCsvPath;
