@@ -31,6 +31,7 @@ struct SimulateArgs {
     std::string output, vdb, png, report;
     std::string design, designTransform, gougeCsv;
     double gougeTolerance = 0.01;
+    double excessTolerance = 0.05;
     double chordTolerance = 0.001;
     double adaptivity = 0.0;
     int refineRounds = 0;

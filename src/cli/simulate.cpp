@@ -130,6 +130,7 @@ SimulateOptions toOptions(const SimulateArgs& a) {
         o.designTransform = parseTransform(a.designTransform);
     }
     o.gougeTolerance = a.gougeTolerance;
+    o.excessTolerance = a.excessTolerance;
     o.gougeCsvPath = a.gougeCsv;
     o.meshPath = a.output;
     o.vdbPath = a.vdb;
@@ -238,6 +239,11 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
                   "surface (mm)")
         ->check(numberCheck(true))
         ->capture_default_str();
+    c->add_option("--excess-tolerance", a.excessTolerance,
+                  "After the cut, stock left farther than this outside the design is excess: its volume,\n"
+                  "largest thickness and regions are reported (mm)")
+        ->check(numberCheck(true))
+        ->capture_default_str();
     c->add_option("--gouge-csv", a.gougeCsv,
                   "The gouges as GOUGES.csv, deepest first: move, file, line, tool, depth_mm, volume_mm3,\n"
                   "x, y, z, rapid (needs --design)");
@@ -288,6 +294,15 @@ int runSimulate(const SimulateArgs& args) {
         }
         if (r.gouges.size() > kPrintedDiagnostics)
             std::cerr << "dexelmill: " << r.gouges.size() - kPrintedDiagnostics << " more gouges\n";
+        shown = 0;
+        for (const SimulateReport::ExcessRegion& e : r.excessRegions) {
+            if (shown++ == kPrintedDiagnostics) break;
+            std::fprintf(stderr,
+                         "dexelmill: excess: %.4g mm^3 up to %.4g mm thick (at %.4f, %.4f, %.4f) in x %.4g .. %.4g, "
+                         "y %.4g .. %.4g, z %.4g .. %.4g mm\n",
+                         e.volumeMm3, e.thicknessMm, e.point.x, e.point.y, e.point.z, e.box.lo.x, e.box.hi.x,
+                         e.box.lo.y, e.box.hi.y, e.box.lo.z, e.box.hi.z);
+        }
     }
     const double pct = r.stockVolumeMm3 > 0 ? 100.0 * r.removedVolumeMm3 / r.stockVolumeMm3 : 0.0;
     std::string meshState;
@@ -297,9 +312,12 @@ int runSimulate(const SimulateArgs& args) {
     }
     std::string gouges;
     if (!r.designFile.empty()) {
-        char text[160];
-        std::snprintf(text, sizeof text, "%zu gouges (deepest %.4g mm, tolerance %.4g mm), ", r.gouges.size(),
-                      r.gouges.empty() ? 0.0 : r.gouges.front().depthMm, r.gougeToleranceMm);
+        char text[320];
+        std::snprintf(text, sizeof text,
+                      "%zu gouges (deepest %.4g mm, tolerance %.4g mm), excess %.4g mm^3 outside the design "
+                      "(thickest %.4g mm, tolerance %.4g mm), ",
+                      r.gouges.size(), r.gouges.empty() ? 0.0 : r.gouges.front().depthMm, r.gougeToleranceMm,
+                      r.excessVolumeMm3, r.excessThicknessMm, r.excessToleranceMm);
         gouges = text;
     }
     std::printf(

@@ -5,21 +5,23 @@
 #include <cctype>
 #include <cmath>
 #include <limits>
-#include <queue>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "dexelmill/error.h"
 #include "dexelmill/io/mesh_io.h"
+#include "compare/detail/deepest.h"
 
 namespace dexelmill {
 
 namespace {
 
-/// The depth search stops when no point of a move's stretches can lie deeper than the deepest
-/// point found by more than this (mm), or a quarter of the tolerance if that is larger.
-constexpr double kMinDepthBound = 1e-3;
+/// The depth search stops when no point can lie deeper than the deepest found by more than a
+/// quarter of the tolerance or this fraction of the spacing, whichever is less, but not below
+/// kMinDepthBound (mm).
+constexpr double kSpacingBound = 0.01;
+constexpr double kMinDepthBound = 1e-4;
 
 /// A float's rounding is 6e-8 of its value; a stated stock may be this much (relative to the
 /// design's largest coordinate) smaller than an STL design's box and still hold it.
@@ -109,7 +111,9 @@ Box designStockBox(const Box& design, const std::optional<StatedStock>& stated, 
     return box;
 }
 
-double depthBound(double tolerance) { return std::max(0.25 * tolerance, kMinDepthBound); }
+double depthBound(double tolerance, double h) {
+    return std::max(kMinDepthBound, std::min(0.25 * tolerance, kSpacingBound * h));
+}
 
 std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, const CutResult& cut, double tolerance) {
     const std::vector<DesignStretch>& stretches = cut.designStretches;
@@ -118,78 +122,16 @@ std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, 
     for (std::size_t i = 0; i < stretches.size(); ++i)
         if (i == 0 || stretches[i].move != stretches[i - 1].move) groups.push_back(i);
     groups.push_back(stretches.size());
-    const double eps = depthBound(tolerance);
+    const double eps = depthBound(tolerance, lattice.h);
 
-    struct Deepest {
-        double depth = -std::numeric_limits<double>::infinity();
-        Vec3 point{0.0};
-    };
     std::vector<Deepest> deepest(groups.size() - 1);
     tbb::parallel_for(std::size_t(0), groups.size() - 1, [&](std::size_t g) {
-        // An interval [t0, t1] of one stretch's coordinate, with the depths at its ends and the
-        // triangles nearest there, and a bound on the depth of any point between. Two bounds hold:
-        // - the depth changes by at most the distance moved, so no point is deeper than
-        //   (f0 + f1 + (t1 - t0)) / 2;
-        // - the depth is at most the distance to any one triangle, which is convex along a line
-        //   (a triangle is convex), so it is at most the larger of that triangle's distances at the
-        //   ends: max(f0, distance from the far end to the triangle nearest t0), and likewise from
-        //   t1. Where one face is nearest along the whole piece (a floor cut too deep) this bound
-        //   is the ends' depth, and the piece needs no splitting.
-        struct Sample {
-            double t, f;
-            std::uint32_t triangle;
-        };
-        struct Piece {
-            double bound;
-            Sample s0, s1;
-            std::size_t stretch;
-            bool operator<(const Piece& o) const { return bound < o.bound; }
-        };
-        auto pointOf = [&](std::size_t i, double t) {
-            const DesignStretch& s = stretches[i];
-            const int a = index(s.family), b = (a + 1) % 3, c = (a + 2) % 3;
-            Vec3 p;
-            p[a] = lattice.origin[a] + t;
-            p[b] = lattice.coord(axisFromIndex(b), s.ib);
-            p[c] = lattice.coord(axisFromIndex(c), s.ic);
-            return p;
-        };
-        Deepest& best = deepest[g];
-        auto sample = [&](std::size_t i, double t) {
-            const Vec3 p = pointOf(i, t);
-            const MeshDistance::Nearest n = design.distance->nearest(p);
-            if (n.distance > best.depth) best.depth = n.distance, best.point = p;
-            return Sample{t, n.distance, n.triangle};
-        };
-        std::priority_queue<Piece> queue;
-        auto push = [&](std::size_t i, const Sample& s0, const Sample& s1) {
-            double bound = 0.5 * (s0.f + s1.f + (s1.t - s0.t));
-            if (bound > best.depth + eps) {
-                bound = std::min(bound, std::max(s0.f, design.distance->distanceTo(pointOf(i, s1.t), s0.triangle)));
-                bound = std::min(bound, std::max(s1.f, design.distance->distanceTo(pointOf(i, s0.t), s1.triangle)));
-            }
-            if (bound > best.depth + eps) queue.push({bound, s0, s1, i});
-        };
-        // Start from samples half a spacing apart, then split the piece that could hold the
-        // deepest point until none can beat the deepest sample by more than eps.
+        std::vector<DexelStretch> lines;
         for (std::size_t i = groups[g]; i < groups[g + 1]; ++i) {
-            const double lo = double(stretches[i].lo), hi = double(stretches[i].hi);
-            const int steps = std::max(1, int(std::ceil((hi - lo) / (0.5 * lattice.h))));
-            Sample s0 = sample(i, lo);
-            for (int k = 1; k <= steps; ++k) {
-                const Sample s1 = sample(i, k == steps ? hi : lo + (hi - lo) * k / steps);
-                push(i, s0, s1);
-                s0 = s1;
-            }
+            const DesignStretch& s = stretches[i];
+            lines.push_back({s.family, s.ib, s.ic, double(s.lo), double(s.hi)});
         }
-        while (!queue.empty()) {
-            const Piece piece = queue.top();
-            queue.pop();
-            if (!(piece.bound > best.depth + eps)) break;
-            const Sample mid = sample(piece.stretch, 0.5 * (piece.s0.t + piece.s1.t));
-            push(piece.stretch, piece.s0, mid);
-            push(piece.stretch, mid, piece.s1);
-        }
+        deepest[g] = deepestPoint(*design.distance, lattice, lines, eps);
     });
     // Volumes as the report measures them: the z family's, else x's, else y's.
     const TriDexelStock& d = design.dexels;

@@ -51,11 +51,23 @@ std::string reportJson(const SimulateReport& r) {
                               {"depth_mm", g.depthMm},
                               {"volume_mm3", g.volumeMm3},
                               {"point_mm", {g.point.x, g.point.y, g.point.z}}});
+        json regions = json::array();
+        for (const SimulateReport::ExcessRegion& e : r.excessRegions)
+            regions.push_back({{"min_mm", {e.box.lo.x, e.box.lo.y, e.box.lo.z}},
+                               {"max_mm", {e.box.hi.x, e.box.hi.y, e.box.hi.z}},
+                               {"volume_mm3", e.volumeMm3},
+                               {"thickness_mm", e.thicknessMm},
+                               {"thickest_point_mm", {e.point.x, e.point.y, e.point.z}}});
         j["design"] = {{"file", r.designFile},
                        {"gouge_tolerance_mm", r.gougeToleranceMm},
                        {"gouge_count", r.gouges.size()},
                        {"worst_gouge_mm", r.gouges.empty() ? 0.0 : r.gouges.front().depthMm},
-                       {"gouges", gouges}};
+                       {"gouges", gouges},
+                       {"excess_tolerance_mm", r.excessToleranceMm},
+                       {"excess_volume_mm3", r.excessVolumeMm3},
+                       {"worst_excess_mm", r.excessThicknessMm},
+                       {"worst_excess_point_mm", {r.excessPoint.x, r.excessPoint.y, r.excessPoint.z}},
+                       {"excess_regions", regions}};
     }
     json warnings = json::array();
     for (const ReportWarning& w : r.warnings)

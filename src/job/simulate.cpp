@@ -10,6 +10,7 @@
 #include <tbb/task_arena.h>
 
 #include "dexelmill/compare/design.h"
+#include "dexelmill/compare/excess.h"
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
 #include "dexelmill/io/atomic_file.h"
@@ -60,6 +61,8 @@ void checkOutputs(const SimulateOptions& o) {
         throw Error("output '" + o.gougeCsvPath + "': the gouges are written as .csv");
     if (!(o.gougeTolerance >= 0.0) || !std::isfinite(o.gougeTolerance))
         throw Error("the gouge tolerance must be a finite distance of 0 mm or more");
+    if (!(o.excessTolerance >= 0.0) || !std::isfinite(o.excessTolerance))
+        throw Error("the excess tolerance must be a finite distance of 0 mm or more");
 }
 
 /// The tools the cutting loop uses: the command line's over the program's; tool numbers nobody
@@ -384,9 +387,20 @@ Simulation runStages(const SimulateOptions& o) {
         }
         std::stable_sort(report.gouges.begin(), report.gouges.end(),
                          [](const ReportGouge& a, const ReportGouge& b) { return a.depthMm > b.depthMm; });
-        design.reset();
     }
     report.timingS.cut = seconds(t);
+    if (design) {
+        t = Clock::now();
+        const Excess excess = findExcess(*design, stock, o.excessTolerance);
+        report.excessToleranceMm = o.excessTolerance;
+        report.excessVolumeMm3 = excess.volume;
+        report.excessThicknessMm = excess.thickness;
+        report.excessPoint = excess.point;
+        for (const ExcessRegion& r : excess.regions)
+            report.excessRegions.push_back({r.box, r.volume, r.thickness, r.point});
+        design.reset();
+        report.timingS.design += seconds(t);
+    }
     for (const CutCollision& c : cut.collisions) {
         const SourceLocation at = program.path.where(c.source);
         report.collisions.push_back({c.move, {at.file, at.line}, c.kind == CollisionKind::Rapid ? "rapid" : "shank",

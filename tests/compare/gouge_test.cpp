@@ -215,9 +215,9 @@ TEST_CASE("gouges: the deepest point between samples is found within the stated 
     REQUIRE(gouges.size() == 2);
     CHECK(gouges[0].move == 0);
     CHECK(gouges[0].depth <= 5.0 + 1e-12);
-    CHECK(gouges[0].depth >= 5.0 - depthBound(tolerance));
+    CHECK(gouges[0].depth >= 5.0 - depthBound(tolerance, lattice.h));
     CHECK(gouges[0].point.y == 5.0);
-    CHECK(gouges[0].point.x == Approx(5.0).margin(depthBound(tolerance)));
+    CHECK(gouges[0].point.x == Approx(5.0).margin(depthBound(tolerance, lattice.h)));
     CHECK(gouges[0].volume == 3.0);  // the z family's measure
     CHECK(gouges[1].move == 2);
     CHECK(gouges[1].depth == Approx(1.0).margin(1e-12));
@@ -295,5 +295,31 @@ TEST_CASE("gouges: a design in another frame, placed by a transform", "[compare]
     back.m[2] = {0.0, 0.0, 0.0};
     o.designTransform = back;
     CHECK_THROWS_WITH(simulate(o), Catch::Contains("m.stl") && Catch::Contains("determinant"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("excess: 0.5 mm left on a wall", "[compare][design][job]") {
+    const fs::path dir = scratch("excess");
+    const std::string design = writeStl(dir / "l.stl", prismFacets(lShape(), -1.0, 41.0));
+    // A D10 pass at x = 35.5 and z = -5.1 along y: the floor exactly, and 0.5 mm short of the wall at
+    // x = 30, which keeps a 0.5 x 5.1 x 40 mm layer outside the design.
+    const std::string program = "G21 G90\nT1 M6\nG0 X35.5 Y-10 Z5\nG1 Z-5.1 F500\nG1 Y50\nG0 Z5\nM30\n";
+    const SimulateReport r = simulate(job(program, design, 10.0));
+    CHECK(r.gouges.empty());
+    CHECK(r.excessToleranceMm == 0.05);
+    CHECK(r.excessThicknessMm == Approx(0.5).margin(0.01 * kH));
+    CHECK(r.excessPoint.x == Approx(30.5).margin(1e-6));
+    CHECK(r.excessVolumeMm3 == Approx(0.5 * 5.1 * 40.0).epsilon(1e-4));
+    REQUIRE(r.excessRegions.size() == 1);
+    CHECK(r.excessRegions[0].volumeMm3 == Approx(0.5 * 5.1 * 40.0).epsilon(1e-4));
+    CHECK(r.excessRegions[0].box.lo.x <= 30.0);
+    CHECK(r.excessRegions[0].box.hi.x >= 30.5);
+    // A tolerance above the layer's thickness leaves no region, and the volume stays.
+    SimulateOptions o = job(program, design, 10.0);
+    o.excessTolerance = 0.6;
+    const SimulateReport loose = simulate(o);
+    CHECK(loose.excessRegions.empty());
+    CHECK(loose.excessThicknessMm == 0.0);
+    CHECK(loose.excessVolumeMm3 == Approx(r.excessVolumeMm3));
     fs::remove_all(dir);
 }

@@ -68,18 +68,19 @@ struct Gouge {
     Vec3 point{0.0};             ///< the deepest point found
 };
 
-/// @brief How far below the deepest point of a move's cut into the design findGouges may stop
-/// (mm): a quarter of the tolerance, and at least a micrometre.
-double depthBound(double tolerance);
+/// @brief How far below the deepest point findGouges and findExcess may stop (mm): a quarter of
+/// the tolerance or a hundredth of the spacing h, whichever is less, and at least 0.1 um.
+double depthBound(double tolerance, double h);
 
 /// @brief The gouges a cut made, in move order: for every move with design stretches
 /// (CutResult::designStretches, from a cut with CutOptions::design = &design.dexels and
 /// designDepth = tolerance), the deepest point of its stretches, kept if deeper than `tolerance`.
 ///
 /// Depths are exact distances to the design's triangles (MeshDistance). Along a stretch the depth
-/// changes by at most the distance moved, so a branch and bound over pieces of the stretches,
-/// started from samples half a spacing apart, finds a point within depthBound(tolerance) of the
-/// deepest one. So every move that cuts deeper than tolerance + depthBound is reported, none that
+/// changes by at most the distance moved, and the distance to one triangle is convex along a
+/// line, so a branch and bound over pieces of the stretches finds a point within
+/// depthBound(tolerance, h) of the deepest one. So every move that cuts deeper than
+/// tolerance + depthBound is reported, none that
 /// cuts at most `tolerance` deep is, and the reported depth is that of a real point of the cut.
 std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, const CutResult& cut, double tolerance);
 

@@ -76,6 +76,9 @@ struct SimulateOptions {
     /// Places the design in the program's frame when its file is in another.
     std::optional<Affine> designTransform;
     double gougeTolerance = 0.01;
+    /// Excess: stock left outside the design farther than this from it (mm) is reported
+    /// (SimulateReport::excess...).
+    double excessTolerance = 0.05;
     /// A CSV of the gouges, one row per gouging move; needs designPath.
     std::string gougeCsvPath;
 
@@ -151,6 +154,19 @@ struct SimulateReport {
     std::string designFile;
     double gougeToleranceMm = 0.0;
     std::vector<ReportGouge> gouges;
+    /// Excess after the cut (findExcess): all the stock outside the design (mm^3), the largest
+    /// distance from the design (mm, 0 when none exceeds the tolerance), where, and the regions
+    /// thicker than the tolerance, most volume first.
+    double excessToleranceMm = 0.0;
+    double excessVolumeMm3 = 0.0;
+    double excessThicknessMm = 0.0;
+    Vec3 excessPoint{0.0};
+    struct ExcessRegion {
+        Box box;
+        double volumeMm3 = 0.0, thicknessMm = 0.0;
+        Vec3 point{0.0};
+    };
+    std::vector<ExcessRegion> excessRegions;
 
     std::string mesher;  ///< "dexel" or "vdb"
     std::size_t meshVertices = 0, meshTriangles = 0;

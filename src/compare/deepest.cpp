@@ -1,0 +1,83 @@
+// The deepest point of dexel stretches: a branch and bound with exact distances.
+#include "compare/detail/deepest.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <queue>
+
+namespace dexelmill {
+
+Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, const std::vector<DexelStretch>& stretches,
+                     double eps) {
+    // An interval [t0, t1] of one stretch's coordinate, with the depths at its ends and the
+    // triangles nearest there, and a bound on the depth of any point between. Two bounds hold:
+    // - the depth changes by at most the distance moved, so no point is deeper than
+    //   (f0 + f1 + (t1 - t0)) / 2;
+    // - the depth is at most the distance to any one triangle, which is convex along a line
+    //   (a triangle is convex), so it is at most the larger of that triangle's distances at the
+    //   ends: max(f0, distance from the far end to the triangle nearest t0), and likewise from
+    //   t1. Where one face is nearest along the whole piece (a floor cut too deep) this bound
+    //   is the ends' depth, and the piece needs no splitting.
+    struct Sample {
+        double t, f;
+        std::uint32_t triangle;
+    };
+    struct Piece {
+        double bound;
+        Sample s0, s1;
+        std::size_t stretch;
+        bool operator<(const Piece& o) const { return bound < o.bound; }
+    };
+    auto pointOf = [&](std::size_t i, double t) {
+        const DexelStretch& s = stretches[i];
+        const int a = index(s.family), b = (a + 1) % 3, c = (a + 2) % 3;
+        Vec3 p;
+        p[a] = lattice.origin[a] + t;
+        p[b] = lattice.coord(axisFromIndex(b), s.ib);
+        p[c] = lattice.coord(axisFromIndex(c), s.ic);
+        return p;
+    };
+    Deepest best;
+    auto sample = [&](std::size_t i, double t) {
+        const Vec3 p = pointOf(i, t);
+        const MeshDistance::Nearest n = distance.nearest(p);
+        if (n.distance > best.depth) best.depth = n.distance, best.point = p;
+        return Sample{t, n.distance, n.triangle};
+    };
+    std::priority_queue<Piece> queue;
+    auto push = [&](std::size_t i, const Sample& s0, const Sample& s1) {
+        double bound = std::min(stretches[i].bound, 0.5 * (s0.f + s1.f + (s1.t - s0.t)));
+        if (bound > best.depth + eps) {
+            bound = std::min(bound, std::max(s0.f, distance.distanceTo(pointOf(i, s1.t), s0.triangle)));
+            bound = std::min(bound, std::max(s1.f, distance.distanceTo(pointOf(i, s0.t), s1.triangle)));
+        }
+        if (bound > best.depth + eps) queue.push({bound, s0, s1, i});
+    };
+    // Best bound first: a stretch is sampled at its ends only when its own bound is the highest
+    // left, and a piece is split at its middle while its bound is; both stop when nothing left
+    // can beat the deepest sample by more than eps.
+    std::vector<std::size_t> order(stretches.size());
+    std::iota(order.begin(), order.end(), std::size_t(0));
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t x, std::size_t y) { return stretches[x].bound > stretches[y].bound; });
+    constexpr double kNone = -std::numeric_limits<double>::infinity();
+    for (std::size_t next = 0;;) {
+        const double queued = queue.empty() ? kNone : queue.top().bound;
+        const double waiting = next < order.size() ? stretches[order[next]].bound : kNone;
+        if (!(std::max(queued, waiting) > best.depth + eps)) break;
+        if (waiting >= queued) {
+            const std::size_t i = order[next++];
+            push(i, sample(i, stretches[i].lo), sample(i, stretches[i].hi));
+            continue;
+        }
+        const Piece piece = queue.top();
+        queue.pop();
+        const Sample mid = sample(piece.stretch, 0.5 * (piece.s0.t + piece.s1.t));
+        push(piece.stretch, piece.s0, mid);
+        push(piece.stretch, mid, piece.s1);
+    }
+    return best;
+}
+
+}  // namespace dexelmill
