@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
+#include <utility>
 
 #include "dexelmill/geometry/tolerance.h"
 
@@ -71,20 +71,45 @@ Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
 MeshDistance::MeshDistance(const Mesh& mesh) {
     const std::size_t n = mesh.triangles.size();
     if (n == 0) return;
-    std::vector<std::uint32_t> order(n);
-    std::iota(order.begin(), order.end(), 0u);
+    // Triangles in Morton order of their centroids (21 bits per axis), so that halving a range
+    // of them halves space; the hierarchy splits ranges at their middle, and its boxes are
+    // gathered bottom-up. Any split gives exact answers; this one keeps boxes tight and the build
+    // at one sort.
     std::vector<Vec3> centroid(n);
-    std::vector<Box> tbox(n);
+    Box all;
     for (std::size_t t = 0; t < n; ++t) {
         const auto& tri = mesh.triangles[t];
-        Box b;
-        for (int k = 0; k < 3; ++k) b.expand(mesh.vertices[tri[std::size_t(k)]]);
-        tbox[t] = b;
-        centroid[t] = b.center();
+        centroid[t] = (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0;
+        all.expand(centroid[t]);
     }
+    const Vec3 size = glm::max(all.size(), Vec3(1e-300));
+    auto spread = [](std::uint64_t v) {
+        v &= 0x1fffff;
+        v = (v | v << 32) & 0x1f00000000ffffULL;
+        v = (v | v << 16) & 0x1f0000ff0000ffULL;
+        v = (v | v << 8) & 0x100f00f00f00f00fULL;
+        v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+        v = (v | v << 2) & 0x1249249249249249ULL;
+        return v;
+    };
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
+    for (std::size_t t = 0; t < n; ++t) {
+        const Vec3 u = (centroid[t] - all.lo) / size * double((1u << 21) - 1);
+        keyed[t] = {spread(std::uint64_t(u.x)) | spread(std::uint64_t(u.y)) << 1 | spread(std::uint64_t(u.z)) << 2,
+                    std::uint32_t(t)};
+    }
+    std::sort(keyed.begin(), keyed.end());
+    original_.resize(n);
+    corners_.resize(3 * n);
+    slot_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        original_[i] = keyed[i].second;
+        slot_[keyed[i].second] = std::uint32_t(i);
+        for (int k = 0; k < 3; ++k)
+            corners_[3 * i + std::size_t(k)] = mesh.vertices[mesh.triangles[keyed[i].second][std::size_t(k)]];
+    }
+    // Ranges split at their middle; a child always comes after its parent.
     nodes_.reserve(2 * (n / kLeafTriangles + 1));
-    // Top-down median split along the longest side of the centroids' box; an explicit stack keeps
-    // deep hierarchies (long thin meshes) off the call stack.
     struct Job {
         std::uint32_t node, begin, end;
     };
@@ -93,22 +118,13 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
     while (!jobs.empty()) {
         const Job job = jobs.back();
         jobs.pop_back();
-        Box box, cbox;
-        for (std::uint32_t i = job.begin; i < job.end; ++i) {
-            box.expand(tbox[order[i]]);
-            cbox.expand(centroid[order[i]]);
-        }
-        nodes_[job.node].box = box;
         if (job.end - job.begin <= kLeafTriangles) {
             nodes_[job.node].first = job.begin;
             nodes_[job.node].count = job.end - job.begin;
+            for (std::uint32_t i = 3 * job.begin; i < 3 * job.end; ++i) nodes_[job.node].box.expand(corners_[i]);
             continue;
         }
-        const Vec3 s = cbox.size();
-        const int axis = s.x >= s.y && s.x >= s.z ? 0 : (s.y >= s.z ? 1 : 2);
         const std::uint32_t mid = job.begin + (job.end - job.begin) / 2;
-        std::nth_element(order.begin() + job.begin, order.begin() + mid, order.begin() + job.end,
-                         [&](std::uint32_t u, std::uint32_t v) { return centroid[u][axis] < centroid[v][axis]; });
         const std::uint32_t left = std::uint32_t(nodes_.size());
         nodes_.emplace_back();
         nodes_.emplace_back();
@@ -117,12 +133,12 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
         jobs.push_back({left, job.begin, mid});
         jobs.push_back({left + 1, mid, job.end});
     }
-    corners_.resize(3 * n);
-    original_ = order;
-    slot_.resize(n);
-    for (std::size_t i = 0; i < n; ++i) slot_[order[i]] = std::uint32_t(i);
-    for (std::size_t i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) corners_[3 * i + std::size_t(k)] = mesh.vertices[mesh.triangles[order[i]][std::size_t(k)]];
+    for (std::size_t k = nodes_.size(); k-- > 0;) {
+        Node& node = nodes_[k];
+        if (node.count > 0) continue;
+        node.box = nodes_[node.first].box;
+        node.box.expand(nodes_[node.first + 1].box);
+    }
 }
 
 double MeshDistance::distanceTo(const Vec3& p, std::uint32_t triangle) const {
