@@ -2,7 +2,6 @@
 #include "dexelmill/compare/design.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <limits>
 
@@ -10,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include "dexelmill/error.h"
+#include "dexelmill/io/file_name.h"
 #include "dexelmill/io/mesh_io.h"
 #include "compare/detail/deepest.h"
 
@@ -26,13 +26,6 @@ constexpr double kMinDepthBound = 1e-4;
 /// A float's rounding is 6e-8 of its value; a stated stock may be this much (relative to the
 /// design's largest coordinate) smaller than an STL design's box and still hold it.
 constexpr double kFloatSlack = 1e-6;
-
-std::string lowerExtension(const std::string& path) {
-    const std::size_t dot = path.find_last_of('.');
-    std::string ext = dot == std::string::npos ? std::string() : path.substr(dot);
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return ext;
-}
 
 }  // namespace
 
@@ -62,7 +55,7 @@ DesignPart loadDesign(const Mesh& mesh, const std::string& path, const Lattice& 
     d.cast = cast;
     d.file = path;
     d.bounds = mesh.bounds();
-    if (d.dexels.volume(d.dexels.has(Axis::Z) ? Axis::Z : (d.dexels.has(Axis::X) ? Axis::X : Axis::Y)) <= 0.0)
+    if (d.dexels.volume(d.dexels.measuringFamily()) <= 0.0)
         throw Error("'" + path + "': the design holds no material inside the stock's box");
     d.distance = std::make_unique<MeshDistance>(mesh);
     return d;
@@ -134,8 +127,7 @@ std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, 
         deepest[g] = deepestPoint(*design.distance, lattice, lines, eps);
     });
     // Volumes as the report measures them: the z family's, else x's, else y's.
-    const TriDexelStock& d = design.dexels;
-    const Axis measure = d.has(Axis::Z) ? Axis::Z : (d.has(Axis::X) ? Axis::X : Axis::Y);
+    const Axis measure = design.dexels.measuringFamily();
     std::vector<Gouge> gouges;
     for (std::size_t g = 0; g + 1 < groups.size(); ++g) {
         if (!(deepest[g].depth > tolerance)) continue;

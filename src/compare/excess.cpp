@@ -66,7 +66,7 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
     const Lattice& dl = design.dexels.lattice();
     if (dl.n != lattice.n || dl.h != lattice.h || dl.origin != lattice.origin)
         throw Error("excess: the design is not cast on the stock's lattice");
-    const Axis measure = stock.has(Axis::Z) ? Axis::Z : (stock.has(Axis::X) ? Axis::X : Axis::Y);
+    const Axis measure = stock.measuringFamily();
     const Vec3 extent = Vec3(lattice.n[0], lattice.n[1], lattice.n[2]) * lattice.h;
     const double cell = std::max(kCellSpacings * lattice.h, std::max({extent.x, extent.y, extent.z}) / kCellsAlongLongest);
     const std::array<std::int64_t, 3> cells{std::int64_t(std::ceil(extent.x / cell)) + 1,

@@ -1,11 +1,10 @@
 #include "dexelmill/io/stock_io.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
-#include <filesystem>
 
 #include "dexelmill/error.h"
+#include "dexelmill/io/file_name.h"
 #include "dexelmill/io/mesh_io.h"
 #include "dexelmill/io/vdb_io.h"
 #include "dexelmill/surface/voxelize.h"
@@ -20,13 +19,6 @@ constexpr double kStlBoxMargin = 0.25;
 
 /// Lattice spacings that differ by less than this fraction are the same spacing.
 constexpr double kSameSpacing = 1e-9;
-
-std::string lowerExtension(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char ch) { return char(std::tolower(ch)); });
-    return ext;
-}
 
 }  // namespace
 

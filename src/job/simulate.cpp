@@ -14,6 +14,7 @@
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
 #include "dexelmill/io/atomic_file.h"
+#include "dexelmill/io/file_name.h"
 #include "dexelmill/io/mesh_io.h"
 #include "dexelmill/io/picture.h"
 #include "dexelmill/io/vdb_io.h"
@@ -33,15 +34,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds(Clock::time_point since) {
     return std::chrono::duration<double>(Clock::now() - since).count();
-}
-
-std::string lowerExtension(const std::string& path) {
-    const std::size_t dot = path.find_last_of('.');
-    const std::size_t slash = path.find_last_of('/');
-    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-    std::string e = path.substr(dot);
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    return e;
 }
 
 /// Fails before any work when an output names a format we cannot write.
@@ -347,7 +339,7 @@ Simulation runStages(const SimulateOptions& o) {
         if (stock.has(ax)) report.dexels[a] = std::size_t(stock.family(ax).nb()) * std::size_t(stock.family(ax).nc());
     }
     // The stock's volume as the first kept family measures it (z preferred).
-    const Axis measure = stock.has(Axis::Z) ? Axis::Z : (stock.has(Axis::X) ? Axis::X : Axis::Y);
+    const Axis measure = stock.measuringFamily();
     report.stockVolumeMm3 = stock.volume(measure);
 
     // The design, on the stock's lattice.

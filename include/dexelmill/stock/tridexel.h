@@ -54,6 +54,8 @@ public:
 
     /// @brief Material volume measured by one family: h^2 times its segment lengths (mm^3).
     double volume(Axis a) const;
+    /// @brief The family volumes are reported by: z when kept, else x, else y.
+    Axis measuringFamily() const { return has(Axis::Z) ? Axis::Z : (has(Axis::X) ? Axis::X : Axis::Y); }
     /// @brief Whether lattice point (i, j, k) is in material according to family a: strictly
     /// inside one of its dexel's segments.
     bool inside(Axis a, int i, int j, int k) const;
