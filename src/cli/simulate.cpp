@@ -18,15 +18,21 @@ namespace {
 /// Most warnings and collisions printed one by one; the rest are counted (all are in --report).
 constexpr std::size_t kPrintedDiagnostics = 20;
 
-Box parseBox(const std::string& text) {
+/// The comma-separated numbers of an option's value; `option` names it in the message.
+std::vector<double> parseNumbers(const std::string& text, const std::string& option) {
     std::vector<double> v;
     std::stringstream s(text);
     std::string item;
     while (std::getline(s, item, ',')) {
         const std::optional<double> x = parseNumber(item);
-        if (!x) throw UsageError("--stock box: '" + item + "' is not a number");
+        if (!x) throw UsageError(option + ": '" + item + "' is not a number");
         v.push_back(*x);
     }
+    return v;
+}
+
+Box parseBox(const std::string& text) {
+    const std::vector<double> v = parseNumbers(text, "--stock box");
     if (v.size() != 6) throw UsageError("--stock box: expected XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (6 numbers, mm)");
     const Box b{Vec3(v[0], v[1], v[2]), Vec3(v[3], v[4], v[5])};
     if (!(b.lo.x < b.hi.x && b.lo.y < b.hi.y && b.lo.z < b.hi.z))
@@ -36,14 +42,7 @@ Box parseBox(const std::string& text) {
 
 /// --design-transform: 12 numbers, the rows of [m | t], or 3, a translation.
 Affine parseTransform(const std::string& text) {
-    std::vector<double> v;
-    std::stringstream s(text);
-    std::string item;
-    while (std::getline(s, item, ',')) {
-        const std::optional<double> x = parseNumber(item);
-        if (!x) throw UsageError("--design-transform: '" + item + "' is not a number");
-        v.push_back(*x);
-    }
+    const std::vector<double> v = parseNumbers(text, "--design-transform");
     Affine a;
     if (v.size() == 3) {
         a.t = Vec3(v[0], v[1], v[2]);
