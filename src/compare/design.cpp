@@ -29,10 +29,6 @@ constexpr double kFloatSlack = 1e-6;
 
 }  // namespace
 
-DesignPart::DesignPart(TriDexelStock dexels) : dexels(std::move(dexels)) {}
-DesignPart::~DesignPart() = default;
-DesignPart::DesignPart(DesignPart&&) noexcept = default;
-DesignPart& DesignPart::operator=(DesignPart&&) noexcept = default;
 
 Mesh readDesign(const std::string& path, const std::optional<Affine>& place) {
     if (lowerExtension(path) != ".stl")

@@ -122,15 +122,16 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
         while (parent[i] != i) i = parent[i] = parent[parent[i]];
         return i;
     };
-    std::vector<std::vector<std::int64_t>> pieceCells(search.size());
+    // A piece's cells follow one another, so they join; its first names its region.
+    std::vector<std::int64_t> firstCell(search.size());
     for (std::size_t i = 0; i < search.size(); ++i) {
         const DexelStretch& s = search[i].line;
         const int a = index(s.family), b = (a + 1) % 3, c = (a + 2) % 3;
         const double atB = (s.ib + 0.5) * lattice.h, atC = (s.ic + 0.5) * lattice.h;
+        firstCell[i] = cellOf(a, s.lo, b, atB, c, atC);
         for (double t = std::floor(s.lo / cell) * cell; t < s.hi; t += cell) {
             const std::int64_t k = cellOf(a, std::clamp(t + 0.5 * cell, s.lo, s.hi), b, atB, c, atC);
             if (id.emplace(k, parent.size()).second) parent.push_back(parent.size());
-            pieceCells[i].push_back(k);
         }
     }
     for (const auto& [k, i] : id) {
@@ -149,7 +150,7 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
     std::vector<std::vector<DexelStretch>> regionLines;
     std::vector<std::vector<std::int64_t>> regionCells;
     for (std::size_t i = 0; i < search.size(); ++i) {
-        const std::size_t root = find(id.at(pieceCells[i].front()));
+        const std::size_t root = find(id.at(firstCell[i]));
         const auto [it, fresh] = regionOf.emplace(root, regionLines.size());
         if (fresh) regionLines.emplace_back(), regionCells.emplace_back();
         regionLines[it->second].push_back(search[i].line);

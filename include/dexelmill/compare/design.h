@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dexelmill/compare/mesh_distance.h"
@@ -22,10 +23,7 @@ namespace dexelmill {
 
 /// @brief A design part ready for the comparison.
 struct DesignPart {
-    explicit DesignPart(TriDexelStock dexels);
-    ~DesignPart();
-    DesignPart(DesignPart&&) noexcept;
-    DesignPart& operator=(DesignPart&&) noexcept;
+    explicit DesignPart(TriDexelStock dexels) : dexels(std::move(dexels)) {}
 
     std::string file;
     Box bounds;                   ///< the design mesh's bounding box (mm)
