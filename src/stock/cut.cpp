@@ -213,12 +213,12 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                            (insideMaterial(now, toFloat(range.hi)) ? MoveSweep::kEndHi : 0u);
                 };
                 // Before a removal: the design's material it takes.
-                DesignStretch at;
-                at.move = m, at.family = a, at.ib = ib, at.ic = ic;
                 auto watch = [&](const LineHit& hit) {
                     if (!design.tile) return;
                     const SegmentSpan kept = design.tile->segments(local);
                     if (kept.empty()) return;
+                    DesignStretch at;
+                    at.move = m, at.family = a, at.ib = ib, at.ic = ic;
                     st.design += designOverlap(tile.segments(local), kept, toFloat(hit.range.lo),
                                                toFloat(hit.range.hi), design.depth, at, stretches);
                 };
