@@ -18,7 +18,7 @@
 
 using namespace dexelmill;
 using dexelmill::testing::CarvedPart;
-using dexelmill::testing::Deviation;
+using dexelmill::testing::FaceDeviation;
 namespace fs = std::filesystem;
 
 namespace {
@@ -65,7 +65,7 @@ SimulateOptions job(const std::string& program, int rounds, int threads = 2) {
     return o;
 }
 
-std::string summary(const char* name, const Simulation& s, const Deviation& d) {
+std::string summary(const char* name, const Simulation& s, const FaceDeviation& d) {
     std::ostringstream out;
     out << name << ": faces RMS " << d.rms / kH << " h, p99 " << d.p99 / kH << " h, max " << d.max / kH
         << " h at (" << d.worst.x << ", " << d.worst.y << ", " << d.worst.z << "); " << s.mesh.triangles.size()
@@ -90,8 +90,8 @@ TEST_CASE("refine: ball passes come out with the cusps the lattice cannot see", 
     const std::string program = passesProgram();
     const Simulation plain = runSimulation(job(program, 0));
     const Simulation refined = runSimulation(job(program, 2));
-    const Deviation before = measureFaces(plain.mesh, part, 3.0 * kH);
-    const Deviation after = measureFaces(refined.mesh, part, 3.0 * kH);
+    const FaceDeviation before = measureFaces(plain.mesh, part, 3.0 * kH);
+    const FaceDeviation after = measureFaces(refined.mesh, part, 3.0 * kH);
     INFO(summary("mesher", plain, before));
     INFO(summary("refined", refined, after));
 

@@ -30,7 +30,7 @@ struct CarvedPart {
 };
 
 /// Distances (mm) of points spread over the mesh to the exact surface.
-struct Deviation {
+struct FaceDeviation {
     double rms = 0.0, p99 = 0.0, max = 0.0;
     std::size_t samples = 0, misses = 0;
     Vec3 worst{0.0};
@@ -42,7 +42,7 @@ struct Deviation {
 /// steps of reach / 48 in both directions of each, the first change bisected to 1e-10 mm. The
 /// least distance found is an upper bound of the point's distance to the surface, exact on a
 /// face. A point with no change within reach counts as `reach`.
-inline Deviation measureFaces(const Mesh& mesh, const CarvedPart& part, double reach, std::size_t count = 20000) {
+inline FaceDeviation measureFaces(const Mesh& mesh, const CarvedPart& part, double reach, std::size_t count = 20000) {
     std::vector<double> cumulative;
     double total = 0.0;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
@@ -52,7 +52,7 @@ inline Deviation measureFaces(const Mesh& mesh, const CarvedPart& part, double r
     std::mt19937_64 rng(5);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     std::vector<double> d;
-    Deviation out;
+    FaceDeviation out;
     for (std::size_t s = 0; s < count; ++s) {
         const std::size_t t = std::size_t(std::lower_bound(cumulative.begin(), cumulative.end(), unit(rng) * total) -
                                           cumulative.begin());

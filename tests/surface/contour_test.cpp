@@ -17,7 +17,7 @@
 
 using namespace dexelmill;
 using dexelmill::testing::Cutter;
-using dexelmill::testing::Deviation;
+using dexelmill::testing::FaceDeviation;
 using dexelmill::testing::measureFaces;
 using Part = dexelmill::testing::CarvedPart;
 
@@ -28,7 +28,7 @@ struct Result {
     Mesh mesh;
     MeshCheck check;
     ContourStats stats;
-    Deviation faces;
+    FaceDeviation faces;
     double h;
 };
 
@@ -217,7 +217,7 @@ TEST_CASE("contour: adaptivity merges flat regions and keeps the mesh closed", "
         CHECK(stats.merged > 0);
         CHECK(merged.triangles.size() < full.triangles.size() / 4);
         // The surface moves by at most adaptivity * 0.05 h.
-        const Deviation d = measureFaces(merged, part, 3.0);
+        const FaceDeviation d = measureFaces(merged, part, 3.0);
         CHECK(d.max <= measureFaces(full, part, 3.0).max + adaptivity * 0.05 + 1e-9);
     }
 }
