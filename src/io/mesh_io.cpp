@@ -118,20 +118,33 @@ void writeStl(const std::string& path, const Mesh& mesh) {
     });
 }
 
-void writePly(const std::string& path, const Mesh& mesh) {
+void writePly(const std::string& path, const Mesh& mesh, const PlyVertexData& data) {
     requireValidIndices(mesh);
+    const std::size_t n = mesh.vertices.size();
+    const bool colours = !data.colours.empty(), scalar = !data.scalar.empty();
+    if ((colours && data.colours.size() != n) || (scalar && data.scalar.size() != n))
+        throw Error("cannot write '" + path + "': vertex data for " +
+                    std::to_string(colours ? data.colours.size() : data.scalar.size()) + " of " +
+                    std::to_string(n) + " vertices");
+    if (scalar && (data.scalarName.empty() || data.scalarName.find_first_of(" \t\n") != std::string::npos))
+        throw Error("cannot write '" + path + "': a PLY property needs a name without spaces");
     writeStreamAtomically(path, [&](std::ostream& out) {
         BlockWriter w(out);
-        w.put("ply\nformat binary_little_endian 1.0\ncomment dexelmill mesh, mm\nelement vertex " +
-              std::to_string(mesh.vertices.size()) +
-              "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
-              std::to_string(mesh.triangles.size()) +
-              "\nproperty list uchar int vertex_indices\nend_header\n");
-        char rec[13];
-        for (const Vec3& v : mesh.vertices) {
+        std::string header = "ply\nformat binary_little_endian 1.0\ncomment dexelmill mesh, mm\nelement vertex " +
+                             std::to_string(n) + "\nproperty float x\nproperty float y\nproperty float z\n";
+        if (colours) header += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+        if (scalar) header += "property float " + data.scalarName + "\n";
+        header += "element face " + std::to_string(mesh.triangles.size()) +
+                  "\nproperty list uchar int vertex_indices\nend_header\n";
+        w.put(header);
+        char rec[19];
+        for (std::size_t i = 0; i < n; ++i) {
             char* p = rec;
-            for (int k = 0; k < 3; ++k) p = binary::putF32(p, float(v[k]));
-            w.put(rec, 12);
+            for (int k = 0; k < 3; ++k) p = binary::putF32(p, float(mesh.vertices[i][k]));
+            if (colours)
+                for (std::uint8_t c : data.colours[i]) *p++ = char(c);
+            if (scalar) p = binary::putF32(p, float(data.scalar[i]));
+            w.put(rec, std::size_t(p - rec));
         }
         for (const Mesh::Triangle& t : mesh.triangles) {
             rec[0] = 3;

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include <png.h>
+#include <stb/stb_easy_font.h>
 
 #include "dexelmill/error.h"
 #include "dexelmill/io/atomic_file.h"
@@ -47,6 +49,60 @@ std::vector<Vec3> vertexNormals(const Mesh& mesh) {
 
 double clamp01(double v) { return std::min(1.0, std::max(0.0, v)); }
 
+/// An 8-bit sRGB value in linear light (the renderer shades in linear light, then applies the
+/// display gamma).
+double linear(std::uint8_t c) { return std::pow(c / 255.0, 2.2); }
+
+/// How a legend sits in the picture: its text scale and parts (pixels).
+struct LegendLayout {
+    int scale = 1;  ///< font pixels per glyph pixel
+    int pad = 0, barWidth = 0, gap = 0, width = 0;
+};
+
+/// stb_easy_font's capital height, in glyph pixels.
+constexpr int kTextHeight = 7;
+
+LegendLayout layoutLegend(const PictureLegend& legend, int height) {
+    LegendLayout l;
+    l.scale = std::max(1, height / 450);
+    l.pad = 6 * l.scale;
+    l.barWidth = 8 * l.scale;
+    l.gap = 3 * l.scale;
+    int longest = 0;
+    for (const PictureLegend::Label& label : legend.labels) longest = std::max(longest, textWidth(label.text, l.scale));
+    l.width = std::max(l.pad + l.barWidth + l.gap + l.scale + longest + l.pad, 2 * l.pad + textWidth(legend.title, l.scale));
+    return l;
+}
+
+void fill(Image& img, int x0, int y0, int x1, int y1, const Rgb& c) {
+    for (int y = std::max(0, y0); y < std::min(img.height, y1); ++y)
+        for (int x = std::max(0, x0); x < std::min(img.width, x1); ++x)
+            std::copy(c.begin(), c.end(), &img.rgb[3 * (std::size_t(y) * img.width + x)]);
+}
+
+/// Draws the legend in the rightmost `layout.width` columns: the title, the bar (60 % of the
+/// height, centred) with a dark frame, and the labels beside it.
+void drawLegend(Image& img, const PictureLegend& legend, const LegendLayout& l) {
+    const Rgb ink{40, 40, 40};
+    const int left = img.width - l.width + l.pad;
+    const int barTop = int(0.2 * img.height), barBottom = int(0.8 * img.height);
+    const int textHeight = kTextHeight * l.scale;
+    drawText(img, left, barTop - textHeight - 2 * l.pad, legend.title, ink, l.scale);
+    fill(img, left - 1, barTop - 1, left + l.barWidth + 1, barBottom + 1, ink);
+    const int span = barBottom - barTop;
+    for (int y = barTop; y < barBottom && !legend.bar.empty(); ++y) {
+        // Row y shows the colour at height (barBottom - y - 0.5) / span from the bottom.
+        const double at = (barBottom - y - 0.5) / span;
+        const std::size_t k = std::min(legend.bar.size() - 1, std::size_t(at * double(legend.bar.size())));
+        fill(img, left, y, left + l.barWidth, y + 1, legend.bar[k]);
+    }
+    for (const PictureLegend::Label& label : legend.labels) {
+        const int y = barBottom - int(std::lround(clamp01(label.at) * span));
+        if (label.tick) fill(img, left + l.barWidth, y - l.scale / 2, left + l.barWidth + l.gap, y - l.scale / 2 + l.scale, ink);
+        drawText(img, left + l.barWidth + l.gap + l.scale, y - textHeight / 2, label.text, ink, l.scale);
+    }
+}
+
 }  // namespace
 
 Image renderPicture(const Mesh& mesh, const PictureOptions& options) {
@@ -55,6 +111,15 @@ Image renderPicture(const Mesh& mesh, const PictureOptions& options) {
     if (options.supersample < 1 || options.supersample > 4)
         throw Error("picture supersampling must be 1 to 4");
     if (!(glm::length(options.viewDirection) > 0.0)) throw Error("picture view direction is zero");
+    const std::vector<Rgb>* colours = options.vertexColours;
+    if (colours && colours->size() != mesh.vertices.size())
+        throw Error("picture: colours for " + std::to_string(colours->size()) + " vertices, the mesh has " +
+                    std::to_string(mesh.vertices.size()));
+    LegendLayout legend;
+    if (options.legend) {
+        legend = layoutLegend(*options.legend, options.height);
+        if (legend.width * 3 > options.width) throw Error("picture too narrow for its legend");
+    }
 
     const int ss = options.supersample;
     const int W = options.width * ss, H = options.height * ss;
@@ -71,10 +136,12 @@ Image renderPicture(const Mesh& mesh, const PictureOptions& options) {
     }
     if (mesh.vertices.empty()) xmin = xmax = ymin = ymax = 0.0;
     const double usable = 1.0 - 2.0 * options.margin;
-    const double sx = (xmax - xmin) > 0 ? usable * W / (xmax - xmin) : 1.0;
+    // The part fits beside the legend.
+    const int partW = W - legend.width * ss;
+    const double sx = (xmax - xmin) > 0 ? usable * partW / (xmax - xmin) : 1.0;
     const double sy = (ymax - ymin) > 0 ? usable * H / (ymax - ymin) : 1.0;
     cam.scale = std::min(sx, sy);
-    cam.x0 = 0.5 * (xmin + xmax) - 0.5 * W / cam.scale;
+    cam.x0 = 0.5 * (xmin + xmax) - 0.5 * partW / cam.scale;
     cam.y0 = 0.5 * (ymin + ymax) + 0.5 * H / cam.scale;
 
     // Lights in view space terms: key from upper left, fill from the right, both towards the
@@ -82,7 +149,10 @@ Image renderPicture(const Mesh& mesh, const PictureOptions& options) {
     const Vec3 key = glm::normalize(-0.6 * cam.right + 0.6 * cam.up + 0.55 * cam.back);
     const Vec3 fill = glm::normalize(0.7 * cam.right - 0.2 * cam.up + 0.7 * cam.back);
     const Vec3 halfKey = glm::normalize(key + cam.back);
-    const Vec3 base(0.62, 0.66, 0.72);  // light steel
+    const Vec3 steel(0.62, 0.66, 0.72);
+    std::vector<Vec3> vertexColour;
+    if (colours)
+        for (const Rgb& c : *colours) vertexColour.emplace_back(linear(c[0]), linear(c[1]), linear(c[2]));
 
     std::vector<float> depth(std::size_t(W) * H, -std::numeric_limits<float>::infinity());
     std::vector<float> color(std::size_t(W) * H * 3);
@@ -127,6 +197,8 @@ Image renderPicture(const Mesh& mesh, const PictureOptions& options) {
                 const double diffuse =
                     0.8 * clamp01(glm::dot(n, key)) + 0.15 * clamp01(glm::dot(n, fill));
                 const double spec = std::pow(clamp01(glm::dot(n, halfKey)), 40.0) * 0.35;
+                const Vec3 base = colours ? w0 * vertexColour[t[0]] + w1 * vertexColour[t[1]] + w2 * vertexColour[t[2]]
+                                          : steel;
                 const Vec3 col = base * (0.18 + 0.85 * diffuse) + Vec3(spec);
                 float* out = &color[3 * pix];
                 for (int k = 0; k < 3; ++k) out[k] = float(clamp01(col[k]));
@@ -152,7 +224,28 @@ Image renderPicture(const Mesh& mesh, const PictureOptions& options) {
             }
         }
     }
+    if (options.legend) drawLegend(img, *options.legend, legend);
     return img;
+}
+
+void drawText(Image& image, int x, int y, const std::string& text, const Rgb& colour, int scale) {
+    // stb_easy_font writes quads of 4 vertices of 16 bytes, about 270 bytes per character on
+    // average; it stops at the buffer's end, so room for 16 quads a character loses nothing.
+    std::vector<char> buffer(16 * 64 * text.size() + 64);
+    std::string copy = text;
+    unsigned char rgba[4] = {colour[0], colour[1], colour[2], 255};
+    const int quads = stb_easy_font_print(0.0f, 0.0f, copy.data(), rgba, buffer.data(), int(buffer.size()));
+    for (int q = 0; q < quads; ++q) {
+        float v[4][4];
+        std::memcpy(v, buffer.data() + std::size_t(q) * 64, 64);
+        fill(image, x + int(v[0][0] * scale), y + int(v[0][1] * scale), x + int(v[2][0] * scale),
+             y + int(v[2][1] * scale), colour);
+    }
+}
+
+int textWidth(const std::string& text, int scale) {
+    std::string copy = text;
+    return stb_easy_font_width(copy.data()) * scale;
 }
 
 void writePng(const std::string& path, const Image& image) {

@@ -1,11 +1,9 @@
-// The study's log-log plot: deviation against spacing, drawn into an RGB image. Text comes from
-// stb_easy_font (Debian's libstb-dev), the PNG from the io module's writer.
+// The study's log-log plot: deviation against spacing, drawn into an RGB image. Text and the PNG
+// come from the io module's picture code.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <sstream>
-
-#include <stb/stb_easy_font.h>
 
 #include "dexelmill/error.h"
 #include "dexelmill/io/picture.h"
@@ -14,10 +12,6 @@
 namespace dexelmill {
 
 namespace {
-
-struct Rgb {
-    std::uint8_t r, g, b;
-};
 
 class Canvas {
 public:
@@ -42,33 +36,15 @@ public:
         }
     }
     /// Text with its top-left corner at (x, y), scaled by `scale`.
-    void text(int x, int y, const std::string& s, Rgb c, int scale = 2) {
-        static char buffer[60000];
-        std::string copy = s;
-        unsigned char col[4] = {c.r, c.g, c.b, 255};
-        const int quads = stb_easy_font_print(0, 0, copy.data(), col, buffer, sizeof buffer);
-        for (int q = 0; q < quads; ++q) {
-            float v[4][4];
-            std::memcpy(v, buffer + q * 64, 64);
-            const int x0 = int(v[0][0] * scale), y0 = int(v[0][1] * scale);
-            const int x1 = int(v[2][0] * scale), y1 = int(v[2][1] * scale);
-            for (int yy = y0; yy < y1; ++yy)
-                for (int xx = x0; xx < x1; ++xx) put(x + xx, y + yy, c);
-        }
-    }
-    static int textWidth(const std::string& s, int scale = 2) {
-        std::string copy = s;
-        return stb_easy_font_width(copy.data()) * scale;
-    }
+    void text(int x, int y, const std::string& s, Rgb c, int scale = 2) { drawText(img_, x, y, s, c, scale); }
+    static int textWidth(const std::string& s, int scale = 2) { return dexelmill::textWidth(s, scale); }
     const Image& image() const { return img_; }
 
 private:
     void put(int x, int y, Rgb c) {
         if (x < 0 || y < 0 || x >= img_.width || y >= img_.height) return;
         std::uint8_t* p = &img_.rgb[3 * (std::size_t(y) * img_.width + x)];
-        p[0] = c.r;
-        p[1] = c.g;
-        p[2] = c.b;
+        std::copy(c.begin(), c.end(), p);
     }
     Image img_;
 };

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -141,6 +142,28 @@ TEST_CASE("mesh files: OBJ, binary STL and PLY", "[io]") {
     CHECK(header.rfind("ply\nformat binary_little_endian 1.0\n", 0) == 0);
     CHECK(header.find("element vertex " + std::to_string(mesh.vertices.size())) != std::string::npos);
     CHECK(ply.size() == header.size() + 12 * mesh.vertices.size() + 13 * mesh.triangles.size());
+
+    // With colours and a scalar per vertex: the first vertex's record holds them after x, y, z.
+    PlyVertexData data;
+    data.colours.assign(mesh.vertices.size(), Rgb{10, 20, 30});
+    data.scalarName = "deviation_mm";
+    data.scalar.assign(mesh.vertices.size(), -0.25);
+    writePly(dir.file("coloured.ply"), mesh, data);
+    const std::string coloured = slurp(dir.file("coloured.ply"));
+    const std::size_t body = coloured.find("end_header\n") + 11;
+    CHECK(coloured.find("property uchar red\nproperty uchar green\nproperty uchar blue\nproperty float deviation_mm\n") <
+          body);
+    CHECK(coloured.size() == body + 19 * mesh.vertices.size() + 13 * mesh.triangles.size());
+    CHECK(coloured.substr(body + 12, 3) == std::string("\x0a\x14\x1e"));
+    float value = 0.0f;
+    std::memcpy(&value, coloured.data() + body + 15, 4);
+    CHECK(value == -0.25f);
+    data.scalar.pop_back();
+    CHECK_THROWS_AS(writePly(dir.file("short.ply"), mesh, data), Error);
+    data.scalar.push_back(0.0);
+    data.scalarName = "two words";
+    CHECK_THROWS_AS(writePly(dir.file("short.ply"), mesh, data), Error);
+    fs::remove(dir.file("coloured.ply"));
 
     writeObj(dir.file("part.obj"), mesh);
     std::istringstream obj(slurp(dir.file("part.obj")));

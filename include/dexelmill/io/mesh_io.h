@@ -4,7 +4,9 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
+#include "dexelmill/io/colour.h"
 #include "dexelmill/surface/mesh.h"
 
 namespace dexelmill {
@@ -19,10 +21,18 @@ void writeObj(const std::string& path, const Mesh& mesh);
 /// @throw Error on any I/O failure, or more than 2^32 - 1 triangles.
 void writeStl(const std::string& path, const Mesh& mesh);
 
-/// @brief Writes a binary little-endian PLY: float x, y, z per vertex; uchar count and int
-/// indices per face.
-/// @throw Error on any I/O failure.
-void writePly(const std::string& path, const Mesh& mesh);
+/// @brief What a PLY may carry per vertex besides its position; each list is empty or holds one
+/// entry per vertex.
+struct PlyVertexData {
+    std::vector<Rgb> colours;  ///< written as uchar red, green, blue
+    std::string scalarName;    ///< the name of the scalar property, e.g. "deviation_mm"
+    std::vector<double> scalar;  ///< written as float
+};
+
+/// @brief Writes a binary little-endian PLY: float x, y, z per vertex (then the colours and the
+/// scalar of `data`, when given); uchar count and int indices per face.
+/// @throw Error on any I/O failure, or lists in `data` whose length is not the vertex count.
+void writePly(const std::string& path, const Mesh& mesh, const PlyVertexData& data = {});
 
 /// @brief Reads an STL file, binary or ASCII. Binary when the size is exactly 84 + 50 n bytes,
 /// n being the count at byte 80 (many binary files start with "solid" too); ASCII otherwise.
