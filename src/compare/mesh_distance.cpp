@@ -2,8 +2,10 @@
 #include "dexelmill/compare/mesh_distance.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <utility>
 
 #include "dexelmill/geometry/tolerance.h"
@@ -31,9 +33,99 @@ double boxDistance2(const Box& box, const Vec3& p) {
     return glm::dot(d, d);
 }
 
-}  // namespace
+/// Directions for the inside test's rays: the fractional parts of the square roots of the first
+/// eighteen primes, three by three, with signs, made unit; far from the axes and every plane of
+/// small integer normal, so that no ray runs along the faces machined and designed parts are full
+/// of. The
+/// first decides almost always; the others serve when a ray meets an edge.
+constexpr double kRays[][3] = {{0.47413860622660531, 0.83795795482700841, 0.27022036937956673},
+                               {-0.68683798550132802, 0.33677040904332112, 0.64408017611573143},
+                               {0.13963054079120774, -0.40707525204102657, 0.9026588786768176},
+                               {-0.55735713455199754, -0.82158990776427432, -0.11976246500418172},
+                               {0.36717645145138433, 0.50773007487449717, -0.77935333743271218},
+                               {-0.25581872022143476, 0.62207669265655807, -0.73998470986753861}};
 
-Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+/// A ray's meeting with a triangle within this fraction (of the barycentric weights, or of the
+/// triangle's size along the ray) of a boundary does not count: another ray is tried. Double
+/// rounding of the weights is about 1e-15 relative, far below it.
+constexpr double kRayMargin = 1e-9;
+
+enum class Crossing { None, One, Ambiguous };
+
+/// Whether the ray p + t d, t > 0, crosses triangle (a, b, c) (Moller-Trumbore).
+Crossing crossing(const Vec3& p, const Vec3& d, const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3 e1 = b - a, e2 = c - a;
+    const Vec3 q = glm::cross(d, e2);
+    const double det = glm::dot(e1, q);
+    const double scale = glm::length(e1) * glm::length(e2);
+    if (!(std::abs(det) > kRayMargin * scale)) {
+        // The ray runs (nearly) along the triangle's plane: it crosses nothing unless it starts
+        // on that plane near the triangle, which another ray settles.
+        const Vec3 n = glm::cross(e1, e2);
+        const double nn = glm::length(n);
+        if (!(nn > 0.0)) return Crossing::None;  // a degenerate triangle bounds no volume
+        return std::abs(glm::dot(p - a, n)) > kRayMargin * nn * std::sqrt(scale) ? Crossing::None
+                                                                                 : Crossing::Ambiguous;
+    }
+    const Vec3 s = p - a;
+    const double u = glm::dot(s, q) / det;
+    if (u < -kRayMargin || u > 1.0 + kRayMargin) return Crossing::None;
+    const Vec3 r = glm::cross(s, e1);
+    const double v = glm::dot(d, r) / det;
+    if (v < -kRayMargin || u + v > 1.0 + kRayMargin) return Crossing::None;
+    const double t = glm::dot(e2, r) / det;
+    const double size = std::sqrt(scale);
+    if (t < -kRayMargin * size) return Crossing::None;
+    if (u < kRayMargin || v < kRayMargin || u + v > 1.0 - kRayMargin || t < kRayMargin * size)
+        return Crossing::Ambiguous;
+    return Crossing::One;
+}
+
+/// Whether the ray p + t d, t >= 0, meets the box (slab test; inv = 1 / d componentwise).
+bool rayMeetsBox(const Box& box, const Vec3& p, const Vec3& inv) {
+    double lo = 0.0, hi = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+        double t0 = (box.lo[k] - p[k]) * inv[k], t1 = (box.hi[k] - p[k]) * inv[k];
+        if (t0 > t1) std::swap(t0, t1);
+        lo = std::max(lo, t0);
+        hi = std::min(hi, t1);
+    }
+    return lo <= hi;
+}
+
+/// +1 when every edge of the mesh is shared by exactly two triangles that run it in opposite
+/// directions and the enclosed volume is positive, -1 when it is negative, else 0. Each edge is a
+/// key: its lower vertex, its higher vertex and a bit for its direction; sorted, the keys of a
+/// closed oriented manifold come in pairs that differ only in that bit.
+int meshOrientation(const Mesh& mesh) {
+    if (mesh.vertices.size() >= (std::size_t(1) << 31)) return 0;
+    std::vector<std::uint64_t> keys;
+    keys.reserve(3 * mesh.triangles.size());
+    double volume6 = 0.0;
+    for (const Mesh::Triangle& t : mesh.triangles) {
+        for (int k = 0; k < 3; ++k) {
+            const std::uint64_t a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
+            if (a == b) return 0;
+            keys.push_back(std::min(a, b) << 32 | std::max(a, b) << 1 | (a < b ? 1u : 0u));
+        }
+        volume6 += glm::dot(mesh.vertices[t[0]], glm::cross(mesh.vertices[t[1]], mesh.vertices[t[2]]));
+    }
+    std::sort(keys.begin(), keys.end());
+    for (std::size_t i = 0; i < keys.size(); i += 2)
+        if (i + 1 == keys.size() || keys[i] + 1 != keys[i + 1] || (keys[i] & 1u) != 0 ||
+            (i + 2 < keys.size() && keys[i + 2] >> 1 == keys[i] >> 1))
+            return 0;
+    return volume6 > 0.0 ? 1 : volume6 < 0.0 ? -1 : 0;
+}
+
+/// The closest point of a triangle, and whether it lies inside the face rather than on an edge or
+/// a corner.
+struct Closest {
+    Vec3 point;
+    bool onFace = false;
+};
+
+Closest closestOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
     const Vec3 ab = b - a, ac = c - a, ap = p - a;
     // A degenerate triangle (checkMesh's measure: doubled area at most kDegenerateTriangle times
     // the longest squared edge) is taken as its three edges; the face it drops is at most that
@@ -43,44 +135,54 @@ Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
         Vec3 best = closestOnSegment(p, a, b);
         for (const Vec3& q : {closestOnSegment(p, b, c), closestOnSegment(p, a, c)})
             if (glm::dot(q - p, q - p) < glm::dot(best - p, best - p)) best = q;
-        return best;
+        return {best, false};
     }
     const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
     // The region of vertex a.
-    if (d1 <= 0.0 && d2 <= 0.0) return a;
+    if (d1 <= 0.0 && d2 <= 0.0) return {a, false};
     const Vec3 bp = p - b;
     const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
     // The region of vertex b.
-    if (d3 >= 0.0 && d4 <= d3) return b;
+    if (d3 >= 0.0 && d4 <= d3) return {b, false};
     const Vec3 cp = p - c;
     const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
     // The region of vertex c.
-    if (d6 >= 0.0 && d5 <= d6) return c;
+    if (d6 >= 0.0 && d5 <= d6) return {c, false};
     // vc, vb and va are the barycentric weights of c, b and a, scaled by twice the area squared;
     // a negative one puts p beyond the edge opposite that vertex.
     const double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return closestOnSegment(p, a, b);
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return {closestOnSegment(p, a, b), false};
     const double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return closestOnSegment(p, a, c);
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return {closestOnSegment(p, a, c), false};
     const double va = d3 * d6 - d5 * d4;
-    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) return closestOnSegment(p, b, c);
+    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) return {closestOnSegment(p, b, c), false};
     const double sum = va + vb + vc;
-    return a + ab * (vb / sum) + ac * (vc / sum);
+    return {a + ab * (vb / sum) + ac * (vc / sum), true};
+}
+
+}  // namespace
+
+Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+    return closestOnTriangle(p, a, b, c).point;
 }
 
 MeshDistance::MeshDistance(const Mesh& mesh) {
     const std::size_t n = mesh.triangles.size();
     if (n == 0) return;
+    triangles_.resize(3 * n);
+    for (std::size_t t = 0; t < n; ++t)
+        for (int k = 0; k < 3; ++k) triangles_[3 * t + std::size_t(k)] = mesh.vertices[mesh.triangles[t][std::size_t(k)]];
+
     // Triangles in Morton order of their centroids (21 bits per axis), so that halving a range
     // of them halves space; the hierarchy splits ranges at their middle, and its boxes are
     // gathered bottom-up. Any split gives exact answers; this one keeps boxes tight and the build
     // at one sort.
-    std::vector<Vec3> centroid(n);
+    const std::size_t m = n;
+    std::vector<Vec3> centroid(m);
     Box all;
-    for (std::size_t t = 0; t < n; ++t) {
-        const auto& tri = mesh.triangles[t];
-        centroid[t] = (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0;
-        all.expand(centroid[t]);
+    for (std::size_t i = 0; i < m; ++i) {
+        centroid[i] = (triangles_[3 * i] + triangles_[3 * i + 1] + triangles_[3 * i + 2]) / 3.0;
+        all.expand(centroid[i]);
     }
     const Vec3 size = glm::max(all.size(), Vec3(1e-300));
     auto spread = [](std::uint64_t v) {
@@ -92,28 +194,25 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
         v = (v | v << 2) & 0x1249249249249249ULL;
         return v;
     };
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
-    for (std::size_t t = 0; t < n; ++t) {
-        const Vec3 u = (centroid[t] - all.lo) / size * double((1u << 21) - 1);
-        keyed[t] = {spread(std::uint64_t(u.x)) | spread(std::uint64_t(u.y)) << 1 | spread(std::uint64_t(u.z)) << 2,
-                    std::uint32_t(t)};
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(m);
+    for (std::size_t i = 0; i < m; ++i) {
+        const Vec3 u = (centroid[i] - all.lo) / size * double((1u << 21) - 1);
+        keyed[i] = {spread(std::uint64_t(u.x)) | spread(std::uint64_t(u.y)) << 1 | spread(std::uint64_t(u.z)) << 2,
+                    std::uint32_t(i)};
     }
     std::sort(keyed.begin(), keyed.end());
-    original_.resize(n);
-    corners_.resize(3 * n);
-    slot_.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
+    original_.resize(m);
+    corners_.resize(3 * m);
+    for (std::size_t i = 0; i < m; ++i) {
         original_[i] = keyed[i].second;
-        slot_[keyed[i].second] = std::uint32_t(i);
-        for (int k = 0; k < 3; ++k)
-            corners_[3 * i + std::size_t(k)] = mesh.vertices[mesh.triangles[keyed[i].second][std::size_t(k)]];
+        for (std::size_t k = 0; k < 3; ++k) corners_[3 * i + k] = triangles_[3 * std::size_t(keyed[i].second) + k];
     }
     // Ranges split at their middle; a child always comes after its parent.
-    nodes_.reserve(2 * (n / kLeafTriangles + 1));
+    nodes_.reserve(2 * (m / kLeafTriangles + 1));
     struct Job {
         std::uint32_t node, begin, end;
     };
-    std::vector<Job> jobs{{0u, 0u, std::uint32_t(n)}};
+    std::vector<Job> jobs{{0u, 0u, std::uint32_t(m)}};
     nodes_.emplace_back();
     while (!jobs.empty()) {
         const Job job = jobs.back();
@@ -139,18 +238,72 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
         node.box = nodes_[node.first].box;
         node.box.expand(nodes_[node.first + 1].box);
     }
+    orientation_ = meshOrientation(mesh);
 }
 
 double MeshDistance::distanceTo(const Vec3& p, std::uint32_t triangle) const {
-    const std::size_t i = slot_.at(triangle);
-    return glm::length(closestPointOnTriangle(p, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]) - p);
+    const std::size_t i = triangle;
+    if (3 * i >= triangles_.size()) throw std::out_of_range("MeshDistance::distanceTo: no such triangle");
+    return glm::length(closestPointOnTriangle(p, triangles_[3 * i], triangles_[3 * i + 1], triangles_[3 * i + 2]) - p);
 }
 
-MeshDistance::Nearest MeshDistance::nearest(const Vec3& p) const {
-    Nearest best;
-    best.distance = std::numeric_limits<double>::infinity();
-    if (nodes_.empty()) return best;
-    double best2 = std::numeric_limits<double>::infinity();
+bool MeshDistance::inside(const Vec3& p) const {
+    if (nodes_.empty()) return false;
+    for (const auto& ray : kRays) {
+        const Vec3 d(ray[0], ray[1], ray[2]);
+        const Vec3 inv = 1.0 / d;  // no component is zero
+        bool odd = false, ambiguous = false;
+        std::uint32_t stack[128];
+        int top = 0;
+        stack[top++] = 0;
+        while (top > 0 && !ambiguous) {
+            const Node& node = nodes_[stack[--top]];
+            if (!rayMeetsBox(node.box, p, inv)) continue;
+            if (node.count == 0) {
+                stack[top++] = node.first;
+                stack[top++] = node.first + 1;
+                continue;
+            }
+            for (std::uint32_t i = node.first; i < node.first + node.count; ++i) {
+                const Crossing c = crossing(p, d, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]);
+                if (c == Crossing::Ambiguous) ambiguous = true;
+                if (c == Crossing::One) odd = !odd;
+            }
+        }
+        if (!ambiguous) return odd;
+    }
+    return false;
+}
+
+double MeshDistance::signedDistance(const Vec3& p, std::uint32_t* hint) const {
+    if (nodes_.empty()) return std::numeric_limits<double>::infinity();
+    const Found f = search(p, hint);
+    if (hint) *hint = original_[f.slot];
+    const double d = std::sqrt(f.d2);
+    if (!(d > 0.0)) return d;
+    if (orientation_ != 0 && f.onFace) {
+        const Vec3 &a = corners_[3 * f.slot], &b = corners_[3 * f.slot + 1], &c = corners_[3 * f.slot + 2];
+        const double side = glm::dot(p - f.point, glm::cross(b - a, c - a)) * orientation_;
+        return side < 0.0 ? -d : d;
+    }
+    return inside(p) ? -d : d;
+}
+
+MeshDistance::Found MeshDistance::search(const Vec3& p, const std::uint32_t* hint) const {
+    Found best;
+    best.d2 = std::numeric_limits<double>::infinity();
+    auto test = [&](std::uint32_t i) {
+        const Closest c = closestOnTriangle(p, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]);
+        const double d2 = glm::dot(c.point - p, c.point - p);
+        if (d2 < best.d2) best = {i, d2, c.point, c.onFace, true};
+    };
+    // The hint bounds the distance; the search then finds it (its slot is not at hand) or a
+    // nearer triangle.
+    if (hint && 3 * std::size_t(*hint) < triangles_.size()) {
+        const std::size_t t = *hint;
+        const Vec3 q = closestPointOnTriangle(p, triangles_[3 * t], triangles_[3 * t + 1], triangles_[3 * t + 2]);
+        best.d2 = std::nextafter(glm::dot(q - p, q - p), std::numeric_limits<double>::infinity());
+    }
     // Depth-first, nearer child first; a node whose box is no nearer than the best triangle so far
     // holds nothing nearer, so the answer is the exact minimum over all triangles.
     struct Entry {
@@ -162,18 +315,10 @@ MeshDistance::Nearest MeshDistance::nearest(const Vec3& p) const {
     stack[top++] = {0u, boxDistance2(nodes_[0].box, p)};
     while (top > 0) {
         const Entry e = stack[--top];
-        if (e.d2 >= best2) continue;
+        if (e.d2 >= best.d2) continue;
         const Node& node = nodes_[e.node];
         if (node.count > 0) {
-            for (std::uint32_t i = node.first; i < node.first + node.count; ++i) {
-                const Vec3 q = closestPointOnTriangle(p, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]);
-                const double d2 = glm::dot(q - p, q - p);
-                if (d2 < best2) {
-                    best2 = d2;
-                    best.point = q;
-                    best.triangle = original_[i];
-                }
-            }
+            for (std::uint32_t i = node.first; i < node.first + node.count; ++i) test(i);
             continue;
         }
         const double dl = boxDistance2(nodes_[node.first].box, p);
@@ -188,8 +333,21 @@ MeshDistance::Nearest MeshDistance::nearest(const Vec3& p) const {
             stack[top++] = {node.first + 1, dr};
         }
     }
-    best.distance = std::sqrt(best2);
+    // Rounding in a box's distance might prune the hint's own slot: then search without the bound.
+    if (!best.found) return search(p, nullptr);
     return best;
+}
+
+MeshDistance::Nearest MeshDistance::nearest(const Vec3& p, std::uint32_t* hint) const {
+    Nearest n;
+    n.distance = std::numeric_limits<double>::infinity();
+    if (nodes_.empty()) return n;
+    const Found f = search(p, hint);
+    n.distance = std::sqrt(f.d2);
+    n.point = f.point;
+    n.triangle = original_[f.slot];
+    if (hint) *hint = n.triangle;
+    return n;
 }
 
 }  // namespace dexelmill

@@ -128,3 +128,82 @@ TEST_CASE("mesh distance: empty and one-triangle meshes", "[compare][distance][d
     points.triangles = {{0, 0, 0}, {1, 1, 1}};
     CHECK(MeshDistance(points).distance(Vec3(3.0, 1.0, 1.0)) == Approx(1.0));
 }
+
+namespace {
+
+/// An L-shaped prism, closed and facing out: the polygon (0,0) (10,0) (10,4) (4,4) (4,10) (0,10),
+/// counter-clockwise seen from +z, from z = 0 to 5. The caps are fans from the reflex corner (4,4),
+/// which sees every other corner.
+Mesh lPrism() {
+    const double xy[6][2] = {{0, 0}, {10, 0}, {10, 4}, {4, 4}, {4, 10}, {0, 10}};
+    Mesh m;
+    for (double z : {0.0, 5.0})
+        for (const auto& c : xy) m.vertices.emplace_back(c[0], c[1], z);
+    for (std::uint32_t i : {4u, 5u, 0u, 1u}) {
+        const std::uint32_t j = (i + 1) % 6;
+        m.triangles.push_back({3, j, i});          // bottom, facing -z
+        m.triangles.push_back({9, 6 + i, 6 + j});  // top, facing +z
+    }
+    for (std::uint32_t i = 0; i < 6; ++i) {
+        const std::uint32_t j = (i + 1) % 6;
+        m.triangles.push_back({i, j, 6 + j});
+        m.triangles.push_back({i, 6 + j, 6 + i});
+    }
+    return m;
+}
+
+/// Whether p is inside the L prism, from its definition.
+bool insideL(const Vec3& p) {
+    const bool inPlan = (p.x > 0 && p.x < 10 && p.y > 0 && p.y < 4) || (p.x > 0 && p.x < 4 && p.y > 0 && p.y < 10);
+    return inPlan && p.z > 0 && p.z < 5;
+}
+
+/// Whether p lies on the L prism's surface (on a face's plane within its extent).
+bool onL(const Vec3& p) {
+    const bool inPlan = (p.x >= 0 && p.x <= 10 && p.y >= 0 && p.y <= 4) || (p.x >= 0 && p.x <= 4 && p.y >= 0 && p.y <= 10);
+    return inPlan && p.z >= 0 && p.z <= 5 && !insideL(p);
+}
+
+}  // namespace
+
+TEST_CASE("mesh distance: the sign, inside a non-convex solid, for any orientation", "[compare][distance]") {
+    const Mesh outward = lPrism();
+    Mesh inward = outward;
+    for (auto& t : inward.triangles) std::swap(t[1], t[2]);
+    Mesh mixed = outward;  // one face turned: no consistent orientation, so rays decide every sign
+    std::swap(mixed.triangles[5][1], mixed.triangles[5][2]);
+    Mesh open = outward;
+    open.triangles.pop_back();
+    CHECK(MeshDistance(outward).orientation() == 1);
+    CHECK(MeshDistance(inward).orientation() == -1);
+    CHECK(MeshDistance(mixed).orientation() == 0);
+    CHECK(MeshDistance(open).orientation() == 0);
+
+    // Random points, and points on a 0.5 mm lattice: many of those lie on faces, on edges, at
+    // corners and in line with them, where a ray meets an edge.
+    std::vector<Vec3> points;
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-2.0, 12.0);
+    for (int i = 0; i < 400; ++i) points.emplace_back(u(rng), u(rng), 0.5 * u(rng));
+    for (int i = -2; i <= 24; i += 1)
+        for (int j = -2; j <= 24; j += 3)
+            for (int k = -2; k <= 12; k += 2) points.emplace_back(0.5 * i, 0.5 * j, 0.5 * k);
+    for (const Mesh* m : std::vector<const Mesh*>{&outward, &inward, &mixed}) {
+        const MeshDistance index(*m);
+        std::uint32_t hint = 0;
+        for (const Vec3& p : points) {
+            INFO("orientation " << index.orientation() << ", point " << p.x << " " << p.y << " " << p.z);
+            const double d = oracleMesh(outward, p);
+            const double s = index.signedDistance(p, &hint);
+            if (onL(p)) {  // zero, to the rounding of a point on a triangle
+                CHECK(d <= 1e-12);
+                CHECK(std::abs(s) <= 1e-12);
+                continue;
+            }
+            CHECK(index.inside(p) == insideL(p));
+            CHECK(std::abs(s) == Approx(d).margin(1e-12));
+            CHECK((s < 0.0) == insideL(p));
+            CHECK(index.nearest(p, &hint).distance == Approx(d).margin(1e-12));
+        }
+    }
+}

@@ -32,26 +32,55 @@ public:
         std::uint32_t triangle = 0;
     };
 
-    /// @brief The nearest point of the mesh to p.
-    Nearest nearest(const Vec3& p) const;
+    /// @brief The nearest point of the mesh to p. `hint`, when given, names a triangle likely
+    /// near p (the previous query's, for points that follow each other): the search starts from
+    /// its distance, which speeds it and does not change the answer. It receives the nearest.
+    Nearest nearest(const Vec3& p, std::uint32_t* hint = nullptr) const;
     /// @brief The distance from p to the mesh (mm).
     double distance(const Vec3& p) const { return nearest(p).distance; }
+
+    /// @brief Whether p lies inside the closed mesh: the parity of the triangles a ray from p
+    /// crosses. A ray that meets a triangle within a relative 1e-9 of its edges or its plane, or
+    /// starts on a triangle, is ambiguous and another direction is tried, so the answer is exact for
+    /// a closed mesh and independent of the triangles' orientation, like the dexel cast. A point on
+    /// the surface (no direction decides) counts as outside.
+    bool inside(const Vec3& p) const;
+    /// @brief The distance from p to the mesh, negative inside it (mm); `hint` as for nearest.
+    /// When the mesh is a closed, consistently oriented 2-manifold and p's nearest point lies
+    /// inside a face, p is inside exactly when it lies behind that face (the segment from the
+    /// nearest point to p meets no other part of the surface); otherwise inside() decides.
+    double signedDistance(const Vec3& p, std::uint32_t* hint = nullptr) const;
 
     /// @brief The distance from p to one triangle of the mesh (by its index in the mesh given).
     double distanceTo(const Vec3& p, std::uint32_t triangle) const;
 
     std::size_t triangleCount() const { return corners_.size() / 3; }
+    /// @brief +1 for a closed, consistently oriented 2-manifold facing outward (positive volume),
+    /// -1 for one facing inward, 0 for anything else.
+    int orientation() const { return orientation_; }
 
 private:
+    /// The nearest triangle's slot, the squared distance, the nearest point and whether it lies
+    /// inside the triangle's face; `found` is false while no slot has been tested.
+    struct Found {
+        std::uint32_t slot = 0;
+        double d2 = 0.0;
+        Vec3 point{0.0};
+        bool onFace = false;
+        bool found = false;
+    };
+    Found search(const Vec3& p, const std::uint32_t* hint) const;
+
     struct Node {
         Box box;
         std::uint32_t first = 0;  ///< a leaf's first triangle slot, or an inner node's left child
         std::uint32_t count = 0;  ///< triangles in a leaf; 0 for an inner node (right = left + 1)
     };
     std::vector<Node> nodes_;
-    std::vector<Vec3> corners_;           ///< three corners per triangle slot, in hierarchy order
+    std::vector<Vec3> corners_;            ///< three corners per triangle slot, in hierarchy order
     std::vector<std::uint32_t> original_;  ///< each slot's index in the input mesh
-    std::vector<std::uint32_t> slot_;      ///< each input triangle's slot
+    std::vector<Vec3> triangles_;          ///< three corners per input triangle, in input order
+    int orientation_ = 0;
 };
 
 }  // namespace dexelmill
