@@ -1,0 +1,85 @@
+/// @file deviation.h
+/// @brief How far a machined surface lies from the design: the signed distance of every vertex of
+/// the machined mesh to the design's surface, its statistics and histogram, and the colours that
+/// show it (red where the machined surface lies inside the design, a gouge; blue where it lies
+/// outside, excess; green within tolerance).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "dexelmill/compare/mesh_distance.h"
+#include "dexelmill/geometry/types.h"
+#include "dexelmill/io/picture.h"
+#include "dexelmill/surface/mesh.h"
+
+namespace dexelmill {
+
+/// @brief The tolerances that say what is a gouge and what is excess (mm, both positive).
+struct DeviationTolerance {
+    double gouge = 0.01;   ///< deeper inside the design than this is a gouge
+    double excess = 0.05;  ///< farther outside the design than this is excess
+};
+
+/// @brief One bin of the deviation histogram: the surface whose signed distance d lies between lo
+/// and hi (mm). The bin within tolerance holds lo <= d <= hi; one of gouge holds lo <= d < hi, one
+/// of excess lo < d <= hi.
+struct DeviationBin {
+    double lo = 0.0, hi = 0.0;
+    double area = 0.0;           ///< mm^2
+    std::size_t vertices = 0;
+};
+
+/// @brief A machined surface measured against the design.
+struct Deviation {
+    /// Per vertex of the machined mesh: the distance to the design's surface (mm), negative where
+    /// the vertex lies inside the design; exact, except that a vertex within 1e-6 mm of the surface
+    /// may be given a distance up to 1e-6 mm off, or the other sign.
+    std::vector<double> distance;
+    DeviationTolerance tolerance;
+    double area = 0.0;                                    ///< the machined surface (mm^2)
+    double gougeArea = 0.0, withinArea = 0.0, excessArea = 0.0;  ///< mm^2, by tolerance
+    double rms = 0.0;                                     ///< area-weighted RMS distance (mm)
+    double deepest = 0.0;   ///< the most negative distance (mm; 0 when no vertex is inside)
+    double farthest = 0.0;  ///< the most positive distance (mm; 0 when no vertex is outside)
+    Vec3 deepestPoint{0.0}, farthestPoint{0.0};
+    /// Bins from the deepest to the farthest: gouge bins with edges at 1, 2, 5, 10, 20, ... times
+    /// the gouge tolerance below zero, one bin within tolerance, excess bins at 1, 2, 5, 10, ...
+    /// times the excess tolerance above zero (a tolerance of 0 steps 0, 1, 2, 5, ... um instead).
+    std::vector<DeviationBin> histogram;
+};
+
+/// @brief Measures every vertex of `machined` against the design (MeshDistance::signedDistance).
+/// Each vertex stands for a third of the area of the triangles around it, so the areas are exact
+/// where the distance is the same over a vertex's triangles, and on a mesh as fine as the
+/// simulate job's (vertices a lattice spacing apart) err only along the lines where the class
+/// changes; on a coarse mesh (a CAD export) they are the vertices' neighbourhoods'. Runs in parallel on the
+/// calling arena.
+Deviation measureDeviation(const Mesh& machined, const MeshDistance& design, const DeviationTolerance& tolerance);
+
+/// @brief The colour scale: green within tolerance; from light to dark red between the gouge
+/// tolerance and `gougeFull` below zero, from light to dark blue between the excess tolerance and
+/// `excessFull` above it; darkest beyond.
+struct DeviationScale {
+    DeviationTolerance tolerance;
+    double gougeFull = 0.0, excessFull = 0.0;  ///< mm, positive
+};
+
+/// @brief A scale that spans the deviation measured: each side's full colour at its largest
+/// distance, and at least at twice its tolerance.
+DeviationScale deviationScale(const Deviation& deviation);
+
+/// @brief The colour of a signed distance on the scale.
+Rgb deviationColour(double distance, const DeviationScale& scale);
+
+/// @brief The colour of every distance (Deviation::distance).
+std::vector<Rgb> deviationColours(const std::vector<double>& distance, const DeviationScale& scale);
+
+/// @brief The legend that explains the scale in a picture: the bar from dark red at the bottom
+/// to dark blue at the top, in three equal parts (gouge, within tolerance, excess), labelled in mm.
+PictureLegend deviationLegend(const DeviationScale& scale);
+
+}  // namespace dexelmill

@@ -1,0 +1,164 @@
+// The machined surface against the design: signed distances per vertex, their statistics and the
+// colours that show them.
+#include "dexelmill/compare/deviation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace dexelmill {
+
+namespace {
+
+/// A vertex this close to a design triangle (mm) is on the design's surface: its distance is taken
+/// as that, at most this much from the exact signed distance's magnitude. It is a sixtieth of the
+/// rounding of an STL's single-precision coordinates at 1 m, and saves the search for the vertices
+/// of machined faces that lie on design faces (more than half of basemach's 1.2 million).
+constexpr double kOnSurface = 1e-6;
+
+/// 1, 2, 5, 10, 20, 50, ...
+double ladder(int k) {
+    static const double mantissa[3] = {1.0, 2.0, 5.0};
+    return mantissa[k % 3] * std::pow(10.0, k / 3);
+}
+
+/// The histogram's steps when a tolerance is 0 (mm): 0, then 1, 2, 5, 10, ... um.
+constexpr double kHistogramUnit = 0.001;
+
+/// The k-th edge of the histogram beyond a tolerance (as a distance from the design): the
+/// tolerance, then 2, 5, 10, 20, ... times it (or 1, 2, 5, ... um for a tolerance of 0).
+double edge(int k, double tolerance) {
+    if (k == 0) return tolerance;
+    return tolerance > 0.0 ? tolerance * ladder(k) : kHistogramUnit * ladder(k - 1);
+}
+
+/// The scale's colours (sRGB).
+constexpr Rgb kWithin{70, 170, 90};
+constexpr Rgb kGougeLight{250, 175, 155}, kGougeDark{165, 0, 30};
+constexpr Rgb kExcessLight{165, 200, 250}, kExcessDark{25, 50, 160};
+
+Rgb mix(const Rgb& a, const Rgb& b, double t) {
+    t = std::clamp(t, 0.0, 1.0);
+    Rgb c;
+    for (int k = 0; k < 3; ++k) c[std::size_t(k)] = std::uint8_t(std::lround(a[std::size_t(k)] + t * (b[std::size_t(k)] - a[std::size_t(k)])));
+    return c;
+}
+
+std::string number(double mm) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%+.3g", mm);
+    return text;
+}
+
+/// Colours per third of the legend's bar.
+constexpr int kBarSteps = 64;
+
+}  // namespace
+
+Deviation measureDeviation(const Mesh& machined, const MeshDistance& design, const DeviationTolerance& tolerance) {
+    Deviation dev;
+    dev.tolerance = tolerance;
+    const std::size_t n = machined.vertices.size();
+    dev.distance.resize(n);
+    // Meshers emit vertices cell by cell, so each vertex's nearest triangle is a good start for
+    // the next one's search. A vertex that lies within kOnSurface of that triangle takes that
+    // distance: the exact one is between 0 and it.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::uint32_t hint = 0;
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            const Vec3& p = machined.vertices[i];
+            const double near = design.distanceTo(p, hint);
+            dev.distance[i] = near <= kOnSurface ? near : design.signedDistance(p, &hint);
+        }
+    });
+    std::vector<double> area(n, 0.0);
+    for (std::size_t t = 0; t < machined.triangles.size(); ++t) {
+        const double third = glm::length(machined.areaVector(t)) / 6.0;
+        for (std::uint32_t v : machined.triangles[t]) area[v] += third;
+    }
+
+    int gougeSteps = 0, excessSteps = 0;
+    double sum2 = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double d = dev.distance[i];
+        dev.area += area[i];
+        sum2 += area[i] * d * d;
+        if (d < -tolerance.gouge) dev.gougeArea += area[i];
+        else if (d > tolerance.excess) dev.excessArea += area[i];
+        else dev.withinArea += area[i];
+        if (d < dev.deepest) dev.deepest = d, dev.deepestPoint = machined.vertices[i];
+        if (d > dev.farthest) dev.farthest = d, dev.farthestPoint = machined.vertices[i];
+    }
+    dev.rms = dev.area > 0.0 ? std::sqrt(sum2 / dev.area) : 0.0;
+    const double g = tolerance.gouge, e = tolerance.excess;
+    while (-dev.deepest > edge(gougeSteps, g)) ++gougeSteps;
+    while (dev.farthest > edge(excessSteps, e)) ++excessSteps;
+
+    // Bins: gouge ones deepest first, the one within tolerance, excess ones nearest first.
+    for (int k = gougeSteps; k >= 1; --k) dev.histogram.push_back({-edge(k, g), -edge(k - 1, g), 0.0, 0});
+    const std::size_t within = dev.histogram.size();
+    dev.histogram.push_back({-g, e, 0.0, 0});
+    for (int k = 1; k <= excessSteps; ++k) dev.histogram.push_back({edge(k - 1, e), edge(k, e), 0.0, 0});
+    for (std::size_t i = 0; i < n; ++i) {
+        const double d = dev.distance[i];
+        std::size_t bin = within;
+        if (d < -g) {
+            int k = 1;  // the bin [-edge(k), -edge(k - 1)) that holds d
+            while (d < -edge(k, g)) ++k;
+            bin = within - std::size_t(k);
+        } else if (d > e) {
+            int k = 1;  // the bin (edge(k - 1), edge(k)]
+            while (d > edge(k, e)) ++k;
+            bin = within + std::size_t(k);
+        }
+        dev.histogram[bin].area += area[i];
+        ++dev.histogram[bin].vertices;
+    }
+    return dev;
+}
+
+DeviationScale deviationScale(const Deviation& deviation) {
+    DeviationScale s;
+    s.tolerance = deviation.tolerance;
+    s.gougeFull = std::max(-deviation.deepest, 2.0 * deviation.tolerance.gouge);
+    s.excessFull = std::max(deviation.farthest, 2.0 * deviation.tolerance.excess);
+    return s;
+}
+
+Rgb deviationColour(double d, const DeviationScale& s) {
+    if (d < -s.tolerance.gouge)
+        return mix(kGougeLight, kGougeDark, (-d - s.tolerance.gouge) / (s.gougeFull - s.tolerance.gouge));
+    if (d > s.tolerance.excess)
+        return mix(kExcessLight, kExcessDark, (d - s.tolerance.excess) / (s.excessFull - s.tolerance.excess));
+    return kWithin;
+}
+
+std::vector<Rgb> deviationColours(const std::vector<double>& distance, const DeviationScale& scale) {
+    std::vector<Rgb> colours(distance.size());
+    for (std::size_t i = 0; i < colours.size(); ++i) colours[i] = deviationColour(distance[i], scale);
+    return colours;
+}
+
+PictureLegend deviationLegend(const DeviationScale& s) {
+    PictureLegend legend;
+    legend.title = "deviation (mm)";
+    // Bottom third: from the full gouge colour up to the lightest; then green; then excess.
+    for (int k = 0; k < kBarSteps; ++k)
+        legend.bar.push_back(mix(kGougeDark, kGougeLight, (k + 0.5) / kBarSteps));
+    for (int k = 0; k < kBarSteps; ++k) legend.bar.push_back(kWithin);
+    for (int k = 0; k < kBarSteps; ++k)
+        legend.bar.push_back(mix(kExcessLight, kExcessDark, (k + 0.5) / kBarSteps));
+    legend.labels = {{0.0, number(-s.gougeFull), true},
+                     {1.0 / 6.0, "gouge", false},
+                     {1.0 / 3.0, number(-s.tolerance.gouge), true},
+                     {0.5, "within", false},
+                     {2.0 / 3.0, number(s.tolerance.excess), true},
+                     {5.0 / 6.0, "excess", false},
+                     {1.0, number(s.excessFull), true}};
+    return legend;
+}
+
+}  // namespace dexelmill

@@ -1,0 +1,350 @@
+// The machined surface against the design: a sphere's mesh measured against a cube, whose signed
+// distance is known in closed form, so every vertex's distance, the areas and the histogram have
+// analytic answers. Then the same through the compare job (files in, report, PLY and picture out)
+// and through the simulate job.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "dexelmill/compare/deviation.h"
+#include "dexelmill/compare/design.h"
+#include "dexelmill/error.h"
+#include "dexelmill/io/mesh_io.h"
+#include "dexelmill/job/compare.h"
+#include "dexelmill/job/simulate.h"
+#include "dexelmill/tool/builders.h"
+
+using namespace dexelmill;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A sphere of radius r about the origin: an octahedron subdivided `levels` times, every vertex
+/// pushed onto the sphere. Closed, facing out.
+Mesh sphere(double r, int levels) {
+    Mesh m;
+    m.vertices = {Vec3(1, 0, 0), Vec3(-1, 0, 0), Vec3(0, 1, 0), Vec3(0, -1, 0), Vec3(0, 0, 1), Vec3(0, 0, -1)};
+    m.triangles = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+    for (int l = 0; l < levels; ++l) {
+        std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
+        auto middle = [&](std::uint32_t a, std::uint32_t b) {
+            const auto key = std::minmax(a, b);
+            const auto it = mid.find(key);
+            if (it != mid.end()) return it->second;
+            m.vertices.push_back(glm::normalize(m.vertices[a] + m.vertices[b]));
+            return mid[key] = std::uint32_t(m.vertices.size() - 1);
+        };
+        decltype(m.triangles) next;
+        for (const auto& t : m.triangles) {
+            const std::uint32_t ab = middle(t[0], t[1]), bc = middle(t[1], t[2]), ca = middle(t[2], t[0]);
+            next.push_back({t[0], ab, ca});
+            next.push_back({ab, t[1], bc});
+            next.push_back({ca, bc, t[2]});
+            next.push_back({ab, bc, ca});
+        }
+        m.triangles = next;
+    }
+    for (Vec3& v : m.vertices) v = r * glm::normalize(v);
+    return m;
+}
+
+/// The cube [-h, h]^3 as 12 triangles facing out.
+Mesh cube(double h) {
+    Mesh m;
+    for (int i = 0; i < 8; ++i) m.vertices.emplace_back(i & 1 ? h : -h, i & 2 ? h : -h, i & 4 ? h : -h);
+    const std::uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : f) {
+        m.triangles.push_back({q[0], q[1], q[2]});
+        m.triangles.push_back({q[0], q[2], q[3]});
+    }
+    return m;
+}
+
+/// The cube's signed distance in closed form: outside, the length of the excess over the faces;
+/// inside, minus the distance to the nearest face.
+double cubeDistance(const Vec3& p, double h) {
+    const Vec3 q = glm::abs(p) - Vec3(h);
+    return glm::length(glm::max(q, Vec3(0.0))) + std::min(std::max({q.x, q.y, q.z}), 0.0);
+}
+
+/// Each vertex's third of its triangles' areas.
+std::vector<double> vertexAreas(const Mesh& m) {
+    std::vector<double> a(m.vertices.size(), 0.0);
+    for (const auto& t : m.triangles) {
+        const double area = 0.5 * glm::length(glm::cross(m.vertices[t[1]] - m.vertices[t[0]], m.vertices[t[2]] - m.vertices[t[0]]));
+        for (std::uint32_t v : t) a[v] += area / 3.0;
+    }
+    return a;
+}
+
+std::string asciiStl(const Mesh& m) {
+    std::ostringstream s;
+    s.precision(17);
+    s << "solid cube\n";
+    for (const auto& t : m.triangles) {
+        s << " facet normal 0 0 0\n  outer loop\n";
+        for (std::uint32_t v : t) s << "   vertex " << m.vertices[v].x << " " << m.vertices[v].y << " " << m.vertices[v].z << "\n";
+        s << "  endloop\n endfacet\n";
+    }
+    s << "endsolid cube\n";
+    return s.str();
+}
+
+fs::path scratch(const std::string& name) {
+    const fs::path p = fs::temp_directory_path() / ("dexelmill_test_deviation_" + name);
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+}
+
+// A sphere of radius 6 against the cube of half-side 5: it bulges 1 mm out through each face's
+// middle (where the meshes below have vertices), and its points along the diagonals lie
+// 5 - 6 / sqrt(3) = 1.536 mm inside (the meshes' vertices nearest them a little less).
+constexpr double kRadius = 6.0, kHalf = 5.0;
+
+}  // namespace
+
+TEST_CASE("deviation: every vertex's signed distance, the areas and the histogram, in closed form",
+          "[compare][deviation]") {
+    const Mesh machined = sphere(kRadius, 4);
+    const MeshDistance design{cube(kHalf)};
+    const DeviationTolerance tol{0.01, 0.05};
+    const Deviation d = measureDeviation(machined, design, tol);
+    REQUIRE(d.distance.size() == machined.vertices.size());
+    const std::vector<double> area = vertexAreas(machined);
+    double total = 0, gouge = 0, within = 0, excess = 0, lo = 0, hi = 0, sum2 = 0;
+    for (std::size_t i = 0; i < machined.vertices.size(); ++i) {
+        const double expected = cubeDistance(machined.vertices[i], kHalf);
+        INFO("vertex " << i);
+        CHECK(d.distance[i] == Approx(expected).margin(1e-12));
+        total += area[i];
+        sum2 += area[i] * expected * expected;
+        (expected < -tol.gouge ? gouge : expected > tol.excess ? excess : within) += area[i];
+        lo = std::min(lo, expected);
+        hi = std::max(hi, expected);
+    }
+    CHECK(d.deepest == Approx(lo).margin(1e-12));
+    CHECK(d.farthest == Approx(hi).margin(1e-12));
+    CHECK(d.farthest == Approx(kRadius - kHalf).margin(1e-12));  // the vertices on the axes
+    CHECK(d.deepest >= kRadius / std::sqrt(3.0) - kHalf);        // no point lies deeper than the diagonals
+    CHECK(cubeDistance(d.deepestPoint, kHalf) == Approx(d.deepest));
+    CHECK(d.area == Approx(total).epsilon(1e-12));
+    CHECK(d.gougeArea == Approx(gouge).epsilon(1e-12));
+    CHECK(d.withinArea == Approx(within).epsilon(1e-12));
+    CHECK(d.excessArea == Approx(excess).epsilon(1e-12));
+    CHECK(d.rms == Approx(std::sqrt(sum2 / total)).epsilon(1e-12));
+
+    // Bins: -2 (the deepest is 1.16 mm) .. -1 .. -0.5 .. -0.2 .. -0.1 .. -0.05 .. -0.02 .. -0.01,
+    // within to +0.05, then 0.1, 0.25, 0.5, 1 (the farthest, 1 mm, closes the last).
+    REQUIRE(lo < -1.0);
+    const std::vector<double> edges{-2, -1, -0.5, -0.2, -0.1, -0.05, -0.02, -0.01, 0.05, 0.1, 0.25, 0.5, 1.0};
+    REQUIRE(d.histogram.size() == edges.size() - 1);
+    for (std::size_t b = 0; b < d.histogram.size(); ++b) {
+        const DeviationBin& bin = d.histogram[b];
+        CHECK(bin.lo == Approx(edges[b]).epsilon(1e-12));
+        CHECK(bin.hi == Approx(edges[b + 1]).epsilon(1e-12));
+        double binArea = 0;
+        std::size_t count = 0;
+        for (std::size_t i = 0; i < machined.vertices.size(); ++i) {
+            const double e = cubeDistance(machined.vertices[i], kHalf);
+            const bool in = bin.hi <= -0.01 ? (e >= bin.lo && e < bin.hi)
+                            : bin.lo >= 0.05 ? (e > bin.lo && e <= bin.hi)
+                                             : (e >= bin.lo && e <= bin.hi);
+            if (in) binArea += area[i], ++count;
+        }
+        INFO("bin " << bin.lo << " .. " << bin.hi);
+        CHECK(bin.vertices == count);
+        CHECK(bin.area == Approx(binArea).epsilon(1e-12).margin(1e-12));
+    }
+}
+
+TEST_CASE("deviation: zero tolerances, a surface that matches, and the colours", "[compare][deviation][degenerate]") {
+    // The cube against itself: every vertex on the design, one bin, all within tolerance.
+    const Mesh c = cube(kHalf);
+    const Deviation same = measureDeviation(c, MeshDistance(c), {0.0, 0.0});
+    CHECK(same.deepest == 0.0);
+    CHECK(same.farthest == 0.0);
+    REQUIRE(same.histogram.size() == 1);
+    CHECK(same.histogram[0].vertices == 8);
+    CHECK(same.withinArea == Approx(6 * 100.0));
+
+    // Zero tolerances step the bins in micrometres: 0, 1, 2, 5, 10 ... 1000 um (the deepest
+    // vertex of this coarser sphere is 0.757 mm inside).
+    const Deviation d = measureDeviation(sphere(kRadius, 2), MeshDistance(c), {0.0, 0.0});
+    REQUIRE(d.deepest < -0.5);
+    CHECK(d.histogram.front().lo == Approx(-1.0));
+    CHECK(d.histogram.back().hi == Approx(1.0));
+    const auto within = std::find_if(d.histogram.begin(), d.histogram.end(), [](const DeviationBin& b) { return b.lo == 0.0 && b.hi == 0.0; });
+    REQUIRE(within != d.histogram.end());
+    CHECK((within + 1)->hi == Approx(0.001));
+    CHECK((within - 1)->lo == Approx(-0.001));
+
+    // Colours: green within, reds below (darker deeper), blues above (darker farther).
+    const DeviationScale scale = deviationScale(measureDeviation(sphere(kRadius, 2), MeshDistance(c), {0.01, 0.05}));
+    CHECK(scale.excessFull == Approx(1.0));
+    CHECK(scale.gougeFull == Approx(-d.deepest));
+    const Rgb green = deviationColour(0.0, scale), shallow = deviationColour(-0.02, scale),
+              deep = deviationColour(-1.5, scale), near = deviationColour(0.06, scale), far = deviationColour(0.9, scale);
+    CHECK(deviationColour(-0.01, scale) == green);
+    CHECK(deviationColour(0.05, scale) == green);
+    CHECK((green[1] > green[0] && green[1] > green[2]));
+    CHECK((shallow[0] > shallow[2] && deep[0] > deep[2]));
+    CHECK(deep[1] < shallow[1]);
+    CHECK((near[2] > near[0] && far[2] > far[0]));
+    CHECK(far[0] < near[0]);
+    CHECK(deviationColour(-100.0, scale) == deviationColour(-scale.gougeFull, scale));
+
+    // The legend: red at the bottom, green in the middle, blue at the top, labelled in mm.
+    const PictureLegend legend = deviationLegend(scale);
+    REQUIRE(legend.bar.size() % 3 == 0);
+    CHECK(legend.bar[legend.bar.size() / 2] == green);
+    CHECK(legend.bar.front()[0] > legend.bar.front()[2]);
+    CHECK(legend.bar.back()[2] > legend.bar.back()[0]);
+    std::vector<std::string> texts;
+    for (const auto& l : legend.labels) texts.push_back(l.text);
+    char deepest[32];
+    std::snprintf(deepest, sizeof deepest, "%+.3g", d.deepest);
+    CHECK(texts == std::vector<std::string>{deepest, "gouge", "-0.01", "within", "+0.05", "excess", "+1"});
+}
+
+TEST_CASE("compare: a sphere's STL against a cube's, with report, PLY and picture", "[compare][deviation][job]") {
+    const fs::path dir = scratch("files");
+    const Mesh machined = sphere(kRadius, 4);
+    writeStl((dir / "sphere.stl").string(), machined);
+    std::ofstream(dir / "cube.stl") << asciiStl(cube(kHalf));
+    CompareOptions o;
+    o.machinedPath = (dir / "sphere.stl").string();
+    o.designPath = (dir / "cube.stl").string();
+    o.plyPath = (dir / "deviation.ply").string();
+    o.pngPath = (dir / "deviation.png").string();
+    o.reportPath = (dir / "report.json").string();
+    o.threads = 2;
+    const CompareReport r = compareParts(o);
+    CHECK(r.machinedClosed);
+    CHECK(r.machinedTriangles == machined.triangles.size());
+    CHECK(r.designTriangles == 12);
+    // Written as float, the sphere's vertices move by up to 6e-8 * 6 mm.
+    CHECK(r.deviation.farthest == Approx(kRadius - kHalf).margin(1e-6));
+    double deepest = 0.0;
+    for (const Vec3& v : machined.vertices) deepest = std::min(deepest, cubeDistance(v, kHalf));
+    CHECK(r.deviation.deepest == Approx(deepest).margin(1e-6));
+
+    const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "report.json"));
+    CHECK(j["units"] == "mm");
+    CHECK(j["surface"]["farthest_mm"].get<double>() == Approx(r.deviation.farthest));
+    CHECK(j["surface"]["histogram"].size() == r.deviation.histogram.size());
+    double binned = 0;
+    for (const auto& b : j["surface"]["histogram"]) binned += b["area_mm2"].get<double>();
+    CHECK(binned == Approx(j["surface"]["area_mm2"].get<double>()));
+
+    // The PLY: its header names the colours and the distance, and the sizes add up.
+    std::ifstream ply(dir / "deviation.ply", std::ios::binary);
+    std::string header, line;
+    while (std::getline(ply, line) && line != "end_header") header += line + "\n";
+    CHECK(header.find("element vertex " + std::to_string(machined.vertices.size())) != std::string::npos);
+    CHECK(header.find("property uchar red\nproperty uchar green\nproperty uchar blue\nproperty float deviation_mm\n") != std::string::npos);
+    const auto headerBytes = std::size_t(ply.tellg());
+    CHECK(fs::file_size(dir / "deviation.ply") ==
+          headerBytes + machined.vertices.size() * (12 + 3 + 4) + machined.triangles.size() * 13);
+    CHECK(fs::file_size(dir / "deviation.png") > 1000);
+
+    // Errors: an unknown format, a bad tolerance, a report that is not JSON; nothing written.
+    CompareOptions bad = o;
+    bad.machinedPath = (dir / "sphere.obj").string();
+    CHECK_THROWS_WITH(compareParts(bad), Catch::Contains("must be an STL file (.stl) or a level set (.vdb)"));
+    bad = o;
+    bad.tolerance.gouge = -1.0;
+    CHECK_THROWS_WITH(compareParts(bad), Catch::Contains("tolerances"));
+    bad = o;
+    bad.reportPath = (dir / "report.txt").string();
+    CHECK_THROWS_WITH(compareParts(bad), Catch::Contains(".json"));
+    CHECK_FALSE(fs::exists(dir / "report.txt"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("picture: the legend's colours and the vertex colours reach the image", "[compare][deviation][io]") {
+    const Mesh machined = sphere(kRadius, 3);
+    const Deviation d = measureDeviation(machined, MeshDistance(cube(kHalf)), {0.01, 0.05});
+    const DeviationScale scale = deviationScale(d);
+    const std::vector<Rgb> colours = deviationColours(d.distance, scale);
+    const PictureLegend legend = deviationLegend(scale);
+    PictureOptions po;
+    po.width = 600;
+    po.height = 450;
+    po.vertexColours = &colours;
+    po.legend = &legend;
+    const Image img = renderPicture(machined, po);
+    // The bar's colours appear as they are, in the right fifth of the picture.
+    auto count = [&](const Rgb& c, int x0) {
+        std::size_t n = 0;
+        for (int y = 0; y < img.height; ++y)
+            for (int x = x0; x < img.width; ++x)
+                if (std::equal(c.begin(), c.end(), img.pixel(x, y))) ++n;
+        return n;
+    };
+    CHECK(count(legend.bar.front(), img.width * 4 / 5) > 0);
+    CHECK(count(legend.bar[legend.bar.size() / 2], img.width * 4 / 5) > 0);
+    CHECK(count(legend.bar.back(), img.width * 4 / 5) > 0);
+    // The part is shaded in its colours: blue-dominated pixels where it bulges out, red where it
+    // lies inside.
+    std::size_t blue = 0, red = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width * 3 / 4; ++x) {
+            const std::uint8_t* p = img.pixel(x, y);
+            blue += p[2] > p[0] + 40;
+            red += p[0] > p[2] + 40;
+        }
+    CHECK(blue > 1000);
+    CHECK(red > 1000);
+    // Colours for another vertex count are refused.
+    const std::vector<Rgb> few(3);
+    po.vertexColours = &few;
+    CHECK_THROWS_AS(renderPicture(machined, po), Error);
+}
+
+TEST_CASE("compare: a level set (.vdb) as the machined part and as the design", "[compare][deviation][job]") {
+    const fs::path dir = scratch("vdb");
+    // A block that nothing cuts, written as a level set at h = 0.5 mm.
+    SimulateOptions o;
+    o.inputs = {"none.ngc"};
+    o.files = [](const std::string& path) -> std::optional<std::string> {
+        if (path == "none.ngc") return std::string("G21 G90\nG0 X0 Y0 Z50\nM30\n");
+        return std::nullopt;
+    };
+    o.stockBox = Box{Vec3(-kHalf), Vec3(kHalf)};
+    o.defaultTool = flatEndMill(6.0, {20.0, 40.0});
+    o.resolution = 0.5;
+    o.vdbPath = (dir / "block.vdb").string();
+    o.threads = 2;
+    simulate(o);
+    std::ofstream(dir / "cube.stl") << asciiStl(cube(kHalf));
+
+    // As the design: its mesh is closed and lies on the block's faces, rounded at edges and
+    // corners by less than a spacing.
+    const Mesh design = readDesign(o.vdbPath);
+    CHECK(checkMesh(design).closedManifold());
+    CHECK(MeshDistance(design).orientation() == 1);
+    const Deviation d = measureDeviation(cube(kHalf), MeshDistance(design), {0.01, 0.05});
+    CHECK(d.farthest <= 0.5);
+    CHECK(d.deepest >= -0.5);
+
+    // As the machined part, against the STL block: the faces' middles lie on it.
+    CompareOptions c;
+    c.machinedPath = o.vdbPath;
+    c.designPath = (dir / "cube.stl").string();
+    const CompareReport r = compareParts(c);
+    CHECK(r.machinedClosed);
+    CHECK(r.deviation.farthest <= 0.5);
+    CHECK(r.deviation.deepest >= -0.5);
+    CHECK(r.deviation.withinArea > 0.5 * r.deviation.area);
+    fs::remove_all(dir);
+}
