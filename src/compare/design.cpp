@@ -11,6 +11,8 @@
 #include "dexelmill/error.h"
 #include "dexelmill/io/file_name.h"
 #include "dexelmill/io/mesh_io.h"
+#include "dexelmill/io/vdb_io.h"
+#include "dexelmill/surface/levelset.h"
 #include "compare/detail/deepest.h"
 
 namespace dexelmill {
@@ -31,11 +33,13 @@ constexpr double kFloatSlack = 1e-6;
 
 
 Mesh readDesign(const std::string& path, const std::optional<Affine>& place) {
-    if (lowerExtension(path) != ".stl")
-        throw Error("'" + path + "': a design must be an STL file (.stl, binary or ASCII)");
+    const std::string extension = lowerExtension(path);
+    if (extension != ".stl" && extension != ".vdb")
+        throw Error("'" + path + "': a design must be an STL file (.stl, binary or ASCII) or a level set (.vdb)");
     if (place && !(std::abs(place->determinant()) > 0.0))
         throw Error("'" + path + "': the design transform flattens the design (its determinant is 0)");
-    Mesh mesh = readStl(path);
+    // A level set is measured through its zero surface, meshed at its own voxel size.
+    Mesh mesh = extension == ".stl" ? readStl(path) : meshLevelSet(readVdb(path));
     if (mesh.empty()) throw Error("'" + path + "': the design has no triangles");
     if (place) {
         for (Vec3& v : mesh.vertices) v = place->apply(v);

@@ -34,8 +34,10 @@ struct DesignPart {
     std::unique_ptr<MeshDistance> distance;
 };
 
-/// @brief Reads a design's mesh (a closed STL, binary or ASCII) and places it with `place`. A map
-/// that mirrors (negative determinant) would turn the faces inside out, so their order is reversed.
+/// @brief Reads a design's mesh, a closed STL (binary or ASCII) or the zero surface of a VDB level
+/// set (meshed by meshLevelSet at the grid's voxel size; distances are then to that mesh), and
+/// places it with `place`. A map that mirrors (negative determinant) would turn the faces inside
+/// out, so their order is reversed.
 /// @throw Error naming the file for another format, an unreadable or empty file, or a map that
 /// flattens the design (determinant 0).
 Mesh readDesign(const std::string& path, const std::optional<Affine>& place = std::nullopt);
