@@ -6,8 +6,28 @@
 
 #include "dexelmill/job/simulate.h"
 #include "dexelmill/stock/lattice.h"
+#include "job/detail/deviation_json.h"
 
 namespace dexelmill {
+
+nlohmann::json deviationJson(const Deviation& d) {
+    using nlohmann::json;
+    json bins = json::array();
+    for (const DeviationBin& b : d.histogram)
+        bins.push_back({{"from_mm", b.lo}, {"to_mm", b.hi}, {"area_mm2", b.area}, {"vertices", b.vertices}});
+    return {{"gouge_tolerance_mm", d.tolerance.gouge},
+            {"excess_tolerance_mm", d.tolerance.excess},
+            {"area_mm2", d.area},
+            {"gouge_area_mm2", d.gougeArea},
+            {"within_tolerance_area_mm2", d.withinArea},
+            {"excess_area_mm2", d.excessArea},
+            {"rms_mm", d.rms},
+            {"deepest_mm", d.deepest},
+            {"deepest_point_mm", {d.deepestPoint.x, d.deepestPoint.y, d.deepestPoint.z}},
+            {"farthest_mm", d.farthest},
+            {"farthest_point_mm", {d.farthestPoint.x, d.farthestPoint.y, d.farthestPoint.z}},
+            {"histogram", bins}};
+}
 
 std::string reportJson(const SimulateReport& r) {
     using nlohmann::json;
@@ -68,6 +88,7 @@ std::string reportJson(const SimulateReport& r) {
                        {"worst_excess_mm", r.excessThicknessMm},
                        {"worst_excess_point_mm", {r.excessPoint.x, r.excessPoint.y, r.excessPoint.z}},
                        {"excess_regions", regions}};
+        if (r.surfaceDeviation) j["design"]["surface"] = deviationJson(*r.surfaceDeviation);
     }
     json warnings = json::array();
     for (const ReportWarning& w : r.warnings)

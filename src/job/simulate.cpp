@@ -49,6 +49,10 @@ void checkOutputs(const SimulateOptions& o) {
         throw Error("output '" + o.pngPath + "': a picture is written as .png");
     if (!o.gougeCsvPath.empty() && o.designPath.empty())
         throw Error("output '" + o.gougeCsvPath + "': gouges are found against a design: give --design PART.stl");
+    if (!o.deviationPlyPath.empty() && o.designPath.empty())
+        throw Error("output '" + o.deviationPlyPath + "': the deviation is measured against a design: give --design PART.stl");
+    if (!o.deviationPlyPath.empty() && lowerExtension(o.deviationPlyPath) != ".ply")
+        throw Error("output '" + o.deviationPlyPath + "': the deviation mesh is written as .ply");
     if (!o.gougeCsvPath.empty() && lowerExtension(o.gougeCsvPath) != ".csv")
         throw Error("output '" + o.gougeCsvPath + "': the gouges are written as .csv");
     if (!(o.gougeTolerance >= 0.0) || !std::isfinite(o.gougeTolerance))
@@ -344,6 +348,8 @@ Simulation runStages(const SimulateOptions& o) {
 
     // The design, on the stock's lattice.
     std::optional<DesignPart> design;
+    // The design's distance outlives its dexels: the mesh is measured against it at the end.
+    std::unique_ptr<MeshDistance> designDistance;
     if (designMesh) {
         t = Clock::now();
         design.emplace(loadDesign(*designMesh, o.designPath, stock.lattice(), o.families));
@@ -390,6 +396,7 @@ Simulation runStages(const SimulateOptions& o) {
         report.excessPoint = excess.point;
         for (const ExcessRegion& r : excess.regions)
             report.excessRegions.push_back({r.box, r.volume, r.thickness, r.point});
+        designDistance = std::move(design->distance);
         design.reset();
         report.timingS.design += seconds(t);
     }
@@ -477,6 +484,18 @@ Simulation runStages(const SimulateOptions& o) {
         report.timingS.refine = seconds(t);
     }
     const Mesh& mesh = sim.mesh;
+    // The surface against the design, when something shows it: it costs about half a
+    // microsecond per vertex and thread.
+    if (designDistance && (o.measureSurface || !o.pngPath.empty() || !o.deviationPlyPath.empty() ||
+                           !o.reportPath.empty())) {
+        t = Clock::now();
+        if (o.progress) o.progress("deviation", 0, 1);
+        Deviation deviation = measureDeviation(mesh, *designDistance, {o.gougeTolerance, o.excessTolerance});
+        sim.deviation = std::move(deviation.distance);
+        deviation.distance.clear();
+        report.surfaceDeviation = std::move(deviation);
+        report.timingS.design += seconds(t);
+    }
     report.meshVertices = mesh.vertices.size();
     report.meshTriangles = mesh.triangles.size();
     report.meshClosed = check.closedManifold();
@@ -515,7 +534,27 @@ SimulateReport simulateInArena(const SimulateOptions& o) {
         else writePly(o.meshPath, mesh);
     }
     if (!o.vdbPath.empty()) writeVdb(o.vdbPath, sim.levelSet);
-    if (!o.pngPath.empty()) writePicture(o.pngPath, mesh);
+    if (report.surfaceDeviation) {
+        // The deviation's colours, on the PLY and the picture.
+        const Deviation& d = *report.surfaceDeviation;
+        const DeviationScale scale = deviationScale(d);
+        PlyVertexData data;
+        data.colours = deviationColours(sim.deviation, scale);
+        if (!o.pngPath.empty()) {
+            const PictureLegend legend = deviationLegend(scale);
+            PictureOptions picture;
+            picture.vertexColours = &data.colours;
+            picture.legend = &legend;
+            writePicture(o.pngPath, mesh, picture);
+        }
+        if (!o.deviationPlyPath.empty()) {
+            data.scalarName = "deviation_mm";
+            data.scalar = std::move(sim.deviation);
+            writePly(o.deviationPlyPath, mesh, data);
+        }
+    } else if (!o.pngPath.empty()) {
+        writePicture(o.pngPath, mesh);
+    }
     if (!o.gougeCsvPath.empty()) {
         const std::string text = gougeCsv(report);
         writeStreamAtomically(o.gougeCsvPath, [&](std::ostream& out) { out << text; });

@@ -3,6 +3,7 @@
 // The designs are written here as ASCII STL, polygon by polygon, sharing no code with the project.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <filesystem>
@@ -120,6 +121,44 @@ TEST_CASE("gouges: a floor cut 0.1 mm too deep, and a rapid through the design",
     // The wall pass (line 5) is no gouge; the report names the design and the tolerance.
     CHECK(r.designFile == design);
     CHECK(r.gougeToleranceMm == 0.01);
+    // No output shows the surface's deviation, so it was not measured.
+    CHECK_FALSE(r.surfaceDeviation);
+    fs::remove_all(dir);
+}
+
+TEST_CASE("deviation: the machined surface against the design, through the job", "[compare][deviation][job]") {
+    const fs::path dir = scratch("surface");
+    const std::string design = writeStl(dir / "l.stl", prismFacets(lShape(), -1.0, 41.0));
+    SimulateOptions o = job(kPocket, design, 10.0);
+    o.deviationPlyPath = (dir / "deviation.ply").string();
+    const SimulateReport r = simulate(o);
+    REQUIRE(r.surfaceDeviation);
+    const Deviation& d = *r.surfaceDeviation;
+    // The rapid left the floor at z = -7, 1.9 mm below the design's at -5.1. The stock's own faces
+    // at y = 0 and 40 lie 1 mm inside the design's ends (y = -1 and 41); its bottom and the walls
+    // the cuts did not reach lie on the design.
+    CHECK(d.deepest == Approx(-1.9).margin(1e-6));
+    CHECK(d.deepestPoint.z == Approx(-7.0).margin(1e-6));
+    CHECK(d.farthest <= 1e-6);
+    // The part is the stock less x 30..40, z -7..0: bottom 1600, top 1200, floor 400, wall at
+    // x = 30 280, face x = 0 400, x = 40 120, y = 0 and 40 330 each (mm^2).
+    CHECK(d.area == Approx(1600 + 1200 + 400 + 280 + 400 + 120 + 2 * 330).epsilon(1e-9));
+    CHECK(fs::file_size(dir / "deviation.ply") > 1000);
+    // The same without the PLY, asked for in memory.
+    o.deviationPlyPath.clear();
+    o.measureSurface = true;
+    const Simulation s = runSimulation(o);
+    REQUIRE(s.report.surfaceDeviation);
+    CHECK(s.report.surfaceDeviation->deepest == d.deepest);
+    REQUIRE(s.deviation.size() == s.mesh.vertices.size());
+    CHECK(*std::min_element(s.deviation.begin(), s.deviation.end()) == d.deepest);
+    // A deviation PLY needs a design, and the .ply extension.
+    o.designPath.clear();
+    o.deviationPlyPath = (dir / "d.ply").string();
+    CHECK_THROWS_WITH(simulate(o), Catch::Contains("give --design"));
+    o.designPath = design;
+    o.deviationPlyPath = (dir / "d.obj").string();
+    CHECK_THROWS_WITH(simulate(o), Catch::Contains(".ply"));
     fs::remove_all(dir);
 }
 

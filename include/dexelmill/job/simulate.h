@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "dexelmill/compare/deviation.h"
 #include "dexelmill/geometry/affine.h"
 #include "dexelmill/geometry/types.h"
 #include "dexelmill/job/memory.h"
@@ -81,6 +82,14 @@ struct SimulateOptions {
     double excessTolerance = 0.05;
     /// A CSV of the gouges, one row per gouging move; needs designPath.
     std::string gougeCsvPath;
+    /// A PLY of the machined mesh with each vertex coloured by its signed distance to the design
+    /// (deviationColours) and the distance as the property deviation_mm; needs designPath. With a
+    /// design, the picture is coloured the same way, with a legend.
+    std::string deviationPlyPath;
+    /// With a design, the machined surface is measured against it (SimulateReport::
+    /// surfaceDeviation) when the picture, the deviation PLY or the report is written, or when
+    /// this is set.
+    bool measureSurface = false;
 
     /// Outputs; empty paths are not written. The mesh format follows the extension (.obj, .stl,
     /// .ply).
@@ -167,6 +176,9 @@ struct SimulateReport {
         Vec3 point{0.0};
     };
     std::vector<ExcessRegion> excessRegions;
+    /// The machined surface against the design (measureDeviation); its per-vertex distances are in
+    /// Simulation::deviation, not here.
+    std::optional<Deviation> surfaceDeviation;
 
     std::string mesher;  ///< "dexel" or "vdb"
     std::size_t meshVertices = 0, meshTriangles = 0;
@@ -200,6 +212,8 @@ struct Simulation {
     std::optional<TriDexelStock> stock;
     LevelSet levelSet;
     Mesh mesh;
+    /// With a design: each mesh vertex's signed distance to it (Deviation::distance, mm).
+    std::vector<double> deviation;
     SimulateReport report;
 };
 
