@@ -8,9 +8,11 @@
 #include <CLI/CLI.hpp>
 
 #include "dexelmill/error.h"
+#include "dexelmill/geometry/affine.h"
 
 namespace dexelmill {
 struct SimulateOptions;
+struct Deviation;
 }
 
 namespace dexelmill::cli {
@@ -29,7 +31,7 @@ struct SimulateArgs {
     double resolution = 0.0;
     std::string families = "xyz";
     std::string output, vdb, png, report;
-    std::string design, designTransform, gougeCsv;
+    std::string design, designTransform, gougeCsv, deviationPly;
     double gougeTolerance = 0.01;
     double excessTolerance = 0.05;
     double chordTolerance = 0.001;
@@ -56,9 +58,30 @@ struct StudyArgs {
 
 CLI::App* addSimulate(CLI::App& app, SimulateArgs& args);
 int runSimulate(const SimulateArgs& args);
+/// @brief `dexelmill compare` options as typed.
+struct CompareArgs {
+    std::string machined, design, designTransform;
+    double gougeTolerance = 0.01;
+    double excessTolerance = 0.05;
+    std::string ply, png, report;
+    int threads = 0;
+};
+
 CLI::App* addStudy(CLI::App& app, StudyArgs& args);
 int runStudy(const StudyArgs& args);
 int runInfo(const std::string& file);
+CLI::App* addCompare(CLI::App& app, CompareArgs& args);
+int runCompare(const CompareArgs& args);
+
+/// @brief --design-transform: TX,TY,TZ, or the rows of a 3 x 4 matrix [M | T] (12 numbers).
+/// @throw UsageError for anything else.
+Affine parseTransform(const std::string& text);
+
+/// @brief Prints a deviation's summary line on stderr.
+void printDeviation(const Deviation& deviation);
+
+/// @brief A CLI11 check that the value is a finite number, positive or (with zeroAllowed) zero.
+CLI::Validator numberCheck(bool zeroAllowed);
 
 /// @brief The whole of `text` as a finite number, or nothing.
 std::optional<double> parseNumber(const std::string& text);

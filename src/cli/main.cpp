@@ -32,6 +32,8 @@ int main(int argc, char** argv) {
         "Examples:\n"
         "  dexelmill simulate part.ngc --stock box:0,0,-20,100,80,0 --tool ball:d=6 -o part.stl\n"
         "  dexelmill simulate project.camotics --png part.png --report report.json\n"
+        "  dexelmill simulate part.ngc --design part.stl --png deviation.png --gouge-csv gouges.csv\n"
+        "  dexelmill compare machined.stl design.stl --ply deviation.ply\n"
         "  dexelmill info part.ngc\n"
         "  dexelmill study --case tilted-slot --resolutions 2,1,0.5 --families z,xyz --csv study.csv\n"
         "Run 'dexelmill COMMAND --help' for a command's options.");
@@ -44,6 +46,8 @@ int main(int argc, char** argv) {
 
     dexelmill::cli::StudyArgs study;
     CLI::App* studyCmd = dexelmill::cli::addStudy(app, study);
+    dexelmill::cli::CompareArgs compare;
+    CLI::App* compareCmd = dexelmill::cli::addCompare(app, compare);
 
     try {
         app.parse(argc, argv);
@@ -55,8 +59,12 @@ int main(int argc, char** argv) {
         if (simulate->parsed()) return dexelmill::cli::runSimulate(sim);
         if (info->parsed()) return dexelmill::cli::runInfo(infoFile);
         if (studyCmd->parsed()) return dexelmill::cli::runStudy(study);
+        if (compareCmd->parsed()) return dexelmill::cli::runCompare(compare);
     } catch (const dexelmill::cli::UsageError& e) {
-        const char* command = simulate->parsed() ? " simulate" : info->parsed() ? " info" : " study";
+        const char* command = simulate->parsed() ? " simulate"
+                              : info->parsed()   ? " info"
+                              : compareCmd->parsed() ? " compare"
+                                                 : " study";
         std::cerr << "dexelmill: " << e.what() << "\nRun 'dexelmill" << command << " --help' for usage.\n";
         return 2;
     } catch (const dexelmill::Error& e) {

@@ -40,7 +40,8 @@ Box parseBox(const std::string& text) {
     return b;
 }
 
-/// --design-transform: 12 numbers, the rows of [m | t], or 3, a translation.
+}  // namespace
+
 Affine parseTransform(const std::string& text) {
     const std::vector<double> v = parseNumbers(text, "--design-transform");
     Affine a;
@@ -58,7 +59,6 @@ Affine parseTransform(const std::string& text) {
     return a;
 }
 
-}  // namespace
 
 std::optional<double> parseNumber(const std::string& text) {
     std::size_t used = 0;
@@ -131,6 +131,8 @@ SimulateOptions toOptions(const SimulateArgs& a) {
     o.gougeTolerance = a.gougeTolerance;
     o.excessTolerance = a.excessTolerance;
     o.gougeCsvPath = a.gougeCsv;
+    if (a.deviationPly.size() && a.design.empty()) throw UsageError("--deviation-ply needs --design PART.stl");
+    o.deviationPlyPath = a.deviationPly;
     o.meshPath = a.output;
     o.vdbPath = a.vdb;
     o.pngPath = a.png;
@@ -148,6 +150,24 @@ SimulateOptions toOptions(const SimulateArgs& a) {
 
 namespace {
 
+std::string where(const ReportLocation& l) {
+    if (l.file.empty()) return "dexelmill";
+    return l.line > 0 ? l.file + ":" + std::to_string(l.line) : l.file;
+}
+
+}  // namespace
+
+void printDeviation(const Deviation& d) {
+    const double pct = d.area > 0.0 ? 100.0 / d.area : 0.0;
+    std::fprintf(stderr,
+                 "dexelmill: surface against the design: %.1f %% within tolerance, %.1f %% gouged (deepest %.4g mm "
+                 "at %.4f, %.4f, %.4f), %.1f %% excess (farthest %.4g mm at %.4f, %.4f, %.4f); RMS %.4g mm over "
+                 "%.6g mm^2\n",
+                 d.withinArea * pct, d.gougeArea * pct, d.deepest < 0.0 ? -d.deepest : 0.0, d.deepestPoint.x, d.deepestPoint.y,
+                 d.deepestPoint.z, d.excessArea * pct, d.farthest, d.farthestPoint.x, d.farthestPoint.y,
+                 d.farthestPoint.z, d.rms, d.area);
+}
+
 /// A number the option must have, checked as CLI11 reads it: the message names the value and what
 /// is allowed (CLI11's own ranges print the largest double in full).
 CLI::Validator numberCheck(bool zeroAllowed) {
@@ -162,13 +182,6 @@ CLI::Validator numberCheck(bool zeroAllowed) {
         },
         zeroAllowed ? "NONNEGATIVE" : "POSITIVE");
 }
-
-std::string where(const ReportLocation& l) {
-    if (l.file.empty()) return "dexelmill";
-    return l.line > 0 ? l.file + ":" + std::to_string(l.line) : l.file;
-}
-
-}  // namespace
 
 void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
     CLI::App* c = &cmd;
@@ -224,12 +237,15 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
         ->capture_default_str();
     c->add_option("-o,--output", a.output, "Mesh of the part: PART.obj, PART.stl or PART.ply");
     c->add_option("--vdb", a.vdb, "The part as an OpenVDB level set, PART.vdb");
-    c->add_option("--png", a.png, "A shaded isometric picture of the part, PART.png");
+    c->add_option("--png", a.png,
+                  "A shaded isometric picture of the part, PART.png; with --design, coloured by the\n"
+                  "distance to the design, with a legend in mm");
     c->add_option("--report", a.report, "A JSON report: volumes, collisions, warnings, timings");
     c->add_option("--design", a.design,
-                  "The design part, PART.stl (closed, in the program's frame): every move that removes\n"
-                  "material it keeps is checked, and those cutting deeper than --gouge-tolerance are\n"
-                  "reported as gouges, by file and line");
+                  "The design part, PART.stl (closed) or PART.vdb (a level set), in the program's frame:\n"
+                  "every move that removes material it keeps is checked, and those cutting deeper than\n"
+                  "--gouge-tolerance are reported as gouges, by file and line; stock left outside it is\n"
+                  "reported as excess, and the machined surface is measured against it");
     c->add_option("--design-transform", a.designTransform,
                   "Places a design drawn in another frame: TX,TY,TZ (mm), or the rows of a 3 x 4 matrix\n"
                   "[M | T], M11,M12,M13,TX,M21,M22,M23,TY,M31,M32,M33,TZ: p -> M p + T");
@@ -246,6 +262,10 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
     c->add_option("--gouge-csv", a.gougeCsv,
                   "The gouges as GOUGES.csv, deepest first: move, file, line, tool, depth_mm, volume_mm3,\n"
                   "x, y, z, rapid (needs --design)");
+    c->add_option("--deviation-ply", a.deviationPly,
+                  "The part's mesh as DEVIATION.ply, each vertex coloured by its signed distance to the\n"
+                  "design (red: inside it, a gouge; green: within tolerance; blue: excess) and carrying\n"
+                  "it as the property deviation_mm (needs --design)");
     c->add_option("--adaptivity", a.adaptivity,
                   "Merging of flat regions, from 0 (none) to 1 (triangles within 15 degrees merge,\n"
                   "moving the surface by at most 0.05 spacings); the mesh stays closed")
@@ -302,6 +322,7 @@ int runSimulate(const SimulateArgs& args) {
                          e.volumeMm3, e.thicknessMm, e.point.x, e.point.y, e.point.z, e.box.lo.x, e.box.hi.x,
                          e.box.lo.y, e.box.hi.y, e.box.lo.z, e.box.hi.z);
         }
+        if (r.surfaceDeviation) printDeviation(*r.surfaceDeviation);
     }
     const double pct = r.stockVolumeMm3 > 0 ? 100.0 * r.removedVolumeMm3 / r.stockVolumeMm3 : 0.0;
     std::string meshState;

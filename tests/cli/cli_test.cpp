@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -104,6 +105,7 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
                                      {"--refine 9", "--refine"},
                                      {"--refine-tolerance 0", "--refine-tolerance: must be positive, got 0"},
                                      {"--gouge-csv g.csv", "--gouge-csv needs --design"},
+                                     {"--deviation-ply d.ply", "--deviation-ply needs --design"},
                                      {"--design-transform 1,2,3", "--design-transform needs --design"},
                                      {"--design d.stl --design-transform 1,2", "TX,TY,TZ or the 3 rows"},
                                      {"--design d.stl --design-transform 1,2,z", "'z' is not a number"},
@@ -114,6 +116,46 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
         CHECK_THAT(r.err, Contains(says));
         CHECK_THAT(r.err, !Contains("Options::"));
     }
+}
+
+namespace {
+
+/// The box [0, 10] x [0, 10] x [0, top] as ASCII STL, facing out.
+std::string boxStl(double top) {
+    const double c[8][3] = {{0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {10, 10, 0}, {0, 0, top}, {10, 0, top}, {0, 10, top}, {10, 10, top}};
+    const int f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    std::string s = "solid box\n";
+    for (const auto& q : f)
+        for (const auto& t : {std::array<int, 3>{q[0], q[1], q[2]}, std::array<int, 3>{q[0], q[2], q[3]}}) {
+            s += "facet normal 0 0 0\nouter loop\n";
+            for (int v : t)
+                s += "vertex " + std::to_string(c[v][0]) + " " + std::to_string(c[v][1]) + " " + std::to_string(c[v][2]) + "\n";
+            s += "endloop\nendfacet\n";
+        }
+    return s + "endsolid box\n";
+}
+
+}  // namespace
+
+TEST_CASE("compare measures a part against the design and writes its files", "[cli][compare]") {
+    const Cli cli("compare");
+    cli.file("part.stl", boxStl(10.0));
+    cli.file("design.stl", boxStl(9.9));
+    Run r = cli("compare part.stl design.stl --ply dev.ply --png dev.png --report dev.json --threads 1");
+    INFO(r.err);
+    CHECK(r.code == 0);
+    // The top face stands 0.1 mm above the design's: excess; the rest lies on it. (Each of the 8
+    // vertices stands for a third of its triangles' area: half the area is the top's corners'.)
+    CHECK_THAT(r.out, Contains("within tolerance") && Contains("farthest 0.1 mm outside") && Contains("deepest 0 mm"));
+    CHECK_THAT(r.out, Contains("+0.05 .. +0.1"));
+    for (const char* f : {"dev.ply", "dev.png", "dev.json"}) CHECK(fs::file_size(cli.dir() / f) > 100);
+    CHECK(cli("compare part.stl").code == 2);
+    r = cli("compare part.stl missing.stl");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("missing.stl"));
+    r = cli("compare part.stl design.stl --excess-tolerance -1");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("--excess-tolerance: must be 0 or more, got -1"));
 }
 
 TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {

@@ -1,0 +1,70 @@
+// `dexelmill compare`: a machined part read from a file against the design.
+#include <cstdio>
+
+#include "commands.h"
+#include "dexelmill/job/compare.h"
+
+namespace dexelmill::cli {
+
+CLI::App* addCompare(CLI::App& app, CompareArgs& a) {
+    CLI::App* c = app.add_subcommand(
+        "compare",
+        "Measures a machined part (a mesh or a level set, e.g. from 'simulate -o' or '--vdb') against\n"
+        "the design: how much of its surface lies within tolerance, how deep it cuts into the design\n"
+        "and how far it stays outside, as a histogram; with a coloured PLY and picture. Without a\n"
+        "program no move is named: 'simulate --design' does that.");
+    c->add_option("MACHINED", a.machined, "The machined part: PART.stl (closed) or PART.vdb")->required();
+    c->add_option("DESIGN", a.design, "The design: DESIGN.stl (closed) or DESIGN.vdb, in the same frame")->required();
+    c->add_option("--design-transform", a.designTransform,
+                  "Places a design drawn in another frame: TX,TY,TZ (mm), or the rows of a 3 x 4 matrix\n"
+                  "[M | T], M11,M12,M13,TX,M21,M22,M23,TY,M31,M32,M33,TZ: p -> M p + T");
+    c->add_option("--gouge-tolerance", a.gougeTolerance,
+                  "Surface farther than this inside the design is gouged (mm)")
+        ->check(numberCheck(true))
+        ->capture_default_str();
+    c->add_option("--excess-tolerance", a.excessTolerance,
+                  "Surface farther than this outside the design is excess (mm)")
+        ->check(numberCheck(true))
+        ->capture_default_str();
+    c->add_option("--ply", a.ply,
+                  "The machined mesh as DEVIATION.ply, each vertex coloured by its signed distance to the\n"
+                  "design (red: inside it; green: within tolerance; blue: outside) and carrying it as\n"
+                  "the property deviation_mm");
+    c->add_option("--png", a.png, "A picture of the machined part in the same colours, with a legend in mm");
+    c->add_option("--report", a.report, "A JSON report: areas by tolerance, extremes, RMS and the histogram");
+    c->add_option("--threads", a.threads, "Worker threads; 0 uses every core")
+        ->check(numberCheck(true))
+        ->capture_default_str();
+    return c;
+}
+
+int runCompare(const CompareArgs& a) {
+    CompareOptions o;
+    o.machinedPath = a.machined;
+    o.designPath = a.design;
+    if (!a.designTransform.empty()) o.designTransform = parseTransform(a.designTransform);
+    o.tolerance = {a.gougeTolerance, a.excessTolerance};
+    o.plyPath = a.ply;
+    o.pngPath = a.png;
+    o.reportPath = a.report;
+    o.threads = a.threads;
+    const CompareReport r = compareParts(o);
+    const Deviation& d = r.deviation;
+    std::printf("dexelmill: %s (%zu triangles%s) against %s (%zu triangles), tolerances -%g / +%g mm\n",
+                r.machinedFile.c_str(), r.machinedTriangles, r.machinedClosed ? "" : ", NOT closed",
+                r.designFile.c_str(), r.designTriangles, d.tolerance.gouge, d.tolerance.excess);
+    std::printf("  %-22s %14s %8s %10s\n", "deviation (mm)", "area (mm^2)", "area %", "vertices");
+    for (const DeviationBin& b : d.histogram) {
+        char range[64];
+        std::snprintf(range, sizeof range, "%+.4g .. %+.4g", b.lo, b.hi);
+        std::printf("  %-22s %14.6g %8.2f %10zu%s\n", range, b.area, d.area > 0 ? 100.0 * b.area / d.area : 0.0,
+                    b.vertices, b.lo == -d.tolerance.gouge && b.hi == d.tolerance.excess ? "  within tolerance" : "");
+    }
+    std::printf("  deepest %.4g mm into the design at (%.4f, %.4f, %.4f); farthest %.4g mm outside at "
+                "(%.4f, %.4f, %.4f); RMS %.4g mm; %.2f s, %.0f MiB\n",
+                d.deepest < 0.0 ? -d.deepest : 0.0, d.deepestPoint.x, d.deepestPoint.y, d.deepestPoint.z, d.farthest, d.farthestPoint.x,
+                d.farthestPoint.y, d.farthestPoint.z, d.rms, r.timingS.total, r.peakMemoryMb);
+    return 0;
+}
+
+}  // namespace dexelmill::cli

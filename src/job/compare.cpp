@@ -1,0 +1,121 @@
+// The compare job: a machined part read from a file, measured against the design.
+#include "dexelmill/job/compare.h"
+
+#include <chrono>
+#include <cmath>
+
+#include <tbb/task_arena.h>
+
+#include "dexelmill/compare/design.h"
+#include "dexelmill/error.h"
+#include "dexelmill/io/atomic_file.h"
+#include "dexelmill/io/file_name.h"
+#include "dexelmill/io/mesh_io.h"
+#include "dexelmill/io/picture.h"
+#include "dexelmill/io/vdb_io.h"
+#include "dexelmill/job/memory.h"
+#include "dexelmill/surface/levelset.h"
+#include "job/detail/deviation_json.h"
+
+namespace dexelmill {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
+
+void validate(const CompareOptions& o) {
+    const std::string machined = lowerExtension(o.machinedPath);
+    if (machined != ".stl" && machined != ".vdb")
+        throw Error("'" + o.machinedPath + "': the machined part must be an STL file (.stl) or a level set (.vdb)");
+    for (double t : {o.tolerance.gouge, o.tolerance.excess})
+        if (!(t >= 0.0) || !std::isfinite(t)) throw Error("the tolerances must be finite distances of 0 mm or more");
+    if (!o.plyPath.empty() && lowerExtension(o.plyPath) != ".ply")
+        throw Error("output '" + o.plyPath + "': the deviation mesh is written as .ply");
+    if (!o.pngPath.empty() && lowerExtension(o.pngPath) != ".png")
+        throw Error("output '" + o.pngPath + "': a picture is written as .png");
+    if (!o.reportPath.empty() && lowerExtension(o.reportPath) != ".json")
+        throw Error("output '" + o.reportPath + "': the report is written as .json");
+}
+
+CompareReport compareInArena(const CompareOptions& o) {
+    const auto tStart = Clock::now();
+    validate(o);
+    CompareReport r;
+    r.version = DEXELMILL_VERSION;
+    r.machinedFile = o.machinedPath;
+    r.designFile = o.designPath;
+
+    auto t = Clock::now();
+    const Mesh machined =
+        lowerExtension(o.machinedPath) == ".stl" ? readStl(o.machinedPath) : meshLevelSet(readVdb(o.machinedPath));
+    if (machined.empty()) throw Error("'" + o.machinedPath + "': the machined part has no surface");
+    const MeshCheck check = checkMesh(machined);
+    r.machinedVertices = machined.vertices.size();
+    r.machinedTriangles = machined.triangles.size();
+    r.machinedClosed = check.closedManifold();
+    std::optional<MeshDistance> design;
+    {
+        const Mesh mesh = readDesign(o.designPath, o.designTransform);
+        r.designTriangles = mesh.triangles.size();
+        design.emplace(mesh);
+    }
+    r.timingS.read = seconds(t);
+
+    t = Clock::now();
+    Deviation deviation = measureDeviation(machined, *design, o.tolerance);
+    r.timingS.measure = seconds(t);
+
+    t = Clock::now();
+    const DeviationScale scale = deviationScale(deviation);
+    PlyVertexData data;
+    if (!o.pngPath.empty() || !o.plyPath.empty()) data.colours = deviationColours(deviation.distance, scale);
+    if (!o.pngPath.empty()) {
+        const PictureLegend legend = deviationLegend(scale);
+        PictureOptions picture;
+        picture.vertexColours = &data.colours;
+        picture.legend = &legend;
+        writePicture(o.pngPath, machined, picture);
+    }
+    if (!o.plyPath.empty()) {
+        data.scalarName = "deviation_mm";
+        data.scalar = deviation.distance;
+        writePly(o.plyPath, machined, data);
+    }
+    deviation.distance.clear();
+    r.deviation = std::move(deviation);
+    r.timingS.write = seconds(t);
+    r.timingS.total = seconds(tStart);
+    r.peakMemoryMb = peakMemoryMb();
+    if (!o.reportPath.empty()) {
+        const std::string text = compareJson(r);
+        writeStreamAtomically(o.reportPath, [&](std::ostream& out) { out << text; });
+    }
+    return r;
+}
+
+}  // namespace
+
+CompareReport compareParts(const CompareOptions& o) {
+    tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+    return arena.execute([&] { return compareInArena(o); });
+}
+
+std::string compareJson(const CompareReport& r) {
+    nlohmann::json j;
+    j["version"] = r.version;
+    j["units"] = "mm";
+    j["machined"] = {{"file", r.machinedFile},
+                     {"vertices", r.machinedVertices},
+                     {"triangles", r.machinedTriangles},
+                     {"closed", r.machinedClosed}};
+    j["design"] = {{"file", r.designFile}, {"triangles", r.designTriangles}};
+    j["surface"] = deviationJson(r.deviation);
+    j["timing_s"] = {{"read", r.timingS.read}, {"measure", r.timingS.measure}, {"write", r.timingS.write},
+                     {"total", r.timingS.total}};
+    j["peak_memory_mb"] = r.peakMemoryMb;
+    return j.dump(2) + "\n";
+}
+
+}  // namespace dexelmill
