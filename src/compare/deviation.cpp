@@ -5,9 +5,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <utility>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 namespace dexelmill {
 
@@ -18,6 +21,21 @@ namespace {
 /// rounding of an STL's single-precision coordinates at 1 m, and saves the search for the vertices
 /// of machined faces that lie on design faces (more than half of basemach's 1.2 million).
 constexpr double kOnSurface = 1e-6;
+
+/// The cells vertices are measured in: about this many of the mesh's mean edge lengths wide (so
+/// about 64 vertices to a flat cell), at most kCellsPerAxis along each axis; and the most design
+/// triangles a cell may offer its vertices before they search the hierarchy instead. On basemach
+/// (1.2 million vertices, a 1,564-triangle design, one thread) 92 % of the vertices then try 5.5
+/// triangles on average, and measureDeviation takes 0.69 s, against 0.89 s with every vertex
+/// searching the hierarchy from its predecessor's nearest triangle; 4 edges or 64 triangles
+/// measured slower.
+constexpr double kCellEdges = 8.0;
+constexpr std::uint64_t kCellsPerAxis = std::uint64_t(1) << 21;
+constexpr std::size_t kMaxCandidates = 16;
+constexpr std::size_t kEdgeSample = 4096;
+/// Rounding of the cell a vertex falls in may put it this fraction of the cell's size outside it;
+/// the cell's reach covers that.
+constexpr double kCellMargin = 1e-9;
 
 /// 1, 2, 5, 10, 20, 50, ...
 double ladder(int k) {
@@ -63,15 +81,58 @@ Deviation measureDeviation(const Mesh& machined, const MeshDistance& design, con
     dev.tolerance = tolerance;
     const std::size_t n = machined.vertices.size();
     dev.distance.resize(n);
-    // Meshers emit vertices cell by cell, so each vertex's nearest triangle is a good start for
-    // the next one's search. A vertex that lies within kOnSurface of that triangle takes that
-    // distance: the exact one is between 0 and it.
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-        std::uint32_t hint = 0;
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-            const Vec3& p = machined.vertices[i];
-            const double near = design.distanceTo(p, hint);
-            dev.distance[i] = near <= kOnSurface ? near : design.signedDistance(p, &hint);
+    // Vertices are measured cell by cell on a grid of cubes about kCellEdges edges wide. One
+    // search per cell, from its centre c with the cube's half-diagonal r, finds the triangles
+    // within distance(c) + 2 r of c: every point of the cube has its nearest among them (it is at
+    // most distance(c) + r from its nearest, which is then at most distance(c) + 2 r from c). When
+    // there are few, every vertex of the cell tries just those. Otherwise (a fine design) each
+    // vertex searches the hierarchy, starting from the previous vertex's nearest triangle, and a
+    // vertex within kOnSurface of that triangle takes that distance: the exact one is between 0
+    // and it.
+    if (n == 0) return dev;
+    // The mean edge length, from a few thousand triangles spread over the list.
+    const std::size_t stride = std::max<std::size_t>(1, machined.triangles.size() / kEdgeSample);
+    double edges = 0.0;
+    std::size_t sampled = 0;
+    for (std::size_t t = 0; t < machined.triangles.size(); t += stride, ++sampled)
+        for (int k = 0; k < 3; ++k)
+            edges += glm::length(machined.vertices[machined.triangles[t][std::size_t(k)]] -
+                                 machined.vertices[machined.triangles[t][std::size_t((k + 1) % 3)]]);
+    const Box box = machined.bounds();
+    const double longest = std::max({box.size().x, box.size().y, box.size().z});
+    double cell = sampled == 0 ? longest : kCellEdges * edges / (3.0 * double(sampled));
+    cell = std::max({cell, longest / double(kCellsPerAxis - 1), std::numeric_limits<double>::min()});
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
+    tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+        const Vec3 u = glm::floor((machined.vertices[i] - box.lo) / cell);
+        keyed[i] = {std::uint64_t(u.x) | std::uint64_t(u.y) << 21 | std::uint64_t(u.z) << 42, std::uint32_t(i)};
+    });
+    tbb::parallel_sort(keyed.begin(), keyed.end());
+    std::vector<std::size_t> groups;
+    for (std::size_t i = 0; i < n; ++i)
+        if (i == 0 || keyed[i].first != keyed[i - 1].first) groups.push_back(i);
+    groups.push_back(n);
+    const double halfDiagonal = 0.5 * std::sqrt(3.0) * cell * (1.0 + kCellMargin);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups.size() - 1), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<std::uint32_t> slots;
+        for (std::size_t g = r.begin(); g != r.end(); ++g) {
+            const std::uint64_t key = keyed[groups[g]].first;
+            const Vec3 corner(double(key & 0x1fffff), double(key >> 21 & 0x1fffff), double(key >> 42));
+            const Vec3 c = box.lo + (corner + Vec3(0.5)) * cell;
+            const double reach = design.distance(c) + 2.0 * halfDiagonal;
+            if (design.slotsNear(c, reach, kMaxCandidates, slots)) {
+                for (std::size_t k = groups[g]; k < groups[g + 1]; ++k) {
+                    const std::uint32_t v = keyed[k].second;
+                    dev.distance[v] = design.signedDistanceAmong(machined.vertices[v], slots);
+                }
+                continue;
+            }
+            std::uint32_t hint = 0;
+            for (std::size_t k = groups[g]; k < groups[g + 1]; ++k) {
+                const Vec3& p = machined.vertices[keyed[k].second];
+                const double near = design.distanceTo(p, hint);
+                dev.distance[keyed[k].second] = near <= kOnSurface ? near : design.signedDistance(p, &hint);
+            }
         }
     });
     std::vector<double> area(n, 0.0);

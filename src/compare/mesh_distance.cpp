@@ -279,6 +279,10 @@ double MeshDistance::signedDistance(const Vec3& p, std::uint32_t* hint) const {
     if (nodes_.empty()) return std::numeric_limits<double>::infinity();
     const Found f = search(p, hint);
     if (hint) *hint = original_[f.slot];
+    return withSign(p, f);
+}
+
+double MeshDistance::withSign(const Vec3& p, const Found& f) const {
     const double d = std::sqrt(f.d2);
     if (!(d > 0.0)) return d;
     if (orientation_ != 0 && f.onFace) {
@@ -287,6 +291,43 @@ double MeshDistance::signedDistance(const Vec3& p, std::uint32_t* hint) const {
         return side < 0.0 ? -d : d;
     }
     return inside(p) ? -d : d;
+}
+
+bool MeshDistance::slotsNear(const Vec3& c, double radius, std::size_t limit, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    if (nodes_.empty()) return true;
+    const double r2 = radius * radius;
+    std::uint32_t stack[128];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        const Node& node = nodes_[stack[--top]];
+        if (boxDistance2(node.box, c) > r2) continue;
+        if (node.count == 0) {
+            stack[top++] = node.first;
+            stack[top++] = node.first + 1;
+            continue;
+        }
+        for (std::uint32_t i = node.first; i < node.first + node.count; ++i) {
+            const Vec3 q = closestPointOnTriangle(c, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]);
+            if (glm::dot(q - c, q - c) > r2) continue;
+            if (out.size() == limit) return false;
+            out.push_back(i);
+        }
+    }
+    return true;
+}
+
+double MeshDistance::signedDistanceAmong(const Vec3& p, const std::vector<std::uint32_t>& slots) const {
+    Found best;
+    best.d2 = std::numeric_limits<double>::infinity();
+    for (std::uint32_t i : slots) {
+        const Closest c = closestOnTriangle(p, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]);
+        const double d2 = glm::dot(c.point - p, c.point - p);
+        if (d2 < best.d2) best = {i, d2, c.point, c.onFace, true};
+    }
+    if (!best.found) return std::numeric_limits<double>::infinity();
+    return withSign(p, best);
 }
 
 MeshDistance::Found MeshDistance::search(const Vec3& p, const std::uint32_t* hint) const {

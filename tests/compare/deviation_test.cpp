@@ -348,3 +348,30 @@ TEST_CASE("compare: a level set (.vdb) as the machined part and as the design", 
     CHECK(r.deviation.withinArea > 0.5 * r.deviation.area);
     fs::remove_all(dir);
 }
+
+TEST_CASE("deviation: a fine design, where vertices search the hierarchy", "[compare][deviation]") {
+    // A design of 8,192 triangles (a sphere of radius 5) offers every cell of these coarse spheres
+    // more triangles than a cell may try, so each vertex searches the hierarchy. The design lies
+    // inside the ball of radius 5 and holds the ball of radius 5 - sag: a vertex at radius 6 is
+    // 1 to 1 + sag outside it, one at radius 4 is 1 - sag to 1 inside.
+    const Mesh fine = sphere(5.0, 5);
+    double sag = 0.0;  // 5 less the nearest face plane's distance from the centre
+    for (const auto& t : fine.triangles) {
+        const Vec3 n = glm::normalize(glm::cross(fine.vertices[t[1]] - fine.vertices[t[0]], fine.vertices[t[2]] - fine.vertices[t[0]]));
+        sag = std::max(sag, 5.0 - glm::dot(n, fine.vertices[t[0]]));
+    }
+    REQUIRE(sag < 0.01);
+    const MeshDistance design(fine);
+    for (const double r : {6.0, 4.0}) {
+        const Mesh machined = sphere(r, 3);
+        const Deviation d = measureDeviation(machined, design, {0.01, 0.05});
+        for (std::size_t i = 0; i < machined.vertices.size(); ++i) {
+            INFO("radius " << r << ", vertex " << i);
+            if (r > 5.0) CHECK((d.distance[i] >= 1.0 - 1e-12 && d.distance[i] <= 1.0 + sag));
+            else CHECK((d.distance[i] <= -1.0 + sag && d.distance[i] >= -1.0 - 1e-12));
+        }
+    }
+    // The design against itself: every vertex on it.
+    const Deviation same = measureDeviation(fine, design, {0.01, 0.05});
+    for (double v : same.distance) CHECK(std::abs(v) <= 1e-6);
+}

@@ -51,6 +51,16 @@ public:
     /// nearest point to p meets no other part of the surface); otherwise inside() decides.
     double signedDistance(const Vec3& p, std::uint32_t* hint = nullptr) const;
 
+    /// @brief For many queries in one small region: the triangles (by their internal slots) whose
+    /// distance from c is at most `radius`, into `out`. Every point within r of c has its nearest
+    /// triangle among those within distance(c) + 2 r of c, so signedDistanceAmong with them is
+    /// then exact for all such points.
+    /// @return false, with `out` incomplete, when there are more than `limit`.
+    bool slotsNear(const Vec3& c, double radius, std::size_t limit, std::vector<std::uint32_t>& out) const;
+    /// @brief signedDistance, when p's nearest triangle is among `slots` (from slotsNear);
+    /// infinity for no slots.
+    double signedDistanceAmong(const Vec3& p, const std::vector<std::uint32_t>& slots) const;
+
     /// @brief The distance from p to one triangle of the mesh (by its index in the mesh given).
     double distanceTo(const Vec3& p, std::uint32_t triangle) const;
 
@@ -70,6 +80,8 @@ private:
         bool found = false;
     };
     Found search(const Vec3& p, const std::uint32_t* hint) const;
+    /// The found distance with its sign (see signedDistance).
+    double withSign(const Vec3& p, const Found& f) const;
 
     struct Node {
         Box box;
