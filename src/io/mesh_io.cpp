@@ -2,14 +2,18 @@
 
 #include <cctype>
 #include <charconv>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <limits>
 #include <sstream>
-#include <unordered_map>
+#include <tuple>
+#include <vector>
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "dexelmill/error.h"
 #include "dexelmill/io/atomic_file.h"
@@ -161,61 +165,63 @@ void writePly(const std::string& path, const Mesh& mesh, const PlyVertexData& da
 
 namespace {
 
-/// Merges vertices with bit-identical coordinates.
-class VertexWelder {
-public:
-    explicit VertexWelder(Mesh& mesh) : mesh_(mesh) {}
-
-    std::uint32_t add(float x, float y, float z) {
-        Key k{};
-        std::memcpy(&k.bits[0], &x, 4);
-        std::memcpy(&k.bits[1], &y, 4);
-        std::memcpy(&k.bits[2], &z, 4);
-        // +0 and -0 are the same point.
-        for (auto& b : k.bits)
-            if (b == 0x80000000u) b = 0;
-        const auto [it, inserted] = index_.emplace(k, std::uint32_t(mesh_.vertices.size()));
-        if (inserted) mesh_.vertices.emplace_back(x, y, z);
-        return it->second;
-    }
-
-private:
-    struct Key {
+/// The mesh of triangles given by their corners (nine floats a triangle): corners with
+/// bit-identical coordinates (+0 and -0 alike) become one vertex, numbered in the order they first
+/// appear, so a closed STL gives a closed mesh. A triangle that float rounding collapsed (two
+/// corners one vertex) adds nothing to a closed surface and is dropped. The corners are sorted by
+/// their bits (and their place, so each run of equal ones starts with its first appearance), which
+/// scales on threads where a hash table does not.
+Mesh weld(const std::vector<float>& corners) {
+    const std::size_t count = corners.size() / 3;
+    struct Corner {
         std::uint32_t bits[3];
-        bool operator==(const Key& o) const {
-            return bits[0] == o.bits[0] && bits[1] == o.bits[1] && bits[2] == o.bits[2];
+        std::uint32_t index;
+        bool operator<(const Corner& o) const {
+            return std::tie(bits[0], bits[1], bits[2], index) < std::tie(o.bits[0], o.bits[1], o.bits[2], o.index);
         }
     };
-    struct KeyHash {
-        std::size_t operator()(const Key& k) const {
-            std::uint64_t h = 1469598103934665603ull;
-            for (std::uint32_t b : k.bits) h = (h ^ b) * 1099511628211ull;
-            return std::size_t(h ^ (h >> 29));
+    std::vector<Corner> sorted(count);
+    tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
+        Corner& c = sorted[i];
+        std::memcpy(c.bits, &corners[3 * i], 12);
+        for (std::uint32_t& b : c.bits)
+            if (b == 0x80000000u) b = 0;  // -0 is +0
+        c.index = std::uint32_t(i);
+    });
+    tbb::parallel_sort(sorted.begin(), sorted.end());
+    // Each corner's run, and each run's first corner.
+    std::vector<std::uint32_t> run(count), first;
+    for (std::size_t k = 0; k < count; ++k) {
+        const bool starts = k == 0 || std::memcmp(sorted[k].bits, sorted[k - 1].bits, 12) != 0;
+        if (starts) first.push_back(sorted[k].index);
+        run[sorted[k].index] = std::uint32_t(first.size() - 1);
+    }
+    std::vector<Corner>().swap(sorted);
+    // Vertices numbered as their runs first appear.
+    Mesh mesh;
+    std::vector<std::uint32_t> vertexOf(first.size());
+    mesh.vertices.reserve(first.size());
+    for (std::size_t i = 0; i < count; ++i)
+        if (first[run[i]] == i) {
+            vertexOf[run[i]] = std::uint32_t(mesh.vertices.size());
+            mesh.vertices.emplace_back(corners[3 * i], corners[3 * i + 1], corners[3 * i + 2]);
         }
-    };
-    Mesh& mesh_;
-    std::unordered_map<Key, std::uint32_t, KeyHash> index_;
-};
-
-void addTriangle(Mesh& mesh, VertexWelder& welder, const float v[9]) {
-    const Mesh::Triangle t{welder.add(v[0], v[1], v[2]), welder.add(v[3], v[4], v[5]),
-                           welder.add(v[6], v[7], v[8])};
-    // A triangle collapsed by float rounding adds nothing to a closed surface: drop it.
-    if (t[0] == t[1] || t[1] == t[2] || t[2] == t[0]) return;
-    mesh.triangles.push_back(t);
+    mesh.triangles.reserve(count / 3);
+    for (std::size_t t = 0; t < count / 3; ++t) {
+        const Mesh::Triangle tri{vertexOf[run[3 * t]], vertexOf[run[3 * t + 1]], vertexOf[run[3 * t + 2]]};
+        if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) continue;
+        mesh.triangles.push_back(tri);
+    }
+    return mesh;
 }
 
 Mesh parseBinaryStl(const std::string& data, std::uint32_t count) {
-    Mesh mesh;
-    VertexWelder welder(mesh);
-    mesh.triangles.reserve(count);
-    for (std::uint32_t t = 0; t < count; ++t) {
-        const char* rec = data.data() + 84 + std::size_t(t) * 50;
-        float v[9];
-        for (int k = 0; k < 9; ++k) v[k] = binary::getF32(rec + 12 + 4 * k);
-        addTriangle(mesh, welder, v);
-    }
-    return mesh;
+    std::vector<float> corners(9 * std::size_t(count));
+    tbb::parallel_for(std::size_t(0), std::size_t(count), [&](std::size_t t) {
+        const char* rec = data.data() + 84 + t * 50;
+        for (std::size_t k = 0; k < 9; ++k) corners[9 * t + k] = binary::getF32(rec + 12 + 4 * k);
+    });
+    return weld(corners);
 }
 
 /// A whitespace tokenizer that knows the line and column of each token.
@@ -275,8 +281,7 @@ private:
 };
 
 Mesh parseAsciiStl(const std::string& text, const std::string& path) {
-    Mesh mesh;
-    VertexWelder welder(mesh);
+    std::vector<float> corners;
     Tokens tok(text, path);
     bool inSolid = false;
     while (tok.next()) {
@@ -292,30 +297,33 @@ Mesh parseAsciiStl(const std::string& text, const std::string& path) {
             for (int k = 0; k < 3; ++k) tok.number();
             tok.expect("outer");
             tok.expect("loop");
-            float v[9];
             for (int i = 0; i < 3; ++i) {
                 tok.expect("vertex");
-                for (int k = 0; k < 3; ++k) v[3 * i + k] = tok.number();
+                for (int k = 0; k < 3; ++k) corners.push_back(tok.number());
             }
             tok.expect("endloop");
             tok.expect("endfacet");
-            addTriangle(mesh, welder, v);
         } else {
             throw ParseError(tok.where(),
                              inSolid ? "expected 'facet' or 'endsolid'" : "expected 'solid'", word);
         }
     }
     if (inSolid) throw ParseError(tok.where(), "missing 'endsolid' at the end of the file");
-    return mesh;
+    return weld(corners);
 }
 
 }  // namespace
 
 Mesh readStl(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw Error("cannot read '" + path + "': it is a folder");
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw Error("cannot open '" + path + "'");
-    std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) throw Error("cannot read '" + path + "'");
+    const std::streamoff size = in.tellg();
+    if (size < 0) throw Error("cannot read '" + path + "'");
+    std::string data(std::size_t(size), '\0');
+    in.seekg(0);
+    if (!in.read(data.data(), size)) throw Error("cannot read '" + path + "'");
     Mesh mesh;
     if (data.size() >= 84 &&
         data.size() == 84 + 50 * std::uint64_t(binary::getU32(data.data() + 80))) {

@@ -219,6 +219,26 @@ TEST_CASE("STL: ASCII is parsed, a binary file starting with 'solid' is binary",
         CHECK(e.offending() == "x");
     }
     CHECK_THROWS_AS(readStl(dir.file("missing.stl")), Error);
+    fs::create_directories(dir.file("folder.stl"));
+    CHECK_THROWS_WITH(readStl(dir.file("folder.stl")), Catch::Contains("folder"));
+}
+
+TEST_CASE("STL: equal corners are welded in order of appearance, -0 with +0", "[io]") {
+    TempDir dir;
+    Mesh m;
+    m.vertices = {Vec3(0.0), Vec3(1.0, 0.0, 0.0), Vec3(0.0, 1.0, 0.0), Vec3(-0.0, -0.0, -0.0), Vec3(2.0, 2.0, 2.0)};
+    // The second triangle names the origin as -0; the third collapses onto an edge once welded.
+    m.triangles = {{4, 1, 2}, {3, 2, 1}, {0, 3, 1}};
+    writeStl(dir.file("w.stl"), m);
+    const Mesh w = readStl(dir.file("w.stl"));
+    REQUIRE(w.vertices.size() == 4);
+    CHECK(w.vertices[0] == Vec3(2.0, 2.0, 2.0));
+    CHECK(w.vertices[1] == Vec3(1.0, 0.0, 0.0));
+    CHECK(w.vertices[2] == Vec3(0.0, 1.0, 0.0));
+    CHECK(w.vertices[3] == Vec3(0.0));
+    REQUIRE(w.triangles.size() == 2);
+    CHECK(w.triangles[0] == Mesh::Triangle{0, 1, 2});
+    CHECK(w.triangles[1] == Mesh::Triangle{3, 2, 1});
 }
 
 TEST_CASE("VDB: a level set written and read back is identical", "[io]") {
