@@ -5,8 +5,10 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <stdexcept>
 #include <utility>
+
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "dexelmill/geometry/tolerance.h"
 
@@ -110,7 +112,7 @@ int meshOrientation(const Mesh& mesh) {
         }
         volume6 += glm::dot(mesh.vertices[t[0]], glm::cross(mesh.vertices[t[1]], mesh.vertices[t[2]]));
     }
-    std::sort(keys.begin(), keys.end());
+    tbb::parallel_sort(keys.begin(), keys.end());
     for (std::size_t i = 0; i < keys.size(); i += 2)
         if (i + 1 == keys.size() || keys[i] + 1 != keys[i + 1] || (keys[i] & 1u) != 0 ||
             (i + 2 < keys.size() && keys[i + 2] >> 1 == keys[i] >> 1))
@@ -169,21 +171,18 @@ Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
 MeshDistance::MeshDistance(const Mesh& mesh) {
     const std::size_t n = mesh.triangles.size();
     if (n == 0) return;
-    triangles_.resize(3 * n);
-    for (std::size_t t = 0; t < n; ++t)
-        for (int k = 0; k < 3; ++k) triangles_[3 * t + std::size_t(k)] = mesh.vertices[mesh.triangles[t][std::size_t(k)]];
 
     // Triangles in Morton order of their centroids (21 bits per axis), so that halving a range
     // of them halves space; the hierarchy splits ranges at their middle, and its boxes are
     // gathered bottom-up. Any split gives exact answers; this one keeps boxes tight and the build
     // at one sort.
     const std::size_t m = n;
-    std::vector<Vec3> centroid(m);
+    auto centroid = [&](std::size_t t) {
+        const auto& tri = mesh.triangles[t];
+        return (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0;
+    };
     Box all;
-    for (std::size_t i = 0; i < m; ++i) {
-        centroid[i] = (triangles_[3 * i] + triangles_[3 * i + 1] + triangles_[3 * i + 2]) / 3.0;
-        all.expand(centroid[i]);
-    }
+    for (std::size_t i = 0; i < m; ++i) all.expand(centroid(i));
     const Vec3 size = glm::max(all.size(), Vec3(1e-300));
     auto spread = [](std::uint64_t v) {
         v &= 0x1fffff;
@@ -195,20 +194,23 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
         return v;
     };
     std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(m);
-    for (std::size_t i = 0; i < m; ++i) {
-        const Vec3 u = (centroid[i] - all.lo) / size * double((1u << 21) - 1);
+    tbb::parallel_for(std::size_t(0), m, [&](std::size_t i) {
+        const Vec3 u = (centroid(i) - all.lo) / size * double((1u << 21) - 1);
         keyed[i] = {spread(std::uint64_t(u.x)) | spread(std::uint64_t(u.y)) << 1 | spread(std::uint64_t(u.z)) << 2,
                     std::uint32_t(i)};
-    }
-    std::sort(keyed.begin(), keyed.end());
+    });
+    tbb::parallel_sort(keyed.begin(), keyed.end());
     original_.resize(m);
+    slot_.resize(m);
     corners_.resize(3 * m);
-    for (std::size_t i = 0; i < m; ++i) {
+    tbb::parallel_for(std::size_t(0), m, [&](std::size_t i) {
         original_[i] = keyed[i].second;
-        for (std::size_t k = 0; k < 3; ++k) corners_[3 * i + k] = triangles_[3 * std::size_t(keyed[i].second) + k];
-    }
+        slot_[keyed[i].second] = std::uint32_t(i);
+        for (std::size_t k = 0; k < 3; ++k) corners_[3 * i + k] = mesh.vertices[mesh.triangles[keyed[i].second][k]];
+    });
     // Ranges split at their middle; a child always comes after its parent.
-    nodes_.reserve(2 * (m / kLeafTriangles + 1));
+    // Median splits leave leaves of at least kLeafTriangles / 2 triangles.
+    nodes_.reserve(4 * (m / kLeafTriangles + 1));
     struct Job {
         std::uint32_t node, begin, end;
     };
@@ -242,9 +244,8 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
 }
 
 double MeshDistance::distanceTo(const Vec3& p, std::uint32_t triangle) const {
-    const std::size_t i = triangle;
-    if (3 * i >= triangles_.size()) throw std::out_of_range("MeshDistance::distanceTo: no such triangle");
-    return glm::length(closestPointOnTriangle(p, triangles_[3 * i], triangles_[3 * i + 1], triangles_[3 * i + 2]) - p);
+    const std::size_t i = slot_.at(triangle);
+    return glm::length(closestPointOnTriangle(p, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]) - p);
 }
 
 bool MeshDistance::inside(const Vec3& p) const {
@@ -338,13 +339,8 @@ MeshDistance::Found MeshDistance::search(const Vec3& p, const std::uint32_t* hin
         const double d2 = glm::dot(c.point - p, c.point - p);
         if (d2 < best.d2) best = {i, d2, c.point, c.onFace, true};
     };
-    // The hint bounds the distance; the search then finds it (its slot is not at hand) or a
-    // nearer triangle.
-    if (hint && 3 * std::size_t(*hint) < triangles_.size()) {
-        const std::size_t t = *hint;
-        const Vec3 q = closestPointOnTriangle(p, triangles_[3 * t], triangles_[3 * t + 1], triangles_[3 * t + 2]);
-        best.d2 = std::nextafter(glm::dot(q - p, q - p), std::numeric_limits<double>::infinity());
-    }
+    // The hint's triangle bounds the search from the start.
+    if (hint && *hint < slot_.size()) test(slot_[*hint]);
     // Depth-first, nearer child first; a node whose box is no nearer than the best triangle so far
     // holds nothing nearer, so the answer is the exact minimum over all triangles.
     struct Entry {
@@ -374,8 +370,6 @@ MeshDistance::Found MeshDistance::search(const Vec3& p, const std::uint32_t* hin
             stack[top++] = {node.first + 1, dr};
         }
     }
-    // Rounding in a box's distance might prune the hint's own slot: then search without the bound.
-    if (!best.found) return search(p, nullptr);
     return best;
 }
 

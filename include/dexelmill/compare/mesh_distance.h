@@ -89,9 +89,9 @@ private:
         std::uint32_t count = 0;  ///< triangles in a leaf; 0 for an inner node (right = left + 1)
     };
     std::vector<Node> nodes_;
-    std::vector<Vec3> corners_;            ///< three corners per triangle slot, in hierarchy order
+    std::vector<Vec3, NoZeroAllocator<Vec3>> corners_;  ///< three corners per triangle slot, in hierarchy order
     std::vector<std::uint32_t> original_;  ///< each slot's index in the input mesh
-    std::vector<Vec3> triangles_;          ///< three corners per input triangle, in input order
+    std::vector<std::uint32_t> slot_;      ///< each input triangle's slot
     int orientation_ = 0;
 };
 
