@@ -373,6 +373,7 @@ Simulation runStages(const SimulateOptions& o) {
     if (design) {
         cutOptions.design = &design->dexels;
         cutOptions.designDepth = o.gougeTolerance;
+        cutOptions.designBounds = design->bounds;
     }
     if (o.progress) cutOptions.progress = [&](std::size_t done, std::size_t total) { o.progress("cutting", done, total); };
     const CutResult cut = cutStock(stock, program.path, tools, cutOptions);

@@ -39,13 +39,19 @@ struct TileMoveStats {
 struct DesignWatch {
     const DexelTile* tile = nullptr;
     double depth = 0.0;
+    /// The dexels' length, and whether the design runs on past their start and their end (the
+    /// cast cut it off at the lattice's box there).
+    float length = 0.0f;
+    bool openLo = false, openHi = false;
 };
 
-/// The material of `segs` inside [lo, hi] that the design's segments `design` keep: returns its
-/// length, and appends to `out` (with only the dexel's [lo, hi] filled in) the pieces where the
-/// design's segment reaches farther than `depth` beyond some point of the piece on both sides.
-double designOverlap(const SegmentSpan& segs, const SegmentSpan& design, float lo, float hi, double depth,
+/// The material of `segs` inside [lo, hi] that the design's segments keep: returns its length, and
+/// appends to `out` (with only the dexel's [lo, hi] filled in) the pieces where the design's
+/// segment reaches farther than `watch.depth` beyond some point of the piece on both sides. A
+/// design segment at an open end of the dexel (DesignWatch) reaches without bound that way.
+double designOverlap(const SegmentSpan& segs, const DesignWatch& watch, const SegmentSpan& design, float lo, float hi,
                      const DesignStretch& at, std::vector<DesignStretch>& out) {
+    constexpr double kUnbounded = std::numeric_limits<double>::infinity();
     double sum = 0.0;
     for (const Segment& s : segs) {
         if (s.lo >= hi) break;
@@ -56,9 +62,20 @@ double designOverlap(const SegmentSpan& segs, const SegmentSpan& design, float l
             if (d.hi <= x0) continue;
             const float p = std::max(x0, d.lo), q = std::min(x1, d.hi);
             sum += double(q) - double(p);
-            // The point of [p, q] farthest inside d along the line: d's midpoint, clamped.
-            const double t = std::clamp(0.5 * (double(d.lo) + double(d.hi)), double(p), double(q));
-            if (std::min(t - double(d.lo), double(d.hi) - t) > depth) {
+            const double dlo = watch.openLo && d.lo <= 0.0f ? -kUnbounded : double(d.lo);
+            const double dhi = watch.openHi && d.hi >= watch.length ? kUnbounded : double(d.hi);
+            // How far d reaches on both sides of the point of [p, q] farthest inside it along the
+            // line: d's midpoint, clamped; p or q when d runs on one way; anywhere when both.
+            double reach = kUnbounded;
+            if (std::isfinite(dlo) && std::isfinite(dhi)) {
+                const double t = std::clamp(0.5 * (dlo + dhi), double(p), double(q));
+                reach = std::min(t - dlo, dhi - t);
+            } else if (std::isfinite(dhi)) {
+                reach = dhi - double(p);
+            } else if (std::isfinite(dlo)) {
+                reach = double(q) - dlo;
+            }
+            if (reach > watch.depth) {
                 DesignStretch piece = at;
                 piece.lo = p;
                 piece.hi = q;
@@ -219,8 +236,8 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                     if (kept.empty()) return;
                     DesignStretch at;
                     at.move = m, at.family = a, at.ib = ib, at.ic = ic;
-                    st.design += designOverlap(tile.segments(local), kept, toFloat(hit.range.lo),
-                                               toFloat(hit.range.hi), design.depth, at, stretches);
+                    st.design += designOverlap(tile.segments(local), design, kept, toFloat(hit.range.lo),
+                                               toFloat(hit.range.hi), at, stretches);
                 };
                 if (cuts) {
                     const std::size_t n = g.cutting->intersectParts(line, parts, makesEnds);
@@ -338,6 +355,12 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
         if (options.design) {
             w.tile = &options.design->family(axisFromIndex(s.family)).tile(s.tb, s.tc);
             w.depth = options.designDepth;
+            const int a = s.family;
+            const double len = lattice.n[std::size_t(a)] * lattice.h;
+            w.length = float(len);
+            const Box& b = options.designBounds;
+            w.openLo = !b.isEmpty() && b.lo[a] < lattice.origin[a];
+            w.openHi = !b.isEmpty() && b.hi[a] > lattice.origin[a] + len;
         }
         return w;
     };

@@ -126,6 +126,22 @@ TEST_CASE("gouges: a floor cut 0.1 mm too deep, and a rapid through the design",
     fs::remove_all(dir);
 }
 
+TEST_CASE("gouges: a design reaching past the stock on every side", "[compare][design][job]") {
+    const fs::path dir = scratch("beyond");
+    // The design fills x and y -5..45 and z -15..5, around the whole stock. A pass at z = -0.005
+    // takes a layer thinner than the tolerance off the top, so along each z dexel the design's
+    // material (cut off by the stock's box) seemed to end 0.005 mm above the cut; in truth its top
+    // is 5.005 mm above it, and the x and y dexels (the highest at z = -0.125) miss the layer.
+    const std::string design = writeStl(dir / "big.stl", prismFacets({{-5, -15}, {45, -15}, {45, 5}, {-5, 5}}, -5.0, 45.0));
+    const char* program = "G21 G90\nT1 M6\nG0 X5 Y-10 Z5\nG1 Z-0.005 F500\nG1 Y50\nG0 Z5\nM30\n";
+    const SimulateReport r = simulate(job(program, design, 10.0));
+    REQUIRE(r.gouges.size() == 1);
+    CHECK(r.gouges[0].where.line == 5);
+    CHECK(r.gouges[0].depthMm == Approx(5.005).margin(depthBound(0.01, kH)));
+    CHECK(r.gouges[0].volumeMm3 == Approx(10.0 * 40.0 * 0.005).epsilon(1e-3));
+    fs::remove_all(dir);
+}
+
 TEST_CASE("deviation: the machined surface against the design, through the job", "[compare][deviation][job]") {
     const fs::path dir = scratch("surface");
     const std::string design = writeStl(dir / "l.stl", prismFacets(lShape(), -1.0, 41.0));

@@ -56,6 +56,10 @@ struct CutOptions {
     /// `designDepth` (mm) go into CutResult::designStretches.
     const TriDexelStock* design = nullptr;
     double designDepth = 0.01;
+    /// The design's whole extent (mm). Where it reaches past the lattice's box, the cast cut its
+    /// material off at the box's faces; a design segment ending there is taken to run on, so that
+    /// no stretch is dropped for lack of design beyond the stock. Empty: the design lies within.
+    Box designBounds;
 };
 
 /// @brief What one move did.
