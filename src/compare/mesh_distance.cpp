@@ -2,14 +2,15 @@
 #include "dexelmill/compare/mesh_distance.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
+#include <string>
 #include <utility>
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
 
 namespace dexelmill {
@@ -38,8 +39,7 @@ double boxDistance2(const Box& box, const Vec3& p) {
 /// Directions for the inside test's rays: the fractional parts of the square roots of the first
 /// eighteen primes, three by three, with signs, made unit; far from the axes and every plane of
 /// small integer normal, so that no ray runs along the faces machined and designed parts are full
-/// of. The
-/// first decides almost always; the others serve when a ray meets an edge.
+/// of. The first decides almost always; the others serve when a ray meets an edge.
 constexpr double kRays[][3] = {{0.47413860622660531, 0.83795795482700841, 0.27022036937956673},
                                {-0.68683798550132802, 0.33677040904332112, 0.64408017611573143},
                                {0.13963054079120774, -0.40707525204102657, 0.9026588786768176},
@@ -52,22 +52,27 @@ constexpr double kRays[][3] = {{0.47413860622660531, 0.83795795482700841, 0.2702
 /// rounding of the weights is about 1e-15 relative, far below it.
 constexpr double kRayMargin = 1e-9;
 
+/// How far behind a shell's largest triangle, as a fraction of its longest edge, the point lies
+/// that tells which way the shell faces: far above the rays' margin, far below any wall's
+/// thickness a mesher keeps.
+constexpr double kProbeDepth = 1e-6;
+
 enum class Crossing { None, One, Ambiguous };
 
 /// Whether the ray p + t d, t > 0, crosses triangle (a, b, c) (Moller-Trumbore).
 Crossing crossing(const Vec3& p, const Vec3& d, const Vec3& a, const Vec3& b, const Vec3& c) {
     const Vec3 e1 = b - a, e2 = c - a;
     const Vec3 q = glm::cross(d, e2);
+    // det = -d . (e1 x e2): the cosine of the ray's angle with the normal, times twice the area.
     const double det = glm::dot(e1, q);
-    const double scale = glm::length(e1) * glm::length(e2);
-    if (!(std::abs(det) > kRayMargin * scale)) {
+    const double nn = glm::length(glm::cross(e1, e2));
+    if (!(nn > 0.0)) return Crossing::None;  // a degenerate triangle bounds no volume
+    const double size = std::max(glm::length(e1), glm::length(e2));
+    if (!(std::abs(det) > kRayMargin * nn)) {
         // The ray runs (nearly) along the triangle's plane: it crosses nothing unless it starts
         // on that plane near the triangle, which another ray settles.
-        const Vec3 n = glm::cross(e1, e2);
-        const double nn = glm::length(n);
-        if (!(nn > 0.0)) return Crossing::None;  // a degenerate triangle bounds no volume
-        return std::abs(glm::dot(p - a, n)) > kRayMargin * nn * std::sqrt(scale) ? Crossing::None
-                                                                                 : Crossing::Ambiguous;
+        return std::abs(glm::dot(p - a, glm::cross(e1, e2))) > kRayMargin * nn * size ? Crossing::None
+                                                                                       : Crossing::Ambiguous;
     }
     const Vec3 s = p - a;
     const double u = glm::dot(s, q) / det;
@@ -76,7 +81,6 @@ Crossing crossing(const Vec3& p, const Vec3& d, const Vec3& a, const Vec3& b, co
     const double v = glm::dot(d, r) / det;
     if (v < -kRayMargin || u + v > 1.0 + kRayMargin) return Crossing::None;
     const double t = glm::dot(e2, r) / det;
-    const double size = std::sqrt(scale);
     if (t < -kRayMargin * size) return Crossing::None;
     if (u < kRayMargin || v < kRayMargin || u + v > 1.0 - kRayMargin || t < kRayMargin * size)
         return Crossing::Ambiguous;
@@ -95,29 +99,45 @@ bool rayMeetsBox(const Box& box, const Vec3& p, const Vec3& inv) {
     return lo <= hi;
 }
 
-/// +1 when every edge of the mesh is shared by exactly two triangles that run it in opposite
-/// directions and the enclosed volume is positive, -1 when it is negative, else 0. Each edge is a
-/// key: its lower vertex, its higher vertex and a bit for its direction; sorted, the keys of a
-/// closed oriented manifold come in pairs that differ only in that bit.
-int meshOrientation(const Mesh& mesh) {
-    if (mesh.vertices.size() >= (std::size_t(1) << 31)) return 0;
-    std::vector<std::uint64_t> keys;
-    keys.reserve(3 * mesh.triangles.size());
-    double volume6 = 0.0;
-    for (const Mesh::Triangle& t : mesh.triangles) {
-        for (int k = 0; k < 3; ++k) {
-            const std::uint64_t a = t[std::size_t(k)], b = t[std::size_t((k + 1) % 3)];
-            if (a == b) return 0;
-            keys.push_back(std::min(a, b) << 32 | std::max(a, b) << 1 | (a < b ? 1u : 0u));
+/// Whether every edge of the mesh is shared by exactly two triangles that run it in opposite
+/// directions (a closed, consistently oriented 2-manifold, shell by shell); if so, `shell`
+/// receives each triangle's shell (connected by edges), numbered from 0. Each edge is a key: its
+/// lower vertex, its higher vertex and a bit for its direction; sorted, the keys of such a mesh come
+/// in pairs that differ only in that bit, and each pair joins two triangles' shells.
+bool pairedEdges(const Mesh& mesh, std::vector<std::uint32_t>& shell) {
+    const std::size_t n = mesh.triangles.size();
+    if (mesh.vertices.size() >= (std::size_t(1) << 31)) return false;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(3 * n);
+    for (std::size_t t = 0; t < n; ++t)
+        for (std::size_t k = 0; k < 3; ++k) {
+            const std::uint64_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+            if (a == b) return false;
+            keys[3 * t + k] = {std::min(a, b) << 32 | std::max(a, b) << 1 | (a < b ? 1u : 0u), std::uint32_t(t)};
         }
-        volume6 += glm::dot(mesh.vertices[t[0]], glm::cross(mesh.vertices[t[1]], mesh.vertices[t[2]]));
-    }
     tbb::parallel_sort(keys.begin(), keys.end());
-    for (std::size_t i = 0; i < keys.size(); i += 2)
-        if (i + 1 == keys.size() || keys[i] + 1 != keys[i + 1] || (keys[i] & 1u) != 0 ||
-            (i + 2 < keys.size() && keys[i + 2] >> 1 == keys[i] >> 1))
-            return 0;
-    return volume6 > 0.0 ? 1 : volume6 < 0.0 ? -1 : 0;
+    std::vector<std::uint32_t> parent(n);
+    for (std::size_t t = 0; t < n; ++t) parent[t] = std::uint32_t(t);
+    auto find = [&](std::uint32_t t) {
+        while (parent[t] != t) t = parent[t] = parent[parent[t]];
+        return t;
+    };
+    for (std::size_t i = 0; i < keys.size(); i += 2) {
+        const std::uint64_t k = keys[i].first;
+        if (i + 1 == keys.size() || k + 1 != keys[i + 1].first || (k & 1u) != 0 ||
+            (i + 2 < keys.size() && keys[i + 2].first >> 1 == k >> 1))
+            return false;
+        const std::uint32_t r0 = find(keys[i].second), r1 = find(keys[i + 1].second);
+        if (r0 != r1) parent[std::max(r0, r1)] = std::min(r0, r1);
+    }
+    shell.assign(n, 0);
+    std::vector<std::uint32_t> number(n, std::uint32_t(-1));
+    std::uint32_t shells = 0;
+    for (std::size_t t = 0; t < n; ++t) {
+        const std::uint32_t r = find(std::uint32_t(t));
+        if (number[r] == std::uint32_t(-1)) number[r] = shells++;
+        shell[t] = number[r];
+    }
+    return true;
 }
 
 /// The closest point of a triangle, and whether it lies inside the face rather than on an edge or
@@ -176,13 +196,12 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
     // of them halves space; the hierarchy splits ranges at their middle, and its boxes are
     // gathered bottom-up. Any split gives exact answers; this one keeps boxes tight and the build
     // at one sort.
-    const std::size_t m = n;
     auto centroid = [&](std::size_t t) {
         const auto& tri = mesh.triangles[t];
         return (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0;
     };
     Box all;
-    for (std::size_t i = 0; i < m; ++i) all.expand(centroid(i));
+    for (std::size_t i = 0; i < n; ++i) all.expand(centroid(i));
     const Vec3 size = glm::max(all.size(), Vec3(1e-300));
     auto spread = [](std::uint64_t v) {
         v &= 0x1fffff;
@@ -193,28 +212,28 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
         v = (v | v << 2) & 0x1249249249249249ULL;
         return v;
     };
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(m);
-    tbb::parallel_for(std::size_t(0), m, [&](std::size_t i) {
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
+    tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
         const Vec3 u = (centroid(i) - all.lo) / size * double((1u << 21) - 1);
         keyed[i] = {spread(std::uint64_t(u.x)) | spread(std::uint64_t(u.y)) << 1 | spread(std::uint64_t(u.z)) << 2,
                     std::uint32_t(i)};
     });
     tbb::parallel_sort(keyed.begin(), keyed.end());
-    original_.resize(m);
-    slot_.resize(m);
-    corners_.resize(3 * m);
-    tbb::parallel_for(std::size_t(0), m, [&](std::size_t i) {
+    original_.resize(n);
+    slot_.resize(n);
+    corners_.resize(3 * n);
+    tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
         original_[i] = keyed[i].second;
         slot_[keyed[i].second] = std::uint32_t(i);
         for (std::size_t k = 0; k < 3; ++k) corners_[3 * i + k] = mesh.vertices[mesh.triangles[keyed[i].second][k]];
     });
     // Ranges split at their middle; a child always comes after its parent.
     // Median splits leave leaves of at least kLeafTriangles / 2 triangles.
-    nodes_.reserve(4 * (m / kLeafTriangles + 1));
+    nodes_.reserve(4 * (n / kLeafTriangles + 1));
     struct Job {
         std::uint32_t node, begin, end;
     };
-    std::vector<Job> jobs{{0u, 0u, std::uint32_t(m)}};
+    std::vector<Job> jobs{{0u, 0u, std::uint32_t(n)}};
     nodes_.emplace_back();
     while (!jobs.empty()) {
         const Job job = jobs.back();
@@ -240,7 +259,35 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
         node.box = nodes_[node.first].box;
         node.box.expand(nodes_[node.first + 1].box);
     }
-    orientation_ = meshOrientation(mesh);
+    orientation_ = orientationOf(mesh);
+}
+
+int MeshDistance::orientationOf(const Mesh& mesh) const {
+    std::vector<std::uint32_t> shell;
+    if (!pairedEdges(mesh, shell)) return 0;
+    // Each shell faces one way throughout; which way, a point just behind its largest triangle
+    // tells: inside the solid (by the rays' parity, which ignores orientation) when the shell
+    // faces out. A shell may bound a cavity, so its own volume's sign would not do.
+    const std::uint32_t shells = *std::max_element(shell.begin(), shell.end()) + 1;
+    std::vector<std::uint32_t> largest(shells, 0);
+    std::vector<double> area2(shells, -1.0);
+    for (std::size_t t = 0; t < shell.size(); ++t) {
+        const double a2 = glm::length(mesh.areaVector(t));
+        if (a2 > area2[shell[t]]) area2[shell[t]] = a2, largest[shell[t]] = std::uint32_t(t);
+    }
+    int facing = 0;
+    for (std::uint32_t k = 0; k < shells; ++k) {
+        const Mesh::Triangle& tri = mesh.triangles[largest[k]];
+        const Vec3 &a = mesh.vertices[tri[0]], &b = mesh.vertices[tri[1]], &c = mesh.vertices[tri[2]];
+        const Vec3 n = mesh.areaVector(largest[k]);
+        if (!(area2[k] > 0.0)) return 0;
+        const double size = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+        const Vec3 behind = (a + b + c) / 3.0 - kProbeDepth * size * (n / area2[k]);
+        const int way = inside(behind) ? 1 : -1;
+        if (facing != 0 && way != facing) return 0;
+        facing = way;
+    }
+    return facing;
 }
 
 double MeshDistance::distanceTo(const Vec3& p, std::uint32_t triangle) const {

@@ -207,3 +207,39 @@ TEST_CASE("mesh distance: the sign, inside a non-convex solid, for any orientati
         }
     }
 }
+
+TEST_CASE("mesh distance: shells facing different ways, and a cavity", "[compare][distance]") {
+    // A 10 mm cube with a 4 mm cavity in its middle (the cavity's faces point into it), and a
+    // separate 2 mm cube beside it.
+    auto cube = [](Mesh& m, const Vec3& lo, double side, bool out) {
+        const auto base = std::uint32_t(m.vertices.size());
+        for (int i = 0; i < 8; ++i) m.vertices.push_back(lo + side * Vec3(i & 1, (i >> 1) & 1, (i >> 2) & 1));
+        const std::uint32_t f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+        for (const auto& q : f) {
+            m.triangles.push_back({base + q[0], base + (out ? q[1] : q[2]), base + (out ? q[2] : q[1])});
+            m.triangles.push_back({base + q[0], base + (out ? q[2] : q[3]), base + (out ? q[3] : q[2])});
+        }
+    };
+    Mesh good;
+    cube(good, Vec3(0.0), 10.0, true);
+    cube(good, Vec3(3.0), 4.0, false);
+    cube(good, Vec3(20.0, 0.0, 0.0), 2.0, true);
+    Mesh flipped;  // the small cube inside out: every edge still pairs, and the volume is positive
+    cube(flipped, Vec3(0.0), 10.0, true);
+    cube(flipped, Vec3(3.0), 4.0, false);
+    cube(flipped, Vec3(20.0, 0.0, 0.0), 2.0, false);
+    CHECK(MeshDistance(good).orientation() == 1);
+    CHECK(MeshDistance(flipped).orientation() == 0);
+    // Inside the solid: between the outer faces and the cavity, and in the small cube; outside:
+    // in the cavity, between the cubes, beyond them.
+    const std::vector<std::pair<Vec3, double>> cases{
+        {Vec3(1.0, 5.0, 5.0), -1.0},  {Vec3(5.0, 5.0, 5.0), 2.0},  {Vec3(5.0, 5.0, 2.5), -0.5},
+        {Vec3(21.0, 1.0, 1.5), -0.5}, {Vec3(15.0, 1.0, 1.0), 5.0}, {Vec3(-3.0, 5.0, 5.0), 3.0}};
+    for (const Mesh* m : std::vector<const Mesh*>{&good, &flipped}) {
+        const MeshDistance index(*m);
+        for (const auto& [p, expected] : cases) {
+            INFO("orientation " << index.orientation() << ", point " << p.x << " " << p.y << " " << p.z);
+            CHECK(index.signedDistance(p) == Approx(expected).margin(1e-12));
+        }
+    }
+}

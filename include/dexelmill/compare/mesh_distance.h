@@ -23,6 +23,7 @@ Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
 class MeshDistance {
 public:
     /// @brief Builds the hierarchy (O(n log n)); the mesh may be freed afterwards.
+    /// @throw Error for more than 2^32 / 3 triangles.
     explicit MeshDistance(const Mesh& mesh);
 
     /// @brief What a query found.
@@ -65,8 +66,9 @@ public:
     double distanceTo(const Vec3& p, std::uint32_t triangle) const;
 
     std::size_t triangleCount() const { return corners_.size() / 3; }
-    /// @brief +1 for a closed, consistently oriented 2-manifold facing outward (positive volume),
-    /// -1 for one facing inward, 0 for anything else.
+    /// @brief +1 for a closed, consistently oriented 2-manifold all of whose shells face out of
+    /// the solid, -1 when all face in, 0 for anything else (an open or non-manifold mesh, shells
+    /// facing both ways).
     int orientation() const { return orientation_; }
 
 private:
@@ -82,6 +84,8 @@ private:
     Found search(const Vec3& p, const std::uint32_t* hint) const;
     /// The found distance with its sign (see signedDistance).
     double withSign(const Vec3& p, const Found& f) const;
+    /// What orientation() reports, for the mesh the index was built from.
+    int orientationOf(const Mesh& mesh) const;
 
     struct Node {
         Box box;
