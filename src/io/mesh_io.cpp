@@ -1,5 +1,6 @@
 #include "dexelmill/io/mesh_io.h"
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -7,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <sstream>
 #include <tuple>
@@ -126,10 +128,12 @@ void writePly(const std::string& path, const Mesh& mesh, const PlyVertexData& da
     requireValidIndices(mesh);
     const std::size_t n = mesh.vertices.size();
     const bool colours = !data.colours.empty(), scalar = !data.scalar.empty();
-    if ((colours && data.colours.size() != n) || (scalar && data.scalar.size() != n))
-        throw Error("cannot write '" + path + "': vertex data for " +
-                    std::to_string(colours ? data.colours.size() : data.scalar.size()) + " of " +
+    if (colours && data.colours.size() != n)
+        throw Error("cannot write '" + path + "': colours for " + std::to_string(data.colours.size()) + " of " +
                     std::to_string(n) + " vertices");
+    if (scalar && data.scalar.size() != n)
+        throw Error("cannot write '" + path + "': " + data.scalarName + " for " + std::to_string(data.scalar.size()) +
+                    " of " + std::to_string(n) + " vertices");
     if (scalar && (data.scalarName.empty() || data.scalarName.find_first_of(" \t\n") != std::string::npos))
         throw Error("cannot write '" + path + "': a PLY property needs a name without spaces");
     writeStreamAtomically(path, [&](std::ostream& out) {
@@ -173,6 +177,8 @@ namespace {
 /// scales on threads where a hash table does not.
 Mesh weld(const std::vector<float>& corners) {
     const std::size_t count = corners.size() / 3;
+    if (count > std::numeric_limits<std::uint32_t>::max())
+        throw Error("an STL of " + std::to_string(count / 3) + " triangles is more than a mesh can index");
     struct Corner {
         std::uint32_t bits[3];
         std::uint32_t index;
@@ -215,12 +221,16 @@ Mesh weld(const std::vector<float>& corners) {
     return mesh;
 }
 
-Mesh parseBinaryStl(const std::string& data, std::uint32_t count) {
+Mesh parseBinaryStl(const std::string& data, std::uint32_t count, const std::string& path) {
     std::vector<float> corners(9 * std::size_t(count));
     tbb::parallel_for(std::size_t(0), std::size_t(count), [&](std::size_t t) {
         const char* rec = data.data() + 84 + t * 50;
         for (std::size_t k = 0; k < 9; ++k) corners[9 * t + k] = binary::getF32(rec + 12 + 4 * k);
     });
+    const auto bad = std::find_if(corners.begin(), corners.end(), [](float v) { return !std::isfinite(v); });
+    if (bad != corners.end())
+        throw Error("'" + path + "': triangle " + std::to_string((bad - corners.begin()) / 9 + 1) +
+                    " has a corner that is not a finite number");
     return weld(corners);
 }
 
@@ -317,17 +327,22 @@ Mesh parseAsciiStl(const std::string& text, const std::string& path) {
 Mesh readStl(const std::string& path) {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) throw Error("cannot read '" + path + "': it is a folder");
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    std::ifstream in(path, std::ios::binary);
     if (!in) throw Error("cannot open '" + path + "'");
-    const std::streamoff size = in.tellg();
-    if (size < 0) throw Error("cannot read '" + path + "'");
-    std::string data(std::size_t(size), '\0');
-    in.seekg(0);
-    if (!in.read(data.data(), size)) throw Error("cannot read '" + path + "'");
+    // A file in one read; a pipe as it comes.
+    std::string data;
+    const bool regular = std::filesystem::is_regular_file(path, ec);
+    if (regular) {
+        data.resize(std::size_t(std::filesystem::file_size(path, ec)));
+        if (ec || !in.read(data.data(), std::streamsize(data.size()))) throw Error("cannot read '" + path + "'");
+    } else {
+        data.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        if (in.bad()) throw Error("cannot read '" + path + "'");
+    }
     Mesh mesh;
     if (data.size() >= 84 &&
         data.size() == 84 + 50 * std::uint64_t(binary::getU32(data.data() + 80))) {
-        mesh = parseBinaryStl(data, binary::getU32(data.data() + 80));
+        mesh = parseBinaryStl(data, binary::getU32(data.data() + 80), path);
     } else {
         mesh = parseAsciiStl(data, path);
     }

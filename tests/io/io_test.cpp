@@ -159,7 +159,8 @@ TEST_CASE("mesh files: OBJ, binary STL and PLY", "[io]") {
     std::memcpy(&value, coloured.data() + body + 15, 4);
     CHECK(value == -0.25f);
     data.scalar.pop_back();
-    CHECK_THROWS_AS(writePly(dir.file("short.ply"), mesh, data), Error);
+    CHECK_THROWS_WITH(writePly(dir.file("short.ply"), mesh, data),
+                      Catch::Contains("deviation_mm for " + std::to_string(mesh.vertices.size() - 1)));
     data.scalar.push_back(0.0);
     data.scalarName = "two words";
     CHECK_THROWS_AS(writePly(dir.file("short.ply"), mesh, data), Error);
@@ -219,6 +220,12 @@ TEST_CASE("STL: ASCII is parsed, a binary file starting with 'solid' is binary",
         CHECK(e.offending() == "x");
     }
     CHECK_THROWS_AS(readStl(dir.file("missing.stl")), Error);
+    // A binary STL with a corner that is not a number.
+    std::string nan = slurp(dir.file("b.stl"));
+    const float notANumber = std::nanf("");
+    std::memcpy(&nan[84 + 50 + 12 + 4], &notANumber, 4);  // the second triangle's first corner's y
+    writeStreamAtomically(dir.file("nan.stl"), [&](std::ostream& o) { o << nan; });
+    CHECK_THROWS_WITH(readStl(dir.file("nan.stl")), Catch::Contains("triangle 2") && Catch::Contains("finite"));
     fs::create_directories(dir.file("folder.stl"));
     CHECK_THROWS_WITH(readStl(dir.file("folder.stl")), Catch::Contains("folder"));
 }
