@@ -13,7 +13,7 @@ CLI::App* addCompare(CLI::App& app, CompareArgs& a) {
         "the design: how much of its surface lies within tolerance, how deep it cuts into the design\n"
         "and how far it stays outside, as a histogram; with a coloured PLY and picture. Without a\n"
         "program no move is named: 'simulate --design' does that.");
-    c->add_option("MACHINED", a.machined, "The machined part: PART.stl (closed) or PART.vdb")->required();
+    c->add_option("MACHINED", a.machined, "The machined part: PART.stl or PART.vdb (whether its mesh is closed is\nreported)")->required();
     c->add_option("DESIGN", a.design, "The design: DESIGN.stl (closed) or DESIGN.vdb, in the same frame")->required();
     c->add_option("--design-transform", a.designTransform,
                   "Places a design drawn in another frame: TX,TY,TZ (mm), or the rows of a 3 x 4 matrix\n"

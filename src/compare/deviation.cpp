@@ -6,20 +6,23 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <string>
 #include <utility>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include "dexelmill/error.h"
+
 namespace dexelmill {
 
 namespace {
 
-/// A vertex this close to a design triangle (mm) is on the design's surface: its distance is taken
-/// as that, at most this much from the exact signed distance's magnitude. It is a sixtieth of the
-/// rounding of an STL's single-precision coordinates at 1 m, and saves the search for the vertices
-/// of machined faces that lie on design faces (more than half of basemach's 1.2 million).
+/// A vertex this close to a design triangle (mm) is on the design's surface: where vertices search
+/// the hierarchy (a fine design), its distance is taken as that, unsigned, at most this much from
+/// the exact signed distance. It is a sixtieth of the rounding of an STL's single-precision
+/// coordinates at 1 m, and spares the search for machined faces that lie on design faces.
 constexpr double kOnSurface = 1e-6;
 
 /// The cells vertices are measured in: about this many of the mesh's mean edge lengths wide (so
@@ -43,14 +46,14 @@ double ladder(int k) {
     return mantissa[k % 3] * std::pow(10.0, k / 3);
 }
 
-/// The histogram's steps when a tolerance is 0 (mm): 0, then 1, 2, 5, 10, ... um.
+/// The histogram's steps when a tolerance is below it (mm): the tolerance, then 1, 2, 5, ... um.
 constexpr double kHistogramUnit = 0.001;
 
 /// The k-th edge of the histogram beyond a tolerance (as a distance from the design): the
-/// tolerance, then 2, 5, 10, 20, ... times it (or 1, 2, 5, ... um for a tolerance of 0).
+/// tolerance, then 2, 5, 10, 20, ... times it (or 1, 2, 5, ... um for a tolerance below 1 um).
 double edge(int k, double tolerance) {
     if (k == 0) return tolerance;
-    return tolerance > 0.0 ? tolerance * ladder(k) : kHistogramUnit * ladder(k - 1);
+    return tolerance >= kHistogramUnit ? tolerance * ladder(k) : kHistogramUnit * ladder(k - 1);
 }
 
 /// The scale's colours (sRGB).
@@ -77,9 +80,17 @@ constexpr int kBarSteps = 64;
 }  // namespace
 
 Deviation measureDeviation(const Mesh& machined, const MeshDistance& design, const DeviationTolerance& tolerance) {
+    for (double t : {tolerance.gouge, tolerance.excess})
+        if (!(t >= 0.0) || !std::isfinite(t)) throw Error("deviation: the tolerances must be finite, 0 mm or more");
+    if (design.triangleCount() == 0) throw Error("deviation: the design has no triangles");
+    const std::size_t n = machined.vertices.size();
+    if (n > std::numeric_limits<std::uint32_t>::max())
+        throw Error("deviation: a mesh of " + std::to_string(n) + " vertices is too large to measure");
+    for (const Vec3& v : machined.vertices)
+        if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+            throw Error("deviation: the mesh has a vertex that is not a finite point");
     Deviation dev;
     dev.tolerance = tolerance;
-    const std::size_t n = machined.vertices.size();
     dev.distance.resize(n);
     // Vertices are measured cell by cell on a grid of cubes about kCellEdges edges wide. One
     // search per cell, from its centre c with the cube's half-diagonal r, finds the triangles
@@ -87,9 +98,12 @@ Deviation measureDeviation(const Mesh& machined, const MeshDistance& design, con
     // most distance(c) + r from its nearest, which is then at most distance(c) + 2 r from c). When
     // there are few, every vertex of the cell tries just those. Otherwise (a fine design) each
     // vertex searches the hierarchy, starting from the previous vertex's nearest triangle, and a
-    // vertex within kOnSurface of that triangle takes that distance: the exact one is between 0
-    // and it.
-    if (n == 0) return dev;
+    // vertex within kOnSurface of that triangle takes that distance (unsigned): the exact one is
+    // between 0 and it.
+    if (n == 0) {
+        dev.histogram.push_back({-tolerance.gouge, tolerance.excess, 0.0, 0});
+        return dev;
+    }
     // The mean edge length, from a few thousand triangles spread over the list.
     const std::size_t stride = std::max<std::size_t>(1, machined.triangles.size() / kEdgeSample);
     double edges = 0.0;

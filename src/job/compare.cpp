@@ -80,10 +80,10 @@ CompareReport compareInArena(const CompareOptions& o) {
     }
     if (!o.plyPath.empty()) {
         data.scalarName = "deviation_mm";
-        data.scalar = deviation.distance;
+        data.scalar = std::move(deviation.distance);
         writePly(o.plyPath, machined, data);
     }
-    deviation.distance.clear();
+    deviation.distance = {};
     r.deviation = std::move(deviation);
     r.timingS.write = seconds(t);
     r.timingS.total = seconds(tStart);

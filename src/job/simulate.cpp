@@ -485,15 +485,14 @@ Simulation runStages(const SimulateOptions& o) {
         report.timingS.refine = seconds(t);
     }
     const Mesh& mesh = sim.mesh;
-    // The surface against the design, when something shows it: it costs about half a
-    // microsecond per vertex and thread.
+    // The surface against the design, when something shows it: it costs about 0.6 us per vertex
+    // on one thread (basemach).
     if (designDistance && (o.measureSurface || !o.pngPath.empty() || !o.deviationPlyPath.empty() ||
                            !o.reportPath.empty())) {
         t = Clock::now();
         if (o.progress) o.progress("deviation", 0, 1);
         Deviation deviation = measureDeviation(mesh, *designDistance, {o.gougeTolerance, o.excessTolerance});
         sim.deviation = std::move(deviation.distance);
-        deviation.distance.clear();
         report.surfaceDeviation = std::move(deviation);
         report.timingS.design += seconds(t);
     }
@@ -535,7 +534,7 @@ SimulateReport simulateInArena(const SimulateOptions& o) {
         else writePly(o.meshPath, mesh);
     }
     if (!o.vdbPath.empty()) writeVdb(o.vdbPath, sim.levelSet);
-    if (report.surfaceDeviation) {
+    if (report.surfaceDeviation && (!o.pngPath.empty() || !o.deviationPlyPath.empty())) {
         // The deviation's colours, on the PLY and the picture.
         const Deviation& d = *report.surfaceDeviation;
         const DeviationScale scale = deviationScale(d);

@@ -1,6 +1,7 @@
 #include "dexelmill/stock/cut.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <map>
 #include <optional>

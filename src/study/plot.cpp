@@ -2,7 +2,6 @@
 // come from the io module's picture code.
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <sstream>
 
 #include "dexelmill/error.h"

@@ -8,9 +8,11 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -106,10 +108,20 @@ fs::path scratch(const std::string& name) {
     return p;
 }
 
-// A sphere of radius 6 against the cube of half-side 5: it bulges 1 mm out through each face's
+// A sphere of radius 5.9 against the cube of half-side 5: it bulges 0.9 mm out through each face's
 // middle (where the meshes below have vertices), and its points along the diagonals lie
-// 5 - 6 / sqrt(3) = 1.536 mm inside (the meshes' vertices nearest them a little less).
-constexpr double kRadius = 6.0, kHalf = 5.0;
+// 5 - 5.9 / sqrt(3) = 1.594 mm inside (the meshes' vertices nearest them a little less).
+constexpr double kRadius = 5.9, kHalf = 5.0;
+
+/// The oracle's deepest and farthest vertex of a mesh against the cube.
+std::pair<double, double> cubeExtremes(const Mesh& m) {
+    double lo = 0.0, hi = 0.0;
+    for (const Vec3& v : m.vertices) {
+        lo = std::min(lo, cubeDistance(v, kHalf));
+        hi = std::max(hi, cubeDistance(v, kHalf));
+    }
+    return {lo, hi};
+}
 
 }  // namespace
 
@@ -143,8 +155,8 @@ TEST_CASE("deviation: every vertex's signed distance, the areas and the histogra
     CHECK(d.excessArea == Approx(excess).epsilon(1e-12));
     CHECK(d.rms == Approx(std::sqrt(sum2 / total)).epsilon(1e-12));
 
-    // Bins: -2 (the deepest is 1.16 mm) .. -1 .. -0.5 .. -0.2 .. -0.1 .. -0.05 .. -0.02 .. -0.01,
-    // within to +0.05, then 0.1, 0.25, 0.5, 1 (the farthest, 1 mm, closes the last).
+    // Bins: -2 (the deepest is 1.23 mm) .. -1 .. -0.5 .. -0.2 .. -0.1 .. -0.05 .. -0.02 .. -0.01,
+    // within to +0.05, then 0.1, 0.25, 0.5, 1 (the farthest, 0.9 mm, lies in the last).
     REQUIRE(lo < -1.0);
     const std::vector<double> edges{-2, -1, -0.5, -0.2, -0.1, -0.05, -0.02, -0.01, 0.05, 0.1, 0.25, 0.5, 1.0};
     REQUIRE(d.histogram.size() == edges.size() - 1);
@@ -178,9 +190,11 @@ TEST_CASE("deviation: zero tolerances, a surface that matches, and the colours",
     CHECK(same.withinArea == Approx(6 * 100.0));
 
     // Zero tolerances step the bins in micrometres: 0, 1, 2, 5, 10 ... 1000 um (the deepest
-    // vertex of this coarser sphere is 0.757 mm inside).
-    const Deviation d = measureDeviation(sphere(kRadius, 2), MeshDistance(c), {0.0, 0.0});
-    REQUIRE(d.deepest < -0.5);
+    // vertex of this coarser sphere is 0.83 mm inside).
+    const Mesh coarse = sphere(kRadius, 2);
+    const auto [deepest, farthest] = cubeExtremes(coarse);
+    REQUIRE(deepest < -0.5);
+    const Deviation d = measureDeviation(coarse, MeshDistance(c), {0.0, 0.0});
     CHECK(d.histogram.front().lo == Approx(-1.0));
     CHECK(d.histogram.back().hi == Approx(1.0));
     const auto within = std::find_if(d.histogram.begin(), d.histogram.end(), [](const DeviationBin& b) { return b.lo == 0.0 && b.hi == 0.0; });
@@ -189,9 +203,9 @@ TEST_CASE("deviation: zero tolerances, a surface that matches, and the colours",
     CHECK((within - 1)->lo == Approx(-0.001));
 
     // Colours: green within, reds below (darker deeper), blues above (darker farther).
-    const DeviationScale scale = deviationScale(measureDeviation(sphere(kRadius, 2), MeshDistance(c), {0.01, 0.05}));
-    CHECK(scale.excessFull == Approx(1.0));
-    CHECK(scale.gougeFull == Approx(-d.deepest));
+    const DeviationScale scale = deviationScale(measureDeviation(coarse, MeshDistance(c), {0.01, 0.05}));
+    CHECK(scale.excessFull == Approx(farthest));
+    CHECK(scale.gougeFull == Approx(-deepest));
     const Rgb green = deviationColour(0.0, scale), shallow = deviationColour(-0.02, scale),
               deep = deviationColour(-1.5, scale), near = deviationColour(0.06, scale), far = deviationColour(0.9, scale);
     CHECK(deviationColour(-0.01, scale) == green);
@@ -211,9 +225,7 @@ TEST_CASE("deviation: zero tolerances, a surface that matches, and the colours",
     CHECK(legend.bar.back()[2] > legend.bar.back()[0]);
     std::vector<std::string> texts;
     for (const auto& l : legend.labels) texts.push_back(l.text);
-    char deepest[32];
-    std::snprintf(deepest, sizeof deepest, "%+.3g", d.deepest);
-    CHECK(texts == std::vector<std::string>{deepest, "gouge", "-0.01", "within", "+0.05", "excess", "+1"});
+    CHECK(texts == std::vector<std::string>{"-0.828", "gouge", "-0.01", "within", "+0.05", "excess", "+0.9"});
 }
 
 TEST_CASE("compare: a sphere's STL against a cube's, with report, PLY and picture", "[compare][deviation][job]") {
@@ -234,13 +246,11 @@ TEST_CASE("compare: a sphere's STL against a cube's, with report, PLY and pictur
     CHECK(r.designTriangles == 12);
     // Written as float, the sphere's vertices move by up to 6e-8 * 6 mm.
     CHECK(r.deviation.farthest == Approx(kRadius - kHalf).margin(1e-6));
-    double deepest = 0.0;
-    for (const Vec3& v : machined.vertices) deepest = std::min(deepest, cubeDistance(v, kHalf));
-    CHECK(r.deviation.deepest == Approx(deepest).margin(1e-6));
+    CHECK(r.deviation.deepest == Approx(cubeExtremes(machined).first).margin(1e-6));
 
     const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "report.json"));
     CHECK(j["units"] == "mm");
-    CHECK(j["surface"]["farthest_mm"].get<double>() == Approx(r.deviation.farthest));
+    CHECK(j["surface"]["farthest_mm"].get<double>() == Approx(kRadius - kHalf).margin(1e-6));
     CHECK(j["surface"]["histogram"].size() == r.deviation.histogram.size());
     double binned = 0;
     for (const auto& b : j["surface"]["histogram"]) binned += b["area_mm2"].get<double>();
@@ -374,4 +384,21 @@ TEST_CASE("deviation: a fine design, where vertices search the hierarchy", "[com
     // The design against itself: every vertex on it.
     const Deviation same = measureDeviation(fine, design, {0.01, 0.05});
     for (double v : same.distance) CHECK(std::abs(v) <= 1e-6);
+}
+
+TEST_CASE("deviation: what it refuses, an empty mesh, a tolerance below a micrometre", "[compare][deviation][degenerate]") {
+    const MeshDistance design{cube(kHalf)};
+    CHECK_THROWS_WITH(measureDeviation(sphere(kRadius, 1), MeshDistance(Mesh{}), {0.01, 0.05}), Catch::Contains("no triangles"));
+    CHECK_THROWS_WITH(measureDeviation(sphere(kRadius, 1), design, {-0.01, 0.05}), Catch::Contains("tolerances"));
+    CHECK_THROWS_WITH(measureDeviation(sphere(kRadius, 1), design, {0.01, std::nan("")}), Catch::Contains("tolerances"));
+    Mesh bad = sphere(kRadius, 1);
+    bad.vertices[3].y = std::numeric_limits<double>::infinity();
+    CHECK_THROWS_WITH(measureDeviation(bad, design, {0.01, 0.05}), Catch::Contains("finite"));
+    const Deviation none = measureDeviation(Mesh{}, design, {0.01, 0.05});
+    REQUIRE(none.histogram.size() == 1);
+    CHECK(none.histogram[0].vertices == 0);
+    // 1e-300 mm steps like 0: 1, 2, 5 ... um, a few dozen bins, not hundreds.
+    const Deviation tiny = measureDeviation(sphere(kRadius, 2), design, {1e-300, 1e-300});
+    CHECK(tiny.histogram.size() < 30);
+    CHECK(tiny.histogram.back().hi == Approx(1.0));
 }

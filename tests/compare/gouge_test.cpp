@@ -167,7 +167,7 @@ TEST_CASE("deviation: the machined surface against the design, through the job",
     REQUIRE(s.report.surfaceDeviation);
     CHECK(s.report.surfaceDeviation->deepest == d.deepest);
     REQUIRE(s.deviation.size() == s.mesh.vertices.size());
-    CHECK(*std::min_element(s.deviation.begin(), s.deviation.end()) == d.deepest);
+    CHECK(*std::min_element(s.deviation.begin(), s.deviation.end()) == Approx(-1.9).margin(1e-6));
     // A deviation PLY needs a design, and the .ply extension.
     o.designPath.clear();
     o.deviationPlyPath = (dir / "d.ply").string();

@@ -8,7 +8,6 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <string>
 #include <vector>
 
 #include "dexelmill/compare/mesh_distance.h"
@@ -18,7 +17,7 @@
 
 namespace dexelmill {
 
-/// @brief The tolerances that say what is a gouge and what is excess (mm, both positive).
+/// @brief The tolerances that say what is a gouge and what is excess (mm, 0 or more).
 struct DeviationTolerance {
     double gouge = 0.01;   ///< deeper inside the design than this is a gouge
     double excess = 0.05;  ///< farther outside the design than this is excess
@@ -48,7 +47,8 @@ struct Deviation {
     Vec3 deepestPoint{0.0}, farthestPoint{0.0};
     /// Bins from the deepest to the farthest: gouge bins with edges at 1, 2, 5, 10, 20, ... times
     /// the gouge tolerance below zero, one bin within tolerance, excess bins at 1, 2, 5, 10, ...
-    /// times the excess tolerance above zero (a tolerance of 0 steps 0, 1, 2, 5, ... um instead).
+    /// times the excess tolerance above zero (a tolerance below 1 um steps 1, 2, 5, ... um instead).
+    /// An empty mesh has the bin within tolerance alone.
     std::vector<DeviationBin> histogram;
 };
 
@@ -58,6 +58,8 @@ struct Deviation {
 /// simulate job's (vertices a lattice spacing apart) err only along the lines where the class
 /// changes; on a coarse mesh (a CAD export) they are the vertices' neighbourhoods'. Runs in parallel on the
 /// calling arena.
+/// @throw Error for an empty design, a tolerance that is negative or not finite, or a vertex that
+/// is not a finite point.
 Deviation measureDeviation(const Mesh& machined, const MeshDistance& design, const DeviationTolerance& tolerance);
 
 /// @brief The colour scale: green within tolerance; from light to dark red between the gouge
