@@ -11,10 +11,10 @@
 #include "dexelmill/io/atomic_file.h"
 #include "dexelmill/io/file_name.h"
 #include "dexelmill/io/mesh_io.h"
-#include "dexelmill/io/picture.h"
 #include "dexelmill/io/vdb_io.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/surface/levelset.h"
+#include "job/detail/deviation_files.h"
 #include "job/detail/deviation_json.h"
 
 namespace dexelmill {
@@ -68,22 +68,9 @@ CompareReport compareInArena(const CompareOptions& o) {
     r.timingS.measure = seconds(t);
 
     t = Clock::now();
-    const DeviationScale scale = deviationScale(deviation);
-    PlyVertexData data;
-    if (!o.pngPath.empty() || !o.plyPath.empty()) data.colours = deviationColours(deviation.distance, scale);
-    if (!o.pngPath.empty()) {
-        const PictureLegend legend = deviationLegend(scale);
-        PictureOptions picture;
-        picture.vertexColours = &data.colours;
-        picture.legend = &legend;
-        writePicture(o.pngPath, machined, picture);
-    }
-    if (!o.plyPath.empty()) {
-        data.scalarName = "deviation_mm";
-        data.scalar = std::move(deviation.distance);
-        writePly(o.plyPath, machined, data);
-    }
+    std::vector<double> distance = std::move(deviation.distance);
     deviation.distance = {};
+    writeDeviationFiles(machined, deviation, std::move(distance), o.pngPath, o.plyPath);
     r.deviation = std::move(deviation);
     r.timingS.write = seconds(t);
     r.timingS.total = seconds(tStart);

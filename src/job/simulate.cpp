@@ -25,6 +25,7 @@
 #include "dexelmill/surface/contour.h"
 #include "dexelmill/surface/levelset.h"
 #include "dexelmill/surface/voxelize.h"
+#include "job/detail/deviation_files.h"
 
 namespace dexelmill {
 
@@ -534,24 +535,8 @@ SimulateReport simulateInArena(const SimulateOptions& o) {
         else writePly(o.meshPath, mesh);
     }
     if (!o.vdbPath.empty()) writeVdb(o.vdbPath, sim.levelSet);
-    if (report.surfaceDeviation && (!o.pngPath.empty() || !o.deviationPlyPath.empty())) {
-        // The deviation's colours, on the PLY and the picture.
-        const Deviation& d = *report.surfaceDeviation;
-        const DeviationScale scale = deviationScale(d);
-        PlyVertexData data;
-        data.colours = deviationColours(sim.deviation, scale);
-        if (!o.pngPath.empty()) {
-            const PictureLegend legend = deviationLegend(scale);
-            PictureOptions picture;
-            picture.vertexColours = &data.colours;
-            picture.legend = &legend;
-            writePicture(o.pngPath, mesh, picture);
-        }
-        if (!o.deviationPlyPath.empty()) {
-            data.scalarName = "deviation_mm";
-            data.scalar = std::move(sim.deviation);
-            writePly(o.deviationPlyPath, mesh, data);
-        }
+    if (report.surfaceDeviation) {
+        writeDeviationFiles(mesh, *report.surfaceDeviation, std::move(sim.deviation), o.pngPath, o.deviationPlyPath);
     } else if (!o.pngPath.empty()) {
         writePicture(o.pngPath, mesh);
     }
