@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <map>
 #include <optional>
+#include <sstream>
 
 #include "dexelmill/error.h"
 #include "dexelmill/tool/builders.h"
@@ -32,6 +33,9 @@ constexpr double kPeckClearance = 0.254;
 /// CUTTER values are printed with about 6 significant digits: mismatches below this fraction of
 /// the diameter are rounding.
 constexpr double kCutterRounding = 1e-5;
+/// An i,j,k vector printed with about 6 significant digits has a length within a few 1e-6 of 1;
+/// one further off than this was not meant as a unit vector, and its normalisation is reported.
+constexpr double kUnitVectorRounding = 1e-5;
 
 struct Token {
     std::string text;  ///< upper case, trimmed
@@ -226,7 +230,8 @@ private:
             const auto v = numbers(s);
             if (v.size() != 3 && v.size() != 6) fail(s, "FROM needs x,y,z[,i,j,k]");
             pos_ = reachable(toPart(Vec3(v[0], v[1], v[2]) * scale_), s);
-            if (v.size() == 6) axis_ = axisOf(s, v[3], v[4], v[5]);
+            if (v.size() == 6) axis_ = axisOf(s, v, 3, "tool axis");
+            posAxis_ = axis_;
             havePos_ = true;
             return;
         }
@@ -331,11 +336,19 @@ private:
         if (world_ || !haveCsys_) return p;
         return rot_[0] * p.x + rot_[1] * p.y + rot_[2] * p.z + trans_;
     }
-    Vec3 axisOf(const Statement& s, double i, double j, double k) const {
-        Vec3 a(i, j, k);
+    /// The unit vector of the i,j,k in v[first..first+2] (s's numbers), in the part frame; one not
+    /// of unit length is normalised with a warning (`what` names it).
+    Vec3 axisOf(const Statement& s, const std::vector<double>& v, std::size_t first, const char* what) {
+        Vec3 a(v[first], v[first + 1], v[first + 2]);
+        const double given = glm::length(a);
         if (!world_ && haveCsys_) a = rot_[0] * a.x + rot_[1] * a.y + rot_[2] * a.z;
         const double len = glm::length(a);
-        if (!(len > 1e-9)) fail(s, "tool axis i,j,k of zero length");
+        if (!(len > 1e-9)) fail(s, std::string(what) + " i,j,k of zero length");
+        if (std::abs(given - 1.0) > kUnitVectorRounding) {
+            std::ostringstream msg;
+            msg << what << " i,j,k of length " << given << ", not 1: taken as the unit vector along it";
+            diags_.warn(loc(s.args[first]), msg.str(), "apt non-unit vector");
+        }
         return a / len;
     }
 
@@ -406,11 +419,13 @@ private:
         m.start = pos_;
         m.end = to;
         m.axis = axis_;
+        if (posAxis_ != axis_) m.startAxis = posAxis_;
         m.tool = tool_;
         m.rapid = rapid;
         m.source = {0, s.line};
         out_.path.moves.push_back(m);
         pos_ = to;
+        posAxis_ = axis_;
     }
 
     void gotoPoint(const Statement& s) {
@@ -418,12 +433,13 @@ private:
         if (v.size() != 3 && v.size() != 6) fail(s, "GOTO needs x,y,z or x,y,z,i,j,k");
         requireTool(s);
         const Vec3 p = reachable(toPart(Vec3(v[0], v[1], v[2]) * scale_), s);
-        if (v.size() == 6) axis_ = axisOf(s, v[3], v[4], v[5]);
+        if (v.size() == 6) axis_ = axisOf(s, v, 3, "tool axis");
         const bool rapid = rapidNext_;
         rapidNext_ = false;
         if (!havePos_) {
             havePos_ = true;
             pos_ = p;
+            posAxis_ = axis_;
             diags_.note(loc(s), "first GOTO without FROM: the tool starts there (no move)");
             if (!cycle_.active) return;
         }
@@ -452,7 +468,7 @@ private:
         if (circle_) fail(s, "CIRCLE follows CIRCLE without the GOTO that ends the first");
         Circle c;
         c.centre = toPart(Vec3(v[0], v[1], v[2]) * scale_);
-        c.axis = axisOf(s, v[3], v[4], v[5]);
+        c.axis = axisOf(s, v, 3, "CIRCLE axis");
         if (v.size() >= 7 && !(v[6] > 0)) fail(s.args[6], "CIRCLE radius must be positive");
         c.radius = v.size() >= 7 ? v[6] * scale_ : -1.0;
         circle_ = c;
@@ -640,6 +656,7 @@ private:
     Vec3 trans_{0.0};
     Vec3 pos_{0.0};
     Vec3 axis_{0, 0, 1};
+    Vec3 posAxis_{0, 0, 1};  ///< the axis the tool has at pos_: a move from there to a new axis_ turns
     bool havePos_ = false;
     bool rapidNext_ = false;
     bool multax_ = false;

@@ -74,6 +74,40 @@ TEST_CASE("apt: motion, CIRCLE, cycles and frames", "[path][apt]") {
     CHECK(q.path.moves[0].axis.x == Approx(1));
 }
 
+TEST_CASE("apt: a GOTO with a new i,j,k turns the axis during its move; non-unit vectors are reported",
+          "[path][apt]") {
+    const Program p = parseApt("MULTAX\nCUTTER/10\nGOTO/0,0,30,0,0,1\nGOTO/10,0,30,0,0,1\n"
+                               "GOTO/90,0,5,0.5,0,0.8660254\nGOTO/80,0,5\nGOTO/80,0,5,0,-0.173648,.984808\n"
+                               "GOTO/70,0,5,0,0,2\nFINI\n",
+                               "t.apt");
+    const auto& m = p.path.moves;
+    // The first GOTO only places the tool.
+    REQUIRE(m.size() == 5);
+    CHECK_FALSE(m[0].turns());
+    REQUIRE(m[1].turns());
+    CHECK(*m[1].startAxis == Vec3(0, 0, 1));
+    CHECK(m[1].axis.x == Approx(0.5));
+    CHECK(m[1].axis.z == Approx(std::sqrt(0.75)));
+    CHECK_FALSE(m[2].turns());
+    CHECK(m[2].axis == m[1].axis);
+    // A turn where the tip stays: the rotation alone, as a move of zero length.
+    REQUIRE(m[3].turns());
+    CHECK(m[3].feed() == Vec3(0.0));
+    CHECK(*m[3].startAxis == m[1].axis);
+    REQUIRE(m[4].turns());
+    CHECK(m[4].axis == Vec3(0, 0, 1));
+    // Printed to 6 digits, (0, -0.173648, .984808) is a unit vector; (0, 0, 2) is not, and says so.
+    int nonUnit = 0;
+    for (const Diagnostic& d : p.diagnostics) {
+        if (d.message.find("not 1") == std::string::npos) continue;
+        ++nonUnit;
+        CHECK(d.where.line == 8);
+        CHECK(d.where.column == 13);
+        CHECK(d.message.find("length 2") != std::string::npos);
+    }
+    CHECK(nonUnit == 1);
+}
+
 TEST_CASE("apt: malformed programs give a parse error with file:line:col and the text",
           "[path][apt][errors]") {
     struct Case {

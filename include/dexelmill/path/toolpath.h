@@ -35,15 +35,22 @@ struct SourceRef {
 
 /// @brief A linear cutter-location move F(u) = start + (end - start) u, u in [0, 1] (Eq. 1),
 /// with a fixed unit tool axis: the tool extends from the CL point (its tip) along +axis.
+///
+/// A move whose program turns the tool axis on the way (an APT GOTO with a new i,j,k) keeps the
+/// axis it starts from in `startAxis`. The cutting loop sweeps fixed axes only, so the job refuses
+/// such a move where it can reach the stock (simulateJob); empty for every fixed-axis move.
 struct Move {
     Vec3 start{0.0};
     Vec3 end{0.0};
-    Vec3 axis{0.0, 0.0, 1.0};
+    Vec3 axis{0.0, 0.0, 1.0};  ///< the unit axis at the end (throughout, unless startAxis is set)
     int tool = 0;        ///< tool number, a key of the tool table
     bool rapid = false;  ///< G0 / RAPID: still cuts, and any cut is a collision to report
     SourceRef source;
+    std::optional<Vec3> startAxis;  ///< the unit axis at the start, when it differs from `axis`
 
     Vec3 feed() const { return end - start; }
+    /// @brief Whether the tool axis turns during the move (simultaneous multi-axis motion).
+    bool turns() const { return startAxis.has_value(); }
 };
 
 /// @brief The tool in the spindle changes before move `moveIndex`.
