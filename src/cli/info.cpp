@@ -33,7 +33,7 @@ void printProgram(const Program& p) {
     std::size_t rapids = 0;
     double feedLength = 0, rapidLength = 0;
     Box cutting;
-    bool tilted = false;
+    std::size_t vertical = 0, tilted = 0, turning = 0;
     for (const Move& m : p.path.moves) {
         const double len = glm::length(m.end - m.start);
         if (m.rapid) {
@@ -44,12 +44,16 @@ void printProgram(const Program& p) {
             cutting.expand(m.start);
             cutting.expand(m.end);
         }
-        if (std::abs(m.axis.z - 1.0) > 1e-12) tilted = true;
+        if (m.turns()) ++turning;
+        else if (std::abs(m.axis.z - 1.0) <= 1e-12) ++vertical;
+        else ++tilted;
     }
     std::printf("%-14s %zu (%zu rapid), feed %.6g mm, rapid %.6g mm\n", "moves", p.path.moves.size(), rapids,
                 feedLength, rapidLength);
     std::printf("%-14s %zu\n", "tool changes", p.path.toolChanges.size());
-    std::printf("%-14s %s\n", "tool axis", tilted ? "tilted (3+2)" : "+z throughout");
+    std::printf("%-14s %zu 3-axis (+z), %zu 3+2 (fixed, tilted), %zu turning the axis (simultaneous 5-axis, not "
+                "simulated yet)\n",
+                "moves by axis", vertical, tilted, turning);
     printBox("extent", p.path.bounds());
     printBox("cutting", cutting);
     for (const auto& [n, t] : p.tools) std::printf("%-14s T%d: %s\n", "tool", n, t.description().c_str());

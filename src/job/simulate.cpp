@@ -22,6 +22,7 @@
 #include "dexelmill/path/camotics.h"
 #include "dexelmill/refine/refine.h"
 #include "dexelmill/stock/cut.h"
+#include "dexelmill/sweep/turning.h"
 #include "dexelmill/surface/contour.h"
 #include "dexelmill/surface/levelset.h"
 #include "dexelmill/surface/voxelize.h"
@@ -96,6 +97,59 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
                                       "=SPEC");
     }
     return table;
+}
+
+/// A turn of the tool axis by theta moves no point of the tool (all within hypot(length, radius)
+/// of its tip) by more than theta times that reach. Below this (mm), the sweep's own accuracy, a
+/// move that turns is swept with its end axis as a fixed-axis move.
+constexpr double kAxisTurnTolerance = 1e-6;
+
+/// The cutting loop sweeps fixed axes only. A feed move whose axis turns and whose tool can reach
+/// the stock's box is refused with its place: sweeping it with one axis would be a wrong part, not
+/// an approximation (a flat D10 turning 30 degrees along 50 mm removes 8 % more or less). A rapid
+/// that turns is a reorientation whose path is the machine's, not the program's straight line: it
+/// is swept with its end axis, with a warning where it can reach the stock. A move out of reach
+/// cuts nothing whichever way the axis turns; those are noted.
+void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& stockBox,
+                       std::vector<ReportWarning>& notes) {
+    std::size_t inAir = 0, rapids = 0;
+    SourceLocation firstInAir, firstRapid;
+    for (const Move& m : path.moves) {
+        if (!m.turns()) continue;
+        const Vec3& a = *m.startAxis;
+        const double theta = turnAngle(m);
+        const Tool& tool = tools.at(m.tool);
+        if (theta * std::hypot(tool.totalLength(), tool.maxRadius()) <= kAxisTurnTolerance) continue;
+        const SourceLocation at = path.where(m.source);
+        std::ostringstream msg;
+        msg.precision(6);
+        msg << "the tool axis turns " << theta * 180.0 / 3.14159265358979323846 << " degrees during this move, from ("
+            << a.x << ", " << a.y << ", " << a.z << ") to (" << m.axis.x << ", " << m.axis.y << ", " << m.axis.z << ")";
+        // Opposite axes have no one great circle to turn on.
+        if (glm::dot(a, m.axis) < 0.0 && glm::length(glm::cross(a, m.axis)) <= tol::kParallel)
+            throw ParseError(at, msg.str() + ": the axes are opposite, so the way it turns is undefined");
+        if (!turningMoveBox(m, tool.totalLength(), tool.maxRadius()).overlaps(stockBox)) {
+            if (inAir++ == 0) firstInAir = at;
+        } else if (m.rapid) {
+            if (rapids++ == 0) firstRapid = at;
+        } else {
+            throw ParseError(at, msg.str() + ", within reach of the stock: feed moves that turn the axis "
+                                             "(simultaneous 5-axis) are not simulated yet, only fixed-axis 3-axis "
+                                             "and 3+2 moves");
+        }
+    }
+    auto note = [&](std::size_t n, const SourceLocation& first, const std::string& what) {
+        if (n == 0) return;
+        ReportWarning w;
+        w.where = {first.file, first.line};
+        w.message = std::to_string(n) + (n == 1 ? " move turns" : " moves turn") + " the tool axis " + what;
+        notes.push_back(w);
+    };
+    note(rapids, firstRapid,
+         "at rapid within reach of the stock (the first here): each is swept with its end axis throughout, "
+         "while the machine's own path for the turn decides where the tool really goes");
+    note(inAir, firstInAir,
+         "out of reach of the stock (the first here): they cut nothing, whichever way the axis turns");
 }
 
 struct LoadedStock {
@@ -334,6 +388,7 @@ Simulation runStages(const SimulateOptions& o) {
     }
     LoadedStock loaded = loadStock(o, budget, program, tools, project ? &*project : nullptr,
                                    designMesh ? &*designMesh : nullptr, report, notes);
+    checkTurningMoves(program.path, tools, loaded.box, notes);
     sim.stock.emplace(std::move(loaded.stock));
     TriDexelStock& stock = *sim.stock;
     report.stockBox = loaded.box;

@@ -219,7 +219,14 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     CHECK_THAT(report, Contains("\"refine\"") && Contains("\"points_tested\"") && Contains("\"edges_split\""));
     const Run prog = cli("info slot.ngc");
     CHECK(prog.code == 0);
-    CHECK_THAT(prog.out, Contains("moves") && Contains("tool changes"));
+    CHECK_THAT(prog.out, Contains("moves") && Contains("tool changes") && Contains("0 3+2 (fixed, tilted), 0 turning"));
+    cli.file("turn.apt", "MULTAX\nCUTTER/10\nFROM/0,0,0,0,0,1\nGOTO/40,0,0,0.5,0,0.8660254\nGOTO/0,0,0\nFINI\n");
+    const Run turning = cli("info turn.apt");
+    CHECK(turning.code == 0);
+    CHECK_THAT(turning.out, Contains("0 3-axis (+z), 1 3+2 (fixed, tilted), 1 turning the axis"));
+    const Run refused = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --quiet");
+    CHECK(refused.code != 0);
+    CHECK_THAT(refused.err, Contains("turn.apt:4: error: the tool axis turns 30 degrees"));
 }
 
 TEST_CASE("a study writes its table, CSV, plot and deviation meshes", "[cli][study]") {

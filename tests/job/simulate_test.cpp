@@ -187,6 +187,64 @@ TEST_CASE("a program without moves says so", "[job][errors]") {
     }
 }
 
+TEST_CASE("a move that turns the tool axis is refused where it can reach the stock, noted where not",
+          "[job][errors]") {
+    const fs::path dir = scratch("turning");
+    // A flat D10, 50 mm long overall, at tip height 0, fed along x while its axis turns from
+    // (-0.5, 0, 0.866) through (0, 0, 1) to (0.5, 0, 0.866). Its top rim, at 50 cos t + 5 sin t for
+    // a lean t, reaches sqrt(50^2 + 5^2) = 50.249 at t = 5.7 degrees, inside the turn (the ends
+    // reach 45.8): a stock from z = 50.2 is within reach, one from 50.3 is not. Below, the flat
+    // bottom tilted 30 degrees at either end reaches 5 sin 30 = 2.5 under the tip.
+    auto program = [&](const char* kind) {
+        return write(dir / "turn.apt", std::string("MULTAX\nCUTTER/10\nFROM/0,0,0,-0.5,0,0.8660254\n") + kind +
+                                           "GOTO/40,0,0,0.5,0,0.8660254\nFINI\n");
+    };
+    auto run = [&](const char* kind, double lo, double hi) {
+        SimulateOptions o;
+        o.inputs = {program(kind)};
+        o.stockBox = Box{Vec3(-20, -20, lo), Vec3(60, 20, hi)};
+        o.resolution = 1.0;
+        return runSimulation(o).report;
+    };
+    auto said = [](const SimulateReport& r, const std::string& what) {
+        for (const ReportWarning& w : r.warnings)
+            if (w.message.find(what) != std::string::npos && w.where.line >= 4) return true;
+        return false;
+    };
+    using Catch::Matchers::Contains;
+    CHECK_THROWS_WITH(run("", 50.2, 60), Contains("turn.apt:4: error") && Contains("turns 60 degrees") &&
+                                             Contains("not simulated yet"));
+    SimulateReport r;
+    REQUIRE_NOTHROW(r = run("", 50.3, 60));
+    CHECK(said(r, "1 move turns the tool axis out of reach"));
+    CHECK(r.removedVolumeMm3 == 0.0);
+    CHECK_THROWS_WITH(run("", -10, -2.4), Contains("within reach of the stock"));
+    REQUIRE_NOTHROW(r = run("", -10, -2.6));
+    CHECK(said(r, "1 move turns the tool axis out of reach"));
+    // A rapid that turns is a reorientation on the machine's own path: swept with its end axis,
+    // with a warning.
+    REQUIRE_NOTHROW(r = run("RAPID\n", 40, 60));
+    CHECK(said(r, "1 move turns the tool axis at rapid within reach"));
+
+    // Opposite axes: no great circle to turn on.
+    {
+        SimulateOptions o;
+        o.inputs = {write(dir / "flip.apt", "MULTAX\nCUTTER/10\nFROM/0,0,100,0,0,1\nGOTO/0,0,100,0,0,-1\n")};
+        o.stockBox = Box{Vec3(-20, -20, -20), Vec3(20, 20, 0)};
+        o.resolution = 1.0;
+        CHECK_THROWS_WITH(runSimulation(o), Contains("flip.apt:4: error") && Contains("opposite"));
+    }
+    // A turn too small to move any point of the tool by the sweep's accuracy is a fixed-axis move.
+    {
+        SimulateOptions o;
+        o.inputs = {write(dir / "tiny.apt", "MULTAX\nCUTTER/10\nFROM/0,0,-1,0,0,1\nGOTO/10,0,-1,1E-9,0,1\n")};
+        o.stockBox = Box{Vec3(-20, -20, -20), Vec3(20, 20, 0)};
+        o.resolution = 1.0;
+        REQUIRE_NOTHROW(r = runSimulation(o).report);
+        CHECK(r.removedVolumeMm3 > 0.0);
+    }
+}
+
 TEST_CASE("a project resolution that is not positive is replaced with a warning that says so", "[job][errors]") {
     const fs::path dir = scratch("bad_resolution");
     write(dir / "own.ngc", "G21 G90\nT1\nG0 X5 Y5 Z5\nG1 Z-1 F100\nG1 X15\n");

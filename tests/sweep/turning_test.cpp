@@ -1,0 +1,116 @@
+// The box of a move whose tool axis turns, against poses sampled along the turn: every sampled
+// point of the tool's cylinder lies inside the box, and the box is the tip's segment box plus the
+// sampled box of the same turn made in place, to within the sampling's shortfall.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "dexelmill/error.h"
+#include "dexelmill/sweep/turning.h"
+
+using namespace dexelmill;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// The axis after turning `from` by `angle` about the unit vector `about` (Rodrigues' formula).
+Vec3 rotated(const Vec3& from, const Vec3& about, double angle) {
+    return from * std::cos(angle) + glm::cross(about, from) * std::sin(angle) +
+           about * glm::dot(about, from) * (1.0 - std::cos(angle));
+}
+
+/// The box of a cylinder of radius r and length l (tip at its bottom centre), sampled at
+/// `poses` poses of the move and `around` points on each of its two rims (the farthest points of
+/// a cylinder along any direction lie on a rim).
+Box sampledBox(const Move& m, double l, double r, int poses, int around) {
+    const Vec3 a0 = m.startAxis ? *m.startAxis : m.axis;
+    const Vec3 cross = glm::cross(a0, m.axis);
+    const double angle = std::atan2(glm::length(cross), glm::dot(a0, m.axis));
+    const Vec3 about = glm::length(cross) > 0 ? glm::normalize(cross) : Vec3(0.0);
+    Box box;
+    for (int k = 0; k <= poses; ++k) {
+        const double u = double(k) / poses;
+        const Vec3 a = glm::length(cross) > 0 ? rotated(a0, about, u * angle) : a0;
+        const Vec3 tip = m.start + u * (m.end - m.start);
+        const Vec3 any = std::abs(a.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+        const Vec3 p = glm::normalize(glm::cross(a, any)), q = glm::cross(a, p);
+        for (int j = 0; j < around; ++j) {
+            const double phi = 2 * kPi * j / around;
+            const Vec3 rim = r * (std::cos(phi) * p + std::sin(phi) * q);
+            box.expand(tip + rim);
+            box.expand(tip + l * a + rim);
+        }
+    }
+    return box;
+}
+
+}  // namespace
+
+TEST_CASE("turning move box: holds and touches every pose of the cylinder, on random turns", "[sweep][turning]") {
+    std::mt19937 rng(20261123);
+    std::uniform_real_distribution<double> coord(-50, 50), unit(-1, 1), size(0.5, 60);
+    auto direction = [&] {
+        for (;;) {
+            const Vec3 v(unit(rng), unit(rng), unit(rng));
+            if (glm::length(v) > 0.1 && glm::length(v) <= 1) return glm::normalize(v);
+        }
+    };
+    for (int trial = 0; trial < 300; ++trial) {
+        Move m;
+        m.start = Vec3(coord(rng), coord(rng), coord(rng));
+        // Some moves turn in place, as a zero-length move.
+        m.end = trial % 5 == 0 ? m.start : Vec3(coord(rng), coord(rng), coord(rng));
+        m.axis = direction();
+        Vec3 a0 = direction();
+        if (glm::dot(a0, m.axis) < -0.999) a0 = -a0;
+        // Every few trials the turn passes through a lattice direction or is tiny.
+        if (trial % 7 == 1) a0 = glm::normalize(Vec3(0, 0, 1) - (m.axis - Vec3(0, 0, 1)));
+        if (trial % 11 == 2) a0 = glm::normalize(m.axis + Vec3(1e-7, 0, 0));
+        m.startAxis = a0;
+        const double l = size(rng), r = 0.1 * size(rng);
+        INFO("trial " << trial);
+        const Box box = turningMoveBox(m, l, r);
+        const Box sampled = sampledBox(m, l, r, 2000, 720);
+        Move inPlace = m;
+        inPlace.start = inPlace.end = Vec3(0.0);
+        const Box turn = sampledBox(inPlace, l, r, 2000, 720);
+        // Sampling falls short of the extremes by at most (l + r) (pi / 2000)^2 / 2 along the
+        // turn and r (2 pi / 720)^2 / 2 around the rim: below 1e-4 (l + r).
+        const double slack = 1e-4 * (l + r);
+        for (int i = 0; i < 3; ++i) {
+            CHECK(box.lo[i] <= sampled.lo[i] + 1e-9);
+            CHECK(box.hi[i] >= sampled.hi[i] - 1e-9);
+            const double tipLo = std::min(m.start[i], m.end[i]), tipHi = std::max(m.start[i], m.end[i]);
+            CHECK(box.lo[i] >= tipLo + turn.lo[i] - slack);
+            CHECK(box.hi[i] <= tipHi + turn.hi[i] + slack);
+        }
+    }
+}
+
+TEST_CASE("turning move box: fixed axes, a turn through +z and opposite axes", "[sweep][turning]") {
+    // A fixed vertical axis: the cylinder's own box.
+    Move m;
+    m.start = Vec3(0.0);
+    m.end = Vec3(10, 0, 0);
+    const Box fixed = turningMoveBox(m, 50, 5);
+    CHECK(fixed.lo == Vec3(-5, -5, 0));
+    CHECK(fixed.hi == Vec3(15, 5, 50));
+    CHECK(turnAngle(m) == 0.0);
+    // Turning from 30 degrees one way to 30 the other in the xz plane: the top rim reaches
+    // sqrt(50^2 + 5^2) where the axis leans atan(5 / 50), inside the turn; the bottom rim's lowest
+    // point is 5 sin 30 below the tip, at either end.
+    m.startAxis = Vec3(-0.5, 0, std::sqrt(0.75));
+    m.axis = Vec3(0.5, 0, std::sqrt(0.75));
+    CHECK(turnAngle(m) == Approx(kPi / 3));
+    const Box turning = turningMoveBox(m, 50, 5);
+    CHECK(turning.hi.z == Approx(std::sqrt(2525.0)));
+    CHECK(turning.lo.z == Approx(-2.5));
+    CHECK(turning.hi.x == Approx(10 + 25 + 5 * std::sqrt(0.75)));
+    CHECK(turning.lo.y == Approx(-5));
+    // Opposite axes: no great circle.
+    m.startAxis = Vec3(0, 0, -1);
+    m.axis = Vec3(0, 0, 1);
+    CHECK_THROWS_WITH(turningMoveBox(m, 50, 5), Catch::Matchers::Contains("opposite"));
+}
