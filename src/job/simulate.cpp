@@ -125,10 +125,13 @@ void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& 
         msg.precision(6);
         msg << "the tool axis turns " << theta * 180.0 / 3.14159265358979323846 << " degrees during this move, from ("
             << a.x << ", " << a.y << ", " << a.z << ") to (" << m.axis.x << ", " << m.axis.y << ", " << m.axis.z << ")";
-        // Opposite axes have no one great circle to turn on.
-        if (glm::dot(a, m.axis) < 0.0 && glm::length(glm::cross(a, m.axis)) <= tol::kParallel)
-            throw ParseError(at, msg.str() + ": the axes are opposite, so the way it turns is undefined");
-        if (!turningMoveBox(m, tool.totalLength(), tool.maxRadius()).overlaps(stockBox)) {
+        Box reach;
+        try {
+            reach = turningMoveBox(m, tool.totalLength(), tool.maxRadius());
+        } catch (const Error& e) {  // opposite axes: no one great circle to turn on
+            throw ParseError(at, msg.str() + ": " + e.what());
+        }
+        if (!reach.overlaps(stockBox)) {
             if (inAir++ == 0) firstInAir = at;
         } else if (m.rapid) {
             if (rapids++ == 0) firstRapid = at;

@@ -36,7 +36,7 @@ Box turningMoveBox(const Move& m, double length, double radius) {
     const double theta = turnAngle(m);
     const Vec3 across = m.axis - glm::dot(m.axis, a0) * a0;
     if (glm::dot(a0, m.axis) < 0.0 && glm::length(glm::cross(a0, m.axis)) <= tol::kParallel)
-        throw Error("the tool axis turns between opposite directions: no one great circle joins them");
+        throw Error("the axes are opposite: no one great circle joins them");
     const double acrossLength = glm::length(across);
     const Vec3 b = acrossLength > 0.0 ? across / acrossLength : Vec3(0.0);
     Box box;
