@@ -24,6 +24,7 @@
 #include "dexelmill/job/compare.h"
 #include "dexelmill/job/simulate.h"
 #include "dexelmill/tool/builders.h"
+#include "support/scratch.h"
 
 using namespace dexelmill;
 namespace fs = std::filesystem;
@@ -101,12 +102,7 @@ std::string asciiStl(const Mesh& m) {
     return s.str();
 }
 
-fs::path scratch(const std::string& name) {
-    const fs::path p = fs::temp_directory_path() / ("dexelmill_test_deviation_" + name);
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-}
+fs::path scratch(const std::string& name) { return testing::scratchFolder("dexelmill_test_deviation_", name); }
 
 // A sphere of radius 5.9 against the cube of half-side 5: it bulges 0.9 mm out through each face's
 // middle (where the meshes below have vertices), and its points along the diagonals lie

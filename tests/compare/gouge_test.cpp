@@ -16,6 +16,7 @@
 #include "dexelmill/compare/design.h"
 #include "dexelmill/job/simulate.h"
 #include "dexelmill/tool/builders.h"
+#include "support/scratch.h"
 
 using namespace dexelmill;
 namespace fs = std::filesystem;
@@ -55,12 +56,7 @@ std::string writeStl(const fs::path& p, const std::string& facets) {
     return p.string();
 }
 
-fs::path scratch(const std::string& name) {
-    const fs::path p = fs::temp_directory_path() / ("dexelmill_test_design_" + name);
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-}
+fs::path scratch(const std::string& name) { return testing::scratchFolder("dexelmill_test_design_", name); }
 
 /// The stock of every case: 40 x 40 x 10 mm, top at z = 0, at a spacing of 0.25 mm.
 const Box kStock{Vec3(0.0, 0.0, -10.0), Vec3(40.0, 40.0, 0.0)};

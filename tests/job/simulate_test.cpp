@@ -11,6 +11,7 @@
 #include "dexelmill/error.h"
 #include "dexelmill/job/simulate.h"
 #include "dexelmill/tool/builders.h"
+#include "support/scratch.h"
 
 using namespace dexelmill;
 namespace fs = std::filesystem;
@@ -19,13 +20,7 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-/// A fresh folder under the system's temporary folder.
-fs::path scratch(const std::string& name) {
-    const fs::path p = fs::temp_directory_path() / ("dexelmill_test_" + name);
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-}
+fs::path scratch(const std::string& name) { return testing::scratchFolder("dexelmill_test_", name); }
 
 std::string write(const fs::path& p, const std::string& text) {
     std::ofstream(p) << text;
