@@ -68,6 +68,13 @@ constexpr double kFoldMargin = 1e-3;
 /// admits creases up to 174 degrees sharp.
 constexpr double kFlipFacing = 0.05;
 
+/// A smooth patch's vertex leaves the loop's mass point along the mean normal only as far as keeps
+/// each fan triangle within this angle of that normal. Its crossing normals lie within half the
+/// feature angle of the mean, so a fan triangle steeper than this cannot follow the surface; where
+/// the loop is a sliver (two crossings a micrometre apart near one lattice point), the least-squares
+/// offset would otherwise stand two fan triangles on edge over it.
+constexpr double kMaxFanTilt = 3.14159265358979323846 / 3.0;  // 60 degrees
+
 /// How far from a loop's mass point towards a crossing, or the midpoint of two, the last resort of
 /// fold repair tries its candidate positions.
 constexpr double kCandidateReach[] = {0.5, 0.9};
@@ -640,7 +647,7 @@ private:
                 den += c * c;
             }
             rank = 1;
-            v = mass + mean * (num / den);
+            v = mass + mean * fanOffset(loop, len, mass, mean, num / den);
         } else if (planes > 0) {
             Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
             Eigen::Vector3d atb = Eigen::Vector3d::Zero();
@@ -673,6 +680,32 @@ private:
             }
         }
         return glm::clamp(v, lo, hi);
+    }
+
+    /// The offset s, nearest `wanted`, of the vertex mass + s n at which every fan triangle that is
+    /// within kMaxFanTilt of n at s = 0 stays so. The fan triangle over crossings p, q has area
+    /// vector A0 - s (n x e), with A0 = (p - m) x (q - m) and e = q - p; its component along n is
+    /// A0 . n whatever s is, so the bound |A0_perp - s (n x e)| <= tan(kMaxFanTilt) (A0 . n) is a
+    /// quadratic in s whose solutions form an interval about 0. The result lies in all of them.
+    double fanOffset(const std::uint32_t* loop, int len, const Vec3& mass, const Vec3& n, double wanted) const {
+        const double tanTilt = std::tan(kMaxFanTilt);
+        double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
+        for (int i = 0; i < len; ++i) {
+            const Vec3 p = mesh_.vertices[loop[i]] - mass;
+            const Vec3 q = mesh_.vertices[loop[i + 1 == len ? 0 : i + 1]] - mass;
+            const Vec3 a0 = glm::cross(p, q);
+            const double along = glm::dot(a0, n);
+            const Vec3 perp = a0 - along * n;
+            const Vec3 w = glm::cross(n, q - p);
+            // |perp - s w|^2 <= (tanTilt along)^2: a s^2 - 2 b s + c <= 0.
+            const double a = glm::dot(w, w), b = glm::dot(perp, w);
+            const double c = glm::dot(perp, perp) - tanTilt * tanTilt * along * along;
+            if (!(along > 0.0) || !(c <= 0.0) || !(a > 0.0)) continue;  // steep already, or s moves nothing
+            const double root = std::sqrt(b * b - a * c);                 // real: c <= 0
+            lo = std::max(lo, (b - root) / a);
+            hi = std::min(hi, (b + root) / a);
+        }
+        return std::clamp(wanted, lo, hi);
     }
 
     /// Whether a patch's crossings span a convex crease: one lies on the material side of

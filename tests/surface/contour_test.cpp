@@ -235,3 +235,52 @@ TEST_CASE("contour: the block's own faces, edges and corners are exact", "[surfa
     CHECK(r.faces.max <= 1e-6);
     CHECK(r.check.signedVolume == Approx(box.volume()).epsilon(1e-7));
 }
+
+TEST_CASE("contour: surfaces that graze lattice points stand no triangle on edge", "[surface][contour]") {
+    // A spherical void whose surface passes a micrometre from a lattice point, with its normal
+    // there nearly across a lattice axis, makes a cell whose loop is a sliver: two crossings
+    // next to the lattice point and one a cell away. The least-squares vertex of such a loop
+    // lies off its (nearly degenerate) plane, and its fan would stand on edge over the sliver.
+    // Every triangle on the sphere must face within 80 degrees of the sphere's normal: the fan
+    // keeps within 60 degrees of its crossings' mean normal, which is within half the feature
+    // angle (17 degrees) of the surface's.
+    const double h = 1.0;
+    const Box box{Vec3(0.0), Vec3(16.0)};
+    const double kDegree = 3.14159265358979323846 / 180.0;
+    const double minCosine = std::cos(80.0 * kDegree);
+    std::mt19937 rng(20261124);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    std::uniform_int_distribution<int> lattice(6, 9);
+    std::size_t onEdge = 0, checked = 0;
+    std::string first;
+    for (int n = 0; n < 80; ++n) {
+        const double r = 2.0 + 0.5 * (unit(rng) + 1.0);
+        // The lattice point (i + 1/2) h, and the sphere's normal there: random, or across axis n % 3.
+        const Vec3 p = (Vec3(lattice(rng), lattice(rng), lattice(rng)) + 0.5) * h;
+        Vec3 d(unit(rng), unit(rng), unit(rng));
+        if (n % 2 == 0) d[n % 3] = 1e-3 * unit(rng);
+        d = glm::normalize(d);
+        const Vec3 centre = p + (r + 1e-6 * unit(rng)) * d;
+        const Part part{box, {testing::sphere(centre, r)}};
+        const Result res = contourPart(part, h);
+        CHECK(res.check.ok());
+        for (const Mesh::Triangle& t : res.mesh.triangles) {
+            const Vec3 a = res.mesh.vertices[t[0]], b = res.mesh.vertices[t[1]], c = res.mesh.vertices[t[2]];
+            const Vec3 mid = (a + b + c) / 3.0;
+            if (glm::length(mid - centre) > r + 0.5 * h) continue;  // on the block's faces
+            const Vec3 area = glm::cross(b - a, c - a);
+            const Vec3 outward = -part.cuts[0].normal(mid);  // out of the material: into the void
+            ++checked;
+            if (glm::dot(area, outward) < minCosine * glm::length(area) && onEdge++ == 0) {
+                std::ostringstream out;
+                out << "first: sphere " << n << " (centre " << centre.x << ", " << centre.y << ", " << centre.z
+                    << ", radius " << r << "), triangle at (" << mid.x << ", " << mid.y << ", " << mid.z << ") faces "
+                    << std::acos(glm::dot(area, outward) / glm::length(area)) / kDegree << " degrees from the surface";
+                first = out.str();
+            }
+        }
+    }
+    INFO(checked << " triangles on the spheres; " << onEdge << " on edge; " << first);
+    CHECK(checked > 0);
+    CHECK(onEdge == 0);
+}
