@@ -7,6 +7,7 @@
 #include <set>
 #include <sstream>
 
+#include <glm/trigonometric.hpp>
 #include <tbb/task_arena.h>
 
 #include "dexelmill/compare/design.h"
@@ -123,7 +124,7 @@ void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& 
         const SourceLocation at = path.where(m.source);
         std::ostringstream msg;
         msg.precision(6);
-        msg << "the tool axis turns " << theta * 180.0 / 3.14159265358979323846 << " degrees during this move, from ("
+        msg << "the tool axis turns " << glm::degrees(theta) << " degrees during this move, from ("
             << a.x << ", " << a.y << ", " << a.z << ") to (" << m.axis.x << ", " << m.axis.y << ", " << m.axis.z << ")";
         Box reach;
         try {

@@ -72,8 +72,8 @@ constexpr double kFlipFacing = 0.05;
 /// each fan triangle within this angle of that normal. Its crossing normals lie within half the
 /// feature angle of the mean, so a fan triangle steeper than this cannot follow the surface; where
 /// the loop is a sliver (two crossings a micrometre apart near one lattice point), the least-squares
-/// offset would otherwise stand two fan triangles on edge over it.
-constexpr double kMaxFanTilt = 3.14159265358979323846 / 3.0;  // 60 degrees
+/// offset would otherwise stand two fan triangles on edge over it. Kept as its squared tangent.
+constexpr double kMaxFanTiltTan2 = 3.0;  // tan^2(60 degrees)
 
 /// How far from a loop's mass point towards a crossing, or the midpoint of two, the last resort of
 /// fold repair tries its candidate positions.
@@ -683,12 +683,11 @@ private:
     }
 
     /// The offset s, nearest `wanted`, of the vertex mass + s n at which every fan triangle that is
-    /// within kMaxFanTilt of n at s = 0 stays so. The fan triangle over crossings p, q has area
+    /// within 60 degrees of n at s = 0 stays so. The fan triangle over crossings p, q has area
     /// vector A0 - s (n x e), with A0 = (p - m) x (q - m) and e = q - p; its component along n is
-    /// A0 . n whatever s is, so the bound |A0_perp - s (n x e)| <= tan(kMaxFanTilt) (A0 . n) is a
-    /// quadratic in s whose solutions form an interval about 0. The result lies in all of them.
+    /// A0 . n whatever s is, so the bound |A0_perp - s (n x e)|^2 <= kMaxFanTiltTan2 (A0 . n)^2 is
+    /// a quadratic in s whose solutions form an interval about 0. The result lies in all of them.
     double fanOffset(const std::uint32_t* loop, int len, const Vec3& mass, const Vec3& n, double wanted) const {
-        const double tanTilt = std::tan(kMaxFanTilt);
         double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
         for (int i = 0; i < len; ++i) {
             const Vec3 p = mesh_.vertices[loop[i]] - mass;
@@ -697,9 +696,9 @@ private:
             const double along = glm::dot(a0, n);
             const Vec3 perp = a0 - along * n;
             const Vec3 w = glm::cross(n, q - p);
-            // |perp - s w|^2 <= (tanTilt along)^2: a s^2 - 2 b s + c <= 0.
+            // |perp - s w|^2 <= kMaxFanTiltTan2 along^2: a s^2 - 2 b s + c <= 0.
             const double a = glm::dot(w, w), b = glm::dot(perp, w);
-            const double c = glm::dot(perp, perp) - tanTilt * tanTilt * along * along;
+            const double c = glm::dot(perp, perp) - kMaxFanTiltTan2 * along * along;
             if (!(along > 0.0) || !(c <= 0.0) || !(a > 0.0)) continue;  // steep already, or s moves nothing
             const double root = std::sqrt(b * b - a * c);                 // real: c <= 0
             lo = std::max(lo, (b - root) / a);
