@@ -1,0 +1,184 @@
+// A convex part of a tool grown by r (offsetPart), against the distance to the part measured by a
+// polygon of its own.
+//
+// The oracle: the part's meridian half-section { 0 <= rho <= R(z), za <= z <= zb }, with R taken
+// from the test's tool models (tests/sweep/tool_models.h, written from the builders' parameters,
+// not from the profile pieces), is replaced by the polygon through points (R(z), z) sampled so that
+// the section lies within kGap / 2 of it (polygonOf). R is concave on a convex part, so its chords
+// lie inside the section: the distance D of a point to the part and the polygon's distance P
+// satisfy P - kGap / 2 <= D <= P. The distance in space is the
+// distance in the meridian plane (the part is a solid of revolution).
+//
+// Checks, for random tools of every kind, random radii and random lines through the grown part:
+// the grown interval's ends lie at distance r from the part, and its midpoint within r; a line
+// that the oracle puts farther than r from the part everywhere gets no interval.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "dexelmill/tool/offset.h"
+#include "sweep/tool_models.h"
+
+using namespace dexelmill;
+
+namespace {
+
+/// Twice the largest distance of the part's section from the oracle's polygon (mm).
+constexpr double kGap = 1e-4;
+/// Halvings of a span of the polygon: 2^-40 of a tool's length is far below kGap.
+constexpr int kMaxDepth = 40;
+/// Rounding of the grown interval's ends and of the oracle's polygon distance (mm): the root
+/// finding of torus pieces stops at about 1e-13 of their size, far below this.
+constexpr double kRound = 1e-7;
+/// Spacing of the points a missed line is checked at (mm).
+constexpr double kLineStep = 0.02;
+
+struct Polygon {
+    std::vector<double> rho, z;
+};
+
+/// The meridian boundary of one oracle part, bottom centre to top centre. On a span [z0, z1] the
+/// curve's height above its chord, d(z), is concave and zero at both ends, so its largest value is
+/// at most 2 d(midpoint) (were the peak at z* left of the midpoint, concavity on [z*, z1] puts
+/// d(midpoint) at half of d(z*) or more; the same on the right). Spans are halved until that bound
+/// is within kGap / 2, so the section lies within kGap / 2 of the polygon.
+Polygon polygonOf(const oracle::Part& part) {
+    Polygon poly;
+    poly.rho.push_back(0.0), poly.z.push_back(part.za);
+    poly.rho.push_back(part.radius(part.za)), poly.z.push_back(part.za);
+    std::function<void(double, double, double, double, int)> sample = [&](double z0, double r0, double z1, double r1,
+                                                                          int depth) {
+        const double zm = 0.5 * (z0 + z1), rm = part.radius(zm);
+        if (depth < kMaxDepth && 2.0 * (rm - 0.5 * (r0 + r1)) > kGap / 2) {
+            sample(z0, r0, zm, rm, depth + 1);
+            sample(zm, rm, z1, r1, depth + 1);
+            return;
+        }
+        poly.rho.push_back(r1), poly.z.push_back(z1);
+    };
+    sample(part.za, part.radius(part.za), part.zb, part.radius(part.zb), 0);
+    poly.rho.push_back(0.0), poly.z.push_back(part.zb);
+    return poly;
+}
+
+double segmentDistance(double px, double py, double ax, double ay, double bx, double by) {
+    const double dx = bx - ax, dy = by - ay, len2 = dx * dx + dy * dy;
+    const double t = len2 > 0.0 ? std::clamp(((px - ax) * dx + (py - ay) * dy) / len2, 0.0, 1.0) : 0.0;
+    return std::hypot(px - ax - t * dx, py - ay - t * dy);
+}
+
+/// The polygon's distance to the point (rho, z), rho >= 0: 0 inside; any value of at least `cap`
+/// when the distance is at least `cap`. The lateral chain (vertices 1 .. n-2) rises monotonically,
+/// and a segment is no nearer than its height gap, so the scan runs out from the point's height and
+/// stops where that gap exceeds the best distance or the cap.
+double polygonDistance(const Polygon& poly, double rho, double z, double cap) {
+    const std::size_t n = poly.rho.size();
+    double best = std::min({cap, segmentDistance(rho, z, poly.rho[0], poly.z[0], poly.rho[1], poly.z[1]),
+                            segmentDistance(rho, z, poly.rho[n - 2], poly.z[n - 2], poly.rho[n - 1], poly.z[n - 1])});
+    const auto first = poly.z.begin() + 1, last = poly.z.begin() + long(n - 1);
+    const std::size_t at = std::size_t(std::lower_bound(first, last, z) - poly.z.begin());
+    bool inside = z >= poly.z.front() && z <= poly.z.back();
+    if (inside && at > 1 && at < n - 1) {
+        const double z0 = poly.z[at - 1], z1 = poly.z[at];
+        const double edge = z1 > z0 ? poly.rho[at - 1] + (poly.rho[at] - poly.rho[at - 1]) * (z - z0) / (z1 - z0)
+                                    : std::max(poly.rho[at - 1], poly.rho[at]);
+        inside = rho <= edge;
+    } else if (inside) {
+        inside = rho <= poly.rho[at <= 1 ? 1 : n - 2];
+    }
+    if (inside) return 0.0;
+    for (std::size_t i = std::max<std::size_t>(at, 2); i < n - 1; ++i) {  // segments (i-1, i) upwards
+        if (poly.z[i - 1] - z > best) break;
+        best = std::min(best, segmentDistance(rho, z, poly.rho[i - 1], poly.z[i - 1], poly.rho[i], poly.z[i]));
+    }
+    for (std::size_t i = std::min(at, n - 2); i >= 2; --i) {  // segments (i-1, i) downwards
+        if (z - poly.z[i] > best) break;
+        best = std::min(best, segmentDistance(rho, z, poly.rho[i - 1], poly.z[i - 1], poly.rho[i], poly.z[i]));
+    }
+    return best;
+}
+
+/// The tool frame's meridian coordinates of a point: tip at the origin, axis +z.
+double rhoOf(const Vec3& p) { return std::hypot(p.x, p.y); }
+
+}  // namespace
+
+TEST_CASE("offsetPart: a grown convex part ends at distance r from the part", "[tool][offset]") {
+    std::mt19937_64 rng(20261123);
+    const int perKind = std::max(2, int(40 * oracle::testScale()));
+    int checked = 0, missed = 0;
+    for (int k = 0; k < int(models::Kind::Count); ++k) {
+        for (int n = 0; n < perKind; ++n) {
+            const models::Model m = models::make(models::Kind(k), rng);
+            REQUIRE(m.parts.size() == m.tool.convexParts().size());
+            for (std::size_t p = 0; p < m.parts.size(); ++p) {
+                const oracle::Part& part = m.parts[p];
+                const Polygon poly = polygonOf(part);
+                const double r = std::exp(models::uniform(rng, std::log(1e-4), std::log(5.0)));
+                const auto grown = offsetPart(m.tool, m.tool.convexParts()[p], r);
+                for (int l = 0; l < 20; ++l) {
+                    // A random line through a point near the part.
+                    const double zc = models::uniform(rng, part.za - 2 * r, part.zb + 2 * r);
+                    const double rc = models::uniform(rng, 0.0, part.rBound + 2 * r);
+                    const Vec3 through(rc, 0.0, zc);
+                    Vec3 dir(models::uniform(rng, -1, 1), models::uniform(rng, -1, 1), models::uniform(rng, -1, 1));
+                    if (l % 4 == 0) dir = Vec3(0.0, 0.0, 1.0);  // along the axis
+                    if (l % 4 == 1) dir = Vec3(0.0, 1.0, 0.0);  // across it
+                    if (glm::length(dir) < 1e-3) continue;
+                    dir = glm::normalize(dir);
+                    const Line line{through - 100.0 * dir, dir};
+                    const Interval iv = intersectPieces(grown, LocalLine::make(ToolPose{}, line));
+                    INFO(models::name(models::Kind(k)) << " part " << p << " r " << r << " line through ("
+                                                       << through.x << ", " << through.y << ", " << through.z
+                                                       << ") along (" << dir.x << ", " << dir.y << ", " << dir.z << ")");
+                    auto distance = [&](double t) {
+                        const Vec3 q = line.at(t);
+                        return polygonDistance(poly, rhoOf(q), q.z, 2.0 * r + kGap);
+                    };
+                    if (iv.isEmpty()) {
+                        // No point of the line within r of the part: none where the polygon, which
+                        // is never nearer than the part, is already within r.
+                        const double reach = part.zb - part.za + part.rBound + 3 * r;
+                        for (double t = 100.0 - reach; t <= 100.0 + reach; t += kLineStep)
+                            if (distance(t) < r - kRound) FAIL_CHECK("within r at t = " << t);
+                        ++missed;
+                        continue;
+                    }
+                    for (const double t : {iv.lo, iv.hi}) {
+                        const double d = distance(t);
+                        CHECK(d >= r - kRound);
+                        CHECK(d - kGap / 2 <= r + kRound);
+                    }
+                    CHECK(distance(0.5 * (iv.lo + iv.hi)) - kGap / 2 <= r + kRound);
+                    ++checked;
+                }
+            }
+        }
+    }
+    CHECK(checked > 1000);
+    CHECK(missed > 10);
+}
+
+TEST_CASE("offsetPart: growing by zero keeps the part, and a flat end mill's grown disk has rounded rims",
+          "[tool][offset]") {
+    const Tool flat = flatEndMill(10.0, {20.0, 20.0});
+    const ConvexPart& part = flat.convexParts().front();
+    // A line across the axis at the tip's height: the disk of radius 5, grown by 1 to 6.
+    const Line across{Vec3(-50.0, 0.0, 0.0), Vec3(1.0, 0.0, 0.0)};
+    const Interval bare = intersectPieces(offsetPart(flat, part, 0.0), LocalLine::make(ToolPose{}, across));
+    CHECK(bare.lo == Approx(45.0));
+    CHECK(bare.hi == Approx(55.0));
+    const Interval grown = intersectPieces(offsetPart(flat, part, 1.0), LocalLine::make(ToolPose{}, across));
+    CHECK(grown.lo == Approx(44.0));
+    CHECK(grown.hi == Approx(56.0));
+    // 0.6 below the bottom, the rim's torus of radius 1: half-width 5 + sqrt(1 - 0.36) = 5.8.
+    const Line below{Vec3(-50.0, 0.0, -0.6), Vec3(1.0, 0.0, 0.0)};
+    const Interval rim = intersectPieces(offsetPart(flat, part, 1.0), LocalLine::make(ToolPose{}, below));
+    CHECK(rim.hi - 50.0 == Approx(5.8));
+    // Along the axis: from 1 below the tip to 1 above the top.
+    const Line axis{Vec3(0.0, 0.0, -50.0), Vec3(0.0, 0.0, 1.0)};
+    const Interval along = intersectPieces(offsetPart(flat, part, 1.0), LocalLine::make(ToolPose{}, axis));
+    CHECK(along.lo == Approx(49.0));
+    CHECK(along.hi == Approx(71.0));
+}
