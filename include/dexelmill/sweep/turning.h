@@ -1,15 +1,26 @@
 /// @file turning.h
-/// @brief Moves whose tool axis turns (simultaneous 5-axis): the angle they turn through, and a
-/// box every pose of the tool stays in. The cutting loop does not sweep them yet; the job uses
-/// these to refuse a turning move that can reach the stock and to let one in the air pass.
+/// @brief Moves whose tool axis turns (simultaneous 5-axis): the angle they turn through, a box
+/// every pose of the tool stays in, and their swept volume along lines, exact within a stated
+/// tolerance epsilon.
 ///
 /// Motion law (APT MULTAX): the tip runs on the straight line from `start` to `end` and the unit
-/// axis turns on the great circle from `startAxis` to `axis` (the shorter arc, at a uniform rate).
+/// axis turns on the great circle from `startAxis` to `axis` (the shorter arc, at a uniform rate):
+///   p(u) = start + u f,   a(u) = a0 cos(theta u) + b sin(theta u),   u in [0, 1],
+/// with f = end - start, theta the angle between the axes and b the unit tangent at a0 towards
+/// the end axis. T(u) is the tool solid at that pose, and the swept volume S is the union of T(u).
 #pragma once
 
+#include <vector>
+
+#include "dexelmill/geometry/types.h"
 #include "dexelmill/path/toolpath.h"
+#include "dexelmill/tool/line_query.h"
+#include "dexelmill/tool/tool.h"
 
 namespace dexelmill {
+
+/// @brief The default tolerance epsilon (mm) of a turning move's sweep.
+constexpr double kDefaultTurnTolerance = 1e-4;
 
 /// @brief The angle (radians, in [0, pi]) the axis of a move turns through; 0 for a fixed axis.
 double turnAngle(const Move& move);
@@ -29,5 +40,65 @@ double turnAngle(const Move& move);
 /// at 0 and length / hypot(length, radius), so the ends of c's range and those peaks bound it.
 /// @throw Error if the axes are opposite (no one great circle joins them).
 Box turningMoveBox(const Move& move, double length, double radius);
+
+/// @brief The swept volume of a tool (or tool region) on one move whose axis turns, along lines.
+///
+/// What a line query returns, for a unit-direction line and the set O of its output intervals:
+///  1. O lies within epsilon of S: O is a union of exact static-pose intervals (inside S, up to
+///     their rounding) and of gaps between them whose every point is within epsilon of a pose.
+///  2. Every point of the line deeper than epsilon inside some T(u) (farther than epsilon from the
+///     complement of T(u)) lies in O. Every point of S that O misses lies within epsilon of a tool
+///     pose whose interval O holds, so S and the union of those poses are within epsilon of each
+///     other (Hausdorff distance).
+/// The proof and the search are in turning.cpp (method notes at TurningSweep::intersect).
+///
+/// Built once per move; thread-safe for concurrent queries.
+class TurningSweep {
+  public:
+    /// @brief Sweeps `tool` along `move`, whose axis turns from `*move.startAxis` to `move.axis`
+    /// (a move with no start axis is swept with its one axis).
+    /// @throw Error if the axes are opposite or epsilon is not positive and finite.
+    TurningSweep(const Tool& tool, const Move& move, double epsilon = kDefaultTurnTolerance);
+
+    /// @brief The tool pose at move parameter u in [0, 1].
+    ToolPose pose(double u) const;
+    /// @brief A bound on how fast any point of the tool moves: |f| + theta * (the largest distance
+    /// of a tool point from the tip), in mm per unit of u.
+    double speed() const { return speed_; }
+    double epsilon() const { return epsilon_; }
+    /// @brief A box that holds every pose of the tool.
+    const Box& bounds() const { return bounds_; }
+    /// @brief A cheap interval of `line` that holds every output interval: the line inside
+    /// bounds(). Empty when the line misses the box.
+    Interval bound(const Line& line) const;
+
+    /// @brief The swept material along `line` (unit direction), sorted, disjoint, with the Hermite
+    /// data at each end: the outward normal of the tool pose whose interval made that end (marked
+    /// sharp on a rim of that tool).
+    /// @param care where along the line the answer matters (sorted, disjoint line parameters, for
+    /// example a dexel's material); empty means everywhere. Outside it, guarantee 2 is waived:
+    /// only the stretches of O that meet `care` are complete.
+    std::vector<LineHit> intersect(const Line& line, const std::vector<Interval>& care = {}) const;
+    /// @brief As intersect, without the Hermite data.
+    std::vector<Interval> intersectAll(const Line& line) const;
+
+  private:
+    /// The Hermite data of an output end at line parameter t, made by part `part` at pose u.
+    void endNormal(const Line& line, double t, double u, std::size_t part, Vec3& normal, bool& sharp) const;
+
+    Tool tool_;
+    Vec3 start_{0.0}, feed_{0.0};
+    Vec3 a0_{0.0, 0.0, 1.0}, b_{0.0};
+    double theta_ = 0.0;
+    double speed_ = 0.0;
+    double epsilon_ = kDefaultTurnTolerance;
+    int maxLevel_ = 0;
+    Box bounds_;
+    /// grown_[k][p]: convex part p grown by speed / 2^(k + 1), the reach of a node of width 2^-k
+    /// (turning.cpp), for the levels k < maxLevel_ whose reach exceeds epsilon.
+    std::vector<std::vector<std::vector<ProfilePiece>>> grown_;
+    /// Each convex part grown by epsilon: the reach that closes a gap between two intervals.
+    std::vector<std::vector<ProfilePiece>> grownEpsilon_;
+};
 
 }  // namespace dexelmill
