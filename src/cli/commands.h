@@ -9,6 +9,7 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/affine.h"
+#include "dexelmill/sweep/turning.h"
 
 namespace dexelmill {
 struct SimulateOptions;
@@ -35,6 +36,7 @@ struct SimulateArgs {
     double gougeTolerance = 0.01;
     double excessTolerance = 0.05;
     double chordTolerance = 0.001;
+    double turnTolerance = kDefaultTurnTolerance;
     double adaptivity = 0.0;
     int refineRounds = 0;
     double refineTolerance = 0.002;

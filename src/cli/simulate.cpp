@@ -113,6 +113,7 @@ SimulateOptions toOptions(const SimulateArgs& a) {
         throw UsageError(std::string("--families: ") + e.what());
     }
     o.chordTolerance = a.chordTolerance;
+    o.turnTolerance = a.turnTolerance;
     if (!(a.adaptivity >= 0.0 && a.adaptivity <= 1.0)) throw UsageError("--adaptivity must lie in [0, 1]");
     o.adaptivity = a.adaptivity;
     o.refineRounds = a.refineRounds;
@@ -199,6 +200,12 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
                   "      optional ,length=L (cutting length) ,total=T (stick-out); mm, degrees.\n"
                   "A bare SPEC serves every tool number nothing else defines.");
     c->add_option("--chord-tolerance", a.chordTolerance, "Largest arc-to-chord distance when arcs are linearised (mm)")
+        ->check(numberCheck(false))
+        ->capture_default_str();
+    c->add_option("--turn-tolerance", a.turnTolerance,
+                  "Tolerance of the sweep of a move whose tool axis turns (simultaneous 5-axis), in mm:\n"
+                  "material deeper than this inside some pose of the tool is removed, and nothing the tool\n"
+                  "never reaches is")
         ->check(numberCheck(false))
         ->capture_default_str();
     c->add_option("--mesher", a.mesher,

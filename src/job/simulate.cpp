@@ -100,60 +100,39 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
     return table;
 }
 
-/// A turn of the tool axis by theta moves no point of the tool (all within hypot(length, radius)
-/// of its tip) by more than theta times that reach. Below this (mm), the sweep's own accuracy, a
-/// move that turns is swept with its end axis as a fixed-axis move.
-constexpr double kAxisTurnTolerance = 1e-6;
-
-/// The cutting loop sweeps fixed axes only. A feed move whose axis turns and whose tool can reach
-/// the stock's box is refused with its place: sweeping it with one axis would be a wrong part, not
-/// an approximation (a flat D10 turning 30 degrees along 50 mm removes 8 % more or less). A rapid
+/// Moves whose tool axis turns. A feed move is swept turning (TurningSweep, within the job's
+/// turn tolerance); its axes must not be opposite, where no one great circle joins them. A rapid
 /// that turns is a reorientation whose path is the machine's, not the program's straight line: it
-/// is swept with its end axis, with a warning where it can reach the stock. A move out of reach
-/// cuts nothing whichever way the axis turns; those are noted.
+/// is swept with its end axis, with a warning where it can reach the stock.
 void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& stockBox,
                        std::vector<ReportWarning>& notes) {
-    std::size_t inAir = 0, rapids = 0;
-    SourceLocation firstInAir, firstRapid;
+    std::size_t rapids = 0;
+    SourceLocation firstRapid;
     for (const Move& m : path.moves) {
         if (!m.turns()) continue;
         const Vec3& a = *m.startAxis;
-        const double theta = turnAngle(m);
         const Tool& tool = tools.at(m.tool);
-        if (theta * std::hypot(tool.totalLength(), tool.maxRadius()) <= kAxisTurnTolerance) continue;
         const SourceLocation at = path.where(m.source);
-        std::ostringstream msg;
-        msg.precision(6);
-        msg << "the tool axis turns " << glm::degrees(theta) << " degrees during this move, from ("
-            << a.x << ", " << a.y << ", " << a.z << ") to (" << m.axis.x << ", " << m.axis.y << ", " << m.axis.z << ")";
         Box reach;
         try {
             reach = turningMoveBox(m, tool.totalLength(), tool.maxRadius());
         } catch (const Error& e) {  // opposite axes: no one great circle to turn on
-            throw ParseError(at, msg.str() + ": " + e.what());
+            std::ostringstream msg;
+            msg.precision(6);
+            msg << "the tool axis turns " << glm::degrees(turnAngle(m)) << " degrees during this move, from (" << a.x
+                << ", " << a.y << ", " << a.z << ") to (" << m.axis.x << ", " << m.axis.y << ", " << m.axis.z
+                << "): " << e.what();
+            throw ParseError(at, msg.str());
         }
-        if (!reach.overlaps(stockBox)) {
-            if (inAir++ == 0) firstInAir = at;
-        } else if (m.rapid) {
-            if (rapids++ == 0) firstRapid = at;
-        } else {
-            throw ParseError(at, msg.str() + ", within reach of the stock: feed moves that turn the axis "
-                                             "(simultaneous 5-axis) are not simulated yet, only fixed-axis 3-axis "
-                                             "and 3+2 moves");
-        }
+        if (m.rapid && reach.overlaps(stockBox) && rapids++ == 0) firstRapid = at;
     }
-    auto note = [&](std::size_t n, const SourceLocation& first, const std::string& what) {
-        if (n == 0) return;
-        ReportWarning w;
-        w.where = {first.file, first.line};
-        w.message = std::to_string(n) + (n == 1 ? " move turns" : " moves turn") + " the tool axis " + what;
-        notes.push_back(w);
-    };
-    note(rapids, firstRapid,
-         "at rapid within reach of the stock (the first here): each is swept with its end axis throughout, "
-         "while the machine's own path for the turn decides where the tool really goes");
-    note(inAir, firstInAir,
-         "out of reach of the stock (the first here): they cut nothing, whichever way the axis turns");
+    if (rapids == 0) return;
+    ReportWarning w;
+    w.where = {firstRapid.file, firstRapid.line};
+    w.message = std::to_string(rapids) + (rapids == 1 ? " move turns" : " moves turn") +
+                " the tool axis at rapid within reach of the stock (the first here): each is swept with its end axis "
+                "throughout, while the machine's own path for the turn decides where the tool really goes";
+    notes.push_back(w);
 }
 
 struct LoadedStock {
@@ -430,6 +409,7 @@ Simulation runStages(const SimulateOptions& o) {
     t = Clock::now();
     CutOptions cutOptions;
     cutOptions.threads = o.threads;
+    cutOptions.turnTolerance = o.turnTolerance;
     if (design) {
         cutOptions.design = &design->dexels;
         cutOptions.designDepth = o.gougeTolerance;

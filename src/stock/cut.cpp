@@ -199,9 +199,14 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
         // The cutting part and the shank each bounded only where their own boxes reach: the shank
         // mostly runs above the stock.
         const SweepWindow cutWin =
-            g.cutting ? SweepWindow(lattice, axB, axC, ia, originA, g.cutting->bounds()) : SweepWindow();
+            g.cutting ? SweepWindow(lattice, axB, axC, ia, originA, g.cutting->bounds())
+            : g.turningCutting ? SweepWindow(lattice, axB, axC, ia, originA, g.turningCutting->bounds())
+                               : SweepWindow();
         const SweepWindow shankWin =
-            g.shank ? SweepWindow(lattice, axB, axC, ia, originA, g.shank->bounds()) : SweepWindow();
+            g.shank ? SweepWindow(lattice, axB, axC, ia, originA, g.shank->bounds())
+            : g.turningShank ? SweepWindow(lattice, axB, axC, ia, originA, g.turningShank->bounds())
+                             : SweepWindow();
+        const bool hasCut = g.cutting || g.turningCutting, hasShank = g.shank || g.turningShank;
         TileMoveStats st;
         st.move = m;
         for (int ic = c0; ic <= c1; ++ic) {
@@ -215,10 +220,12 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                 ++st.bounded;
                 // Per dexel: a cheap bound of the sweep along this line against its material
                 // (most dexels under a finishing pass were cut down by the moves before).
-                const bool cuts = g.cutting && cutWin.meets(ib, ic, segs);
-                const bool shank = g.shank && shankWin.meets(ib, ic, segs);
-                Interval reach = cuts ? g.cutting->bound(line) : Interval::empty();
-                if (shank) reach = reach.hull(g.shank->bound(line));
+                const bool cuts = hasCut && cutWin.meets(ib, ic, segs);
+                const bool shank = hasShank && shankWin.meets(ib, ic, segs);
+                Interval reach = !cuts ? Interval::empty()
+                                 : g.cutting ? g.cutting->bound(line)
+                                             : g.turningCutting->bound(line);
+                if (shank) reach = reach.hull(g.shank ? g.shank->bound(line) : g.turningShank->bound(line));
                 if (!reachesMaterial(segs, reach)) continue;
                 ++st.visited;
                 double removed = 0.0;
@@ -240,28 +247,37 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                     st.design += designOverlap(tile.segments(local), design, kept, toFloat(hit.range.lo),
                                                toFloat(hit.range.hi), at, stretches);
                 };
-                if (cuts) {
-                    const std::size_t n = g.cutting->intersectParts(line, parts, makesEnds);
-                    for (std::size_t k = 0; k < n; ++k) {
-                        if (parts[k].isEmpty()) continue;
-                        watch(parts[k]);
-                        removed += subtractHit(tile, local, parts[k]);
+                // Applies `apply` to the swept intervals of one region: a fixed-axis sweep's parts,
+                // or a turning sweep's intervals, solved to its tolerance where the dexel has material.
+                auto forEachHit = [&](const std::optional<MoveSweep>& fixed, const std::optional<TurningSweep>& turning,
+                                      auto&& apply) {
+                    if (fixed) {
+                        const std::size_t n = fixed->intersectParts(line, parts, makesEnds);
+                        for (std::size_t k = 0; k < n; ++k)
+                            if (!parts[k].isEmpty()) apply(parts[k]);
+                        return;
                     }
+                    std::vector<Interval> material;
+                    for (const Segment& sg : tile.segments(local)) material.push_back({double(sg.lo), double(sg.hi)});
+                    for (const LineHit& hit : turning->intersect(line, material)) apply(hit);
+                };
+                if (cuts) {
+                    forEachHit(g.cutting, g.turningCutting, [&](const LineHit& hit) {
+                        watch(hit);
+                        removed += subtractHit(tile, local, hit);
+                    });
                 }
                 if (shank) {
-                    const std::size_t n = g.shank->intersectParts(line, parts, makesEnds);
-                    for (std::size_t k = 0; k < n; ++k) {
-                        if (parts[k].isEmpty()) continue;
-                        const float lo = toFloat(parts[k].range.lo), hi = toFloat(parts[k].range.hi);
+                    forEachHit(g.shank, g.turningShank, [&](const LineHit& hit) {
                         if (removeShank) {
-                            watch(parts[k]);
-                            const double met = subtractHit(tile, local, parts[k]);
+                            watch(hit);
+                            const double met = subtractHit(tile, local, hit);
                             st.shank += met;
                             removed += met;
                         } else {
-                            st.shank += overlapLength(tile.segments(local), lo, hi);
+                            st.shank += overlapLength(tile.segments(local), toFloat(hit.range.lo), toFloat(hit.range.hi));
                         }
-                    }
+                    });
                 }
                 if (removed > 0.0) {
                     ++st.changed;
@@ -299,7 +315,22 @@ std::map<int, ToolRegions> toolRegions(const ToolPath& path, const ToolTable& to
     return regions;
 }
 
-MoveGeometry::MoveGeometry(const ToolRegions& regions, const Move& move) {
+bool sweepsTurning(const Move& move, const Tool& tool, double turnTolerance) {
+    return move.turns() && !move.rapid &&
+           turnAngle(move) * std::hypot(tool.totalLength(), tool.maxRadius()) > turnTolerance;
+}
+
+MoveGeometry::MoveGeometry(const ToolRegions& regions, const Move& move, double turnTolerance) {
+    if (sweepsTurning(move, *regions.cutting, turnTolerance) ||
+        (regions.shank && sweepsTurning(move, *regions.shank, turnTolerance))) {
+        turningCutting.emplace(*regions.cutting, move, turnTolerance);
+        box = turningCutting->bounds();
+        if (regions.shank) {
+            turningShank.emplace(*regions.shank, move, turnTolerance);
+            box.expand(turningShank->bounds());
+        }
+        return;
+    }
     cutting.emplace(*regions.cutting, move);
     box = cutting->bounds();
     if (regions.shank) {
@@ -376,7 +407,7 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
         arena.execute([&] {
             tbb::parallel_for(m0, m1, [&](std::size_t i) {
                 const Move& mv = path.moves[i];
-                geoms[i - m0] = MoveGeometry(regions.at(mv.tool), mv);
+                geoms[i - m0] = MoveGeometry(regions.at(mv.tool), mv, options.turnTolerance);
             });
         });
         // Bucket the moves by the tiles their boxes overlap, in program order.

@@ -224,9 +224,11 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     const Run turning = cli("info turn.apt");
     CHECK(turning.code == 0);
     CHECK_THAT(turning.out, Contains("0 3-axis (+z), 1 3+2 (fixed, tilted), 1 turning the axis"));
-    const Run refused = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --quiet");
-    CHECK(refused.code != 0);
-    CHECK_THAT(refused.err, Contains("turn.apt:4: error: the tool axis turns 30 degrees"));
+    const Run turned = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 0.001 --quiet");
+    CHECK(turned.code == 0);
+    const Run badTolerance = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 0 --quiet");
+    CHECK(badTolerance.code != 0);
+    CHECK_THAT(badTolerance.err, Contains("--turn-tolerance") && Contains("positive"));
 }
 
 TEST_CASE("a study writes its table, CSV, plot and deviation meshes", "[cli][study]") {

@@ -22,6 +22,7 @@
 #include "dexelmill/stock/tridexel.h"
 #include "dexelmill/surface/levelset.h"
 #include "dexelmill/surface/mesh.h"
+#include "dexelmill/sweep/turning.h"
 #include "dexelmill/tool/tool.h"
 
 namespace dexelmill {
@@ -59,6 +60,8 @@ struct SimulateOptions {
     FamilySet families = FamilySet::all();
     /// Largest distance between an arc and its chords.
     double chordTolerance = 0.001;
+    /// The tolerance (mm) of the sweep of a feed move whose tool axis turns (CutOptions).
+    double turnTolerance = kDefaultTurnTolerance;
     /// The mesher.
     Mesher mesher = Mesher::Dexel;
     /// Mesh adaptivity in [0, 1]: 0 keeps every cell's vertices; higher values merge flat regions.

@@ -37,8 +37,8 @@ struct SourceRef {
 /// with a fixed unit tool axis: the tool extends from the CL point (its tip) along +axis.
 ///
 /// A move whose program turns the tool axis on the way (an APT GOTO with a new i,j,k) keeps the
-/// axis it starts from in `startAxis`. The cutting loop sweeps fixed axes only, so the job refuses
-/// such a move where it can reach the stock (simulateJob); empty for every fixed-axis move.
+/// axis it starts from in `startAxis`; the cutting loop sweeps it turning (sweep/turning.h).
+/// Empty for every fixed-axis move.
 struct Move {
     Vec3 start{0.0};
     Vec3 end{0.0};

@@ -3,7 +3,8 @@
 /// method.md sections 4-5), with localisation by tiles, TBB threads and collision reports.
 ///
 /// Per move, the volume the cutting part of the tool sweeps (heights [0, cutting length]) is
-/// removed from every dexel it meets (MoveSweep, sweep.h). Localisation: the sweep's tight
+/// removed from every dexel it meets (MoveSweep, sweep.h; for a feed move whose axis turns,
+/// TurningSweep, turning.h, solved to its tolerance where the dexel has material). Localisation: the sweep's tight
 /// axis-aligned box selects the 16 x 16 dexel tiles of each family it overlaps; inside a tile,
 /// only the dexels whose line crosses the box and whose material reaches into it are intersected
 /// with the sweep.
@@ -32,6 +33,7 @@
 #include "dexelmill/path/toolpath.h"
 #include "dexelmill/stock/tridexel.h"
 #include "dexelmill/sweep/sweep.h"
+#include "dexelmill/sweep/turning.h"
 
 namespace dexelmill {
 
@@ -42,6 +44,10 @@ struct CutOptions {
     /// A move meeting at most this volume (mm^3) is not reported as a collision: float endpoint
     /// storage makes grazing contacts of about 1e-7 mm per dexel.
     double collisionVolume = 1e-6;
+    /// The tolerance epsilon (mm) of the sweep of a feed move whose tool axis turns (TurningSweep).
+    /// A move that turns so little that no tool point moves farther than this is swept with its end
+    /// axis as a fixed-axis move.
+    double turnTolerance = kDefaultTurnTolerance;
     /// Worker threads: 0 uses TBB's default, 1 runs on the calling thread only.
     int threads = 0;
     /// Moves per batch (progress is reported after each batch). 0: about 1% of the program, at
@@ -128,15 +134,24 @@ struct ToolRegions {
 std::map<int, ToolRegions> toolRegions(const ToolPath& path, const ToolTable& tools);
 
 /// @brief One move's sweeps: its cutting part's, its shank's if the tool has one, and the box
-/// that holds both.
+/// that holds both. A feed move whose axis turns by more than the tolerance allows (see
+/// CutOptions::turnTolerance) has turning sweeps; every other move has fixed-axis ones (a rapid
+/// that turns is swept with its end axis: its path is the machine's, not the program's).
 struct MoveGeometry {
     std::optional<MoveSweep> cutting;
     std::optional<MoveSweep> shank;
+    std::optional<TurningSweep> turningCutting;
+    std::optional<TurningSweep> turningShank;
     Box box;
 
     MoveGeometry() = default;
-    MoveGeometry(const ToolRegions& regions, const Move& move);
+    MoveGeometry(const ToolRegions& regions, const Move& move, double turnTolerance = kDefaultTurnTolerance);
 };
+
+/// @brief Whether the cutting loop sweeps `move` of `tool` as a turning move with tolerance
+/// `turnTolerance`: a feed move whose axis turns far enough to move some tool point (all within
+/// hypot(total length, max radius) of the tip) by more than the tolerance.
+bool sweepsTurning(const Move& move, const Tool& tool, double turnTolerance);
 
 /// @brief Applies every move of `path`, in order, to `stock`.
 /// @param tools the tools by number; every move's tool must be in it.
