@@ -487,11 +487,20 @@ Simulation runStages(const SimulateOptions& o) {
     }
     report.timingS.mesh = seconds(t);
 
-    // Refine against the exact part.
+    // Refine against the exact part. Its crossings come from fixed-axis sweeps only.
+    const auto turning = std::find_if(program.path.moves.begin(), program.path.moves.end(), [&](const Move& m) {
+        return sweepsTurning(m, tools.at(m.tool), o.turnTolerance);
+    });
     if (o.refineRounds > 0 && !loaded.isBox) {
         ReportWarning w;
         w.where.file = o.stockFile;
         w.message = "--refine needs a box stock: the mesh of a stock from a file is not refined";
+        report.warnings.push_back(w);
+    } else if (o.refineRounds > 0 && turning != program.path.moves.end()) {
+        const SourceLocation at = program.path.where(turning->source);
+        ReportWarning w;
+        w.where = {at.file, at.line};
+        w.message = "--refine does not follow moves whose tool axis turns yet (the first here): the mesh is not refined";
         report.warnings.push_back(w);
     } else if (o.refineRounds > 0) {
         t = Clock::now();

@@ -216,6 +216,17 @@ TEST_CASE("a move that turns the tool axis cuts what its poses reach, and nothin
     CHECK(r.removedVolumeMm3 > 0.0);
     REQUIRE_NOTHROW(r = run("", -10, -2.6));
     CHECK(r.removedVolumeMm3 == 0.0);
+    // Refinement follows fixed-axis sweeps only: it says so and leaves the mesh.
+    {
+        SimulateOptions o;
+        o.inputs = {program("")};
+        o.stockBox = Box{Vec3(-20, -20, -10), Vec3(60, 20, -2.4)};
+        o.resolution = 0.5;
+        o.refineRounds = 1;
+        REQUIRE_NOTHROW(r = runSimulation(o).report);
+        CHECK(said(r, "--refine does not follow moves whose tool axis turns"));
+        CHECK(r.refineRounds == 0);
+    }
     // A rapid that turns is a reorientation on the machine's own path: swept with its end axis,
     // with a warning.
     REQUIRE_NOTHROW(r = run("RAPID\n", 40, 60));
