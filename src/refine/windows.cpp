@@ -283,9 +283,10 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
                             if (w.point[a] < lo || w.point[a] > hi) near = false;
                         }
                         if (!near) continue;
-                        if (g.cutting && cutReach[mi].mayReach(w.point, slack)) subtractSweep(*g.cutting, line, freach, m);
-                        if (g.shank && removeShank && shankReach[mi].mayReach(w.point, slack))
-                            subtractSweep(*g.shank, line, freach, m);
+                        if (g.cutting.fixed && cutReach[mi].mayReach(w.point, slack))
+                            subtractSweep(*g.cutting.fixed, line, freach, m);
+                        if (g.shank.fixed && removeShank && shankReach[mi].mayReach(w.point, slack))
+                            subtractSweep(*g.shank.fixed, line, freach, m);
                     }
                 }
                 runMoves[run].clear();

@@ -199,14 +199,9 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
         // The cutting part and the shank each bounded only where their own boxes reach: the shank
         // mostly runs above the stock.
         const SweepWindow cutWin =
-            g.cutting ? SweepWindow(lattice, axB, axC, ia, originA, g.cutting->bounds())
-            : g.turningCutting ? SweepWindow(lattice, axB, axC, ia, originA, g.turningCutting->bounds())
-                               : SweepWindow();
+            g.cutting ? SweepWindow(lattice, axB, axC, ia, originA, g.cutting.bounds()) : SweepWindow();
         const SweepWindow shankWin =
-            g.shank ? SweepWindow(lattice, axB, axC, ia, originA, g.shank->bounds())
-            : g.turningShank ? SweepWindow(lattice, axB, axC, ia, originA, g.turningShank->bounds())
-                             : SweepWindow();
-        const bool hasCut = g.cutting || g.turningCutting, hasShank = g.shank || g.turningShank;
+            g.shank ? SweepWindow(lattice, axB, axC, ia, originA, g.shank.bounds()) : SweepWindow();
         TileMoveStats st;
         st.move = m;
         for (int ic = c0; ic <= c1; ++ic) {
@@ -220,12 +215,10 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                 ++st.bounded;
                 // Per dexel: a cheap bound of the sweep along this line against its material
                 // (most dexels under a finishing pass were cut down by the moves before).
-                const bool cuts = hasCut && cutWin.meets(ib, ic, segs);
-                const bool shank = hasShank && shankWin.meets(ib, ic, segs);
-                Interval reach = !cuts ? Interval::empty()
-                                 : g.cutting ? g.cutting->bound(line)
-                                             : g.turningCutting->bound(line);
-                if (shank) reach = reach.hull(g.shank ? g.shank->bound(line) : g.turningShank->bound(line));
+                const bool cuts = g.cutting && cutWin.meets(ib, ic, segs);
+                const bool shank = g.shank && shankWin.meets(ib, ic, segs);
+                Interval reach = cuts ? g.cutting.bound(line) : Interval::empty();
+                if (shank) reach = reach.hull(g.shank.bound(line));
                 if (!reachesMaterial(segs, reach)) continue;
                 ++st.visited;
                 double removed = 0.0;
@@ -249,26 +242,25 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                 };
                 // Applies `apply` to the swept intervals of one region: a fixed-axis sweep's parts,
                 // or a turning sweep's intervals, solved to its tolerance where the dexel has material.
-                auto forEachHit = [&](const std::optional<MoveSweep>& fixed, const std::optional<TurningSweep>& turning,
-                                      auto&& apply) {
-                    if (fixed) {
-                        const std::size_t n = fixed->intersectParts(line, parts, makesEnds);
+                auto forEachHit = [&](const RegionSweep& sweep, auto&& apply) {
+                    if (sweep.fixed) {
+                        const std::size_t n = sweep.fixed->intersectParts(line, parts, makesEnds);
                         for (std::size_t k = 0; k < n; ++k)
                             if (!parts[k].isEmpty()) apply(parts[k]);
                         return;
                     }
                     std::vector<Interval> material;
                     for (const Segment& sg : tile.segments(local)) material.push_back({double(sg.lo), double(sg.hi)});
-                    for (const LineHit& hit : turning->intersect(line, material)) apply(hit);
+                    for (const LineHit& hit : sweep.turning->intersect(line, material)) apply(hit);
                 };
                 if (cuts) {
-                    forEachHit(g.cutting, g.turningCutting, [&](const LineHit& hit) {
+                    forEachHit(g.cutting, [&](const LineHit& hit) {
                         watch(hit);
                         removed += subtractHit(tile, local, hit);
                     });
                 }
                 if (shank) {
-                    forEachHit(g.shank, g.turningShank, [&](const LineHit& hit) {
+                    forEachHit(g.shank, [&](const LineHit& hit) {
                         if (removeShank) {
                             watch(hit);
                             const double met = subtractHit(tile, local, hit);
@@ -321,22 +313,15 @@ bool sweepsTurning(const Move& move, const Tool& tool, double turnTolerance) {
 }
 
 MoveGeometry::MoveGeometry(const ToolRegions& regions, const Move& move, double turnTolerance) {
-    if (sweepsTurning(move, *regions.cutting, turnTolerance) ||
-        (regions.shank && sweepsTurning(move, *regions.shank, turnTolerance))) {
-        turningCutting.emplace(*regions.cutting, move, turnTolerance);
-        box = turningCutting->bounds();
-        if (regions.shank) {
-            turningShank.emplace(*regions.shank, move, turnTolerance);
-            box.expand(turningShank->bounds());
-        }
-        return;
-    }
-    cutting.emplace(*regions.cutting, move);
-    box = cutting->bounds();
-    if (regions.shank) {
-        shank.emplace(*regions.shank, move);
-        box.expand(shank->bounds());
-    }
+    const bool turning = sweepsTurning(move, *regions.cutting, turnTolerance) ||
+                         (regions.shank && sweepsTurning(move, *regions.shank, turnTolerance));
+    auto sweep = [&](const Tool& region, RegionSweep& out) {
+        if (turning) out.turning.emplace(region, move, turnTolerance);
+        else out.fixed.emplace(region, move);
+        box.expand(out.bounds());
+    };
+    sweep(*regions.cutting, cutting);
+    if (regions.shank) sweep(*regions.shank, shank);
 }
 
 CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools, const CutOptions& options) {

@@ -133,15 +133,27 @@ struct ToolRegions {
 /// a region has more convex parts than the sweep handles.
 std::map<int, ToolRegions> toolRegions(const ToolPath& path, const ToolTable& tools);
 
+/// @brief One tool region's sweep on one move: fixed-axis, or turning (a feed move whose axis
+/// turns by more than the tolerance allows, CutOptions::turnTolerance). Empty when the tool has no
+/// such region.
+struct RegionSweep {
+    std::optional<MoveSweep> fixed;
+    std::optional<TurningSweep> turning;
+
+    explicit operator bool() const { return fixed || turning; }
+    /// @brief The box of the swept volume. Not empty.
+    const Box& bounds() const { return fixed ? fixed->bounds() : turning->bounds(); }
+    /// @brief A cheap interval of `line` holding every swept interval (MoveSweep::bound,
+    /// TurningSweep::bound). Not empty.
+    Interval bound(const Line& line) const { return fixed ? fixed->bound(line) : turning->bound(line); }
+};
+
 /// @brief One move's sweeps: its cutting part's, its shank's if the tool has one, and the box
-/// that holds both. A feed move whose axis turns by more than the tolerance allows (see
-/// CutOptions::turnTolerance) has turning sweeps; every other move has fixed-axis ones (a rapid
-/// that turns is swept with its end axis: its path is the machine's, not the program's).
+/// that holds both. Both are turning when either region's turn exceeds the tolerance; a rapid
+/// that turns is swept with its end axis (its path is the machine's, not the program's).
 struct MoveGeometry {
-    std::optional<MoveSweep> cutting;
-    std::optional<MoveSweep> shank;
-    std::optional<TurningSweep> turningCutting;
-    std::optional<TurningSweep> turningShank;
+    RegionSweep cutting;
+    RegionSweep shank;
     Box box;
 
     MoveGeometry() = default;

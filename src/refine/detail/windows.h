@@ -68,7 +68,8 @@ double stockCrossing(const Window& window, double reach, const Box& stock);
 /// exact part's surface that faces its way, within [-reach, reach]; NaN where there is none. The
 /// part is `stock` (its open interior) minus the closed sweep of every move's cutting part, and of
 /// its shank when `removeShank`: the solids the cutting loop subtracts, cut in double precision.
-/// The moves are taken in batches, and each batch's sweeps are shared by the windows they reach, so
+/// Only fixed-axis sweeps are followed: a move the cutting loop sweeps turning (MoveGeometry) is
+/// left out, and the job does not refine a program that has one. The moves are taken in batches, and each batch's sweeps are shared by the windows they reach, so
 /// memory does not grow with the program. Runs in the caller's task arena; the answers do not
 /// depend on the thread count.
 /// @throw Error if a move uses a tool that is not in `tools`.
