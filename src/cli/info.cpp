@@ -51,8 +51,7 @@ void printProgram(const Program& p) {
     std::printf("%-14s %zu (%zu rapid), feed %.6g mm, rapid %.6g mm\n", "moves", p.path.moves.size(), rapids,
                 feedLength, rapidLength);
     std::printf("%-14s %zu\n", "tool changes", p.path.toolChanges.size());
-    std::printf("%-14s %zu 3-axis (+z), %zu 3+2 (fixed, tilted), %zu turning the axis (simultaneous 5-axis, not "
-                "simulated yet)\n",
+    std::printf("%-14s %zu 3-axis (+z), %zu 3+2 (fixed, tilted), %zu turning the axis (simultaneous 5-axis)\n",
                 "moves by axis", vertical, tilted, turning);
     printBox("extent", p.path.bounds());
     printBox("cutting", cutting);

@@ -40,6 +40,25 @@ double reachAlong(double lo, double hi, double length, double radius) {
     return best;
 }
 
+/// The great circle a move's axis turns on: a(t) = a0 cos t + b sin t, t in [0, theta], with b the
+/// unit tangent at a0 towards the end axis (zero, and theta 0, when the axis does not turn).
+struct GreatCircle {
+    Vec3 a0{0.0, 0.0, 1.0}, b{0.0};
+    double theta = 0.0;
+};
+
+GreatCircle greatCircle(const Move& m) {
+    GreatCircle c;
+    c.a0 = m.turns() ? *m.startAxis : m.axis;
+    const Vec3 across = m.axis - glm::dot(m.axis, c.a0) * c.a0;
+    const double acrossLength = glm::length(across);
+    if (acrossLength > 0.0) {
+        c.b = across / acrossLength;
+        c.theta = turnAngle(m);
+    }
+    return c;
+}
+
 /// The parameter range of `line` inside `box`; empty when it misses.
 Interval lineInBox(const Line& line, const Box& box) {
     Interval range = Interval::all();
@@ -101,13 +120,11 @@ double turnAngle(const Move& m) {
 }
 
 Box turningMoveBox(const Move& m, double length, double radius) {
-    const Vec3 a0 = m.turns() ? *m.startAxis : m.axis;
-    const double theta = turnAngle(m);
-    const Vec3 across = m.axis - glm::dot(m.axis, a0) * a0;
+    const GreatCircle turn = greatCircle(m);
+    const Vec3 &a0 = turn.a0, &b = turn.b;
+    const double theta = turn.theta;
     if (glm::dot(a0, m.axis) < 0.0 && glm::length(glm::cross(a0, m.axis)) <= tol::kParallel)
         throw Error("the axes are opposite: no one great circle joins them");
-    const double acrossLength = glm::length(across);
-    const Vec3 b = acrossLength > 0.0 ? across / acrossLength : Vec3(0.0);
     Box box;
     box.expand(m.start);
     box.expand(m.end);
@@ -130,12 +147,9 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     if (!(epsilon > 0.0) || !std::isfinite(epsilon))
         throw Error("the tolerance of a turning move's sweep must be positive, not " + std::to_string(epsilon));
     bounds_ = turningMoveBox(move, tool.totalLength(), tool.maxRadius()).padded(kBoxSlack);
-    a0_ = move.turns() ? *move.startAxis : move.axis;
-    theta_ = turnAngle(move);
-    const Vec3 across = move.axis - glm::dot(move.axis, a0_) * a0_;
-    const double acrossLength = glm::length(across);
-    if (theta_ > 0.0 && acrossLength > 0.0) b_ = across / acrossLength;
-    else theta_ = 0.0;
+    const GreatCircle turn = greatCircle(move);
+    a0_ = turn.a0, b_ = turn.b, theta_ = turn.theta;
+    k_ = glm::cross(a0_, b_);
     // Every tool point lies within hypot(total length, max radius) of the tip; the rotation turns it
     // about an axis through the tip at theta per unit u, the translation moves it by |f|.
     speed_ = glm::length(feed_) + theta_ * std::hypot(tool.totalLength(), tool.maxRadius());
@@ -325,7 +339,7 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     sharp = true;
     if (rho <= 0.0) return;
     const Vec3 tangent = glm::cross(ps.axis, radial);
-    const Vec3 velocity = feed_ + theta_ * glm::cross(glm::cross(a0_, b_), d);
+    const Vec3 velocity = feed_ + theta_ * glm::cross(k_, d);
     Vec3 n = glm::cross(tangent, velocity);
     const double len = glm::length(n);
     if (len <= tol::kParallel * glm::length(velocity)) return;

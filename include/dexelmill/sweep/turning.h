@@ -89,6 +89,7 @@ class TurningSweep {
     Tool tool_;
     Vec3 start_{0.0}, feed_{0.0};
     Vec3 a0_{0.0, 0.0, 1.0}, b_{0.0};
+    Vec3 k_{0.0};  ///< a0 x b: the axis the turn is about
     double theta_ = 0.0;
     double speed_ = 0.0;
     double epsilon_ = kDefaultTurnTolerance;
