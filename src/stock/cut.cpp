@@ -308,8 +308,9 @@ std::map<int, ToolRegions> toolRegions(const ToolPath& path, const ToolTable& to
 }
 
 bool sweepsTurning(const Move& move, const Tool& tool, double turnTolerance) {
-    return move.turns() && !move.rapid &&
-           turnAngle(move) * std::hypot(tool.totalLength(), tool.maxRadius()) > turnTolerance;
+    const double reach = std::hypot(tool.totalLength(), tool.maxRadius());
+    if (move.rotary) return MotionLaw(move).turnBound(reach) > turnTolerance;
+    return move.turns() && !move.rapid && turnAngle(move) * reach > turnTolerance;
 }
 
 MoveGeometry::MoveGeometry(const ToolRegions& regions, const Move& move, double turnTolerance) {

@@ -119,7 +119,42 @@ double turnAngle(const Move& m) {
     return std::atan2(glm::length(glm::cross(*m.startAxis, m.axis)), glm::dot(*m.startAxis, m.axis));
 }
 
+namespace {
+
+/// The box of the tool (within `radius` of its axis, heights [0, length] above the tip) at one pose.
+Box poseBox(const ToolPose& p, double length, double radius) {
+    Box box;
+    box.expand(p.tip);
+    for (int i = 0; i < 3; ++i) {
+        box.lo[i] -= reachAlong(-p.axis[i], -p.axis[i], length, radius);
+        box.hi[i] += reachAlong(p.axis[i], p.axis[i], length, radius);
+    }
+    return box;
+}
+
+/// Most poses the box of a machine's rotary move is sampled at.
+constexpr int kMaxBoxSamples = 4096;
+
+}  // namespace
+
 Box turningMoveBox(const Move& m, double length, double radius) {
+    if (m.rotary) {
+        // Samples at u_k = (k + 1/2) / N: every u lies within 1 / (2N) of one, so every pose lies
+        // within V / (2N) of a sampled pose (V the law's speed bound), and the union of the sampled
+        // poses' boxes padded by that holds them all. N makes the padding at most a tenth of the
+        // radius (or a hundredth of a millimetre), up to kMaxBoxSamples.
+        const MotionLaw law(m);
+        const double speed = law.speedBound(std::hypot(length, radius));
+        const double target = std::max(0.1 * radius, 0.01);
+        const int n = int(std::clamp(std::ceil(speed / (2.0 * target)), 1.0, double(kMaxBoxSamples)));
+        Box box;
+        for (int k = 0; k < n; ++k) {
+            const Box b = poseBox(law.pose((k + 0.5) / n), length, radius);
+            box.expand(b.lo);
+            box.expand(b.hi);
+        }
+        return box.padded(speed / (2.0 * n));
+    }
     const GreatCircle turn = greatCircle(m);
     const Vec3 &a0 = turn.a0, &b = turn.b;
     const double theta = turn.theta;
@@ -143,16 +178,12 @@ Box turningMoveBox(const Move& m, double length, double radius) {
 }
 
 TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
-    : tool_(tool), start_(move.start), feed_(move.feed()), epsilon_(epsilon) {
+    : tool_(tool), law_(move), epsilon_(epsilon) {
     if (!(epsilon > 0.0) || !std::isfinite(epsilon))
         throw Error("the tolerance of a turning move's sweep must be positive, not " + std::to_string(epsilon));
     bounds_ = turningMoveBox(move, tool.totalLength(), tool.maxRadius()).padded(kBoxSlack);
-    const GreatCircle turn = greatCircle(move);
-    a0_ = turn.a0, b_ = turn.b, theta_ = turn.theta;
-    k_ = glm::cross(a0_, b_);
-    // Every tool point lies within hypot(total length, max radius) of the tip; the rotation turns it
-    // about an axis through the tip at theta per unit u, the translation moves it by |f|.
-    speed_ = glm::length(feed_) + theta_ * std::hypot(tool.totalLength(), tool.maxRadius());
+    // Every tool point lies within hypot(total length, max radius) of the tip.
+    speed_ = law_.speedBound(std::hypot(tool.totalLength(), tool.maxRadius()));
     for (const ConvexPart& part : tool_.convexParts()) grownEpsilon_.push_back(offsetPart(tool_, part, epsilon_));
     for (int k = 0; k < kMaxLevel && std::ldexp(speed_, -(k + 1)) > epsilon_; ++k) {
         std::vector<std::vector<ProfilePiece>> level;
@@ -162,21 +193,18 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     }
 }
 
-ToolPose TurningSweep::pose(double u) const {
-    ToolPose p;
-    p.tip = start_ + u * feed_;
-    p.axis = theta_ > 0.0 ? glm::normalize(a0_ * std::cos(theta_ * u) + b_ * std::sin(theta_ * u)) : a0_;
-    return p;
-}
+ToolPose TurningSweep::pose(double u) const { return law_.pose(u); }
 
 Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bounds_); }
 
 // Method. Write T(u) for the tool at pose(u) and V = speed().
-//  (a) Speed. A tool point y moves as y(u) = p(u) + R(u) (y0 - p0), with R(u) the turn by
-//      theta u about the fixed unit axis k = a0 x a1 / |a0 x a1| (it carries a0 to a(u) along the
-//      great circle; the tool is a solid of revolution, so which rotation about a(u) is chosen does
-//      not change T(u)). So y'(u) = f + theta k x (y(u) - p(u)) and |y'| <= |f| + theta |y - p|
-//      <= V. Hence T(u') lies within V |u' - u| of T(u): T(u') is inside T(u) grown by that.
+//  (a) Speed. The motion is rigid (MotionLaw): on a great circle, a tool point moves as
+//      y(u) = p(u) + R(u) (y0 - p0), with R(u) the turn by theta u about the fixed unit axis
+//      k = a0 x a1 / |a0 x a1| (it carries a0 to a(u) along the great circle; the tool is a solid
+//      of revolution, so which rotation about a(u) is chosen does not change T(u)). So
+//      y'(u) = f + theta k x (y(u) - p(u)) and |y'| <= |f| + theta |y - p| <= V. A machine's
+//      rotary move is bounded the same way turn by turn (MotionLaw::speedBound). Hence T(u') lies
+//      within V |u' - u| of T(u): T(u') is inside T(u) grown by that.
 //  (b) Depth. A point x deeper than d inside T(u) has the ball B(x, d) inside T(u); at u' the same
 //      rigid motion carries that ball to B(x', d) inside T(u') with |x' - x| <= V |u' - u|. So x
 //      lies inside T(u') when V |u' - u| < d.
@@ -332,14 +360,14 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     if (!other) return;
     // On a rim, a circle about the axis (on the axis, an apex: a point). Where the moving rim
     // grazes, the envelope is smooth there: its normal is across both the rim's tangent and the
-    // rim point's velocity y' = f + theta k x (y - p), and lies within the rim's normal cone (the
+    // rim point's velocity (MotionLaw::velocity), and lies within the rim's normal cone (the
     // normals between the two faces'). Elsewhere the end lies on a crease of the swept volume.
     const Vec3 n1 = normal, n2 = other->n;
     normal = glm::normalize(n1 + n2);
     sharp = true;
     if (rho <= 0.0) return;
     const Vec3 tangent = glm::cross(ps.axis, radial);
-    const Vec3 velocity = feed_ + theta_ * glm::cross(k_, d);
+    const Vec3 velocity = law_.velocity(u, line.at(t));
     Vec3 n = glm::cross(tangent, velocity);
     const double len = glm::length(n);
     if (len <= tol::kParallel * glm::length(velocity)) return;

@@ -14,9 +14,9 @@ TEST_CASE("a rapid through material and a shank in material are reported", "[sto
     p.files = {"crash.ngc"};
     // A feed slot 5 mm deep, then a rapid 3 mm deep, then a feed 15 mm deep (the shank meets
     // the 5 mm above the flutes).
-    p.moves.push_back({Vec3(-5, 10, 15), Vec3(45, 10, 15), Vec3(0, 0, 1), 1, false, {0, 10}, {}});
-    p.moves.push_back({Vec3(-5, 20, 17), Vec3(45, 20, 17), Vec3(0, 0, 1), 1, true, {0, 11}, {}});
-    p.moves.push_back({Vec3(-5, 30, 5), Vec3(45, 30, 5), Vec3(0, 0, 1), 1, false, {0, 12}, {}});
+    p.moves.push_back({Vec3(-5, 10, 15), Vec3(45, 10, 15), Vec3(0, 0, 1), 1, false, {0, 10}, {}, {}});
+    p.moves.push_back({Vec3(-5, 20, 17), Vec3(45, 20, 17), Vec3(0, 0, 1), 1, true, {0, 11}, {}, {}});
+    p.moves.push_back({Vec3(-5, 30, 5), Vec3(45, 30, 5), Vec3(0, 0, 1), 1, false, {0, 12}, {}, {}});
     TriDexelStock s = TriDexelStock::fromBox(Box{Vec3(0.0), Vec3(40, 40, 20)}, 0.25);
     const CutResult r = cutStock(s, p, table);
     REQUIRE(r.collisions.size() == 2);
@@ -37,7 +37,7 @@ TEST_CASE("a rapid through material and a shank in material are reported", "[sto
 TEST_CASE("a move naming an undefined tool is an error with its line", "[stock][cut][errors]") {
     ToolPath p;
     p.files = {"prog.ngc"};
-    p.moves.push_back({Vec3(0.0), Vec3(1, 0, 0), Vec3(0, 0, 1), 9, false, {0, 4}, {}});
+    p.moves.push_back({Vec3(0.0), Vec3(1, 0, 0), Vec3(0, 0, 1), 9, false, {0, 4}, {}, {}});
     TriDexelStock s = TriDexelStock::fromBox(Box{Vec3(0.0), Vec3(10.0)}, 1.0);
     CHECK_THROWS_WITH(cutStock(s, p, ToolTable{}), Catch::Matchers::Contains("prog.ngc:4") &&
                                                        Catch::Matchers::Contains("T9"));

@@ -20,7 +20,7 @@ Program groove() {
     Program p;
     p.path.files = {"groove"};
     p.tools.emplace(1, ballEndMill(8, {20, 30}));
-    p.path.moves.push_back({Vec3(-10, 10, 7), Vec3(40, 10, 7), Vec3(0, 0, 1), 1, false, {0, 1}, {}});
+    p.path.moves.push_back({Vec3(-10, 10, 7), Vec3(40, 10, 7), Vec3(0, 0, 1), 1, false, {0, 1}, {}, {}});
     return p;
 }
 

@@ -7,12 +7,14 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/types.h"
+#include "dexelmill/path/motion.h"
 #include "dexelmill/tool/tool.h"
 
 namespace dexelmill {
@@ -38,7 +40,9 @@ struct SourceRef {
 ///
 /// A move whose program turns the tool axis on the way (an APT GOTO with a new i,j,k) keeps the
 /// axis it starts from in `startAxis`; the cutting loop sweeps it turning (sweep/turning.h).
-/// Empty for every fixed-axis move.
+/// A move of a machine's rotary axes also carries its law in `rotary` (path/motion.h): then
+/// start, end, startAxis and axis are its poses at u = 0 and 1, and the law says what lies
+/// between. Both are empty for every fixed-axis move.
 struct Move {
     Vec3 start{0.0};
     Vec3 end{0.0};
@@ -47,10 +51,11 @@ struct Move {
     bool rapid = false;  ///< G0 / RAPID: still cuts, and any cut is a collision to report
     SourceRef source;
     std::optional<Vec3> startAxis;  ///< the unit axis at the start, when it differs from `axis`
+    std::shared_ptr<const RotaryMotion> rotary;  ///< the law of a machine's rotary motion, if any
 
     Vec3 feed() const { return end - start; }
     /// @brief Whether the tool axis turns during the move (simultaneous multi-axis motion).
-    bool turns() const { return startAxis.has_value(); }
+    bool turns() const { return startAxis.has_value() || rotary != nullptr; }
 };
 
 /// @brief The tool in the spindle changes before move `moveIndex`.

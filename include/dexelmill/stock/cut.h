@@ -162,7 +162,9 @@ struct MoveGeometry {
 
 /// @brief Whether the cutting loop sweeps `move` of `tool` as a turning move with tolerance
 /// `turnTolerance`: a feed move whose axis turns far enough to move some tool point (all within
-/// hypot(total length, max radius) of the tip) by more than the tolerance.
+/// hypot(total length, max radius) of the tip) by more than the tolerance. A machine's rotary move
+/// (rapid or feed: the machine's law says where it goes) is swept turning when its turns can move
+/// a tool point by more than that (MotionLaw::turnBound).
 bool sweepsTurning(const Move& move, const Tool& tool, double turnTolerance);
 
 /// @brief Applies every move of `path`, in order, to `stock`.

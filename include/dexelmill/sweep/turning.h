@@ -3,16 +3,19 @@
 /// every pose of the tool stays in, and their swept volume along lines, exact within a stated
 /// tolerance epsilon.
 ///
-/// Motion law (APT MULTAX): the tip runs on the straight line from `start` to `end` and the unit
-/// axis turns on the great circle from `startAxis` to `axis` (the shorter arc, at a uniform rate):
+/// Motion law (path/motion.h). APT MULTAX: the tip runs on the straight line from `start` to
+/// `end` and the unit axis turns on the great circle from `startAxis` to `axis` (the shorter arc,
+/// at a uniform rate):
 ///   p(u) = start + u f,   a(u) = a0 cos(theta u) + b sin(theta u),   u in [0, 1],
 /// with f = end - start, theta the angle between the axes and b the unit tangent at a0 towards
-/// the end axis. T(u) is the tool solid at that pose, and the swept volume S is the union of T(u).
+/// the end axis. A machine's rotary move follows its RotaryMotion instead. T(u) is the tool solid
+/// at that pose, and the swept volume S is the union of T(u).
 #pragma once
 
 #include <vector>
 
 #include "dexelmill/geometry/types.h"
+#include "dexelmill/path/motion.h"
 #include "dexelmill/path/toolpath.h"
 #include "dexelmill/tool/line_query.h"
 #include "dexelmill/tool/tool.h"
@@ -38,6 +41,8 @@ double turnAngle(const Move& move);
 /// normal to a; along a unit direction e with c = a.e it reaches
 /// g(c) = length max(c, 0) + radius sqrt(1 - c^2), concave on [-1, 0] and on [0, 1] with peaks
 /// at 0 and length / hypot(length, radius), so the ends of c's range and those peaks bound it.
+/// A machine's rotary move (Move::rotary) gets a box of sampled poses padded by the law's speed
+/// bound (turning.cpp), which holds every pose.
 /// @throw Error if the axes are opposite (no one great circle joins them).
 Box turningMoveBox(const Move& move, double length, double radius);
 
@@ -87,10 +92,7 @@ class TurningSweep {
     void endNormal(const Line& line, double t, double u, std::size_t part, Vec3& normal, bool& sharp) const;
 
     Tool tool_;
-    Vec3 start_{0.0}, feed_{0.0};
-    Vec3 a0_{0.0, 0.0, 1.0}, b_{0.0};
-    Vec3 k_{0.0};  ///< a0 x b: the axis the turn is about
-    double theta_ = 0.0;
+    MotionLaw law_;
     double speed_ = 0.0;
     double epsilon_ = kDefaultTurnTolerance;
     int maxLevel_ = 0;

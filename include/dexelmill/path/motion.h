@@ -1,0 +1,74 @@
+/// @file motion.h
+/// @brief How the tool moves during one move: the tool pose in the part frame as a function of the
+/// move parameter u in [0, 1], for fixed-axis moves, APT MULTAX moves whose axis turns on a great
+/// circle, and moves of a machine's rotary axes (machine/kinematics.h).
+#pragma once
+
+#include <vector>
+
+#include "dexelmill/geometry/types.h"
+#include "dexelmill/tool/line_query.h"
+
+namespace dexelmill {
+
+struct Move;
+
+/// @brief A rotation of the part frame about a fixed line (unit `direction` through `pivot`) by an
+/// angle (radians) that runs linearly in u from `from` to `to`.
+struct RotaryTurn {
+    Vec3 direction{0.0, 0.0, 1.0};
+    Vec3 pivot{0.0};
+    double from = 0.0, to = 0.0;
+};
+
+/// @brief The motion law of a move that a machine's rotary axes make.
+///
+/// Write T_i(u) x = c_i + R_i(u) (x - c_i) for turn i (R_i the rotation about direction_i by its
+/// angle at u) and G(u) = T_0 T_1 ... T_{n-1} (turn 0 outermost). The tool axis in the part frame
+/// is Q(u) toolAxis, Q = R_0 R_1 ... R_{n-1}. The tip in the part frame:
+///  - tool centre point control (tipCarried false): the straight line from the move's start to its
+///    end, as for any move;
+///  - identity kinematics (tipCarried true): G(u) applied to the machine-frame point that runs
+///    linearly from machineStart to machineEnd, a curve in the part frame.
+struct RotaryMotion {
+    std::vector<RotaryTurn> turns;
+    Vec3 toolAxis{0.0, 0.0, 1.0};  ///< unit, in the frame the turns act on
+    bool tipCarried = false;
+    Vec3 machineStart{0.0}, machineEnd{0.0};
+};
+
+/// @brief The pose of the tool over a move, and how fast its points move. Every move is a rigid
+/// motion of the tool: a fixed-axis move translates it; an APT move whose axis turns rotates it
+/// about the fixed axis a0 x a1 by the angle between its axes, uniformly in u (one RotaryTurn);
+/// a machine move follows its RotaryMotion.
+class MotionLaw {
+  public:
+    explicit MotionLaw(const Move& move);
+
+    ToolPose pose(double u) const;
+    /// @brief The velocity (mm per unit u) at u of the tool point that is at `point` then.
+    Vec3 velocity(double u, const Vec3& point) const;
+    /// @brief A bound on |velocity| over the move for every tool point within `reach` of the tip:
+    ///  - tip on the line: |f| + sum_i |to_i - from_i| reach, since a tool point moves as
+    ///    y' = f + w x (y - p) with |w| <= sum_i |angle rate_i|;
+    ///  - tip carried: |m1 - m0| + sum_i |to_i - from_i| rho_i, with rho_i bounding a tool point's
+    ///    distance to pivot i in the frame turn i acts on (motion.cpp).
+    double speedBound(double reach) const;
+    /// @brief The part of speedBound that the turns make: how far, at most, a tool point strays
+    /// from where the move's translation alone would take it.
+    double turnBound(double reach) const;
+    /// @brief Whether the axis or the path is anything but a translation along the straight line.
+    bool rotates() const { return !turns_.empty(); }
+
+  private:
+    /// R_i at u, as a function applied to a vector.
+    Vec3 rotate(std::size_t i, double u, const Vec3& v) const;
+
+    Vec3 start_{0.0}, feed_{0.0};
+    std::vector<RotaryTurn> turns_;
+    Vec3 toolAxis_{0.0, 0.0, 1.0};
+    bool carried_ = false;
+    Vec3 machineStart_{0.0}, machineFeed_{0.0};
+};
+
+}  // namespace dexelmill

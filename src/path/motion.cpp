@@ -1,0 +1,115 @@
+#include "dexelmill/path/motion.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "dexelmill/path/toolpath.h"
+
+namespace dexelmill {
+
+MotionLaw::MotionLaw(const Move& move) : start_(move.start), feed_(move.feed()), toolAxis_(move.axis) {
+    if (move.rotary) {
+        const RotaryMotion& r = *move.rotary;
+        turns_ = r.turns;
+        toolAxis_ = r.toolAxis;
+        carried_ = r.tipCarried;
+        machineStart_ = r.machineStart;
+        machineFeed_ = r.machineEnd - r.machineStart;
+        return;
+    }
+    if (!move.startAxis) return;
+    // The great circle from a0 to a1 is the turn about k = a0 x a1 / |a0 x a1| by their angle.
+    const Vec3 a0 = *move.startAxis;
+    const Vec3 k = glm::cross(a0, move.axis);
+    const double s = glm::length(k);
+    toolAxis_ = a0;
+    if (s == 0.0) return;  // parallel (opposite axes are refused by the sweep)
+    RotaryTurn turn;
+    turn.direction = k / s;
+    turn.pivot = move.start;
+    turn.to = std::atan2(s, glm::dot(a0, move.axis));
+    turns_.push_back(turn);
+}
+
+Vec3 MotionLaw::rotate(std::size_t i, double u, const Vec3& v) const {
+    // Rodrigues' formula about the unit direction d by the angle at u.
+    const RotaryTurn& t = turns_[i];
+    const double angle = t.from + u * (t.to - t.from);
+    const double c = std::cos(angle), s = std::sin(angle);
+    const Vec3& d = t.direction;
+    return v * c + glm::cross(d, v) * s + d * (glm::dot(d, v) * (1.0 - c));
+}
+
+ToolPose MotionLaw::pose(double u) const {
+    ToolPose p;
+    Vec3 axis = toolAxis_;
+    for (std::size_t i = turns_.size(); i-- > 0;) axis = rotate(i, u, axis);
+    p.axis = glm::normalize(axis);
+    if (!carried_) {
+        p.tip = start_ + u * feed_;
+        return p;
+    }
+    Vec3 x = machineStart_ + u * machineFeed_;
+    for (std::size_t i = turns_.size(); i-- > 0;) x = turns_[i].pivot + rotate(i, u, x - turns_[i].pivot);
+    p.tip = x;
+    return p;
+}
+
+// A tool point is y = G(u) x(u) (carried; x the machine-frame point, x' = m1 - m0) or
+// y = p(u) + Q(u) v (on the line; v fixed). With y_0 = y and y_{i+1} = T_i^{-1} y_i, so that
+// y_i = T_i y_{i+1}, the derivative of T_i in its angle at y_{i+1} is rate_i d_i x (y_i - c_i),
+// carried to the part frame by R_0 ... R_{i-1}:
+//   y' = sum_i Q_{<i} (rate_i d_i x (y_i - c_i)) + Q x'            (carried)
+//   y' = f + w x (y - p),  w = sum_i rate_i Q_{<i} d_i              (on the line)
+Vec3 MotionLaw::velocity(double u, const Vec3& point) const {
+    Vec3 v(0.0);
+    if (!carried_) {
+        const Vec3 tip = start_ + u * feed_;
+        for (std::size_t i = 0; i < turns_.size(); ++i) {
+            Vec3 w = turns_[i].direction * (turns_[i].to - turns_[i].from);
+            for (std::size_t j = i; j-- > 0;) w = rotate(j, u, w);
+            v += glm::cross(w, point - tip);
+        }
+        return feed_ + v;
+    }
+    Vec3 y = point;
+    for (std::size_t i = 0; i < turns_.size(); ++i) {
+        const RotaryTurn& t = turns_[i];
+        Vec3 term = (t.to - t.from) * glm::cross(t.direction, y - t.pivot);
+        for (std::size_t j = i; j-- > 0;) term = rotate(j, u, term);
+        v += term;
+        // y_{i+1} = c_i + R_i^T (y_i - c_i): the rotation by minus the angle.
+        const double angle = t.from + u * (t.to - t.from);
+        const double c = std::cos(angle), s = -std::sin(angle);
+        const Vec3 r = y - t.pivot;
+        y = t.pivot + r * c + glm::cross(t.direction, r) * s + t.direction * (glm::dot(t.direction, r) * (1.0 - c));
+    }
+    Vec3 drift = machineFeed_;
+    for (std::size_t j = turns_.size(); j-- > 0;) drift = rotate(j, u, drift);
+    return v + drift;
+}
+
+// Carried: |y_i - c_i| = |y_{i+1} - c_i| <= |y_{i+1} - c_{i+1}| + |c_{i+1} - c_i| (T_{i+1} keeps
+// distances to c_{i+1}), and the innermost y_n = x lies within reach of the machine-frame tip,
+// whose distance to c_{n-1} is convex along its segment, so largest at an end.
+double MotionLaw::speedBound(double reach) const {
+    return glm::length(carried_ ? machineFeed_ : feed_) + turnBound(reach);
+}
+
+double MotionLaw::turnBound(double reach) const {
+    double v = 0.0;
+    if (!carried_) {
+        for (const RotaryTurn& t : turns_) v += std::abs(t.to - t.from) * reach;
+        return v;
+    }
+    if (turns_.empty()) return v;
+    const Vec3& last = turns_.back().pivot;
+    double rho = std::max(glm::length(machineStart_ - last), glm::length(machineStart_ + machineFeed_ - last)) + reach;
+    for (std::size_t i = turns_.size(); i-- > 0;) {
+        if (i + 1 < turns_.size()) rho += glm::length(turns_[i + 1].pivot - turns_[i].pivot);
+        v += std::abs(turns_[i].to - turns_[i].from) * rho;
+    }
+    return v;
+}
+
+}  // namespace dexelmill
