@@ -1,0 +1,205 @@
+#include "dexelmill/machine/kinematics.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "dexelmill/error.h"
+#include "dexelmill/geometry/tolerance.h"
+
+namespace dexelmill {
+
+namespace {
+
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+
+/// The rotation of v about the unit direction d by `angle` (radians, right-handed).
+Vec3 rotated(const Vec3& v, const Vec3& d, double angle) {
+    const double c = std::cos(angle), s = std::sin(angle);
+    return v * c + glm::cross(d, v) * s + d * (glm::dot(d, v) * (1.0 - c));
+}
+
+/// A turn of a point about a line by `angle`.
+Vec3 turned(const Vec3& x, const RotaryAxisSpec& a, double angle) {
+    return a.pivot + rotated(x - a.pivot, a.direction, angle);
+}
+
+/// The tables' turns seen from the part (turn 0 outermost): the part frame is the machine frame
+/// carried back through the tables, innermost (next to the part) first, each by minus its angle.
+std::vector<RotaryTurn> tableTurns(const Machine& m, const RotaryAngles& from, const RotaryAngles& to) {
+    std::vector<RotaryTurn> turns;
+    for (std::size_t i = m.axes.size(); i-- > 0;) {
+        const RotaryAxisSpec& a = m.axes[i];
+        if (!a.onTable) continue;
+        turns.push_back({a.direction, a.pivot, -from[a.letter] * kDegree, -to[a.letter] * kDegree});
+    }
+    return turns;
+}
+
+/// The heads' turns, from the base out to the tool, each by its angle (pivots relative to the tip).
+std::vector<RotaryTurn> headTurns(const Machine& m, const RotaryAngles& from, const RotaryAngles& to) {
+    std::vector<RotaryTurn> turns;
+    for (const RotaryAxisSpec& a : m.axes)
+        if (!a.onTable) turns.push_back({a.direction, a.pivot, from[a.letter] * kDegree, to[a.letter] * kDegree});
+    return turns;
+}
+
+/// The turns applied to a point, innermost (last) first, at their start angles.
+Vec3 applyTurns(const std::vector<RotaryTurn>& turns, Vec3 x, bool aboutPivot) {
+    for (std::size_t i = turns.size(); i-- > 0;) {
+        const RotaryTurn& t = turns[i];
+        x = aboutPivot ? t.pivot + rotated(x - t.pivot, t.direction, t.from) : rotated(x, t.direction, t.from);
+    }
+    return x;
+}
+
+/// Where the heads put the tip relative to the joints: the tip at zero turned about each head's
+/// pivot, from the tool side in.
+Vec3 headOffset(const Machine& m, const RotaryAngles& angles) {
+    return applyTurns(headTurns(m, angles, angles), Vec3(0.0), true);
+}
+
+/// The head turns' rotation applied to the tool's own axis.
+Vec3 headAxis(const Machine& m, const RotaryAngles& angles) {
+    return applyTurns(headTurns(m, angles, angles), Vec3(0.0, 0.0, 1.0), false);
+}
+
+Machine builtin(const std::string& name) {
+    Machine m;
+    m.name = name;
+    if (name == "xyzac-trt") {
+        // LinuxCNC's xyzac-trt-kins with y-offset 20, z-offset 10, rot-points 0, conventional
+        // directions 0: part = Rz(-C) (D + Rx(-A) (joints - D)), D = (0, 20, 10).
+        m.axes = {{'A', true, {1, 0, 0}, {0, 20, 10}}, {'C', true, {0, 0, 1}, {0, 0, 0}}};
+    } else if (name == "xyzbc-trt") {
+        // LinuxCNC's xyzbc-trt-kins with x-offset -20, z-offset -15 (its sim config's values):
+        // part = Rz(-C) (D + Ry(-B) (joints - D)), D = (-20, 0, -15).
+        m.axes = {{'B', true, {0, 1, 0}, {-20, 0, -15}}, {'C', true, {0, 0, 1}, {0, 0, 0}}};
+    } else if (name == "xyza") {
+        m.axes = {{'A', true, {1, 0, 0}, {0, 0, 0}}};
+    } else {
+        m.name.clear();
+    }
+    return m;
+}
+
+Vec3 readVector(const nlohmann::json& j, const std::string& what, const SourceLocation& at) {
+    if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
+        throw ParseError(at, what + " must be an array of three numbers", j.dump());
+    const Vec3 v(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
+    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+        throw ParseError(at, what + " must be finite", j.dump());
+    return v;
+}
+
+}  // namespace
+
+bool Machine::has(char letter) const {
+    for (const RotaryAxisSpec& a : axes)
+        if (a.letter == letter) return true;
+    return false;
+}
+
+Vec3 Machine::toolAxis(const RotaryAngles& angles) const {
+    return glm::normalize(applyTurns(tableTurns(*this, angles, angles), headAxis(*this, angles), false));
+}
+
+Vec3 Machine::partFromJoints(const Vec3& joints, const RotaryAngles& angles) const {
+    return applyTurns(tableTurns(*this, angles, angles), joints + headOffset(*this, angles), true);
+}
+
+Vec3 Machine::jointsFromPart(const Vec3& tip, const RotaryAngles& angles) const {
+    // Undo the tables' turns, outermost first, each by its own angle's opposite.
+    Vec3 x = tip;
+    for (const RotaryTurn& t : tableTurns(*this, angles, angles)) x = t.pivot + rotated(x - t.pivot, t.direction, -t.from);
+    return x - headOffset(*this, angles);
+}
+
+bool Machine::carriesTip(const RotaryAngles& from, const RotaryAngles& to) const {
+    for (const RotaryAxisSpec& a : axes)
+        if (!a.onTable && from[a.letter] != to[a.letter]) return false;
+    return true;
+}
+
+RotaryMotion Machine::motion(const RotaryAngles& from, const RotaryAngles& to, bool tcp, const Vec3& jointsFrom,
+                             const Vec3& jointsTo) const {
+    RotaryMotion r;
+    r.turns = tableTurns(*this, from, to);
+    if (tcp) {
+        // The axis is Q_tables Q_heads z: the heads' turns follow the tables' in the chain.
+        for (const RotaryTurn& t : headTurns(*this, from, to)) r.turns.push_back(t);
+        r.toolAxis = Vec3(0.0, 0.0, 1.0);
+        return r;
+    }
+    if (!carriesTip(from, to)) throw Error("a head axis that turns in identity kinematics is not supported");
+    // The heads stand still: they fix the tool's axis and the tip's offset from the joints.
+    r.toolAxis = headAxis(*this, from);
+    r.tipCarried = true;
+    r.machineStart = jointsFrom + headOffset(*this, from);
+    r.machineEnd = jointsTo + headOffset(*this, to);
+    return r;
+}
+
+std::vector<std::string> builtinMachineNames() { return {"xyzac-trt", "xyzbc-trt", "xyza"}; }
+
+Machine parseMachine(const std::string& text, const std::string& fileName) {
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(text);
+    } catch (const nlohmann::json::parse_error& e) {
+        // Place the fault by line and column from its byte offset.
+        SourceLocation at{fileName, 1, 1};
+        for (std::size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
+            if (text[i] == '\n') ++at.line, at.column = 1;
+            else ++at.column;
+        }
+        throw ParseError(at, "not valid JSON for a machine description");
+    }
+    const SourceLocation at{fileName, 0, 0};
+    if (!j.is_object()) throw ParseError(at, "a machine description must be a JSON object");
+    Machine m;
+    m.name = j.value("name", fileName);
+    if (j.contains("tcp_at_start")) {
+        if (!j["tcp_at_start"].is_boolean()) throw ParseError(at, "\"tcp_at_start\" must be true or false");
+        m.tcpAtStart = j["tcp_at_start"].get<bool>();
+    }
+    if (!j.contains("axes") || !j["axes"].is_array() || j["axes"].empty())
+        throw ParseError(at, "a machine description needs \"axes\": a non-empty array of rotary axes");
+    for (const auto& a : j["axes"]) {
+        RotaryAxisSpec s;
+        const std::string letter = a.is_object() ? a.value("letter", std::string()) : std::string();
+        if (letter != "A" && letter != "B" && letter != "C")
+            throw ParseError(at, "each axis needs \"letter\": \"A\", \"B\" or \"C\"", a.dump());
+        s.letter = letter[0];
+        if (m.has(s.letter)) throw ParseError(at, "rotary axis " + letter + " is described twice");
+        const std::string on = a.value("on", std::string("table"));
+        if (on != "table" && on != "head") throw ParseError(at, "axis " + letter + ": \"on\" must be \"table\" or \"head\"", on);
+        s.onTable = on == "table";
+        if (!a.contains("direction")) throw ParseError(at, "axis " + letter + " needs a \"direction\"");
+        const Vec3 d = readVector(a["direction"], "axis " + letter + "'s direction", at);
+        if (glm::length(d) <= tol::kLength) throw ParseError(at, "axis " + letter + "'s direction is zero");
+        s.direction = glm::normalize(d);
+        if (a.contains("pivot")) s.pivot = readVector(a["pivot"], "axis " + letter + "'s pivot", at);
+        m.axes.push_back(s);
+    }
+    return m;
+}
+
+Machine loadMachine(const std::string& nameOrFile) {
+    Machine m = builtin(nameOrFile);
+    if (!m.name.empty()) return m;
+    std::ifstream in(nameOrFile, std::ios::binary);
+    if (!in) {
+        std::string names;
+        for (const std::string& n : builtinMachineNames()) names += (names.empty() ? "" : ", ") + n;
+        throw Error("--machine '" + nameOrFile + "': no built-in machine of that name (" + names +
+                    ") and no file to read");
+    }
+    std::ostringstream text;
+    text << in.rdbuf();
+    return parseMachine(text.str(), nameOrFile);
+}
+
+}  // namespace dexelmill

@@ -1,0 +1,249 @@
+// Moves of a machine's rotary axes (xyzac-trt, with TCP and in identity kinematics) swept by
+// TurningSweep, against a brute-force oracle that shares no code with it: the poses come from
+// LinuxCNC's xyzac-trt forward kinematics written out here (y-offset 20, z-offset 10), the tools
+// are analytic solids (a cylinder, a ball end), and the speed bound is derived here for this
+// machine alone.
+//  Check 1: every output point is within epsilon of some pose: failing needs a certificate, a
+//    branch and bound over u proving the point farther than epsilon + margin from every pose.
+//  Check 2: every line point deeper than epsilon + margin inside a pose found by a dense search
+//    over u (refined by golden sections) is in the output.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "dexelmill/machine/kinematics.h"
+#include "dexelmill/sweep/turning.h"
+#include "dexelmill/tool/builders.h"
+
+using namespace dexelmill;
+
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+constexpr double kDy = 20.0, kDz = 10.0;  // the sim config's offsets
+constexpr double kEpsilon = 1e-4;
+constexpr double kMargin = 1e-6;
+
+/// LinuxCNC's xyzac forward kinematics (rot points 0): joints to the part frame.
+Vec3 forward(const Vec3& j, double aDeg, double cDeg) {
+    const double a = aDeg * kDeg, c = cDeg * kDeg;
+    const double y = j.y - kDy, z = j.z - kDz;
+    return {std::cos(c) * j.x + std::sin(c) * std::cos(a) * y + std::sin(c) * std::sin(a) * z + std::sin(c) * kDy,
+            -std::sin(c) * j.x + std::cos(c) * std::cos(a) * y + std::cos(c) * std::sin(a) * z + std::cos(c) * kDy,
+            -std::sin(a) * y + std::cos(a) * z + kDz};
+}
+
+Vec3 toolAxisOf(double aDeg, double cDeg) {
+    const double a = aDeg * kDeg, c = cDeg * kDeg;
+    return {std::sin(c) * std::sin(a), std::cos(c) * std::sin(a), std::cos(a)};
+}
+
+/// A flat end mill (ball = false) or ball end mill of radius r and length l, tip at the origin.
+struct Solid {
+    double r = 3, l = 20;
+    bool ball = false;
+    /// A signed clearance: positive outside, at most the distance outside; negative inside, its
+    /// magnitude exactly the depth (the solid is an intersection of convex sets, whose clearances
+    /// are exact, and the largest of them has both properties).
+    double clearance(double z, double rho) const {
+        if (!ball) return std::max({rho - r, -z, z - l});
+        const double zc = std::clamp(z, r, l + r);  // capsule about the segment z in [r, l + r]
+        return std::max(std::hypot(rho, z - zc) - r, z - l);
+    }
+};
+
+struct Case {
+    Vec3 j0, j1;   ///< joints (identity) or part-frame tips (TCP)
+    double a0, a1, c0, c1;  ///< degrees
+    bool tcp = false;
+};
+
+class RotaryOracle {
+  public:
+    RotaryOracle(const Case& c, const Solid& s) : c_(c), s_(s) {
+        const double reach = std::hypot(s.l, s.r);
+        const double rateA = std::abs(c.a1 - c.a0) * kDeg, rateC = std::abs(c.c1 - c.c0) * kDeg;
+        if (c.tcp) {
+            // y = p + Q v: |y'| <= |p'| + (|A'| + |C'|) |y - p|.
+            speed_ = glm::length(c.j1 - c.j0) + (rateA + rateC) * reach;
+        } else {
+            // y = Rz(-C) (D + Rx(-A) (x - D)), x a machine-frame tool point, D = (0, dy, dz):
+            // |y'| <= |x'| + |A'| |x - D| + |C'| (|D| + |x - D|).
+            const Vec3 d(0, kDy, kDz);
+            const double far = std::max(glm::length(c.j0 - d), glm::length(c.j1 - d)) + reach;
+            speed_ = glm::length(c.j1 - c.j0) + rateA * far + rateC * (glm::length(d) + far);
+        }
+    }
+
+    void pose(double u, Vec3& tip, Vec3& axis) const {
+        const double a = c_.a0 + u * (c_.a1 - c_.a0), c = c_.c0 + u * (c_.c1 - c_.c0);
+        const Vec3 j = c_.j0 + u * (c_.j1 - c_.j0);
+        tip = c_.tcp ? j : forward(j, a, c);
+        axis = toolAxisOf(a, c);
+    }
+    double clearance(const Vec3& x, double u) const {
+        Vec3 tip, axis;
+        pose(u, tip, axis);
+        const Vec3 d = x - tip;
+        const double z = glm::dot(d, axis);
+        return s_.clearance(z, glm::length(d - z * axis));
+    }
+    /// A certificate that x is farther than `margin` from every pose.
+    bool certainlyOutside(const Vec3& x, double margin) const {
+        struct Node {
+            double ua, ub;
+        };
+        std::vector<Node> stack{{0.0, 1.0}};
+        int nodes = 0;
+        while (!stack.empty()) {
+            const Node n = stack.back();
+            stack.pop_back();
+            const double um = 0.5 * (n.ua + n.ub), half = 0.5 * (n.ub - n.ua);
+            const double c = clearance(x, um);
+            if (c <= margin) return false;
+            if (c - speed_ * half > margin) continue;
+            if (++nodes > 200000) return false;
+            stack.push_back({n.ua, um});
+            stack.push_back({um, n.ub});
+        }
+        return true;
+    }
+    /// The greatest depth of x found over u (dense grid, then golden sections).
+    double depth(const Vec3& x) const {
+        constexpr int kGrid = 400;
+        int best = 0;
+        double bestC = 1e300;
+        for (int k = 0; k <= kGrid; ++k) {
+            const double c = clearance(x, double(k) / kGrid);
+            if (c < bestC) bestC = c, best = k;
+        }
+        double lo = std::max(best - 1, 0) / double(kGrid), hi = std::min(best + 1, kGrid) / double(kGrid);
+        for (int i = 0; i < 60; ++i) {
+            const double m1 = lo + (hi - lo) * 0.382, m2 = lo + (hi - lo) * 0.618;
+            if (clearance(x, m1) < clearance(x, m2)) hi = m2;
+            else lo = m1;
+        }
+        return -std::min(bestC, clearance(x, 0.5 * (lo + hi)));
+    }
+
+  private:
+    Case c_;
+    Solid s_;
+    double speed_ = 0;
+};
+
+/// The move the interpreter would make: poses at u = 0 and 1 and the machine's law.
+Move machineMove(const Case& c) {
+    const Machine m = loadMachine("xyzac-trt");
+    RotaryAngles from, to;
+    from['A'] = c.a0, from['C'] = c.c0, to['A'] = c.a1, to['C'] = c.c1;
+    Move mv;
+    mv.start = c.tcp ? c.j0 : m.partFromJoints(c.j0, from);
+    mv.end = c.tcp ? c.j1 : m.partFromJoints(c.j1, to);
+    mv.startAxis = m.toolAxis(from);
+    mv.axis = m.toolAxis(to);
+    mv.rotary = std::make_shared<const RotaryMotion>(m.motion(from, to, c.tcp, c.j0, c.j1));
+    return mv;
+}
+
+int checkCase(const Case& c, const Solid& s, std::mt19937& rng, int lines) {
+    const Tool tool = s.ball ? ballEndMill(2 * s.r, {s.l, s.l}) : flatEndMill(2 * s.r, {s.l, s.l});
+    const Move mv = machineMove(c);
+    const TurningSweep sweep(tool, mv, kEpsilon);
+    const RotaryOracle oracle(c, s);
+    std::uniform_real_distribution<double> uni(0.0, 1.0), sym(-1.0, 1.0);
+    int checked = 0;
+    for (int li = 0; li < lines; ++li) {
+        // A line through a random point of a random pose, along a lattice or a random direction.
+        Vec3 tip, axis;
+        oracle.pose(uni(rng), tip, axis);
+        const Vec3 any = std::abs(axis.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+        const Vec3 p = glm::normalize(glm::cross(axis, any)), q = glm::cross(axis, p);
+        const double ang = 6.283185307179586 * uni(rng), rr = 1.3 * s.r * uni(rng);
+        const Vec3 through = tip + axis * (s.l * uni(rng)) + (p * std::cos(ang) + q * std::sin(ang)) * rr;
+        Vec3 dir;
+        if (li % 2 == 0) dir = Vec3(0.0), dir[li / 2 % 3] = 1.0;
+        else dir = glm::normalize(Vec3(sym(rng), sym(rng), sym(rng)));
+        Line line{through, dir};
+        const std::vector<Interval> out = sweep.intersectAll(line);
+        const Interval span = sweep.bound(line);
+        if (span.isEmpty()) {  // the line passes outside the tool (up to 1.3 r from its axis) and the box
+            CHECK(out.empty());
+            continue;
+        }
+        for (const Interval& iv : out) {
+            INFO("interval " << iv.lo << " .. " << iv.hi << " on line " << li);
+            for (int k = 0; k <= 8; ++k) {
+                const double t = iv.lo + (iv.hi - iv.lo) * k / 8.0;
+                CHECK_FALSE(oracle.certainlyOutside(line.at(t), kEpsilon + kMargin));
+            }
+        }
+        constexpr int kSamples = 120;
+        for (int k = 0; k <= kSamples; ++k) {
+            const double t = span.lo + (span.hi - span.lo) * k / kSamples;
+            const bool inOut = std::any_of(out.begin(), out.end(), [&](const Interval& iv) { return iv.lo <= t && t <= iv.hi; });
+            if (inOut) continue;
+            const double d = oracle.depth(line.at(t));
+            INFO("line " << li << " t " << t << " depth " << d);
+            CHECK(d <= kEpsilon + kMargin);
+            ++checked;
+        }
+    }
+    return checked;
+}
+
+}  // namespace
+
+TEST_CASE("rotary sweep vs oracle: xyzac-trt moves with TCP and in identity kinematics", "[sweep][turning][machine]") {
+    std::mt19937 rng(20261123);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    int checked = 0;
+    for (int i = 0; i < 24; ++i) {
+        Case c;
+        c.tcp = i % 2 == 0;
+        c.j0 = Vec3(20 * uni(rng), 20 * uni(rng), 5 + 10 * uni(rng));
+        c.j1 = c.j0 + Vec3(8 * uni(rng), 8 * uni(rng), 3 * uni(rng));
+        c.a0 = -60 + 40 * uni(rng);
+        c.a1 = c.a0 + 25 * uni(rng);
+        c.c0 = 180 * uni(rng);
+        c.c1 = c.c0 + 60 * uni(rng);
+        Solid s;
+        s.ball = i % 4 >= 2;
+        s.r = 2 + uni(rng);
+        s.l = 15 + 5 * uni(rng);
+        INFO("case " << i << (c.tcp ? " TCP" : " identity"));
+        checked += checkCase(c, s, rng, 6);
+    }
+    CHECK(checked > 1000);
+}
+
+TEST_CASE("rotary sweep vs oracle: a rotary table alone turning under a still tool", "[sweep][turning][machine]") {
+    // C turns 90 degrees at A = 0 in identity kinematics: the axis stays +z while the tip runs on
+    // a quarter circle of radius |(10, 5)| about the C axis (turns() holds, the axes are equal).
+    std::mt19937 rng(7);
+    Case c;
+    c.j0 = c.j1 = Vec3(10, 5, 2);
+    c.a0 = c.a1 = 0;
+    c.c0 = 0, c.c1 = 90;
+    Solid s;
+    const Move mv = machineMove(c);
+    CHECK(mv.turns());
+    CHECK(glm::length(*mv.startAxis - mv.axis) < 1e-15);
+    checkCase(c, s, rng, 30);
+}
+
+TEST_CASE("rotary sweep vs oracle: a zero-length move that only tilts A", "[sweep][turning][machine]") {
+    std::mt19937 rng(11);
+    for (const bool tcp : {true, false}) {
+        Case c;
+        c.tcp = tcp;
+        c.j0 = c.j1 = Vec3(-4, 12, 6);
+        c.a0 = 0, c.a1 = -45;
+        c.c0 = c.c1 = 30;
+        Solid s;
+        s.ball = true;
+        checkCase(c, s, rng, 30);
+    }
+}
