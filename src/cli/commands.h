@@ -37,6 +37,8 @@ struct SimulateArgs {
     double excessTolerance = 0.05;
     double chordTolerance = 0.001;
     double turnTolerance = kDefaultTurnTolerance;
+    std::string machine;
+    std::string start;
     double adaptivity = 0.0;
     int refineRounds = 0;
     double refineTolerance = 0.002;
@@ -71,7 +73,7 @@ struct CompareArgs {
 
 CLI::App* addStudy(CLI::App& app, StudyArgs& args);
 int runStudy(const StudyArgs& args);
-int runInfo(const std::string& file);
+int runInfo(const std::string& file, const std::string& machine);
 CLI::App* addCompare(CLI::App& app, CompareArgs& args);
 int runCompare(const CompareArgs& args);
 

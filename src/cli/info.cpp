@@ -51,8 +51,13 @@ void printProgram(const Program& p) {
     std::printf("%-14s %zu (%zu rapid), feed %.6g mm, rapid %.6g mm\n", "moves", p.path.moves.size(), rapids,
                 feedLength, rapidLength);
     std::printf("%-14s %zu\n", "tool changes", p.path.toolChanges.size());
-    std::printf("%-14s %zu 3-axis (+z), %zu 3+2 (fixed, tilted), %zu turning the axis (simultaneous 5-axis)\n",
+    std::printf("%-14s %zu 3-axis (+z), %zu 3+2 (fixed, tilted), %zu simultaneous multi-axis (the axis or a "
+                "rotary table turns)\n",
                 "moves by axis", vertical, tilted, turning);
+    for (int a = 0; a < 3; ++a) {
+        const Interval& r = p.rotaryRanges[std::size_t(a)];
+        if (!r.isEmpty()) std::printf("%-14s %c %.6g .. %.6g degrees\n", "rotary range", char('A' + a), r.lo, r.hi);
+    }
     printBox("extent", p.path.bounds());
     printBox("cutting", cutting);
     for (const auto& [n, t] : p.tools) std::printf("%-14s T%d: %s\n", "tool", n, t.description().c_str());
@@ -63,7 +68,7 @@ void printProgram(const Program& p) {
 
 }  // namespace
 
-int runInfo(const std::string& file) {
+int runInfo(const std::string& file, const std::string& machine) {
     std::printf("%-14s %s\n", "file", file.c_str());
     if (endsWith(file, ".vdb")) {
         const LevelSet ls = readVdb(file);
@@ -76,7 +81,8 @@ int runInfo(const std::string& file) {
         return 0;
     }
     const MemoryBudget budget = memoryBudget();
-    const GcodeOptions gcode = jobGcodeOptions(SimulateOptions().chordTolerance, budget);
+    GcodeOptions gcode = jobGcodeOptions(SimulateOptions().chordTolerance, budget);
+    if (!machine.empty()) gcode.machine = loadMachine(machine);
     if (endsWith(file, ".camotics")) {
         const Project project = readCamoticsProject(file);
         std::printf("%-14s CAMotics project, %s units\n", "kind", project.metric ? "metric" : "imperial");

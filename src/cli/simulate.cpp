@@ -114,6 +114,12 @@ SimulateOptions toOptions(const SimulateArgs& a) {
     }
     o.chordTolerance = a.chordTolerance;
     o.turnTolerance = a.turnTolerance;
+    o.machine = a.machine;
+    if (!a.start.empty()) {
+        const std::vector<double> v = parseNumbers(a.start, "--start");
+        if (v.size() != 3) throw UsageError("--start takes X,Y,Z (mm)");
+        o.startPosition = Vec3(v[0], v[1], v[2]);
+    }
     if (!(a.adaptivity >= 0.0 && a.adaptivity <= 1.0)) throw UsageError("--adaptivity must lie in [0, 1]");
     o.adaptivity = a.adaptivity;
     o.refineRounds = a.refineRounds;
@@ -208,6 +214,17 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
                   "never reaches is")
         ->check(numberCheck(false))
         ->capture_default_str();
+    c->add_option("--machine", a.machine,
+                  "NAME or FILE.json: the machine whose rotary axes A, B, C a G-code program turns.\n"
+                  "Built-in: xyzac-trt and xyzbc-trt (LinuxCNC's sim configs: tilting table A or B\n"
+                  "carrying rotary table C) and xyza (a rotary table A about x). M428 / G43.4 switch\n"
+                  "tool centre point control on (X Y Z are the tip in the part frame), M429 / G49 off\n"
+                  "(X Y Z are joints; the tip's path is carried by the tables). The file form is in\n"
+                  "the README");
+    c->add_option("--start", a.start,
+                  "X,Y,Z: where the machine stands when a G-code program starts (mm). Unset, moves only\n"
+                  "set the position until the program has given X, Y and Z (for example a 4-axis\n"
+                  "program that never names Y needs --start)");
     c->add_option("--mesher", a.mesher,
                   "dexel: the surface placed from the dexels' exact crossings and normals, sharp edges kept;\n"
                   "vdb: OpenVDB's volumeToMesh on the level set alone")

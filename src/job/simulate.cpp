@@ -1,4 +1,5 @@
 #include "dexelmill/job/simulate.h"
+#include "dexelmill/machine/kinematics.h"
 
 #include <algorithm>
 #include <chrono>
@@ -326,6 +327,8 @@ Simulation runStages(const SimulateOptions& o) {
     const MemoryBudget budget = memoryBudget(o.maxMemoryBytes);
     GcodeOptions gcode = jobGcodeOptions(o.chordTolerance, budget);
     gcode.files = o.files;
+    if (!o.machine.empty()) gcode.machine = loadMachine(o.machine);
+    if (o.startPosition) gcode.startPosition = o.startPosition;
     const AptOptions apt = jobAptOptions(o.chordTolerance, budget);
     std::optional<Project> project;
     Program& program = sim.program;

@@ -219,11 +219,11 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     CHECK_THAT(report, Contains("\"refine\"") && Contains("\"points_tested\"") && Contains("\"edges_split\""));
     const Run prog = cli("info slot.ngc");
     CHECK(prog.code == 0);
-    CHECK_THAT(prog.out, Contains("moves") && Contains("tool changes") && Contains("0 3+2 (fixed, tilted), 0 turning"));
+    CHECK_THAT(prog.out, Contains("moves") && Contains("tool changes") && Contains("0 3+2 (fixed, tilted), 0 simultaneous"));
     cli.file("turn.apt", "MULTAX\nCUTTER/10\nFROM/0,0,0,0,0,1\nGOTO/40,0,0,0.5,0,0.8660254\nGOTO/0,0,0\nFINI\n");
     const Run turning = cli("info turn.apt");
     CHECK(turning.code == 0);
-    CHECK_THAT(turning.out, Contains("0 3-axis (+z), 1 3+2 (fixed, tilted), 1 turning the axis"));
+    CHECK_THAT(turning.out, Contains("0 3-axis (+z), 1 3+2 (fixed, tilted), 1 simultaneous multi-axis"));
     const Run turned = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 0.001 --quiet");
     CHECK(turned.code == 0);
     const Run badTolerance = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 0 --quiet");

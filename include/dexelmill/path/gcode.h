@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "dexelmill/geometry/types.h"
+#include "dexelmill/machine/kinematics.h"
 #include "dexelmill/path/toolpath.h"
 
 namespace dexelmill {
@@ -53,6 +54,9 @@ struct GcodeOptions {
     /// so no move sweeps from a guessed origin through the stock (one warning says so). LinuxCNC
     /// itself starts wherever the machine is, commonly (0, 0, 0).
     std::optional<Vec3> startPosition;
+    /// The machine whose rotary axes A, B, C the program moves (machine/kinematics.h). Without
+    /// one, a block that turns a rotary axis is an error that names --machine.
+    std::optional<Machine> machine;
     /// Where named files are read from: the tool table, subroutine files, the files of
     /// readGcodeFiles and of a project (runProject). Empty: the file system.
     FileSource files;

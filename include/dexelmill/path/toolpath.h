@@ -3,6 +3,7 @@
 /// loop consumes. Positions in mm in the part frame.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -113,6 +114,8 @@ struct Program {
     ToolTable tools;  ///< tools the program or project defines (APT CUTTER/, .camotics tools)
     std::vector<Diagnostic> diagnostics;
     std::optional<StatedStock> statedStock;  ///< the last one stated
+    /// The range (degrees) rotary axes A, B, C take over the moves; empty for an axis never set.
+    std::array<Interval, 3> rotaryRanges{Interval::empty(), Interval::empty(), Interval::empty()};
 
     /// @brief Runs `next` after this program: its files, moves and tool changes are renumbered
     /// onto the end of these, its tools replace same-numbered ones, its diagnostics follow.
@@ -132,6 +135,7 @@ struct Program {
         for (auto& [n, t] : next.tools) tools.insert_or_assign(n, std::move(t));
         for (Diagnostic& d : next.diagnostics) diagnostics.push_back(std::move(d));
         if (next.statedStock) statedStock = std::move(next.statedStock);
+        for (std::size_t a = 0; a < 3; ++a) rotaryRanges[a] = rotaryRanges[a].hull(next.rotaryRanges[a]);
     }
 };
 

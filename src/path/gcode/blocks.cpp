@@ -136,7 +136,7 @@ int Interpreter::gGroup(int code) {
     case 930: case 940: case 950: return 5;
     case 200: case 210: return 6;
     case 400: case 410: case 420: case 411: case 421: return 7;
-    case 430: case 431: case 432: case 490: return 8;
+    case 430: case 431: case 432: case 434: case 490: return 8;
     case 980: case 990: return 10;
     case 540: case 550: case 560: case 570: case 580: case 590: case 591: case 592: case 593:
         return 12;
@@ -229,6 +229,9 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
             break;
         case 2: case 30: case 6: case 98: case 99:
             break;
+        case 428: case 429:  // LinuxCNC's switchable kinematics (its sim configs' remaps)
+            setTcp(m == 428, col, m == 428 ? "M428" : "M429");
+            break;
         default:
             warn("unknown M-code M" + std::to_string(m) + " ignored", "M" + std::to_string(m), col);
         }
@@ -258,6 +261,13 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
         if (groupCode[8] == 431 || groupCode[8] == 432)
             for (char c : {'X', 'Y', 'Z', 'I', 'J', 'K'})
                 if (b.has(c) && groupCode[1] < 0 && motion < 0) b.use(c);
+        if (groupCode[8] == 434) {
+            setTcp(true, 0, "G43.4");
+            tcpByG434_ = true;
+        } else if (groupCode[8] == 490 && tcpByG434_) {
+            setTcp(false, 0, "G49");
+            tcpByG434_ = false;
+        }
         if (groupCode[8] != 490)
             diags_.note(where(), "tool length offset: the simulated tip follows the programmed "
                                  "point",

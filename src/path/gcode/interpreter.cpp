@@ -23,6 +23,7 @@ Interpreter::Interpreter(const GcodeOptions& options, Program& out) : opt_(optio
     if (!(options.chordTolerance > 0.0))
         throw Error("GcodeOptions::chordTolerance must be positive");
     hot_.fill(kNone);
+    if (options.machine) tcp_ = options.machine->tcpAtStart;
     if (options.startPosition) {
         mpos_ = *options.startPosition;
         known_[0] = known_[1] = known_[2] = positionKnown_ = true;

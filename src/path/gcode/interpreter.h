@@ -293,7 +293,15 @@ private:
     /// The program-frame target of the axis words (unspecified axes keep their place).
     Vec3 targetOf(Block& b, const Vec3& from, bool incremental);
 
+    /// The rotary angles the block's A, B, C words ask for (letters it lacks keep theirs).
+    /// Without a machine, or for a letter the machine lacks, a word that turns an axis fails.
+    RotaryAngles rotaryTarget(Block& b, bool incremental);
+    /// For blocks whose motion cannot turn a rotary axis (arcs, cycles, G28, offsets): fails if
+    /// an A, B or C word would turn one.
     void checkRotary(Block& b, bool incremental);
+    /// Switches tool centre point control (M428 / G43.4 on, M429 / G49 off), keeping the tool where
+    /// it is: the position changes from joints to part-frame tip or back.
+    void setTcp(bool on, int col, const char* code);
 
     // ---- non-modal codes ----
     bool executeNonModal(int code, Block& b, int motion);
@@ -350,7 +358,13 @@ private:
     /// Which coordinates of the position the program has set, and whether all three are.
     bool known_[3] = {false, false, false};
     bool positionKnown_ = false;
-    double rotary_[3] = {0, 0, 0};
+    /// The rotary angles now, and those the current G0/G1 block moves to (emit).
+    RotaryAngles angles_, nextAngles_;
+    /// Tool centre point control: positions are the tip in the part frame, not joints.
+    bool tcp_ = false;
+    bool tcpByG434_ = false;
+    /// G92 / G52 offsets of the rotary axes (degrees): machine angle = programmed + offset.
+    std::array<double, 3> rotaryOffset_{0.0, 0.0, 0.0};  ///< TCP came from G43.4, so G49 ends it
     Vec3 baseAxis_{0, 0, 1};
     Vec3 axis_{0, 0, 1};
     bool twp_ = false;

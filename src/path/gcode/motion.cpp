@@ -48,6 +48,8 @@ void Interpreter::emit(const Vec3& target, bool rapid) {
     if (out_.path.moves.size() >= opt_.maxMoves)
         fail(0, detail::tooManyMoves(opt_.maxMoves, opt_.maxMovesReason), std::string(line_.substr(0, 40)));
     for (int a = 0; a < 3; ++a) known_[a] = known_[a] || target[a] != mpos_[a];
+    if (twp_ && opt_.machine)
+        fail(0, "a tilted work plane (G68.2) together with --machine is not supported", std::string(line_.substr(0, 40)));
     if (!positionKnown_) {
         // Where the machine starts is not in the program: moves until X, Y and Z have all
         // been given only establish the position, rather than sweep from a guessed origin.
@@ -56,6 +58,7 @@ void Interpreter::emit(const Vec3& target, bool rapid) {
              "the position and is not simulated",
              "unknown start");
         mpos_ = target;
+        angles_ = nextAngles_;
         return;
     }
     Move m;
@@ -65,8 +68,34 @@ void Interpreter::emit(const Vec3& target, bool rapid) {
     m.tool = toolInSpindle_;
     m.rapid = rapid;
     m.source = {files_[std::size_t(curFile_)]->pathIndex, curLineNo_};
+    if (opt_.machine) {
+        // The machine's kinematics give the pose in the part frame: with TCP the positions are
+        // the tip there already; in identity kinematics they are joints, carried by the tables.
+        const Machine& mc = *opt_.machine;
+        if (!tcp_) {
+            m.start = mc.partFromJoints(mpos_, angles_);
+            m.end = mc.partFromJoints(target, nextAngles_);
+            if (!withinReach(m.start) || !withinReach(m.end))
+                fail(0, "the machine's kinematics put this move beyond the 1e9 mm a program may reach",
+                     std::string(line_.substr(0, 40)));
+        }
+        m.axis = mc.toolAxis(nextAngles_);
+        if (nextAngles_ != angles_) {
+            if (!tcp_ && !mc.carriesTip(angles_, nextAngles_))
+                fail(0, "a head axis that turns in identity kinematics (M429) is not supported; use TCP (M428 or G43.4)",
+                     std::string(line_.substr(0, 40)));
+            m.startAxis = mc.toolAxis(angles_);
+            m.rotary = std::make_shared<const RotaryMotion>(mc.motion(angles_, nextAngles_, tcp_, mpos_, target));
+        }
+    }
+    if (opt_.machine)
+        for (const RotaryAxisSpec& ax : opt_.machine->axes) {
+            Interval& r = out_.rotaryRanges[std::size_t(ax.letter - 'A')];
+            r = r.hull({angles_[ax.letter], angles_[ax.letter]}).hull({nextAngles_[ax.letter], nextAngles_[ax.letter]});
+        }
     out_.path.moves.push_back(m);
     mpos_ = target;
+    angles_ = nextAngles_;
 }
 
 Vec3 Interpreter::targetOf(Block& b, const Vec3& from, bool incremental) {
@@ -78,21 +107,52 @@ Vec3 Interpreter::targetOf(Block& b, const Vec3& from, bool incremental) {
             t[a] = incremental ? from[a] + v : v;
             known_[a] = true;
         }
-    checkRotary(b, incremental);
     return t;
 }
 
-void Interpreter::checkRotary(Block& b, bool incremental) {
+RotaryAngles Interpreter::rotaryTarget(Block& b, bool incremental) {
+    RotaryAngles next = angles_;
     for (int a = 0; a < 3; ++a) {
         const char c = char('A' + a);
         if (!b.has(c)) continue;
-        const double v = b.get(c);
-        const double target = incremental ? rotary_[a] + v : v;
-        if (std::abs(target - rotary_[a]) > 1e-9)
-            fail(b.col[a], "A/B/C rotary axes are not supported yet (rotary motion)", tokenAt(b.col[a]));
+        const double v = b.get(c);  // degrees, whatever the length units
+        const double target = incremental ? angles_.deg[a] + v : v + rotaryOffset_[std::size_t(a)];
+        if (!std::isfinite(target)) fail(b.col[a], "rotary axis " + std::string(1, c) + " to a non-finite angle", tokenAt(b.col[a]));
+        if (target == angles_.deg[a]) continue;
+        if (!opt_.machine) {
+            std::string names;
+            for (const std::string& n : builtinMachineNames()) names += (names.empty() ? "" : ", ") + n;
+            fail(b.col[a],
+                 "rotary axis " + std::string(1, c) + " turns, and what it turns depends on the machine: give "
+                 "--machine NAME|FILE.json (built-in: " + names + ")",
+                 tokenAt(b.col[a]));
+        }
+        if (!opt_.machine->has(c))
+            fail(b.col[a], "the machine '" + opt_.machine->name + "' has no " + std::string(1, c) + " axis", tokenAt(b.col[a]));
+        next.deg[a] = target;
     }
     for (char c : {'U', 'V', 'W'})
         if (b.has(c)) fail(b.col[c - 'A'], "U/V/W axes are not supported", tokenAt(b.col[c - 'A']));
+    return next;
+}
+
+void Interpreter::checkRotary(Block& b, bool incremental) {
+    if (rotaryTarget(b, incremental) == angles_) return;
+    const char c = b.has('A') ? 'A' : b.has('B') ? 'B' : 'C';
+    fail(b.col[c - 'A'], "a rotary axis turns in a block whose motion is not a straight G0/G1 move (not supported)",
+         tokenAt(b.col[c - 'A']));
+}
+
+void Interpreter::setTcp(bool on, int col, const char* code) {
+    if (!opt_.machine) {
+        warn(std::string(code) + " (tool centre point control " + (on ? "on" : "off") +
+                 ") has no effect without --machine",
+             code, col);
+        return;
+    }
+    if (on == tcp_) return;
+    mpos_ = on ? opt_.machine->partFromJoints(mpos_, angles_) : opt_.machine->jointsFromPart(mpos_, angles_);
+    tcp_ = on;
 }
 
 bool Interpreter::executeNonModal(int code, Block& b, int motion) {
@@ -142,6 +202,7 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         home *= units_;
         const Vec3 pp = toProgram(mpos_);
         if (anyXYZ) {
+            checkRotary(b, !absolute_);
             const Vec3 via = targetOf(b, pp, !absolute_);
             emit(toMachine(via), true);
             Vec3 end = mpos_;
@@ -161,7 +222,19 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
     }
     case 520: case 920: {  // G52, G92
         axisConflict();
-        checkRotary(b, false);
+        if (opt_.machine) {
+            // A rotary axis's offset: G92 makes its current angle read as the value given.
+            for (int a = 0; a < 3; ++a) {
+                const char c = char('A' + a);
+                if (!b.has(c)) continue;
+                if (!opt_.machine->has(c))
+                    fail(b.col[a], "the machine '" + opt_.machine->name + "' has no " + std::string(1, c) + " axis", tokenAt(b.col[a]));
+                const double v = b.get(c);
+                rotaryOffset_[std::size_t(a)] = code == 920 ? angles_.deg[a] - v : v;
+            }
+        } else {
+            checkRotary(b, false);
+        }
         static const char letters[3] = {'X', 'Y', 'Z'};
         const Vec3 before = g92_;
         for (int a = 0; a < 3; ++a) {
@@ -181,6 +254,7 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
     }
     case 921: case 922:
         g92_ = Vec3(0.0);
+        rotaryOffset_ = {0.0, 0.0, 0.0};
         if (code == 921)
             for (int a = 0; a < 3; ++a) store(params_[std::size_t(5211 + a)], 0.0);
         return false;
@@ -224,6 +298,7 @@ void Interpreter::orientTool(int code, Block& b) {
     axis_ = glm::normalize(twpRot_ * Vec3(0, 0, 1));
     if (code == 533) {
         const Vec3 pp = toProgram(mpos_);
+        checkRotary(b, false);
         const Vec3 t = targetOf(b, pp, false);
         emit(toMachine(t), true);
     }
@@ -248,9 +323,10 @@ void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
             static const char letters[3] = {'X', 'Y', 'Z'};
             for (int a = 0; a < 3; ++a)
                 if (b.has(letters[a])) target[a] = b.get(letters[a]) * units_;
-            checkRotary(b, false);
+            nextAngles_ = rotaryTarget(b, false);
         } else {
             target = toMachine(targetOf(b, toProgram(mpos_), !absolute_));
+            nextAngles_ = rotaryTarget(b, !absolute_);
         }
         emit(target, mode == 0);
         return;
@@ -272,6 +348,7 @@ void Interpreter::arc(bool clockwise, Block& b, int motionCol) {
     if (plane_ == 17) { p0 = 0; p1 = 1; p2 = 2; o0 = 'I'; o1 = 'J'; }
     else if (plane_ == 18) { p0 = 2; p1 = 0; p2 = 1; o0 = 'K'; o1 = 'I'; }
     else { p0 = 1; p1 = 2; p2 = 0; o0 = 'J'; o1 = 'K'; }
+    checkRotary(b, !absolute_);
     const Vec3 s = toProgram(mpos_);
     const Vec3 e = targetOf(b, s, !absolute_);
     const int arcCol = motionCol;

@@ -1,0 +1,161 @@
+// Machine kinematics against LinuxCNC's trt kinematics written out here as formulas (its
+// xyzac-trt and xyzbc-trt sim configs' offsets), and the G-code reader's rotary moves.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "dexelmill/error.h"
+#include "dexelmill/machine/kinematics.h"
+#include "dexelmill/path/gcode.h"
+
+using namespace dexelmill;
+using Catch::Matchers::Contains;
+
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+/// xyzac-trt forward kinematics, y-offset 20, z-offset 10, rot points 0.
+Vec3 xyzacForward(const Vec3& j, double aDeg, double cDeg) {
+    const double a = aDeg * kDeg, c = cDeg * kDeg, dy = 20, dz = 10;
+    return {std::cos(c) * j.x + std::sin(c) * std::cos(a) * (j.y - dy) + std::sin(c) * std::sin(a) * (j.z - dz) +
+                std::sin(c) * dy,
+            -std::sin(c) * j.x + std::cos(c) * std::cos(a) * (j.y - dy) + std::cos(c) * std::sin(a) * (j.z - dz) +
+                std::cos(c) * dy,
+            -std::sin(a) * (j.y - dy) + std::cos(a) * (j.z - dz) + dz};
+}
+
+/// xyzbc-trt forward kinematics, x-offset -20, z-offset -15, rot points 0.
+Vec3 xyzbcForward(const Vec3& j, double bDeg, double cDeg) {
+    const double b = bDeg * kDeg, c = cDeg * kDeg, dx = -20, dz = -15;
+    return {std::cos(c) * std::cos(b) * (j.x - dx) + std::sin(c) * j.y - std::cos(c) * std::sin(b) * (j.z - dz) +
+                std::cos(c) * dx,
+            -std::sin(c) * std::cos(b) * (j.x - dx) + std::cos(c) * j.y + std::sin(c) * std::sin(b) * (j.z - dz) -
+                std::sin(c) * dx,
+            std::sin(b) * (j.x - dx) + std::cos(b) * (j.z - dz) + dz};
+}
+
+double distance(const Vec3& a, const Vec3& b) { return glm::length(a - b); }
+
+}  // namespace
+
+TEST_CASE("machine: xyzac-trt and xyzbc-trt match LinuxCNC's trt kinematics", "[machine]") {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    const Machine ac = loadMachine("xyzac-trt"), bc = loadMachine("xyzbc-trt");
+    for (int i = 0; i < 200; ++i) {
+        const Vec3 j(100 * uni(rng), 100 * uni(rng), 100 * uni(rng));
+        const double tilt = 100 * uni(rng), spin = 360 * uni(rng);
+        RotaryAngles a;
+        a['A'] = tilt, a['C'] = spin;
+        CHECK(distance(ac.partFromJoints(j, a), xyzacForward(j, tilt, spin)) < 1e-12);
+        // The tool axis is the image of machine +z: the issue's (sin C sin A, cos C sin A, cos A).
+        const Vec3 axis(std::sin(spin * kDeg) * std::sin(tilt * kDeg), std::cos(spin * kDeg) * std::sin(tilt * kDeg),
+                        std::cos(tilt * kDeg));
+        CHECK(distance(ac.toolAxis(a), axis) < 1e-14);
+        CHECK(distance(ac.jointsFromPart(xyzacForward(j, tilt, spin), a), j) < 1e-11);
+        RotaryAngles b;
+        b['B'] = tilt, b['C'] = spin;
+        CHECK(distance(bc.partFromJoints(j, b), xyzbcForward(j, tilt, spin)) < 1e-12);
+        const Vec3 bAxis = xyzbcForward(j + Vec3(0, 0, 1), tilt, spin) - xyzbcForward(j, tilt, spin);
+        CHECK(distance(bc.toolAxis(b), bAxis) < 1e-12);
+        CHECK(distance(bc.jointsFromPart(bc.partFromJoints(j, b), b), j) < 1e-11);
+    }
+}
+
+TEST_CASE("machine: the law of a move reproduces the kinematics at every u", "[machine]") {
+    const Machine ac = loadMachine("xyzac-trt");
+    RotaryAngles from, to;
+    from['A'] = -10, from['C'] = 20, to['A'] = -50, to['C'] = 95;
+    const Vec3 j0(3, -7, 12), j1(-9, 4, 5);
+    for (const bool tcp : {false, true}) {
+        Move m;
+        m.start = tcp ? j0 : ac.partFromJoints(j0, from);
+        m.end = tcp ? j1 : ac.partFromJoints(j1, to);
+        m.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, tcp, j0, j1));
+        const MotionLaw law(m);
+        for (int k = 0; k <= 10; ++k) {
+            const double u = k / 10.0;
+            const double a = -10 - 40 * u, c = 20 + 75 * u;
+            const Vec3 j = j0 + u * (j1 - j0);
+            const ToolPose p = law.pose(u);
+            CHECK(distance(p.tip, tcp ? j : xyzacForward(j, a, c)) < 1e-12);
+            RotaryAngles at;
+            at['A'] = a, at['C'] = c;
+            CHECK(distance(p.axis, ac.toolAxis(at)) < 1e-14);
+            // The velocity of the tool point 7 mm up the axis, against a central difference.
+            const double h = 1e-6;
+            auto point = [&](double v) {
+                const ToolPose q = law.pose(v);
+                return q.tip + 7.0 * q.axis;
+            };
+            if (k > 0 && k < 10) {
+                const Vec3 fd = (point(u + h) - point(u - h)) / (2 * h);
+                CHECK(distance(law.velocity(u, point(u)), fd) < 1e-6 * (1 + glm::length(fd)));
+                CHECK(glm::length(fd) <= law.speedBound(7.0));
+            }
+        }
+    }
+}
+
+TEST_CASE("machine: description files and their errors", "[machine]") {
+    const Machine m = parseMachine(
+        R"({"name": "ht", "tcp_at_start": true, "axes": [{"letter": "C", "on": "table", "direction": [0, 0, 2]},
+            {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 150]}]})",
+        "ht.json");
+    CHECK(m.name == "ht");
+    CHECK(m.tcpAtStart);
+    REQUIRE(m.axes.size() == 2);
+    CHECK(m.axes[0].direction == Vec3(0, 0, 1));
+    RotaryAngles a;
+    a['B'] = 90;
+    // A head B of +90 degrees turns the tool's +z to +x; its pivot 150 above the tip swings the tip.
+    CHECK(distance(m.toolAxis(a), Vec3(1, 0, 0)) < 1e-15);
+    CHECK(distance(m.partFromJoints(Vec3(0.0), a), Vec3(-150, 0, 150)) < 1e-12);
+    CHECK_FALSE(m.carriesTip(RotaryAngles{}, a));
+    CHECK_THROWS_WITH(parseMachine("{\n  \"axes\": [\n  {\"letter\": \"A\",, }]}", "bad.json"),
+                      Contains("bad.json:3:") && Contains("not valid JSON"));
+    CHECK_THROWS_WITH(parseMachine("{}", "x.json"), Contains("x.json") && Contains("\"axes\""));
+    CHECK_THROWS_WITH(parseMachine(R"({"axes": [{"letter": "A", "direction": [1, 0, 0]}, {"letter": "A", "direction": [0, 1, 0]}]})", "d.json"),
+                      Contains("twice"));
+    CHECK_THROWS_WITH(parseMachine(R"({"axes": [{"letter": "D", "direction": [1, 0, 0]}]})", "d.json"), Contains("letter"));
+    CHECK_THROWS_WITH(parseMachine(R"({"axes": [{"letter": "A", "direction": [0, 0, 0]}]})", "d.json"), Contains("zero"));
+    CHECK_THROWS_WITH(loadMachine("no-such-machine"), Contains("xyzac-trt") && Contains("no-such-machine"));
+}
+
+TEST_CASE("G-code: rotary words need a machine, and M428 / M429 switch the kinematics", "[machine][gcode]") {
+    GcodeOptions o;
+    CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0 A0 C0\nG1 X1 C90\n", "r.ngc", o),
+                      Contains("r.ngc:2:7") && Contains("--machine"));
+    // A and C words that repeat the current angle need no machine.
+    CHECK_NOTHROW(parseGcode("G0 X0 Y0 Z0 A0 C0\nG1 X1 A0\n", "r.ngc", o));
+
+    o.machine = loadMachine("xyzac-trt");
+    CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG1 B10\n", "r.ngc", o), Contains("no B axis"));
+    CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG2 X2 I1 C10\n", "r.ngc", o), Contains("r.ngc:2:") && Contains("G0/G1"));
+    // Identity kinematics (the sim config's start): the joints are carried by the tables.
+    const Program p = parseGcode("G0 X0 Y0 Z0 A0 C0\nG0 X10 C90\nG1 Z2\nM428\nG1 Z0\nG1 A-30 X12\nM429\nG1 Z5\n",
+                                 "sw.ngc", o);
+    const auto& mv = p.path.moves;
+    REQUIRE(mv.size() == 5);
+    CHECK(mv[0].turns());  // C turns: the tip runs on an arc about the C axis
+    CHECK(distance(mv[0].end, xyzacForward(Vec3(10, 0, 0), 0, 90)) < 1e-12);
+    CHECK_FALSE(mv[1].turns());
+    CHECK(distance(mv[1].end, xyzacForward(Vec3(10, 0, 2), 0, 90)) < 1e-12);
+    // Under TCP the position is the tip in the part frame: Z0 lowers it there.
+    const Vec3 tip = xyzacForward(Vec3(10, 0, 2), 0, 90);
+    CHECK(distance(mv[2].end, Vec3(tip.x, tip.y, 0)) < 1e-12);
+    REQUIRE(mv[3].turns());
+    CHECK(mv[3].rotary != nullptr);
+    CHECK_FALSE(mv[3].rotary->tipCarried);
+    CHECK(distance(mv[3].end, Vec3(12, tip.y, 0)) < 1e-12);
+    CHECK(distance(mv[3].axis, Vec3(std::sin(90 * kDeg) * std::sin(-30 * kDeg), 0, std::cos(30 * kDeg))) < 1e-12);
+    // Back to identity: the joints under that tip, then Z5 moves joint Z.
+    RotaryAngles at;
+    at['A'] = -30, at['C'] = 90;
+    const Vec3 joints = o.machine->jointsFromPart(Vec3(12, tip.y, 0), at);
+    CHECK(distance(mv[4].end, xyzacForward(Vec3(joints.x, joints.y, 5), -30, 90)) < 1e-9);
+    CHECK(p.rotaryRanges[0].lo == -30);
+    CHECK(p.rotaryRanges[2].hi == 90);
+}
