@@ -104,7 +104,8 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
 /// Moves whose tool axis turns. A feed move is swept turning (TurningSweep, within the job's
 /// turn tolerance); its axes must not be opposite, where no one great circle joins them. A rapid
 /// that turns is a reorientation whose path is the machine's, not the program's straight line: it
-/// is swept with its end axis, with a warning where it can reach the stock.
+/// is swept with its end axis, with a warning where it can reach the stock; a rapid of a machine's
+/// rotary axes follows the machine's law (Move::rotary) and needs no warning.
 void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& stockBox,
                        std::vector<ReportWarning>& notes) {
     std::size_t rapids = 0;
@@ -125,7 +126,8 @@ void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& 
                 << "): " << e.what();
             throw ParseError(at, msg.str());
         }
-        if (m.rapid && reach.overlaps(stockBox) && rapids++ == 0) firstRapid = at;
+        // A machine's rotary rapid has a known law and is swept by it (sweepsTurning).
+        if (m.rapid && !m.rotary && reach.overlaps(stockBox) && rapids++ == 0) firstRapid = at;
     }
     if (rapids == 0) return;
     ReportWarning w;
