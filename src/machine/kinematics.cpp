@@ -21,11 +21,6 @@ Vec3 rotated(const Vec3& v, const Vec3& d, double angle) {
     return v * c + glm::cross(d, v) * s + d * (glm::dot(d, v) * (1.0 - c));
 }
 
-/// A turn of a point about a line by `angle`.
-Vec3 turned(const Vec3& x, const RotaryAxisSpec& a, double angle) {
-    return a.pivot + rotated(x - a.pivot, a.direction, angle);
-}
-
 /// The tables' turns seen from the part (turn 0 outermost): the part frame is the machine frame
 /// carried back through the tables, innermost (next to the part) first, each by minus its angle.
 std::vector<RotaryTurn> tableTurns(const Machine& m, const RotaryAngles& from, const RotaryAngles& to) {
