@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "dexelmill/error.h"
+#include "dexelmill/geometry/rotation.h"
 #include "dexelmill/geometry/tolerance.h"
 
 namespace dexelmill {
@@ -14,12 +15,6 @@ namespace dexelmill {
 namespace {
 
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
-
-/// The rotation of v about the unit direction d by `angle` (radians, right-handed).
-Vec3 rotated(const Vec3& v, const Vec3& d, double angle) {
-    const double c = std::cos(angle), s = std::sin(angle);
-    return v * c + glm::cross(d, v) * s + d * (glm::dot(d, v) * (1.0 - c));
-}
 
 /// The tables' turns seen from the part (turn 0 outermost): the part frame is the machine frame
 /// carried back through the tables, innermost (next to the part) first, each by minus its angle.
@@ -45,7 +40,7 @@ std::vector<RotaryTurn> headTurns(const Machine& m, const RotaryAngles& from, co
 Vec3 applyTurns(const std::vector<RotaryTurn>& turns, Vec3 x, bool aboutPivot) {
     for (std::size_t i = turns.size(); i-- > 0;) {
         const RotaryTurn& t = turns[i];
-        x = aboutPivot ? t.pivot + rotated(x - t.pivot, t.direction, t.from) : rotated(x, t.direction, t.from);
+        x = aboutPivot ? t.pivot + rotateAbout(x - t.pivot, t.direction, t.from) : rotateAbout(x, t.direction, t.from);
     }
     return x;
 }
@@ -108,7 +103,7 @@ Vec3 Machine::partFromJoints(const Vec3& joints, const RotaryAngles& angles) con
 Vec3 Machine::jointsFromPart(const Vec3& tip, const RotaryAngles& angles) const {
     // Undo the tables' turns, outermost first, each by its own angle's opposite.
     Vec3 x = tip;
-    for (const RotaryTurn& t : tableTurns(*this, angles, angles)) x = t.pivot + rotated(x - t.pivot, t.direction, -t.from);
+    for (const RotaryTurn& t : tableTurns(*this, angles, angles)) x = t.pivot + rotateAbout(x - t.pivot, t.direction, -t.from);
     return x - headOffset(*this, angles);
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dexelmill/geometry/rotation.h"
 #include "dexelmill/path/toolpath.h"
 
 namespace dexelmill {
@@ -32,12 +33,8 @@ MotionLaw::MotionLaw(const Move& move) : start_(move.start), feed_(move.feed()),
 }
 
 Vec3 MotionLaw::rotate(std::size_t i, double u, const Vec3& v) const {
-    // Rodrigues' formula about the unit direction d by the angle at u.
     const RotaryTurn& t = turns_[i];
-    const double angle = t.from + u * (t.to - t.from);
-    const double c = std::cos(angle), s = std::sin(angle);
-    const Vec3& d = t.direction;
-    return v * c + glm::cross(d, v) * s + d * (glm::dot(d, v) * (1.0 - c));
+    return rotateAbout(v, t.direction, t.from + u * (t.to - t.from));
 }
 
 ToolPose MotionLaw::pose(double u) const {
@@ -79,10 +76,7 @@ Vec3 MotionLaw::velocity(double u, const Vec3& point) const {
         for (std::size_t j = i; j-- > 0;) term = rotate(j, u, term);
         v += term;
         // y_{i+1} = c_i + R_i^T (y_i - c_i): the rotation by minus the angle.
-        const double angle = t.from + u * (t.to - t.from);
-        const double c = std::cos(angle), s = -std::sin(angle);
-        const Vec3 r = y - t.pivot;
-        y = t.pivot + r * c + glm::cross(t.direction, r) * s + t.direction * (glm::dot(t.direction, r) * (1.0 - c));
+        y = t.pivot + rotateAbout(y - t.pivot, t.direction, -(t.from + u * (t.to - t.from)));
     }
     Vec3 drift = machineFeed_;
     for (std::size_t j = turns_.size(); j-- > 0;) drift = rotate(j, u, drift);
