@@ -1,7 +1,7 @@
 /// @file kinematics.h
 /// @brief Machine kinematics: a machine's rotary axes and what their angles do to the tool's pose
 /// in the part frame. The program readers call it; the sweep sees only the motion law it gives
-/// (path/motion.h).
+/// (rotary_motion.h).
 ///
 /// Frames. The machine frame is where X, Y and Z move the tool; at every rotary angle zero the part
 /// frame coincides with it. A table axis turns what it carries (the part) by its angle, right-handed
@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "dexelmill/geometry/types.h"
-#include "dexelmill/path/motion.h"
+#include "dexelmill/machine/rotary_motion.h"
 
 namespace dexelmill {
 

@@ -7,35 +7,12 @@
 #include <vector>
 
 #include "dexelmill/geometry/types.h"
+#include "dexelmill/machine/rotary_motion.h"
 #include "dexelmill/tool/line_query.h"
 
 namespace dexelmill {
 
 struct Move;
-
-/// @brief A rotation of the part frame about a fixed line (unit `direction` through `pivot`) by an
-/// angle (radians) that runs linearly in u from `from` to `to`.
-struct RotaryTurn {
-    Vec3 direction{0.0, 0.0, 1.0};
-    Vec3 pivot{0.0};
-    double from = 0.0, to = 0.0;
-};
-
-/// @brief The motion law of a move that a machine's rotary axes make.
-///
-/// Write T_i(u) x = c_i + R_i(u) (x - c_i) for turn i (R_i the rotation about direction_i by its
-/// angle at u) and G(u) = T_0 T_1 ... T_{n-1} (turn 0 outermost). The tool axis in the part frame
-/// is Q(u) toolAxis, Q = R_0 R_1 ... R_{n-1}. The tip in the part frame:
-///  - tool centre point control (tipCarried false): the straight line from the move's start to its
-///    end, as for any move;
-///  - identity kinematics (tipCarried true): G(u) applied to the machine-frame point that runs
-///    linearly from machineStart to machineEnd, a curve in the part frame.
-struct RotaryMotion {
-    std::vector<RotaryTurn> turns;
-    Vec3 toolAxis{0.0, 0.0, 1.0};  ///< unit, in the frame the turns act on
-    bool tipCarried = false;
-    Vec3 machineStart{0.0}, machineEnd{0.0};
-};
 
 /// @brief The pose of the tool over a move, and how fast its points move. Every move is a rigid
 /// motion of the tool: a fixed-axis move translates it; an APT move whose axis turns rotates it
