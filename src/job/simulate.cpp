@@ -111,7 +111,9 @@ void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& 
     std::size_t rapids = 0;
     SourceLocation firstRapid;
     for (const Move& m : path.moves) {
-        if (!m.turns()) continue;
+        // A machine's rotary move has a known law, swept as it is (sweepsTurning): no great circle
+        // to check and, at rapid, no end axis to warn of.
+        if (!m.turns() || m.rotary) continue;
         const Vec3& a = *m.startAxis;
         const Tool& tool = tools.at(m.tool);
         const SourceLocation at = path.where(m.source);
@@ -126,8 +128,7 @@ void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& 
                 << "): " << e.what();
             throw ParseError(at, msg.str());
         }
-        // A machine's rotary rapid has a known law and is swept by it (sweepsTurning).
-        if (m.rapid && !m.rotary && reach.overlaps(stockBox) && rapids++ == 0) firstRapid = at;
+        if (m.rapid && reach.overlaps(stockBox) && rapids++ == 0) firstRapid = at;
     }
     if (rapids == 0) return;
     ReportWarning w;
