@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "dexelmill/error.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/job/simulate.h"
 #include "dexelmill/tool/spec.h"
@@ -38,6 +39,39 @@ Box parseBox(const std::string& text) {
     if (!(b.lo.x < b.hi.x && b.lo.y < b.hi.y && b.lo.z < b.hi.z))
         throw UsageError("--stock box: each minimum must be below its maximum");
     return b;
+}
+
+/// A round stock along a coordinate axis: `cylinder:AXIS,X,Y,Z,R,H` or
+/// `cone:AXIS,X,Y,Z,R0,R1,H` (`kind` says which; `text` follows the colon). AXIS is x, y or z,
+/// with an optional sign (-z points down); X,Y,Z the base face's centre; R0 the radius there, R1
+/// at the face H further along the axis.
+Frustum parseRoundStock(const std::string& kind, const std::string& text) {
+    const bool cone = kind == "cone";
+    const std::string form = cone ? "cone:AXIS,X,Y,Z,R0,R1,H" : "cylinder:AXIS,X,Y,Z,R,H";
+    const std::size_t comma = text.find(',');
+    std::string letter = text.substr(0, comma);
+    double sign = 1.0;
+    if (!letter.empty() && (letter[0] == '-' || letter[0] == '+')) {
+        sign = letter[0] == '-' ? -1.0 : 1.0;
+        letter = letter.substr(1);
+    }
+    Vec3 axis(0.0);
+    if (letter == "x" || letter == "X") axis.x = sign;
+    else if (letter == "y" || letter == "Y") axis.y = sign;
+    else if (letter == "z" || letter == "Z") axis.z = sign;
+    else throw UsageError("--stock " + form + ": the axis '" + letter + "' is not x, y or z (optionally -x, -y, -z)");
+    const std::vector<double> v =
+        comma == std::string::npos ? std::vector<double>{} : parseNumbers(text.substr(comma + 1), "--stock " + kind);
+    const std::size_t want = cone ? 6 : 5;
+    if (v.size() != want)
+        throw UsageError("--stock " + form + ": expected the axis and " + std::to_string(want) +
+                         " numbers (mm): the base face's centre, " + (cone ? "its radius, the far face's radius" : "the radius") +
+                         " and the height");
+    try {
+        return Frustum::make(Vec3(v[0], v[1], v[2]), axis, v[want - 1], v[3], cone ? v[4] : v[3]);
+    } catch (const Error& e) {
+        throw UsageError("--stock " + form + ": " + e.what());
+    }
 }
 
 }  // namespace
@@ -77,6 +111,8 @@ SimulateOptions toOptions(const SimulateArgs& a) {
     o.inputs = a.inputs;
     if (!a.stock.empty()) {
         if (a.stock.rfind("box:", 0) == 0) o.stockBox = parseBox(a.stock.substr(4));
+        else if (a.stock.rfind("cylinder:", 0) == 0) o.stockFrustum = parseRoundStock("cylinder", a.stock.substr(9));
+        else if (a.stock.rfind("cone:", 0) == 0) o.stockFrustum = parseRoundStock("cone", a.stock.substr(5));
         else o.stockFile = a.stock;
     }
     for (const std::string& t : a.tools) {
@@ -196,8 +232,11 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
         c->add_option("INPUTS", a.inputs, "PROJECT.camotics or PROGRAM... (.ngc, .nc, .gcode, .tap, .apt, .cl)");
     if (inputsRequired) in->required();
     c->add_option("--stock", a.stock,
-                  "box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (mm), or FILE.stl / FILE.vdb (a casting, a forging,\n"
-                  "an earlier result). Default: the project's workpiece, else the program's extent.");
+                  "box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX | cylinder:AXIS,X,Y,Z,R,H |\n"
+                  "cone:AXIS,X,Y,Z,R0,R1,H (bar stock, a turned blank: AXIS x, y or z, or -x...;\n"
+                  "X,Y,Z the centre of the base face, R0 its radius, R1 the radius H along AXIS)\n"
+                  "or FILE.stl / FILE.vdb (a casting, a forging, an earlier result); mm.\n"
+                  "Default: the project's workpiece, else the program's extent.");
     c->add_option("--tool", a.tools,
                   "SPEC or N=SPEC, repeatable; N is the tool number used by T words.\n"
                   "SPEC: ball:d=6 | flat:d=10 | bull:d=10,r=2 | taper:d=2,angle=15 |\n"

@@ -62,7 +62,7 @@ int runStudy(const StudyArgs& a) {
             throw UsageError(std::string("--case: ") + e.what());
         }
         o.job.program = std::move(c.program);
-        if (!o.job.stockBox && o.job.stockFile.empty()) o.job.stockBox = c.stock;
+        if (!o.job.stockBox && !o.job.stockFrustum && o.job.stockFile.empty()) o.job.stockBox = c.stock;
         o.job.inputs = {"case:" + c.name};
     }
     o.resolutions.clear();

@@ -175,6 +175,8 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
     std::optional<Mesh> fromStl;
     if (o.stockBox) {
         box = *o.stockBox;
+    } else if (o.stockFrustum) {
+        box = o.stockFrustum->bounds();
     } else if (!o.stockFile.empty()) {
         const std::string e = lowerExtension(o.stockFile);
         if (e == ".stl") {
@@ -247,6 +249,7 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
     }
     if (fromStl) return {stockFromMesh(*fromStl, lattice, o.families), box, false};
     if (fromVdb) return {stockFromLevelSet(*fromVdb, lattice, o.families), box, false};
+    if (o.stockFrustum) return {stockFromFrustum(*o.stockFrustum, h, o.families), box, false};
     return {TriDexelStock::fromBox(box, h, o.families), box, true};
 }
 
@@ -500,7 +503,7 @@ Simulation runStages(const SimulateOptions& o) {
     if (o.refineRounds > 0 && !loaded.isBox) {
         ReportWarning w;
         w.where.file = o.stockFile;
-        w.message = "--refine needs a box stock: the mesh of a stock from a file is not refined";
+        w.message = "--refine needs a box stock: the mesh of a round stock or a stock from a file is not refined";
         report.warnings.push_back(w);
     } else if (o.refineRounds > 0 && turning != program.path.moves.end()) {
         const SourceLocation at = program.path.where(turning->source);

@@ -159,6 +159,9 @@ StudyResult runStudy(const StudyOptions& o) {
     if (!o.job.stockFile.empty())
         throw Error(o.job.stockFile + ": a study measures against the exact part cut from a box stock; an STL or "
                     "VDB stock is not supported (give the stock as box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX)");
+    if (o.job.stockFrustum)
+        throw Error("a study measures against the exact part cut from a box stock; a cylinder or cone stock is not "
+                    "supported (give the stock as box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX)");
     if (!o.plyDeviationDir.empty()) {
         std::error_code ec;
         std::filesystem::create_directories(o.plyDeviationDir, ec);

@@ -84,6 +84,15 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
     CHECK_THAT(r.err, Contains("6 numbers"));
     r = cli("simulate ok.ngc --tool flat:d=3 --stock box:0,0,0,-10,10,10");
     CHECK(r.code == 2);
+    r = cli("simulate ok.ngc --tool flat:d=3 --stock cylinder:w,0,0,0,5,10");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("the axis 'w' is not x, y or z"));
+    r = cli("simulate ok.ngc --tool flat:d=3 --stock cone:z,0,0,0,5,10");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("cone:AXIS,X,Y,Z,R0,R1,H") && Contains("6 numbers"));
+    r = cli("simulate ok.ngc --tool flat:d=3 --stock cone:-z,0,0,0,0,0,10");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("positive radius"));
     r = cli("simulate ok.ngc --tool flat:d=3 --families xw");
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Contains("x, y and z"));

@@ -304,3 +304,24 @@ TEST_CASE("the dexel mesher keeps the slot's volume, folds nothing, and works wi
     CHECK(z.meshClosed);
     CHECK(z.interpolatedCrossings > 0);
 }
+
+TEST_CASE("a round stock: bar stock faced along its length loses its analytic cap", "[job][primitive]") {
+    const fs::path dir = scratch("round");
+    // A D30 flat end mill faces a bar of radius 10 along x (0 .. 40) down to z = 6 across its
+    // whole width: it removes the circular segment above z = 6, r^2 acos(d / r) - d sqrt(r^2 - d^2)
+    // with d = 6, times the bar's length.
+    SimulateOptions o;
+    o.inputs = {write(dir / "face.ngc", "G21 G90\nT1 M6\nG0 X-20 Y0 Z20\nG1 Z6 F100\nG1 X60\nG0 Z20\nM30\n")};
+    o.stockFrustum = Frustum::make(Vec3(0.0), Vec3(1, 0, 0), 40, 10, 10);
+    o.tools.emplace(1, flatEndMill(30, {20, 40}));
+    o.resolution = 0.25;
+    o.meshPath = (dir / "part.stl").string();
+    const SimulateReport r = simulate(o);
+    const double cap = 100 * std::acos(0.6) - 6 * 8;
+    CHECK(r.stockVolumeMm3 == Approx(kPi * 100 * 40).epsilon(0.002));
+    CHECK(r.removedVolumeMm3 == Approx(cap * 40).epsilon(0.005));
+    CHECK(r.stockBox.lo == Vec3(0, -10, -10));
+    CHECK(r.stockBox.hi == Vec3(40, 10, 10));
+    CHECK(r.meshClosed);
+    CHECK(r.collisions.empty());
+}

@@ -19,6 +19,7 @@
 #include "dexelmill/path/apt.h"
 #include "dexelmill/path/gcode.h"
 #include "dexelmill/path/toolpath.h"
+#include "dexelmill/stock/primitive.h"
 #include "dexelmill/stock/tridexel.h"
 #include "dexelmill/surface/levelset.h"
 #include "dexelmill/surface/mesh.h"
@@ -43,9 +44,11 @@ struct SimulateOptions {
     /// Where the inputs and the files they name are read from. Empty: the file system.
     FileSource files;
 
-    /// The stock: a box, or a file (STL or VDB) ray-cast into tri-dexels. With neither, the
-    /// project's workpiece, else the programs' cutting extent with a margin.
+    /// The stock: a box, a cylinder or cone frustum (cast exactly), or a file (STL or VDB)
+    /// ray-cast into tri-dexels. With none, the project's workpiece, else the programs' cutting
+    /// extent with a margin.
     std::optional<Box> stockBox;
+    std::optional<Frustum> stockFrustum;
     std::string stockFile;
 
     /// Tools by number; they override the project's and the program's own. `defaultTool` serves
