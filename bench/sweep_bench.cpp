@@ -4,6 +4,8 @@
 //    sweep's box is intersected with the sweep; the counter ns_per_query is the average.
 //  BM_SweepQueryNormals/<tool>/<move>: the same lines, each with the Hermite data (the normals at
 //    both ends of every part's interval), as the cutting loop asks for them.
+//  BM_TurningQuery/<tool>/<turn in degrees>: the tilted move with its axis turning, against the
+//    same move with the axis held (turn 0), over the same lines: the cost of a 5-axis move per line.
 //  BM_Raster/<threads>/<h in um>: a 10,000-move ball-end finishing raster over a wavy surface on a
 //    40 x 40 x 10 mm stock (400 x 400 lattice at h = 0.1): moves per second, visited/changed
 //    (exact intersections per dexel that lost material) and bounded/changed (cheap bounds taken).
@@ -14,6 +16,7 @@
 
 #include "dexelmill/stock/cut.h"
 #include "dexelmill/sweep/sweep.h"
+#include "dexelmill/sweep/turning.h"
 #include "dexelmill/tool/builders.h"
 
 using namespace dexelmill;
@@ -98,6 +101,56 @@ void BM_SweepQueryNormals(benchmark::State& state) {
     });
 }
 BENCHMARK(BM_SweepQueryNormals)->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2}})->Unit(benchmark::kMicrosecond);
+
+/// BM_TurningQuery/<tool>/<turn in degrees>: the tilted move of BM_SweepQuery, (0, 0, 0) to
+/// (30, 10, -3), with its axis turning by the angle in the plane of the tilt, ending at the tilted
+/// axis, swept within the default tolerance with its Hermite data. A turn of 0 is the same move
+/// with the end axis held, swept by the fixed-axis solver: the 3+2 move the turning one is compared
+/// with. Both query the same lines, those through the turning sweep's box below z = 0 (a stock's
+/// top), so ns_per_query of two rows is the cost ratio per dexel line.
+void BM_TurningQuery(benchmark::State& state) {
+    const Tool tool = benchTool(int(state.range(0)));
+    const double turn = double(state.range(1)) * 3.14159265358979323846 / 180.0;
+    Move m;
+    m.start = Vec3(0.0);
+    m.end = Vec3(30, 10, -3);
+    m.axis = glm::normalize(Vec3(0.3, -0.2, 1.0));
+    // The start axis: the end axis turned back by `turn` about the axis across the tilt.
+    const Vec3 across = glm::normalize(glm::cross(Vec3(0, 0, 1), m.axis));
+    const Vec3 towards = glm::normalize(glm::cross(across, m.axis));
+    const Vec3 startAxis = std::cos(turn) * m.axis + std::sin(turn) * towards;
+    Move turning = m;
+    turning.startAxis = startAxis;
+    const TurningSweep sweep(tool, turning);
+    // A stock with its top at z = 0, which the move enters 3 mm deep: the lines through it, and
+    // on each the stretch of material the cutting loop would pass as `care`.
+    Box box = sweep.bounds();
+    box.hi.z = 0.0;
+    const std::vector<Line> lines = linesThrough(box, 0.1);
+    std::vector<std::vector<Interval>> care;
+    for (const Line& l : lines) care.push_back({Interval{0.0, l.dir.z > 0.0 ? -l.origin.z : 200.0}});
+    const MoveSweep fixed(tool, m.start, m.end, m.axis);
+    std::size_t hits = 0;
+    LineHit parts[MoveSweep::kMaxParts];
+    for (auto _ : state) {
+        for (std::size_t i = 0; i < lines.size(); ++i) {
+            if (state.range(1) == 0) {
+                const std::size_t n = fixed.intersectParts(lines[i], parts);
+                hits += n > 0 && !parts[0].isEmpty();
+            } else {
+                const std::vector<LineHit> h = sweep.intersect(lines[i], care[i]);
+                hits += !h.empty();
+            }
+        }
+    }
+    state.SetLabel(std::string(kToolNames[state.range(0)]) + "/turn " + std::to_string(state.range(1)));
+    state.counters["queries"] = double(lines.size());
+    state.counters["hit_fraction"] = double(hits) / double(lines.size() * state.iterations());
+    state.counters["ns_per_query"] = benchmark::Counter(double(lines.size()) * 1e-9,
+                                                        benchmark::Counter::kIsIterationInvariantRate |
+                                                            benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_TurningQuery)->ArgsProduct({{0, 1, 2}, {0, 1, 10, 30}})->Unit(benchmark::kMillisecond);
 
 /// 100 passes along x at y steps of 0.4 mm, 100 moves of 0.4 mm each, following
 /// z = 6 + 2 sin(x / 5) cos(y / 7): 10,000 feed moves (and 99 link moves).
