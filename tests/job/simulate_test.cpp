@@ -231,6 +231,20 @@ TEST_CASE("a move that turns the tool axis cuts what its poses reach, and nothin
     // with a warning.
     REQUIRE_NOTHROW(r = run("RAPID\n", 40, 60));
     CHECK(said(r, "1 move turns the tool axis at rapid within reach"));
+    // A machine's rotary rapid is not: the machine's law says where the tool goes, and the sweep
+    // follows it. The A table turns the stock 45 degrees and back under a tool whose tip is 30 mm
+    // from the A axis, within reach of the stock's box.
+    {
+        SimulateOptions o;
+        o.inputs = {write(dir / "rotary.ngc", "G21 G90\nG0 X0 Y0 Z30 A0\nG0 A45\nG0 A0\nM30\n")};
+        o.machine = "xyza";
+        o.stockBox = Box{Vec3(-20, -20, -20), Vec3(20, 20, 0)};
+        o.defaultTool = flatEndMill(6, {20, 40});
+        o.resolution = 1.0;
+        REQUIRE_NOTHROW(r = runSimulation(o).report);
+        CHECK(r.moves == 2);
+        for (const ReportWarning& w : r.warnings) CHECK_THAT(w.message, !Contains("at rapid within reach"));
+    }
 
     // Opposite axes: no great circle to turn on.
     {
