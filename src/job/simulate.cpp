@@ -1,5 +1,4 @@
 #include "dexelmill/job/simulate.h"
-#include "dexelmill/machine/kinematics.h"
 
 #include <algorithm>
 #include <chrono>
@@ -21,6 +20,7 @@
 #include "dexelmill/io/picture.h"
 #include "dexelmill/io/vdb_io.h"
 #include "dexelmill/job/memory.h"
+#include "dexelmill/machine/kinematics.h"
 #include "dexelmill/path/camotics.h"
 #include "dexelmill/refine/refine.h"
 #include "dexelmill/stock/cut.h"
@@ -249,7 +249,7 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
     }
     if (fromStl) return {stockFromMesh(*fromStl, lattice, o.families), box, false};
     if (fromVdb) return {stockFromLevelSet(*fromVdb, lattice, o.families), box, false};
-    if (o.stockFrustum) return {stockFromFrustum(*o.stockFrustum, h, o.families), box, false};
+    if (o.stockFrustum) return {stockFromFrustum(*o.stockFrustum, lattice, o.families), box, false};
     return {TriDexelStock::fromBox(box, h, o.families), box, true};
 }
 

@@ -16,14 +16,9 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-/// An open interval of line parameters; empty when !(lo < hi).
-struct Span {
-    double lo = -kInf, hi = kInf;
-    bool empty() const { return !(lo < hi); }
-    double length() const { return hi - lo; }
-};
-
-Span intersect(const Span& a, const Span& b) { return {std::max(a.lo, b.lo), std::min(a.hi, b.hi)}; }
+/// The solid is open (method.md section 5): an interval of the line holds material only where it
+/// has an interior.
+bool hasInterior(const Interval& iv) { return iv.length() > 0.0; }
 
 }  // namespace
 
@@ -65,7 +60,7 @@ FrustumChord frustumChord(const Frustum& f, const Vec3& origin, const Vec3& dir)
 
     // The slab between the faces: 0 < t < height. Inside it r(t) > 0, so |q| < r there is
     // Q(s) = |q|^2 - r^2 < 0, with Q(s) = A s^2 + 2 B s + C.
-    Span slab;
+    Interval slab = Interval::all();
     if (k == 0.0) {
         if (!(0.0 < t0 && t0 < f.height)) return {};
     } else {
@@ -76,7 +71,7 @@ FrustumChord frustumChord(const Frustum& f, const Vec3& origin, const Vec3& dir)
     const double B = glm::dot(q0, m) - rho0 * g * k;
     const double C = glm::dot(q0, q0) - rho0 * rho0;
 
-    Span side;
+    Interval side = Interval::all();
     if (A == 0.0) {
         // A line along a generator of the cone (or along a cylinder's axis): Q is linear.
         if (B == 0.0) {
@@ -100,16 +95,16 @@ FrustumChord frustumChord(const Frustum& f, const Vec3& origin, const Vec3& dir)
             // the other touching it, and the longer piece is the chord.
             const double qq = -(B + std::copysign(std::sqrt(disc), B));
             const double s1 = qq / A, s2 = C / qq;
-            const Span before{-kInf, std::min(s1, s2)}, after{std::max(s1, s2), kInf};
-            const Span inBefore = intersect(slab, before), inAfter = intersect(slab, after);
-            if (inBefore.empty() && inAfter.empty()) return {};
-            side = inAfter.empty() || (!inBefore.empty() && inBefore.length() >= inAfter.length()) ? before : after;
+            const Interval before{-kInf, std::min(s1, s2)}, after{std::max(s1, s2), kInf};
+            const Interval inBefore = slab.intersect(before), inAfter = slab.intersect(after);
+            if (!hasInterior(inBefore) && !hasInterior(inAfter)) return {};
+            side = inBefore.length() >= inAfter.length() ? before : after;
         }
         // A < 0 and disc <= 0: Q <= 0 everywhere (a line along the axis of a cone, touching the
         // surface only at the apex), and the slab decides.
     }
-    const Span chord = intersect(slab, side);
-    if (chord.empty()) return {};
+    const Interval chord = slab.intersect(side);
+    if (!hasInterior(chord)) return {};
 
     FrustumChord out;
     out.empty = false;
@@ -143,9 +138,8 @@ FrustumChord frustumChord(const Frustum& f, const Vec3& origin, const Vec3& dir)
     return out;
 }
 
-TriDexelStock stockFromFrustum(const Frustum& f, double h, FamilySet families) {
-    const Box box = f.bounds();
-    TriDexelStock stock(Lattice::fromBox(box, h), families);
+TriDexelStock stockFromFrustum(const Frustum& f, const Lattice& lattice, FamilySet families) {
+    TriDexelStock stock(lattice, families);
     std::vector<Segment> segs;
     std::uint16_t counts[DexelTile::kDexels];
     for (int a = 0; a < 3; ++a) {

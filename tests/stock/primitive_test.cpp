@@ -254,7 +254,7 @@ TEST_CASE("a round stock holds the frustum's chord on every dexel", "[stock][pri
     const Frustum f = Frustum::make(Vec3(-3, 1, 2), Vec3(1, 0.3, 0.2), 20, 6, 2);
     const OracleFrustum of{f.base, f.axis, f.height, f.r0, f.r1};
     const double h = 0.4;
-    const TriDexelStock s = stockFromFrustum(f, h);
+    const TriDexelStock s = stockFromFrustum(f, Lattice::fromBox(f.bounds(), h));
     const Lattice& l = s.lattice();
     CHECK(l.origin == f.bounds().lo);
     for (int a = 0; a < 3; ++a) {

@@ -44,9 +44,9 @@ struct FrustumChord {
 /// rounding: the roots come from the numerically stable form of the quadratic formula.
 FrustumChord frustumChord(const Frustum& f, const Vec3& origin, const Vec3& dir);
 
-/// @brief A stock holding the frustum: its lattice tiles f.bounds() with spacing h, and every
-/// dexel holds the chord of its line as one segment (or nothing), with the side's or the face's
-/// outward normal at each end.
-TriDexelStock stockFromFrustum(const Frustum& f, double h, FamilySet families = FamilySet::all());
+/// @brief A stock holding the frustum on `lattice` (Lattice::fromBox(f.bounds(), h) tiles it):
+/// every dexel holds the chord of its line as one segment (or nothing), with the side's or the
+/// face's outward normal at each end.
+TriDexelStock stockFromFrustum(const Frustum& f, const Lattice& lattice, FamilySet families = FamilySet::all());
 
 }  // namespace dexelmill
