@@ -57,11 +57,14 @@ struct Material {
     }
 };
 
-/// The stock box's open interior along a window, clipped to [-reach, reach].
+/// The stock box along a window, clipped to [-reach, reach]. A window in the plane of one of the
+/// box's faces runs on that face, whose part surface is the face's material: the box is taken
+/// closed across the window's axis, so that a vertex where the face meets a cut finds the cut's
+/// edge on the face.
 Material stockMaterial(const Window& w, float reach, const Box& stock) {
     Material m;
     for (int a = 0; a < 3; ++a)
-        if (a != w.axis && !(w.point[a] > stock.lo[a] && w.point[a] < stock.hi[a])) return m;
+        if (a != w.axis && !(w.point[a] >= stock.lo[a] && w.point[a] <= stock.hi[a])) return m;
     const double lo = std::max(double(-reach), stock.lo[w.axis] - w.point[w.axis]);
     const double hi = std::min(double(reach), stock.hi[w.axis] - w.point[w.axis]);
     if (lo < hi) {
