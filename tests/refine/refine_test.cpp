@@ -228,3 +228,42 @@ TEST_CASE("refine: a round that would not fit in memory is not started", "[refin
     CHECK(untouched.triangles.size() == plain.mesh.triangles.size());
     CHECK(none.check.ok());
 }
+
+TEST_CASE("refine: a vertex whose nearest axis finds no crossing is moved along another", "[refine]") {
+    // A flat mill faces the block down to z = 5. The mesh is one tetrahedron: its apex 0.1 mm
+    // above the floor, its base deep in the material and tilted so that the apex's normal is
+    // (-0.90, 0, 0.44). Along x the apex's window runs through air (no crossing); along z it
+    // meets the floor 0.1 mm below.
+    const std::string facing = "G21 G90\nT1 M6\nG0 X-5 Y0 Z12\nG1 Z5 F500\nG1 X15\nG1 Y3\nG1 X-5\nG1 Y6\nG1 X15\n"
+                               "G1 Y9\nG1 X-5\nG1 Y12\nG1 X15\nG0 Z12\nM30\n";
+    SimulateOptions o = job(facing, 0);
+    o.stockBox = Box{Vec3(0.0), Vec3(10.0)};
+    o.tools.clear();
+    o.tools.emplace(1, flatEndMill(6.0, {20.0, 40.0}));
+    const Simulation s = runSimulation(o);
+
+    Mesh tetra;
+    tetra.vertices = {Vec3(5.0, 5.0, 5.1), Vec3(6.0, 3.0, 4.4), Vec3(6.0, 7.0, 4.4), Vec3(5.02, 5.0, 2.4)};
+    const Vec3 centre = 0.25 * (tetra.vertices[0] + tetra.vertices[1] + tetra.vertices[2] + tetra.vertices[3]);
+    for (Mesh::Triangle t : {Mesh::Triangle{0, 1, 2}, Mesh::Triangle{0, 1, 3}, Mesh::Triangle{0, 2, 3},
+                             Mesh::Triangle{1, 2, 3}}) {
+        const Vec3 a = tetra.vertices[t[0]], b = tetra.vertices[t[1]], c = tetra.vertices[t[2]];
+        if (glm::dot(glm::cross(b - a, c - a), a - centre) < 0.0) std::swap(t[1], t[2]);
+        tetra.triangles.push_back(t);
+    }
+    REQUIRE(checkMesh(tetra).ok());
+
+    RefineOptions ro;
+    ro.rounds = 1;
+    ro.window = 0.5;  // the base lies 0.6 mm or more inside: its windows find no surface
+    RefineStats stats;
+    refineMesh(tetra, *o.stockBox, s.program.path, s.tools, ro, &stats);
+    const Vec3 apex = tetra.vertices[0];
+    INFO("queries " << stats.queries << " snapped " << stats.snapped << " refused " << stats.snapRefused << " split " << stats.split);
+    INFO("apex at (" << apex.x << ", " << apex.y << ", " << apex.z << ")");
+    CHECK(stats.snapped == 1);
+    CHECK(apex.x == 5.0);
+    CHECK(apex.y == 5.0);
+    CHECK(apex.z == Approx(5.0).margin(1e-6));
+    CHECK(stats.check.ok());
+}
