@@ -1,6 +1,10 @@
 // The cutting loop against hand-computed volumes: a rapid and a shank in material, and the
-// message of a move whose tool is missing. (cut_test.cpp covers threads, families and culling.)
+// message of a move whose tool is missing; a turning move's shank against a closed-form oracle.
+// (cut_test.cpp covers threads, families and culling.)
 #include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
 
 #include "dexelmill/stock/cut.h"
 #include "dexelmill/tool/builders.h"
@@ -41,4 +45,71 @@ TEST_CASE("a move naming an undefined tool is an error with its line", "[stock][
     TriDexelStock s = TriDexelStock::fromBox(Box{Vec3(0.0), Vec3(10.0)}, 1.0);
     CHECK_THROWS_WITH(cutStock(s, p, ToolTable{}), Catch::Matchers::Contains("prog.ngc:4") &&
                                                        Catch::Matchers::Contains("T9"));
+}
+
+namespace {
+
+/// Whether some pose of a pure rotation about the tip (the origin) puts the point (X, y, Z) inside
+/// the cylinder of radius r between heights lo >= 0 and hi along the tool axis. The axis turns in
+/// the xz-plane from +z towards +x through angles [0, turn]. In the tool's frame at angle t the
+/// point lies at angle psi = phi - t from the axis (phi: its own angle from +z); it is inside
+/// when rho |sin psi| <= sqrt(r^2 - y^2) and lo <= rho cos psi <= hi, that is when
+/// b <= |psi| <= a for the angles a and b below. Closed form: no sweep code is shared.
+bool inTurningCylinder(double X, double y, double Z, double r, double lo, double hi, double turn) {
+    if (std::abs(y) >= r) return false;
+    const double c = std::sqrt(r * r - y * y), rho = std::hypot(X, Z);
+    if (rho <= 0.0 || lo > rho) return false;
+    const double halfPi = std::acos(0.0);
+    const double a = std::min(c >= rho ? halfPi : std::asin(c / rho), std::acos(lo / rho));
+    const double b = hi >= rho ? 0.0 : std::acos(hi / rho);
+    if (b > a) return false;
+    const double phi = std::atan2(X, Z);
+    const auto meets = [&](double l, double h) { return std::max(l, phi - turn) <= std::min(h, phi); };
+    return meets(b, a) || meets(-a, -b);
+}
+
+}  // namespace
+
+TEST_CASE("a turning move whose shank sweeps through material is reported with what it meets",
+          "[stock][cut][turning]") {
+    // A flat D6, 10 mm of flutes on 40 mm, turns 20 degrees about its tip at (20, 20, 12), from
+    // +z towards +x, in a block 30 mm high: the flutes sweep a fan from heights 12 to 22, the
+    // shank one above them. What the shank meets is the block inside the shank's fan and outside
+    // the flutes' (they come first on every dexel).
+    const double turn = 20.0 * std::acos(-1.0) / 180.0;
+    const Vec3 tip(20.0, 20.0, 12.0);
+    ToolTable table;
+    table.emplace(1, flatEndMill(6, {10, 40}));
+    ToolPath p;
+    p.files = {"tilt.ngc"};
+    Move m{tip, tip, Vec3(std::sin(turn), 0.0, std::cos(turn)), 1, false, {0, 7}, {}, {}};
+    m.startAxis = Vec3(0.0, 0.0, 1.0);
+    p.moves.push_back(m);
+    const Box block{Vec3(10.0, 10.0, 0.0), Vec3(40.0, 30.0, 30.0)};
+    TriDexelStock s = TriDexelStock::fromBox(block, 0.25);
+    const CutResult r = cutStock(s, p, table);
+
+    // The oracle's volumes: the midpoint rule on 0.05 mm cells over the block's reach.
+    double cut = 0.0, shank = 0.0;
+    const double step = 0.05;
+    for (double x = 15.0 + 0.5 * step; x < 36.0; x += step)
+        for (double y = 16.5 + 0.5 * step; y < 23.5; y += step)
+            for (double z = 10.0 + 0.5 * step; z < block.hi.z; z += step) {
+                const double X = x - tip.x, Y = y - tip.y, Z = z - tip.z;
+                const bool flutes = inTurningCylinder(X, Y, Z, 3.0, 0.0, 10.0, turn);
+                const bool stick = inTurningCylinder(X, Y, Z, 3.0, 10.0, 40.0, turn);
+                cut += (flutes || stick) ? 1.0 : 0.0;
+                shank += (stick && !flutes) ? 1.0 : 0.0;
+            }
+    cut *= step * step * step;
+    shank *= step * step * step;
+    INFO("oracle: removed " << cut << " mm^3, met by the shank " << shank << " mm^3; cut: removed "
+                            << r.removedVolume << ", shank " << r.shankVolume);
+    REQUIRE(shank > 100.0);
+    REQUIRE(r.collisions.size() == 1);
+    CHECK(r.collisions[0].kind == CollisionKind::Shank);
+    CHECK(r.collisions[0].move == 0);
+    CHECK(r.collisions[0].source.line == 7);
+    CHECK(r.collisions[0].volume == Approx(shank).epsilon(0.005));  // measured: 0.01 %
+    CHECK(r.removedVolume == Approx(cut).epsilon(0.005));  // measured: 0.02 %
 }
