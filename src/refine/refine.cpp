@@ -125,9 +125,9 @@ std::vector<detail::Window> windowsFor(std::vector<std::uint32_t>& asked, const 
     return windows;
 }
 
-/// Makes the vertex moves in `moved` (vertex, position before), then undoes those around any fold
-/// of the mesh, one ring farther each pass, until it folds no more or the folds are not the
-/// moves' doing. Returns the vertices moved back; `back` counts them.
+/// Given the vertex moves in `moved` (vertex, position before), already made, undoes those around
+/// any fold of the mesh, one ring farther each pass, until it folds no more or the folds are not
+/// the moves' doing. Returns the indices in `moved` of the moves undone; `back` counts them.
 std::vector<std::uint32_t> moveUnlessFolding(Mesh& mesh, const std::vector<std::uint32_t>& active,
                                              const std::vector<std::pair<std::uint32_t, Vec3>>& moved,
                                              std::size_t& back) {
@@ -152,10 +152,10 @@ std::vector<std::uint32_t> moveUnlessFolding(Mesh& mesh, const std::vector<std::
         back += undone;
         if (undone == 0 && pass >= kSnapRings) break;  // the folds are not the moves' doing
     }
-    std::vector<std::uint32_t> unmoved;
-    for (const auto& [v, old] : moved)
-        if (mesh.vertices[v] == old) unmoved.push_back(v);
-    return unmoved;
+    std::vector<std::uint32_t> undone;
+    for (std::size_t i = 0; i < moved.size(); ++i)
+        if (mesh.vertices[moved[i].first] == moved[i].second) undone.push_back(std::uint32_t(i));
+    return undone;
 }
 
 /// Moves the mesh's vertices that lie off the exact part onto it: the mesher puts a vertex on a
@@ -178,13 +178,15 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
     std::vector<std::uint32_t> asked;
     for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
         if (normal[v] != Vec3(0.0) && cells.reached(mesh.vertices[v])) asked.push_back(v);
-    // The windows of some vertices along their normals' rank-th nearest axes, and their offsets.
-    const auto ask = [&](std::vector<std::uint32_t>& vertices, int rank, std::vector<detail::Window>& windows) {
+    // The windows of some items (vertexOf gives each one's vertex) along their vertices' normals'
+    // rank-th nearest axes, and their offsets.
+    const auto ask = [&](std::vector<std::uint32_t>& items, int rank, std::vector<detail::Window>& windows,
+                         const auto& vertexOf) {
         windows = windowsFor(
-            vertices,
-            [&](std::uint32_t v, Vec3& point, Vec3& n) {
-                point = mesh.vertices[v];
-                n = normal[v];
+            items,
+            [&](std::uint32_t item, Vec3& point, Vec3& n) {
+                point = mesh.vertices[vertexOf(item)];
+                n = normal[vertexOf(item)];
             },
             rank);
         st.queries += windows.size();
@@ -193,8 +195,13 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
 
     // Along the nearest axis.
     std::vector<detail::Window> windows;
-    std::vector<double> offsets = ask(asked, 0, windows);
+    std::vector<double> offsets = ask(asked, 0, windows, [](std::uint32_t v) { return v; });
+    struct Candidate {
+        int axis = 0;
+        double offset = 0.0;
+    };
     std::vector<std::pair<std::uint32_t, Vec3>> moved;  // vertex, old position
+    std::vector<Candidate> first;                       // per move, what it was
     std::vector<std::uint32_t> retry;                   // no crossing, or moved back
     for (std::size_t i = 0; i < asked.size(); ++i) {
         const std::uint32_t v = asked[i];
@@ -202,52 +209,56 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
             retry.push_back(v);
         } else if (std::abs(offsets[i]) > o.tolerance) {
             moved.push_back({v, mesh.vertices[v]});
+            first.push_back({windows[i].axis, offsets[i]});
             mesh.vertices[v][windows[i].axis] += offsets[i];
         }
     }
-    std::size_t done = moved.size();
     const std::vector<std::uint32_t> back = moveUnlessFolding(mesh, active, moved, st.snapRefused);
-    done -= back.size();
-    retry.insert(retry.end(), back.begin(), back.end());
-    std::sort(retry.begin(), retry.end());
+    std::size_t done = moved.size() - back.size();
+    const std::size_t unanswered = retry.size();
+    for (std::uint32_t i : back) retry.push_back(moved[i].first);
 
-    // Along every axis within 75 degrees of the normal, the shortest move first. A vertex within
-    // the tolerance on some axis is on the part already and stays.
-    struct Candidate {
-        int axis = 0;
-        double offset = 0.0;
-    };
+    // Along every axis within 75 degrees of the normal, the shortest move first (a vertex moved
+    // back keeps its first move among them). A vertex within the tolerance on some axis is on the
+    // part already and stays.
     std::vector<std::array<Candidate, 3>> candidates(retry.size());
     std::vector<int> count(retry.size(), 0);
     std::vector<char> onPart(retry.size(), 0);
-    for (int rank = 0; rank < 3 && !retry.empty(); ++rank) {
-        std::vector<std::uint32_t> vertices = retry;
-        offsets = ask(vertices, rank, windows);
-        for (std::size_t i = 0; i < vertices.size(); ++i) {
-            const std::size_t k = std::size_t(std::lower_bound(retry.begin(), retry.end(), vertices[i]) - retry.begin());
+    for (std::size_t b = 0; b < back.size(); ++b) {
+        candidates[unanswered + b][0] = first[back[b]];
+        count[unanswered + b] = 1;
+    }
+    for (int rank = 1; rank < 3 && !retry.empty(); ++rank) {
+        std::vector<std::uint32_t> items(retry.size());  // indices into retry
+        for (std::size_t k = 0; k < retry.size(); ++k) items[k] = std::uint32_t(k);
+        offsets = ask(items, rank, windows, [&](std::uint32_t k) { return retry[k]; });
+        for (std::size_t i = 0; i < items.size(); ++i) {
+            const std::uint32_t k = items[i];
             if (std::abs(offsets[i]) <= o.tolerance) onPart[k] = 1;
             else if (!std::isnan(offsets[i])) candidates[k][std::size_t(count[k]++)] = {windows[i].axis, offsets[i]};
         }
     }
-    for (std::size_t k = 0; k < retry.size(); ++k)
+    std::vector<std::uint32_t> trying;  // indices into retry
+    for (std::size_t k = 0; k < retry.size(); ++k) {
         std::stable_sort(candidates[k].begin(), candidates[k].begin() + count[k],
                          [](const Candidate& a, const Candidate& b) { return std::abs(a.offset) < std::abs(b.offset); });
-    std::vector<std::uint32_t> trying(retry.size());
-    for (std::size_t k = 0; k < retry.size(); ++k) trying[k] = std::uint32_t(k);
+        if (!onPart[k]) trying.push_back(std::uint32_t(k));
+    }
     for (int attempt = 0; attempt < 3 && !trying.empty(); ++attempt) {
         moved.clear();
+        std::vector<std::uint32_t> movedK;  // per move, its index into retry
         for (std::uint32_t k : trying) {
-            if (onPart[k] || attempt >= count[k]) continue;
+            if (attempt >= count[k]) continue;
             const std::uint32_t v = retry[k];
+            const Candidate& c = candidates[k][std::size_t(attempt)];
             moved.push_back({v, mesh.vertices[v]});
-            mesh.vertices[v][candidates[k][std::size_t(attempt)].axis] += candidates[k][std::size_t(attempt)].offset;
+            movedK.push_back(k);
+            mesh.vertices[v][c.axis] += c.offset;
         }
-        done += moved.size();
-        const std::vector<std::uint32_t> unmoved = moveUnlessFolding(mesh, active, moved, st.snapRefused);
-        done -= unmoved.size();
+        const std::vector<std::uint32_t> undone = moveUnlessFolding(mesh, active, moved, st.snapRefused);
+        done += moved.size() - undone.size();
         trying.clear();
-        for (std::uint32_t v : unmoved)
-            trying.push_back(std::uint32_t(std::lower_bound(retry.begin(), retry.end(), v) - retry.begin()));
+        for (std::uint32_t i : undone) trying.push_back(movedK[i]);
     }
     st.snapped += done;
     return done;

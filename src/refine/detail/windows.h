@@ -66,8 +66,9 @@ double stockCrossing(const Window& window, double reach, const Box& stock);
 
 /// @brief For each window, the offset along its axis from its point to the nearest crossing of the
 /// exact part's surface that faces its way, within [-reach, reach]; NaN where there is none. The
-/// part is `stock` (its open interior, or the face a window lies on) minus the closed sweep of every move's cutting part, and of
-/// its shank when `removeShank`: the solids the cutting loop subtracts, cut in double precision.
+/// part is `stock` (its open interior, or the face a window lies on) minus the closed sweep of
+/// every move's cutting part, and of its shank when `removeShank`: the solids the cutting loop
+/// subtracts, cut in double precision.
 /// Only fixed-axis sweeps are followed: a move the cutting loop sweeps turning (MoveGeometry) is
 /// left out, and the job does not refine a program that has one. The moves are taken in batches, and each batch's sweeps are shared by the windows they reach, so
 /// memory does not grow with the program. Runs in the caller's task arena; the answers do not
