@@ -32,8 +32,8 @@
 #include "dexelmill/geometry/packed_normal.h"
 #include "dexelmill/surface/levelset_vdb.h"
 #include "dexelmill/surface/simplify.h"
+#include "memory/pages.h"
 #include "surface/detail/cell_table.h"
-#include "surface/detail/pages.h"
 
 namespace dexelmill {
 

@@ -8,7 +8,7 @@
 #include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
-#include "surface/detail/pages.h"
+#include "memory/pages.h"
 
 namespace dexelmill {
 
