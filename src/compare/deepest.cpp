@@ -3,12 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numeric>
 #include <queue>
+#include <utility>
+#include <vector>
 
 namespace dexelmill {
 
-Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, const std::vector<DexelStretch>& stretches,
+Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, StretchSpan stretches,
                      double eps) {
     // An interval [t0, t1] of one stretch's coordinate, with the depths at its ends and the
     // triangles nearest there, and a bound on the depth of any point between. Two bounds hold:
@@ -39,9 +40,12 @@ Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, const
         return p;
     };
     Deepest best;
+    // The search starts from the triangle nearest the last sample (usually close by); that
+    // speeds it and does not change the answer.
+    std::uint32_t hint = 0;
     auto sample = [&](std::size_t i, double t) {
         const Vec3 p = pointOf(i, t);
-        const MeshDistance::Nearest n = distance.nearest(p);
+        const MeshDistance::Nearest n = distance.nearest(p, &hint);
         if (n.distance > best.depth) best.depth = n.distance, best.point = p;
         return Sample{t, n.distance, n.triangle};
     };
@@ -57,17 +61,17 @@ Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, const
     // Best bound first: a stretch is sampled at its ends only when its own bound is the highest
     // left, and a piece is split at its middle while its bound is; both stop when nothing left
     // can beat the deepest sample by more than eps.
-    std::vector<std::size_t> order(stretches.size());
-    std::iota(order.begin(), order.end(), std::size_t(0));
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t x, std::size_t y) { return stretches[x].bound > stretches[y].bound; });
+    // Highest bound first, ties in the stretches' order.
+    std::vector<std::pair<double, std::size_t>> order(stretches.size);
+    for (std::size_t i = 0; i < stretches.size; ++i) order[i] = {-stretches[i].bound, i};
+    std::sort(order.begin(), order.end());
     constexpr double kNone = -std::numeric_limits<double>::infinity();
     for (std::size_t next = 0;;) {
         const double queued = queue.empty() ? kNone : queue.top().bound;
-        const double waiting = next < order.size() ? stretches[order[next]].bound : kNone;
+        const double waiting = next < order.size() ? -order[next].first : kNone;
         if (!(std::max(queued, waiting) > best.depth + eps)) break;
         if (waiting >= queued) {
-            const std::size_t i = order[next++];
+            const std::size_t i = order[next++].second;
             push(i, sample(i, stretches[i].lo), sample(i, stretches[i].hi));
             continue;
         }

@@ -124,7 +124,7 @@ std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, 
             const DesignStretch& s = stretches[i];
             lines.push_back({s.family, s.ib, s.ic, double(s.lo), double(s.hi)});
         }
-        deepest[g] = deepestPoint(*design.distance, lattice, lines, eps);
+        deepest[g] = deepestPoint(*design.distance, lattice, {lines.data(), lines.size()}, eps);
     });
     // Volumes as the report measures them: the z family's, else x's, else y's.
     const Axis measure = design.dexels.measuringFamily();

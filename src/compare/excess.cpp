@@ -2,15 +2,19 @@
 #include "dexelmill/compare/excess.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numeric>
-#include <unordered_map>
+#include <utility>
+#include <vector>
 
 #include <tbb/parallel_for.h>
 
 #include "compare/detail/deepest.h"
 #include "dexelmill/error.h"
+#include "memory/pages.h"
 
 namespace dexelmill {
 
@@ -72,26 +76,37 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
     const std::array<std::int64_t, 3> cells{std::int64_t(std::ceil(extent.x / cell)) + 1,
                                             std::int64_t(std::ceil(extent.y / cell)) + 1,
                                             std::int64_t(std::ceil(extent.z / cell)) + 1};
+    const std::size_t cellCount = std::size_t(cells[0] * cells[1] * cells[2]);
+    // A point's cell. Stock lies inside the lattice's box, so the clamp only guards the arrays.
     auto cellOf = [&](int a, double along, int b, double atB, int c, double atC) {
         std::array<std::int64_t, 3> i{};
         i[std::size_t(a)] = std::int64_t(along / cell);
         i[std::size_t(b)] = std::int64_t(atB / cell);
         i[std::size_t(c)] = std::int64_t(atC / cell);
-        return i[0] + cells[0] * (i[1] + cells[1] * i[2]);
+        for (std::size_t k = 0; k < 3; ++k) i[k] = std::clamp<std::int64_t>(i[k], 0, cells[k] - 1);
+        return std::size_t(i[0] + cells[0] * (i[1] + cells[1] * i[2]));
     };
 
     Excess result;
-    // The pieces to search, and the measuring family's volume per cell.
-    std::vector<Piece> search;
-    std::unordered_map<std::int64_t, double> cellVolume;
+    // The pieces to search, and the measuring family's volume per cell. Each row of dexels (one
+    // ic of a family) is differenced on its own thread; the rows' findings are gathered in row
+    // order, so the sums and the order of the pieces do not depend on the threads.
+    struct Row {
+        std::vector<DexelStretch> search;
+        std::vector<std::pair<std::size_t, double>> volume;  ///< (cell, mm^3), in dexel order
+    };
+    std::vector<DexelStretch> search;
+    std::vector<double> cellVolume(cellCount, 0.0);
     for (int a = 0; a < 3; ++a) {
         const Axis ax = axisFromIndex(a);
         if (!stock.has(ax) || !design.dexels.has(ax)) continue;
         const DexelFamily& sf = stock.family(ax);
         const DexelFamily& df = design.dexels.family(ax);
         const int b = (a + 1) % 3, c = (a + 2) % 3;
-        std::vector<Piece> pieces;
-        for (int ic = 0; ic < sf.nc(); ++ic)
+        std::vector<Row> rows(std::size_t(sf.nc()));
+        tbb::parallel_for(0, sf.nc(), [&](int ic) {
+            Row& row = rows[std::size_t(ic)];
+            std::vector<Piece> pieces;
             for (int ib = 0; ib < sf.nb(); ++ib) {
                 pieces.clear();
                 difference(sf.segments(ib, ic), df.segments(ib, ic), DexelStretch{ax, ib, ic, 0.0, 0.0}, pieces);
@@ -102,81 +117,113 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
                         for (double lo = p.line.lo; lo < p.line.hi;) {
                             const double wall = (std::floor(lo / cell) + 1.0) * cell;
                             const double hi = std::min(p.line.hi, wall);
-                            cellVolume[cellOf(a, 0.5 * (lo + hi), b, atB, c, atC)] += (hi - lo) * lattice.h * lattice.h;
+                            row.volume.emplace_back(cellOf(a, 0.5 * (lo + hi), b, atB, c, atC),
+                                                    (hi - lo) * lattice.h * lattice.h);
                             lo = hi;
                         }
                     }
                     if (alongBound(p) > tolerance) {
-                        search.push_back(p);
-                        search.back().line.bound = alongBound(p);
+                        row.search.push_back(p.line);
+                        row.search.back().bound = alongBound(p);
                     }
                 }
             }
+        });
+        std::size_t more = 0;
+        for (const Row& row : rows) more += row.search.size();
+        detail::reservePopulated(search, search.size() + more);
+        for (Row& row : rows) {
+            for (const auto& [k, v] : row.volume) cellVolume[k] += v;
+            search.insert(search.end(), row.search.begin(), row.search.end());
+        }
     }
-    for (const auto& [k, v] : cellVolume) result.volume += v;
+    for (const double v : cellVolume) result.volume += v;
 
     // Join the searched pieces' cells into regions (cells that share a face, an edge or a corner).
-    std::unordered_map<std::int64_t, std::size_t> id;
-    std::vector<std::size_t> parent;
-    auto find = [&](std::size_t i) {
+    constexpr std::uint32_t kNone = ~0u;
+    std::vector<std::uint32_t> idOf(cellCount, kNone);  // each searched cell's number
+    std::vector<std::size_t> idCell;                     // each number's cell
+    std::vector<std::uint32_t> parent;
+    auto find = [&](std::uint32_t i) {
         while (parent[i] != i) i = parent[i] = parent[parent[i]];
         return i;
     };
     // A piece's cells follow one another, so they join; its first names its region.
-    std::vector<std::int64_t> firstCell(search.size());
+    std::vector<std::size_t> firstCell(search.size());
     for (std::size_t i = 0; i < search.size(); ++i) {
-        const DexelStretch& s = search[i].line;
+        const DexelStretch& s = search[i];
         const int a = index(s.family), b = (a + 1) % 3, c = (a + 2) % 3;
         const double atB = (s.ib + 0.5) * lattice.h, atC = (s.ic + 0.5) * lattice.h;
         firstCell[i] = cellOf(a, s.lo, b, atB, c, atC);
         for (double t = std::floor(s.lo / cell) * cell; t < s.hi; t += cell) {
-            const std::int64_t k = cellOf(a, std::clamp(t + 0.5 * cell, s.lo, s.hi), b, atB, c, atC);
-            if (id.emplace(k, parent.size()).second) parent.push_back(parent.size());
+            const std::size_t k = cellOf(a, std::clamp(t + 0.5 * cell, s.lo, s.hi), b, atB, c, atC);
+            if (idOf[k] == kNone) {
+                idOf[k] = std::uint32_t(parent.size());
+                parent.push_back(std::uint32_t(parent.size()));
+                idCell.push_back(k);
+            }
         }
     }
-    for (const auto& [k, i] : id) {
+    for (std::uint32_t i = 0; i < idCell.size(); ++i) {
+        const auto k = std::int64_t(idCell[i]);
         const std::int64_t x = k % cells[0], y = (k / cells[0]) % cells[1], z = k / (cells[0] * cells[1]);
         for (int dz = -1; dz <= 1; ++dz)
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) {
                     const std::int64_t nx = x + dx, ny = y + dy, nz = z + dz;
                     if (nx < 0 || ny < 0 || nz < 0 || nx >= cells[0] || ny >= cells[1] || nz >= cells[2]) continue;
-                    const auto it = id.find(nx + cells[0] * (ny + cells[1] * nz));
-                    if (it != id.end()) parent[find(it->second)] = find(i);
+                    const std::uint32_t j = idOf[std::size_t(nx + cells[0] * (ny + cells[1] * nz))];
+                    if (j != kNone) parent[find(j)] = find(i);
                 }
     }
-    // Each region's pieces, and its thickness.
-    std::unordered_map<std::size_t, std::size_t> regionOf;
-    std::vector<std::vector<DexelStretch>> regionLines;
-    std::vector<std::vector<std::int64_t>> regionCells;
+    // Each region's pieces, gathered region by region into one array (in their order within a
+    // region), and its cells.
+    std::vector<std::uint32_t> regionOf(parent.size(), kNone);  // by root
+    std::vector<std::uint32_t> pieceRegion(search.size());
+    std::vector<std::size_t> regionStart{0};
     for (std::size_t i = 0; i < search.size(); ++i) {
-        const std::size_t root = find(id.at(firstCell[i]));
-        const auto [it, fresh] = regionOf.emplace(root, regionLines.size());
-        if (fresh) regionLines.emplace_back(), regionCells.emplace_back();
-        regionLines[it->second].push_back(search[i].line);
+        std::uint32_t& r = regionOf[find(idOf[firstCell[i]])];
+        if (r == kNone) {
+            r = std::uint32_t(regionStart.size() - 1);
+            regionStart.push_back(0);
+        }
+        pieceRegion[i] = r;
+        ++regionStart[r + 1];
     }
-    for (const auto& [k, i] : id) {
-        const auto it = regionOf.find(find(i));
-        if (it != regionOf.end()) regionCells[it->second].push_back(k);
+    const std::size_t regions = regionStart.size() - 1;
+    std::partial_sum(regionStart.begin(), regionStart.end(), regionStart.begin());
+    std::vector<DexelStretch> grouped;
+    detail::reservePopulated(grouped, search.size());
+    grouped.resize(search.size());
+    {
+        std::vector<std::size_t> next(regionStart.begin(), regionStart.end() - 1);
+        for (std::size_t i = 0; i < search.size(); ++i) grouped[next[pieceRegion[i]]++] = search[i];
+    }
+    std::vector<DexelStretch>().swap(search);
+    std::vector<std::vector<std::size_t>> regionCells(regions);
+    for (std::uint32_t i = 0; i < idCell.size(); ++i) {
+        const std::uint32_t r = regionOf[find(i)];
+        if (r != kNone) regionCells[r].push_back(idCell[i]);
     }
     const double eps = depthBound(tolerance, lattice.h);
-    std::vector<Deepest> thickest(regionLines.size());
-    tbb::parallel_for(std::size_t(0), regionLines.size(), [&](std::size_t r) {
-        thickest[r] = deepestPoint(*design.distance, lattice, regionLines[r], eps);
+    std::vector<Deepest> thickest(regions);
+    tbb::parallel_for(std::size_t(0), regions, [&](std::size_t r) {
+        thickest[r] = deepestPoint(*design.distance, lattice,
+                                   {grouped.data() + regionStart[r], regionStart[r + 1] - regionStart[r]}, eps);
     });
-    for (std::size_t r = 0; r < regionLines.size(); ++r) {
+    for (std::size_t r = 0; r < regions; ++r) {
         if (!(thickest[r].depth > tolerance)) continue;
         ExcessRegion region;
         region.thickness = thickest[r].depth;
         region.point = thickest[r].point;
         std::sort(regionCells[r].begin(), regionCells[r].end());
-        for (const std::int64_t k : regionCells[r]) {
+        for (const std::size_t cellIndex : regionCells[r]) {
+            const auto k = std::int64_t(cellIndex);
             const Vec3 lo = lattice.origin + Vec3(double(k % cells[0]), double((k / cells[0]) % cells[1]),
                                                   double(k / (cells[0] * cells[1]))) * cell;
             region.box.expand(lo);
             region.box.expand(lo + Vec3(cell));
-            const auto v = cellVolume.find(k);
-            if (v != cellVolume.end()) region.volume += v->second;
+            region.volume += cellVolume[cellIndex];
         }
         region.box = Box{glm::max(region.box.lo, lattice.origin), glm::min(region.box.hi, lattice.origin + extent)};
         if (region.thickness > result.thickness) result.thickness = region.thickness, result.point = region.point;

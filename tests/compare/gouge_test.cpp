@@ -374,3 +374,45 @@ TEST_CASE("excess: 0.5 mm left on a wall", "[compare][design][job]") {
     CHECK(loose.excessVolumeMm3 == Approx(r.excessVolumeMm3));
     fs::remove_all(dir);
 }
+
+TEST_CASE("excess: two walls left apart are two regions, the same for any thread count", "[compare][design][job]") {
+    const fs::path dir = scratch("excess_regions");
+    // Two blocks, x in [0, 18] and [22, 40], full height: the design is the stock with a 4 mm slot.
+    const std::string design =
+        writeStl(dir / "two.stl", prismFacets({{0, -10}, {18, -10}, {18, 0}, {0, 0}}, -1.0, 41.0) +
+                                      prismFacets({{22, -10}, {40, -10}, {40, 0}, {22, 0}}, -1.0, 41.0));
+    // A D3 pass through the stock at x = 20.25 cuts x in [18.75, 21.75]: 0.75 mm stays on the left
+    // wall and 0.25 mm on the right, 3 mm apart, both on lattice planes (h = 0.25).
+    const std::string program = "G21 G90\nT1 M6\nG0 X20.25 Y-10 Z5\nG1 Z-10.5 F500\nG1 Y50\nG0 Z5\nM30\n";
+    std::vector<SimulateReport> runs;
+    for (int threads : {1, 3}) {
+        SimulateOptions o = job(program, design, 3.0);
+        o.threads = threads;
+        runs.push_back(simulate(o));
+    }
+    const SimulateReport& r = runs[0];
+    CHECK(r.gouges.empty());
+    CHECK(r.excessVolumeMm3 == Approx((0.75 + 0.25) * 10.0 * 40.0).epsilon(1e-4));
+    CHECK(r.excessThicknessMm == Approx(0.75).margin(0.01 * kH));
+    CHECK(r.excessPoint.x == Approx(18.75).margin(1e-6));
+    REQUIRE(r.excessRegions.size() == 2);
+    // Most volume first.
+    CHECK(r.excessRegions[0].volumeMm3 == Approx(0.75 * 10.0 * 40.0).epsilon(1e-4));
+    CHECK(r.excessRegions[0].thicknessMm == Approx(0.75).margin(0.01 * kH));
+    CHECK(r.excessRegions[0].box.hi.x <= 20.0);
+    CHECK(r.excessRegions[1].volumeMm3 == Approx(0.25 * 10.0 * 40.0).epsilon(1e-4));
+    CHECK(r.excessRegions[1].thicknessMm == Approx(0.25).margin(0.01 * kH));
+    CHECK(r.excessRegions[1].box.lo.x >= 20.0);
+    // Bit for bit, whatever the threads.
+    const SimulateReport& s = runs[1];
+    CHECK(s.excessVolumeMm3 == r.excessVolumeMm3);
+    CHECK(s.excessThicknessMm == r.excessThicknessMm);
+    CHECK(s.excessPoint == r.excessPoint);
+    REQUIRE(s.excessRegions.size() == r.excessRegions.size());
+    for (std::size_t i = 0; i < r.excessRegions.size(); ++i) {
+        CHECK(s.excessRegions[i].volumeMm3 == r.excessRegions[i].volumeMm3);
+        CHECK(s.excessRegions[i].thicknessMm == r.excessRegions[i].thicknessMm);
+        CHECK(s.excessRegions[i].point == r.excessRegions[i].point);
+    }
+    fs::remove_all(dir);
+}

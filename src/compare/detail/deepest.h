@@ -2,6 +2,7 @@
 // over pieces of the stretches with exact distances, shared by the gouge and excess searches.
 #pragma once
 
+#include <cstddef>
 #include <limits>
 #include <vector>
 
@@ -19,6 +20,13 @@ struct DexelStretch {
     double bound = std::numeric_limits<double>::infinity();
 };
 
+/// Stretches lying one after another in memory (C++17 has no std::span).
+struct StretchSpan {
+    const DexelStretch* data = nullptr;
+    std::size_t size = 0;
+    const DexelStretch& operator[](std::size_t i) const { return data[i]; }
+};
+
 struct Deepest {
     double depth = -std::numeric_limits<double>::infinity();  ///< mm; -infinity without stretches
     Vec3 point{0.0};
@@ -26,7 +34,7 @@ struct Deepest {
 
 /// The point of `stretches` farthest from the mesh, within `eps` (mm) of the farthest: its
 /// distance is that of a real point, and no point lies farther than depth + eps.
-Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, const std::vector<DexelStretch>& stretches,
+Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, StretchSpan stretches,
                      double eps);
 
 }  // namespace dexelmill
