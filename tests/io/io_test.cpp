@@ -1,12 +1,17 @@
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
+#include <random>
 #include <sstream>
+#include <vector>
 
 #include <unistd.h>
 
@@ -246,6 +251,73 @@ TEST_CASE("STL: equal corners are welded in order of appearance, -0 with +0", "[
     REQUIRE(w.triangles.size() == 2);
     CHECK(w.triangles[0] == Mesh::Triangle{0, 1, 2});
     CHECK(w.triangles[1] == Mesh::Triangle{3, 2, 1});
+}
+
+TEST_CASE("STL: welding many corners agrees with a brute-force weld", "[io]") {
+    // 3,000 triangles whose corners come from a pool of 4,000 points (some given as -0), so the
+    // vertices outnumber a closed mesh's and the weld's table must grow; some triangles collapse.
+    // The file is written byte by byte here, and the oracle welds with an ordered map.
+    std::mt19937 rng(20261124);
+    std::uniform_int_distribution<int> pick(0, 3999), coord(-3, 3);
+    std::vector<std::array<float, 3>> pool(4000);
+    for (auto& p : pool)
+        for (float& c : p) c = float(coord(rng)) * 0.5f + float(pick(rng)) * 1e-3f;
+    for (std::size_t i = 0; i < pool.size(); i += 97) pool[i][1] = 0.0f;
+    const std::size_t triangles = 3000;
+    std::vector<std::array<float, 3>> corners;
+    for (std::size_t t = 0; t < triangles; ++t)
+        for (int k = 0; k < 3; ++k) {
+            std::array<float, 3> c = pool[std::size_t(pick(rng))];
+            if (c[1] == 0.0f && k == 1) c[1] = -0.0f;
+            corners.push_back(c);
+        }
+    corners[3 * 7 + 2] = corners[3 * 7];  // a triangle with two equal corners
+    TempDir dir;
+    {
+        std::ofstream out(dir.file("soup.stl"), std::ios::binary);
+        const std::string head(80, ' ');
+        out.write(head.data(), 80);
+        const auto count = std::uint32_t(triangles);
+        out.write(reinterpret_cast<const char*>(&count), 4);  // the test machine is little-endian
+        for (std::size_t t = 0; t < triangles; ++t) {
+            const float normal[3] = {0.0f, 0.0f, 0.0f};
+            out.write(reinterpret_cast<const char*>(normal), 12);
+            for (int k = 0; k < 3; ++k) out.write(reinterpret_cast<const char*>(corners[3 * t + std::size_t(k)].data()), 12);
+            out.write("\0\0", 2);
+        }
+    }
+    // The oracle: numbered in order of first appearance, -0 as +0, collapsed triangles dropped.
+    auto key = [](const std::array<float, 3>& c) {
+        std::array<std::uint32_t, 3> k{};
+        for (int i = 0; i < 3; ++i) {
+            const float v = c[std::size_t(i)] == 0.0f ? 0.0f : c[std::size_t(i)];
+            std::memcpy(&k[std::size_t(i)], &v, 4);
+        }
+        return k;
+    };
+    std::map<std::array<std::uint32_t, 3>, std::uint32_t> number;
+    std::vector<std::array<float, 3>> vertices;
+    std::vector<Mesh::Triangle> expected;
+    for (std::size_t t = 0; t < triangles; ++t) {
+        Mesh::Triangle tri{};
+        for (int k = 0; k < 3; ++k) {
+            const auto& c = corners[3 * t + std::size_t(k)];
+            const auto [it, fresh] = number.emplace(key(c), std::uint32_t(vertices.size()));
+            if (fresh) vertices.push_back(c);
+            tri[std::size_t(k)] = it->second;
+        }
+        if (tri[0] != tri[1] && tri[1] != tri[2] && tri[2] != tri[0]) expected.push_back(tri);
+    }
+    REQUIRE(vertices.size() > 3000);  // more than half of a table sized for a closed mesh
+    REQUIRE(expected.size() < triangles);
+    const Mesh w = readStl(dir.file("soup.stl"));
+    REQUIRE(w.vertices.size() == vertices.size());
+    for (std::size_t v = 0; v < vertices.size(); ++v) {
+        INFO("vertex " << v);
+        CHECK(w.vertices[v] == Vec3(vertices[v][0], vertices[v][1], vertices[v][2]));
+        CHECK(std::signbit(w.vertices[v].y) == std::signbit(vertices[v][1]));
+    }
+    CHECK(w.triangles == std::vector<Mesh::Triangle, NoZeroAllocator<Mesh::Triangle>>(expected.begin(), expected.end()));
 }
 
 TEST_CASE("VDB: a level set written and read back is identical", "[io]") {
