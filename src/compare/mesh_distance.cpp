@@ -6,12 +6,14 @@
 #include <limits>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
+#include "memory/pages.h"
 
 namespace dexelmill {
 
@@ -99,36 +101,61 @@ bool rayMeetsBox(const Box& box, const Vec3& p, const Vec3& inv) {
     return lo <= hi;
 }
 
+/// The nodes of the hierarchy over m triangles: ranges split at their middle until a leaf holds
+/// at most kLeafTriangles.
+std::size_t nodeCount(std::size_t m) {
+    return m <= kLeafTriangles ? 1 : 1 + nodeCount(m / 2) + nodeCount(m - m / 2);
+}
+
 /// Whether every edge of the mesh is shared by exactly two triangles that run it in opposite
 /// directions (a closed, consistently oriented 2-manifold, shell by shell); if so, `shell`
-/// receives each triangle's shell (connected by edges), numbered from 0. Each edge is a key: its
-/// lower vertex, its higher vertex and a bit for its direction; sorted, the keys of such a mesh come
-/// in pairs that differ only in that bit, and each pair joins two triangles' shells.
+/// receives each triangle's shell (connected by edges), numbered from 0 in the order of their
+/// first triangles. The half-edges are listed by the vertex they leave: each half-edge a -> b must
+/// be the only one from a to b, and b's list must hold exactly one b -> a, whose triangle joins
+/// its shell.
 bool pairedEdges(const Mesh& mesh, std::vector<std::uint32_t>& shell) {
-    const std::size_t n = mesh.triangles.size();
-    if (mesh.vertices.size() >= (std::size_t(1) << 31)) return false;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(3 * n);
-    for (std::size_t t = 0; t < n; ++t)
+    const std::size_t n = mesh.triangles.size(), vertices = mesh.vertices.size();
+    if (vertices >= (std::size_t(1) << 32) - 1) return false;
+    std::vector<std::uint32_t> start(vertices + 1, 0);
+    for (const Mesh::Triangle& tri : mesh.triangles)
         for (std::size_t k = 0; k < 3; ++k) {
-            const std::uint64_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
-            if (a == b) return false;
-            keys[3 * t + k] = {std::min(a, b) << 32 | std::max(a, b) << 1 | (a < b ? 1u : 0u), std::uint32_t(t)};
+            if (tri[k] == tri[(k + 1) % 3] || tri[k] >= vertices) return false;
+            ++start[tri[k] + 1];
         }
-    tbb::parallel_sort(keys.begin(), keys.end());
+    for (std::size_t v = 0; v < vertices; ++v) start[v + 1] += start[v];
+    struct HalfEdge {
+        std::uint32_t to, triangle;
+    };
+    std::vector<HalfEdge, NoZeroAllocator<HalfEdge>> out;
+    detail::reservePopulated(out, 3 * n);
+    out.resize(3 * n);
+    {
+        std::vector<std::uint32_t> next(start.begin(), start.end() - 1);
+        for (std::size_t t = 0; t < n; ++t)
+            for (std::size_t k = 0; k < 3; ++k)
+                out[next[mesh.triangles[t][k]]++] = {mesh.triangles[t][(k + 1) % 3], std::uint32_t(t)};
+    }
+    // Each vertex's list sorted by the vertex reached, so that a repeat sits next to its twin
+    // and the way back is a binary search, however many triangles meet at a vertex.
+    auto less = [](const HalfEdge& x, const HalfEdge& y) { return x.to < y.to; };
+    tbb::parallel_for(std::size_t(0), vertices,
+                      [&](std::size_t v) { std::sort(out.begin() + start[v], out.begin() + start[v + 1], less); });
     std::vector<std::uint32_t> parent(n);
     for (std::size_t t = 0; t < n; ++t) parent[t] = std::uint32_t(t);
     auto find = [&](std::uint32_t t) {
         while (parent[t] != t) t = parent[t] = parent[parent[t]];
         return t;
     };
-    for (std::size_t i = 0; i < keys.size(); i += 2) {
-        const std::uint64_t k = keys[i].first;
-        if (i + 1 == keys.size() || k + 1 != keys[i + 1].first || (k & 1u) != 0 ||
-            (i + 2 < keys.size() && keys[i + 2].first >> 1 == k >> 1))
-            return false;
-        const std::uint32_t r0 = find(keys[i].second), r1 = find(keys[i + 1].second);
-        if (r0 != r1) parent[std::max(r0, r1)] = std::min(r0, r1);
-    }
+    for (std::uint32_t a = 0; a < vertices; ++a)
+        for (std::uint32_t i = start[a]; i < start[a + 1]; ++i) {
+            const std::uint32_t b = out[i].to;
+            if ((i > start[a] && out[i - 1].to == b) || (i + 1 < start[a + 1] && out[i + 1].to == b)) return false;
+            const auto first = out.begin() + start[b], last = out.begin() + start[b + 1];
+            const auto back = std::lower_bound(first, last, HalfEdge{a, 0}, less);
+            if (back == last || back->to != a || (back + 1 != last && (back + 1)->to == a)) return false;
+            const std::uint32_t r0 = find(out[i].triangle), r1 = find(back->triangle);
+            if (r0 != r1) parent[std::max(r0, r1)] = std::min(r0, r1);
+        }
     shell.assign(n, 0);
     std::vector<std::uint32_t> number(n, std::uint32_t(-1));
     std::uint32_t shells = 0;
@@ -212,13 +239,18 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
         v = (v | v << 2) & 0x1249249249249249ULL;
         return v;
     };
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
+    std::vector<std::pair<std::uint64_t, std::uint32_t>, NoZeroAllocator<std::pair<std::uint64_t, std::uint32_t>>> keyed;
+    detail::reservePopulated(keyed, n);
+    keyed.resize(n);
     tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
         const Vec3 u = (centroid(i) - all.lo) / size * double((1u << 21) - 1);
         keyed[i] = {spread(std::uint64_t(u.x)) | spread(std::uint64_t(u.y)) << 1 | spread(std::uint64_t(u.z)) << 2,
                     std::uint32_t(i)};
     });
     tbb::parallel_sort(keyed.begin(), keyed.end());
+    detail::reservePopulated(original_, n);
+    detail::reservePopulated(slot_, n);
+    detail::reservePopulated(corners_, 3 * n);
     original_.resize(n);
     slot_.resize(n);
     corners_.resize(3 * n);
@@ -228,8 +260,9 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
         for (std::size_t k = 0; k < 3; ++k) corners_[3 * i + k] = mesh.vertices[mesh.triangles[keyed[i].second][k]];
     });
     // Ranges split at their middle; a child always comes after its parent.
-    // Median splits leave leaves of at least kLeafTriangles / 2 triangles.
-    nodes_.reserve(4 * (n / kLeafTriangles + 1));
+    // Median splits leave leaves of at least kLeafTriangles / 2 triangles. The nodes are counted
+    // first, so that their pages are faulted in at once.
+    detail::reservePopulated(nodes_, nodeCount(n));
     struct Job {
         std::uint32_t node, begin, end;
     };
@@ -241,7 +274,6 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
         if (job.end - job.begin <= kLeafTriangles) {
             nodes_[job.node].first = job.begin;
             nodes_[job.node].count = job.end - job.begin;
-            for (std::uint32_t i = 3 * job.begin; i < 3 * job.end; ++i) nodes_[job.node].box.expand(corners_[i]);
             continue;
         }
         const std::uint32_t mid = job.begin + (job.end - job.begin) / 2;
@@ -253,6 +285,11 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
         jobs.push_back({left, job.begin, mid});
         jobs.push_back({left + 1, mid, job.end});
     }
+    tbb::parallel_for(std::size_t(0), nodes_.size(), [&](std::size_t k) {
+        Node& node = nodes_[k];
+        for (std::size_t i = 3 * std::size_t(node.first); node.count > 0 && i < 3 * std::size_t(node.first + node.count); ++i)
+            node.box.expand(corners_[i]);
+    });
     for (std::size_t k = nodes_.size(); k-- > 0;) {
         Node& node = nodes_[k];
         if (node.count > 0) continue;

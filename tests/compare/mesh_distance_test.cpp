@@ -230,6 +230,22 @@ TEST_CASE("mesh distance: shells facing different ways, and a cavity", "[compare
     cube(flipped, Vec3(20.0, 0.0, 0.0), 2.0, false);
     CHECK(MeshDistance(good).orientation() == 1);
     CHECK(MeshDistance(flipped).orientation() == 0);
+    // Two cubes sharing an edge, its vertices shared: every edge runs both ways, but four
+    // triangles meet at that one, so the mesh is not a 2-manifold.
+    Mesh touching;
+    cube(touching, Vec3(0.0), 10.0, true);
+    cube(touching, Vec3(10.0, 10.0, 0.0), 10.0, true);
+    for (auto& t : touching.triangles)
+        for (auto& v : t)
+            for (std::uint32_t w = 0; w < v; ++w)
+                if (touching.vertices[w] == touching.vertices[v]) {
+                    v = w;
+                    break;
+                }
+    CHECK(MeshDistance(touching).orientation() == 0);
+    Mesh collapsed = good;  // a triangle with a repeated corner
+    collapsed.triangles.push_back({0, 0, 1});
+    CHECK(MeshDistance(collapsed).orientation() == 0);
     // Inside the solid: between the outer faces and the cavity, and in the small cube; outside:
     // in the cavity, between the cubes, beyond them.
     const std::vector<std::pair<Vec3, double>> cases{
