@@ -7,6 +7,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "dexelmill/error.h"
 #include "dexelmill/io/file_name.h"
@@ -50,14 +51,20 @@ Mesh readDesign(const std::string& path, const std::optional<Affine>& place) {
 }
 
 DesignPart loadDesign(const Mesh& mesh, const std::string& path, const Lattice& lattice, FamilySet families) {
+    // The cast and the distance index are built side by side: each has stretches that run on
+    // one thread, which the other fills.
     MeshCastStats cast;
-    DesignPart d(stockFromMesh(mesh, lattice, families, &cast));
+    std::optional<TriDexelStock> dexels;
+    std::unique_ptr<MeshDistance> distance;
+    tbb::parallel_invoke([&] { dexels.emplace(stockFromMesh(mesh, lattice, families, &cast)); },
+                         [&] { distance = std::make_unique<MeshDistance>(mesh); });
+    DesignPart d(std::move(*dexels));
     d.cast = cast;
     d.file = path;
     d.bounds = mesh.bounds();
     if (d.dexels.volume(d.dexels.measuringFamily()) <= 0.0)
         throw Error("'" + path + "': the design holds no material inside the stock's box");
-    d.distance = std::make_unique<MeshDistance>(mesh);
+    d.distance = std::move(distance);
     return d;
 }
 
