@@ -50,14 +50,15 @@ Mesh readDesign(const std::string& path, const std::optional<Affine>& place) {
     return mesh;
 }
 
-DesignPart loadDesign(const Mesh& mesh, const std::string& path, const Lattice& lattice, FamilySet families) {
+DesignPart loadDesign(const Mesh& mesh, const std::string& path, const Lattice& lattice, FamilySet families,
+                      bool signs) {
     // The cast and the distance index are built side by side: each has stretches that run on
     // one thread, which the other fills.
     MeshCastStats cast;
     std::optional<TriDexelStock> dexels;
     std::unique_ptr<MeshDistance> distance;
     tbb::parallel_invoke([&] { dexels.emplace(stockFromMesh(mesh, lattice, families, &cast)); },
-                         [&] { distance = std::make_unique<MeshDistance>(mesh); });
+                         [&] { distance = std::make_unique<MeshDistance>(mesh, signs); });
     DesignPart d(std::move(*dexels));
     d.cast = cast;
     d.file = path;

@@ -215,7 +215,7 @@ Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
     return closestOnTriangle(p, a, b, c).point;
 }
 
-MeshDistance::MeshDistance(const Mesh& mesh) {
+MeshDistance::MeshDistance(const Mesh& mesh, bool orient) {
     const std::size_t n = mesh.triangles.size();
     if (n == 0) return;
 
@@ -296,7 +296,7 @@ MeshDistance::MeshDistance(const Mesh& mesh) {
         node.box = nodes_[node.first].box;
         node.box.expand(nodes_[node.first + 1].box);
     }
-    orientation_ = orientationOf(mesh);
+    if (orient) orientation_ = orientationOf(mesh);
 }
 
 int MeshDistance::orientationOf(const Mesh& mesh) const {

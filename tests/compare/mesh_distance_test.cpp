@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "dexelmill/compare/mesh_distance.h"
@@ -188,8 +189,11 @@ TEST_CASE("mesh distance: the sign, inside a non-convex solid, for any orientati
     for (int i = -2; i <= 24; i += 1)
         for (int j = -2; j <= 24; j += 3)
             for (int k = -2; k <= 12; k += 2) points.emplace_back(0.5 * i, 0.5 * j, 0.5 * k);
-    for (const Mesh* m : std::vector<const Mesh*>{&outward, &inward, &mixed}) {
-        const MeshDistance index(*m);
+    // The outward L once more without its orientation checked: rays decide every sign.
+    CHECK(MeshDistance(outward, false).orientation() == 0);
+    for (const auto& [m, orient] : std::vector<std::pair<const Mesh*, bool>>{
+             {&outward, true}, {&inward, true}, {&mixed, true}, {&outward, false}}) {
+        const MeshDistance index(*m, orient);
         std::uint32_t hint = 0;
         for (const Vec3& p : points) {
             INFO("orientation " << index.orientation() << ", point " << p.x << " " << p.y << " " << p.z);

@@ -42,10 +42,12 @@ struct DesignPart {
 /// flattens the design (determinant 0).
 Mesh readDesign(const std::string& path, const std::optional<Affine>& place = std::nullopt);
 
-/// @brief Casts a design read by readDesign from `path` on `lattice`.
+/// @brief Casts a design read by readDesign from `path` on `lattice`. `signs` says whether signed
+/// distances will be asked for many points (a surface's deviation), which MeshDistance's `orient`
+/// prepares for; gouge depths and excess thickness are unsigned.
 /// @throw Error naming the file when the design holds no material inside the lattice's box.
 DesignPart loadDesign(const Mesh& mesh, const std::string& path, const Lattice& lattice,
-                      FamilySet families = FamilySet::all());
+                      FamilySet families = FamilySet::all(), bool signs = true);
 
 /// @brief readDesign, then loadDesign.
 DesignPart loadDesign(const std::string& path, const Lattice& lattice, FamilySet families = FamilySet::all());
