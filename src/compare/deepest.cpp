@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <queue>
 #include <utility>
 #include <vector>
@@ -61,17 +62,21 @@ Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, Stret
     // Best bound first: a stretch is sampled at its ends only when its own bound is the highest
     // left, and a piece is split at its middle while its bound is; both stop when nothing left
     // can beat the deepest sample by more than eps.
-    // Highest bound first, ties in the stretches' order.
-    std::vector<std::pair<double, std::size_t>> order(stretches.size);
-    for (std::size_t i = 0; i < stretches.size; ++i) order[i] = {-stretches[i].bound, i};
-    std::sort(order.begin(), order.end());
+    // The stretches wait in a heap, highest bound first and ties in their order: usually only a
+    // few are taken before the search stops, so they are not sorted.
+    using Waiting = std::pair<double, std::size_t>;  // (-bound, stretch)
+    std::vector<Waiting> waiting(stretches.size);
+    for (std::size_t i = 0; i < stretches.size; ++i) waiting[i] = {-stretches[i].bound, i};
+    std::make_heap(waiting.begin(), waiting.end(), std::greater<Waiting>());
     constexpr double kNone = -std::numeric_limits<double>::infinity();
-    for (std::size_t next = 0;;) {
+    for (;;) {
         const double queued = queue.empty() ? kNone : queue.top().bound;
-        const double waiting = next < order.size() ? -order[next].first : kNone;
-        if (!(std::max(queued, waiting) > best.depth + eps)) break;
-        if (waiting >= queued) {
-            const std::size_t i = order[next++].second;
+        const double next = waiting.empty() ? kNone : -waiting.front().first;
+        if (!(std::max(queued, next) > best.depth + eps)) break;
+        if (next >= queued) {
+            std::pop_heap(waiting.begin(), waiting.end(), std::greater<Waiting>());
+            const std::size_t i = waiting.back().second;
+            waiting.pop_back();
             push(i, sample(i, stretches[i].lo), sample(i, stretches[i].hi));
             continue;
         }

@@ -77,24 +77,24 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
                                             std::int64_t(std::ceil(extent.y / cell)) + 1,
                                             std::int64_t(std::ceil(extent.z / cell)) + 1};
     const std::size_t cellCount = std::size_t(cells[0] * cells[1] * cells[2]);
-    // A point's cell. Stock lies inside the lattice's box, so the clamp only guards the arrays.
+    const std::array<std::size_t, 3> stride{1, std::size_t(cells[0]), std::size_t(cells[0] * cells[1])};
+    // The cell along axis a of a coordinate. Stock lies inside the lattice's box, so the clamp
+    // only guards the arrays.
+    auto step = [&](int a, double along) {
+        return std::size_t(std::clamp<std::int64_t>(std::int64_t(along / cell), 0, cells[std::size_t(a)] - 1));
+    };
     auto cellOf = [&](int a, double along, int b, double atB, int c, double atC) {
-        std::array<std::int64_t, 3> i{};
-        i[std::size_t(a)] = std::int64_t(along / cell);
-        i[std::size_t(b)] = std::int64_t(atB / cell);
-        i[std::size_t(c)] = std::int64_t(atC / cell);
-        for (std::size_t k = 0; k < 3; ++k) i[k] = std::clamp<std::int64_t>(i[k], 0, cells[k] - 1);
-        return std::size_t(i[0] + cells[0] * (i[1] + cells[1] * i[2]));
+        return step(a, along) * stride[std::size_t(a)] + step(b, atB) * stride[std::size_t(b)] +
+               step(c, atC) * stride[std::size_t(c)];
     };
 
     Excess result;
     // The pieces to search, and the measuring family's volume per cell. Each row of dexels (one
-    // ic of a family) is differenced on its own thread; the rows' findings are gathered in row
-    // order, so the sums and the order of the pieces do not depend on the threads.
-    struct Row {
-        std::vector<DexelStretch> search;
-        std::vector<std::pair<std::size_t, double>> volume;  ///< (cell, mm^3), in dexel order
-    };
+    // ic of a family) is differenced on its own thread, twice: first to sum its volume per cell
+    // (in dexel order, in a dense array over the row's cells) and count its pieces to search,
+    // then to write those pieces at the row's place in one array. Rows are gathered in order, so
+    // the sums and the order of the pieces do not depend on the threads, and no list grows piece
+    // by piece.
     std::vector<DexelStretch> search;
     std::vector<double> cellVolume(cellCount, 0.0);
     for (int a = 0; a < 3; ++a) {
@@ -103,39 +103,60 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
         const DexelFamily& sf = stock.family(ax);
         const DexelFamily& df = design.dexels.family(ax);
         const int b = (a + 1) % 3, c = (a + 2) % 3;
-        std::vector<Row> rows(std::size_t(sf.nc()));
-        tbb::parallel_for(0, sf.nc(), [&](int ic) {
-            Row& row = rows[std::size_t(ic)];
+        const auto alongCells = std::size_t(cells[std::size_t(a)]);
+        const std::size_t rowCells = alongCells * std::size_t(cells[std::size_t(b)]);
+        // Each row's pieces, given to `use` with the dexel's coordinates across it.
+        auto eachPiece = [&](int ic, auto&& use) {
             std::vector<Piece> pieces;
             for (int ib = 0; ib < sf.nb(); ++ib) {
                 pieces.clear();
                 difference(sf.segments(ib, ic), df.segments(ib, ic), DexelStretch{ax, ib, ic, 0.0, 0.0}, pieces);
-                const double atB = (ib + 0.5) * lattice.h, atC = (ic + 0.5) * lattice.h;
-                for (const Piece& p : pieces) {
-                    if (ax == measure) {
-                        // The piece's length, split at the cells' walls.
-                        for (double lo = p.line.lo; lo < p.line.hi;) {
-                            const double wall = (std::floor(lo / cell) + 1.0) * cell;
-                            const double hi = std::min(p.line.hi, wall);
-                            row.volume.emplace_back(cellOf(a, 0.5 * (lo + hi), b, atB, c, atC),
-                                                    (hi - lo) * lattice.h * lattice.h);
-                            lo = hi;
-                        }
-                    }
-                    if (alongBound(p) > tolerance) {
-                        row.search.push_back(p.line);
-                        row.search.back().bound = alongBound(p);
+                for (const Piece& p : pieces) use(p, (ib + 0.5) * lattice.h, (ic + 0.5) * lattice.h);
+            }
+        };
+        struct Row {
+            std::size_t searched = 0;
+            std::vector<std::pair<std::size_t, double>> volume;  ///< (cell, mm^3), by cell
+        };
+        std::vector<Row> rows(std::size_t(sf.nc()));
+        tbb::parallel_for(0, sf.nc(), [&](int ic) {
+            Row& row = rows[std::size_t(ic)];
+            std::vector<double> sum(ax == measure ? rowCells : 0, 0.0);  // by (along, across)
+            eachPiece(ic, [&](const Piece& p, double atB, double atC) {
+                if (ax == measure) {
+                    // The piece's length, split at the cells' walls.
+                    for (double lo = p.line.lo; lo < p.line.hi;) {
+                        const double wall = (std::floor(lo / cell) + 1.0) * cell;
+                        const double hi = std::min(p.line.hi, wall);
+                        sum[step(a, 0.5 * (lo + hi)) + alongCells * step(b, atB)] += (hi - lo) * lattice.h * lattice.h;
+                        lo = hi;
                     }
                 }
-            }
+                row.searched += alongBound(p) > tolerance;
+            });
+            if (sum.empty()) return;
+            const std::size_t across = step(c, (ic + 0.5) * lattice.h) * stride[std::size_t(c)];
+            for (std::size_t i = 0; i < rowCells; ++i)
+                if (sum[i] > 0.0)
+                    row.volume.emplace_back((i % alongCells) * stride[std::size_t(a)] +
+                                                (i / alongCells) * stride[std::size_t(b)] + across,
+                                            sum[i]);
         });
-        std::size_t more = 0;
-        for (const Row& row : rows) more += row.search.size();
-        detail::reservePopulated(search, search.size() + more);
-        for (Row& row : rows) {
-            for (const auto& [k, v] : row.volume) cellVolume[k] += v;
-            search.insert(search.end(), row.search.begin(), row.search.end());
+        std::vector<std::size_t> at(rows.size() + 1, search.size());
+        for (std::size_t r = 0; r < rows.size(); ++r) {
+            for (const auto& [k, v] : rows[r].volume) cellVolume[k] += v;
+            at[r + 1] = at[r] + rows[r].searched;
         }
+        detail::reservePopulated(search, at.back());
+        search.resize(at.back());
+        tbb::parallel_for(0, sf.nc(), [&](int ic) {
+            std::size_t next = at[std::size_t(ic)];
+            eachPiece(ic, [&](const Piece& p, double, double) {
+                if (!(alongBound(p) > tolerance)) return;
+                search[next] = p.line;
+                search[next++].bound = alongBound(p);
+            });
+        });
     }
     for (const double v : cellVolume) result.volume += v;
 
@@ -176,8 +197,8 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
                     if (j != kNone) parent[find(j)] = find(i);
                 }
     }
-    // Each region's pieces, gathered region by region into one array (in their order within a
-    // region), and its cells.
+    // Each region's pieces, gathered region by region (in their order within a region), and its
+    // cells.
     std::vector<std::uint32_t> regionOf(parent.size(), kNone);  // by root
     std::vector<std::uint32_t> pieceRegion(search.size());
     std::vector<std::size_t> regionStart{0};
@@ -192,14 +213,15 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
     }
     const std::size_t regions = regionStart.size() - 1;
     std::partial_sum(regionStart.begin(), regionStart.end(), regionStart.begin());
-    std::vector<DexelStretch> grouped;
-    detail::reservePopulated(grouped, search.size());
-    grouped.resize(search.size());
-    {
+    // One region (a common case) is already in place.
+    if (regions > 1) {
+        std::vector<DexelStretch> grouped;
+        detail::reservePopulated(grouped, search.size());
+        grouped.resize(search.size());
         std::vector<std::size_t> next(regionStart.begin(), regionStart.end() - 1);
         for (std::size_t i = 0; i < search.size(); ++i) grouped[next[pieceRegion[i]]++] = search[i];
+        search.swap(grouped);
     }
-    std::vector<DexelStretch>().swap(search);
     std::vector<std::vector<std::size_t>> regionCells(regions);
     for (std::uint32_t i = 0; i < idCell.size(); ++i) {
         const std::uint32_t r = regionOf[find(i)];
@@ -209,7 +231,7 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
     std::vector<Deepest> thickest(regions);
     tbb::parallel_for(std::size_t(0), regions, [&](std::size_t r) {
         thickest[r] = deepestPoint(*design.distance, lattice,
-                                   {grouped.data() + regionStart[r], regionStart[r + 1] - regionStart[r]}, eps);
+                                   {search.data() + regionStart[r], regionStart[r + 1] - regionStart[r]}, eps);
     });
     for (std::size_t r = 0; r < regions; ++r) {
         if (!(thickest[r].depth > tolerance)) continue;
