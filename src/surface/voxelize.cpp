@@ -100,15 +100,17 @@ MeshCastStats castMesh(const Mesh& mesh, TriDexelStock& stock) {
             int b0, b1, c0, c1;
         };
         std::vector<Span> spans(mesh.triangles.size());
-        std::vector<std::size_t> rowStart(std::size_t(fam.tilesC()) + 1, 0);
-        for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        tbb::parallel_for(std::size_t(0), mesh.triangles.size(), [&](std::size_t t) {
             Box box;
             for (std::uint32_t i : mesh.triangles[t]) box.expand(mesh.vertices[i]);
             const auto rb = lat.indexRange(axisB, box.lo[b], box.hi[b]);
             const auto rc = lat.indexRange(axisC, box.lo[c], box.hi[c]);
             spans[t] = {rb[0], rb[1], rc[0], rc[1]};
-            if (rb[0] > rb[1] || rc[0] > rc[1]) continue;
-            for (int tc = rc[0] / kTile; tc <= rc[1] / kTile; ++tc) ++rowStart[std::size_t(tc) + 1];
+        });
+        std::vector<std::size_t> rowStart(std::size_t(fam.tilesC()) + 1, 0);
+        for (const Span& s : spans) {
+            if (s.b0 > s.b1 || s.c0 > s.c1) continue;
+            for (int tc = s.c0 / kTile; tc <= s.c1 / kTile; ++tc) ++rowStart[std::size_t(tc) + 1];
         }
         for (std::size_t r = 1; r < rowStart.size(); ++r) rowStart[r] += rowStart[r - 1];
         std::vector<std::uint32_t> bucket(rowStart.back());
