@@ -8,7 +8,9 @@
 #include <utility>
 #include <vector>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include "dexelmill/error.h"
@@ -227,8 +229,16 @@ MeshDistance::MeshDistance(const Mesh& mesh, bool orient) {
         const auto& tri = mesh.triangles[t];
         return (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0;
     };
-    Box all;
-    for (std::size_t i = 0; i < n; ++i) all.expand(centroid(i));
+    const Box all = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, n), Box{},
+        [&](const tbb::blocked_range<std::size_t>& r, Box box) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i) box.expand(centroid(i));
+            return box;
+        },
+        [](Box x, const Box& y) {
+            x.expand(y);
+            return x;
+        });
     const Vec3 size = glm::max(all.size(), Vec3(1e-300));
     auto spread = [](std::uint64_t v) {
         v &= 0x1fffff;
@@ -250,14 +260,32 @@ MeshDistance::MeshDistance(const Mesh& mesh, bool orient) {
     tbb::parallel_sort(keyed.begin(), keyed.end());
     detail::reservePopulated(original_, n);
     detail::reservePopulated(slot_, n);
-    detail::reservePopulated(corners_, 3 * n);
     original_.resize(n);
     slot_.resize(n);
-    corners_.resize(3 * n);
+    const bool single = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, mesh.vertices.size()), true,
+        [&](const tbb::blocked_range<std::size_t>& r, bool all) {
+            for (std::size_t v = r.begin(); all && v != r.end(); ++v) all = Vec3(glm::vec3(mesh.vertices[v])) == mesh.vertices[v];
+            return all;
+        },
+        [](bool x, bool y) { return x && y; });
+    if (single) {
+        detail::reservePopulated(single_, 3 * n);
+        single_.resize(3 * n);
+    } else {
+        detail::reservePopulated(corners_, 3 * n);
+        corners_.resize(3 * n);
+    }
     tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
         original_[i] = keyed[i].second;
         slot_[keyed[i].second] = std::uint32_t(i);
-        for (std::size_t k = 0; k < 3; ++k) corners_[3 * i + k] = mesh.vertices[mesh.triangles[keyed[i].second][k]];
+        for (std::size_t k = 0; k < 3; ++k) {
+            const Vec3& v = mesh.vertices[mesh.triangles[keyed[i].second][k]];
+            if (single)
+                single_[3 * i + k] = glm::vec3(v);
+            else
+                corners_[3 * i + k] = v;
+        }
     });
     // Ranges split at their middle; a child always comes after its parent.
     // Median splits leave leaves of at least kLeafTriangles / 2 triangles. The nodes are counted
@@ -288,7 +316,7 @@ MeshDistance::MeshDistance(const Mesh& mesh, bool orient) {
     tbb::parallel_for(std::size_t(0), nodes_.size(), [&](std::size_t k) {
         Node& node = nodes_[k];
         for (std::size_t i = 3 * std::size_t(node.first); node.count > 0 && i < 3 * std::size_t(node.first + node.count); ++i)
-            node.box.expand(corners_[i]);
+            node.box.expand(corner(i));
     });
     for (std::size_t k = nodes_.size(); k-- > 0;) {
         Node& node = nodes_[k];
@@ -329,7 +357,7 @@ int MeshDistance::orientationOf(const Mesh& mesh) const {
 
 double MeshDistance::distanceTo(const Vec3& p, std::uint32_t triangle) const {
     const std::size_t i = slot_.at(triangle);
-    return glm::length(closestPointOnTriangle(p, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]) - p);
+    return glm::length(closestPointOnTriangle(p, corner(3 * i), corner(3 * i + 1), corner(3 * i + 2)) - p);
 }
 
 bool MeshDistance::inside(const Vec3& p) const {
@@ -350,7 +378,7 @@ bool MeshDistance::inside(const Vec3& p) const {
                 continue;
             }
             for (std::uint32_t i = node.first; i < node.first + node.count; ++i) {
-                const Crossing c = crossing(p, d, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]);
+                const Crossing c = crossing(p, d, corner(3 * i), corner(3 * i + 1), corner(3 * i + 2));
                 if (c == Crossing::Ambiguous) ambiguous = true;
                 if (c == Crossing::One) odd = !odd;
             }
@@ -371,7 +399,7 @@ double MeshDistance::withSign(const Vec3& p, const Found& f) const {
     const double d = std::sqrt(f.d2);
     if (!(d > 0.0)) return d;
     if (orientation_ != 0 && f.onFace) {
-        const Vec3 &a = corners_[3 * f.slot], &b = corners_[3 * f.slot + 1], &c = corners_[3 * f.slot + 2];
+        const Vec3 a = corner(3 * f.slot), b = corner(3 * f.slot + 1), c = corner(3 * f.slot + 2);
         const double side = glm::dot(p - f.point, glm::cross(b - a, c - a)) * orientation_;
         return side < 0.0 ? -d : d;
     }
@@ -394,7 +422,7 @@ bool MeshDistance::slotsNear(const Vec3& c, double radius, std::size_t limit, st
             continue;
         }
         for (std::uint32_t i = node.first; i < node.first + node.count; ++i) {
-            const Vec3 q = closestPointOnTriangle(c, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]);
+            const Vec3 q = closestPointOnTriangle(c, corner(3 * i), corner(3 * i + 1), corner(3 * i + 2));
             if (glm::dot(q - c, q - c) > r2) continue;
             if (out.size() == limit) return false;
             out.push_back(i);
@@ -407,7 +435,7 @@ double MeshDistance::signedDistanceAmong(const Vec3& p, const std::vector<std::u
     Found best;
     best.d2 = std::numeric_limits<double>::infinity();
     for (std::uint32_t i : slots) {
-        const Closest c = closestOnTriangle(p, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]);
+        const Closest c = closestOnTriangle(p, corner(3 * i), corner(3 * i + 1), corner(3 * i + 2));
         const double d2 = glm::dot(c.point - p, c.point - p);
         if (d2 < best.d2) best = {i, d2, c.point, c.onFace, true};
     }
@@ -419,7 +447,7 @@ MeshDistance::Found MeshDistance::search(const Vec3& p, const std::uint32_t* hin
     Found best;
     best.d2 = std::numeric_limits<double>::infinity();
     auto test = [&](std::uint32_t i) {
-        const Closest c = closestOnTriangle(p, corners_[3 * i], corners_[3 * i + 1], corners_[3 * i + 2]);
+        const Closest c = closestOnTriangle(p, corner(3 * i), corner(3 * i + 1), corner(3 * i + 2));
         const double d2 = glm::dot(c.point - p, c.point - p);
         if (d2 < best.d2) best = {i, d2, c.point, c.onFace, true};
     };

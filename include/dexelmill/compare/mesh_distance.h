@@ -68,7 +68,7 @@ public:
     /// @brief The distance from p to one triangle of the mesh (by its index in the mesh given).
     double distanceTo(const Vec3& p, std::uint32_t triangle) const;
 
-    std::size_t triangleCount() const { return corners_.size() / 3; }
+    std::size_t triangleCount() const { return original_.size(); }
     /// @brief +1 for a closed, consistently oriented 2-manifold all of whose shells face out of
     /// the solid, -1 when all face in, 0 for anything else (an open or non-manifold mesh, shells
     /// facing both ways).
@@ -96,7 +96,12 @@ private:
         std::uint32_t count = 0;  ///< triangles in a leaf; 0 for an inner node (right = left + 1)
     };
     std::vector<Node> nodes_;
-    std::vector<Vec3, NoZeroAllocator<Vec3>> corners_;  ///< three corners per triangle slot, in hierarchy order
+    /// Corner k of the triangle slots (three a slot, in hierarchy order), exactly as the mesh has it.
+    Vec3 corner(std::size_t k) const { return single_.empty() ? corners_[k] : Vec3(single_[k]); }
+    /// The corners, in single precision when every one of them is a float (an STL's always are),
+    /// which halves the index and the memory its queries read; otherwise in double.
+    std::vector<glm::vec3, NoZeroAllocator<glm::vec3>> single_;
+    std::vector<Vec3, NoZeroAllocator<Vec3>> corners_;
     std::vector<std::uint32_t> original_;  ///< each slot's index in the input mesh
     std::vector<std::uint32_t> slot_;      ///< each input triangle's slot
     int orientation_ = 0;
