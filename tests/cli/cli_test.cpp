@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sys/wait.h>
 
+#include "support/scratch.h"
+
 using Catch::Matchers::Contains;
 namespace fs = std::filesystem;
 
@@ -26,10 +28,7 @@ std::string slurp(const fs::path& p) {
 /// Runs the CLI in a folder of its own (ctest runs test cases in parallel).
 class Cli {
 public:
-    explicit Cli(const std::string& name) : dir_(fs::temp_directory_path() / ("dexelmill_cli_" + name)) {
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
+    explicit Cli(const std::string& name) : dir_(dexelmill::testing::scratchFolder("dexelmill_cli_", name)) {}
     /// Runs `dexelmill ARGS` (shell words) in the folder.
     Run operator()(const std::string& args) const {
         const std::string cmd =

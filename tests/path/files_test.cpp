@@ -13,6 +13,7 @@
 #include "dexelmill/error.h"
 #include "dexelmill/path/camotics.h"
 #include "dexelmill/path/gcode.h"
+#include "support/scratch.h"
 
 using namespace dexelmill;
 namespace fs = std::filesystem;
@@ -22,10 +23,7 @@ namespace {
 /// A folder of its own under the system's temporary folder, removed at the end.
 class Folder {
 public:
-    explicit Folder(const std::string& name) : dir_(fs::temp_directory_path() / ("dexelmill_files_" + name)) {
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
+    explicit Folder(const std::string& name) : dir_(testing::scratchFolder("dexelmill_files_", name)) {}
     ~Folder() {
         std::error_code ec;
         fs::remove_all(dir_, ec);

@@ -15,6 +15,7 @@
 #include "dexelmill/refine/refine.h"
 #include "dexelmill/tool/builders.h"
 #include "support/face_deviation.h"
+#include "support/scratch.h"
 
 using namespace dexelmill;
 using dexelmill::testing::CarvedPart;
@@ -181,9 +182,7 @@ TEST_CASE("refine: an uncut block and zero rounds are left as they are", "[refin
 }
 
 TEST_CASE("refine: a stock from a file is not refined, and the report says why", "[refine]") {
-    const fs::path dir = fs::temp_directory_path() / "dexelmill_test_refine_stock";
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+    const fs::path dir = testing::scratchFolder("dexelmill_test_refine_", "stock");
     // The block itself, as an STL: the stock the box would be, but from a file.
     const std::string above = "G21 G90\nT1 M6\nG0 X5 Y5 Z30\nM30\n";
     const Simulation block = runSimulation(job(above, 0));
