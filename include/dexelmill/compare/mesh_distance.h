@@ -23,9 +23,9 @@ Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
 class MeshDistance {
 public:
     /// @brief Builds the hierarchy (O(n log n)); the mesh may be freed afterwards. With `orient`
-    /// false the mesh's orientation is not checked (a pass over its edges, about a third of the
-    /// build): orientation() is then 0 and signedDistance lets rays decide every sign, which is
-    /// as exact and slower, for callers that sign no points or few.
+    /// false the mesh's orientation is not checked (a pass over its edges and a ray per shell):
+    /// orientation() is then 0 and signedDistance lets rays decide every sign, which is as exact
+    /// and slower, for callers that sign no points or few.
     /// @throw Error for more than 2^32 / 3 triangles.
     explicit MeshDistance(const Mesh& mesh, bool orient = true);
 
