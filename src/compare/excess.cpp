@@ -122,7 +122,7 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
         tbb::parallel_for(0, sf.nc(), [&](int ic) {
             Row& row = rows[std::size_t(ic)];
             std::vector<double> sum(ax == measure ? rowCells : 0, 0.0);  // by (along, across)
-            eachPiece(ic, [&](const Piece& p, double atB, double atC) {
+            eachPiece(ic, [&](const Piece& p, double atB, double) {
                 if (ax == measure) {
                     // The piece's length, split at the cells' walls.
                     for (double lo = p.line.lo; lo < p.line.hi;) {
