@@ -121,9 +121,10 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
         std::vector<Row> rows(std::size_t(sf.nc()));
         tbb::parallel_for(0, sf.nc(), [&](int ic) {
             Row& row = rows[std::size_t(ic)];
-            std::vector<double> sum(ax == measure ? rowCells : 0, 0.0);  // by (along, across)
+            std::vector<double> sum;  // by (along, across), made at the row's first piece
             eachPiece(ic, [&](const Piece& p, double atB, double) {
                 if (ax == measure) {
+                    if (sum.empty()) sum.assign(rowCells, 0.0);
                     // The piece's length, split at the cells' walls.
                     for (double lo = p.line.lo; lo < p.line.hi;) {
                         const double wall = (std::floor(lo / cell) + 1.0) * cell;
