@@ -153,9 +153,10 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
         tbb::parallel_for(0, sf.nc(), [&](int ic) {
             std::size_t next = at[std::size_t(ic)];
             eachPiece(ic, [&](const Piece& p, double, double) {
-                if (!(alongBound(p) > tolerance)) return;
+                const double bound = alongBound(p);
+                if (!(bound > tolerance)) return;
                 search[next] = p.line;
-                search[next++].bound = alongBound(p);
+                search[next++].bound = bound;
             });
         });
     }
