@@ -127,13 +127,16 @@ std::vector<detail::Window> windowsFor(std::vector<std::uint32_t>& asked, const 
 
 /// Given the vertex moves in `moved` (vertex, position before), already made, undoes those around
 /// any fold of the mesh, one ring farther each pass, until it folds no more or the folds are not
-/// the moves' doing. Returns the indices in `moved` of the moves undone; `back` counts them.
+/// the moves' doing. `watch` follows the mesh's folds (every earlier move told). Returns the
+/// indices in `moved` of the moves undone; `back` counts them.
 std::vector<std::uint32_t> moveUnlessFolding(Mesh& mesh, const std::vector<std::uint32_t>& active,
                                              const std::vector<std::pair<std::uint32_t, Vec3>>& moved,
-                                             std::size_t& back) {
-    std::vector<std::uint32_t> folded;
+                                             FoldWatch& watch, std::size_t& back) {
+    std::vector<std::uint32_t> changed;
+    for (const auto& [v, old] : moved) changed.push_back(v);
     for (int pass = 0; !moved.empty(); ++pass) {
-        checkMesh(mesh, &folded);
+        watch.moved(changed);
+        const std::vector<std::uint32_t> folded = watch.folded();
         if (folded.empty()) break;
         std::vector<char> near(mesh.vertices.size(), 0);
         for (std::uint32_t t : folded)
@@ -146,9 +149,10 @@ std::vector<std::uint32_t> moveUnlessFolding(Mesh& mesh, const std::vector<std::
             }
             near.swap(grown);
         }
-        std::size_t undone = 0;
+        changed.clear();
         for (const auto& [v, old] : moved)
-            if (near[v] && mesh.vertices[v] != old) mesh.vertices[v] = old, ++undone;
+            if (near[v] && mesh.vertices[v] != old) mesh.vertices[v] = old, changed.push_back(v);
+        const std::size_t undone = changed.size();
         back += undone;
         if (undone == 0 && pass >= kSnapRings) break;  // the folds are not the moves' doing
     }
@@ -178,6 +182,7 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
     std::vector<std::uint32_t> asked;
     for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
         if (normal[v] != Vec3(0.0) && cells.reached(mesh.vertices[v])) asked.push_back(v);
+    FoldWatch watch(mesh);
     // The windows of some items (vertexOf gives each one's vertex) along their vertices' normals'
     // rank-th nearest axes, and their offsets.
     const auto ask = [&](std::vector<std::uint32_t>& items, int rank, std::vector<detail::Window>& windows,
@@ -213,7 +218,7 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
             mesh.vertices[v][windows[i].axis] += offsets[i];
         }
     }
-    const std::vector<std::uint32_t> back = moveUnlessFolding(mesh, active, moved, st.snapRefused);
+    const std::vector<std::uint32_t> back = moveUnlessFolding(mesh, active, moved, watch, st.snapRefused);
     std::size_t done = moved.size() - back.size();
     const std::size_t unanswered = retry.size();
     for (std::uint32_t i : back) retry.push_back(moved[i].first);
@@ -255,7 +260,7 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
             movedK.push_back(k);
             mesh.vertices[v][c.axis] += c.offset;
         }
-        const std::vector<std::uint32_t> undone = moveUnlessFolding(mesh, active, moved, st.snapRefused);
+        const std::vector<std::uint32_t> undone = moveUnlessFolding(mesh, active, moved, watch, st.snapRefused);
         done += moved.size() - undone.size();
         trying.clear();
         for (std::uint32_t i : undone) trying.push_back(movedK[i]);

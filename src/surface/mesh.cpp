@@ -84,6 +84,29 @@ Stars buildStars(const Mesh& mesh) {
     return s;
 }
 
+/// The area vector of corner `corner` (3 t + k) of the star of the vertex at pv: the same for
+/// each corner of triangle t, taken from this one.
+inline Vec3 cornerArea(const Mesh& mesh, std::uint32_t corner, const Vec3& pv) {
+    constexpr int kNext[3] = {1, 2, 0}, kPrev[3] = {2, 0, 1};
+    const Mesh::Triangle& t = mesh.triangles[corner / 3];
+    const int k = int(corner % 3);
+    return glm::cross(mesh.vertices[t[kNext[k]]] - pv, mesh.vertices[t[kPrev[k]]] - pv);
+}
+
+/// A vertex's normal from the sum of its star's area vectors: unit, zero without area.
+inline glm::vec3 unitNormal(const Vec3& sum) {
+    const double l = glm::length(sum);
+    return l > 0.0 ? glm::vec3(sum / l) : glm::vec3(0.0f);
+}
+
+/// Vertex v's normal as the check takes it: its star's area vectors summed in star order.
+glm::vec3 checkNormal(const Mesh& mesh, const Stars& stars, std::size_t v) {
+    Vec3 sum(0.0);
+    const Vec3& pv = mesh.vertices[v];
+    for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i) sum += cornerArea(mesh, stars.corners[i], pv);
+    return unitNormal(sum);
+}
+
 /// What the pass over the vertices finds.
 struct VertexCounts {
     std::size_t edges = 0, boundary = 0, nonManifold = 0, misoriented = 0, unused = 0;
@@ -128,13 +151,11 @@ VertexCounts vertexPass(const Mesh& mesh, const Stars& stars, std::vector<glm::v
                     const Mesh::Triangle& t = mesh.triangles[corner / 3];
                     const int k = int(corner % 3);
                     const std::uint32_t out = t[kNext[k]], in = t[kPrev[k]];
-                    // The area vector from this corner: the same for each of its corners.
-                    sum += glm::cross(mesh.vertices[out] - pv, mesh.vertices[in] - pv);
+                    sum += cornerArea(mesh, corner, pv);
                     if (out > v) outs[nOut++] = out;
                     if (in > v) ins[nIn++] = in;
                 }
-                const double l = glm::length(sum);
-                if (l > 0.0) normal[v] = glm::vec3(sum / l);
+                normal[v] = unitNormal(sum);
                 // Each distinct neighbour once: its uses in each direction.
                 auto count = [](const std::uint32_t* list, std::size_t n, std::uint32_t w) {
                     std::size_t k = 0;
@@ -461,6 +482,71 @@ MeshCheck repairAndCheckMesh(Mesh& mesh, const FoldRepair& repair, std::size_t* 
     if (moved) *moved = 0;
     if (unrepaired) unrepaired->clear();
     return check(&mesh, mesh, &repair, moved, unrepaired);
+}
+
+struct FoldWatch::State {
+    const Mesh& mesh;
+    Stars stars;
+    std::vector<glm::vec3> normal;
+    std::vector<char> suspect;  ///< per triangle: check's suspect test with no margin
+    /// Per vertex and per triangle, the update that last took it in (0: none): no sorting.
+    std::vector<std::uint32_t> vertexSeen, triangleSeen;
+    std::uint32_t update = 0;
+
+    explicit State(const Mesh& m) : mesh(m), stars(buildStars(m)) {}
+};
+
+FoldWatch::FoldWatch(const Mesh& mesh) : s_(std::make_unique<State>(mesh)) {
+    State& s = *s_;
+    const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+    detail::reservePopulated(s.normal, nv);
+    s.normal.resize(nv);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t v = r.begin(); v < r.end(); ++v) s.normal[v] = checkNormal(mesh, s.stars, v);
+    });
+    s.suspect.resize(nt);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nt, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t t = r.begin(); t < r.end(); ++t) s.suspect[t] = suspect(mesh, s.normal, std::uint32_t(t), 0.0);
+    });
+    s.vertexSeen.assign(nv, 0);
+    s.triangleSeen.assign(nt, 0);
+}
+
+FoldWatch::~FoldWatch() = default;
+
+void FoldWatch::moved(const std::vector<std::uint32_t>& vertices) {
+    State& s = *s_;
+    const std::uint32_t u = ++s.update;
+    // The vertices whose normals may change: the moved ones and their neighbours.
+    std::vector<std::uint32_t> renormal;
+    for (std::uint32_t v : vertices)
+        for (std::uint32_t i = s.stars.offset[v]; i < s.stars.offset[v + 1]; ++i)
+            for (std::uint32_t w : s.mesh.triangles[s.stars.corners[i] / 3])
+                if (s.vertexSeen[w] != u) s.vertexSeen[w] = u, renormal.push_back(w);
+    // The triangles whose test may change: those around any of them.
+    std::vector<std::uint32_t> retest;
+    for (std::uint32_t w : renormal)
+        for (std::uint32_t i = s.stars.offset[w]; i < s.stars.offset[w + 1]; ++i) {
+            const std::uint32_t t = s.stars.corners[i] / 3;
+            if (s.triangleSeen[t] != u) s.triangleSeen[t] = u, retest.push_back(t);
+        }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, renormal.size(), 1024),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t k = r.begin(); k < r.end(); ++k)
+                              s.normal[renormal[k]] = checkNormal(s.mesh, s.stars, renormal[k]);
+                      });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, retest.size(), 2048),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t k = r.begin(); k < r.end(); ++k)
+                              s.suspect[retest[k]] = suspect(s.mesh, s.normal, retest[k], 0.0);
+                      });
+}
+
+std::vector<std::uint32_t> FoldWatch::folded() const {
+    std::vector<std::uint32_t> out;
+    for (std::size_t t = 0; t < s_->suspect.size(); ++t)
+        if (s_->suspect[t]) out.push_back(std::uint32_t(t));
+    return out;
 }
 
 }  // namespace dexelmill

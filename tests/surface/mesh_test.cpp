@@ -186,6 +186,46 @@ TEST_CASE("checkMesh lists the folded triangles it counts", "[surface][mesh]") {
     compare(c, bruteForce(m));
 }
 
+TEST_CASE("FoldWatch follows the folds checkMesh finds while vertices move", "[surface][mesh]") {
+    std::mt19937_64 rng(7);
+    for (int trial = 0; trial < 20; ++trial) {
+        Mesh m = sphere(8 + int(rng() % 6), 10 + int(rng() % 10), 3.0);
+        const std::vector<Vec3, NoZeroAllocator<Vec3>> start = m.vertices;
+        const int threads = 1 + int(rng() % 3);
+        tbb::task_arena arena(threads);
+        arena.execute([&] {
+            FoldWatch watch(m);
+            CHECK(watch.folded().empty());
+            for (int batch = 0; batch < 15; ++batch) {
+                std::vector<std::uint32_t> moved;
+                const int count = int(rng() % 6);  // sometimes none
+                for (int k = 0; k < count; ++k) {
+                    const std::uint32_t v = std::uint32_t(rng() % m.vertices.size());
+                    switch (rng() % 4) {
+                        case 0: m.vertices[v] *= -0.2; break;                  // pushed through: folds
+                        case 1: m.vertices[v] = start[v]; break;               // back where it was
+                        case 2: m.vertices[v] = m.vertices[(v + 1) % m.vertices.size()]; break;  // onto another
+                        default: m.vertices[v] *= 1.0 + 0.3 * double(rng() % 100) / 100.0; break;
+                    }
+                    moved.push_back(v);
+                    if (rng() % 3 == 0) moved.push_back(v);  // told twice
+                }
+                watch.moved(moved);
+                INFO("trial " << trial << ", batch " << batch << ", " << threads << " threads");
+                std::vector<std::uint32_t> want;
+                const MeshCheck c = checkMesh(m, &want);
+                CHECK(watch.folded() == want);
+                // And against the oracle, which shares no code: folded and degenerate triangles,
+                // give or take those within its float margin of facing across.
+                const MeshCheck brute = bruteForce(m);
+                CHECK(watch.folded().size() >= brute.foldedTriangles + brute.degenerateTriangles);
+                CHECK(watch.folded().size() <= brute.foldedTriangles + brute.degenerateTriangles + nearlyFolded(brute));
+                CHECK(c.foldedTriangles + c.degenerateTriangles == want.size());
+            }
+        });
+    }
+}
+
 TEST_CASE("repairAndCheckMesh: pulls fold vertices until none folds", "[surface][mesh]") {
     Mesh m = sphere(10, 16, 4.0);
     const auto original = m.vertices;

@@ -92,6 +92,32 @@ struct MeshCheck {
 /// `folded`, when given, receives the folded and degenerate triangles (in increasing order).
 MeshCheck checkMesh(const Mesh& mesh, std::vector<std::uint32_t>* folded = nullptr);
 
+/// @brief checkMesh's `folded` list kept up to date while vertices move and the triangles stay.
+/// A triangle's test depends on its corners' normals, each from the triangles around it, so a
+/// moved vertex can change the test of the triangles around it and around its neighbours: only
+/// those are tested again. The answers are checkMesh's, bit for bit (the same sums in the same
+/// order); an update costs in proportion to the triangles it touches, not to the mesh.
+class FoldWatch {
+public:
+    /// @brief Watches `mesh`, which must outlive the watch, keep its triangles, and have valid
+    /// indices (checkMesh's invalidIndices zero).
+    explicit FoldWatch(const Mesh& mesh);
+    ~FoldWatch();
+    FoldWatch(const FoldWatch&) = delete;
+    FoldWatch& operator=(const FoldWatch&) = delete;
+
+    /// @brief Takes into account that these vertices have moved since the watch was made or last
+    /// told (any order; repeats allowed).
+    void moved(const std::vector<std::uint32_t>& vertices);
+    /// @brief The folded and degenerate triangles, in increasing order: what checkMesh's `folded`
+    /// would receive now.
+    std::vector<std::uint32_t> folded() const;
+
+private:
+    struct State;
+    std::unique_ptr<State> s_;
+};
+
 /// @brief How repairAndCheckMesh repairs folds.
 struct FoldRepair {
     /// Triangles facing their vertices' normals at a cosine below this are repaired too, as are
