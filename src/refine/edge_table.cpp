@@ -4,6 +4,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include "memory/pages.h"
+
 namespace dexelmill::detail {
 
 // The slots are grouped by their first vertex (a counting sort): an edge's owner is its slot
@@ -12,7 +14,9 @@ EdgeTable buildEdges(const Mesh& mesh, const std::vector<std::uint32_t>& triangl
     const std::size_t slots = 3 * triangles.size();
     const auto from = [&](std::size_t s) { return mesh.triangles[triangles[s / 3]][s % 3]; };
     const auto to = [&](std::size_t s) { return mesh.triangles[triangles[s / 3]][(s % 3 + 1) % 3]; };
-    std::vector<std::uint32_t> start(mesh.vertices.size() + 1, 0), bySource(slots);
+    std::vector<std::uint32_t> start(mesh.vertices.size() + 1, 0), bySource;
+    reservePopulated(bySource, slots);
+    bySource.resize(slots);
     for (std::size_t s = 0; s < slots; ++s) ++start[from(s) + 1];
     for (std::size_t v = 0; v < mesh.vertices.size(); ++v) start[v + 1] += start[v];
     {
@@ -20,7 +24,9 @@ EdgeTable buildEdges(const Mesh& mesh, const std::vector<std::uint32_t>& triangl
         for (std::size_t s = 0; s < slots; ++s) bySource[fill[from(s)]++] = std::uint32_t(s);
     }
     // Per slot: its twin (kNoTriangle if none or several) and whether the edge has other slots.
-    std::vector<std::uint32_t> twin(slots, kNoTriangle);
+    std::vector<std::uint32_t> twin;
+    reservePopulated(twin, slots);
+    twin.assign(slots, kNoTriangle);
     std::vector<char> shared(slots, 0);
     tbb::parallel_for(std::size_t(0), slots, [&](std::size_t s) {
         const std::uint32_t a = from(s), b = to(s);
@@ -34,11 +40,14 @@ EdgeTable buildEdges(const Mesh& mesh, const std::vector<std::uint32_t>& triangl
     });
     // Owners number the edges in slot order; the others take their twin's number.
     EdgeTable e;
+    reservePopulated(e.edgeOf, slots);
     e.edgeOf.resize(slots);
     const auto owner = [&](std::size_t s) { return from(s) < to(s) || twin[s] == kNoTriangle; };
     std::uint32_t edges = 0;
     for (std::size_t s = 0; s < slots; ++s)
         if (owner(s)) e.edgeOf[s] = edges++;
+    reservePopulated(e.ends, edges);
+    reservePopulated(e.triangles, edges);
     e.ends.resize(edges);
     e.triangles.resize(edges);
     tbb::parallel_for(std::size_t(0), slots, [&](std::size_t s) {

@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include "memory/pages.h"
 #include "refine/detail/edge_table.h"
 #include "refine/detail/pieces.h"
 #include "refine/detail/windows.h"
@@ -58,7 +59,9 @@ double longestEdge(const Mesh& mesh) {
 /// least half the longest edge beyond the windows' reach, so an edge whose midpoint window a sweep
 /// reaches has both its triangles here.
 std::vector<std::uint32_t> activeTriangles(const Mesh& mesh, const detail::SweptCells& cells) {
-    std::vector<char> reached(mesh.vertices.size());
+    std::vector<char> reached;
+    detail::reservePopulated(reached, mesh.vertices.size());
+    reached.resize(mesh.vertices.size());
     tbb::parallel_for(std::size_t(0), mesh.vertices.size(),
                       [&](std::size_t v) { reached[v] = cells.reached(mesh.vertices[v]); });
     std::vector<std::uint32_t> active;
@@ -75,14 +78,21 @@ std::vector<std::uint32_t> activeTriangles(const Mesh& mesh, const detail::Swept
 std::vector<double> exactOffsets(const std::vector<detail::Window>& windows, const detail::SweptCells& cells,
                                  const Box& stock, const ToolPath& path, const ToolTable& tools,
                                  const RefineOptions& o) {
-    std::vector<double> offsets(windows.size(), 0.0);
-    std::vector<char> nearSweep(windows.size(), 0);
+    std::vector<double> offsets;
+    std::vector<char> nearSweep;
+    detail::reservePopulated(offsets, windows.size());
+    detail::reservePopulated(nearSweep, windows.size());
+    offsets.assign(windows.size(), 0.0);
+    nearSweep.assign(windows.size(), 0);
     tbb::parallel_for(std::size_t(0), windows.size(), [&](std::size_t i) {
         nearSweep[i] = cells.reached(windows[i].point);
         if (!nearSweep[i]) offsets[i] = detail::stockCrossing(windows[i], o.window, stock);
     });
     std::vector<std::uint32_t> cutIndex;
     std::vector<detail::Window> cut;
+    const std::size_t near = std::size_t(std::count(nearSweep.begin(), nearSweep.end(), 1));
+    detail::reservePopulated(cutIndex, near);
+    detail::reservePopulated(cut, near);
     for (std::size_t i = 0; i < windows.size(); ++i)
         if (nearSweep[i]) cutIndex.push_back(std::uint32_t(i)), cut.push_back(windows[i]);
     const std::vector<double> exact = detail::exactCrossings(cut, o.window, stock, path, tools, o.removeShankMaterial);
@@ -110,8 +120,12 @@ bool windowAlong(const Vec3& point, const Vec3& normal, int rank, detail::Window
 /// two lists stay in step. The windows run along each normal's `rank`-th nearest axis (windowAlong).
 template <class Along>
 std::vector<detail::Window> windowsFor(std::vector<std::uint32_t>& asked, const Along& along, int rank = 0) {
-    std::vector<detail::Window> windows(asked.size());
-    std::vector<char> facing(asked.size(), 0);
+    std::vector<detail::Window> windows;
+    std::vector<char> facing;
+    detail::reservePopulated(windows, asked.size());
+    detail::reservePopulated(facing, asked.size());
+    windows.resize(asked.size());
+    facing.assign(asked.size(), 0);
     tbb::parallel_for(std::size_t(0), asked.size(), [&](std::size_t i) {
         Vec3 point(0.0), normal(0.0);
         along(asked[i], point, normal);
@@ -134,15 +148,16 @@ std::vector<std::uint32_t> moveUnlessFolding(Mesh& mesh, const std::vector<std::
                                              FoldWatch& watch, std::size_t& back) {
     std::vector<std::uint32_t> changed;
     for (const auto& [v, old] : moved) changed.push_back(v);
+    std::vector<char> near, grown;
     for (int pass = 0; !moved.empty(); ++pass) {
         watch.moved(changed);
         const std::vector<std::uint32_t> folded = watch.folded();
         if (folded.empty()) break;
-        std::vector<char> near(mesh.vertices.size(), 0);
+        near.assign(mesh.vertices.size(), 0);
         for (std::uint32_t t : folded)
             for (std::uint32_t v : mesh.triangles[t]) near[v] = 1;
         for (int ring = 0; ring < std::min(pass, kSnapRings); ++ring) {
-            std::vector<char> grown = near;
+            grown = near;
             for (std::uint32_t t : active) {
                 const Mesh::Triangle& tri = mesh.triangles[t];
                 if (near[tri[0]] || near[tri[1]] || near[tri[2]]) grown[tri[0]] = grown[tri[1]] = grown[tri[2]] = 1;
@@ -174,7 +189,9 @@ std::vector<std::uint32_t> moveUnlessFolding(Mesh& mesh, const std::vector<std::
 std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, const detail::SweptCells& cells,
                          const Box& stock, const ToolPath& path, const ToolTable& tools, const RefineOptions& o,
                          RefineStats& st) {
-    std::vector<Vec3> normal(mesh.vertices.size(), Vec3(0.0));
+    std::vector<Vec3> normal;
+    detail::reservePopulated(normal, mesh.vertices.size());
+    normal.assign(mesh.vertices.size(), Vec3(0.0));
     for (std::uint32_t t : active) {
         const Vec3 a = mesh.areaVector(t);
         for (std::uint32_t v : mesh.triangles[t]) normal[v] += a;
@@ -328,6 +345,9 @@ private:
     void propose(std::size_t firstNew, const detail::SweptCells& cells, const Box& stock, const ToolPath& path,
                  const ToolTable& tools, RefineStats& stats) {
         const std::size_t nEdges = edges_.ends.size();
+        detail::reservePopulated(split_, nEdges);
+        detail::reservePopulated(at_, nEdges);
+        detail::reservePopulated(moved_, nEdges);
         split_.assign(nEdges, 0);
         at_.resize(nEdges);
         moved_.assign(nEdges, 0.0);
@@ -426,6 +446,8 @@ private:
         oldVertices_ = mesh_.vertices.size();
         oldTriangles_ = mesh_.triangles.size();
         newVertex_.assign(split_.size(), 0);
+        detail::reservePopulated(mesh_.vertices,
+                                 oldVertices_ + std::size_t(std::count(split_.begin(), split_.end(), char(1))));
         std::size_t added = 0;
         for (std::size_t e = 0; e < split_.size(); ++e) {
             if (!split_[e]) continue;
@@ -453,6 +475,7 @@ private:
             splitGlobal_[j] = active_[splitLocal_[j]];
             replaced_[j] = mesh_.triangles[splitGlobal_[j]];
         }
+        detail::reservePopulated(mesh_.triangles, oldTriangles_ + extra[n]);
         mesh_.triangles.resize(oldTriangles_ + extra[n]);
         appendedParent_.resize(extra[n]);
         applied_ = true;

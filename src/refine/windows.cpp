@@ -11,6 +11,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "dexelmill/stock/cut.h"
+#include "memory/pages.h"
 
 namespace dexelmill::detail {
 
@@ -102,13 +103,17 @@ Buckets bucketWindows(const std::vector<Window>& windows, std::size_t w0, std::s
     for (std::size_t i = w0; i < w1; ++i) box.expand(windows[i].point);
     b.grid = CoarseGrid(box, kBucketReach * 2.0 * reach);
     const CoarseGrid& g = b.grid;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(w1 - w0);
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed;
+    reservePopulated(keyed, w1 - w0);
+    keyed.resize(w1 - w0);
     tbb::parallel_for(w0, w1, [&](std::size_t i) {
         const Vec3& p = windows[i].point;
         keyed[i - w0] = {g.index({g.coord(0, p.x), g.coord(1, p.y), g.coord(2, p.z)}), std::uint32_t(i)};
     });
     tbb::parallel_sort(keyed.begin(), keyed.end());
+    reservePopulated(b.index, g.cellCount());
     b.index.assign(g.cellCount(), -1);
+    reservePopulated(b.order, keyed.size());
     b.order.resize(keyed.size());
     for (std::size_t k = 0; k < keyed.size(); ++k) {
         b.order[k] = keyed[k].second;
@@ -222,7 +227,9 @@ double stockCrossing(const Window& window, double reach, const Box& stock) {
 
 std::vector<double> exactCrossings(const std::vector<Window>& windows, double reach, const Box& stock,
                                    const ToolPath& path, const ToolTable& tools, bool removeShank) {
-    std::vector<double> out(windows.size(), std::numeric_limits<double>::quiet_NaN());
+    std::vector<double> out;
+    reservePopulated(out, windows.size());
+    out.assign(windows.size(), std::numeric_limits<double>::quiet_NaN());
     if (windows.empty()) return out;
     const float freach = float(reach);
     const std::map<int, ToolRegions> regions = toolRegions(path, tools);
@@ -233,10 +240,12 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
     const double slack = reach * (1.0 + 1e-9) + 1e-9;
     std::vector<std::vector<std::uint32_t>> runMoves;
     std::vector<std::size_t> active;
+    reservePopulated(geoms, std::min(kBatch, path.moves.size()));
 
     for (std::size_t w0 = 0; w0 < windows.size(); w0 += kChunk) {
         const std::size_t w1 = std::min(windows.size(), w0 + kChunk);
         const Buckets b = bucketWindows(windows, w0, w1, reach);
+        reservePopulated(material, w1 - w0);
         material.resize(w1 - w0);
         tbb::parallel_for(w0, w1, [&](std::size_t i) { material[i - w0] = stockMaterial(windows[i], freach, stock); });
         runMoves.assign(b.runStart.size() - 1, {});
