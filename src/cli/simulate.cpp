@@ -250,7 +250,7 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
     c->add_option("--turn-tolerance", a.turnTolerance,
                   "Tolerance of the sweep of a move whose tool axis turns (simultaneous 5-axis), in mm:\n"
                   "material deeper than this inside some pose of the tool is removed, and nothing the tool\n"
-                  "never reaches is")
+                  "never reaches is removed")
         ->check(numberCheck(false))
         ->capture_default_str();
     c->add_option("--machine", a.machine,
