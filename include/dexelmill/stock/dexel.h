@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "dexelmill/geometry/packed_normal.h"
+#include "dexelmill/span.h"
 #include "dexelmill/stock/lattice.h"
 
 namespace dexelmill {
@@ -33,15 +34,7 @@ struct Segment {
 };
 
 /// @brief A read-only view of a dexel's segments.
-struct SegmentSpan {
-    const Segment* data = nullptr;
-    std::size_t size = 0;
-
-    const Segment* begin() const { return data; }
-    const Segment* end() const { return data + size; }
-    bool empty() const { return size == 0; }
-    const Segment& operator[](std::size_t i) const { return data[i]; }
-};
+using SegmentSpan = Span<Segment>;
 
 /// @brief kTile x kTile dexels of one family with their segments in one array.
 class DexelTile {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "dexelmill/compare/mesh_distance.h"
+#include "dexelmill/span.h"
 #include "dexelmill/stock/lattice.h"
 
 namespace dexelmill {
@@ -20,12 +21,8 @@ struct DexelStretch {
     double bound = std::numeric_limits<double>::infinity();
 };
 
-/// Stretches lying one after another in memory (C++17 has no std::span).
-struct StretchSpan {
-    const DexelStretch* data = nullptr;
-    std::size_t size = 0;
-    const DexelStretch& operator[](std::size_t i) const { return data[i]; }
-};
+/// Stretches lying one after another in memory.
+using StretchSpan = Span<DexelStretch>;
 
 struct Deepest {
     double depth = -std::numeric_limits<double>::infinity();  ///< mm; -infinity without stretches
