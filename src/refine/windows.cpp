@@ -156,10 +156,11 @@ struct SweepReach {
 
 /// Subtracts one sweep from a window's material, if its cheap bound reaches the window.
 void subtractSweep(const MoveSweep& sweep, const Line& line, float reach, Material& m) {
-    const Interval bound = sweep.bound(line);
+    const MoveSweep::LocalLine local = sweep.toLocal(line);
+    const Interval bound = sweep.bound(local);
     if (bound.isEmpty() || bound.hi < -reach || bound.lo > reach) return;
     Interval parts[MoveSweep::kMaxParts];
-    const std::size_t n = sweep.intersectParts(line, parts);
+    const std::size_t n = sweep.intersectParts(local, parts);
     for (std::size_t k = 0; k < n; ++k) {
         const Interval& r = parts[k];
         if (r.isEmpty() || r.hi < -reach || r.lo > reach) continue;

@@ -217,8 +217,16 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                 // (most dexels under a finishing pass were cut down by the moves before).
                 const bool cuts = g.cutting && cutWin.meets(ib, ic, segs);
                 const bool shank = g.shank && shankWin.meets(ib, ic, segs);
-                Interval reach = cuts ? g.cutting.bound(line) : Interval::empty();
-                if (shank) reach = reach.hull(g.shank.bound(line));
+                // A fixed-axis sweep's line in its frame, made once for the bound and the hits.
+                const MoveSweep::LocalLine cutLine =
+                    cuts && g.cutting.fixed ? g.cutting.fixed->toLocal(line) : MoveSweep::LocalLine{};
+                const MoveSweep::LocalLine shankLine =
+                    shank && g.shank.fixed ? g.shank.fixed->toLocal(line) : MoveSweep::LocalLine{};
+                const auto boundOf = [&](const RegionSweep& sweep, const MoveSweep::LocalLine& frameLine) {
+                    return sweep.fixed ? sweep.fixed->bound(frameLine) : sweep.turning->bound(line);
+                };
+                Interval reach = cuts ? boundOf(g.cutting, cutLine) : Interval::empty();
+                if (shank) reach = reach.hull(boundOf(g.shank, shankLine));
                 if (!reachesMaterial(segs, reach)) continue;
                 ++st.visited;
                 double removed = 0.0;
@@ -242,9 +250,9 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                 };
                 // Applies `apply` to the swept intervals of one region: a fixed-axis sweep's parts,
                 // or a turning sweep's intervals, solved to its tolerance where the dexel has material.
-                auto forEachHit = [&](const RegionSweep& sweep, auto&& apply) {
+                auto forEachHit = [&](const RegionSweep& sweep, const MoveSweep::LocalLine& frameLine, auto&& apply) {
                     if (sweep.fixed) {
-                        const std::size_t n = sweep.fixed->intersectParts(line, parts, makesEnds);
+                        const std::size_t n = sweep.fixed->intersectParts(frameLine, parts, makesEnds);
                         for (std::size_t k = 0; k < n; ++k)
                             if (!parts[k].isEmpty()) apply(parts[k]);
                         return;
@@ -254,13 +262,13 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                     for (const LineHit& hit : sweep.turning->intersect(line, material)) apply(hit);
                 };
                 if (cuts) {
-                    forEachHit(g.cutting, [&](const LineHit& hit) {
+                    forEachHit(g.cutting, cutLine, [&](const LineHit& hit) {
                         watch(hit);
                         removed += subtractHit(tile, local, hit);
                     });
                 }
                 if (shank) {
-                    forEachHit(g.shank, [&](const LineHit& hit) {
+                    forEachHit(g.shank, shankLine, [&](const LineHit& hit) {
                         if (removeShank) {
                             watch(hit);
                             const double met = subtractHit(tile, local, hit);

@@ -200,15 +200,6 @@ struct MoveSweep::Part {
 };
 
 /// A query line in the move's frame, with the per-line quantities every part shares.
-struct MoveSweep::Query {
-    Vec3 o{0.0}, w{0.0};
-    double vShift = 0.0;  ///< world line parameter = local parameter + vShift
-    Vec3 c{0.0};          ///< w x f: normal of the plane through the line spanned by w and f
-    double c2 = 0.0;      ///< |c|^2
-    double co = 0.0;      ///< c . o
-    bool parallel = false;
-};
-
 /// Where the two ends of a part's interval lie (intersectLocal<true>), for hermite.
 struct MoveSweep::EndTrace {
     struct End {
@@ -864,8 +855,8 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
     }
 }
 
-MoveSweep::Query MoveSweep::toLocal(const Line& line) const {
-    Query q;
+MoveSweep::LocalLine MoveSweep::toLocal(const Line& line) const {
+    LocalLine q;
     const Vec3& w = line.dir;
     const Vec3 rel = line.origin - start_;
     // Re-anchor the line at its point nearest the start tip: keeps the local numbers small.
@@ -881,7 +872,7 @@ MoveSweep::Query MoveSweep::toLocal(const Line& line) const {
     return q;
 }
 
-Interval MoveSweep::boxLocal(const Part& part, const Query& q) const {
+Interval MoveSweep::boxLocal(const Part& part, const LocalLine& q) const {
     Interval range = Interval::all();
     for (int i = 0; i < 3; ++i) {
         const double oa = glm::dot(q.o, boxAxes_[i]), wa = glm::dot(q.w, boxAxes_[i]);
@@ -897,7 +888,7 @@ Interval MoveSweep::boxLocal(const Part& part, const Query& q) const {
 }
 
 template <bool kTrace>
-Interval MoveSweep::intersectLocal(const Part& part, const Query& q, [[maybe_unused]] EndTrace* trace) const {
+Interval MoveSweep::intersectLocal(const Part& part, const LocalLine& q, [[maybe_unused]] EndTrace* trace) const {
     const Vec3& o = q.o;
     const Vec3& w = q.w;
     if (kind_ == SweepKind::Static) {
@@ -1079,7 +1070,7 @@ Interval MoveSweep::intersectLocal(const Part& part, const Query& q, [[maybe_unu
     return out;
 }
 
-void MoveSweep::hermite(std::size_t index, const Query& q, Interval local, const EndTrace& trace, unsigned ends,
+void MoveSweep::hermite(std::size_t index, const LocalLine& q, Interval local, const EndTrace& trace, unsigned ends,
                         LineHit& hit) const {
     const Part& part = parts_[index];
     const StaticProfile& profile = staticProfiles_[index];
@@ -1133,8 +1124,9 @@ void MoveSweep::hermite(std::size_t index, const Query& q, Interval local, const
     }
 }
 
-Interval MoveSweep::bound(const Line& line) const {
-    const Query q = toLocal(line);
+Interval MoveSweep::bound(const Line& line) const { return bound(toLocal(line)); }
+
+Interval MoveSweep::bound(const LocalLine& q) const {
     Interval hull;
     for (const Part& part : parts_) {
         Interval range = boxLocal(part, q);
@@ -1163,7 +1155,10 @@ Interval MoveSweep::bound(const Line& line) const {
 }
 
 std::size_t MoveSweep::intersectParts(const Line& line, Interval* out) const {
-    const Query q = toLocal(line);
+    return intersectParts(toLocal(line), out);
+}
+
+std::size_t MoveSweep::intersectParts(const LocalLine& q, Interval* out) const {
     for (std::size_t i = 0; i < parts_.size(); ++i) {
         const Interval iv = intersectLocal<false>(parts_[i], q, nullptr);
         out[i] = iv.isEmpty() ? Interval::empty() : Interval{iv.lo + q.vShift, iv.hi + q.vShift};
@@ -1176,7 +1171,10 @@ std::size_t MoveSweep::intersectParts(const Line& line, LineHit* out) const {
 }
 
 std::size_t MoveSweep::intersectParts(const Line& line, LineHit* out, const EndFilter& wanted) const {
-    const Query q = toLocal(line);
+    return intersectParts(toLocal(line), out, wanted);
+}
+
+std::size_t MoveSweep::intersectParts(const LocalLine& q, LineHit* out, const EndFilter& wanted) const {
     for (std::size_t i = 0; i < parts_.size(); ++i) {
         EndTrace trace;
         const Interval iv = intersectLocal<true>(parts_[i], q, &trace);
@@ -1192,7 +1190,7 @@ std::size_t MoveSweep::intersectParts(const Line& line, LineHit* out, const EndF
 
 Interval MoveSweep::intersect(const Line& line) const {
     if (parts_.size() == 1) {
-        const Query q = toLocal(line);
+        const LocalLine q = toLocal(line);
         const Interval iv = intersectLocal<false>(parts_[0], q, nullptr);
         return iv.isEmpty() ? Interval::empty() : Interval{iv.lo + q.vShift, iv.hi + q.vShift};
     }

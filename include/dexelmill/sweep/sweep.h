@@ -158,25 +158,39 @@ public:
     /// swept axis. Empty when the line surely misses; a few dot products, no root finding.
     Interval bound(const Line& line) const;
 
+    /// @brief A line in the move's frame, re-anchored at its point nearest the start tip. A caller
+    /// that bounds a line and then intersects it makes it once (toLocal) and passes it to both:
+    /// the answers are those of the Line overloads, to the bit.
+    struct LocalLine {
+        Vec3 o{0.0}, w{0.0};
+        double vShift = 0.0;  ///< world line parameter = local parameter + vShift
+        Vec3 c{0.0};          ///< w x f: normal of the plane through the line spanned by w and f
+        double c2 = 0.0;      ///< |c|^2
+        double co = 0.0;      ///< c . o
+        bool parallel = false;
+    };
+    LocalLine toLocal(const Line& line) const;
+    Interval bound(const LocalLine& q) const;
+    std::size_t intersectParts(const LocalLine& q, Interval* out) const;
+    std::size_t intersectParts(const LocalLine& q, LineHit* out, const EndFilter& wanted) const;
+
     /// The precomputed sweep of one convex part (defined in sweep.cpp).
     struct Part;
     /// One convex part as the normals of its static tool need it (defined in sweep.cpp).
     struct StaticProfile;
 
 private:
-    struct Query;
     struct EndTrace;
-    Query toLocal(const Line& line) const;
     /// The part's interval of the query line in local parameters. With kTrace, also where each end
     /// came from (`trace`), for endNormal; without it, `trace` is unused and nothing is recorded.
     template <bool kTrace>
-    Interval intersectLocal(const Part& part, const Query& q, EndTrace* trace) const;
+    Interval intersectLocal(const Part& part, const LocalLine& q, EndTrace* trace) const;
     /// The Hermite data of part `index`'s interval `local` (local line parameters, non-empty), whose
     /// ends intersectLocal<true> traced: the world-frame outward unit normals and sharp marks of
     /// `hit` at the ends in `ends` (kEndLo, kEndHi; its range is the caller's).
-    void hermite(std::size_t index, const Query& q, Interval local, const EndTrace& trace, unsigned ends,
+    void hermite(std::size_t index, const LocalLine& q, Interval local, const EndTrace& trace, unsigned ends,
                  LineHit& hit) const;
-    Interval boxLocal(const Part& part, const Query& q) const;
+    Interval boxLocal(const Part& part, const LocalLine& q) const;
 
     SweepKind kind_ = SweepKind::Static;
     ToolFrame frame_;
