@@ -502,20 +502,12 @@ Simulation runStages(const SimulateOptions& o) {
     }
     report.timingS.mesh = seconds(t);
 
-    // Refine against the exact part. Its crossings come from fixed-axis sweeps only.
-    const auto turning = std::find_if(program.path.moves.begin(), program.path.moves.end(), [&](const Move& m) {
-        return sweepsTurning(m, tools.at(m.tool), o.turnTolerance);
-    });
+    // Refine against the exact part: the sweeps the cutting loop subtracted, moves whose axis
+    // turns within the same tolerance.
     if (o.refineRounds > 0 && !loaded.isBox) {
         ReportWarning w;
         w.where.file = o.stockFile;
         w.message = "--refine needs a box stock: the mesh of a round stock or a stock from a file is not refined";
-        report.warnings.push_back(w);
-    } else if (o.refineRounds > 0 && turning != program.path.moves.end()) {
-        const SourceLocation at = program.path.where(turning->source);
-        ReportWarning w;
-        w.where = {at.file, at.line};
-        w.message = "--refine does not follow moves whose tool axis turns yet (the first here): the mesh is not refined";
         report.warnings.push_back(w);
     } else if (o.refineRounds > 0) {
         t = Clock::now();
@@ -523,6 +515,7 @@ Simulation runStages(const SimulateOptions& o) {
         RefineOptions refine;
         refine.rounds = o.refineRounds;
         refine.tolerance = o.refineTolerance * stock.lattice().h;
+        refine.turnTolerance = o.turnTolerance;
         refine.window = 0.5 * stock.lattice().h;
         refine.memoryBytes = std::max(0.0, double(budget.bytes) - double(residentBytes()));
         RefineStats stats;

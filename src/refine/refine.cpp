@@ -95,7 +95,8 @@ std::vector<double> exactOffsets(const std::vector<detail::Window>& windows, con
     detail::reservePopulated(cut, near);
     for (std::size_t i = 0; i < windows.size(); ++i)
         if (nearSweep[i]) cutIndex.push_back(std::uint32_t(i)), cut.push_back(windows[i]);
-    const std::vector<double> exact = detail::exactCrossings(cut, o.window, stock, path, tools, o.removeShankMaterial);
+    const std::vector<double> exact = detail::exactCrossings(cut, o.window, stock, path, tools, o.removeShankMaterial,
+                                                               o.turnTolerance);
     for (std::size_t k = 0; k < cutIndex.size(); ++k) offsets[cutIndex[k]] = exact[k];
     return offsets;
 }

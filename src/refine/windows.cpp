@@ -154,6 +154,16 @@ struct SweepReach {
     }
 };
 
+/// Subtracts a swept interval r (line parameters) from a window's material.
+void subtractRange(const Interval& r, float reach, Material& m) {
+    if (r.isEmpty() || r.hi < -reach || r.lo > reach) return;
+    // Rounded outwards to float: the sweep is closed, and 1e-8 of a reach is far below its
+    // accuracy.
+    const float lo = std::nextafter(float(std::max(r.lo, -2.0 * reach)), -std::numeric_limits<float>::infinity());
+    const float hi = std::nextafter(float(std::min(r.hi, 2.0 * reach)), std::numeric_limits<float>::infinity());
+    m.subtract(lo, hi);
+}
+
 /// Subtracts one sweep from a window's material, if its cheap bound reaches the window.
 void subtractSweep(const MoveSweep& sweep, const Line& line, float reach, Material& m) {
     const MoveSweep::LocalLine local = sweep.toLocal(line);
@@ -161,15 +171,17 @@ void subtractSweep(const MoveSweep& sweep, const Line& line, float reach, Materi
     if (bound.isEmpty() || bound.hi < -reach || bound.lo > reach) return;
     Interval parts[MoveSweep::kMaxParts];
     const std::size_t n = sweep.intersectParts(local, parts);
-    for (std::size_t k = 0; k < n; ++k) {
-        const Interval& r = parts[k];
-        if (r.isEmpty() || r.hi < -reach || r.lo > reach) continue;
-        // Rounded outwards to float: the sweep is closed, and 1e-8 of a reach is far below its
-        // accuracy.
-        const float lo = std::nextafter(float(std::max(r.lo, -2.0 * reach)), -std::numeric_limits<float>::infinity());
-        const float hi = std::nextafter(float(std::min(r.hi, 2.0 * reach)), std::numeric_limits<float>::infinity());
-        m.subtract(lo, hi);
-    }
+    for (std::size_t k = 0; k < n; ++k) subtractRange(parts[k], reach, m);
+}
+
+/// Subtracts the sweep of a move whose axis turns, solved as the cutting loop solves it: within
+/// its tolerance, where the window still has material.
+void subtractTurning(const TurningSweep& sweep, const Line& line, float reach, Material& m) {
+    const Interval bound = sweep.bound(line);
+    if (bound.isEmpty() || bound.hi < -reach || bound.lo > reach) return;
+    std::vector<Interval> care;
+    for (int i = 0; i < m.count; ++i) care.push_back({double(m.lo[std::size_t(i)]), double(m.hi[std::size_t(i)])});
+    for (const LineHit& hit : sweep.intersect(line, care)) subtractRange(hit.range, reach, m);
 }
 
 }  // namespace
@@ -199,11 +211,16 @@ SweptCells::SweptCells(const Box& stock, const ToolPath& path, const ToolTable& 
         const auto it = tools.find(mv.tool);
         if (it == tools.end()) continue;  // exactCrossings reports it
         const Tool& tool = it->second;
-        // The tool's axis segment at both ends of the move, grown by its widest radius.
-        const Vec3 n = glm::normalize(mv.axis);
+        // The tool's axis segment at both ends of the move, grown by its widest radius; for a move
+        // whose axis turns, a box that holds the axis at every pose (turningMoveBox with no radius).
         Box box;
-        for (const Vec3& tip : {mv.start, mv.end})
-            for (double z : {tool.bottom(), tool.totalLength()}) box.expand(tip + z * n);
+        if (mv.turns()) {
+            box = turningMoveBox(mv, tool.totalLength(), 0.0);
+        } else {
+            const Vec3 n = glm::normalize(mv.axis);
+            for (const Vec3& tip : {mv.start, mv.end})
+                for (double z : {tool.bottom(), tool.totalLength()}) box.expand(tip + z * n);
+        }
         std::array<int, 3> c0{}, c1{};
         if (!grid_.overlap(box, tool.maxRadius() + margin, c0, c1)) continue;
         for (int z = c0[2]; z <= c1[2]; ++z)
@@ -227,7 +244,8 @@ double stockCrossing(const Window& window, double reach, const Box& stock) {
 }
 
 std::vector<double> exactCrossings(const std::vector<Window>& windows, double reach, const Box& stock,
-                                   const ToolPath& path, const ToolTable& tools, bool removeShank) {
+                                   const ToolPath& path, const ToolTable& tools, bool removeShank,
+                                   double turnTolerance) {
     std::vector<double> out;
     reservePopulated(out, windows.size());
     out.assign(windows.size(), std::numeric_limits<double>::quiet_NaN());
@@ -258,7 +276,7 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
             shankReach.resize(m1 - m0);
             tbb::parallel_for(m0, m1, [&](std::size_t i) {
                 const ToolRegions& r = regions.at(path.moves[i].tool);
-                geoms[i - m0] = MoveGeometry(r, path.moves[i]);
+                geoms[i - m0] = MoveGeometry(r, path.moves[i], turnTolerance);
                 cutReach[i - m0] = SweepReach(*r.cutting, path.moves[i]);
                 if (r.shank) shankReach[i - m0] = SweepReach(*r.shank, path.moves[i]);
             });
@@ -296,10 +314,16 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
                             if (w.point[a] < lo || w.point[a] > hi) near = false;
                         }
                         if (!near) continue;
+                        // The cheap reach test holds for a fixed axis only.
                         if (g.cutting.fixed && cutReach[mi].mayReach(w.point, slack))
                             subtractSweep(*g.cutting.fixed, line, freach, m);
-                        if (g.shank.fixed && removeShank && shankReach[mi].mayReach(w.point, slack))
+                        else if (g.cutting.turning)
+                            subtractTurning(*g.cutting.turning, line, freach, m);
+                        if (!removeShank) continue;
+                        if (g.shank.fixed && shankReach[mi].mayReach(w.point, slack))
                             subtractSweep(*g.shank.fixed, line, freach, m);
+                        else if (g.shank.turning)
+                            subtractTurning(*g.shank.turning, line, freach, m);
                     }
                 }
                 runMoves[run].clear();

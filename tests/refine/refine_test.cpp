@@ -4,8 +4,10 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
@@ -265,4 +267,136 @@ TEST_CASE("refine: a vertex whose nearest axis finds no crossing is moved along 
     CHECK(apex.y == 5.0);
     CHECK(apex.z == Approx(5.0).margin(1e-6));
     CHECK(stats.check.ok());
+}
+
+namespace {
+
+/// A ball-end mill (radius r, reaching `length` above its tip) on APT MULTAX moves: the tip runs
+/// straight, the axis turns on the great circle. Membership of the swept part is tested against
+/// `kPoses` poses per move, taken here from the motion law's own formula; between two poses a
+/// tool point moves at most 0.02 mm, so the sampled union lies within 0.02^2 / (8 r) = 2e-5 mm of
+/// the swept one (the ball and the side are smooth; the top rim never reaches the stock).
+struct TurningBall {
+    static constexpr int kPoses = 2000;
+    double r = 3.0, length = 30.0;
+    std::vector<Vec3> tips, axes;
+    /// Per move: its tips' segment, and where its poses start.
+    std::vector<std::array<Vec3, 2>> segments;
+    std::vector<std::size_t> first;
+    std::vector<double> step;  ///< per move: the farthest any tool point goes from one pose to the next
+
+    void move(const Vec3& p0, const Vec3& a0, const Vec3& p1, const Vec3& a1) {
+        segments.push_back({p0, p1});
+        first.push_back(tips.size());
+        const double theta = std::acos(std::clamp(glm::dot(a0, a1), -1.0, 1.0));
+        step.push_back((glm::length(p1 - p0) + theta * std::hypot(length, r)) / kPoses);
+        for (int k = 0; k <= kPoses; ++k) {
+            const double u = double(k) / kPoses;
+            tips.push_back(p0 + u * (p1 - p0));
+            axes.push_back(theta < 1e-12 ? a1
+                                         : (std::sin((1.0 - u) * theta) * a0 + std::sin(u * theta) * a1) /
+                                               std::sin(theta));
+        }
+    }
+    bool inside(const Vec3& p) const {
+        for (std::size_t m = 0; m < segments.size(); ++m)
+            if (insideMove(p, m)) return true;
+        return false;
+    }
+    bool insideMove(const Vec3& p, std::size_t m) const {
+        // Every point of the tool lies within hypot(length, r) of its tip.
+        const Vec3 a = segments[m][0], f = segments[m][1] - a;
+        const double u = glm::dot(f, f) > 0.0 ? std::clamp(glm::dot(p - a, f) / glm::dot(f, f), 0.0, 1.0) : 0.0;
+        if (glm::length(p - (a + u * f)) > std::hypot(length, r)) return false;
+        const std::size_t end = m + 1 < first.size() ? first[m + 1] : tips.size();
+        for (std::size_t k = first[m]; k < end; ++k) {
+            const Vec3 d = p - tips[k];
+            const double s = glm::dot(d, axes[k]);
+            // The tool lies within r of its axis segment, and comes no nearer by more than one
+            // step a pose: poses that cannot reach p yet are skipped.
+            const double gap = glm::length(d - std::clamp(s, 0.0, length) * axes[k]) - r;
+            if (gap > 2.0 * step[m]) {
+                k += std::size_t(gap / step[m]) - 1;
+                continue;
+            }
+            if (s < r) {
+                const Vec3 c = d - r * axes[k];
+                if (glm::dot(c, c) < r * r) return true;
+            } else if (s <= length && glm::dot(d, d) - s * s < r * r) {
+                return true;
+            }
+        }
+        return false;
+    }
+};
+
+}  // namespace
+
+TEST_CASE("refine: moves whose tool axis turns are followed within their tolerance", "[refine][turning]") {
+    const fs::path dir = testing::scratchFolder("dexelmill_test_refine_", "turning");
+    // Two passes 4 mm apart, each turning the axis from 20 degrees one way to 20 the other, 3 mm
+    // deep in the block: the ridge between them is a cusp 0.76 mm high, which the 0.5 mm lattice
+    // sees only where its lines cross it.
+    const double s20 = std::sin(20.0 * M_PI / 180.0), c20 = std::cos(20.0 * M_PI / 180.0);
+    const Vec3 left(-s20, 0.0, c20), right(s20, 0.0, c20);
+    std::ostringstream apt;
+    apt.precision(9);
+    apt << "MULTAX\nCUTTER/6,3\nFROM/0,5,2," << left.x << ",0," << left.z << "\nGOTO/20,5,2," << right.x << ",0,"
+        << right.z << "\nGOTO/20,9,2," << right.x << ",0," << right.z << "\nGOTO/0,9,2," << left.x << ",0," << left.z
+        << "\nFINI\n";
+    const std::string path = (dir / "turning.apt").string();
+    {
+        std::ofstream(path) << apt.str();
+    }
+    TurningBall ball;
+    ball.move(Vec3(0, 5, 2), left, Vec3(20, 5, 2), right);
+    ball.move(Vec3(20, 5, 2), right, Vec3(20, 9, 2), right);
+    ball.move(Vec3(20, 9, 2), right, Vec3(0, 9, 2), left);
+    const Box stock{Vec3(-6.0, 0.0, -2.0), Vec3(26.0, 14.0, 5.0)};
+    auto run = [&](int rounds) {
+        SimulateOptions o;
+        o.inputs = {path};
+        o.stockBox = stock;
+        o.resolution = 0.5;
+        o.refineRounds = rounds;
+        o.threads = 2;
+        return runSimulation(o);
+    };
+    const Simulation plain = run(0);
+    const Simulation refined = run(1);
+    CHECK(refined.report.refineRounds == 1);
+    CHECK(refined.report.refineSplit > 0);
+    CHECK(refined.report.refineSnapped > 0);
+    CHECK(checkMesh(refined.mesh).ok());
+    for (const ReportWarning& w : refined.report.warnings) CHECK(w.message.find("--refine") == std::string::npos);
+
+    // Every vertex refinement moved or made lies within the turn tolerance (1e-4 mm) of the swept
+    // part's surface, plus the oracle's sampling (2e-5 mm): onSurface's cube of half-side delta
+    // sees a plane within delta / sqrt(3) of its centre.
+    const double delta = std::sqrt(3.0) * (kDefaultTurnTolerance + 3e-5);
+    CarvedPart part{stock, {}};
+    testing::Cutter sweep;
+    sweep.inside = [&](const Vec3& p) { return ball.inside(p); };
+    part.cuts.push_back(sweep);
+    REQUIRE(refined.mesh.vertices.size() > plain.mesh.vertices.size());
+    std::size_t off = 0, checked = 0, turningRegion = 0;
+    for (std::size_t v = 0; v < refined.mesh.vertices.size(); ++v) {
+        const Vec3& p = refined.mesh.vertices[v];
+        if (v < plain.mesh.vertices.size() && p == plain.mesh.vertices[v]) continue;
+        ++checked;
+        turningRegion += p.x > 1.0 && p.x < 19.0 && p.z > 2.0 && p.z < 4.9;
+        if (!onSurface(part, p, delta)) {
+            ++off;
+            UNSCOPED_INFO("off the part: (" << p.x << ", " << p.y << ", " << p.z << ")");
+        }
+    }
+    INFO(checked << " vertices moved or made, " << turningRegion << " of them under the turning moves");
+    CHECK(turningRegion > 100);
+    CHECK(off == 0);
+    // The unrefined mesher's vertices are not all that close: the test can tell.
+    bool plainOff = false;
+    for (std::size_t v = 0; v < plain.mesh.vertices.size() && !plainOff; ++v)
+        plainOff = !onSurface(part, plain.mesh.vertices[v], delta);
+    CHECK(plainOff);
+    fs::remove_all(dir);
 }

@@ -19,7 +19,8 @@
 ///
 /// Error bound: every moved or new vertex lies on the exact part's surface to the sweep's
 /// accuracy (1e-6 mm; the windows are cut in double and kept as float offsets within half a
-/// spacing, about 1e-8 mm). Between vertices the surface is still linear, so what remains is the
+/// spacing, about 1e-8 mm), or, where a move whose tool axis turns makes the surface, to that
+/// move's sweep tolerance (RefineOptions::turnTolerance). Between vertices the surface is still linear, so what remains is the
 /// chord error of the finer edges, and features narrower than the edges the last round left.
 ///
 /// Nothing folds: a split is not made where a piece would face away from the triangle it splits or
@@ -33,6 +34,7 @@
 #include "dexelmill/geometry/types.h"
 #include "dexelmill/path/toolpath.h"
 #include "dexelmill/surface/mesh.h"
+#include "dexelmill/sweep/turning.h"
 #include "dexelmill/tool/tool.h"
 
 namespace dexelmill {
@@ -47,6 +49,10 @@ struct RefineOptions {
     double window = 0.5;
     /// Whether the shank's sweep removes material too (CutOptions::removeShankMaterial).
     bool removeShankMaterial = true;
+    /// The tolerance of the sweeps of moves whose axis turns (CutOptions::turnTolerance): those
+    /// moves are cut as the cutting loop cuts them, so a crossing they make lies within this of
+    /// the exact part's surface rather than within the fixed-axis sweep's 1e-6 mm.
+    double turnTolerance = kDefaultTurnTolerance;
     /// The most memory a round may add (bytes; 0: no limit). A round that would need more, by
     /// kRoundBytesPerTriangle, is not started: the mesh keeps the rounds done so far.
     double memoryBytes = 0.0;

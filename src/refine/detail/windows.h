@@ -68,13 +68,15 @@ double stockCrossing(const Window& window, double reach, const Box& stock);
 /// exact part's surface that faces its way, within [-reach, reach]; NaN where there is none. The
 /// part is `stock` (its open interior, or the face a window lies on) minus the closed sweep of
 /// every move's cutting part, and of its shank when `removeShank`: the solids the cutting loop
-/// subtracts, cut in double precision.
-/// Only fixed-axis sweeps are followed: a move the cutting loop sweeps turning (MoveGeometry) is
-/// left out, and the job does not refine a program that has one. The moves are taken in batches, and each batch's sweeps are shared by the windows they reach, so
-/// memory does not grow with the program. Runs in the caller's task arena; the answers do not
+/// subtracts, cut in double precision. A move the cutting loop sweeps turning (MoveGeometry with
+/// `turnTolerance`) is cut as it cuts it, within that tolerance (TurningSweep's guarantees: where
+/// such a move makes the crossing, it lies within the tolerance of the exact part's surface).
+/// The moves are taken in batches, and each batch's sweeps are shared by the windows they reach,
+/// so memory does not grow with the program. Runs in the caller's task arena; the answers do not
 /// depend on the thread count.
 /// @throw Error if a move uses a tool that is not in `tools`.
 std::vector<double> exactCrossings(const std::vector<Window>& windows, double reach, const Box& stock,
-                                   const ToolPath& path, const ToolTable& tools, bool removeShank);
+                                   const ToolPath& path, const ToolTable& tools, bool removeShank,
+                                   double turnTolerance);
 
 }  // namespace dexelmill::detail
