@@ -516,6 +516,7 @@ Simulation runStages(const SimulateOptions& o) {
         refine.rounds = o.refineRounds;
         refine.tolerance = o.refineTolerance * stock.lattice().h;
         refine.turnTolerance = o.turnTolerance;
+        refine.progress = o.progress;
         refine.window = 0.5 * stock.lattice().h;
         refine.memoryBytes = std::max(0.0, double(budget.bytes) - double(residentBytes()));
         RefineStats stats;

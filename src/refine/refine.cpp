@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -77,7 +78,7 @@ std::vector<std::uint32_t> activeTriangles(const Mesh& mesh, const detail::Swept
 /// stock box alone and are answered here; the others are cut by the moves.
 std::vector<double> exactOffsets(const std::vector<detail::Window>& windows, const detail::SweptCells& cells,
                                  const Box& stock, const ToolPath& path, const ToolTable& tools,
-                                 const RefineOptions& o) {
+                                 const RefineOptions& o, const std::string& stage) {
     std::vector<double> offsets;
     std::vector<char> nearSweep;
     detail::reservePopulated(offsets, windows.size());
@@ -95,8 +96,10 @@ std::vector<double> exactOffsets(const std::vector<detail::Window>& windows, con
     detail::reservePopulated(cut, near);
     for (std::size_t i = 0; i < windows.size(); ++i)
         if (nearSweep[i]) cutIndex.push_back(std::uint32_t(i)), cut.push_back(windows[i]);
+    std::function<void(std::size_t, std::size_t)> progress;
+    if (o.progress) progress = [&](std::size_t done, std::size_t total) { o.progress(stage.c_str(), done, total); };
     const std::vector<double> exact = detail::exactCrossings(cut, o.window, stock, path, tools, o.removeShankMaterial,
-                                                               o.turnTolerance);
+                                                               o.turnTolerance, progress);
     for (std::size_t k = 0; k < cutIndex.size(); ++k) offsets[cutIndex[k]] = exact[k];
     return offsets;
 }
@@ -213,7 +216,7 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
             },
             rank);
         st.queries += windows.size();
-        return exactOffsets(windows, cells, stock, path, tools, o);
+        return exactOffsets(windows, cells, stock, path, tools, o, "snap " + std::to_string(rank + 1));
     };
 
     // Along the nearest axis.
@@ -363,7 +366,8 @@ private:
             point = 0.5 * (mesh_.vertices[edges_.ends[e][0]] + mesh_.vertices[edges_.ends[e][1]]);
         });
         stats.queries += windows.size();
-        const std::vector<double> offsets = exactOffsets(windows, cells, stock, path, tools, o_);
+        const std::vector<double> offsets =
+            exactOffsets(windows, cells, stock, path, tools, o_, "refine " + std::to_string(stats.rounds));
 
         for (std::size_t i = 0; i < asked.size(); ++i) {
             const double d = offsets[i];

@@ -245,7 +245,8 @@ double stockCrossing(const Window& window, double reach, const Box& stock) {
 
 std::vector<double> exactCrossings(const std::vector<Window>& windows, double reach, const Box& stock,
                                    const ToolPath& path, const ToolTable& tools, bool removeShank,
-                                   double turnTolerance) {
+                                   double turnTolerance,
+                                   const std::function<void(std::size_t done, std::size_t total)>& progress) {
     std::vector<double> out;
     reservePopulated(out, windows.size());
     out.assign(windows.size(), std::numeric_limits<double>::quiet_NaN());
@@ -260,6 +261,9 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
     std::vector<std::vector<std::uint32_t>> runMoves;
     std::vector<std::size_t> active;
     reservePopulated(geoms, std::min(kBatch, path.moves.size()));
+    const std::size_t chunks = (windows.size() + kChunk - 1) / kChunk;
+    const std::size_t total = chunks * path.moves.size();
+    std::size_t done = 0;
 
     for (std::size_t w0 = 0; w0 < windows.size(); w0 += kChunk) {
         const std::size_t w1 = std::min(windows.size(), w0 + kChunk);
@@ -328,6 +332,8 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
                 }
                 runMoves[run].clear();
             });
+            done += m1 - m0;
+            if (progress) progress(done, total);
         }
         tbb::parallel_for(w0, w1, [&](std::size_t i) { out[i] = nearestCrossing(windows[i], material[i - w0], freach); });
     }

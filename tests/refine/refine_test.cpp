@@ -353,6 +353,8 @@ TEST_CASE("refine: moves whose tool axis turns are followed within their toleran
     ball.move(Vec3(20, 5, 2), right, Vec3(20, 9, 2), right);
     ball.move(Vec3(20, 9, 2), right, Vec3(0, 9, 2), left);
     const Box stock{Vec3(-6.0, 0.0, -2.0), Vec3(26.0, 14.0, 5.0)};
+    // Each stage's last report, in the order the stages came.
+    std::vector<std::pair<std::string, std::pair<std::size_t, std::size_t>>> stages;
     auto run = [&](int rounds) {
         SimulateOptions o;
         o.inputs = {path};
@@ -360,10 +362,23 @@ TEST_CASE("refine: moves whose tool axis turns are followed within their toleran
         o.resolution = 0.5;
         o.refineRounds = rounds;
         o.threads = 2;
+        o.progress = [&](const char* stage, std::size_t done, std::size_t total) {
+            if (stages.empty() || stages.back().first != stage) stages.push_back({stage, {}});
+            stages.back().second = {done, total};
+        };
         return runSimulation(o);
     };
     const Simulation plain = run(0);
+    stages.clear();
     const Simulation refined = run(1);
+    // The refinement's progress: the vertices' windows, then the round's, each to its end.
+    std::map<std::string, std::pair<std::size_t, std::size_t>> last(stages.begin(), stages.end());
+    for (const char* stage : {"snap 1", "refine 1"}) {
+        INFO(stage);
+        REQUIRE(last.count(stage) == 1);
+        CHECK(last[stage].second > 0);
+        CHECK(last[stage].first == last[stage].second);
+    }
     CHECK(refined.report.refineRounds == 1);
     CHECK(refined.report.refineSplit > 0);
     CHECK(refined.report.refineSnapped > 0);

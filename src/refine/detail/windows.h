@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "dexelmill/geometry/types.h"
@@ -75,8 +76,10 @@ double stockCrossing(const Window& window, double reach, const Box& stock);
 /// so memory does not grow with the program. Runs in the caller's task arena; the answers do not
 /// depend on the thread count.
 /// @throw Error if a move uses a tool that is not in `tools`.
+/// `progress(done, total)`, if given, is called from the calling thread after each batch of moves.
 std::vector<double> exactCrossings(const std::vector<Window>& windows, double reach, const Box& stock,
                                    const ToolPath& path, const ToolTable& tools, bool removeShank,
-                                   double turnTolerance);
+                                   double turnTolerance,
+                                   const std::function<void(std::size_t done, std::size_t total)>& progress = {});
 
 }  // namespace dexelmill::detail
