@@ -107,7 +107,7 @@ Vec3 Machine::jointsFromPart(const Vec3& tip, const RotaryAngles& angles) const 
     return x - headOffset(*this, angles);
 }
 
-bool Machine::carriesTip(const RotaryAngles& from, const RotaryAngles& to) const {
+bool Machine::headsStill(const RotaryAngles& from, const RotaryAngles& to) const {
     for (const RotaryAxisSpec& a : axes)
         if (!a.onTable && from[a.letter] != to[a.letter]) return false;
     return true;
@@ -123,10 +123,16 @@ RotaryMotion Machine::motion(const RotaryAngles& from, const RotaryAngles& to, b
         r.toolAxis = Vec3(0.0, 0.0, 1.0);
         return r;
     }
-    if (!carriesTip(from, to)) throw Error("a head axis that turns in identity kinematics is not supported");
+    r.tipCarried = true;
+    if (!headsStill(from, to)) {
+        // A head turns: its pivot travels with the joints, and the tool turns about it.
+        r.headTurns = headTurns(*this, from, to);
+        r.machineStart = jointsFrom;
+        r.machineEnd = jointsTo;
+        return r;
+    }
     // The heads stand still: they fix the tool's axis and the tip's offset from the joints.
     r.toolAxis = headAxis(*this, from);
-    r.tipCarried = true;
     r.machineStart = jointsFrom + headOffset(*this, from);
     r.machineEnd = jointsTo + headOffset(*this, to);
     return r;

@@ -16,6 +16,7 @@ MotionLaw::MotionLaw(const Move& move) : start_(move.start), feed_(move.feed()),
         carried_ = r.tipCarried;
         machineStart_ = r.machineStart;
         machineFeed_ = r.machineEnd - r.machineStart;
+        heads_ = r.headTurns;
         return;
     }
     if (!move.startAxis) return;
@@ -37,9 +38,30 @@ Vec3 MotionLaw::rotate(std::size_t i, double u, const Vec3& v) const {
     return rotateAbout(v, t.direction, t.from + u * (t.to - t.from));
 }
 
+Vec3 MotionLaw::headPoint(double u, Vec3 v) const {
+    for (std::size_t j = heads_.size(); j-- > 0;) {
+        const RotaryTurn& h = heads_[j];
+        v = h.pivot + rotateAbout(v - h.pivot, h.direction, h.from + u * (h.to - h.from));
+    }
+    return v;
+}
+
+// rho_j bounds |z_j - c_j| (the chain of turnBound); |H v| = |z_0| <= rho_0 + |c_0|.
+double MotionLaw::headBounds(double reach, double& turn) const {
+    if (heads_.empty()) return reach;
+    double rho = reach + glm::length(heads_.back().pivot);
+    for (std::size_t j = heads_.size(); j-- > 0;) {
+        if (j + 1 < heads_.size()) rho += glm::length(heads_[j + 1].pivot - heads_[j].pivot);
+        turn += std::abs(heads_[j].to - heads_[j].from) * rho;
+    }
+    return rho + glm::length(heads_.front().pivot);
+}
+
 ToolPose MotionLaw::pose(double u) const {
     ToolPose p;
     Vec3 axis = toolAxis_;
+    for (std::size_t j = heads_.size(); j-- > 0;)
+        axis = rotateAbout(axis, heads_[j].direction, heads_[j].from + u * (heads_[j].to - heads_[j].from));
     for (std::size_t i = turns_.size(); i-- > 0;) axis = rotate(i, u, axis);
     p.axis = glm::normalize(axis);
     if (!carried_) {
@@ -47,17 +69,20 @@ ToolPose MotionLaw::pose(double u) const {
         return p;
     }
     Vec3 x = machineStart_ + u * machineFeed_;
+    if (!heads_.empty()) x += headPoint(u, Vec3(0.0));
     for (std::size_t i = turns_.size(); i-- > 0;) x = turns_[i].pivot + rotate(i, u, x - turns_[i].pivot);
     p.tip = x;
     return p;
 }
 
-// A tool point is y = G(u) x(u) (carried; x the machine-frame point, x' = m1 - m0) or
+// A tool point is y = G(u) (x(u) + H(u) v) (carried; x the machine-frame point, x' = m1 - m0) or
 // y = p(u) + Q(u) v (on the line; v fixed). With y_0 = y and y_{i+1} = T_i^{-1} y_i, so that
 // y_i = T_i y_{i+1}, the derivative of T_i in its angle at y_{i+1} is rate_i d_i x (y_i - c_i),
-// carried to the part frame by R_0 ... R_{i-1}:
-//   y' = sum_i Q_{<i} (rate_i d_i x (y_i - c_i)) + Q x'            (carried)
-//   y' = f + w x (y - p),  w = sum_i rate_i Q_{<i} d_i              (on the line)
+// carried to the part frame by R_0 ... R_{i-1}; the heads' the same on z_0 = H v = y_n - x,
+// z_{j+1} = T_hj^{-1} z_j, carried by the heads before j and then by Q:
+//   y' = sum_i Q_{<i} (rate_i d_i x (y_i - c_i)) + Q (x' + sum_j Q_h<j (rate_j d_j x (z_j - c_j)))
+//                                                                       (carried)
+//   y' = f + w x (y - p),  w = sum_i rate_i Q_{<i} d_i                  (on the line)
 Vec3 MotionLaw::velocity(double u, const Vec3& point) const {
     Vec3 v(0.0);
     if (!carried_) {
@@ -79,13 +104,25 @@ Vec3 MotionLaw::velocity(double u, const Vec3& point) const {
         y = t.pivot + rotateAbout(y - t.pivot, t.direction, -(t.from + u * (t.to - t.from)));
     }
     Vec3 drift = machineFeed_;
+    Vec3 z = y - (machineStart_ + u * machineFeed_);
+    for (std::size_t j = 0; j < heads_.size(); ++j) {
+        const RotaryTurn& h = heads_[j];
+        const double angle = h.from + u * (h.to - h.from);
+        Vec3 term = (h.to - h.from) * glm::cross(h.direction, z - h.pivot);
+        for (std::size_t k = j; k-- > 0;)
+            term = rotateAbout(term, heads_[k].direction, heads_[k].from + u * (heads_[k].to - heads_[k].from));
+        drift += term;
+        z = h.pivot + rotateAbout(z - h.pivot, h.direction, -angle);
+    }
     for (std::size_t j = turns_.size(); j-- > 0;) drift = rotate(j, u, drift);
     return v + drift;
 }
 
 // Carried: |y_i - c_i| = |y_{i+1} - c_i| <= |y_{i+1} - c_{i+1}| + |c_{i+1} - c_i| (T_{i+1} keeps
-// distances to c_{i+1}), and the innermost y_n = x lies within reach of the machine-frame tip,
-// whose distance to c_{n-1} is convex along its segment, so largest at an end.
+// distances to c_{i+1}), and the innermost y_n = x + H v lies within headBounds' reach of the
+// machine-frame point x, whose distance to c_{n-1} is convex along its segment, so largest at an
+// end. The heads' the same: |z_j - c_j| <= |z_{j+1} - c_{j+1}| + |c_{j+1} - c_j|, and the
+// innermost z_m = v has |v - c_{m-1}| <= reach + |c_{m-1}|.
 double MotionLaw::speedBound(double reach) const {
     return glm::length(carried_ ? machineFeed_ : feed_) + turnBound(reach);
 }
@@ -96,9 +133,11 @@ double MotionLaw::turnBound(double reach) const {
         for (const RotaryTurn& t : turns_) v += std::abs(t.to - t.from) * reach;
         return v;
     }
+    const double headReach = headBounds(reach, v);
     if (turns_.empty()) return v;
     const Vec3& last = turns_.back().pivot;
-    double rho = std::max(glm::length(machineStart_ - last), glm::length(machineStart_ + machineFeed_ - last)) + reach;
+    double rho = std::max(glm::length(machineStart_ - last), glm::length(machineStart_ + machineFeed_ - last)) +
+                 headReach;
     for (std::size_t i = turns_.size(); i-- > 0;) {
         if (i + 1 < turns_.size()) rho += glm::length(turns_[i + 1].pivot - turns_[i].pivot);
         v += std::abs(turns_[i].to - turns_[i].from) * rho;

@@ -8,6 +8,7 @@
 #include "dexelmill/error.h"
 #include "dexelmill/machine/kinematics.h"
 #include "dexelmill/path/gcode.h"
+#include "dexelmill/path/motion.h"
 
 using namespace dexelmill;
 using Catch::Matchers::Contains;
@@ -99,6 +100,67 @@ TEST_CASE("machine: the law of a move reproduces the kinematics at every u", "[m
     }
 }
 
+TEST_CASE("machine: a head that turns in identity kinematics swings the tool about its travelling pivot",
+          "[machine]") {
+    // A table C about z and a head B about y pivoting 150 above the tip: a tool point v (relative
+    // to the tip at B = 0) of joints j sits at Rz(-C) (j + P + Ry(B) (v - P)), P = (0, 0, 150).
+    const Machine m = parseMachine(
+        R"({"name": "ht", "axes": [{"letter": "C", "on": "table", "direction": [0, 0, 1]},
+            {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 150]}]})",
+        "ht.json");
+    auto forward = [](const Vec3& j, const Vec3& v, double bDeg, double cDeg) {
+        const double b = bDeg * kDeg, c = -cDeg * kDeg;
+        const Vec3 w = v - Vec3(0, 0, 150);
+        const Vec3 x = j + Vec3(0, 0, 150) + Vec3(std::cos(b) * w.x + std::sin(b) * w.z, w.y, -std::sin(b) * w.x + std::cos(b) * w.z);
+        return Vec3(std::cos(c) * x.x - std::sin(c) * x.y, std::sin(c) * x.x + std::cos(c) * x.y, x.z);
+    };
+    // The table turning too, and the head alone.
+    for (const double c1 : {80.0, 10.0}) {
+        INFO("C from 10 to " << c1);
+        RotaryAngles from, to;
+        from['B'] = -20, from['C'] = 10, to['B'] = 35, to['C'] = c1;
+        const Vec3 j0(3, -7, 12), j1(-9, 4, 5);
+        CHECK_FALSE(m.headsStill(from, to));
+        Move mv;
+        mv.start = m.partFromJoints(j0, from);
+        mv.end = m.partFromJoints(j1, to);
+        mv.rotary = std::make_shared<const RotaryMotion>(m.motion(from, to, false, j0, j1));
+        REQUIRE(mv.rotary->tipCarried);
+        REQUIRE(mv.rotary->headTurns.size() == 1);
+        const MotionLaw law(mv);
+        for (int k = 0; k <= 10; ++k) {
+            const double u = k / 10.0;
+            const double b = -20 + 55 * u, c = 10 + (c1 - 10) * u;
+            const Vec3 j = j0 + u * (j1 - j0);
+            const ToolPose p = law.pose(u);
+            CHECK(distance(p.tip, forward(j, Vec3(0.0), b, c)) < 1e-11);
+            CHECK(distance(p.axis, forward(j, Vec3(0, 0, 1), b, c) - forward(j, Vec3(0.0), b, c)) < 1e-12);
+            if (k == 0) CHECK(distance(p.tip, mv.start) < 1e-11);
+            if (k == 10) CHECK(distance(p.tip, mv.end) < 1e-11);
+            // Tool points up the axis and off it: their velocity against a central difference of
+            // the formula, and the speed bound.
+            if (k == 0 || k == 10) continue;
+            for (const Vec3& v : {Vec3(0, 0, 7), Vec3(3, 0, 0), Vec3(0, -3, 20)}) {
+                const double h = 1e-6;
+                auto at = [&](double w) { return forward(j0 + w * (j1 - j0), v, -20 + 55 * w, 10 + (c1 - 10) * w); };
+                const Vec3 fd = (at(u + h) - at(u - h)) / (2 * h);
+                INFO("u " << u << ", v (" << v.x << ", " << v.y << ", " << v.z << ")");
+                CHECK(distance(law.velocity(u, at(u)), fd) < 1e-6 * (1 + glm::length(fd)));
+                CHECK(glm::length(fd) <= law.speedBound(glm::length(v)));
+            }
+        }
+    }
+    // The G-code reader makes such moves in M429 (the machine starts in identity kinematics).
+    GcodeOptions o;
+    o.machine = m;
+    const Program p = parseGcode("G0 X0 Y0 Z0 B0 C0\nG1 X10 B30 F100\n", "h.ngc", o);
+    REQUIRE(p.path.moves.size() == 1);
+    const Move& g = p.path.moves[0];
+    REQUIRE(g.rotary);
+    CHECK(g.rotary->headTurns.size() == 1);
+    CHECK(distance(g.end, forward(Vec3(10, 0, 0), Vec3(0.0), 30, 0)) < 1e-11);
+}
+
 TEST_CASE("machine: description files and their errors", "[machine]") {
     const Machine m = parseMachine(
         R"({"name": "ht", "tcp_at_start": true, "axes": [{"letter": "C", "on": "table", "direction": [0, 0, 2]},
@@ -113,7 +175,7 @@ TEST_CASE("machine: description files and their errors", "[machine]") {
     // A head B of +90 degrees turns the tool's +z to +x; its pivot 150 above the tip swings the tip.
     CHECK(distance(m.toolAxis(a), Vec3(1, 0, 0)) < 1e-15);
     CHECK(distance(m.partFromJoints(Vec3(0.0), a), Vec3(-150, 0, 150)) < 1e-12);
-    CHECK_FALSE(m.carriesTip(RotaryAngles{}, a));
+    CHECK_FALSE(m.headsStill(RotaryAngles{}, a));
     CHECK_THROWS_WITH(parseMachine("{\n  \"axes\": [\n  {\"letter\": \"A\",, }]}", "bad.json"),
                       Contains("bad.json:3:") && Contains("not valid JSON"));
     CHECK_THROWS_WITH(parseMachine("{}", "x.json"), Contains("x.json") && Contains("\"axes\""));

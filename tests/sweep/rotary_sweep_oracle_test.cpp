@@ -1,8 +1,8 @@
-// Moves of a machine's rotary axes (xyzac-trt, with TCP and in identity kinematics) swept by
-// TurningSweep, against a brute-force oracle that shares no code with it: the poses come from
-// LinuxCNC's xyzac-trt forward kinematics written out here (y-offset 20, z-offset 10), the tools
-// are analytic solids (a cylinder, a ball end), and the speed bound is derived here for this
-// machine alone.
+// Moves of a machine's rotary axes (xyzac-trt, with TCP and in identity kinematics; a head B
+// over a table C in identity kinematics) swept by TurningSweep, against a brute-force oracle that
+// shares no code with it: the poses come from LinuxCNC's xyzac-trt forward kinematics written out
+// here (y-offset 20, z-offset 10), or the head machine's written out here, the tools are analytic
+// solids (a cylinder, a ball end), and the speed bounds are derived here for each machine alone.
 //  Check 1: every output point is within epsilon of some pose: failing needs a certificate, a
 //    branch and bound over u proving the point farther than epsilon + margin from every pose.
 //  Check 2: every line point deeper than epsilon + margin inside a pose found by a dense search
@@ -40,6 +40,22 @@ Vec3 toolAxisOf(double aDeg, double cDeg) {
     return {std::sin(c) * std::sin(a), std::cos(c) * std::sin(a), std::cos(a)};
 }
 
+/// The head machine: a table C about z through the origin, and a head B about y whose pivot is
+/// kPivot above the tip. A tool point v (relative to the tip at B = 0) of joints j sits at
+/// Rz(-C) (j + P + Ry(B) (v - P)), P = (0, 0, kPivot).
+constexpr double kPivot = 40.0;
+const char* const kHeadMachine = R"({"name": "bc-head", "axes": [
+    {"letter": "C", "on": "table", "direction": [0, 0, 1], "pivot": [0, 0, 0]},
+    {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 40]}]})";
+
+Vec3 rotY(const Vec3& v, double b) { return {std::cos(b) * v.x + std::sin(b) * v.z, v.y, -std::sin(b) * v.x + std::cos(b) * v.z}; }
+Vec3 rotZ(const Vec3& v, double c) { return {std::cos(c) * v.x - std::sin(c) * v.y, std::sin(c) * v.x + std::cos(c) * v.y, v.z}; }
+
+Vec3 headForward(const Vec3& j, const Vec3& v, double bDeg, double cDeg) {
+    const Vec3 pivot(0, 0, kPivot);
+    return rotZ(j + pivot + rotY(v - pivot, bDeg * kDeg), -cDeg * kDeg);
+}
+
 /// A flat end mill (ball = false) or ball end mill of radius r and length l, tip at the origin.
 struct Solid {
     double r = 3, l = 20;
@@ -56,8 +72,9 @@ struct Solid {
 
 struct Case {
     Vec3 j0, j1;   ///< joints (identity) or part-frame tips (TCP)
-    double a0, a1, c0, c1;  ///< degrees
+    double a0, a1, c0, c1;  ///< degrees (A, or B on the head machine)
     bool tcp = false;
+    bool head = false;  ///< the head machine (identity kinematics), not xyzac-trt
 };
 
 class RotaryOracle {
@@ -65,7 +82,13 @@ class RotaryOracle {
     RotaryOracle(const Case& c, const Solid& s) : c_(c), s_(s) {
         const double reach = std::hypot(s.l, s.r);
         const double rateA = std::abs(c.a1 - c.a0) * kDeg, rateC = std::abs(c.c1 - c.c0) * kDeg;
-        if (c.tcp) {
+        if (c.head) {
+            // y = Rz(-C) (j + P + Ry(B) (v - P)): |y'| <= |j'| + |B'| |v - P| + |C'| |j + P + Ry(B) (v - P)|,
+            // with |v - P| <= reach + |P| and |j| largest at an end of its segment.
+            const double arm = reach + kPivot;
+            speed_ = glm::length(c.j1 - c.j0) + rateA * arm +
+                     rateC * (std::max(glm::length(c.j0), glm::length(c.j1)) + kPivot + arm);
+        } else if (c.tcp) {
             // y = p + Q v: |y'| <= |p'| + (|A'| + |C'|) |y - p|.
             speed_ = glm::length(c.j1 - c.j0) + (rateA + rateC) * reach;
         } else {
@@ -80,6 +103,11 @@ class RotaryOracle {
     void pose(double u, Vec3& tip, Vec3& axis) const {
         const double a = c_.a0 + u * (c_.a1 - c_.a0), c = c_.c0 + u * (c_.c1 - c_.c0);
         const Vec3 j = c_.j0 + u * (c_.j1 - c_.j0);
+        if (c_.head) {
+            tip = headForward(j, Vec3(0.0), a, c);
+            axis = headForward(j, Vec3(0, 0, 1), a, c) - tip;
+            return;
+        }
         tip = c_.tcp ? j : forward(j, a, c);
         axis = toolAxisOf(a, c);
     }
@@ -136,9 +164,10 @@ class RotaryOracle {
 
 /// The move the interpreter would make: poses at u = 0 and 1 and the machine's law.
 Move machineMove(const Case& c) {
-    const Machine m = loadMachine("xyzac-trt");
+    const Machine m = c.head ? parseMachine(kHeadMachine, "bc-head.json") : loadMachine("xyzac-trt");
+    const char tilt = c.head ? 'B' : 'A';
     RotaryAngles from, to;
-    from['A'] = c.a0, from['C'] = c.c0, to['A'] = c.a1, to['C'] = c.c1;
+    from[tilt] = c.a0, from['C'] = c.c0, to[tilt] = c.a1, to['C'] = c.c1;
     Move mv;
     mv.start = c.tcp ? c.j0 : m.partFromJoints(c.j0, from);
     mv.end = c.tcp ? c.j1 : m.partFromJoints(c.j1, to);
@@ -246,4 +275,32 @@ TEST_CASE("rotary sweep vs oracle: a zero-length move that only tilts A", "[swee
         s.ball = true;
         checkCase(c, s, rng, 30);
     }
+}
+
+TEST_CASE("rotary sweep vs oracle: a head that turns in identity kinematics", "[sweep][turning][machine]") {
+    // The head's pivot travels with the joints and the tool swings about it: the tip runs on an
+    // arc of radius 40 about the moving pivot while the table turns under it.
+    std::mt19937 rng(20261124);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    int checked = 0;
+    for (int i = 0; i < 12; ++i) {
+        Case c;
+        c.head = true;
+        c.j0 = Vec3(15 * uni(rng), 15 * uni(rng), 5 * uni(rng));
+        c.j1 = c.j0 + Vec3(6 * uni(rng), 6 * uni(rng), 2 * uni(rng));
+        c.a0 = 30 * uni(rng);
+        c.a1 = c.a0 + 20 * uni(rng);
+        c.c0 = 90 * uni(rng);
+        c.c1 = c.c0 + (i % 3 == 0 ? 0.0 : 30 * uni(rng));  // a third with the head alone turning
+        Solid s;
+        s.ball = i % 2 == 1;
+        s.r = 2 + uni(rng);
+        s.l = 15 + 5 * uni(rng);
+        const Move mv = machineMove(c);
+        REQUIRE(mv.rotary);
+        CHECK_FALSE(mv.rotary->headTurns.empty());
+        INFO("case " << i);
+        checked += checkCase(c, s, rng, 6);
+    }
+    CHECK(checked > 500);
 }

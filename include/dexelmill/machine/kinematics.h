@@ -66,9 +66,8 @@ struct Machine {
     /// in the part frame; in identity mode it is carried, from joints `jointsFrom` to `jointsTo`.
     RotaryMotion motion(const RotaryAngles& from, const RotaryAngles& to, bool tcp, const Vec3& jointsFrom,
                         const Vec3& jointsTo) const;
-    /// @brief Whether the tip's path in identity mode is one the motion law can carry: no head axis
-    /// turns between `from` and `to` (a head's pivot travels with X Y Z).
-    bool carriesTip(const RotaryAngles& from, const RotaryAngles& to) const;
+    /// @brief Whether no head axis turns between `from` and `to`.
+    bool headsStill(const RotaryAngles& from, const RotaryAngles& to) const;
 };
 
 /// @brief The built-in machines, by name:

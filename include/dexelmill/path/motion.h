@@ -46,6 +46,12 @@ class MotionLaw {
     Vec3 toolAxis_{0.0, 0.0, 1.0};
     bool carried_ = false;
     Vec3 machineStart_{0.0}, machineFeed_{0.0};
+    std::vector<RotaryTurn> heads_;  ///< RotaryMotion::headTurns
+    /// H(u) applied to a point relative to the machine-frame point.
+    Vec3 headPoint(double u, Vec3 v) const;
+    /// For tool points within `reach` of the tip: adds the heads' share of turnBound to `turn`, and
+    /// returns a bound on |H(u) v|, how far the heads put such a point from the machine-frame point.
+    double headBounds(double reach, double& turn) const;
 };
 
 }  // namespace dexelmill

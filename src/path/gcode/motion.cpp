@@ -81,9 +81,6 @@ void Interpreter::emit(const Vec3& target, bool rapid) {
         }
         m.axis = mc.toolAxis(nextAngles_);
         if (nextAngles_ != angles_) {
-            if (!tcp_ && !mc.carriesTip(angles_, nextAngles_))
-                fail(0, "a head axis that turns in identity kinematics (M429) is not supported; use TCP (M428 or G43.4)",
-                     std::string(line_.substr(0, 40)));
             m.startAxis = mc.toolAxis(angles_);
             m.rotary = std::make_shared<const RotaryMotion>(mc.motion(angles_, nextAngles_, tcp_, mpos_, target));
         }
