@@ -248,6 +248,34 @@ TEST_CASE("a move that turns the tool axis cuts what its poses reach, and nothin
         for (const ReportWarning& w : r.warnings) CHECK_THAT(w.message, !Contains("at rapid within reach"));
     }
 
+    // A head that turns in identity kinematics: B turning the tool about a pivot 40 mm above the
+    // tip, joints still, moves the tool relative to the part exactly as a table B about the same
+    // point (in the machine frame) turning the other way does. The two jobs run different laws
+    // (heads carried with the joints, tables carrying the part) to the same swept volume.
+    {
+        const std::string head = write(dir / "head.json", R"({"name": "head", "axes": [
+            {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 40]}]})");
+        const std::string table = write(dir / "table.json", R"({"name": "table", "axes": [
+            {"letter": "B", "on": "table", "direction": [0, 1, 0], "pivot": [0, 0, 40]}]})");
+        auto swing = [&](const std::string& machine, const char* program) {
+            SimulateOptions o;
+            o.inputs = {write(dir / "swing.ngc", program)};
+            o.machine = machine;
+            o.stockBox = Box{Vec3(-30, -10, -5), Vec3(30, 10, 2)};
+            o.defaultTool = flatEndMill(6, {20, 40});
+            o.resolution = 0.5;
+            return runSimulation(o).report;
+        };
+        SimulateReport h, t;
+        REQUIRE_NOTHROW(h = swing(head, "G21 G90\nG0 X0 Y0 Z0 B-30\nG1 B30 F100\nM30\n"));
+        REQUIRE_NOTHROW(t = swing(table, "G21 G90\nG0 X0 Y0 Z0 B30\nG1 B-30 F100\nM30\n"));
+        // The tip swings on an arc of radius 40 from (-20, 0, 5.36) down to the origin and back.
+        CHECK(h.removedVolumeMm3 > 100.0);
+        // Both sweeps lie within the turn tolerance (1e-4 mm) of the same volume, whose surface in
+        // the stock is well under 1,000 mm^2.
+        CHECK(h.removedVolumeMm3 == Approx(t.removedVolumeMm3).margin(0.1));
+        CHECK(h.meshClosed);
+    }
     // Opposite axes: no great circle to turn on.
     {
         SimulateOptions o;
