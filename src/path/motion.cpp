@@ -38,11 +38,13 @@ Vec3 MotionLaw::rotate(std::size_t i, double u, const Vec3& v) const {
     return rotateAbout(v, t.direction, t.from + u * (t.to - t.from));
 }
 
+Vec3 MotionLaw::rotateHead(std::size_t j, double u, const Vec3& v) const {
+    const RotaryTurn& h = heads_[j];
+    return rotateAbout(v, h.direction, h.from + u * (h.to - h.from));
+}
+
 Vec3 MotionLaw::headPoint(double u, Vec3 v) const {
-    for (std::size_t j = heads_.size(); j-- > 0;) {
-        const RotaryTurn& h = heads_[j];
-        v = h.pivot + rotateAbout(v - h.pivot, h.direction, h.from + u * (h.to - h.from));
-    }
+    for (std::size_t j = heads_.size(); j-- > 0;) v = heads_[j].pivot + rotateHead(j, u, v - heads_[j].pivot);
     return v;
 }
 
@@ -60,8 +62,7 @@ double MotionLaw::headBounds(double reach, double& turn) const {
 ToolPose MotionLaw::pose(double u) const {
     ToolPose p;
     Vec3 axis = toolAxis_;
-    for (std::size_t j = heads_.size(); j-- > 0;)
-        axis = rotateAbout(axis, heads_[j].direction, heads_[j].from + u * (heads_[j].to - heads_[j].from));
+    for (std::size_t j = heads_.size(); j-- > 0;) axis = rotateHead(j, u, axis);
     for (std::size_t i = turns_.size(); i-- > 0;) axis = rotate(i, u, axis);
     p.axis = glm::normalize(axis);
     if (!carried_) {
@@ -107,12 +108,11 @@ Vec3 MotionLaw::velocity(double u, const Vec3& point) const {
     Vec3 z = y - (machineStart_ + u * machineFeed_);
     for (std::size_t j = 0; j < heads_.size(); ++j) {
         const RotaryTurn& h = heads_[j];
-        const double angle = h.from + u * (h.to - h.from);
         Vec3 term = (h.to - h.from) * glm::cross(h.direction, z - h.pivot);
-        for (std::size_t k = j; k-- > 0;)
-            term = rotateAbout(term, heads_[k].direction, heads_[k].from + u * (heads_[k].to - heads_[k].from));
+        for (std::size_t k = j; k-- > 0;) term = rotateHead(k, u, term);
         drift += term;
-        z = h.pivot + rotateAbout(z - h.pivot, h.direction, -angle);
+        // z_{j+1} = c_j + R_j^T (z_j - c_j): the rotation by minus the angle.
+        z = h.pivot + rotateAbout(z - h.pivot, h.direction, -(h.from + u * (h.to - h.from)));
     }
     for (std::size_t j = turns_.size(); j-- > 0;) drift = rotate(j, u, drift);
     return v + drift;

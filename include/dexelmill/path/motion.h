@@ -47,6 +47,8 @@ class MotionLaw {
     bool carried_ = false;
     Vec3 machineStart_{0.0}, machineFeed_{0.0};
     std::vector<RotaryTurn> heads_;  ///< RotaryMotion::headTurns
+    /// Head turn j's rotation at u, applied to a vector.
+    Vec3 rotateHead(std::size_t j, double u, const Vec3& v) const;
     /// H(u) applied to a point relative to the machine-frame point.
     Vec3 headPoint(double u, Vec3 v) const;
     /// For tool points within `reach` of the tip: adds the heads' share of turnBound to `turn`, and
