@@ -247,14 +247,6 @@ TriangleCounts trianglePass(const Mesh& mesh, const std::vector<glm::vec3>& norm
         });
 }
 
-/// The unit normal of vertex v from its star (zero without area around it).
-glm::vec3 starNormal(const Mesh& mesh, const Stars& stars, std::uint32_t v) {
-    Vec3 sum(0.0);
-    for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i) sum += mesh.areaVector(stars.corners[i] / 3);
-    const double l = glm::length(sum);
-    return l > 0.0 ? glm::vec3(sum / l) : glm::vec3(0.0f);
-}
-
 /// Whether triangle t folds, nearly folds or is degenerate (the test of trianglePass).
 /// The sums of trianglePass over some triangles, in their order.
 TriangleCounts triangleSums(const Mesh& mesh, const std::vector<glm::vec3>& normal, const Vec3& centre,
@@ -351,8 +343,8 @@ void tryCandidates(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& norma
         const std::vector<std::uint32_t> ring = trianglesAround(stars, neighbours);
         auto place = [&](const Vec3& x) {
             mesh.vertices[v] = x;
-            normal[v] = starNormal(mesh, stars, v);
-            for (std::uint32_t w : neighbours) normal[w] = starNormal(mesh, stars, w);
+            normal[v] = checkNormal(mesh, stars, v);
+            for (std::uint32_t w : neighbours) normal[w] = checkNormal(mesh, stars, w);
             std::size_t n = 0;
             for (std::uint32_t t : ring) n += suspect(mesh, normal, t, repair.minCosine);
             return n;
@@ -400,7 +392,7 @@ void pullBack(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& normal, st
         const std::vector<std::uint32_t> touched = verticesOf(mesh, trianglesAround(stars, changed));
         for (std::uint32_t w : touched) {
             log.normal(w, normal[w]);
-            normal[w] = starNormal(mesh, stars, w);
+            normal[w] = checkNormal(mesh, stars, w);
         }
         // The triangles whose test may have changed: those around any touched vertex; and the
         // suspects no pull touched, which must not be forgotten.
