@@ -122,10 +122,12 @@ static_assert(LeafT::DIM == kLeafDim, "FloatTree leaves must be 8^3");
 inline int blockOf(int i) { return (i >= 0 ? i : i - (kLeafDim - 1)) / kLeafDim; }
 
 /// For the `count` lattice points t = (i0 + m + 1/2) h, m = 0..count-1, along one dexel: whether
-/// each is in material and its distance to the nearest segment endpoint (infinity if the dexel is
-/// empty). Endpoints alternate lo, hi, lo, hi ...: a point is in material when an odd number of
-/// them lie at or below it.
-inline void scanDexel(const SegmentSpan& segs, int i0, double h, double* dist, bool* inside,
+/// each is in material and, if some segment endpoint lies within `reach` of one of them, each
+/// one's distance to the nearest endpoint (infinity if the dexel is empty). Returns whether it
+/// did: with no endpoint that close every distance exceeds `reach`, the points all lie on the
+/// same side, and `dist` is left alone. Endpoints alternate lo, hi, lo, hi ...: a point is in
+/// material when an odd number of them lie at or below it.
+inline bool scanDexel(const SegmentSpan& segs, int i0, double h, double reach, double* dist, bool* inside,
                       int count = kLeafDim) {
     const std::size_t ends = 2 * segs.size;
     auto endpoint = [&](std::size_t k) -> double {
@@ -140,6 +142,12 @@ inline void scanDexel(const SegmentSpan& segs, int i0, double h, double* dist, b
         if (endpoint(mid) <= t0) lo = mid + 1; else hi = mid;
     }
     std::size_t k = lo;
+    // The same comparisons as the loop below makes for its first and last points.
+    const double tLast = (i0 + count - 1 + 0.5) * h;
+    if ((k == 0 || t0 - endpoint(k - 1) > reach) && (k == ends || endpoint(k) - tLast > reach)) {
+        std::fill(inside, inside + count, (k & 1) != 0);
+        return false;
+    }
     constexpr double inf = std::numeric_limits<double>::infinity();
     for (int m = 0; m < count; ++m) {
         const double t = (i0 + m + 0.5) * h;
@@ -149,6 +157,7 @@ inline void scanDexel(const SegmentSpan& segs, int i0, double h, double* dist, b
         const double above = k < ends ? endpoint(k) - t : inf;
         dist[m] = std::min(below, above);
     }
+    return true;
 }
 
 /// The rebuild of one stock; see rebuildLevelSet.
@@ -363,8 +372,8 @@ private:
                     SegmentSpan segs;
                     if (ib >= 0 && ib < fam.nb() && ic >= 0 && ic < fam.nc())
                         segs = fam.segments(ib, ic);
-                    scanDexel(segs, o[a] - ring, h_, dist, in, kLeafDim + 2 * ring);
-                    const bool inner = u >= 0 && u < kLeafDim && v >= 0 && v < kLeafDim;
+                    const bool near = scanDexel(segs, o[a] - ring, h_, cutoff_, dist, in, kLeafDim + 2 * ring);
+                    const bool inner = near && u >= 0 && u < kLeafDim && v >= 0 && v < kLeafDim;
                     int q[3];
                     q[b] = u;
                     q[c] = v;
