@@ -289,15 +289,40 @@ private:
     /// blocks below one (a cell at a block's upper faces reaches into the next block). Cells with
     /// all corners in tiles have one sign: the flood fill puts leaves between inside and outside.
     void findBlocks() {
-        std::vector<std::uint64_t> keys;
-        detail::reservePopulated(keys, 8 * grid_.tree().leafCount());
+        // A bit per block position in the leaves' box, grown by one block downwards, read back
+        // in the keys' order (x, then y, then z) instead of sorting eight keys per leaf. The box
+        // lies within the lattice and its band: at most a bit per 512 lattice points.
+        std::vector<Coord> origins;
+        origins.reserve(grid_.tree().leafCount());
+        Coord lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
         for (auto leaf = grid_.tree().cbeginLeaf(); leaf; ++leaf) {
-            const Coord o = leaf->origin();
-            for (int d = 0; d < 8; ++d)
-                keys.push_back(blockKey(o.offsetBy(-kDim * (d & 1), -kDim * ((d >> 1) & 1), -kDim * ((d >> 2) & 1))));
+            origins.push_back(leaf->origin());
+            lo.minComponent(leaf->origin());
+            hi.maxComponent(leaf->origin());
         }
-        std::sort(keys.begin(), keys.end());
-        keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+        std::vector<std::uint64_t> keys;
+        if (!origins.empty()) {
+            lo.offset(-kDim);
+            const std::int64_t nx = (hi.x() - lo.x()) / kDim + 1, ny = (hi.y() - lo.y()) / kDim + 1,
+                               nz = (hi.z() - lo.z()) / kDim + 1;
+            std::vector<std::uint64_t> bits(std::size_t((nx * ny * nz + 63) / 64), 0);
+            std::size_t marked = 0;
+            for (const Coord& o : origins)
+                for (int d = 0; d < 8; ++d) {
+                    const Coord c = o.offsetBy(-kDim * (d & 1), -kDim * ((d >> 1) & 1), -kDim * ((d >> 2) & 1));
+                    const std::int64_t b = ((c.x() - lo.x()) / kDim * ny + (c.y() - lo.y()) / kDim) * nz + (c.z() - lo.z()) / kDim;
+                    const std::uint64_t mask = std::uint64_t(1) << (b % 64);
+                    marked += (bits[std::size_t(b / 64)] & mask) == 0;
+                    bits[std::size_t(b / 64)] |= mask;
+                }
+            detail::reservePopulated(keys, marked);
+            for (std::size_t w = 0; w < bits.size(); ++w)
+                for (std::uint64_t word = bits[w]; word != 0; word &= word - 1) {
+                    const std::int64_t b = std::int64_t(64 * w) + __builtin_ctzll(word);
+                    keys.push_back(blockKey(Coord(lo.x() + kDim * int(b / (ny * nz)), lo.y() + kDim * int(b / nz % ny),
+                                                  lo.z() + kDim * int(b % nz))));
+                }
+        }
         detail::reservePopulated(blocks_, keys.size());
         blocks_.resize(keys.size());
         for (std::size_t i = 0; i < keys.size(); ++i) blocks_[i].origin = blockOrigin(keys[i]);
