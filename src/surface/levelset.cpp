@@ -360,6 +360,7 @@ private:
         bool in[kPad];
         // LeafNode offset of (x, y, z) within the leaf: x * 64 + y * 8 + z.
         constexpr int kStride[3] = {kLeafDim * kLeafDim, kLeafDim, 1};
+        constexpr int kPadStride[3] = {kPad * kPad, kPad, 1};
         // The padding ring is needed only to see the neighbours across a missing axis.
         const int ring = axisCount_ < 3 ? 1 : 0;
         const double minDistance = kMinDistance * h_;
@@ -373,19 +374,17 @@ private:
                     if (ib >= 0 && ib < fam.nb() && ic >= 0 && ic < fam.nc())
                         segs = fam.segments(ib, ic);
                     const bool near = scanDexel(segs, o[a] - ring, h_, cutoff_, dist, in, kLeafDim + 2 * ring);
-                    const bool inner = near && u >= 0 && u < kLeafDim && v >= 0 && v < kLeafDim;
-                    int q[3];
-                    q[b] = u;
-                    q[c] = v;
-                    for (int m = -ring; m < kLeafDim + ring; ++m) {
-                        q[a] = m;
-                        const int pi = padIndex(q[0], q[1], q[2]);
-                        votes[pi] += in[m + ring];
-                        if (ai == 0) first[pi] = in[m + ring];
-                        if (!inner || m < 0 || m >= kLeafDim) continue;
-                        const int off = u * kStride[b] + v * kStride[c] + m * kStride[a];
+                    // The dexel's points m = -ring .. kLeafDim + ring - 1 step by the axis'
+                    // stride from their start, in the padded block and in the leaf.
+                    const int padStart = padIndex(0, 0, 0) + u * kPadStride[b] + v * kPadStride[c];
+                    for (int m = -ring; m < kLeafDim + ring; ++m) votes[padStart + m * kPadStride[a]] += in[m + ring];
+                    if (ai == 0)
+                        for (int m = -ring; m < kLeafDim + ring; ++m) first[padStart + m * kPadStride[a]] = in[m + ring];
+                    if (!near || u < 0 || u >= kLeafDim || v < 0 || v >= kLeafDim) continue;
+                    const int start = u * kStride[b] + v * kStride[c];
+                    for (int m = 0; m < kLeafDim; ++m) {
                         const double d = std::max(dist[m + ring], minDistance);
-                        if (d <= cutoff_) invSq[off] += float(1.0 / (d * d));
+                        if (d <= cutoff_) invSq[start + m * kStride[a]] += float(1.0 / (d * d));
                     }
                 }
             }
@@ -419,18 +418,18 @@ private:
         float* values = leaf->buffer().data();
         bool any = false;
         const float w2 = float(1.0 / (width_ * width_));
-        for (int off = 0; off < kSize; ++off) {
-            const int x = off >> (2 * kLeafLog2), y = (off >> kLeafLog2) & (kLeafDim - 1), z = off & (kLeafDim - 1);
-            const bool inside = insideAt(padIndex(x, y, z));
-            const float s = inside ? -1.0f : 1.0f;
-            if (invSq[off] > w2) {
-                values[off] = s / std::sqrt(invSq[off]);
-                leaf->setActiveState(openvdb::Index(off), true);
-                any = true;
-            } else {
-                values[off] = s * background;
-            }
-        }
+        for (int x = 0, off = 0; x < kLeafDim; ++x)
+            for (int y = 0; y < kLeafDim; ++y)
+                for (int z = 0, pi = padIndex(x, y, 0); z < kLeafDim; ++z, ++off, ++pi) {
+                    const float s = insideAt(pi) ? -1.0f : 1.0f;
+                    if (invSq[off] > w2) {
+                        values[off] = s / std::sqrt(invSq[off]);
+                        leaf->setActiveState(openvdb::Index(off), true);
+                        any = true;
+                    } else {
+                        values[off] = s * background;
+                    }
+                }
         if (!any) {
             delete leaf;
             return nullptr;
