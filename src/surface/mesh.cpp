@@ -4,11 +4,13 @@
 #include <cmath>
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/task_arena.h>
 
 #include "memory/pages.h"
+#include "surface/stars.h"
 
 namespace dexelmill {
 
@@ -44,45 +46,8 @@ double meshVolume(const Mesh& mesh) {
 
 namespace {
 
-/// Every vertex's star: the triangle corners at it, as 3 t + k for corner k of triangle t, grouped
-/// by vertex (offsets into `corners`) and sorted within each vertex, so that sums over a star come
-/// out the same for any thread count.
-struct Stars {
-    std::vector<std::uint32_t> offset;
-    std::vector<std::uint32_t> corners;
-};
-
-Stars buildStars(const Mesh& mesh) {
-    const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
-    Stars s;
-    detail::reservePopulated(s.offset, nv + 1);
-    detail::reservePopulated(s.corners, 3 * nt);
-    s.offset.assign(nv + 1, 0);
-    // A counting sort in triangle order, split by vertex range: each part scans every triangle
-    // and takes the corners of its own vertices. Each star comes out sorted, with no atomics,
-    // the same for any thread count. (Atomic counters over all vertices, then a sort of each
-    // star, took twice as long on two threads: the scans are sequential, the counters not.)
-    const std::size_t parts = std::size_t(std::max(1, tbb::this_task_arena::max_concurrency()));
-    auto partStart = [&](std::size_t p) { return std::uint32_t(nv * p / parts); };
-    tbb::parallel_for(std::size_t(0), parts, [&](std::size_t p) {
-        const std::uint32_t lo = partStart(p), hi = partStart(p + 1);
-        for (const Mesh::Triangle& t : mesh.triangles)
-            for (std::uint32_t v : t)
-                if (v >= lo && v < hi) ++s.offset[v + 1];
-    });
-    for (std::size_t v = 0; v < nv; ++v) s.offset[v + 1] += s.offset[v];
-    s.corners.resize(s.offset[nv]);
-    tbb::parallel_for(std::size_t(0), parts, [&](std::size_t p) {
-        const std::uint32_t lo = partStart(p), hi = partStart(p + 1);
-        std::vector<std::uint32_t> cursor(s.offset.begin() + lo, s.offset.begin() + hi);
-        for (std::size_t t = 0; t < nt; ++t)
-            for (int k = 0; k < 3; ++k) {
-                const std::uint32_t v = mesh.triangles[t][std::size_t(k)];
-                if (v >= lo && v < hi) s.corners[cursor[v - lo]++] = std::uint32_t(3 * t + std::size_t(k));
-            }
-    });
-    return s;
-}
+using detail::StarChunks;
+using detail::Stars;
 
 /// The area vector of corner `corner` (3 t + k) of the star of the vertex at pv: the same for
 /// each corner of triangle t, taken from this one.
@@ -100,10 +65,11 @@ inline glm::vec3 unitNormal(const Vec3& sum) {
 }
 
 /// Vertex v's normal as the check takes it: its star's area vectors summed in star order.
-glm::vec3 checkNormal(const Mesh& mesh, const Stars& stars, std::size_t v) {
+template <class StarsT>
+glm::vec3 checkNormal(const Mesh& mesh, const StarsT& stars, std::uint32_t v) {
     Vec3 sum(0.0);
     const Vec3& pv = mesh.vertices[v];
-    for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i) sum += cornerArea(mesh, stars.corners[i], pv);
+    for (const std::uint32_t* c = stars.begin(v); c != stars.end(v); ++c) sum += cornerArea(mesh, *c, pv);
     return unitNormal(sum);
 }
 
@@ -112,80 +78,117 @@ struct VertexCounts {
     std::size_t edges = 0, boundary = 0, nonManifold = 0, misoriented = 0, unused = 0;
 };
 
-/// One pass over the vertices' stars: the edge counts, and each vertex's unit normal (the
-/// area-weighted mean direction of its triangles; zero without area around it).
+/// One vertex's part of the pass over the stars: its normal (the area-weighted mean direction
+/// of its triangles; zero without area around it) and its edges' counts.
 ///
 /// Every edge at a vertex v shows in v's own star: triangle (v, a, b) walks v -> a and b -> v.
-/// Per vertex, the edges to each neighbour w > v are counted by direction (each undirected edge
-/// once, at its smaller end): used once it is a boundary edge; more than twice, non-manifold;
-/// twice in one direction, misoriented.
-VertexCounts vertexPass(const Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& normal) {
+/// The edges to each neighbour w > v are counted by direction (each undirected edge once, at its
+/// smaller end): used once it is a boundary edge; more than twice, non-manifold; twice in one
+/// direction, misoriented.
+class VertexVisit {
+public:
+    glm::vec3 operator()(const Mesh& mesh, std::uint32_t v, const std::uint32_t* first, const std::uint32_t* last,
+                         VertexCounts& c) {
+        constexpr int kNext[3] = {1, 2, 0}, kPrev[3] = {2, 0, 1};
+        const std::size_t n = std::size_t(last - first);
+        c.unused += n == 0;
+        std::uint32_t* outs = outStack_;
+        std::uint32_t* ins = inStack_;
+        if (n > kStack) {
+            outHeap_.resize(n);
+            inHeap_.resize(n);
+            outs = outHeap_.data();
+            ins = inHeap_.data();
+        }
+        std::size_t nOut = 0, nIn = 0;
+        Vec3 sum(0.0);
+        const Vec3& pv = mesh.vertices[v];
+        for (const std::uint32_t* i = first; i != last; ++i) {
+            const std::uint32_t corner = *i;
+            const Mesh::Triangle& t = mesh.triangles[corner / 3];
+            const int k = int(corner % 3);
+            const std::uint32_t out = t[kNext[k]], in = t[kPrev[k]];
+            sum += cornerArea(mesh, corner, pv);
+            if (out > v) outs[nOut++] = out;
+            if (in > v) ins[nIn++] = in;
+        }
+        // Each distinct neighbour once: its uses in each direction.
+        auto count = [](const std::uint32_t* list, std::size_t m, std::uint32_t w) {
+            std::size_t k = 0;
+            for (std::size_t i = 0; i < m; ++i) k += list[i] == w;
+            return k;
+        };
+        auto seenBefore = [](const std::uint32_t* list, std::size_t m, std::uint32_t w) {
+            for (std::size_t i = 0; i < m; ++i)
+                if (list[i] == w) return true;
+            return false;
+        };
+        auto tally = [&](std::size_t forward, std::size_t backward) {
+            ++c.edges;
+            const std::size_t uses = forward + backward;
+            if (uses == 1) ++c.boundary;
+            else if (uses > 2) ++c.nonManifold;
+            else if (forward != 1) ++c.misoriented;
+        };
+        for (std::size_t i = 0; i < nOut; ++i)
+            if (!seenBefore(outs, i, outs[i])) tally(count(outs, nOut, outs[i]), count(ins, nIn, outs[i]));
+        for (std::size_t i = 0; i < nIn; ++i)
+            if (!seenBefore(ins, i, ins[i]) && !seenBefore(outs, nOut, ins[i])) tally(0, count(ins, nIn, ins[i]));
+        return unitNormal(sum);
+    }
+
+private:
+    // The neighbours w > v reached by an edge leaving v (outs) and entering it (ins): on the
+    // stack for ordinary stars.
+    static constexpr std::size_t kStack = 32;
+    std::uint32_t outStack_[kStack], inStack_[kStack];
+    std::vector<std::uint32_t> outHeap_, inHeap_;
+};
+
+VertexCounts addCounts(VertexCounts a, const VertexCounts& b) {
+    a.edges += b.edges, a.boundary += b.boundary, a.nonManifold += b.nonManifold;
+    a.misoriented += b.misoriented, a.unused += b.unused;
+    return a;
+}
+
+/// One pass over the vertices' stars, chunk by chunk where the stars come so: every vertex's
+/// normal and the edge counts (VertexVisit).
+VertexCounts vertexPass(const Mesh& mesh, const StarChunks& stars, std::vector<glm::vec3>& normal) {
     const std::size_t nv = mesh.vertices.size();
     detail::reservePopulated(normal, nv);
-    normal.assign(nv, glm::vec3(0.0f));
+    normal.resize(nv);
+    if (!stars.chunked())
+        return tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, nv, 4096), VertexCounts{},
+            [&](const tbb::blocked_range<std::size_t>& rv, VertexCounts c) {
+                VertexVisit visit;
+                const Stars& all = stars.whole();
+                for (std::size_t v = rv.begin(); v < rv.end(); ++v) {
+                    const auto w = std::uint32_t(v);
+                    normal[v] = visit(mesh, w, all.begin(w), all.end(w), c);
+                }
+                return c;
+            },
+            addCounts);
+    struct Chunk {
+        Stars stars;
+        std::vector<std::uint64_t> scratch;
+    };
+    tbb::enumerable_thread_specific<Chunk> chunk;
     return tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, nv, 4096), VertexCounts{},
-        [&](const tbb::blocked_range<std::size_t>& rv, VertexCounts c) {
-            constexpr int kNext[3] = {1, 2, 0}, kPrev[3] = {2, 0, 1};
-            // The neighbours w > v reached by an edge leaving v (outs) and entering it (ins): on
-            // the stack for ordinary stars.
-            constexpr std::size_t kStack = 32;
-            std::uint32_t outStack[kStack], inStack[kStack];
-            std::vector<std::uint32_t> outHeap, inHeap;
-            for (std::size_t v = rv.begin(); v < rv.end(); ++v) {
-                const std::uint32_t lo = stars.offset[v], hi = stars.offset[v + 1];
-                c.unused += lo == hi;
-                std::uint32_t* outs = outStack;
-                std::uint32_t* ins = inStack;
-                if (std::size_t(hi - lo) > kStack) {
-                    outHeap.resize(hi - lo);
-                    inHeap.resize(hi - lo);
-                    outs = outHeap.data();
-                    ins = inHeap.data();
-                }
-                std::size_t nOut = 0, nIn = 0;
-                Vec3 sum(0.0);
-                const Vec3& pv = mesh.vertices[v];
-                for (std::uint32_t i = lo; i < hi; ++i) {
-                    const std::uint32_t corner = stars.corners[i];
-                    const Mesh::Triangle& t = mesh.triangles[corner / 3];
-                    const int k = int(corner % 3);
-                    const std::uint32_t out = t[kNext[k]], in = t[kPrev[k]];
-                    sum += cornerArea(mesh, corner, pv);
-                    if (out > v) outs[nOut++] = out;
-                    if (in > v) ins[nIn++] = in;
-                }
-                normal[v] = unitNormal(sum);
-                // Each distinct neighbour once: its uses in each direction.
-                auto count = [](const std::uint32_t* list, std::size_t n, std::uint32_t w) {
-                    std::size_t k = 0;
-                    for (std::size_t i = 0; i < n; ++i) k += list[i] == w;
-                    return k;
-                };
-                auto seenBefore = [](const std::uint32_t* list, std::size_t n, std::uint32_t w) {
-                    for (std::size_t i = 0; i < n; ++i)
-                        if (list[i] == w) return true;
-                    return false;
-                };
-                auto tally = [&](std::size_t forward, std::size_t backward) {
-                    ++c.edges;
-                    const std::size_t uses = forward + backward;
-                    if (uses == 1) ++c.boundary;
-                    else if (uses > 2) ++c.nonManifold;
-                    else if (forward != 1) ++c.misoriented;
-                };
-                for (std::size_t i = 0; i < nOut; ++i)
-                    if (!seenBefore(outs, i, outs[i])) tally(count(outs, nOut, outs[i]), count(ins, nIn, outs[i]));
-                for (std::size_t i = 0; i < nIn; ++i)
-                    if (!seenBefore(ins, i, ins[i]) && !seenBefore(outs, nOut, ins[i])) tally(0, count(ins, nIn, ins[i]));
+        tbb::blocked_range<std::size_t>(0, stars.chunkCount(), 1), VertexCounts{},
+        [&](const tbb::blocked_range<std::size_t>& rc, VertexCounts c) {
+            VertexVisit visit;
+            Chunk& mine = chunk.local();
+            const Stars& local = mine.stars;
+            for (std::size_t k = rc.begin(); k < rc.end(); ++k) {
+                stars.build(k, mine.stars, mine.scratch);
+                const auto end = std::uint32_t(local.first + local.offset.size() - 1);
+                for (std::uint32_t v = local.first; v < end; ++v) normal[v] = visit(mesh, v, local.begin(v), local.end(v), c);
             }
             return c;
         },
-        [](VertexCounts a, const VertexCounts& b) {
-            a.edges += b.edges, a.boundary += b.boundary, a.nonManifold += b.nonManifold;
-            a.misoriented += b.misoriented, a.unused += b.unused;
-            return a;
-        });
+        addCounts);
 }
 
 /// What the pass over the triangles finds.
@@ -286,19 +289,19 @@ std::vector<std::uint32_t> verticesOf(const Mesh& mesh, const std::vector<std::u
 }
 
 /// The triangles around any of some vertices, each once.
-std::vector<std::uint32_t> trianglesAround(const Stars& stars, const std::vector<std::uint32_t>& vertices) {
+std::vector<std::uint32_t> trianglesAround(const StarChunks& stars, const std::vector<std::uint32_t>& vertices) {
     std::vector<std::uint32_t> out;
     for (std::uint32_t v : vertices)
-        for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i) out.push_back(stars.corners[i] / 3);
+        for (const std::uint32_t* c = stars.begin(v); c != stars.end(v); ++c) out.push_back(*c / 3);
     sortUnique(out);
     return out;
 }
 
 /// The vertices joined to v by an edge, each once, into `out`.
-void neighboursOf(const Mesh& mesh, const Stars& stars, std::uint32_t v, std::vector<std::uint32_t>& out) {
+void neighboursOf(const Mesh& mesh, const StarChunks& stars, std::uint32_t v, std::vector<std::uint32_t>& out) {
     out.clear();
-    for (std::uint32_t i = stars.offset[v]; i < stars.offset[v + 1]; ++i)
-        for (std::uint32_t w : mesh.triangles[stars.corners[i] / 3])
+    for (const std::uint32_t* c = stars.begin(v); c != stars.end(v); ++c)
+        for (std::uint32_t w : mesh.triangles[*c / 3])
             if (w != v) out.push_back(w);
     sortUnique(out);
 }
@@ -330,7 +333,7 @@ void keepSuspects(const Mesh& mesh, const std::vector<glm::vec3>& normal, double
 /// The last resort of pullBack: each vertex of a triangle still suspect tries the candidate
 /// positions it is offered, and keeps the one that leaves the fewest suspect triangles around it
 /// and its neighbours (their normals follow the move).
-void tryCandidates(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& normal,
+void tryCandidates(Mesh& mesh, const StarChunks& stars, std::vector<glm::vec3>& normal,
                    std::vector<std::uint32_t>& suspects, const FoldRepair& repair, RepairLog& log) {
     std::vector<std::uint32_t> neighbours;
     std::vector<Vec3> offered;
@@ -375,7 +378,7 @@ void tryCandidates(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& norma
 /// The local repair of repairAndCheckMesh: rounds of pulls on the suspects' vertices, testing again
 /// only the triangles around moved vertices and their neighbours, then the candidates' last
 /// resort. Leaves in `suspects` the triangles that are still suspect.
-void pullBack(Mesh& mesh, const Stars& stars, std::vector<glm::vec3>& normal, std::vector<std::uint32_t>& suspects,
+void pullBack(Mesh& mesh, const StarChunks& stars, std::vector<glm::vec3>& normal, std::vector<std::uint32_t>& suspects,
               const FoldRepair& repair, RepairLog& log) {
     std::vector<std::uint32_t> neighbours;
     for (int round = 0; round < repair.rounds && !suspects.empty(); ++round) {
@@ -415,7 +418,7 @@ MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, st
         if (t[0] >= nv || t[1] >= nv || t[2] >= nv) ++r.invalidIndices;
     if (r.invalidIndices > 0) return r;
 
-    const Stars stars = buildStars(mesh);
+    const StarChunks stars(mesh);
     std::vector<glm::vec3> normal;
     const VertexCounts v = vertexPass(mesh, stars, normal);
     r.edgeCount = v.edges;
@@ -485,7 +488,7 @@ struct FoldWatch::State {
     std::vector<std::uint32_t> vertexSeen, triangleSeen;
     std::uint32_t update = 0;
 
-    explicit State(const Mesh& m) : mesh(m), stars(buildStars(m)) {}
+    explicit State(const Mesh& m) : mesh(m), stars(detail::buildStars(m)) {}
 };
 
 FoldWatch::FoldWatch(const Mesh& mesh) : s_(std::make_unique<State>(mesh)) {
@@ -512,14 +515,14 @@ void FoldWatch::moved(const std::vector<std::uint32_t>& vertices) {
     // The vertices whose normals may change: the moved ones and their neighbours.
     std::vector<std::uint32_t> renormal;
     for (std::uint32_t v : vertices)
-        for (std::uint32_t i = s.stars.offset[v]; i < s.stars.offset[v + 1]; ++i)
-            for (std::uint32_t w : s.mesh.triangles[s.stars.corners[i] / 3])
+        for (const std::uint32_t* c = s.stars.begin(v); c != s.stars.end(v); ++c)
+            for (std::uint32_t w : s.mesh.triangles[*c / 3])
                 if (s.vertexSeen[w] != u) s.vertexSeen[w] = u, renormal.push_back(w);
     // The triangles whose test may change: those around any of them.
     std::vector<std::uint32_t> retest;
     for (std::uint32_t w : renormal)
-        for (std::uint32_t i = s.stars.offset[w]; i < s.stars.offset[w + 1]; ++i) {
-            const std::uint32_t t = s.stars.corners[i] / 3;
+        for (const std::uint32_t* c = s.stars.begin(w); c != s.stars.end(w); ++c) {
+            const std::uint32_t t = *c / 3;
             if (s.triangleSeen[t] != u) s.triangleSeen[t] = u, retest.push_back(t);
         }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, renormal.size(), 1024),
