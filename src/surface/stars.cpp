@@ -34,42 +34,6 @@ void sortCorners(const Mesh& mesh, std::size_t tlo, std::size_t thi, Stars& s, s
     s.offset[0] = 0;
 }
 
-}  // namespace
-
-Stars buildStars(const Mesh& mesh) {
-    const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
-    Stars s;
-    reservePopulated(s.offset, nv + 1);
-    reservePopulated(s.corners, 3 * nt);
-    s.offset.assign(nv + 1, 0);
-    // A counting sort in triangle order, split by vertex range: each part scans every triangle
-    // and takes the corners of its own vertices. Each star comes out sorted, with no atomics,
-    // the same for any thread count. (Atomic counters over all vertices, then a sort of each
-    // star, took twice as long on two threads: the scans are sequential, the counters not.)
-    const std::size_t parts = std::size_t(std::max(1, tbb::this_task_arena::max_concurrency()));
-    auto partStart = [&](std::size_t p) { return std::uint32_t(nv * p / parts); };
-    tbb::parallel_for(std::size_t(0), parts, [&](std::size_t p) {
-        const std::uint32_t lo = partStart(p), hi = partStart(p + 1);
-        for (const Mesh::Triangle& t : mesh.triangles)
-            for (std::uint32_t v : t)
-                if (v >= lo && v < hi) ++s.offset[v + 1];
-    });
-    for (std::size_t v = 0; v < nv; ++v) s.offset[v + 1] += s.offset[v];
-    s.corners.resize(s.offset[nv]);
-    tbb::parallel_for(std::size_t(0), parts, [&](std::size_t p) {
-        const std::uint32_t lo = partStart(p), hi = partStart(p + 1);
-        std::vector<std::uint32_t> cursor(s.offset.begin() + lo, s.offset.begin() + hi);
-        for (std::size_t t = 0; t < nt; ++t)
-            for (int k = 0; k < 3; ++k) {
-                const std::uint32_t v = mesh.triangles[t][std::size_t(k)];
-                if (v >= lo && v < hi) s.corners[cursor[v - lo]++] = std::uint32_t(3 * t + std::size_t(k));
-            }
-    });
-    return s;
-}
-
-namespace {
-
 /// Per run of `size` consecutive vertices: the first triangle and one past the last with a
 /// corner at one of them (lo > hi where none has), found by parts of the triangle list side by
 /// side.
@@ -108,6 +72,38 @@ void buildRun(const Mesh& mesh, std::uint32_t first, std::size_t count, std::uin
 }
 
 }  // namespace
+
+Stars buildStars(const Mesh& mesh) {
+    const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
+    Stars s;
+    reservePopulated(s.offset, nv + 1);
+    reservePopulated(s.corners, 3 * nt);
+    s.offset.assign(nv + 1, 0);
+    // A counting sort in triangle order, split by vertex range: each part scans every triangle
+    // and takes the corners of its own vertices. Each star comes out sorted, with no atomics,
+    // the same for any thread count. (Atomic counters over all vertices, then a sort of each
+    // star, took twice as long on two threads: the scans are sequential, the counters not.)
+    const std::size_t parts = std::size_t(std::max(1, tbb::this_task_arena::max_concurrency()));
+    auto partStart = [&](std::size_t p) { return std::uint32_t(nv * p / parts); };
+    tbb::parallel_for(std::size_t(0), parts, [&](std::size_t p) {
+        const std::uint32_t lo = partStart(p), hi = partStart(p + 1);
+        for (const Mesh::Triangle& t : mesh.triangles)
+            for (std::uint32_t v : t)
+                if (v >= lo && v < hi) ++s.offset[v + 1];
+    });
+    for (std::size_t v = 0; v < nv; ++v) s.offset[v + 1] += s.offset[v];
+    s.corners.resize(s.offset[nv]);
+    tbb::parallel_for(std::size_t(0), parts, [&](std::size_t p) {
+        const std::uint32_t lo = partStart(p), hi = partStart(p + 1);
+        std::vector<std::uint32_t> cursor(s.offset.begin() + lo, s.offset.begin() + hi);
+        for (std::size_t t = 0; t < nt; ++t)
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t v = mesh.triangles[t][std::size_t(k)];
+                if (v >= lo && v < hi) s.corners[cursor[v - lo]++] = std::uint32_t(3 * t + std::size_t(k));
+            }
+    });
+    return s;
+}
 
 StarChunks::StarChunks(const Mesh& mesh, std::size_t chunkedBytes) : mesh_(mesh) {
     const std::size_t nt = mesh.triangles.size();
