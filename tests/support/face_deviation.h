@@ -41,8 +41,10 @@ struct FaceDeviation {
 /// by a sharp edge of the part finds the other face too, along the axes and the cube diagonals:
 /// steps of reach / 48 in both directions of each, the first change bisected to 1e-10 mm. The
 /// least distance found is an upper bound of the point's distance to the surface, exact on a
-/// face. A point with no change within reach counts as `reach`.
+/// face. A point with no change within reach counts as `reach`. A mesh without triangles has no
+/// samples.
 inline FaceDeviation measureFaces(const Mesh& mesh, const CarvedPart& part, double reach, std::size_t count = 20000) {
+    if (mesh.triangles.empty()) return {};
     std::vector<double> cumulative;
     double total = 0.0;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {

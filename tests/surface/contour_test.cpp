@@ -287,15 +287,12 @@ TEST_CASE("contour: surfaces that graze lattice points stand no triangle on edge
 
 TEST_CASE("contour: a block cut away entirely gives an empty mesh", "[surface][contour]") {
     // The level set has no leaf: no block holds a cell with surface.
-    TriDexelStock stock = TriDexelStock::fromBox(kBox, 1.0);
-    testing::carve(stock, testing::boxCutter({Vec3(-1.0), kBox.hi + 1.0}));
-    const LevelSet ls = rebuildLevelSet(stock);
-    CHECK(ls.activeVoxelCount() == 0);
-    ContourStats stats;
-    const Mesh mesh = contourStock(ls, stock, {}, &stats);
-    CHECK(mesh.vertices.empty());
-    CHECK(mesh.triangles.empty());
-    CHECK(stats.cells == 0);
-    CHECK(stats.check.triangleCount == 0);
-    CHECK(stats.check.boundaryEdges == 0);
+    const Part part{kBox, {testing::boxCutter({Vec3(-1.0), kBox.hi + 1.0})}};
+    const Result r = contourPart(part, 1.0);
+    CHECK(r.mesh.vertices.empty());
+    CHECK(r.mesh.triangles.empty());
+    CHECK(r.stats.cells == 0);
+    CHECK(r.check.triangleCount == 0);
+    CHECK(r.check.boundaryEdges == 0);
+    CHECK(r.faces.samples == 0);
 }
