@@ -8,6 +8,48 @@
 
 namespace dexelmill {
 
+namespace {
+
+/// Turn t at u, applied to a vector.
+Vec3 turnVector(const RotaryTurn& t, double u, const Vec3& v) {
+    return rotateAbout(v, t.direction, t.from + u * (t.to - t.from));
+}
+
+/// The first `count` turns of a chain at u, applied to a vector: R_0 ... R_{count-1} v.
+Vec3 turnVector(const std::vector<RotaryTurn>& chain, std::size_t count, double u, Vec3 v) {
+    for (std::size_t i = count; i-- > 0;) v = turnVector(chain[i], u, v);
+    return v;
+}
+
+/// The whole chain at u, applied to a point: T_0 ... T_{n-1} x.
+Vec3 turnPoint(const std::vector<RotaryTurn>& chain, double u, Vec3 x) {
+    for (std::size_t i = chain.size(); i-- > 0;) x = chain[i].pivot + turnVector(chain[i], u, x - chain[i].pivot);
+    return x;
+}
+
+/// Adds to `sum` a chain's part of a point's velocity (see velocity), the point given as y_0 in
+/// the frame the chain's first turn acts in; leaves y at y_n, in the frame inside its last turn.
+void addChainVelocity(const std::vector<RotaryTurn>& chain, double u, Vec3& y, Vec3& sum) {
+    for (std::size_t i = 0; i < chain.size(); ++i) {
+        const RotaryTurn& t = chain[i];
+        sum += turnVector(chain, i, u, (t.to - t.from) * glm::cross(t.direction, y - t.pivot));
+        // y_{i+1} = c_i + R_i^T (y_i - c_i): the rotation by minus the angle.
+        y = t.pivot + rotateAbout(y - t.pivot, t.direction, -(t.from + u * (t.to - t.from)));
+    }
+}
+
+/// Given rho, a bound on |y_n - c_{n-1}| inside a chain's last turn, adds sum_i |to_i - from_i|
+/// rho_i to `turn` (rho_i bounding |y_i - c_i|, see turnBound) and returns rho_0.
+double chainBound(const std::vector<RotaryTurn>& chain, double rho, double& turn) {
+    for (std::size_t i = chain.size(); i-- > 0;) {
+        if (i + 1 < chain.size()) rho += glm::length(chain[i + 1].pivot - chain[i].pivot);
+        turn += std::abs(chain[i].to - chain[i].from) * rho;
+    }
+    return rho;
+}
+
+}  // namespace
+
 MotionLaw::MotionLaw(const Move& move) : start_(move.start), feed_(move.feed()), toolAxis_(move.axis) {
     if (move.rotary) {
         const RotaryMotion& r = *move.rotary;
@@ -33,46 +75,18 @@ MotionLaw::MotionLaw(const Move& move) : start_(move.start), feed_(move.feed()),
     turns_.push_back(turn);
 }
 
-Vec3 MotionLaw::rotate(std::size_t i, double u, const Vec3& v) const {
-    const RotaryTurn& t = turns_[i];
-    return rotateAbout(v, t.direction, t.from + u * (t.to - t.from));
-}
-
-Vec3 MotionLaw::rotateHead(std::size_t j, double u, const Vec3& v) const {
-    const RotaryTurn& h = heads_[j];
-    return rotateAbout(v, h.direction, h.from + u * (h.to - h.from));
-}
-
-Vec3 MotionLaw::headPoint(double u, Vec3 v) const {
-    for (std::size_t j = heads_.size(); j-- > 0;) v = heads_[j].pivot + rotateHead(j, u, v - heads_[j].pivot);
-    return v;
-}
-
-// rho_j bounds |z_j - c_j| (the chain of turnBound); |H v| = |z_0| <= rho_0 + |c_0|.
-double MotionLaw::headBounds(double reach, double& turn) const {
-    if (heads_.empty()) return reach;
-    double rho = reach + glm::length(heads_.back().pivot);
-    for (std::size_t j = heads_.size(); j-- > 0;) {
-        if (j + 1 < heads_.size()) rho += glm::length(heads_[j + 1].pivot - heads_[j].pivot);
-        turn += std::abs(heads_[j].to - heads_[j].from) * rho;
-    }
-    return rho + glm::length(heads_.front().pivot);
-}
-
 ToolPose MotionLaw::pose(double u) const {
     ToolPose p;
     Vec3 axis = toolAxis_;
-    for (std::size_t j = heads_.size(); j-- > 0;) axis = rotateHead(j, u, axis);
-    for (std::size_t i = turns_.size(); i-- > 0;) axis = rotate(i, u, axis);
+    axis = turnVector(turns_, turns_.size(), u, turnVector(heads_, heads_.size(), u, axis));
     p.axis = glm::normalize(axis);
     if (!carried_) {
         p.tip = start_ + u * feed_;
         return p;
     }
     Vec3 x = machineStart_ + u * machineFeed_;
-    if (!heads_.empty()) x += headPoint(u, Vec3(0.0));
-    for (std::size_t i = turns_.size(); i-- > 0;) x = turns_[i].pivot + rotate(i, u, x - turns_[i].pivot);
-    p.tip = x;
+    if (!heads_.empty()) x += turnPoint(heads_, u, Vec3(0.0));
+    p.tip = turnPoint(turns_, u, x);
     return p;
 }
 
@@ -89,32 +103,17 @@ Vec3 MotionLaw::velocity(double u, const Vec3& point) const {
     if (!carried_) {
         const Vec3 tip = start_ + u * feed_;
         for (std::size_t i = 0; i < turns_.size(); ++i) {
-            Vec3 w = turns_[i].direction * (turns_[i].to - turns_[i].from);
-            for (std::size_t j = i; j-- > 0;) w = rotate(j, u, w);
+            const Vec3 w = turnVector(turns_, i, u, turns_[i].direction * (turns_[i].to - turns_[i].from));
             v += glm::cross(w, point - tip);
         }
         return feed_ + v;
     }
     Vec3 y = point;
-    for (std::size_t i = 0; i < turns_.size(); ++i) {
-        const RotaryTurn& t = turns_[i];
-        Vec3 term = (t.to - t.from) * glm::cross(t.direction, y - t.pivot);
-        for (std::size_t j = i; j-- > 0;) term = rotate(j, u, term);
-        v += term;
-        // y_{i+1} = c_i + R_i^T (y_i - c_i): the rotation by minus the angle.
-        y = t.pivot + rotateAbout(y - t.pivot, t.direction, -(t.from + u * (t.to - t.from)));
-    }
+    addChainVelocity(turns_, u, y, v);
     Vec3 drift = machineFeed_;
     Vec3 z = y - (machineStart_ + u * machineFeed_);
-    for (std::size_t j = 0; j < heads_.size(); ++j) {
-        const RotaryTurn& h = heads_[j];
-        Vec3 term = (h.to - h.from) * glm::cross(h.direction, z - h.pivot);
-        for (std::size_t k = j; k-- > 0;) term = rotateHead(k, u, term);
-        drift += term;
-        // z_{j+1} = c_j + R_j^T (z_j - c_j): the rotation by minus the angle.
-        z = h.pivot + rotateAbout(z - h.pivot, h.direction, -(h.from + u * (h.to - h.from)));
-    }
-    for (std::size_t j = turns_.size(); j-- > 0;) drift = rotate(j, u, drift);
+    addChainVelocity(heads_, u, z, drift);
+    drift = turnVector(turns_, turns_.size(), u, drift);
     return v + drift;
 }
 
@@ -133,15 +132,16 @@ double MotionLaw::turnBound(double reach) const {
         for (const RotaryTurn& t : turns_) v += std::abs(t.to - t.from) * reach;
         return v;
     }
-    const double headReach = headBounds(reach, v);
+    // |H v| = |z_0| <= rho_0 + |c_0| for the heads' chain, whose innermost z_m = v lies within
+    // reach + |c_{m-1}| of its last pivot.
+    const double headReach = heads_.empty() ? reach
+                                            : chainBound(heads_, reach + glm::length(heads_.back().pivot), v) +
+                                                  glm::length(heads_.front().pivot);
     if (turns_.empty()) return v;
     const Vec3& last = turns_.back().pivot;
-    double rho = std::max(glm::length(machineStart_ - last), glm::length(machineStart_ + machineFeed_ - last)) +
-                 headReach;
-    for (std::size_t i = turns_.size(); i-- > 0;) {
-        if (i + 1 < turns_.size()) rho += glm::length(turns_[i + 1].pivot - turns_[i].pivot);
-        v += std::abs(turns_[i].to - turns_[i].from) * rho;
-    }
+    chainBound(turns_,
+               std::max(glm::length(machineStart_ - last), glm::length(machineStart_ + machineFeed_ - last)) + headReach,
+               v);
     return v;
 }
 

@@ -38,22 +38,12 @@ class MotionLaw {
     bool rotates() const { return !turns_.empty(); }
 
   private:
-    /// R_i at u, as a function applied to a vector.
-    Vec3 rotate(std::size_t i, double u, const Vec3& v) const;
-
     Vec3 start_{0.0}, feed_{0.0};
     std::vector<RotaryTurn> turns_;
     Vec3 toolAxis_{0.0, 0.0, 1.0};
     bool carried_ = false;
     Vec3 machineStart_{0.0}, machineFeed_{0.0};
     std::vector<RotaryTurn> heads_;  ///< RotaryMotion::headTurns
-    /// Head turn j's rotation at u, applied to a vector.
-    Vec3 rotateHead(std::size_t j, double u, const Vec3& v) const;
-    /// H(u) applied to a point relative to the machine-frame point.
-    Vec3 headPoint(double u, Vec3 v) const;
-    /// For tool points within `reach` of the tip: adds the heads' share of turnBound to `turn`, and
-    /// returns a bound on |H(u) v|, how far the heads put such a point from the machine-frame point.
-    double headBounds(double reach, double& turn) const;
 };
 
 }  // namespace dexelmill
