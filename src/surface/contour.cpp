@@ -306,15 +306,14 @@ private:
             const std::int64_t nx = (hi.x() - lo.x()) / kDim + 1, ny = (hi.y() - lo.y()) / kDim + 1,
                                nz = (hi.z() - lo.z()) / kDim + 1;
             std::vector<std::uint64_t> bits(std::size_t((nx * ny * nz + 63) / 64), 0);
-            std::size_t marked = 0;
             for (const Coord& o : origins)
                 for (int d = 0; d < 8; ++d) {
                     const Coord c = o.offsetBy(-kDim * (d & 1), -kDim * ((d >> 1) & 1), -kDim * ((d >> 2) & 1));
                     const std::int64_t b = ((c.x() - lo.x()) / kDim * ny + (c.y() - lo.y()) / kDim) * nz + (c.z() - lo.z()) / kDim;
-                    const std::uint64_t mask = std::uint64_t(1) << (b % 64);
-                    marked += (bits[std::size_t(b / 64)] & mask) == 0;
-                    bits[std::size_t(b / 64)] |= mask;
+                    bits[std::size_t(b / 64)] |= std::uint64_t(1) << (b % 64);
                 }
+            std::size_t marked = 0;
+            for (std::uint64_t word : bits) marked += std::size_t(popcount(word));
             detail::reservePopulated(keys, marked);
             for (std::size_t w = 0; w < bits.size(); ++w)
                 for (std::uint64_t word = bits[w]; word != 0; word &= word - 1) {

@@ -250,7 +250,6 @@ TriangleCounts trianglePass(const Mesh& mesh, const std::vector<glm::vec3>& norm
         });
 }
 
-/// Whether triangle t folds, nearly folds or is degenerate (the test of trianglePass).
 /// The sums of trianglePass over some triangles, in their order.
 TriangleCounts triangleSums(const Mesh& mesh, const std::vector<glm::vec3>& normal, const Vec3& centre,
                             const std::vector<std::uint32_t>& triangles) {
@@ -259,6 +258,7 @@ TriangleCounts triangleSums(const Mesh& mesh, const std::vector<glm::vec3>& norm
     return c;
 }
 
+/// Whether triangle t folds, nearly folds or is degenerate (the test of trianglePass).
 bool suspect(const Mesh& mesh, const std::vector<glm::vec3>& normal, std::uint32_t t, double minCosine) {
     const Mesh::Triangle& tri = mesh.triangles[t];
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) return true;
