@@ -14,6 +14,9 @@
 #include <string_view>
 #include <vector>
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include "dexelmill/error.h"
 #include "dexelmill/io/atomic_file.h"
 #include "io/detail/binary.h"
@@ -59,6 +62,11 @@ private:
     std::string buf_;
 };
 
+/// A binary STL record: normal, three corners (twelve floats) and a two-byte attribute count.
+constexpr std::size_t kStlRecord = 50;
+/// Triangles formatted into one buffer by one task (1.6 MB).
+constexpr std::size_t kStlChunk = std::size_t(1) << 15;
+
 void requireValidIndices(const Mesh& mesh) {
     for (const Mesh::Triangle& t : mesh.triangles)
         for (std::uint32_t i : t)
@@ -100,25 +108,40 @@ void writeStl(const std::string& path, const Mesh& mesh) {
     if (mesh.triangles.size() > std::numeric_limits<std::uint32_t>::max())
         throw Error("binary STL holds at most 2^32 - 1 triangles");
     writeStreamAtomically(path, [&](std::ostream& out) {
-        BlockWriter w(out);
         char header[80] = {};
         std::snprintf(header, sizeof(header), "dexelmill binary STL, mm");
-        w.put(header, sizeof(header));
-        char rec[50];
-        binary::putU32(rec, std::uint32_t(mesh.triangles.size()));
-        w.put(rec, 4);
-        for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-            const Vec3 a = mesh.areaVector(t);
-            const double len = glm::length(a);
-            const Vec3 n = len > 0.0 ? a / len : Vec3(0.0);
-            char* p = rec;
-            for (int k = 0; k < 3; ++k) p = binary::putF32(p, float(n[k]));
-            for (std::uint32_t vi : mesh.triangles[t])
-                for (int k = 0; k < 3; ++k) p = binary::putF32(p, float(mesh.vertices[vi][k]));
-            p[0] = p[1] = 0;
-            w.put(rec, sizeof(rec));
+        out.write(header, sizeof(header));
+        char count[4];
+        binary::putU32(count, std::uint32_t(mesh.triangles.size()));
+        out.write(count, sizeof(count));
+        // Records are formatted in parallel, a chunk of triangles per buffer, a few chunks per
+        // thread at a time, and written in order: on a large mesh the formatting waits on the
+        // vertex list's cache misses (the hood's 29 million triangles took 2.6 s on one thread).
+        const std::size_t n = mesh.triangles.size();
+        const std::size_t chunks = (n + kStlChunk - 1) / kStlChunk;
+        const std::size_t batch = 2 * std::size_t(std::max(1, tbb::this_task_arena::max_concurrency()));
+        std::vector<std::vector<char>> buffers(std::min(batch, chunks));
+        for (std::size_t c0 = 0; c0 < chunks; c0 += batch) {
+            const std::size_t c1 = std::min(chunks, c0 + batch);
+            tbb::parallel_for(c0, c1, [&](std::size_t c) {
+                const std::size_t t0 = c * kStlChunk, t1 = std::min(n, t0 + kStlChunk);
+                std::vector<char>& buffer = buffers[c - c0];
+                buffer.resize(kStlRecord * (t1 - t0));
+                char* p = buffer.data();
+                for (std::size_t t = t0; t < t1; ++t) {
+                    const Vec3 a = mesh.areaVector(t);
+                    const double len = glm::length(a);
+                    const Vec3 normal = len > 0.0 ? a / len : Vec3(0.0);
+                    for (int k = 0; k < 3; ++k) p = binary::putF32(p, float(normal[k]));
+                    for (std::uint32_t vi : mesh.triangles[t])
+                        for (int k = 0; k < 3; ++k) p = binary::putF32(p, float(mesh.vertices[vi][k]));
+                    p[0] = p[1] = 0;
+                    p += 2;
+                }
+            });
+            for (std::size_t c = c0; c < c1; ++c)
+                out.write(buffers[c - c0].data(), std::streamsize(buffers[c - c0].size()));
         }
-        w.flush();
     });
 }
 

@@ -15,6 +15,8 @@
 
 #include <unistd.h>
 
+#include <tbb/task_arena.h>
+
 #include "dexelmill/error.h"
 #include "dexelmill/io/atomic_file.h"
 #include "dexelmill/io/mesh_io.h"
@@ -186,6 +188,55 @@ TEST_CASE("mesh files: OBJ, binary STL and PLY", "[io]") {
     CHECK(f == mesh.triangles.size());
     CHECK(first == mesh.vertices[0]);  // shortest round-trip decimals
     CHECK(dir.entries() == 3);
+}
+
+TEST_CASE("binary STL: a mesh many buffers long is written record by record, in order, on any thread count",
+          "[io]") {
+    // 100,003 triangles span several of the writer's buffers, the last one partly; every tenth
+    // repeats a corner, so its normal must be zero.
+    std::mt19937 rng(20261124);
+    std::uniform_real_distribution<double> coord(-500.0, 500.0);
+    Mesh mesh;
+    for (int i = 0; i < 20011; ++i) mesh.vertices.push_back({coord(rng), coord(rng), coord(rng)});
+    std::uniform_int_distribution<std::uint32_t> pick(0, std::uint32_t(mesh.vertices.size() - 1));
+    for (int t = 0; t < 100003; ++t) {
+        const std::uint32_t a = pick(rng), b = pick(rng);
+        mesh.triangles.push_back({a, b, t % 10 == 0 ? a : pick(rng)});
+    }
+    auto f32 = [](const std::string& bytes, std::size_t at) {
+        std::uint32_t bits = 0;
+        for (int i = 0; i < 4; ++i) bits |= std::uint32_t(static_cast<unsigned char>(bytes[at + std::size_t(i)])) << (8 * i);
+        float f = 0.0f;
+        std::memcpy(&f, &bits, 4);
+        return f;
+    };
+    TempDir dir;
+    for (const int threads : {1, 2, 3}) {
+        tbb::task_arena(threads).execute([&] { writeStl(dir.file("many.stl"), mesh); });
+        const std::string stl = slurp(dir.file("many.stl"));
+        REQUIRE(stl.size() == 84 + 50 * mesh.triangles.size());
+        CHECK(stl.substr(0, 24) == "dexelmill binary STL, mm");
+        std::uint32_t count = 0;
+        for (int i = 0; i < 4; ++i) count |= std::uint32_t(static_cast<unsigned char>(stl[80 + std::size_t(i)])) << (8 * i);
+        CHECK(count == mesh.triangles.size());
+        std::size_t wrong = 0;
+        for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+            const std::size_t at = 84 + 50 * t;
+            const Vec3 a = mesh.vertices[mesh.triangles[t][0]], b = mesh.vertices[mesh.triangles[t][1]],
+                       c = mesh.vertices[mesh.triangles[t][2]];
+            const Vec3 cross = glm::cross(b - a, c - a);
+            const double length = glm::length(cross);
+            for (int k = 0; k < 3; ++k) {
+                const float expected = length > 0.0 ? float(cross[k] / length) : 0.0f;
+                wrong += f32(stl, at + 4 * std::size_t(k)) != expected;
+                for (int corner = 0; corner < 3; ++corner)
+                    wrong += f32(stl, at + 12 + 12 * std::size_t(corner) + 4 * std::size_t(k)) !=
+                             float(mesh.vertices[mesh.triangles[t][std::size_t(corner)]][k]);
+            }
+            wrong += stl[at + 48] != 0 || stl[at + 49] != 0;
+        }
+        CHECK(wrong == 0);
+    }
 }
 
 TEST_CASE("STL: ASCII is parsed, a binary file starting with 'solid' is binary", "[io]") {
