@@ -8,9 +8,8 @@
 /// scattered over it miss the TLB far less. On the hood at 1 mm (runs in turn with the populating
 /// build, medians of three) the STL's write, which reads the 0.35 GB vertex list (14.6 million
 /// vertices) in triangle order, took 2.7 s instead of 5.2 s on two threads and 2.8 s instead of
-/// 4.4 s on one; the mesh stage
-/// moved within the machine's noise. Advising and then populating made the mesh stage slower
-/// (3.65 s against 2.81 s on two threads). Elsewhere the calls are
+/// 4.4 s on one; the mesh stage moved within the machine's noise. Advising and then populating
+/// made the mesh stage slower (3.65 s against 2.81 s on two threads). Elsewhere the calls are
 /// skipped or fail harmlessly.
 #pragma once
 
@@ -48,7 +47,7 @@ inline bool hugePagesOnAdvice() {
 template <class T, class A>
 void reservePopulated(std::vector<T, A>& v, std::size_t n) {
     v.reserve(n);
-#if defined(__linux__)
+#if defined(__linux__) && (defined(MADV_HUGEPAGE) || defined(MADV_POPULATE_WRITE))
     const std::size_t bytes = n * sizeof(T);
     if (bytes < kPopulateBytes) return;
     const auto page = std::uintptr_t(sysconf(_SC_PAGESIZE));

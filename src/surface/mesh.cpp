@@ -199,6 +199,31 @@ struct TriangleCounts {
     std::vector<std::uint32_t> suspects;
 };
 
+/// The fold test of one triangle, shared by the pass over the triangles and the repair.
+struct Facing {
+    bool degenerate = true;  ///< a repeated index, or (numerically) no area
+    double twiceArea = 0.0;
+    double facing = 0.0;     ///< the area vector's dot product with `sum`
+    Vec3 sum{0.0};           ///< the sum of the vertices' unit normals
+
+    /// Facing its vertices' normals at a cosine below minCosine (folded when minCosine is 0).
+    bool below(double minCosine) const { return facing < minCosine * twiceArea * glm::length(sum); }
+};
+
+inline Facing facingOf(const Mesh::Triangle& tri, const Vec3& a, const Vec3& b, const Vec3& d,
+                       const std::vector<glm::vec3>& normal) {
+    Facing f;
+    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) return f;
+    const Vec3 areaVector = glm::cross(b - a, d - a);
+    f.twiceArea = glm::length(areaVector);
+    const double longest2 = std::max({glm::dot(b - a, b - a), glm::dot(d - b, d - b), glm::dot(a - d, a - d)});
+    if (!(f.twiceArea > tol::kDegenerateTriangle * longest2)) return f;
+    f.degenerate = false;
+    f.sum = Vec3(normal[tri[0]]) + Vec3(normal[tri[1]]) + Vec3(normal[tri[2]]);
+    f.facing = glm::dot(areaVector, f.sum);
+    return f;
+}
+
 /// Adds triangle t to the sums of trianglePass.
 inline void addTriangle(const Mesh& mesh, const std::vector<glm::vec3>& normal, const Vec3& centre, double minCosine,
                         std::size_t t, TriangleCounts& c) {
@@ -207,25 +232,15 @@ inline void addTriangle(const Mesh& mesh, const std::vector<glm::vec3>& normal, 
     const Vec3& b = mesh.vertices[tri[1]];
     const Vec3& d = mesh.vertices[tri[2]];
     c.volume6 += glm::dot(a - centre, glm::cross(b - centre, d - centre));
-    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) {
+    const Facing f = facingOf(tri, a, b, d, normal);
+    if (f.degenerate) {
         ++c.degenerate;
         c.suspects.push_back(std::uint32_t(t));
         return;
     }
-    const Vec3 areaVector = glm::cross(b - a, d - a);
-    const double twiceArea = glm::length(areaVector);
-    const double longest2 = std::max({glm::dot(b - a, b - a), glm::dot(d - b, d - b), glm::dot(a - d, a - d)});
-    if (!(twiceArea > tol::kDegenerateTriangle * longest2)) {
-        ++c.degenerate;
-        c.suspects.push_back(std::uint32_t(t));
-        return;
-    }
-    c.area += 0.5 * twiceArea;
-    const Vec3 sum = Vec3(normal[tri[0]]) + Vec3(normal[tri[1]]) + Vec3(normal[tri[2]]);
-    const double facing = glm::dot(areaVector, sum);
-    c.folded += facing < 0.0;
-    if (facing < 0.0 || (minCosine > 0.0 && facing < minCosine * twiceArea * glm::length(sum)))
-        c.suspects.push_back(std::uint32_t(t));
+    c.area += 0.5 * f.twiceArea;
+    c.folded += f.facing < 0.0;
+    if (f.facing < 0.0 || (minCosine > 0.0 && f.below(minCosine))) c.suspects.push_back(std::uint32_t(t));
 }
 
 /// One pass over the triangles: degenerate ones, area, six times the enclosed volume (about
@@ -261,16 +276,8 @@ TriangleCounts triangleSums(const Mesh& mesh, const std::vector<glm::vec3>& norm
 /// Whether triangle t folds, nearly folds or is degenerate (the test of trianglePass).
 bool suspect(const Mesh& mesh, const std::vector<glm::vec3>& normal, std::uint32_t t, double minCosine) {
     const Mesh::Triangle& tri = mesh.triangles[t];
-    if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) return true;
-    const Vec3& a = mesh.vertices[tri[0]];
-    const Vec3& b = mesh.vertices[tri[1]];
-    const Vec3& d = mesh.vertices[tri[2]];
-    const Vec3 areaVector = glm::cross(b - a, d - a);
-    const double twiceArea = glm::length(areaVector);
-    const double longest2 = std::max({glm::dot(b - a, b - a), glm::dot(d - b, d - b), glm::dot(a - d, a - d)});
-    if (!(twiceArea > tol::kDegenerateTriangle * longest2)) return true;
-    const Vec3 sum = Vec3(normal[tri[0]]) + Vec3(normal[tri[1]]) + Vec3(normal[tri[2]]);
-    return glm::dot(areaVector, sum) < minCosine * twiceArea * glm::length(sum);
+    const Facing f = facingOf(tri, mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]], normal);
+    return f.degenerate || f.below(minCosine);
 }
 
 /// Sorts a list of indices and drops repeats.
