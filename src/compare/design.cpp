@@ -6,6 +6,7 @@
 #include <limits>
 
 #include <tbb/blocked_range.h>
+#include <tbb/collaborative_call_once.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
@@ -50,22 +51,63 @@ Mesh readDesign(const std::string& path, const std::optional<Affine>& place) {
     return mesh;
 }
 
-DesignPart loadDesign(const Mesh& mesh, const std::string& path, const Lattice& lattice, FamilySet families,
-                      bool signs) {
-    // The cast and the distance index are built side by side: each has stretches that run on
-    // one thread, which the other fills.
+/// The distance index, or what builds it once.
+struct DesignPart::Index {
+    tbb::collaborative_once_flag once;
+    Mesh mesh;  ///< emptied once the index is built
+    bool signs = false;
+    std::unique_ptr<MeshDistance> distance;
+};
+
+DesignPart::DesignPart(TriDexelStock d, Mesh mesh, std::unique_ptr<MeshDistance> distance, bool signs)
+    : dexels(std::move(d)), index_(std::make_unique<Index>()) {
+    index_->signs = signs;
+    if (distance) {
+        index_->distance = std::move(distance);
+        tbb::collaborative_call_once(index_->once, [] {});
+    } else {
+        index_->mesh = std::move(mesh);
+    }
+}
+
+DesignPart::DesignPart(DesignPart&&) noexcept = default;
+DesignPart& DesignPart::operator=(DesignPart&&) noexcept = default;
+DesignPart::~DesignPart() = default;
+
+const MeshDistance& DesignPart::distance() const {
+    Index& index = *index_;
+    tbb::collaborative_call_once(index.once, [&index] {
+        index.distance = std::make_unique<MeshDistance>(index.mesh, index.signs);
+        index.mesh = Mesh{};
+    });
+    if (!index.distance) throw Error("the design's distance was handed over");
+    return *index.distance;
+}
+
+std::unique_ptr<MeshDistance> DesignPart::takeDistance() {
+    distance();
+    return std::move(index_->distance);
+}
+
+DesignPart loadDesign(Mesh mesh, const std::string& path, const Lattice& lattice, FamilySet families, bool signs) {
     MeshCastStats cast;
     std::optional<TriDexelStock> dexels;
     std::unique_ptr<MeshDistance> distance;
-    tbb::parallel_invoke([&] { dexels.emplace(stockFromMesh(mesh, lattice, families, &cast)); },
-                         [&] { distance = std::make_unique<MeshDistance>(mesh, signs); });
-    DesignPart d(std::move(*dexels));
+    if (signs) {
+        // The cast and the distance index are built side by side: each has stretches that run
+        // on one thread, which the other fills.
+        tbb::parallel_invoke([&] { dexels.emplace(stockFromMesh(mesh, lattice, families, &cast)); },
+                             [&] { distance = std::make_unique<MeshDistance>(mesh, signs); });
+    } else {
+        dexels.emplace(stockFromMesh(mesh, lattice, families, &cast));
+    }
+    const Box bounds = mesh.bounds();
+    DesignPart d(std::move(*dexels), std::move(mesh), std::move(distance), signs);
     d.cast = cast;
     d.file = path;
-    d.bounds = mesh.bounds();
+    d.bounds = bounds;
     if (d.dexels.volume(d.dexels.measuringFamily()) <= 0.0)
         throw Error("'" + path + "': the design holds no material inside the stock's box");
-    d.distance = std::move(distance);
     return d;
 }
 
@@ -132,7 +174,7 @@ std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, 
             const DesignStretch& s = stretches[i];
             lines.push_back({s.family, s.ib, s.ic, double(s.lo), double(s.hi)});
         }
-        deepest[g] = deepestPoint(*design.distance, lattice, {lines.data(), lines.size()}, eps);
+        deepest[g] = deepestPoint(design.distance(), lattice, {lines.data(), lines.size()}, eps);
     });
     // Volumes as the report measures them: the z family's, else x's, else y's.
     const Axis measure = design.dexels.measuringFamily();

@@ -232,7 +232,7 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
     const double eps = depthBound(tolerance, lattice.h);
     std::vector<Deepest> thickest(regions);
     tbb::parallel_for(std::size_t(0), regions, [&](std::size_t r) {
-        thickest[r] = deepestPoint(*design.distance, lattice,
+        thickest[r] = deepestPoint(design.distance(), lattice,
                                    {search.data() + regionStart[r], regionStart[r + 1] - regionStart[r]}, eps);
     });
     for (std::size_t r = 0; r < regions; ++r) {

@@ -406,7 +406,7 @@ Simulation runStages(const SimulateOptions& o) {
     std::unique_ptr<MeshDistance> designDistance;
     if (designMesh) {
         t = Clock::now();
-        design.emplace(loadDesign(*designMesh, o.designPath, stock.lattice(), o.families, measuresSurface(o)));
+        design.emplace(loadDesign(std::move(*designMesh), o.designPath, stock.lattice(), o.families, measuresSurface(o)));
         designMesh.reset();
         if (design->cast.unpairedDexels > 0) {
             ReportWarning w;
@@ -452,7 +452,7 @@ Simulation runStages(const SimulateOptions& o) {
         report.excessPoint = excess.point;
         for (const ExcessRegion& r : excess.regions)
             report.excessRegions.push_back({r.box, r.volume, r.thickness, r.point});
-        designDistance = std::move(design->distance);
+        if (measuresSurface(o)) designDistance = design->takeDistance();
         design.reset();
         report.timingS.design += seconds(t);
     }

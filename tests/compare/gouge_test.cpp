@@ -12,6 +12,9 @@
 #include <string>
 #include <vector>
 
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
 #include "dexelmill/error.h"
 #include "dexelmill/compare/design.h"
 #include "dexelmill/job/simulate.h"
@@ -274,6 +277,39 @@ TEST_CASE("gouges: the deepest point between samples is found within the stated 
     CHECK(gouges[1].depth == Approx(1.0).margin(1e-12));
     // A tolerance above both depths reports nothing.
     CHECK(findGouges(part, lattice, cut, 5.5).empty());
+    fs::remove_all(dir);
+}
+
+TEST_CASE("design: the distance index built when first asked for, by threads at once", "[compare][design]") {
+    const fs::path dir = scratch("lazy");
+    // A 10 mm cube: from a point inside it the distance is the nearest face's, min over the axes
+    // of min(c, 10 - c).
+    const std::string path = writeStl(dir / "cube.stl", prismFacets({{0, 0}, {10, 0}, {10, 10}, {0, 10}}, 0.0, 10.0));
+    const Lattice lattice = Lattice::fromBox(Box{Vec3(0.0), Vec3(10.0)}, 1.0);
+    for (const bool signs : {false, true}) {
+        DesignPart part = loadDesign(readDesign(path), path, lattice, FamilySet::all(), signs);
+        std::vector<double> found(4000, -1.0);
+        tbb::task_arena arena(3);
+        arena.execute([&] {
+            tbb::parallel_for(std::size_t(0), found.size(), [&](std::size_t i) {
+                const Vec3 p(0.5 + 9.0 * double(i % 17) / 16.0, 0.5 + 9.0 * double(i % 13) / 12.0,
+                             0.5 + 9.0 * double(i % 11) / 10.0);
+                found[i] = part.distance().distance(p);
+            });
+        });
+        for (std::size_t i = 0; i < found.size(); ++i) {
+            const Vec3 p(0.5 + 9.0 * double(i % 17) / 16.0, 0.5 + 9.0 * double(i % 13) / 12.0,
+                         0.5 + 9.0 * double(i % 11) / 10.0);
+            double expected = 10.0;
+            for (int k = 0; k < 3; ++k) expected = std::min({expected, p[k], 10.0 - p[k]});
+            CHECK(found[i] == Approx(expected).margin(1e-12));
+        }
+        // Handed over, the index leaves the part.
+        const std::unique_ptr<MeshDistance> taken = part.takeDistance();
+        REQUIRE(taken);
+        CHECK(taken->distance(Vec3(5.0, 5.0, 9.0)) == Approx(1.0));
+        CHECK_THROWS_AS(part.distance(), Error);
+    }
     fs::remove_all(dir);
 }
 

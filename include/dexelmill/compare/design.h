@@ -23,15 +23,32 @@ namespace dexelmill {
 
 /// @brief A design part ready for the comparison.
 struct DesignPart {
-    explicit DesignPart(TriDexelStock dexels) : dexels(std::move(dexels)) {}
+    /// @brief The part whose solid on the lattice is `dexels`, measured through `distance` when
+    /// given, else through an index of `mesh` built when first asked for (distance()).
+    DesignPart(TriDexelStock dexels, Mesh mesh, std::unique_ptr<MeshDistance> distance, bool signs);
+    DesignPart(DesignPart&&) noexcept;
+    DesignPart& operator=(DesignPart&&) noexcept;
+    ~DesignPart();
 
     std::string file;
     Box bounds;                   ///< the design mesh's bounding box (mm)
     TriDexelStock dexels;         ///< its solid on the stock's lattice
     MeshCastStats cast;           ///< what casting met: unpaired dexels mean an open mesh
-    /// The exact distance to the design's surface. Inside the design (where the dexels hold
-    /// material) it is the depth.
-    std::unique_ptr<MeshDistance> distance;
+
+    /// @brief The exact distance to the design's surface. Inside the design (where the dexels
+    /// hold material) it is the depth. A part loaded for gouges and excess alone builds it on the
+    /// first call: a cut that removes nothing deeper than the gouge tolerance along a dexel, and
+    /// leaves nothing thicker than the excess tolerance, never pays for it. Safe to call from
+    /// several threads and from inside TBB tasks: callers that arrive while it is being built
+    /// join the build (tbb::collaborative_call_once).
+    const MeshDistance& distance() const;
+    /// @brief Hands the distance over (building it if needed), to measure the surface after the
+    /// part's dexels are dropped. The part has no distance afterwards.
+    std::unique_ptr<MeshDistance> takeDistance();
+
+  private:
+    struct Index;
+    std::unique_ptr<Index> index_;
 };
 
 /// @brief Reads a design's mesh, a closed STL (binary or ASCII) or the zero surface of a VDB level
@@ -44,9 +61,11 @@ Mesh readDesign(const std::string& path, const std::optional<Affine>& place = st
 
 /// @brief Casts a design read by readDesign from `path` on `lattice`. `signs` says whether signed
 /// distances will be asked for many points (a surface's deviation), which MeshDistance's `orient`
-/// prepares for; gouge depths and excess thickness are unsigned.
+/// prepares for; gouge depths and excess thickness are unsigned. With `signs` the distance index
+/// is surely needed and is built now, beside the cast; without, the part keeps the mesh and
+/// builds the index only when asked (DesignPart::distance).
 /// @throw Error naming the file when the design holds no material inside the lattice's box.
-DesignPart loadDesign(const Mesh& mesh, const std::string& path, const Lattice& lattice,
+DesignPart loadDesign(Mesh mesh, const std::string& path, const Lattice& lattice,
                       FamilySet families = FamilySet::all(), bool signs = true);
 
 /// @brief readDesign, then loadDesign.
