@@ -275,6 +275,18 @@ Mesh weld(std::size_t count, const CornerBits& cornerBits) {
     return mesh;
 }
 
+/// Whether the bytes where a binary STL keeps its triangle count and its first record (offsets
+/// 80 to 134) are text: printable or white space. Binary data almost never is: a count below
+/// 2^24 has a zero byte, and so has a zero coordinate or normal.
+bool looksLikeText(const char* data, std::size_t size) {
+    for (std::size_t i = 80; i < std::min<std::size_t>(size, 134); ++i) {
+        const auto c = static_cast<unsigned char>(data[i]);
+        if (c < 0x20 && c != '\t' && c != '\n' && c != '\r' && c != '\f' && c != '\v') return false;
+        if (c == 0x7f) return false;
+    }
+    return true;
+}
+
 /// A binary STL's corners, read in place from its records (50 bytes each after an 84-byte head).
 Mesh parseBinaryStl(const char* data, std::uint32_t count, const std::string& path) {
     return weld(3 * std::size_t(count), [&](std::size_t i, std::uint32_t* bits) {
@@ -396,9 +408,16 @@ Mesh readStl(const std::string& path) {
         if (in.bad()) throw Error("cannot read '" + path + "'");
     }
     Mesh mesh;
-    if (data.size() >= 84 &&
-        data.size() == 84 + 50 * std::uint64_t(binary::getU32(data.data() + 80))) {
+    const std::uint64_t binaryBytes = data.size() >= 84 ? 84 + 50 * std::uint64_t(binary::getU32(data.data() + 80)) : 0;
+    if (data.size() >= 84 && data.size() == binaryBytes) {
         mesh = parseBinaryStl(data.data(), binary::getU32(data.data() + 80), path);
+    } else if (data.size() >= 84 && !looksLikeText(data.data(), data.size())) {
+        // Binary data, and not the size its count needs: most often a file cut short, which read
+        // as text would only say that it does not begin with "solid".
+        throw Error("'" + path + "': a binary STL whose header counts " +
+                    std::to_string(binary::getU32(data.data() + 80)) + " triangles is " +
+                    std::to_string(binaryBytes) + " bytes long, and this file has " + std::to_string(data.size()) +
+                    ": it is cut short, has bytes after its last triangle, or is not an STL");
     } else {
         mesh = parseAsciiStl(std::string_view(data.data(), data.size()), path);
     }

@@ -284,6 +284,18 @@ TEST_CASE("STL: ASCII is parsed, a binary file starting with 'solid' is binary",
     CHECK_THROWS_WITH(readStl(dir.file("nan.stl")), Catch::Contains("triangle 2") && Catch::Contains("finite"));
     fs::create_directories(dir.file("folder.stl"));
     CHECK_THROWS_WITH(readStl(dir.file("folder.stl")), Catch::Contains("folder"));
+    // A binary STL cut short, or with bytes after its last record, whether or not its header
+    // begins with "solid": the count's size and the file's are named.
+    const std::string whole = slurp(dir.file("b.stl"));
+    REQUIRE(whole.size() == 84 + 50 * 12);
+    for (const std::size_t size : {std::size_t(84 + 50 * 12 - 7), std::size_t(100), std::size_t(84)}) {
+        writeStreamAtomically(dir.file("cut.stl"), [&](std::ostream& o) { o << whole.substr(0, size); });
+        CHECK_THROWS_WITH(readStl(dir.file("cut.stl")),
+                          Catch::Contains("counts 12 triangles") && Catch::Contains("684 bytes") &&
+                              Catch::Contains("has " + std::to_string(size)));
+    }
+    writeStreamAtomically(dir.file("long.stl"), [&](std::ostream& o) { o << whole << "extra"; });
+    CHECK_THROWS_WITH(readStl(dir.file("long.stl")), Catch::Contains("has 689"));
 }
 
 TEST_CASE("STL: equal corners are welded in order of appearance, -0 with +0", "[io]") {
