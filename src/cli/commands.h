@@ -81,6 +81,11 @@ int runCompare(const CompareArgs& args);
 /// @throw UsageError for anything else.
 Affine parseTransform(const std::string& text);
 
+/// @brief Warns on stderr when --threads asks for more threads than the machine runs at once: the
+/// job's arena is cut to that (job/memory.h, arenaThreads). Simulate's report carries the same
+/// warning; compare and study call this.
+void warnThreads(int requested);
+
 /// @brief Prints a deviation's summary line on stderr.
 void printDeviation(const Deviation& deviation);
 

@@ -32,7 +32,7 @@ CLI::App* addCompare(CLI::App& app, CompareArgs& a) {
                   "the property deviation_mm");
     c->add_option("--png", a.png, "A picture of the machined part in the same colours, with a legend in mm");
     c->add_option("--report", a.report, "A JSON report: areas by tolerance, extremes, RMS and the histogram");
-    c->add_option("--threads", a.threads, "Worker threads; 0 uses every core")
+    c->add_option("--threads", a.threads, "Worker threads; 0 uses every core. More than the machine runs at once are cut to that, with a warning")
         ->check(numberCheck(true))
         ->capture_default_str();
     return c;
@@ -48,6 +48,7 @@ int runCompare(const CompareArgs& a) {
     o.pngPath = a.png;
     o.reportPath = a.report;
     o.threads = a.threads;
+    warnThreads(a.threads);
     const CompareReport r = compareParts(o);
     const Deviation& d = r.deviation;
     std::printf("dexelmill: %s (%zu triangles%s) against %s (%zu triangles), tolerances -%g / +%g mm\n",

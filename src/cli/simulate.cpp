@@ -200,6 +200,15 @@ std::string where(const ReportLocation& l) {
 
 }  // namespace
 
+void warnThreads(int requested) {
+    const int runnable = runnableThreads();
+    if (requested > runnable)
+        std::fprintf(stderr,
+                     "dexelmill: warning: --threads %d: this machine runs at most %d threads at once (its cores, "
+                     "within the process's CPU affinity and quota); the job uses %d\n",
+                     requested, runnable, runnable);
+}
+
 void printDeviation(const Deviation& d) {
     const double pct = d.area > 0.0 ? 100.0 / d.area : 0.0;
     std::fprintf(stderr,
@@ -279,7 +288,9 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
                   "(in spacings)")
         ->check(numberCheck(false))
         ->capture_default_str();
-    c->add_option("--threads", a.threads, "Worker threads for every stage; 0 uses every core")
+    c->add_option("--threads", a.threads,
+                  "Worker threads for every stage; 0 uses every core. More than the machine runs at once\n"
+                  "(its cores, within the process's CPU affinity and quota) are cut to that, with a warning")
         ->check(numberCheck(true))
         ->capture_default_str();
     c->add_option("--max-memory", a.maxMemory,

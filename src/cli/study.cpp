@@ -84,6 +84,7 @@ int runStudy(const StudyArgs& a) {
     o.surfacePoints = a.surfacePoints;
     o.samplePoints = a.samples;
     o.plyDeviationDir = a.plyDir;
+    if (!a.job.quiet) warnThreads(a.job.threads);
     ProgressBar bar(!a.job.quiet && ProgressBar::stderrIsTerminal());
     o.progress = [&bar](const char* stage, std::size_t done, std::size_t total) { bar.update(stage, done, total); };
     const StudyResult r = runStudy(o);

@@ -85,7 +85,7 @@ CompareReport compareInArena(const CompareOptions& o) {
 }  // namespace
 
 CompareReport compareParts(const CompareOptions& o) {
-    tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena(arenaThreads(o.threads));
     return arena.execute([&] { return compareInArena(o); });
 }
 

@@ -11,6 +11,8 @@
 #include <limits>
 #include <string>
 
+#include <tbb/info.h>
+
 #include "dexelmill/error.h"
 #include "dexelmill/path/toolpath.h"
 
@@ -54,6 +56,12 @@ double peakMemoryMb() { return procNumber("/proc/self/status", "VmHWM:") / 1024.
 double currentMemoryMb() { return double(residentBytes()) / (1024.0 * 1024.0); }
 
 std::size_t processThreadCount() { return std::size_t(procNumber("/proc/self/status", "Threads:")); }
+
+int runnableThreads() { return std::max(1, tbb::info::default_concurrency()); }
+
+int arenaThreads(int requested) {
+    return requested > 0 ? std::min(requested, runnableThreads()) : runnableThreads();
+}
 
 bool resetPeakMemory() {
     malloc_trim(0);  // hand freed heap back first, so that the next peak is the next stage's own

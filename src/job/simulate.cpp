@@ -266,7 +266,7 @@ SimulateReport simulateInArena(const SimulateOptions& o);
 
 Simulation runSimulation(const SimulateOptions& o) {
     // Every stage's parallel work runs in one arena of the requested size.
-    tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena(arenaThreads(o.threads));
     return arena.execute([&] { return runStages(o); });
 }
 
@@ -370,6 +370,13 @@ Simulation runStages(const SimulateOptions& o) {
                                               [](const Move& m) { return m.rapid; }));
     report.toolChanges = program.path.toolChanges.size();
     std::vector<ReportWarning> notes;
+    if (o.threads > runnableThreads()) {
+        ReportWarning w;
+        w.message = "--threads " + std::to_string(o.threads) + ": this machine runs at most " +
+                    std::to_string(runnableThreads()) + " threads at once (its cores, within the process's CPU "
+                    "affinity and quota); the job uses " + std::to_string(runnableThreads());
+        notes.push_back(w);
+    }
     if (program.path.moves.empty()) {
         ReportWarning w;
         if (!o.inputs.empty()) w.where.file = o.inputs.back();
@@ -423,7 +430,7 @@ Simulation runStages(const SimulateOptions& o) {
     // Cut.
     t = Clock::now();
     CutOptions cutOptions;
-    cutOptions.threads = o.threads;
+    cutOptions.threads = arenaThreads(o.threads);
     cutOptions.turnTolerance = o.turnTolerance;
     if (design) {
         cutOptions.design = &design->dexels;
@@ -567,7 +574,7 @@ Simulation runStages(const SimulateOptions& o) {
 }  // namespace
 
 SimulateReport simulate(const SimulateOptions& o) {
-    tbb::task_arena arena(o.threads > 0 ? o.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena(arenaThreads(o.threads));
     return arena.execute([&] { return simulateInArena(o); });
 }
 

@@ -176,7 +176,7 @@ StudyResult runStudy(const StudyOptions& o) {
         if (std::none_of(familySets.begin(), familySets.end(), [&](FamilySet g) { return g.mask == f.mask; }))
             familySets.push_back(f);
     // The measurements use the job's thread count too.
-    tbb::task_arena arena(o.job.threads > 0 ? o.job.threads : tbb::task_arena::automatic);
+    tbb::task_arena arena(arenaThreads(o.job.threads));
 
     StudyResult result;
     result.subject = o.job.inputs.empty() ? std::string("program in memory") : o.job.inputs.front();

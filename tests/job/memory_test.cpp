@@ -9,6 +9,10 @@
 #include <optional>
 #include <string>
 
+#if defined(__linux__)
+#include <sched.h>
+#endif
+
 #include "dexelmill/error.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/job/simulate.h"
@@ -187,4 +191,54 @@ TEST_CASE("memory: a program whose moves will not fit stops in the reader, which
     g.maxMoves = 3;
     CHECK_THROWS_WITH(parseGcode(files.at("loop.ngc"), "loop.ngc", g),
                       Catch::Matchers::Contains("more than 3 moves") && !Catch::Matchers::Contains("memory"));
+}
+
+TEST_CASE("threads: a request beyond what the machine runs is cut to it, and said", "[job][memory][errors]") {
+    const int runnable = runnableThreads();
+    REQUIRE(runnable >= 1);
+#if defined(__linux__)
+    // No more than the CPUs the process may run on.
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    if (sched_getaffinity(0, sizeof set, &set) == 0) CHECK(runnable <= CPU_COUNT(&set));
+#endif
+    CHECK(arenaThreads(0) == runnable);
+    CHECK(arenaThreads(1) == 1);
+    CHECK(arenaThreads(runnable) == runnable);
+    CHECK(arenaThreads(runnable + 1) == runnable);
+    CHECK(arenaThreads(100000) == runnable);
+
+    // A job asked for 100,000 threads runs as one on every runnable thread, with the same part,
+    // and its report says what it did. (Each stage used to size its work by the arena: the mesh
+    // check's star building scanned the triangles once per requested thread.)
+    SimulateOptions o;
+    ToolPath path;
+    path.files.push_back("slot.nc");
+    Move m;
+    m.start = Vec3(2, 15, 8);
+    m.end = Vec3(38, 15, 8);
+    m.tool = 1;
+    m.source = SourceRef{0, 1};
+    path.moves.push_back(m);
+    Program program;
+    program.path = path;
+    o.program = program;
+    o.inputs = {"slot.nc"};
+    o.defaultTool = flatEndMill(6.0, {20.0, 30.0});
+    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
+    o.resolution = 0.5;
+    o.threads = runnable;
+    const SimulateReport usual = runSimulation(o).report;
+    o.threads = 100000;
+    const SimulateReport asked = runSimulation(o).report;
+    CHECK(asked.meshTriangles == usual.meshTriangles);
+    CHECK(asked.removedVolumeMm3 == usual.removedVolumeMm3);
+    const auto said = std::find_if(asked.warnings.begin(), asked.warnings.end(), [](const ReportWarning& w) {
+        return w.message.find("--threads 100000") != std::string::npos;
+    });
+    REQUIRE(said != asked.warnings.end());
+    CHECK_THAT(said->message, Catch::Matchers::Contains("the job uses " + std::to_string(runnable)));
+    CHECK(std::none_of(usual.warnings.begin(), usual.warnings.end(), [](const ReportWarning& w) {
+        return w.message.find("--threads") != std::string::npos;
+    }));
 }

@@ -34,6 +34,17 @@ double peakMemoryMb();
 /// @brief The threads of this process now (0 when the system does not say).
 std::size_t processThreadCount();
 
+/// @brief The most threads this process can run at once: its cores, within its CPU affinity and
+/// its cgroup's CPU quota (TBB's default concurrency).
+int runnableThreads();
+
+/// @brief The size of a job's task arena for a requested thread count: every runnable thread for
+/// 0, else the request up to runnableThreads(). An arena larger than that runs no more threads,
+/// and the stages size their work by the arena (a part per thread, a batch of buffers per
+/// thread), so a request of 100,000 threads would only multiply their work and their memory.
+/// Callers that take the count from a user say when it is cut (SimulateReport's warnings).
+int arenaThreads(int requested);
+
 /// @brief Resident memory of this process now (MiB).
 double currentMemoryMb();
 
