@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <limits>
 
 #include <tbb/blocked_range.h>
@@ -57,6 +58,9 @@ struct DesignPart::Index {
     Mesh mesh;  ///< emptied once the index is built
     bool signs = false;
     std::unique_ptr<MeshDistance> distance;
+    /// A build that failed: kept and thrown again, so the threads waiting on it and every later
+    /// caller get its error rather than each building again.
+    std::exception_ptr failure;
 };
 
 DesignPart::DesignPart(TriDexelStock d, Mesh mesh, std::unique_ptr<MeshDistance> distance, bool signs)
@@ -75,11 +79,17 @@ DesignPart& DesignPart::operator=(DesignPart&&) noexcept = default;
 DesignPart::~DesignPart() = default;
 
 const MeshDistance& DesignPart::distance() const {
+    if (!index_) throw Error("the design part was moved from: it has no distance");
     Index& index = *index_;
     tbb::collaborative_call_once(index.once, [&index] {
-        index.distance = std::make_unique<MeshDistance>(index.mesh, index.signs);
-        index.mesh = Mesh{};
+        try {
+            index.distance = std::make_unique<MeshDistance>(index.mesh, index.signs);
+            index.mesh = Mesh{};
+        } catch (...) {
+            index.failure = std::current_exception();
+        }
     });
+    if (index.failure) std::rethrow_exception(index.failure);
     if (!index.distance) throw Error("the design's distance was handed over");
     return *index.distance;
 }

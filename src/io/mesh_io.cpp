@@ -411,15 +411,18 @@ Mesh readStl(const std::string& path) {
     const std::uint64_t binaryBytes = data.size() >= 84 ? 84 + 50 * std::uint64_t(binary::getU32(data.data() + 80)) : 0;
     if (data.size() >= 84 && data.size() == binaryBytes) {
         mesh = parseBinaryStl(data.data(), binary::getU32(data.data() + 80), path);
-    } else if (data.size() >= 84 && !looksLikeText(data.data(), data.size())) {
-        // Binary data, and not the size its count needs: most often a file cut short, which read
-        // as text would only say that it does not begin with "solid".
-        throw Error("'" + path + "': a binary STL whose header counts " +
-                    std::to_string(binary::getU32(data.data() + 80)) + " triangles is " +
-                    std::to_string(binaryBytes) + " bytes long, and this file has " + std::to_string(data.size()) +
-                    ": it is cut short, has bytes after its last triangle, or is not an STL");
     } else {
-        mesh = parseAsciiStl(std::string_view(data.data(), data.size()), path);
+        try {
+            mesh = parseAsciiStl(std::string_view(data.data(), data.size()), path);
+        } catch (const Error&) {
+            // Not text either. Binary data of the wrong length is most often a file cut short,
+            // which the text reader would only say does not begin with "solid".
+            if (data.size() < 84 || looksLikeText(data.data(), data.size())) throw;
+            throw Error("'" + path + "': a binary STL whose header counts " +
+                        std::to_string(binary::getU32(data.data() + 80)) + " triangles is " +
+                        std::to_string(binaryBytes) + " bytes long, and this file has " +
+                        std::to_string(data.size()) + ": it is cut short, has bytes after its last triangle, or is not an STL");
+        }
     }
     if (mesh.triangles.empty()) throw Error("'" + path + "' holds no triangle");
     return mesh;

@@ -49,6 +49,23 @@ std::size_t cgroupLimit() {
     return 0;
 }
 
+/// The CPUs the cgroup's quota allows (v2 cpu.max "QUOTA PERIOD", else v1 cpu.cfs_quota_us and
+/// cpu.cfs_period_us), rounded up; 0 for no quota. TBB 2021's default concurrency does not read it.
+int cgroupCpus() {
+    double quota = 0.0, period = 0.0;
+    {
+        std::ifstream in("/sys/fs/cgroup/cpu.max");
+        std::string q;
+        if (in >> q >> period && q != "max") quota = std::strtod(q.c_str(), nullptr);
+    }
+    if (!(quota > 0.0 && period > 0.0)) {
+        std::ifstream q("/sys/fs/cgroup/cpu/cpu.cfs_quota_us"), p("/sys/fs/cgroup/cpu/cpu.cfs_period_us");
+        if (!(q >> quota && p >> period)) return 0;  // v1 says -1 for no quota
+    }
+    if (!(quota > 0.0 && period > 0.0)) return 0;
+    return int(std::max(1.0, std::ceil(quota / period)));
+}
+
 }  // namespace
 
 double peakMemoryMb() { return procNumber("/proc/self/status", "VmHWM:") / 1024.0; }
@@ -57,7 +74,14 @@ double currentMemoryMb() { return double(residentBytes()) / (1024.0 * 1024.0); }
 
 std::size_t processThreadCount() { return std::size_t(procNumber("/proc/self/status", "Threads:")); }
 
-int runnableThreads() { return std::max(1, tbb::info::default_concurrency()); }
+int runnableThreads() {
+    static const int runnable = [] {
+        const int cores = std::max(1, tbb::info::default_concurrency());  // within the CPU affinity
+        const int quota = cgroupCpus();
+        return quota > 0 ? std::min(cores, quota) : cores;
+    }();
+    return runnable;
+}
 
 int arenaThreads(int requested) {
     return requested > 0 ? std::min(requested, runnableThreads()) : runnableThreads();

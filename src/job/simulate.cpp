@@ -439,7 +439,10 @@ Simulation runStages(const SimulateOptions& o) {
     }
     if (o.progress) cutOptions.progress = [&](std::size_t done, std::size_t total) { o.progress("cutting", done, total); };
     const CutResult cut = cutStock(stock, program.path, tools, cutOptions);
+    report.timingS.cut = seconds(t);
     if (design) {
+        // The gouges' depths (and the distance index, built when first needed) are the design's.
+        t = Clock::now();
         for (const Gouge& g : findGouges(*design, stock.lattice(), cut, o.gougeTolerance)) {
             const Move& mv = program.path.moves[g.move];
             const SourceLocation at = program.path.where(mv.source);
@@ -448,8 +451,8 @@ Simulation runStages(const SimulateOptions& o) {
         }
         std::stable_sort(report.gouges.begin(), report.gouges.end(),
                          [](const ReportGouge& a, const ReportGouge& b) { return a.depthMm > b.depthMm; });
+        report.timingS.design += seconds(t);
     }
-    report.timingS.cut = seconds(t);
     if (design) {
         t = Clock::now();
         const Excess excess = findExcess(*design, stock, o.excessTolerance);
@@ -468,9 +471,11 @@ Simulation runStages(const SimulateOptions& o) {
         report.collisions.push_back({c.move, {at.file, at.line}, c.kind == CollisionKind::Rapid ? "rapid" : "shank",
                                      c.volume});
     }
+    // The job's own notes first (a thread count cut, the stock it chose, an open design): a long
+    // program's diagnostics would push them past what the summary prints.
+    for (ReportWarning& n : notes) report.warnings.push_back(std::move(n));
     for (const Diagnostic& d : program.diagnostics)
         report.warnings.push_back({{d.where.file, d.where.line}, d.message});
-    for (ReportWarning& n : notes) report.warnings.push_back(std::move(n));
     for (int a = 0; a < 3; ++a)
         if (stock.has(axisFromIndex(a))) report.familyVolumesMm3[a] = stock.volume(axisFromIndex(a));
     report.finalVolumeMm3 = stock.volume(measure);

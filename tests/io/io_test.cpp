@@ -296,6 +296,11 @@ TEST_CASE("STL: ASCII is parsed, a binary file starting with 'solid' is binary",
     }
     writeStreamAtomically(dir.file("long.stl"), [&](std::ostream& o) { o << whole << "extra"; });
     CHECK_THROWS_WITH(readStl(dir.file("long.stl")), Catch::Contains("has 689"));
+    // An ASCII STL whose name runs past byte 80 with control bytes in it is still text.
+    std::string padded = ascii.str();
+    padded.replace(0, std::string("solid cube").size(), "solid " + std::string(90, 'n') + std::string(4, '\0'));
+    writeStreamAtomically(dir.file("padded.stl"), [&](std::ostream& o) { o << padded; });
+    CHECK(meshVolume(readStl(dir.file("padded.stl"))) == Approx(8.0));
 }
 
 TEST_CASE("STL: equal corners are welded in order of appearance, -0 with +0", "[io]") {

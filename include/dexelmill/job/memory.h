@@ -34,8 +34,8 @@ double peakMemoryMb();
 /// @brief The threads of this process now (0 when the system does not say).
 std::size_t processThreadCount();
 
-/// @brief The most threads this process can run at once: its cores, within its CPU affinity and
-/// its cgroup's CPU quota (TBB's default concurrency).
+/// @brief The most threads this process can run at once: its cores within its CPU affinity (TBB's
+/// default concurrency), and no more than its cgroup's CPU quota allows, rounded up.
 int runnableThreads();
 
 /// @brief The size of a job's task arena for a requested thread count: every runnable thread for
