@@ -149,6 +149,14 @@ SimulateOptions toOptions(const SimulateArgs& a) {
         throw UsageError(std::string("--families: ") + e.what());
     }
     o.chordTolerance = a.chordTolerance;
+    if (a.turnTolerance < kMinTurnTolerance) {
+        char text[300];
+        std::snprintf(text, sizeof text,
+                      "--turn-tolerance: %g mm is finer than the stock keeps (its dexel ends are floats, 8e-6 mm "
+                      "apart at 100 mm); give %g mm or more",
+                      a.turnTolerance, kMinTurnTolerance);
+        throw UsageError(text);
+    }
     o.turnTolerance = a.turnTolerance;
     o.machine = a.machine;
     if (!a.start.empty()) {
@@ -259,7 +267,7 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
     c->add_option("--turn-tolerance", a.turnTolerance,
                   "Tolerance of the sweep of a move whose tool axis turns (simultaneous 5-axis), in mm:\n"
                   "material deeper than this inside some pose of the tool is removed, and nothing the tool\n"
-                  "never reaches is removed")
+                  "never reaches is removed. At least 1e-6; the time grows about as its inverse square root")
         ->check(numberCheck(false))
         ->capture_default_str();
     c->add_option("--machine", a.machine,

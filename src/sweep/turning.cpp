@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "dexelmill/error.h"
@@ -179,8 +180,12 @@ Box turningMoveBox(const Move& m, double length, double radius) {
 
 TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     : tool_(tool), law_(move), epsilon_(epsilon) {
-    if (!(epsilon > 0.0) || !std::isfinite(epsilon))
-        throw Error("the tolerance of a turning move's sweep must be positive, not " + std::to_string(epsilon));
+    if (!(epsilon >= kMinTurnTolerance) || !std::isfinite(epsilon)) {
+        char text[200];
+        std::snprintf(text, sizeof text, "the tolerance of a turning move's sweep must be at least %g mm, not %g",
+                      kMinTurnTolerance, epsilon);
+        throw Error(text);
+    }
     bounds_ = turningMoveBox(move, tool.totalLength(), tool.maxRadius()).padded(kBoxSlack);
     // Every tool point lies within hypot(total length, max radius) of the tip.
     speed_ = law_.speedBound(std::hypot(tool.totalLength(), tool.maxRadius()));

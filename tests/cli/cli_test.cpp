@@ -237,6 +237,10 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     const Run badTolerance = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 0 --quiet");
     CHECK(badTolerance.code != 0);
     CHECK_THAT(badTolerance.err, Contains("--turn-tolerance") && Contains("positive"));
+    // Finer than the stock keeps: refused at once, where it would have run for hours.
+    const Run tooFine = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 1e-9 --quiet");
+    CHECK(tooFine.code == 2);
+    CHECK_THAT(tooFine.err, Contains("--turn-tolerance: 1e-09 mm is finer than the stock keeps") && Contains("1e-06 mm or more"));
 }
 
 TEST_CASE("a study writes its table, CSV, plot and deviation meshes", "[cli][study]") {

@@ -25,6 +25,12 @@ namespace dexelmill {
 /// @brief The default tolerance epsilon (mm) of a turning move's sweep.
 constexpr double kDefaultTurnTolerance = 1e-4;
 
+/// @brief The finest tolerance (mm) a turning move's sweep is asked for. The stock keeps its
+/// dexel ends as floats (stock/dexel.h), 8e-6 mm apart at 100 mm from the lattice origin, so a
+/// finer answer could not be kept; and the search's cost grows about as epsilon^-1/2 (a one-move
+/// job: 6 s at 1e-4 mm, 53 s at 1e-6, hours at 1e-9).
+constexpr double kMinTurnTolerance = 1e-6;
+
 /// @brief The angle (radians, in [0, pi]) the axis of a move turns through; 0 for a fixed axis.
 double turnAngle(const Move& move);
 
@@ -62,7 +68,7 @@ class TurningSweep {
   public:
     /// @brief Sweeps `tool` along `move`, whose axis turns from `*move.startAxis` to `move.axis`
     /// (a move with no start axis is swept with its one axis).
-    /// @throw Error if the axes are opposite or epsilon is not positive and finite.
+    /// @throw Error if the axes are opposite or epsilon is below kMinTurnTolerance or not finite.
     TurningSweep(const Tool& tool, const Move& move, double epsilon = kDefaultTurnTolerance);
 
     /// @brief The tool pose at move parameter u in [0, 1].
