@@ -140,8 +140,8 @@ std::string gougeCsv(const SimulateReport& r) {
 
 double chooseResolution(const Box& stock, double cells) {
     const Vec3 s = stock.size();
-    const double longest = std::max({s.x, s.y, s.z});
-    const double raw = longest / cells;
+    const double longest = std::max({s.x, s.y, s.z}), thinnest = std::min({s.x, s.y, s.z});
+    const double raw = std::min(longest / cells, thinnest / kMinCellsAcross);
     const double decade = std::pow(10.0, std::floor(std::log10(raw)));
     for (double m : {5.0, 2.0, 1.0})
         if (m * decade <= raw) return m * decade;

@@ -236,6 +236,16 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
             notes.push_back(w);
         }
     }
+    // kMinCellsAcross (a 20 x 16 x 5 mm block at 10 mm gave an empty mesh and a part of 2,000 mm^3).
+    const int thin = size.x <= size.y && size.x <= size.z ? 0 : (size.y <= size.z ? 1 : 2);
+    if (size[thin] < kMinCellsAcross * h) {
+        char text[300];
+        std::snprintf(text, sizeof text,
+                      "a spacing of %g mm is too coarse for this %g x %g x %g mm stock: the lattice needs %d cells "
+                      "across its thinnest side (%g mm along %c); give --resolution %g mm or less",
+                      h, size.x, size.y, size.z, kMinCellsAcross, size[thin], "xyz"[thin], size[thin] / kMinCellsAcross);
+        throw Error(text);
+    }
     const Lattice lattice = Lattice::fromBox(box, h);
     // The stock's dexels (and the design's, cast on the same lattice) and, at the least, the level
     // set and mesh of the block's own faces.

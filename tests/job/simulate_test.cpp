@@ -143,6 +143,9 @@ TEST_CASE("the default spacing is a round fraction of the stock", "[job]") {
     CHECK(chooseResolution(Box{Vec3(0.0), Vec3(1694, 890, 870)}) == Approx(2.0));
     CHECK(chooseResolution(Box{Vec3(0.0), Vec3(80, 80, 20)}) == Approx(0.2));
     CHECK(chooseResolution(Box{Vec3(0.0), Vec3(1000, 800, 440)}) == Approx(2.0));
+    // A sheet: two cells across its 1 mm, not 1/400 of its 400 mm.
+    CHECK(chooseResolution(Box{Vec3(0.0), Vec3(400, 400, 1)}) == Approx(0.5));
+    CHECK(chooseResolution(Box{Vec3(0.0), Vec3(400, 400, 0.3)}) == Approx(0.1));
 }
 
 TEST_CASE("programs after a project replace its programs; its tools and stock stay", "[job]") {
@@ -368,4 +371,31 @@ TEST_CASE("a round stock: bar stock faced along its length loses its analytic ca
     CHECK(r.stockBox.hi == Vec3(40, 10, 10));
     CHECK(r.meshClosed);
     CHECK(r.collisions.empty());
+}
+
+TEST_CASE("simulate: a spacing coarser than half the stock's thinnest side is refused", "[job][errors][degenerate]") {
+    SimulateOptions o;
+    ToolPath path;
+    path.files.push_back("slot.nc");
+    Move m;
+    m.start = Vec3(2, 8, 4);
+    m.end = Vec3(18, 8, 4);
+    m.tool = 1;
+    m.source = SourceRef{0, 1};
+    path.moves.push_back(m);
+    Program program;
+    program.path = path;
+    o.program = program;
+    o.inputs = {"slot.nc"};
+    o.defaultTool = flatEndMill(3.0, {10.0, 20.0});
+    o.stockBox = Box{Vec3(0.0), Vec3(20, 16, 5)};
+    // Two cells across the 5 mm: 2.5 mm runs, anything coarser stops and names the largest.
+    o.resolution = 2.5;
+    CHECK(runSimulation(o).report.meshTriangles > 0);
+    for (const double h : {2.6, 10.0, 1e6}) {
+        o.resolution = h;
+        CHECK_THROWS_WITH(runSimulation(o), Catch::Contains("too coarse for this 20 x 16 x 5 mm stock") &&
+                                                Catch::Contains("5 mm along z") &&
+                                                Catch::Contains("give --resolution 2.5 mm or less"));
+    }
 }

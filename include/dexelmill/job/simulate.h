@@ -253,8 +253,14 @@ std::string reportJson(const SimulateReport& report);
 /// (1 for a rapid move). Text fields are quoted.
 std::string gougeCsv(const SimulateReport& report);
 
+/// @brief The fewest lattice cells a spacing may leave across the stock's thinnest side: coarser,
+/// the lattice rounds the stock up to whole cells of more material than it has, and the level set
+/// has no inside to mesh. A job given a coarser spacing stops with an error naming the largest.
+constexpr int kMinCellsAcross = 2;
+
 /// @brief A default lattice spacing for a stock box: its longest side divided by `cells` (about),
-/// rounded down to 1, 2 or 5 times a power of ten.
+/// but no more than the thinnest side over kMinCellsAcross, rounded down to 1, 2 or 5 times a
+/// power of ten.
 double chooseResolution(const Box& stock, double cells = 400);
 
 }  // namespace dexelmill
