@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "dexelmill/error.h"
+#include "memory/pages.h"
 #include "surface/detail/tile_fill.h"
 
 namespace dexelmill {
@@ -87,6 +88,16 @@ MeshCastStats castMesh(const Mesh& mesh, TriDexelStock& stock) {
     constexpr int kTile = DexelTile::kTile;
     std::atomic<std::size_t> hitCount{0}, unpaired{0};
 
+    // Each triangle's dexel index box across the family, and the triangles by tile row: made
+    // once for the three families, so that their pages are faulted in once (on a virtual machine
+    // the faults of three fresh lists cost as much as the cast's own work on bear's design).
+    struct Span {
+        int b0, b1, c0, c1;
+    };
+    std::vector<Span, NoZeroAllocator<Span>> spans;
+    detail::reservePopulated(spans, mesh.triangles.size());
+    spans.resize(mesh.triangles.size());
+    std::vector<std::uint32_t, NoZeroAllocator<std::uint32_t>> bucket;
     for (int a = 0; a < 3; ++a) {
         const Axis axis = axisFromIndex(a);
         if (!stock.has(axis)) continue;
@@ -95,11 +106,6 @@ MeshCastStats castMesh(const Mesh& mesh, TriDexelStock& stock) {
         DexelFamily& fam = stock.family(axis);
         const double len = lat.n[a] * lat.h;
 
-        // Each triangle's dexel index box across the family, and a bucket per tile row.
-        struct Span {
-            int b0, b1, c0, c1;
-        };
-        std::vector<Span> spans(mesh.triangles.size());
         tbb::parallel_for(std::size_t(0), mesh.triangles.size(), [&](std::size_t t) {
             Box box;
             for (std::uint32_t i : mesh.triangles[t]) box.expand(mesh.vertices[i]);
@@ -113,7 +119,11 @@ MeshCastStats castMesh(const Mesh& mesh, TriDexelStock& stock) {
             for (int tc = s.c0 / kTile; tc <= s.c1 / kTile; ++tc) ++rowStart[std::size_t(tc) + 1];
         }
         for (std::size_t r = 1; r < rowStart.size(); ++r) rowStart[r] += rowStart[r - 1];
-        std::vector<std::uint32_t> bucket(rowStart.back());
+        if (bucket.capacity() < rowStart.back()) {
+            bucket = {};
+            detail::reservePopulated(bucket, rowStart.back());
+        }
+        bucket.resize(rowStart.back());
         {
             std::vector<std::size_t> fillAt(rowStart.begin(), rowStart.end() - 1);
             for (std::size_t t = 0; t < spans.size(); ++t) {
