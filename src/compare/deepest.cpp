@@ -4,11 +4,19 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <queue>
 #include <utility>
 #include <vector>
 
+#include <tbb/parallel_for.h>
+
 namespace dexelmill {
+
+double endRounding(const Lattice& lattice) {
+    const double longest = std::max({lattice.n[0], lattice.n[1], lattice.n[2]}) * lattice.h;
+    return std::ldexp(std::max(longest, 1.0), -23);
+}
 
 Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, StretchSpan stretches,
                      double eps) {
@@ -87,6 +95,38 @@ Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, Stret
         push(piece.stretch, mid, piece.s1);
     }
     return best;
+}
+
+std::vector<Deepest> deepestPoints(const DesignPart& design, const Lattice& lattice,
+                                   const std::vector<DexelStretch>& stretches, const std::vector<std::size_t>& groups,
+                                   double eps) {
+    const std::size_t count = groups.empty() ? 0 : groups.size() - 1;
+    std::vector<Deepest> deepest(count);
+    if (stretches.empty()) return deepest;
+    const double radius = kNearSpacings * lattice.h;
+    std::vector<Box> where(stretches.size());
+    // Per group: the depth up to which local distances are exact.
+    std::vector<double> trusted(count, std::numeric_limits<double>::infinity());
+    for (std::size_t g = 0; g < count; ++g)
+        for (std::size_t i = groups[g]; i < groups[g + 1]; ++i) {
+            const DexelStretch& s = stretches[i];
+            const double r = std::min(s.bound, radius);
+            if (r < s.bound) trusted[g] = std::min(trusted[g], r);
+            const int a = index(s.family), b = (a + 1) % 3, c = (a + 2) % 3;
+            Vec3 lo, hi;
+            lo[a] = lattice.origin[a] + s.lo;
+            hi[a] = lattice.origin[a] + s.hi;
+            lo[b] = hi[b] = lattice.coord(axisFromIndex(b), s.ib);
+            lo[c] = hi[c] = lattice.coord(axisFromIndex(c), s.ic);
+            where[i] = Box{lo - Vec3(r), hi + Vec3(r)};
+        }
+    const NearDistance near = design.distanceNear(where);
+    tbb::parallel_for(std::size_t(0), count, [&](std::size_t g) {
+        const StretchSpan span{stretches.data() + groups[g], groups[g + 1] - groups[g]};
+        deepest[g] = deepestPoint(*near, lattice, span, eps);
+        if (near.local && deepest[g].depth > trusted[g]) deepest[g] = deepestPoint(design.distance(), lattice, span, eps);
+    });
+    return deepest;
 }
 
 }  // namespace dexelmill

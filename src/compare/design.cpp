@@ -2,9 +2,11 @@
 #include "dexelmill/compare/design.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <mutex>
 
 #include <tbb/blocked_range.h>
 #include <tbb/collaborative_call_once.h>
@@ -32,6 +34,12 @@ constexpr double kMinDepthBound = 1e-4;
 /// design's largest coordinate) smaller than an STL design's box and still hold it.
 constexpr double kFloatSlack = 1e-6;
 
+/// The grid a local index (DesignPart::distanceNear) sorts its boxes on: this many cells along the
+/// longest side of their union.
+constexpr int kNearGridCells = 32;
+/// Past this many grid entries a box on average, a local index is not tried.
+constexpr std::size_t kNearEntriesPerBox = 64;
+
 }  // namespace
 
 
@@ -55,7 +63,11 @@ Mesh readDesign(const std::string& path, const std::optional<Affine>& place) {
 /// The distance index, or what builds it once.
 struct DesignPart::Index {
     tbb::collaborative_once_flag once;
-    Mesh mesh;  ///< emptied once the index is built
+    /// Guards `mesh` and `built`: a local index (distanceNear) reads the mesh, which the whole
+    /// index's build lets go of when it is done. Held only to copy or drop the pointer.
+    std::mutex guard;
+    std::shared_ptr<const Mesh> mesh;  ///< null once the index is built
+    bool built = false;
     bool signs = false;
     std::unique_ptr<MeshDistance> distance;
     /// A build that failed: kept and thrown again, so the threads waiting on it and every later
@@ -68,9 +80,10 @@ DesignPart::DesignPart(TriDexelStock d, Mesh mesh, std::unique_ptr<MeshDistance>
     index_->signs = signs;
     if (distance) {
         index_->distance = std::move(distance);
+        index_->built = true;
         tbb::collaborative_call_once(index_->once, [] {});
     } else {
-        index_->mesh = std::move(mesh);
+        index_->mesh = std::make_shared<const Mesh>(std::move(mesh));
     }
 }
 
@@ -83,8 +96,10 @@ const MeshDistance& DesignPart::distance() const {
     Index& index = *index_;
     tbb::collaborative_call_once(index.once, [&index] {
         try {
-            index.distance = std::make_unique<MeshDistance>(index.mesh, index.signs);
-            index.mesh = Mesh{};
+            index.distance = std::make_unique<MeshDistance>(*index.mesh, index.signs);
+            const std::lock_guard<std::mutex> lock(index.guard);
+            index.mesh.reset();
+            index.built = true;
         } catch (...) {
             index.failure = std::current_exception();
         }
@@ -97,6 +112,105 @@ const MeshDistance& DesignPart::distance() const {
 std::unique_ptr<MeshDistance> DesignPart::takeDistance() {
     distance();
     return std::move(index_->distance);
+}
+
+NearDistance DesignPart::distanceNear(const std::vector<Box>& where) const {
+    if (!index_) throw Error("the design part was moved from: it has no distance");
+    NearDistance near;
+    auto whole = [&] {
+        near.index = &distance();
+        return std::move(near);
+    };
+    for (const Box& b : where)
+        if (!std::isfinite(b.lo.x + b.lo.y + b.lo.z + b.hi.x + b.hi.y + b.hi.z)) return whole();
+    std::shared_ptr<const Mesh> held;
+    {
+        const std::lock_guard<std::mutex> lock(index_->guard);
+        if (!index_->built) held = index_->mesh;
+    }
+    if (!held) return whole();
+    const Mesh& mesh = *held;
+    // The boxes, clipped to the design's, on a coarse grid over their union: a triangle is tested
+    // against the boxes of the cells its own box spans.
+    const Box meshBox = mesh.bounds();
+    std::vector<Box> boxes;
+    Box all;
+    for (const Box& b : where) {
+        const Box clipped{glm::max(b.lo, meshBox.lo), glm::min(b.hi, meshBox.hi)};
+        if (clipped.isEmpty()) continue;
+        boxes.push_back(clipped);
+        all.expand(clipped);
+    }
+    std::vector<std::uint8_t> chosen(mesh.triangles.size(), 0);
+    if (!boxes.empty()) {
+        // Cells no smaller than the median box, so that most boxes span at most two a side.
+        const Vec3 size = all.size();
+        std::vector<double> sides(boxes.size());
+        for (std::size_t i = 0; i < boxes.size(); ++i) {
+            const Vec3 b = boxes[i].size();
+            sides[i] = std::max({b.x, b.y, b.z});
+        }
+        std::nth_element(sides.begin(), sides.begin() + std::ptrdiff_t(sides.size() / 2), sides.end());
+        const double longest = std::max({size.x, size.y, size.z});
+        const double cell = longest > 0.0 ? std::max(longest / kNearGridCells, sides[sides.size() / 2]) : 1.0;
+        std::array<int, 3> cells{};
+        for (int k = 0; k < 3; ++k) cells[std::size_t(k)] = std::clamp(int(std::ceil(size[k] / cell)), 1, kNearGridCells);
+        auto cellOf = [&](int k, double at) {
+            return std::clamp(int(std::floor((at - all.lo[k]) / cell)), 0, cells[std::size_t(k)] - 1);
+        };
+        auto flat = [&](int x, int y, int z) { return std::size_t(x) + std::size_t(cells[0]) * (std::size_t(y) + std::size_t(cells[1]) * std::size_t(z)); };
+        std::vector<std::size_t> start(std::size_t(cells[0]) * std::size_t(cells[1]) * std::size_t(cells[2]) + 1, 0);
+        auto eachCell = [&](const Box& b, auto&& use) {
+            const int x0 = cellOf(0, b.lo.x), x1 = cellOf(0, b.hi.x), y0 = cellOf(1, b.lo.y), y1 = cellOf(1, b.hi.y),
+                      z0 = cellOf(2, b.lo.z), z1 = cellOf(2, b.hi.z);
+            for (int z = z0; z <= z1; ++z)
+                for (int y = y0; y <= y1; ++y)
+                    for (int x = x0; x <= x1; ++x) use(flat(x, y, z));
+        };
+        for (const Box& b : boxes) eachCell(b, [&](std::size_t c) { ++start[c + 1]; });
+        for (std::size_t c = 1; c < start.size(); ++c) start[c] += start[c - 1];
+        // Boxes much larger than most, many of them: the whole index serves as well.
+        if (start.back() > kNearEntriesPerBox * boxes.size() + start.size()) return whole();
+        std::vector<std::uint32_t> listed(start.back());
+        {
+            std::vector<std::size_t> at(start.begin(), start.end() - 1);
+            for (std::uint32_t i = 0; i < boxes.size(); ++i) eachCell(boxes[i], [&](std::size_t c) { listed[at[c]++] = i; });
+        }
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 4096), [&](const auto& r) {
+            for (std::size_t t = r.begin(); t != r.end(); ++t) {
+                Box tb;
+                for (const std::uint32_t v : mesh.triangles[t]) tb.expand(mesh.vertices[v]);
+                if (!tb.overlaps(all)) continue;
+                bool hit = false;
+                eachCell(tb, [&](std::size_t c) {
+                    for (std::size_t k = start[c]; k < start[c + 1] && !hit; ++k) hit = tb.overlaps(boxes[listed[k]]);
+                });
+                chosen[t] = hit;
+            }
+        });
+    }
+    const std::size_t count = std::size_t(std::count(chosen.begin(), chosen.end(), std::uint8_t(1)));
+    if (double(count) > kNearShare * double(mesh.triangles.size())) return whole();
+    // Those triangles, with their own vertices.
+    Mesh part;
+    part.triangles.reserve(count);
+    std::vector<std::uint32_t> renumber(mesh.vertices.size(), ~0u);
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+        if (!chosen[t]) continue;
+        Mesh::Triangle tri = mesh.triangles[t];
+        for (std::uint32_t& v : tri) {
+            if (renumber[v] == ~0u) {
+                renumber[v] = std::uint32_t(part.vertices.size());
+                part.vertices.push_back(mesh.vertices[v]);
+            }
+            v = renumber[v];
+        }
+        part.triangles.push_back(tri);
+    }
+    held.reset();
+    near.local = std::make_unique<MeshDistance>(part, false);
+    near.index = near.local.get();
+    return near;
 }
 
 DesignPart loadDesign(Mesh mesh, const std::string& path, const Lattice& lattice, FamilySet families, bool signs) {
@@ -176,16 +290,15 @@ std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, 
         if (i == 0 || stretches[i].move != stretches[i - 1].move) groups.push_back(i);
     groups.push_back(stretches.size());
     const double eps = depthBound(tolerance, lattice.h);
-
-    std::vector<Deepest> deepest(groups.size() - 1);
-    tbb::parallel_for(std::size_t(0), groups.size() - 1, [&](std::size_t g) {
-        std::vector<DexelStretch> lines;
-        for (std::size_t i = groups[g]; i < groups[g + 1]; ++i) {
-            const DesignStretch& s = stretches[i];
-            lines.push_back({s.family, s.ib, s.ic, double(s.lo), double(s.hi)});
-        }
-        deepest[g] = deepestPoint(design.distance(), lattice, {lines.data(), lines.size()}, eps);
-    });
+    // Each stretch lies within its reach of the design's surface: the ends of the design's segment
+    // along the dexel.
+    const double rounding = endRounding(lattice);
+    std::vector<DexelStretch> lines(stretches.size());
+    for (std::size_t i = 0; i < stretches.size(); ++i) {
+        const DesignStretch& s = stretches[i];
+        lines[i] = {s.family, s.ib, s.ic, double(s.lo), double(s.hi), s.reach + rounding};
+    }
+    const std::vector<Deepest> deepest = deepestPoints(design, lattice, lines, groups, eps);
     // Volumes as the report measures them: the z family's, else x's, else y's.
     const Axis measure = design.dexels.measuringFamily();
     std::vector<Gouge> gouges;

@@ -88,6 +88,8 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
                step(c, atC) * stride[std::size_t(c)];
     };
 
+    // The design's segment ends are surface points to a float's rounding.
+    const double rounding = endRounding(lattice);
     Excess result;
     // The pieces to search, and the measuring family's volume per cell. Each row of dexels (one
     // ic of a family) is differenced on its own thread, twice: first to sum its volume per cell
@@ -156,7 +158,7 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
                 const double bound = alongBound(p);
                 if (!(bound > tolerance)) return;
                 search[next] = p.line;
-                search[next++].bound = bound;
+                search[next++].bound = bound + rounding;
             });
         });
     }
@@ -230,11 +232,7 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
         if (r != kNone) regionCells[r].push_back(idCell[i]);
     }
     const double eps = depthBound(tolerance, lattice.h);
-    std::vector<Deepest> thickest(regions);
-    tbb::parallel_for(std::size_t(0), regions, [&](std::size_t r) {
-        thickest[r] = deepestPoint(design.distance(), lattice,
-                                   {search.data() + regionStart[r], regionStart[r + 1] - regionStart[r]}, eps);
-    });
+    const std::vector<Deepest> thickest = deepestPoints(design, lattice, search, regionStart, eps);
     for (std::size_t r = 0; r < regions; ++r) {
         if (!(thickest[r].depth > tolerance)) continue;
         ExcessRegion region;

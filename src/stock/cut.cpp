@@ -80,6 +80,7 @@ double designOverlap(const SegmentSpan& segs, const DesignWatch& watch, const Se
                 DesignStretch piece = at;
                 piece.lo = p;
                 piece.hi = q;
+                piece.reach = reach;
                 out.push_back(piece);
             }
         }

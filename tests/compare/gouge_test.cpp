@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "dexelmill/compare/design.h"
 #include "dexelmill/job/simulate.h"
 #include "dexelmill/tool/builders.h"
+#include "compare/detail/deepest.h"
 #include "support/scratch.h"
 
 using namespace dexelmill;
@@ -51,6 +53,37 @@ std::string prismFacets(const std::vector<P2>& xz, double y0, double y1) {
         facet(at(i, y0), at(i, y1), at(i + 1, y1));
         facet(at(i, y0), at(i + 1, y1), at(i + 1, y0));
     }
+    return s.str();
+}
+
+/// A cube [0, side]^3 as ASCII STL facets facing out, each face cut into n x n squares of two
+/// triangles: many triangles, and the distance from a point inside is still the nearest face's.
+std::string tiledCubeFacets(double side, int n) {
+    std::ostringstream s;
+    s.precision(17);
+    const double step = side / n;
+    for (int k = 0; k < 3; ++k)
+        for (const bool high : {false, true})
+            for (int i = 0; i < n; ++i)
+                for (int j = 0; j < n; ++j) {
+                    // Axes u = k + 1 and v = k + 2 (cyclic): counter-clockwise in (u, v) faces +k.
+                    auto at = [&](int du, int dv) {
+                        std::array<double, 3> p{};
+                        p[std::size_t(k)] = high ? side : 0.0;
+                        p[std::size_t((k + 1) % 3)] = (i + du) * step;
+                        p[std::size_t((k + 2) % 3)] = (j + dv) * step;
+                        return p;
+                    };
+                    std::array<std::array<double, 3>, 4> q{at(0, 0), at(1, 0), at(1, 1), at(0, 1)};
+                    if (!high) std::swap(q[1], q[3]);
+                    for (const auto& tri : {std::array<int, 3>{0, 1, 2}, std::array<int, 3>{0, 2, 3}}) {
+                        s << " facet normal 0 0 0\n  outer loop\n";
+                        for (const int c : tri)
+                            s << "   vertex " << q[std::size_t(c)][0] << " " << q[std::size_t(c)][1] << " "
+                              << q[std::size_t(c)][2] << "\n";
+                        s << "  endloop\n endfacet\n";
+                    }
+                }
     return s.str();
 }
 
@@ -310,6 +343,74 @@ TEST_CASE("design: the distance index built when first asked for, by threads at 
         CHECK(taken->distance(Vec3(5.0, 5.0, 9.0)) == Approx(1.0));
         CHECK_THROWS_AS(part.distance(), Error);
     }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("design: distances near a few regions from an index of the triangles there", "[compare][design]") {
+    const fs::path dir = scratch("near");
+    // A 10 mm cube of 2,400 triangles: inside, the distance is the nearest face's.
+    const std::string path = writeStl(dir / "cube.stl", tiledCubeFacets(10.0, 20));
+    const Lattice lattice = Lattice::fromBox(Box{Vec3(0.0), Vec3(10.0)}, 0.5);
+    const DesignPart part = loadDesign(readDesign(path), path, lattice, FamilySet::all(), false);
+    auto cube = [](const Vec3& p) {
+        double d = 10.0;
+        for (int k = 0; k < 3; ++k) d = std::min({d, p[k], 10.0 - p[k]});
+        return d;
+    };
+    // Around (5, 5, 0.5), 1 mm each way: the nearest points of the points within 0.5 mm of its
+    // centre lie on the floor inside it.
+    const NearDistance near = part.distanceNear({Box{Vec3(4.0, 4.0, -0.5), Vec3(6.0, 6.0, 1.5)}});
+    REQUIRE(near.local);
+    CHECK(near.index == near.local.get());
+    CHECK(near.local->triangleCount() > 0);
+    CHECK(near.local->triangleCount() <= 72);  // the floor's 6 x 6 squares that meet the box
+    for (const Vec3& p : {Vec3(5.0, 5.0, 0.5), Vec3(5.2, 4.9, 0.3), Vec3(4.6, 5.4, 0.9), Vec3(5.0, 5.0, 0.0)})
+        CHECK((*near).distance(p) == Approx(cube(p)).margin(1e-12));
+    // No region: nothing to answer, and nothing to build.
+    const NearDistance none = part.distanceNear({});
+    REQUIRE(none.local);
+    CHECK(none.local->triangleCount() == 0);
+    // A region reaching more than a quarter of the triangles takes the whole index.
+    const NearDistance wide = part.distanceNear({Box{Vec3(-1.0), Vec3(6.0, 11.0, 11.0)}});
+    CHECK_FALSE(wide.local);
+    CHECK(wide.index == &part.distance());
+    // So does a region without bound, on a part whose index is not built yet.
+    const DesignPart other = loadDesign(readDesign(path), path, lattice, FamilySet::all(), false);
+    const double inf = std::numeric_limits<double>::infinity();
+    const NearDistance unbounded = other.distanceNear({Box{Vec3(5.0, 5.0, -inf), Vec3(5.0, 5.0, inf)}});
+    CHECK_FALSE(unbounded.local);
+    CHECK(unbounded.index == &other.distance());
+    // Once the whole index is built, it answers.
+    const NearDistance later = part.distanceNear({Box{Vec3(4.0, 4.0, -0.5), Vec3(6.0, 6.0, 1.5)}});
+    CHECK_FALSE(later.local);
+    CHECK(later.index == &part.distance());
+    fs::remove_all(dir);
+}
+
+TEST_CASE("gouges: a stretch deeper than the local index reaches is measured on the whole design", "[compare][design]") {
+    const fs::path dir = scratch("reach");
+    const std::string path = writeStl(dir / "cube.stl", tiledCubeFacets(10.0, 20));
+    // h = 0.5: the local index looks 2 mm around each stretch (kNearSpacings h).
+    const Lattice lattice = Lattice::fromBox(Box{Vec3(0.0), Vec3(10.0)}, 0.5);
+    REQUIRE(kNearSpacings * lattice.h == 2.0);
+    const DesignPart part = loadDesign(readDesign(path), path, lattice, FamilySet::all(), false);
+    CutResult cut;
+    cut.moves.resize(2);
+    // Both along x from 4 to 6 mm, inside the design's segment [0, 10] of that dexel: it reaches
+    // 5 mm. Move 0 at y = 3.25, z = 4.75: 3.25 mm deep, beyond the local index's 2 mm. No face
+    // lies within 2 mm of it; the nearest the local index holds is the top, 5.25 mm away (taken
+    // for move 1). Move 1 at y = 5.25, z = 9.25: 0.75 mm below the top, which the local index
+    // answers.
+    cut.designStretches.push_back({0, Axis::X, 6, 9, 4.0f, 6.0f, 5.0});
+    cut.designStretches.push_back({1, Axis::X, 10, 18, 4.0f, 6.0f, 5.0});
+    const std::vector<Gouge> gouges = findGouges(part, lattice, cut, 0.01);
+    REQUIRE(gouges.size() == 2);
+    CHECK(gouges[0].move == 0);
+    CHECK(gouges[0].depth == Approx(3.25).margin(1e-12));
+    CHECK(gouges[0].point.y == 3.25);
+    CHECK(gouges[1].move == 1);
+    CHECK(gouges[1].depth == Approx(0.75).margin(1e-12));
+    CHECK(gouges[1].point.z == 9.25);
     fs::remove_all(dir);
 }
 

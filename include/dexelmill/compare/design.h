@@ -21,6 +21,14 @@
 
 namespace dexelmill {
 
+/// @brief A distance to the design for queries in a few small regions (DesignPart::distanceNear):
+/// an index of only the triangles there, or the design's whole index.
+struct NearDistance {
+    std::unique_ptr<MeshDistance> local;  ///< the index of the triangles near the regions, when built
+    const MeshDistance* index = nullptr;  ///< what to ask: `local`, or the whole design's index
+    const MeshDistance& operator*() const { return *index; }
+};
+
 /// @brief A design part ready for the comparison.
 struct DesignPart {
     /// @brief The part whose solid on the lattice is `dexels`, measured through `distance` when
@@ -45,6 +53,16 @@ struct DesignPart {
     /// @brief Hands the distance over (building it if needed), to measure the surface after the
     /// part's dexels are dropped. The part has no distance afterwards.
     std::unique_ptr<MeshDistance> takeDistance();
+    /// @brief A distance exact for every point whose nearest point on the design lies inside one of
+    /// the boxes `where`. That point lies on a triangle whose bounding box meets that box, so an
+    /// index of those triangles alone answers exactly there; it is built when they are fewer than
+    /// kNearShare of the design's. Otherwise, when a box is not finite, or when the whole index is
+    /// already built, the answer is the whole index (distance()). A few gouges on a large design
+    /// then cost a scan of its triangles rather than its whole index.
+    NearDistance distanceNear(const std::vector<Box>& where) const;
+    /// @brief The largest share of the design's triangles a local index (distanceNear) is built
+    /// for: more, and the whole index, which later steps may reuse, costs little more.
+    static constexpr double kNearShare = 0.25;
 
   private:
     struct Index;

@@ -26,6 +26,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <map>
 #include <optional>
 #include <vector>
@@ -92,6 +93,11 @@ struct DesignStretch {
     Axis family = Axis::Z;
     int ib = 0, ic = 0;  ///< the dexel's lattice indexes across the family's axis (DexelFamily::axisB, axisC)
     float lo = 0.0f, hi = 0.0f;  ///< along the dexel, relative to the lattice origin
+    /// How far the design's segment reaches along the dexel on both sides of the stretch's point
+    /// farthest inside it (mm). The segment's ends lie on the design's surface, so no point of the
+    /// stretch is farther from that surface than this, to the float rounding of the ends. Infinity
+    /// where the segment runs on past the lattice's box (its end there is no surface point).
+    double reach = std::numeric_limits<double>::infinity();
 };
 
 /// @brief The kinds of collision the cutting loop reports.
