@@ -13,6 +13,20 @@
 
 namespace dexelmill {
 
+namespace {
+
+/// The point at t along a stretch's dexel (mm from the lattice's origin along it).
+Vec3 stretchPoint(const Lattice& lattice, const DexelStretch& s, double t) {
+    const int a = index(s.family), b = (a + 1) % 3, c = (a + 2) % 3;
+    Vec3 p;
+    p[a] = lattice.origin[a] + t;
+    p[b] = lattice.coord(axisFromIndex(b), s.ib);
+    p[c] = lattice.coord(axisFromIndex(c), s.ic);
+    return p;
+}
+
+}  // namespace
+
 double endRounding(const Lattice& lattice) {
     const double longest = std::max({lattice.n[0], lattice.n[1], lattice.n[2]}) * lattice.h;
     return std::ldexp(std::max(longest, 1.0), -23);
@@ -39,15 +53,7 @@ Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, Stret
         std::size_t stretch;
         bool operator<(const Piece& o) const { return bound < o.bound; }
     };
-    auto pointOf = [&](std::size_t i, double t) {
-        const DexelStretch& s = stretches[i];
-        const int a = index(s.family), b = (a + 1) % 3, c = (a + 2) % 3;
-        Vec3 p;
-        p[a] = lattice.origin[a] + t;
-        p[b] = lattice.coord(axisFromIndex(b), s.ib);
-        p[c] = lattice.coord(axisFromIndex(c), s.ic);
-        return p;
-    };
+    auto pointOf = [&](std::size_t i, double t) { return stretchPoint(lattice, stretches[i], t); };
     Deepest best;
     // The search starts from the triangle nearest the last sample (usually close by); that
     // speeds it and does not change the answer.
@@ -112,13 +118,7 @@ std::vector<Deepest> deepestPoints(const DesignPart& design, const Lattice& latt
             const DexelStretch& s = stretches[i];
             const double r = std::min(s.bound, radius);
             if (r < s.bound) trusted[g] = std::min(trusted[g], r);
-            const int a = index(s.family), b = (a + 1) % 3, c = (a + 2) % 3;
-            Vec3 lo, hi;
-            lo[a] = lattice.origin[a] + s.lo;
-            hi[a] = lattice.origin[a] + s.hi;
-            lo[b] = hi[b] = lattice.coord(axisFromIndex(b), s.ib);
-            lo[c] = hi[c] = lattice.coord(axisFromIndex(c), s.ic);
-            where[i] = Box{lo - Vec3(r), hi + Vec3(r)};
+            where[i] = Box{stretchPoint(lattice, s, s.lo) - Vec3(r), stretchPoint(lattice, s, s.hi) + Vec3(r)};
         }
     const NearDistance near = design.distanceNear(where);
     tbb::parallel_for(std::size_t(0), count, [&](std::size_t g) {
