@@ -4,12 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <exception>
 #include <set>
 #include <sstream>
 
 #include <glm/trigonometric.hpp>
-#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 
 #include "dexelmill/compare/design.h"
@@ -346,8 +344,7 @@ Simulation runStages(const SimulateOptions& o) {
     if (o.inputs.empty() && !o.program) throw Error("nothing to simulate: give a project or at least one program");
     checkOutputs(o);
 
-    // Parse, and read the design's mesh beside it: two jobs that each run on one thread. A failed
-    // parse is reported first, as if the design were read after it.
+    // Parse.
     auto t = Clock::now();
     const MemoryBudget budget = memoryBudget(o.maxMemoryBytes);
     GcodeOptions gcode = jobGcodeOptions(o.chordTolerance, budget);
@@ -357,58 +354,26 @@ Simulation runStages(const SimulateOptions& o) {
     const AptOptions apt = jobAptOptions(o.chordTolerance, budget);
     std::optional<Project> project;
     Program& program = sim.program;
-    auto parse = [&] {
-        if (o.program) {
-            program = *o.program;
-        } else if (lowerExtension(o.inputs[0]) == ".camotics") {
-            // A project, and optionally programs that replace its own (its tools, workpiece and
-            // resolution still apply).
-            project = readCamoticsProject(o.inputs[0], o.files);
-            if (o.inputs.size() > 1) project->files.assign(o.inputs.begin() + 1, o.inputs.end());
-            for (const std::string& f : project->files)
-                if (lowerExtension(f) == ".camotics") throw Error("'" + f + "': only the first input may be a project");
-            program = runProject(*project, gcode);
-        } else {
-            for (const std::string& in : o.inputs) {
-                if (lowerExtension(in) == ".camotics")
-                    throw Error("'" + in + "': a project must be the first input");
-                program.append(readProgram(in, gcode, apt));
-            }
-        }
-        sim.tools = resolveTools(o, program);
-        report.timingS.parse = seconds(t);
-    };
-    // With no stock given, the design's box is the stock's.
-    std::optional<Mesh> designMesh;
-    auto readDesignMesh = [&] {
-        const auto start = Clock::now();
-        if (o.progress) o.progress("design", 0, 1);
-        designMesh = readDesign(o.designPath, o.designTransform);
-        report.timingS.design = seconds(start);
-    };
-    if (o.designPath.empty()) {
-        parse();
+    if (o.program) {
+        program = *o.program;
+    } else if (lowerExtension(o.inputs[0]) == ".camotics") {
+        // A project, and optionally programs that replace its own (its tools, workpiece and
+        // resolution still apply).
+        project = readCamoticsProject(o.inputs[0], o.files);
+        if (o.inputs.size() > 1) project->files.assign(o.inputs.begin() + 1, o.inputs.end());
+        for (const std::string& f : project->files)
+            if (lowerExtension(f) == ".camotics") throw Error("'" + f + "': only the first input may be a project");
+        program = runProject(*project, gcode);
     } else {
-        std::exception_ptr parseFailure, designFailure;
-        tbb::parallel_invoke(
-            [&] {
-                try {
-                    parse();
-                } catch (...) {
-                    parseFailure = std::current_exception();
-                }
-            },
-            [&] {
-                try {
-                    readDesignMesh();
-                } catch (...) {
-                    designFailure = std::current_exception();
-                }
-            });
-        if (parseFailure) std::rethrow_exception(parseFailure);
-        if (designFailure) std::rethrow_exception(designFailure);
+        for (const std::string& in : o.inputs) {
+            if (lowerExtension(in) == ".camotics")
+                throw Error("'" + in + "': a project must be the first input");
+            program.append(readProgram(in, gcode, apt));
+        }
     }
+    sim.tools = resolveTools(o, program);
     const ToolTable& tools = sim.tools;
+    report.timingS.parse = seconds(t);
 
     report.moves = program.path.moves.size();
     report.rapids = std::size_t(std::count_if(program.path.moves.begin(), program.path.moves.end(),
@@ -427,6 +392,14 @@ Simulation runStages(const SimulateOptions& o) {
         if (!o.inputs.empty()) w.where.file = o.inputs.back();
         w.message = "the program makes no moves (empty, or only comments and settings): the part is the stock";
         notes.push_back(w);
+    }
+    // The design's mesh first: with no stock given, its box is the stock's.
+    std::optional<Mesh> designMesh;
+    if (!o.designPath.empty()) {
+        t = Clock::now();
+        if (o.progress) o.progress("design", 0, 1);
+        designMesh = readDesign(o.designPath, o.designTransform);
+        report.timingS.design = seconds(t);
     }
     LoadedStock loaded = loadStock(o, budget, program, tools, project ? &*project : nullptr,
                                    designMesh ? &*designMesh : nullptr, report, notes);

@@ -275,8 +275,8 @@ TEST_CASE("gouges: a design that cannot be read, and a CSV without a design", "[
     CHECK_THROWS_WITH(simulate(o), Catch::Contains("part.obj") && Catch::Contains("STL"));
     o.designPath = (dir / "missing.stl").string();
     CHECK_THROWS_WITH(simulate(o), Catch::Contains("missing.stl"));
-    // The design is read while the program is parsed; a program that fails is reported first,
-    // on either thread count.
+    // A program that fails is reported before a design that cannot be read, on either thread
+    // count.
     for (const int threads : {1, 2}) {
         SimulateOptions bad = job("G21\nG1 X1 Y\n", (dir / "missing.stl").string(), 10.0);
         bad.threads = threads;
