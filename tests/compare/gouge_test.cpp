@@ -56,22 +56,22 @@ std::string prismFacets(const std::vector<P2>& xz, double y0, double y1) {
     return s.str();
 }
 
-/// A cube [0, side]^3 as ASCII STL facets facing out, each face cut into n x n squares of two
+/// The box [lo, hi] as ASCII STL facets facing out, each face cut into n x n rectangles of two
 /// triangles: many triangles, and the distance from a point inside is still the nearest face's.
-std::string tiledCubeFacets(double side, int n) {
+std::string tiledBoxFacets(const std::array<double, 3>& lo, const std::array<double, 3>& hi, int n) {
     std::ostringstream s;
     s.precision(17);
-    const double step = side / n;
     for (int k = 0; k < 3; ++k)
         for (const bool high : {false, true})
             for (int i = 0; i < n; ++i)
                 for (int j = 0; j < n; ++j) {
                     // Axes u = k + 1 and v = k + 2 (cyclic): counter-clockwise in (u, v) faces +k.
+                    const auto u = std::size_t((k + 1) % 3), v = std::size_t((k + 2) % 3);
                     auto at = [&](int du, int dv) {
                         std::array<double, 3> p{};
-                        p[std::size_t(k)] = high ? side : 0.0;
-                        p[std::size_t((k + 1) % 3)] = (i + du) * step;
-                        p[std::size_t((k + 2) % 3)] = (j + dv) * step;
+                        p[std::size_t(k)] = high ? hi[std::size_t(k)] : lo[std::size_t(k)];
+                        p[u] = lo[u] + (hi[u] - lo[u]) * (i + du) / n;
+                        p[v] = lo[v] + (hi[v] - lo[v]) * (j + dv) / n;
                         return p;
                     };
                     std::array<std::array<double, 3>, 4> q{at(0, 0), at(1, 0), at(1, 1), at(0, 1)};
@@ -86,6 +86,9 @@ std::string tiledCubeFacets(double side, int n) {
                 }
     return s.str();
 }
+
+/// The cube [0, side]^3 so.
+std::string tiledCubeFacets(double side, int n) { return tiledBoxFacets({0.0, 0.0, 0.0}, {side, side, side}, n); }
 
 std::string writeStl(const fs::path& p, const std::string& facets) {
     std::ofstream(p) << "solid design\n" << facets << "endsolid design\n";
@@ -516,6 +519,41 @@ TEST_CASE("excess: 0.5 mm left on a wall", "[compare][design][job]") {
     CHECK(loose.excessRegions.empty());
     CHECK(loose.excessThicknessMm == 0.0);
     CHECK(loose.excessVolumeMm3 == Approx(r.excessVolumeMm3));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("excess: 2.5 mm left on a wall, thicker than the local search reaches", "[compare][design][job]") {
+    const fs::path dir = scratch("excess_thick");
+    const std::string design = writeStl(dir / "l.stl", prismFacets(lShape(), -1.0, 41.0));
+    // A D10 pass at x = 37.5 cuts x in [32.5, 42.5] down to the floor, keeping a 2.5 x 5.1 x 40 mm
+    // layer on the wall at x = 30. Its farthest points, on its face at x = 32.5 and at least 2.5 mm
+    // above the floor, lie 2.5 mm from the design: beyond the 4 h = 1 mm the first, local search
+    // looks, so it is measured again against the whole design.
+    REQUIRE(2.5 > kNearSpacings * kH);
+    const std::string program = "G21 G90\nT1 M6\nG0 X37.5 Y-10 Z5\nG1 Z-5.1 F500\nG1 Y50\nG0 Z5\nM30\n";
+    const SimulateReport r = simulate(job(program, design, 10.0));
+    CHECK(r.gouges.empty());
+    CHECK(r.excessThicknessMm == Approx(2.5).margin(0.01 * kH));
+    CHECK(r.excessPoint.x == Approx(32.5).margin(1e-6));
+    CHECK(r.excessVolumeMm3 == Approx(2.5 * 5.1 * 40.0).epsilon(1e-4));
+    REQUIRE(r.excessRegions.size() == 1);
+    CHECK(r.excessRegions[0].thicknessMm == Approx(2.5).margin(0.01 * kH));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("excess: an island of stock far from the design is measured on the whole design", "[compare][design][job]") {
+    const fs::path dir = scratch("excess_island");
+    // The design: the block x in [0, 10] across the stock, 9,600 triangles. A D20 pass at x = 20
+    // clears x in [10, 30], which leaves the island x in [30, 40]: its far face lies 30 mm from the
+    // design. No design triangle lies within 4 h of the island, so the first, local search finds
+    // nothing there and the island is measured again against the whole design.
+    const std::string design = writeStl(dir / "block.stl", tiledBoxFacets({0.0, -1.0, -11.0}, {10.0, 41.0, 1.0}, 40));
+    const std::string program = "G21 G90\nT1 M6\nG0 X20 Y-15 Z5\nG1 Z-10.5 F500\nG1 Y55\nG0 Z5\nM30\n";
+    const SimulateReport r = simulate(job(program, design, 20.0));
+    CHECK(r.gouges.empty());
+    CHECK(r.excessThicknessMm == Approx(30.0).margin(0.01 * kH));
+    CHECK(r.excessPoint.x == Approx(40.0).margin(1e-6));
+    CHECK(r.excessVolumeMm3 == Approx(10.0 * 40.0 * 10.0).epsilon(1e-4));
     fs::remove_all(dir);
 }
 
