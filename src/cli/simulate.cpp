@@ -313,7 +313,9 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
         "Cut the stock with the programs and write the part.\n"
         "Inputs are a CAMotics .camotics project or G-code / APT CL programs run in order.");
     addJobOptions(*c, a, true);
-    c->add_option("--resolution", a.resolution, "Lattice spacing in mm. Default: chosen from the stock, and printed.")
+    c->add_option("--resolution", a.resolution,
+                  "Lattice spacing in mm, at most half the stock's thinnest side. Default: chosen from the stock, "
+                  "and printed.")
         ->check(numberCheck(false));
     c->add_option("--families", a.families, "Dexel families to keep: xyz, z, x, y, xy, xz or yz")
         ->capture_default_str();
