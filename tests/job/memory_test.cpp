@@ -18,6 +18,7 @@
 #include "dexelmill/job/simulate.h"
 #include "dexelmill/path/gcode.h"
 #include "dexelmill/tool/builders.h"
+#include "support/slot_job.h"
 
 using namespace dexelmill;
 
@@ -77,21 +78,8 @@ TEST_CASE("memory: the spacing that fits", "[job][memory]") {
 
 TEST_CASE("memory: a job too big for its budget stops before it starts, with a spacing that fits",
           "[job][memory][errors]") {
-    SimulateOptions o;
-    ToolPath path;
-    path.files.push_back("slot.nc");
-    Move m;
-    m.start = Vec3(2, 15, 8);
-    m.end = Vec3(38, 15, 8);
-    m.tool = 1;
-    m.source = SourceRef{0, 1};
-    path.moves.push_back(m);
-    Program program;
-    program.path = path;
-    o.program = program;
-    o.inputs = {"slot.nc"};
-    o.defaultTool = flatEndMill(6.0, {20.0, 30.0});
-    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
+    SimulateOptions o = testing::slotJob(Vec3(2, 15, 8), Vec3(38, 15, 8), flatEndMill(6.0, {20.0, 30.0}),
+                                         Box{Vec3(0.0), Vec3(40, 30, 10)});
     o.resolution = 0.02;
     o.maxMemoryBytes = residentBytes() + (200ull << 20);
     std::string message;
@@ -211,21 +199,8 @@ TEST_CASE("threads: a request beyond what the machine runs is cut to it, and sai
     // A job asked for 100,000 threads runs as one on every runnable thread, with the same part,
     // and its report says what it did. (Each stage used to size its work by the arena: the mesh
     // check's star building scanned the triangles once per requested thread.)
-    SimulateOptions o;
-    ToolPath path;
-    path.files.push_back("slot.nc");
-    Move m;
-    m.start = Vec3(2, 15, 8);
-    m.end = Vec3(38, 15, 8);
-    m.tool = 1;
-    m.source = SourceRef{0, 1};
-    path.moves.push_back(m);
-    Program program;
-    program.path = path;
-    o.program = program;
-    o.inputs = {"slot.nc"};
-    o.defaultTool = flatEndMill(6.0, {20.0, 30.0});
-    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
+    SimulateOptions o = testing::slotJob(Vec3(2, 15, 8), Vec3(38, 15, 8), flatEndMill(6.0, {20.0, 30.0}),
+                                         Box{Vec3(0.0), Vec3(40, 30, 10)});
     o.resolution = 0.5;
     o.threads = runnable;
     const SimulateReport usual = runSimulation(o).report;

@@ -12,6 +12,7 @@
 #include "dexelmill/job/simulate.h"
 #include "dexelmill/tool/builders.h"
 #include "support/scratch.h"
+#include "support/slot_job.h"
 
 using namespace dexelmill;
 namespace fs = std::filesystem;
@@ -374,21 +375,8 @@ TEST_CASE("a round stock: bar stock faced along its length loses its analytic ca
 }
 
 TEST_CASE("simulate: a spacing coarser than half the stock's thinnest side is refused", "[job][errors][degenerate]") {
-    SimulateOptions o;
-    ToolPath path;
-    path.files.push_back("slot.nc");
-    Move m;
-    m.start = Vec3(2, 8, 4);
-    m.end = Vec3(18, 8, 4);
-    m.tool = 1;
-    m.source = SourceRef{0, 1};
-    path.moves.push_back(m);
-    Program program;
-    program.path = path;
-    o.program = program;
-    o.inputs = {"slot.nc"};
-    o.defaultTool = flatEndMill(3.0, {10.0, 20.0});
-    o.stockBox = Box{Vec3(0.0), Vec3(20, 16, 5)};
+    SimulateOptions o = testing::slotJob(Vec3(2, 8, 4), Vec3(18, 8, 4), flatEndMill(3.0, {10.0, 20.0}),
+                                         Box{Vec3(0.0), Vec3(20, 16, 5)});
     // Two cells across the 5 mm: 2.5 mm runs, anything coarser stops and names the largest.
     o.resolution = 2.5;
     CHECK(runSimulation(o).report.meshTriangles > 0);
