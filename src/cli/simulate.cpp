@@ -209,12 +209,8 @@ std::string where(const ReportLocation& l) {
 }  // namespace
 
 void warnThreads(int requested) {
-    const int runnable = runnableThreads();
-    if (requested > runnable)
-        std::fprintf(stderr,
-                     "dexelmill: warning: --threads %d: this machine runs at most %d threads at once (its cores, "
-                     "within the process's CPU affinity and quota); the job uses %d\n",
-                     requested, runnable, runnable);
+    const std::string cut = threadsCutNote(requested);
+    if (!cut.empty()) std::fprintf(stderr, "dexelmill: warning: %s\n", cut.c_str());
 }
 
 void printDeviation(const Deviation& d) {

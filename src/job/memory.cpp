@@ -87,6 +87,14 @@ int arenaThreads(int requested) {
     return requested > 0 ? std::min(requested, runnableThreads()) : runnableThreads();
 }
 
+std::string threadsCutNote(int requested) {
+    const int runnable = runnableThreads();
+    if (requested <= runnable) return {};
+    return "--threads " + std::to_string(requested) + ": this machine runs at most " + std::to_string(runnable) +
+           " threads at once (its cores, within the process's CPU affinity and quota); the job uses " +
+           std::to_string(runnable);
+}
+
 bool resetPeakMemory() {
     malloc_trim(0);  // hand freed heap back first, so that the next peak is the next stage's own
     std::ofstream out("/proc/self/clear_refs");

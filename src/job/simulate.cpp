@@ -380,11 +380,9 @@ Simulation runStages(const SimulateOptions& o) {
                                               [](const Move& m) { return m.rapid; }));
     report.toolChanges = program.path.toolChanges.size();
     std::vector<ReportWarning> notes;
-    if (o.threads > runnableThreads()) {
+    if (std::string cut = threadsCutNote(o.threads); !cut.empty()) {
         ReportWarning w;
-        w.message = "--threads " + std::to_string(o.threads) + ": this machine runs at most " +
-                    std::to_string(runnableThreads()) + " threads at once (its cores, within the process's CPU "
-                    "affinity and quota); the job uses " + std::to_string(runnableThreads());
+        w.message = std::move(cut);
         notes.push_back(w);
     }
     if (program.path.moves.empty()) {

@@ -45,6 +45,10 @@ int runnableThreads();
 /// Callers that take the count from a user say when it is cut (SimulateReport's warnings).
 int arenaThreads(int requested);
 
+/// @brief What to tell a user whose --threads `requested` arenaThreads cuts: the request, the
+/// machine's limit and the count used. Empty when nothing is cut.
+std::string threadsCutNote(int requested);
+
 /// @brief Resident memory of this process now (MiB).
 double currentMemoryMb();
 
