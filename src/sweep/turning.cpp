@@ -193,14 +193,14 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     for (int k = 0; k < kMaxLevel && std::ldexp(speed_, -(k + 1)) > epsilon_; ++k) {
         std::vector<std::vector<ProfilePiece>> level;
         for (const ConvexPart& part : tool_.convexParts())
-            level.push_back(offsetPart(tool_, part, std::ldexp(speed_, -(k + 1))));
+            level.push_back(offsetPart(tool_, part, std::ldexp(speed_, -(k + 1)) - epsilon_));
         grown_.push_back(std::move(level));
     }
 }
 
 ToolPose TurningSweep::pose(double u) const { return law_.pose(u); }
 
-Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bounds_); }
+Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bounds_.padded(epsilon_)); }
 
 // Method. Write T(u) for the tool at pose(u) and V = speed().
 //  (a) Speed. The motion is rigid (MotionLaw): on a great circle, a tool point moves as
@@ -210,31 +210,37 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      y'(u) = f + theta k x (y(u) - p(u)) and |y'| <= |f| + theta |y - p| <= V. A machine's
 //      rotary move is bounded the same way turn by turn (MotionLaw::speedBound). Hence T(u') lies
 //      within V |u' - u| of T(u): T(u') is inside T(u) grown by that.
-//  (b) Depth. A point x deeper than d inside T(u) has the ball B(x, d) inside T(u); at u' the same
-//      rigid motion carries that ball to B(x', d) inside T(u') with |x' - x| <= V |u' - u|. So x
-//      lies inside T(u') when V |u' - u| < d.
+//  (b) Depth. A point x deeper than epsilon inside T(u) has the ball B(x, epsilon) inside T(u);
+//      the rigid motion from u to u' carries it to B(x', epsilon) inside T(u'), with
+//      |x' - x| <= V |u' - u| = r. So x lies within r - epsilon of T(u') (of the point of the
+//      ball nearest x) when r >= epsilon, and inside T(u') when r <= epsilon. The tool is a union
+//      of convex parts, and growing distributes over the union: x lies in some part of T(u')
+//      grown by max(r - epsilon, 0).
 //  (c) Search. A node is a range [ua, ub] of width 2^-k whose two end poses have been solved
 //      exactly (Tool::intersectPart per convex part); every u in it is within 2^-(k+1) of one of
-//      them, so T(u) lies inside that end's tool grown by r_k = V 2^-(k+1) (a). The grown tool is a
-//      convex solid of revolution per part (offset.h); its interval along the line is exact. A
-//      node is settled when, at both ends, the grown intervals hold no point of `care` outside
-//      the union O of the intervals solved so far: then every point of the line inside T(u),
-//      u in the node, is in O or outside `care`. Otherwise the pose at the middle is solved,
-//      added to O, and both halves are searched. A node whose reach r_k is at most epsilon is a
-//      leaf.
+//      them, so by (b) a point deeper than epsilon inside T(u) lies inside that end's tool grown
+//      by g_k = r_k - epsilon, r_k = V 2^-(k+1). The grown tool is a convex solid of revolution
+//      per part (offset.h); its interval along the line is exact. A node is settled when, at both
+//      ends, the grown intervals hold no point of `care` outside the union O of the intervals
+//      solved so far. A node whose reach r_k is at most epsilon is a leaf: g_k <= 0, so the ends'
+//      own intervals, which O holds, hold those points. A node that is not settled, at a level
+//      where g_k <= epsilon, is closed: its ends' grown intervals are added to O (each point of
+//      them within epsilon of a pose). Otherwise the pose at the middle is solved, added to O, and
+//      both halves are searched. The left half's test of the middle pose, passed, is the right
+//      half's as well: O only grows.
 //  (d) Gaps. Two consecutive intervals of O whose gap lies within the pose intervals grown by
 //      epsilon (the pose that made the left one's upper end, and the right one's lower end) are
 //      joined: every point of the gap is within epsilon of a pose, so within epsilon of S.
-//  (e) Guarantees. O is a union of exact static intervals and such gaps, so every point of it is
-//      inside S or within epsilon of it (1). A point x of `care` deeper than epsilon inside some
-//      T(u): u lies in a settled node, so x is in O, or in a leaf, whose nearer end u_e has
-//      V |u - u_e| <= r_k <= epsilon, so x is inside T(u_e) by (b) and in O (2). A point of S
-//      that O misses is inside some T(u) and so within r_k <= epsilon of the leaf's end pose,
-//      whose intervals O holds, or outside `care`.
+//  (e) Guarantees. O is a union of exact static intervals, intervals of poses grown by at most
+//      epsilon (closed nodes) and such gaps, so every point of it is inside S or within epsilon of
+//      it (1). A point x of `care` deeper than epsilon inside some T(u): u lies in a settled,
+//      closed or leaf node, and x is in O by (c) (2).
 //  (f) Cost. Settling needs the grown intervals inside O, so near a line's extreme the search
-//      descends to the leaves over the range of u where the tool's reach along the line is within
-//      r_k / sin(angle) of its maximum. Most nodes settle at once: far from the tool the grown
-//      intervals are empty, and deep inside the cut they are held by the neighbours' intervals.
+//      descends over the range of u where the tool's reach along the line is within
+//      g_k / sin(angle) of its maximum, down to the level where g_k <= epsilon, two levels short
+//      of a search that grew by r_k and stopped at r_k <= epsilon. Most nodes settle at once: far
+//      from the tool the grown intervals are empty, and deep inside the cut they are held by the
+//      neighbours' intervals.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     const Interval reach = bound(line);
@@ -272,22 +278,37 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         double ua, ub;
         int level;
         LocalLine la, lb;
+        bool aSettled;  ///< the end at ua passed this level's test (as its left sibling's end)
     };
     std::vector<Node> stack;
-    stack.push_back({0.0, 1.0, 0, solve(0.0), solve(1.0)});
+    stack.push_back({0.0, 1.0, 0, solve(0.0), solve(1.0), false});
     const int levels = int(grown_.size());
     while (!stack.empty()) {
         const Node n = stack.back();
         stack.pop_back();
         if (n.level >= levels) continue;  // a leaf: its reach is at most epsilon
-        if (settled(n.la, n.level) && settled(n.lb, n.level)) continue;
+        const std::size_t k = std::size_t(n.level);
+        if ((n.aSettled || settled(n.la, n.level)) && settled(n.lb, n.level)) {
+            // The right sibling, still on the stack, starts at this node's end.
+            if (!stack.empty() && stack.back().level == n.level && stack.back().ua == n.ub) stack.back().aSettled = true;
+            continue;
+        }
+        if (std::ldexp(speed_, -(n.level + 1)) - epsilon_ <= epsilon_) {  // closed: grown by at most epsilon
+            for (std::size_t p = 0; p < parts.size(); ++p) {
+                const Interval ga = intersectPieces(grown_[k][p], n.la);
+                if (!ga.isEmpty()) found.add(ga, n.ua, p);
+                const Interval gb = intersectPieces(grown_[k][p], n.lb);
+                if (!gb.isEmpty()) found.add(gb, n.ub, p);
+            }
+            continue;
+        }
         const double um = 0.5 * (n.ua + n.ub);
         const LocalLine lm = solve(um);
-        stack.push_back({um, n.ub, n.level + 1, lm, n.lb});
-        stack.push_back({n.ua, um, n.level + 1, n.la, lm});
+        stack.push_back({um, n.ub, n.level + 1, lm, n.lb, false});
+        stack.push_back({n.ua, um, n.level + 1, n.la, lm, false});
     }
 
-    // Close the gaps that lie within epsilon of the poses on both sides (c): where the line runs
+    // Close the gaps that lie within epsilon of the poses on both sides (d): where the line runs
     // nearly tangent to the envelope, consecutive poses' intervals leave slivers of 1e-7 mm that
     // the continuous motion sweeps, and that a stock must not keep.
     std::vector<Piece> pieces;

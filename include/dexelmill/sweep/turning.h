@@ -56,11 +56,12 @@ Box turningMoveBox(const Move& move, double length, double radius);
 ///
 /// What a line query returns, for a unit-direction line and the set O of its output intervals:
 ///  1. O lies within epsilon of S: O is a union of exact static-pose intervals (inside S, up to
-///     their rounding) and of gaps between them whose every point is within epsilon of a pose.
+///     their rounding), of intervals of poses grown by at most epsilon, and of gaps between them
+///     whose every point is within epsilon of a pose.
 ///  2. Every point of the line deeper than epsilon inside some T(u) (farther than epsilon from the
-///     complement of T(u)) lies in O. Every point of S that O misses lies within epsilon of a tool
-///     pose whose interval O holds, so S and the union of those poses are within epsilon of each
-///     other (Hausdorff distance).
+///     complement of T(u)) lies in O. So O's ends lie in the band of width 2 epsilon about the
+///     boundary of S: a point O misses is within epsilon of S's outside, a point O holds within
+///     epsilon of S.
 /// The proof and the search are in turning.cpp (method notes at TurningSweep::intersect).
 ///
 /// Built once per move; thread-safe for concurrent queries.
@@ -80,7 +81,8 @@ class TurningSweep {
     /// @brief A box that holds every pose of the tool.
     const Box& bounds() const { return bounds_; }
     /// @brief A cheap interval of `line` that holds every output interval: the line inside
-    /// bounds(). Empty when the line misses the box.
+    /// bounds() grown by epsilon (an output interval may be a pose's grown by up to epsilon).
+    /// Empty when the line misses that box.
     Interval bound(const Line& line) const;
 
     /// @brief The swept material along `line` (unit direction), sorted, disjoint, with the Hermite
@@ -101,10 +103,10 @@ class TurningSweep {
     MotionLaw law_;
     double speed_ = 0.0;
     double epsilon_ = kDefaultTurnTolerance;
-    int maxLevel_ = 0;
     Box bounds_;
-    /// grown_[k][p]: convex part p grown by speed / 2^(k + 1), the reach of a node of width 2^-k
-    /// (turning.cpp), for the levels k < maxLevel_ whose reach exceeds epsilon.
+    /// grown_[k][p]: convex part p grown by speed / 2^(k + 1) - epsilon, the reach of a node of
+    /// width 2^-k less the depth guarantee 2 leaves out (turning.cpp), for the levels k whose reach
+    /// exceeds epsilon.
     std::vector<std::vector<std::vector<ProfilePiece>>> grown_;
     /// Each convex part grown by epsilon: the reach that closes a gap between two intervals.
     std::vector<std::vector<ProfilePiece>> grownEpsilon_;
