@@ -10,6 +10,7 @@
 #include "dexelmill/error.h"
 #include "dexelmill/stock/cut.h"
 #include "dexelmill/tool/builders.h"
+#include "support/slot_job.h"
 
 using namespace dexelmill;
 
@@ -313,16 +314,8 @@ TEST_CASE("cut: a move far past the stock cuts what the move clipped to the stoc
     for (const Case& c : cases) {
         INFO(c.what);
         auto run = [&](const Vec3& start, const Vec3& end) {
-            ToolPath path;
-            path.files.push_back("far.nc");
-            Move m;
-            m.start = start;
-            m.end = end;
-            m.tool = 1;
-            m.source = SourceRef{0, 1};
-            path.moves.push_back(m);
             TriDexelStock stock = TriDexelStock::fromBox(kStockBox, h);
-            const CutResult r = cutStock(stock, path, testTools());
+            const CutResult r = cutStock(stock, testing::slotPath(start, end, "far.nc"), testTools());
             return std::make_pair(std::move(stock), r.removedVolume);
         };
         const auto [nearStock, nearVolume] = run(c.nearStart, c.nearEnd);
