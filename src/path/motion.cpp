@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "dexelmill/geometry/rotation.h"
 #include "dexelmill/path/toolpath.h"
@@ -124,6 +125,13 @@ Vec3 MotionLaw::velocity(double u, const Vec3& point) const {
 // innermost z_m = v has |v - c_{m-1}| <= reach + |c_{m-1}|.
 double MotionLaw::speedBound(double reach) const {
     return glm::length(carried_ ? machineFeed_ : feed_) + turnBound(reach);
+}
+
+double MotionLaw::axisPointAccelerationBound(double reach) const {
+    if (carried_ || !heads_.empty()) return std::numeric_limits<double>::infinity();
+    double rate = 0.0;
+    for (const RotaryTurn& t : turns_) rate += std::abs(t.to - t.from);
+    return rate * rate * reach;
 }
 
 double MotionLaw::turnBound(double reach) const {

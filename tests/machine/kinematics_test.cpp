@@ -2,6 +2,7 @@
 // xyzac-trt and xyzbc-trt sim configs' offsets), and the G-code reader's rotary moves.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -97,6 +98,55 @@ TEST_CASE("machine: the law of a move reproduces the kinematics at every u", "[m
                 CHECK(glm::length(fd) <= law.speedBound(7.0));
             }
         }
+    }
+}
+
+TEST_CASE("machine: the acceleration bound of a tool point on the axis holds with TCP and in APT, not in identity",
+          "[machine]") {
+    // A second central difference of the pose (h = 1e-3: its rounding error, about 1e-16 x 100 mm
+    // / h^2, is 1e-8 mm) never exceeds the bound; for a great circle the bound is the exact
+    // |y''| = r theta^2, and a sinusoid's second difference falls just short of it.
+    constexpr double kH = 1e-3, kRounding = 1e-6;
+    const Machine ac = loadMachine("xyzac-trt");
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    for (int i = 0; i < 40; ++i) {
+        RotaryAngles from, to;
+        from['A'] = 80 * uni(rng), from['C'] = 180 * uni(rng);
+        to['A'] = from['A'] + 40 * uni(rng), to['C'] = from['C'] + 120 * uni(rng);
+        const Vec3 j0(50 * uni(rng), 50 * uni(rng), 50 * uni(rng)), j1(50 * uni(rng), 50 * uni(rng), 50 * uni(rng));
+        const double r = 1 + 20 * (uni(rng) + 1);
+        Move tcp;
+        tcp.start = j0, tcp.end = j1;
+        tcp.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, true, j0, j1));
+        // The same move's axis point from the issue's formula, angles linear in u.
+        auto point = [&](double u) {
+            const double a = (from['A'] + u * (to['A'] - from['A'])) * kDeg;
+            const double c = (from['C'] + u * (to['C'] - from['C'])) * kDeg;
+            return j0 + u * (j1 - j0) + r * Vec3(std::sin(c) * std::sin(a), std::cos(c) * std::sin(a), std::cos(a));
+        };
+        const double bound = MotionLaw(tcp).axisPointAccelerationBound(r);
+        Move apt;
+        apt.start = j0, apt.end = j1;
+        apt.startAxis = glm::normalize(Vec3(uni(rng), uni(rng), uni(rng)));
+        apt.axis = glm::normalize(*apt.startAxis + 1.5 * Vec3(uni(rng), uni(rng), uni(rng)));
+        const MotionLaw slerp(apt);
+        const double theta = std::acos(std::clamp(glm::dot(*apt.startAxis, apt.axis), -1.0, 1.0));
+        CHECK(slerp.axisPointAccelerationBound(r) == Approx(r * theta * theta).epsilon(1e-12));
+        auto aptPoint = [&](double u) {
+            const ToolPose q = slerp.pose(u);
+            return q.tip + r * q.axis;
+        };
+        for (int k = 1; k < 20; ++k) {
+            const double u = k / 20.0;
+            const Vec3 d2 = (point(u + kH) - 2.0 * point(u) + point(u - kH)) / (kH * kH);
+            CHECK(glm::length(d2) <= bound + kRounding);
+            const Vec3 e2 = (aptPoint(u + kH) - 2.0 * aptPoint(u) + aptPoint(u - kH)) / (kH * kH);
+            CHECK(glm::length(e2) <= r * theta * theta + kRounding);
+        }
+        Move identity = tcp;
+        identity.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, false, j0, j1));
+        CHECK(std::isinf(MotionLaw(identity).axisPointAccelerationBound(r)));
     }
 }
 

@@ -34,6 +34,13 @@ class MotionLaw {
     /// @brief The part of speedBound that the turns make: how far, at most, a tool point strays
     /// from where the move's translation alone would take it.
     double turnBound(double reach) const;
+    /// @brief A bound on |y''(u)| (mm per unit u squared) over the move for the tool point y at
+    /// distance `reach` from the tip along the tool axis, when the tip runs on the straight line:
+    /// y = p(u) + Q(u) v with p'' = 0 and Q = R_0 ... R_{n-1}, each R_i a turn about a fixed
+    /// direction at the constant rate w_i, so |R_i'| = |w_i|, |R_i''| = w_i^2 and by the product
+    /// rule |Q''| <= (sum_i |w_i|)^2. Infinite when the machine carries the tip (identity
+    /// kinematics), whose curved path this does not bound.
+    double axisPointAccelerationBound(double reach) const;
     /// @brief Whether the axis or the path is anything but a translation along the straight line.
     bool rotates() const { return !turns_.empty(); }
 
