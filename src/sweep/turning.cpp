@@ -87,8 +87,10 @@ struct Piece {
 /// The union of static-pose intervals found so far: sorted, disjoint.
 class Union {
   public:
-    void add(const Interval& iv, double u, std::size_t part) {
-        Piece p{iv, u, u, part, part};
+    void add(const Interval& iv, double u, std::size_t part) { add(iv, u, u, part); }
+    /// Adds an interval whose ends were made at different poses.
+    void add(const Interval& iv, double uLo, double uHi, std::size_t part) {
+        Piece p{iv, uLo, uHi, part, part};
         auto it = std::lower_bound(pieces_.begin(), pieces_.end(), iv.lo,
                                    [](const Piece& q, double lo) { return q.range.hi < lo; });
         // Merge every piece that overlaps or touches the new one.
@@ -135,6 +137,61 @@ Box poseBox(const ToolPose& p, double length, double radius) {
 
 /// Most poses the box of a machine's rotary move is sampled at.
 constexpr int kMaxBoxSamples = 4096;
+
+/// Most chords a ball's centre path is cut into; a move that needs more is searched whole.
+constexpr double kMaxChords = 256.0;
+
+/// The parameters of `line` (unit direction) within r of the segment [a, b]: one interval, since
+/// the capsule is convex, the hull of the line's intervals in the two end balls and in the
+/// cylinder between them (the points whose projection onto the segment falls inside it).
+Interval lineCapsule(const Line& line, const Vec3& a, const Vec3& b, double r) {
+    const auto inBall = [&](const Vec3& c) {
+        const Vec3 oc = line.origin - c;
+        const double half = glm::dot(line.dir, oc);
+        const double disc = half * half - (glm::dot(oc, oc) - r * r);
+        if (disc < 0.0) return Interval::empty();
+        const double root = std::sqrt(disc);
+        return Interval{-half - root, -half + root};
+    };
+    Interval out = inBall(a).hull(inBall(b));
+    const Vec3 m = b - a;
+    const double mm = glm::dot(m, m);
+    if (!(mm > 0.0)) return out;
+    // Across m, the line's offset from the segment's line is w(t) = oPerp + t dPerp.
+    const Vec3 oa = line.origin - a;
+    const double dm = glm::dot(line.dir, m), om = glm::dot(oa, m);
+    const Vec3 dPerp = line.dir - (dm / mm) * m, oPerp = oa - (om / mm) * m;
+    const Interval across =
+        detail::solveQuadraticLE(glm::dot(dPerp, dPerp), glm::dot(dPerp, oPerp), glm::dot(oPerp, oPerp) - r * r).first;
+    // Between the end planes: 0 <= om + t dm <= mm.
+    Interval slab = Interval::all();
+    if (dm == 0.0) {
+        if (om < 0.0 || om > mm) slab = Interval::empty();
+    } else {
+        const double t0 = -om / dm, t1 = (mm - om) / dm;
+        slab = {std::min(t0, t1), std::max(t0, t1)};
+    }
+    return out.hull(across.intersect(slab));
+}
+
+/// Whether convex part `part` starts with a ball end: the lower half of a sphere (radius rho,
+/// centre zc on the axis) from its bottom to its centre, then a cylinder of the same radius up
+/// to at least zc + rho, so that the whole ball lies inside the part. Its radius must exceed
+/// twice the tolerance (note g of TurningSweep::intersect).
+bool ballEnd(const std::vector<ProfilePiece>& pieces, const ConvexPart& part, double epsilon, double& zc,
+             double& rho) {
+    if (part.last - part.first < 2) return false;
+    const auto* arc = std::get_if<ArcPiece>(&pieces[part.first]);
+    const auto* cylinder = std::get_if<ConePiece>(&pieces[part.first + 1]);
+    if (!arc || !cylinder || arc->rc != 0.0 || arc->z0 != arc->zc - arc->rho || arc->z1 != arc->zc) return false;
+    if (cylinder->z0 != arc->zc || cylinder->r0 != arc->rho || cylinder->r1 != arc->rho ||
+        cylinder->z1 < arc->zc + arc->rho)
+        return false;
+    if (!(arc->rho > 2.0 * epsilon)) return false;
+    zc = arc->zc;
+    rho = arc->rho;
+    return true;
+}
 
 }  // namespace
 
@@ -189,10 +246,35 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     bounds_ = turningMoveBox(move, tool.totalLength(), tool.maxRadius()).padded(kBoxSlack);
     // Every tool point lies within hypot(total length, max radius) of the tip.
     speed_ = law_.speedBound(std::hypot(tool.totalLength(), tool.maxRadius()));
-    for (const ConvexPart& part : tool_.convexParts()) grownEpsilon_.push_back(offsetPart(tool_, part, epsilon_));
+    // Ball ends (note g): chords enough that w^2 / 8 |c''| <= epsilon / 2 for chords of width
+    // w = 1 / chords, i.e. chords^2 >= |c''| / (4 epsilon).
+    for (const ConvexPart& part : tool_.convexParts()) {
+        Ball ball;
+        const double accel = ballEnd(tool_.pieces(), part, epsilon_, ball.zc, ball.rho)
+                                 ? law_.axisPointAccelerationBound(ball.zc)
+                                 : std::numeric_limits<double>::infinity();
+        const double chords = std::max(1.0, std::ceil(std::sqrt(accel / (4.0 * epsilon_))));
+        if (!(chords <= kMaxChords)) {
+            parts_.push_back(part);
+            continue;
+        }
+        chords_ = std::max(chords_, int(chords));
+        parts_.push_back({part.first + 1, part.last, ball.zc, part.z1});
+        balls_.push_back(std::move(ball));
+    }
+    for (Ball& ball : balls_)
+        for (int j = 0; j <= chords_; ++j) {
+            const ToolPose p = law_.pose(double(j) / chords_);
+            ball.centres.push_back(p.tip + ball.zc * p.axis);
+        }
+    for (const ConvexPart& part : parts_) grownEpsilon_.push_back(offsetPart(tool_, part, epsilon_));
+    for (const Ball& ball : balls_) {
+        const double r = ball.rho + epsilon_;
+        grownEpsilon_.push_back({ArcPiece{ball.zc - r, ball.zc + r, 0.0, ball.zc, r}});
+    }
     for (int k = 0; k < kMaxLevel && std::ldexp(speed_, -(k + 1)) > epsilon_; ++k) {
         std::vector<std::vector<ProfilePiece>> level;
-        for (const ConvexPart& part : tool_.convexParts())
+        for (const ConvexPart& part : parts_)
             level.push_back(offsetPart(tool_, part, std::ldexp(speed_, -(k + 1)) - epsilon_));
         grown_.push_back(std::move(level));
     }
@@ -241,6 +323,29 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      of a search that grew by r_k and stopped at r_k <= epsilon. Most nodes settle at once: far
 //      from the tool the grown intervals are empty, and deep inside the cut they are held by the
 //      neighbours' intervals.
+//  (g) Ball ends. A convex part that is a ball end (ballEnd: the lower half-sphere of radius R
+//      about the axis point at height zc, then a cylinder of radius R up to at least zc + R) is
+//      the union of the whole ball B and the part above zc, P; the search runs on P (and the
+//      other parts) alone, and B's sweep is taken as capsules. B's centre moves on
+//      c(u) = p(u) + zc a(u), with |c''| <= K (MotionLaw::axisPointAccelerationBound). On a chord
+//      from c(u_j) to c(u_j + w), the straight interpolant L(u) has |c(u) - L(u)| <= w^2 K / 8
+//      (along any fixed direction, the error is a scalar function that vanishes at both ends,
+//      whose second derivative is at most K); w is chosen so that this is at most
+//      delta = epsilon / 2. The union of the capsules of radius R about the chords is then
+//      within delta of the union of the balls B(u) (a point within R of L(u) is within R + delta
+//      of c(u)), and holds every point deeper than delta inside some B(u) (|x - c(u)| <= R - delta
+//      puts x within R of L(u)). So the capsules keep guarantee 1, and guarantee 2 holds if every
+//      point x deeper than epsilon inside T(u) is deeper than delta inside B(u) or deeper than
+//      epsilon inside P(u). With z the height of x above the centre and rho its distance from the
+//      axis: if z < 0, the point of the sphere nearest x lies on the lower half, a face of T, so
+//      x's depth in B is at least its depth in T; if z > epsilon, its depth in P is the smaller
+//      of its depth in T (P's other faces are T's) and z; if 0 <= z <= epsilon, the cylinder
+//      bounds rho <= R - epsilon, so |x - c| <= sqrt((R - epsilon)^2 + epsilon^2) and x's depth
+//      in B is more than epsilon / 2 whenever R > 7 epsilon / 4 (ballEnd asks for R > 2 epsilon).
+//      The search settles P's nodes against O with the capsules already in it: near the ball's
+//      surface P's grown intervals are empty or held, so the search descends only where P
+//      itself comes near the line. A move whose law has no bound K (a tip the machine carries)
+//      or would need more than kMaxChords chords is searched whole.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     const Interval reach = bound(line);
@@ -251,8 +356,23 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
     if (!std::any_of(careBegin, careEnd, [&](const Interval& c) { return !c.intersect(reach).isEmpty(); }))
         return out;
 
-    const auto& parts = tool_.convexParts();
+    const auto& parts = parts_;
     Union found;
+    // The balls' capsules (g); each end's pose is where its chord comes nearest it.
+    for (std::size_t b = 0; b < balls_.size(); ++b) {
+        const std::vector<Vec3>& c = balls_[b].centres;
+        for (int j = 0; j < chords_; ++j) {
+            const Interval iv = lineCapsule(line, c[std::size_t(j)], c[std::size_t(j) + 1], balls_[b].rho);
+            if (iv.isEmpty()) continue;
+            const Vec3 m = c[std::size_t(j) + 1] - c[std::size_t(j)];
+            const double mm = glm::dot(m, m);
+            const auto chordU = [&](double t) {
+                const double s = mm > 0.0 ? std::clamp(glm::dot(line.at(t) - c[std::size_t(j)], m) / mm, 0.0, 1.0) : 0.0;
+                return (j + s) / chords_;
+            };
+            found.add(iv, chordU(iv.lo), chordU(iv.hi), parts.size() + b);
+        }
+    }
     auto solve = [&](double u) {
         const LocalLine local = LocalLine::make(pose(u), line);
         for (std::size_t p = 0; p < parts.size(); ++p) {
@@ -346,7 +466,14 @@ std::vector<Interval> TurningSweep::intersectAll(const Line& line) const {
 void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t part, Vec3& normal,
                              bool& sharp) const {
     const ToolPose ps = pose(u);
-    const ConvexPart& cp = tool_.convexParts()[part];
+    if (part >= parts_.size()) {  // a ball: the sphere about its centre at that pose
+        const Vec3 d = line.at(t) - (ps.tip + balls_[part - parts_.size()].zc * ps.axis);
+        const double l = glm::length(d);
+        normal = l > 0.0 ? d / l : -ps.axis;
+        sharp = false;
+        return;
+    }
+    const ConvexPart& cp = parts_[part];
     const Vec3 d = line.at(t) - ps.tip;
     const double z = glm::dot(d, ps.axis);
     Vec3 radial = d - z * ps.axis;

@@ -749,6 +749,43 @@ TEST_CASE("turning sweep vs oracle: a fixed axis (no start axis)", "[sweep][turn
     report(tally);
 }
 
+TEST_CASE("turning sweep vs oracle: ball ends swept as capsules, and those searched whole", "[sweep][turning]") {
+    std::mt19937_64 rng(20261124);
+    Tally tally;
+    struct Variant {
+        double d, total, angle, epsilon;
+        bool bull;
+        std::size_t balls;
+        const char* what;
+    };
+    const Variant variants[] = {
+        {4.0, 40.0, 5.0, 1e-4, false, 1, "the impeller's ball end turning 5 degrees"},
+        {10.0, 15.0, 60.0, 1e-4, false, 1, "turning 60 degrees"},
+        {6.0, 12.0, 20.0, 1e-4, true, 1, "a bull nose whose corner radius is half its diameter"},
+        {10.0, 7.0, 30.0, 1e-4, false, 0, "a cylinder shorter than the radius: the ball is not inside the tool"},
+        {40.0, 45.0, 90.0, 1e-5, false, 0, "a turn that needs more than 256 chords"},
+        {3e-4, 1.0, 30.0, 1e-4, false, 0, "a radius below twice the tolerance"},
+    };
+    for (const Variant& v : variants) {
+        const double r = v.d / 2;
+        const ToolLengths lengths{v.total, v.total};
+        const models::Model model{v.bull ? bullNoseEndMill(v.d, r, lengths) : ballEndMill(v.d, lengths),
+                                  {models::part(0, v.total, [r](double z) { return z < r ? models::capRadius(r, z) : r; }, r)}};
+        for (int i = 0, n = scaled(40); i < n; ++i) {
+            Case c;
+            c.kind = v.bull ? models::Kind::Bull : models::Kind::Ball;
+            c.model.emplace(model);
+            c.move = randomMove(rng, degrees(v.angle), rng() % 4 == 0 ? 0.0 : cases::uniform(rng, 0, 30));
+            c.line = randomLine(rng, model, c.move, rng() % 2 == 0);
+            c.epsilon = v.epsilon;
+            INFO(v.what);
+            CHECK(TurningSweep(model.tool, c.move, c.epsilon).capsuleBalls() == v.balls);
+            checkCase(c, tally, rng);
+        }
+    }
+    report(tally);
+}
+
 TEST_CASE("turning sweep vs oracle: a line the tool cannot reach gets nothing", "[sweep][turning]") {
     std::mt19937_64 rng(20261131);
     Tally tally;

@@ -80,6 +80,10 @@ class TurningSweep {
     double epsilon() const { return epsilon_; }
     /// @brief A box that holds every pose of the tool.
     const Box& bounds() const { return bounds_; }
+    /// @brief How many of the tool's ball ends are swept as capsules along chords of their
+    /// centres' paths instead of searched (turning.cpp, note g), and into how many chords.
+    std::size_t capsuleBalls() const { return balls_.size(); }
+    int chords() const { return chords_; }
     /// @brief A cheap interval of `line` that holds every output interval: the line inside
     /// bounds() grown by epsilon (an output interval may be a pose's grown by up to epsilon).
     /// Empty when the line misses that box.
@@ -99,16 +103,30 @@ class TurningSweep {
     /// The Hermite data of an output end at line parameter t, made by part `part` at pose u.
     void endNormal(const Line& line, double t, double u, std::size_t part, Vec3& normal, bool& sharp) const;
 
+    /// A ball inside the tool whose sphere is the tool's lower face below its centre (a ball end
+    /// mill's): swept as capsules along chords of its centre's path (turning.cpp, note g).
+    struct Ball {
+        double zc = 0.0, rho = 0.0;  ///< the centre's height above the tip, and the radius
+        std::vector<Vec3> centres;   ///< the centre at u = j / chords, j = 0 .. chords
+    };
+
     Tool tool_;
     MotionLaw law_;
     double speed_ = 0.0;
     double epsilon_ = kDefaultTurnTolerance;
     Box bounds_;
-    /// grown_[k][p]: convex part p grown by speed / 2^(k + 1) - epsilon, the reach of a node of
-    /// width 2^-k less the depth guarantee 2 leaves out (turning.cpp), for the levels k whose reach
-    /// exceeds epsilon.
+    /// The convex solids the search solves: the tool's convex parts, with a ball's part cut at
+    /// its centre's height (the part above it; the ball itself is in balls_).
+    std::vector<ConvexPart> parts_;
+    std::vector<Ball> balls_;
+    /// Chords per ball: enough that the centre's path lies within epsilon / 2 of them.
+    int chords_ = 0;
+    /// grown_[k][p]: part p of parts_ grown by speed / 2^(k + 1) - epsilon, the reach of a node
+    /// of width 2^-k less the depth guarantee 2 leaves out (turning.cpp), for the levels k whose
+    /// reach exceeds epsilon.
     std::vector<std::vector<std::vector<ProfilePiece>>> grown_;
-    /// Each convex part grown by epsilon: the reach that closes a gap between two intervals.
+    /// Each part of parts_, then each ball, grown by epsilon: the reach that closes a gap between
+    /// two intervals. An output piece's part index counts the same way.
     std::vector<std::vector<ProfilePiece>> grownEpsilon_;
 };
 
