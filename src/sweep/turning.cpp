@@ -174,7 +174,7 @@ Interval lineCapsule(const Line& line, const Vec3& a, const Vec3& b, double r) {
     return out.hull(across.intersect(slab));
 }
 
-/// Whether convex part `part` starts with a ball end: the lower half of a sphere (radius rho,
+/// Whether convex part `part` (the tool's lowest) starts with a ball end: the lower half of a sphere (radius rho,
 /// centre zc on the axis) from its bottom to its centre, then a cylinder of the same radius up
 /// to at least zc + rho, so that the whole ball lies inside the part. Its radius must exceed
 /// twice the tolerance (note g of TurningSweep::intersect).
@@ -246,21 +246,19 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     bounds_ = turningMoveBox(move, tool.totalLength(), tool.maxRadius()).padded(kBoxSlack);
     // Every tool point lies within hypot(total length, max radius) of the tip.
     speed_ = law_.speedBound(std::hypot(tool.totalLength(), tool.maxRadius()));
-    // Ball ends (note g): chords enough that w^2 / 8 |c''| <= epsilon / 2 for chords of width
-    // w = 1 / chords, i.e. chords^2 >= |c''| / (4 epsilon).
-    for (const ConvexPart& part : tool_.convexParts()) {
-        Ball ball;
-        const double accel = ballEnd(tool_.pieces(), part, epsilon_, ball.zc, ball.rho)
-                                 ? law_.axisPointAccelerationBound(ball.zc)
-                                 : std::numeric_limits<double>::infinity();
+    // A ball end at the bottom (note g): chords enough that w^2 / 8 |c''| <= epsilon / 2 for
+    // chords of width w = 1 / chords, i.e. chords^2 >= |c''| / (4 epsilon).
+    parts_ = tool_.convexParts();
+    Ball ball;
+    if (!parts_.empty() && ballEnd(tool_.pieces(), parts_.front(), epsilon_, ball.zc, ball.rho)) {
+        const double accel = law_.axisPointAccelerationBound(ball.zc);
         const double chords = std::max(1.0, std::ceil(std::sqrt(accel / (4.0 * epsilon_))));
-        if (!(chords <= kMaxChords)) {
-            parts_.push_back(part);
-            continue;
+        if (chords <= kMaxChords) {
+            chords_ = int(chords);
+            const ConvexPart bottom = parts_.front();
+            parts_.front() = {bottom.first + 1, bottom.last, ball.zc, bottom.z1};
+            balls_.push_back(std::move(ball));
         }
-        chords_ = std::max(chords_, int(chords));
-        parts_.push_back({part.first + 1, part.last, ball.zc, part.z1});
-        balls_.push_back(std::move(ball));
     }
     for (Ball& ball : balls_)
         for (int j = 0; j <= chords_; ++j) {
@@ -323,10 +321,11 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      of a search that grew by r_k and stopped at r_k <= epsilon. Most nodes settle at once: far
 //      from the tool the grown intervals are empty, and deep inside the cut they are held by the
 //      neighbours' intervals.
-//  (g) Ball ends. A convex part that is a ball end (ballEnd: the lower half-sphere of radius R
-//      about the axis point at height zc, then a cylinder of radius R up to at least zc + R) is
-//      the union of the whole ball B and the part above zc, P; the search runs on P (and the
-//      other parts) alone, and B's sweep is taken as capsules. B's centre moves on
+//  (g) Ball ends. When the tool's lowest convex part is a ball end (ballEnd: the lower
+//      half-sphere of radius R about the axis point at height zc, then a cylinder of radius R up
+//      to at least zc + R), the tool is the union of the whole ball B and P, the tool above zc
+//      (that part above zc and every part over it); the search runs on P's convex parts alone,
+//      and B's sweep is taken as capsules. B's centre moves on
 //      c(u) = p(u) + zc a(u), with |c''| <= K (MotionLaw::axisPointAccelerationBound). On a chord
 //      from c(u_j) to c(u_j + w), the straight interpolant L(u) has |c(u) - L(u)| <= w^2 K / 8
 //      (along any fixed direction, the error is a scalar function that vanishes at both ends,
@@ -339,7 +338,7 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      epsilon inside P(u). With z the height of x above the centre and rho its distance from the
 //      axis: if z < 0, the point of the sphere nearest x lies on the lower half, a face of T, so
 //      x's depth in B is at least its depth in T; if z > epsilon, its depth in P is the smaller
-//      of its depth in T (P's other faces are T's) and z; if 0 <= z <= epsilon, the cylinder
+//      of its depth in T and z (P is T cut by the plane at the centre's height); if 0 <= z <= epsilon, the cylinder
 //      bounds rho <= R - epsilon, so |x - c| <= sqrt((R - epsilon)^2 + epsilon^2) and x's depth
 //      in B is more than epsilon / 2 whenever R > 7 epsilon / 4 (ballEnd asks for R > 2 epsilon).
 //      The search settles P's nodes against O with the capsules already in it: near the ball's

@@ -80,8 +80,8 @@ class TurningSweep {
     double epsilon() const { return epsilon_; }
     /// @brief A box that holds every pose of the tool.
     const Box& bounds() const { return bounds_; }
-    /// @brief How many of the tool's ball ends are swept as capsules along chords of their
-    /// centres' paths instead of searched (turning.cpp, note g), and into how many chords.
+    /// @brief Whether the tool's ball end is swept as capsules along chords of its centre's path
+    /// instead of searched (1) or not (0) (turning.cpp, note g), and into how many chords.
     std::size_t capsuleBalls() const { return balls_.size(); }
     int chords() const { return chords_; }
     /// @brief A cheap interval of `line` that holds every output interval: the line inside
@@ -104,7 +104,8 @@ class TurningSweep {
     void endNormal(const Line& line, double t, double u, std::size_t part, Vec3& normal, bool& sharp) const;
 
     /// A ball inside the tool whose sphere is the tool's lower face below its centre (a ball end
-    /// mill's): swept as capsules along chords of its centre's path (turning.cpp, note g).
+    /// mill's, at the bottom): swept as capsules along chords of its centre's path (turning.cpp,
+    /// note g).
     struct Ball {
         double zc = 0.0, rho = 0.0;  ///< the centre's height above the tip, and the radius
         std::vector<Vec3> centres;   ///< the centre at u = j / chords, j = 0 .. chords
@@ -115,10 +116,10 @@ class TurningSweep {
     double speed_ = 0.0;
     double epsilon_ = kDefaultTurnTolerance;
     Box bounds_;
-    /// The convex solids the search solves: the tool's convex parts, with a ball's part cut at
-    /// its centre's height (the part above it; the ball itself is in balls_).
+    /// The convex solids the search solves: the tool's convex parts, the lowest cut at its
+    /// ball's centre when it is a ball end (the ball itself is in balls_).
     std::vector<ConvexPart> parts_;
-    std::vector<Ball> balls_;
+    std::vector<Ball> balls_;  ///< none, or the lowest part's ball
     /// Chords per ball: enough that the centre's path lies within epsilon / 2 of them.
     int chords_ = 0;
     /// grown_[k][p]: part p of parts_ grown by speed / 2^(k + 1) - epsilon, the reach of a node
