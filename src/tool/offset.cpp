@@ -1,5 +1,6 @@
 #include "dexelmill/tool/offset.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace dexelmill {
@@ -7,6 +8,14 @@ namespace dexelmill {
 namespace {
 
 constexpr double kHalfPi = 1.57079632679489661923;
+
+/// A step of a tangent chain this small against its arc's radius is level. At a rim where the arc
+/// meets a bottom or top face the first or last step is level, but the arc's end angles come from
+/// asin or atan2 next to +-pi/2, where a rounding of 1e-16 moves them by up to sqrt(2e-16), 1.5e-8
+/// rad, which tilts the step by about that: a cone of that height and a fraction of the radius
+/// across is too steep to solve reliably. Merging a step this low enlarges the solid by at most
+/// its height.
+constexpr double kLevelStep = 1e-6;
 
 /// The outward normal's angle psi = atan2(nz, nr) of a piece at height z (meridianNormal).
 double normalAngle(const ProfilePiece& piece, double z) {
@@ -49,9 +58,86 @@ std::vector<ProfilePiece> offsetPart(const Tool& tool, const ConvexPart& part, d
     return out;
 }
 
+OuterPart outerOffsetPart(const Tool& tool, const ConvexPart& part, double r, double slack) {
+    OuterPart outer;
+    outer.pieces = offsetPart(tool, part, r);
+    outer.chains.resize(outer.pieces.size());
+    for (std::size_t k = 0; k < outer.pieces.size(); ++k) {
+        const auto* a = std::get_if<ArcPiece>(&outer.pieces[k]);
+        if (!a || a->rc == 0.0 || !(slack > 0.0)) continue;  // cones, and spheres (closed form)
+        std::vector<ConePiece>& out = outer.chains[k];
+        // Normal angles of the arc's ends; the outer half's heights rise with the angle.
+        const double psiA = std::asin(std::clamp((a->z0 - a->zc) / a->rho, -1.0, 1.0));
+        const double psiB = std::asin(std::clamp((a->z1 - a->zc) / a->rho, -1.0, 1.0));
+        // Steps d with a (1 / cos(d / 2) - 1) <= slack.
+        const double maxStep = 2.0 * std::acos(1.0 / (1.0 + slack / a->rho));
+        const double steps = std::ceil((psiB - psiA) / maxStep);
+        if (!(steps <= kMaxTangentCones)) continue;
+        const int n = std::max(1, int(steps));
+        const double d = (psiB - psiA) / n, corner = a->rho / std::cos(0.5 * d);
+        // The chain's vertices: the arc's start, the tangents' meeting points, the arc's end.
+        // Where a step is level to rounding (at a bottom or top face's rim), no cone is made of
+        // it: at the chain's start the next cone starts as wide, later the last cone is raised
+        // and widened to the step's end. Either only enlarges the solid.
+        const double level = kLevelStep * a->rho;
+        double rPrev = a->rc + a->rho * std::cos(psiA), zPrev = a->z0;
+        for (int i = 0; i <= n; ++i) {
+            double rv, zv;
+            if (i < n) {
+                const double psi = psiA + (i + 0.5) * d;
+                rv = a->rc + corner * std::cos(psi);
+                zv = a->zc + corner * std::sin(psi);
+            } else {
+                rv = a->rc + a->rho * std::cos(psiB);
+                zv = a->z1;
+            }
+            if (zv - zPrev > level) {
+                out.push_back(ConePiece{zPrev, zv, rPrev, rv});
+                rPrev = rv, zPrev = zv;
+            } else if (!out.empty()) {
+                ConePiece& last = out.back();
+                last.z1 = std::max(last.z1, zv);
+                last.r1 = std::max(last.r1, rv);
+                rPrev = last.r1, zPrev = last.z1;
+            } else {
+                rPrev = std::max(rPrev, rv);
+            }
+        }
+    }
+    return outer;
+}
+
+Interval intersectOuter(const OuterPart& outer, const LocalLine& line) {
+    Interval hull;
+    for (std::size_t k = 0; k < outer.pieces.size(); ++k) {
+        const auto* a = std::get_if<ArcPiece>(&outer.pieces[k]);
+        if (!a || outer.chains[k].empty()) {
+            hull = hull.hull(intersectPiece(outer.pieces[k], line));
+            continue;
+        }
+        const Interval slab = detail::slabRange(line, a->z0, a->z1);
+        if (slab.isEmpty()) continue;
+        Interval exact;
+        if (detail::torusClosedForm(*a, line, slab, exact)) {
+            hull = hull.hull(exact);
+            continue;
+        }
+        for (const ConePiece& c : outer.chains[k]) hull = hull.hull(detail::intersectCone(c, line));
+    }
+    if (hull.isEmpty()) return hull;
+    return {hull.lo + line.vShift, hull.hi + line.vShift};
+}
+
 Interval intersectPieces(const std::vector<ProfilePiece>& pieces, const LocalLine& line) {
     Interval hull;
-    for (const ProfilePiece& p : pieces) hull = hull.hull(intersectPiece(p, line));
+    for (const ProfilePiece& p : pieces) {
+        // A piece's interval lies within its slab's: a slab the hull already spans adds nothing.
+        const auto* c = std::get_if<ConePiece>(&p);
+        const Interval slab = c ? detail::slabRange(line, c->z0, c->z1)
+                                : detail::slabRange(line, std::get<ArcPiece>(p).z0, std::get<ArcPiece>(p).z1);
+        if (slab.isEmpty() || (!hull.isEmpty() && slab.lo >= hull.lo && slab.hi <= hull.hi)) continue;
+        hull = hull.hull(intersectPiece(p, line));
+    }
     if (hull.isEmpty()) return hull;
     return {hull.lo + line.vShift, hull.hi + line.vShift};
 }

@@ -35,42 +35,62 @@ double maxRadiusOver(const ProfilePiece& p, double z0, double z1) {
     return ends;
 }
 
+/// rho(t) - R(z(t)) along the line for a torus piece: negative inside its slab solid.
+double torusGap(const ArcPiece& a, const LocalLine& l, double t) {
+    const double r2 = std::max(0.0, (l.A * t + 2.0 * l.B) * t + l.C);
+    const double dz = l.z0 + l.zv * t - a.zc;
+    return std::sqrt(r2) - a.rc - std::sqrt(std::max(0.0, a.rho * a.rho - dz * dz));
+}
+
 }  // namespace
 
-// Torus slab: g(t) = rho(t) - R(z(t)) is convex on the slab (a norm of an affine map minus a
-// concave function of an affine map), so { g <= 0 } is one interval. Find the minimum by Brent's
-// method and the two ends by TOMS 748 on the brackets it leaves.
-Interval detail::intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& slab) {
+bool detail::torusClosedForm(const ArcPiece& a, const LocalLine& l, const Interval& slab, Interval& out) {
     if (l.A <= tol::kParallel * tol::kParallel * l.zv * l.zv && l.zv != 0.0) {
         // A line parallel to the axis (A = 0) at distance sqrt(C): inside where the profile
         // circle is at least that far out, |z - zc| <= sqrt(rho^2 - (sqrt(C) - rc)^2), or over the
         // whole slab when it runs inside the core (sqrt(C) <= rc). Closed form: the convex search
         // below would look for a minimum of a function that is flat in the radial term.
-        const double out = std::sqrt(l.C) - a.rc;
-        if (out <= 0.0) return slab;
-        if (out > a.rho) return Interval::empty();
-        const double half = std::sqrt(a.rho * a.rho - out * out);
-        return slab.intersect(slabRange(l, a.zc - half, a.zc + half));
+        const double outside = std::sqrt(l.C) - a.rc;
+        if (outside <= 0.0) {
+            out = slab;
+        } else if (outside > a.rho) {
+            out = Interval::empty();
+        } else {
+            const double half = std::sqrt(a.rho * a.rho - outside * outside);
+            out = slab.intersect(slabRange(l, a.zc - half, a.zc + half));
+        }
+        return true;
     }
-    const double rOuter = a.rc + a.rho;
-    Interval range = slab.intersect(cylinderRange(l, rOuter));
-    if (range.isEmpty()) return range;
+    const Interval range = slab.intersect(cylinderRange(l, a.rc + a.rho));
+    if (range.isEmpty()) {
+        out = range;
+        return true;
+    }
     if (l.zv == 0.0) {
         // Constant height: a disk of radius R(z0).
         const double dz = l.z0 - a.zc;
         const double r = a.rc + std::sqrt(std::max(0.0, a.rho * a.rho - dz * dz));
-        return cylinderRange(l, r).intersect(range);
+        out = cylinderRange(l, r).intersect(range);
+        return true;
     }
-    const double rho2 = a.rho * a.rho;
-    auto g = [&](double t) {
-        const double r2 = std::max(0.0, (l.A * t + 2.0 * l.B) * t + l.C);
-        const double dz = l.z0 + l.zv * t - a.zc;
-        return std::sqrt(r2) - a.rc - std::sqrt(std::max(0.0, rho2 - dz * dz));
-    };
+    if (torusGap(a, l, range.lo) <= 0.0 && torusGap(a, l, range.hi) <= 0.0) {  // convex: all inside
+        out = range;
+        return true;
+    }
+    return false;
+}
+
+// Torus slab: g(t) = rho(t) - R(z(t)) is convex on the slab (a norm of an affine map minus a
+// concave function of an affine map), so { g <= 0 } is one interval. Find the minimum by Brent's
+// method and the two ends by TOMS 748 on the brackets it leaves.
+Interval detail::intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& slab) {
+    Interval decided;
+    if (torusClosedForm(a, l, slab, decided)) return decided;
+    const Interval range = slab.intersect(cylinderRange(l, a.rc + a.rho));
+    auto g = [&](double t) { return torusGap(a, l, t); };
     const double gLo = g(range.lo);
     const double gHi = g(range.hi);
     double tMin = 0.0, gMin = 0.0;
-    if (gLo <= 0.0 && gHi <= 0.0) return range;  // convex: the whole range is inside
     {
         boost::uintmax_t iters = 200;
         const auto m = boost::math::tools::brent_find_minima(

@@ -182,3 +182,101 @@ TEST_CASE("offsetPart: growing by zero keeps the part, and a flat end mill's gro
     CHECK(along.lo == Approx(49.0));
     CHECK(along.hi == Approx(71.0));
 }
+
+TEST_CASE("outerOffsetPart: holds the grown part and lies within r + slack of the part", "[tool][offset]") {
+    std::mt19937_64 rng(20261124);
+    const int perKind = std::max(2, int(30 * oracle::testScale()));
+    int checked = 0, missed = 0, coned = 0, kept = 0;
+    for (int k = 0; k < int(models::Kind::Count); ++k) {
+        for (int n = 0; n < perKind; ++n) {
+            const models::Model m = models::make(models::Kind(k), rng);
+            for (std::size_t p = 0; p < m.parts.size(); ++p) {
+                const oracle::Part& part = m.parts[p];
+                const Polygon poly = polygonOf(part);
+                const double r = std::exp(models::uniform(rng, std::log(1e-3), std::log(5.0)));
+                const double slack = r * std::exp(models::uniform(rng, std::log(0.01), std::log(0.5)));
+                const auto outer = outerOffsetPart(m.tool, m.tool.convexParts()[p], r, slack);
+                for (std::size_t i = 0; i < outer.pieces.size(); ++i) {
+                    const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
+                    if (a && a->rc > 0.0) (outer.chains[i].empty() ? kept : coned) += 1;
+                }
+                for (int l = 0; l < 20; ++l) {
+                    const double zc = models::uniform(rng, part.za - 2 * r, part.zb + 2 * r);
+                    const double rc = models::uniform(rng, 0.0, part.rBound + 2 * r);
+                    const Vec3 through(rc, 0.0, zc);
+                    Vec3 dir(models::uniform(rng, -1, 1), models::uniform(rng, -1, 1), models::uniform(rng, -1, 1));
+                    if (l % 4 == 0) dir = Vec3(0.0, 0.0, 1.0);
+                    if (l % 4 == 1) dir = Vec3(0.0, 1.0, 0.0);
+                    if (glm::length(dir) < 1e-3) continue;
+                    dir = glm::normalize(dir);
+                    const Line line{through - 100.0 * dir, dir};
+                    const Interval iv = intersectOuter(outer, LocalLine::make(ToolPose{}, line));
+                    INFO(models::name(models::Kind(k)) << " part " << p << " r " << r << " slack " << slack
+                                                       << " line through (" << through.x << ", " << through.y
+                                                       << ", " << through.z << ") along (" << dir.x << ", " << dir.y
+                                                       << ", " << dir.z << ")");
+                    auto distance = [&](double t) {
+                        const Vec3 q = line.at(t);
+                        return polygonDistance(poly, rhoOf(q), q.z, 2.0 * (r + slack) + kGap);
+                    };
+                    if (iv.isEmpty()) {
+                        const double reach = part.zb - part.za + part.rBound + 3 * r;
+                        for (double t = 100.0 - reach; t <= 100.0 + reach; t += kLineStep)
+                            if (distance(t) < r - kRound) FAIL_CHECK("within r at t = " << t);
+                        ++missed;
+                        continue;
+                    }
+                    // Ends: outside the grown part (a superset's boundary), within r + slack of the part.
+                    for (const double t : {iv.lo, iv.hi}) {
+                        const double d = distance(t);
+                        INFO("end t = " << t << " of [" << iv.lo << ", " << iv.hi << "]");
+                        CHECK(d >= r - kRound);
+                        CHECK(d - kGap / 2 <= r + slack + kRound);
+                    }
+                    // The line's points just outside the interval are farther than r from the part.
+                    for (const double t : {iv.lo - kLineStep, iv.hi + kLineStep}) CHECK(distance(t) >= r - kRound);
+                    ++checked;
+                }
+            }
+        }
+    }
+    CHECK(checked > 1000);
+    CHECK(missed > 10);
+    CHECK(coned > 0);
+    CHECK(kept > 0);  // tori whose chain would need more than kMaxTangentCones cones stay
+}
+
+TEST_CASE("outerOffsetPart: a flat end mill's rims get two cones each, used where a line crosses them",
+          "[tool][offset]") {
+    const Tool flat = flatEndMill(10.0, {20.0, 20.0});
+    const ConvexPart& part = flat.convexParts().front();
+    const OuterPart outer = outerOffsetPart(flat, part, 1.0, 0.1);
+    const auto grown = offsetPart(flat, part, 1.0);
+    REQUIRE(outer.pieces.size() == grown.size());
+    REQUIRE(outer.chains.size() == grown.size());
+    for (std::size_t i = 0; i < grown.size(); ++i)
+        CHECK(outer.chains[i].size() == (std::holds_alternative<ArcPiece>(grown[i]) ? 2u : 0u));
+    // Rims of 90 degrees in two steps of 45: meeting points 1 / cos(22.5 deg) from the rim's centre.
+    const double meet = 1.0 / std::cos(std::acos(-1.0) / 8.0);
+    // A line that leaves through the bottom rim's torus, rising across the axis: the chain's
+    // interval holds the torus's, ends later, and its end lies within `meet` of the rim's circle.
+    const Line rising{Vec3(-50.0, 0.0, -1.6), glm::normalize(Vec3(1.0, 0.0, 0.02))};
+    const LocalLine local = LocalLine::make(ToolPose{}, rising);
+    const Interval exact = intersectPieces(grown, local);
+    const Interval rim = intersectOuter(outer, local);
+    REQUIRE(!exact.isEmpty());
+    CHECK(rim.lo <= exact.lo);
+    CHECK(rim.hi > exact.hi);
+    const Vec3 end = rising.at(rim.hi);
+    CHECK(end.z < 0.0);
+    CHECK(std::hypot(std::hypot(end.x, end.y) - 5.0, end.z) <= meet + 1e-12);
+    // Closed forms stay exact: across the bottom face, and along the axis.
+    const Line across{Vec3(-50.0, 0.0, 0.0), Vec3(1.0, 0.0, 0.0)};
+    CHECK(intersectOuter(outer, LocalLine::make(ToolPose{}, across)).hi == Approx(56.0));
+    const Line axis{Vec3(0.0, 0.0, -50.0), Vec3(0.0, 0.0, 1.0)};
+    const Interval along = intersectOuter(outer, LocalLine::make(ToolPose{}, axis));
+    CHECK(along.lo == Approx(49.0));
+    CHECK(along.hi == Approx(71.0));
+    // No slack: no chains.
+    for (const auto& chain : outerOffsetPart(flat, part, 1.0, 0.0).chains) CHECK(chain.empty());
+}

@@ -124,6 +124,11 @@ inline Interval intersectSphere(const ArcPiece& a, const LocalLine& l, const Int
 /// The torus slab, by bracketed root finding (tool.cpp).
 Interval intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& slab);
 
+/// The torus slab's interval where a closed form gives it (a line along the axis, at a constant
+/// height, missing the slab's outer cylinder, or inside at both ends of its range there): returns
+/// true and sets `out`; false where intersectTorus needs its root finding.
+bool torusClosedForm(const ArcPiece& a, const LocalLine& l, const Interval& slab, Interval& out);
+
 }  // namespace detail
 
 /// @brief The outward unit normal of a piece's lateral surface at its point at distance `rho` from

@@ -30,6 +30,32 @@ namespace dexelmill {
 /// @brief The pieces of `part` of `tool` grown by r >= 0, bottom to top (see the file comment).
 std::vector<ProfilePiece> offsetPart(const Tool& tool, const ConvexPart& part, double r);
 
+/// @brief A part grown by r, for tests that need only a superset of a line's interval in it:
+/// offsetPart's pieces, with each torus piece (an arc off the axis) also as the chain of cones
+/// tangent to it at evenly spaced points, where at most kMaxTangentCones keep the chain within
+/// `slack` of the arc.
+///
+/// The chain round an arc of radius a from normal angle psiA to psiB in n steps of d: the
+/// tangents at psiA + i d meet at distance a / cos(d / 2) from the arc's centre, so the chain
+/// holds the arc's slab solid and lies within a (1 / cos(d / 2) - 1) of it.
+struct OuterPart {
+    std::vector<ProfilePiece> pieces;
+    /// Per piece: its tangent cones, bottom to top, or none (a cone, a sphere, or a torus whose
+    /// chain would need too many).
+    std::vector<std::vector<ConePiece>> chains;
+};
+
+/// @brief `part` of `tool` grown by r >= 0, with tangent chains within slack > 0 of its tori.
+OuterPart outerOffsetPart(const Tool& tool, const ConvexPart& part, double r, double slack);
+
+/// Most cones that replace one torus piece in outerOffsetPart.
+constexpr int kMaxTangentCones = 6;
+
+/// @brief An interval of `line` that holds its interval in the grown part and lies within the
+/// part's chains: exact, except where a torus would need root finding (the line crosses its
+/// surface), where its chain's interval stands in. So it lies within r + slack of the part.
+Interval intersectOuter(const OuterPart& outer, const LocalLine& line);
+
 /// @brief The interval of `line` inside the convex solid that `pieces` describe (the hull of the
 /// pieces' slab solids), in the line's own parameters (LocalLine::vShift added back).
 Interval intersectPieces(const std::vector<ProfilePiece>& pieces, const LocalLine& line);
