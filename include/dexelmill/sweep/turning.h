@@ -18,6 +18,7 @@
 #include "dexelmill/path/motion.h"
 #include "dexelmill/path/toolpath.h"
 #include "dexelmill/tool/line_query.h"
+#include "dexelmill/tool/offset.h"
 #include "dexelmill/tool/tool.h"
 
 namespace dexelmill {
@@ -126,6 +127,9 @@ class TurningSweep {
     /// of width 2^-k less the depth guarantee 2 leaves out (turning.cpp), for the levels k whose
     /// reach exceeds epsilon.
     std::vector<std::vector<std::vector<ProfilePiece>>> grown_;
+    /// grownOuter_[k][p]: grown_[k][p] with tangent cones for its tori, within kSettleSlack of
+    /// its growth (outerOffsetPart): the settling test's.
+    std::vector<std::vector<OuterPart>> grownOuter_;
     /// Each part of parts_, then each ball, grown by epsilon: the reach that closes a gap between
     /// two intervals. An output piece's part index counts the same way.
     std::vector<std::vector<ProfilePiece>> grownEpsilon_;
