@@ -42,9 +42,10 @@ double torusGap(const ArcPiece& a, const LocalLine& l, double t) {
     return std::sqrt(r2) - a.rc - std::sqrt(std::max(0.0, a.rho * a.rho - dz * dz));
 }
 
-}  // namespace
-
-bool detail::torusClosedForm(const ArcPiece& a, const LocalLine& l, const Interval& slab, Interval& out) {
+/// detail::torusClosedForm; where it returns false, `range` (the slab within the outer cylinder) and
+/// the gaps at its ends are left for the root finding.
+bool torusClosedFormOrStart(const ArcPiece& a, const LocalLine& l, const Interval& slab, Interval& out,
+                            Interval& range, double& gLo, double& gHi) {
     if (l.A <= tol::kParallel * tol::kParallel * l.zv * l.zv && l.zv != 0.0) {
         // A line parallel to the axis (A = 0) at distance sqrt(C): inside where the profile
         // circle is at least that far out, |z - zc| <= sqrt(rho^2 - (sqrt(C) - rc)^2), or over the
@@ -57,11 +58,11 @@ bool detail::torusClosedForm(const ArcPiece& a, const LocalLine& l, const Interv
             out = Interval::empty();
         } else {
             const double half = std::sqrt(a.rho * a.rho - outside * outside);
-            out = slab.intersect(slabRange(l, a.zc - half, a.zc + half));
+            out = slab.intersect(detail::slabRange(l, a.zc - half, a.zc + half));
         }
         return true;
     }
-    const Interval range = slab.intersect(cylinderRange(l, a.rc + a.rho));
+    range = slab.intersect(detail::cylinderRange(l, a.rc + a.rho));
     if (range.isEmpty()) {
         out = range;
         return true;
@@ -70,26 +71,34 @@ bool detail::torusClosedForm(const ArcPiece& a, const LocalLine& l, const Interv
         // Constant height: a disk of radius R(z0).
         const double dz = l.z0 - a.zc;
         const double r = a.rc + std::sqrt(std::max(0.0, a.rho * a.rho - dz * dz));
-        out = cylinderRange(l, r).intersect(range);
+        out = detail::cylinderRange(l, r).intersect(range);
         return true;
     }
-    if (torusGap(a, l, range.lo) <= 0.0 && torusGap(a, l, range.hi) <= 0.0) {  // convex: all inside
+    gLo = torusGap(a, l, range.lo);
+    gHi = torusGap(a, l, range.hi);
+    if (gLo <= 0.0 && gHi <= 0.0) {  // convex: the whole range is inside
         out = range;
         return true;
     }
     return false;
 }
 
+}  // namespace
+
+bool detail::torusClosedForm(const ArcPiece& a, const LocalLine& l, const Interval& slab, Interval& out) {
+    Interval range;
+    double gLo = 0.0, gHi = 0.0;
+    return torusClosedFormOrStart(a, l, slab, out, range, gLo, gHi);
+}
+
 // Torus slab: g(t) = rho(t) - R(z(t)) is convex on the slab (a norm of an affine map minus a
 // concave function of an affine map), so { g <= 0 } is one interval. Find the minimum by Brent's
 // method and the two ends by TOMS 748 on the brackets it leaves.
 Interval detail::intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& slab) {
-    Interval decided;
-    if (torusClosedForm(a, l, slab, decided)) return decided;
-    const Interval range = slab.intersect(cylinderRange(l, a.rc + a.rho));
+    Interval decided, range;
+    double gLo = 0.0, gHi = 0.0;
+    if (torusClosedFormOrStart(a, l, slab, decided, range, gLo, gHi)) return decided;
     auto g = [&](double t) { return torusGap(a, l, t); };
-    const double gLo = g(range.lo);
-    const double gHi = g(range.hi);
     double tMin = 0.0, gMin = 0.0;
     {
         boost::uintmax_t iters = 200;
