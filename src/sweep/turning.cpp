@@ -315,9 +315,10 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      by g_k = r_k - epsilon, r_k = V 2^-(k+1). The grown tool is a convex solid of revolution
 //      per part (offset.h); its interval along the line is exact. A node is settled when, at both
 //      ends, the grown intervals hold no point of `care` outside the union O of the intervals
-//      solved so far. The test takes an interval that holds each grown part's (intersectOuter:
-//      where a torus would need root finding, its tangent cones, within kSettleSlack g_k of it):
-//      what a larger interval leaves outside O, a smaller one does too. A node whose reach r_k is
+//      solved so far. The test is made piece by piece on intervals that hold each piece's
+//      (allPiecesHeld: a torus's slab within its outer cylinder first, then where it would need
+//      root finding its tangent cones, within kSettleSlack g_k of it): what a larger interval
+//      leaves outside O, a smaller one does too. A node whose reach r_k is
 //      at most epsilon is a leaf: g_k <= 0, so the ends' own intervals, which O holds, hold those
 //      points. A node that is not settled, at a level where g_k <= epsilon, is closed: its ends'
 //      grown intervals are added to O (each point of them within epsilon of a pose). Otherwise the
@@ -396,16 +397,17 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         return local;
     };
     // Whether the tool at one end pose, grown by level k's reach, holds no point of care outside O
-    // (tested on a solid that holds it).
+    // (tested piece by piece, on intervals that hold each piece's).
     auto settled = [&](const LocalLine& local, int k) {
-        for (const OuterPart& grown : grownOuter_[std::size_t(k)]) {
-            const Interval g = intersectOuter(grown, local);
-            if (g.isEmpty()) continue;
-            for (const Interval* c = careBegin; c != careEnd; ++c) {
+        const auto held = [&](const Interval& g) {
+            for (const Interval* c = careBegin; c != careEnd && !g.isEmpty(); ++c) {
                 const Interval part = g.intersect(*c);
                 if (!part.isEmpty() && !found.holds(part.lo, part.hi)) return false;
             }
-        }
+            return true;
+        };
+        for (const OuterPart& grown : grownOuter_[std::size_t(k)])
+            if (!allPiecesHeld(grown, local, held)) return false;
         return true;
     };
 

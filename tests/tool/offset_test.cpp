@@ -183,10 +183,11 @@ TEST_CASE("offsetPart: growing by zero keeps the part, and a flat end mill's gro
     CHECK(along.hi == Approx(71.0));
 }
 
-TEST_CASE("outerOffsetPart: holds the grown part and lies within r + slack of the part", "[tool][offset]") {
+TEST_CASE("outerOffsetPart: holds the grown part and lies within r + slack of the part; allPiecesHeld",
+          "[tool][offset]") {
     std::mt19937_64 rng(20261124);
     const int perKind = std::max(2, int(30 * oracle::testScale()));
-    int checked = 0, missed = 0, coned = 0, kept = 0;
+    int checked = 0, missed = 0, coned = 0, kept = 0, windowsAccepted = 0, windowsRefused = 0;
     for (int k = 0; k < int(models::Kind::Count); ++k) {
         for (int n = 0; n < perKind; ++n) {
             const models::Model m = models::make(models::Kind(k), rng);
@@ -196,6 +197,7 @@ TEST_CASE("outerOffsetPart: holds the grown part and lies within r + slack of th
                 const double r = std::exp(models::uniform(rng, std::log(1e-3), std::log(5.0)));
                 const double slack = r * std::exp(models::uniform(rng, std::log(0.01), std::log(0.5)));
                 const auto outer = outerOffsetPart(m.tool, m.tool.convexParts()[p], r, slack);
+                const auto grown = offsetPart(m.tool, m.tool.convexParts()[p], r);
                 for (std::size_t i = 0; i < outer.pieces.size(); ++i) {
                     const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
                     if (a && a->rc > 0.0) (outer.chains[i].empty() ? kept : coned) += 1;
@@ -210,7 +212,26 @@ TEST_CASE("outerOffsetPart: holds the grown part and lies within r + slack of th
                     if (glm::length(dir) < 1e-3) continue;
                     dir = glm::normalize(dir);
                     const Line line{through - 100.0 * dir, dir};
-                    const Interval iv = intersectOuter(outer, LocalLine::make(ToolPose{}, line));
+                    const LocalLine local = LocalLine::make(ToolPose{}, line);
+                    const Interval iv = intersectOuter(outer, local);
+                    // allPiecesHeld against a random window W: accepting means the grown part's
+                    // exact interval lies in W; and W holding intersectOuter's interval means accepting.
+                    {
+                        const Interval exact = intersectPieces(grown, local);
+                        const Interval base = iv.isEmpty() ? Interval{99.0, 101.0} : iv;
+                        const double spread = 2.0 * (r + slack);
+                        const Interval window{base.lo + models::uniform(rng, -spread, spread),
+                                              base.hi + models::uniform(rng, -spread, spread)};
+                        const bool accepted = allPiecesHeld(outer, local, [&](const Interval& x) {
+                            return x.isEmpty() || (x.lo >= window.lo && x.hi <= window.hi);
+                        });
+                        if (accepted && !exact.isEmpty()) {
+                            CHECK(exact.lo >= window.lo);
+                            CHECK(exact.hi <= window.hi);
+                        }
+                        if (iv.isEmpty() || (iv.lo >= window.lo && iv.hi <= window.hi)) CHECK(accepted);
+                        (accepted ? windowsAccepted : windowsRefused) += 1;
+                    }
                     INFO(models::name(models::Kind(k)) << " part " << p << " r " << r << " slack " << slack
                                                        << " line through (" << through.x << ", " << through.y
                                                        << ", " << through.z << ") along (" << dir.x << ", " << dir.y
@@ -244,6 +265,8 @@ TEST_CASE("outerOffsetPart: holds the grown part and lies within r + slack of th
     CHECK(missed > 10);
     CHECK(coned > 0);
     CHECK(kept > 0);  // tori whose chain would need more than kMaxTangentCones cones stay
+    CHECK(windowsAccepted > 500);
+    CHECK(windowsRefused > 500);
 }
 
 TEST_CASE("outerOffsetPart: a flat end mill's rims get two cones each, used where a line crosses them",

@@ -56,6 +56,35 @@ constexpr int kMaxTangentCones = 6;
 /// surface), where its chain's interval stands in. So it lies within r + slack of the part.
 Interval intersectOuter(const OuterPart& outer, const LocalLine& line);
 
+/// @brief Whether `held` accepts, for each piece of the grown part, an interval that holds the
+/// line's interval in that piece (line parameters, LocalLine::vShift added back; possibly empty).
+/// The line's interval in a convex part is the union of its pieces' (the slab solids tile it along
+/// the axis), so this is the test "does `held` accept the whole interval" for any `held` that
+/// accepts an interval whenever it accepts a larger one; made piece by piece it can stop early.
+/// A torus piece with a chain is first offered its slab within the outer cylinder (one square
+/// root), then what intersectOuter takes for it.
+template <class Held>
+bool allPiecesHeld(const OuterPart& outer, const LocalLine& line, Held&& held) {
+    const auto shifted = [&](const Interval& iv) {
+        return iv.isEmpty() ? iv : Interval{iv.lo + line.vShift, iv.hi + line.vShift};
+    };
+    for (std::size_t i = 0; i < outer.pieces.size(); ++i) {
+        const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
+        if (!a || outer.chains[i].empty()) {
+            if (!held(shifted(intersectPiece(outer.pieces[i], line)))) return false;
+            continue;
+        }
+        const Interval slab = detail::slabRange(line, a->z0, a->z1);
+        if (slab.isEmpty()) continue;
+        if (held(shifted(slab.intersect(detail::cylinderRange(line, a->rc + a->rho))))) continue;
+        Interval iv;
+        if (!detail::torusClosedForm(*a, line, slab, iv))
+            for (const ConePiece& c : outer.chains[i]) iv = iv.hull(detail::intersectCone(c, line));
+        if (!held(shifted(iv))) return false;
+    }
+    return true;
+}
+
 /// @brief The interval of `line` inside the convex solid that `pieces` describe (the hull of the
 /// pieces' slab solids), in the line's own parameters (LocalLine::vShift added back).
 Interval intersectPieces(const std::vector<ProfilePiece>& pieces, const LocalLine& line);
