@@ -280,14 +280,9 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     }
     for (int k = 0; k < kMaxLevel && std::ldexp(speed_, -(k + 1)) > epsilon_; ++k) {
         const double g = std::ldexp(speed_, -(k + 1)) - epsilon_;
-        std::vector<std::vector<ProfilePiece>> level;
-        std::vector<OuterPart> outer;
-        for (const ConvexPart& part : parts_) {
-            level.push_back(offsetPart(tool_, part, g));
-            outer.push_back(outerOffsetPart(tool_, part, g, kSettleSlack * g));
-        }
+        std::vector<OuterPart> level;
+        for (const ConvexPart& part : parts_) level.push_back(outerOffsetPart(tool_, part, g, kSettleSlack * g));
         grown_.push_back(std::move(level));
-        grownOuter_.push_back(std::move(outer));
     }
 }
 
@@ -406,7 +401,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             }
             return true;
         };
-        for (const OuterPart& grown : grownOuter_[std::size_t(k)])
+        for (const OuterPart& grown : grown_[std::size_t(k)])
             if (!allPiecesHeld(grown, local, held)) return false;
         return true;
     };
@@ -432,9 +427,9 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         }
         if (std::ldexp(speed_, -(n.level + 1)) - epsilon_ <= epsilon_) {  // closed: grown by at most epsilon
             for (std::size_t p = 0; p < parts.size(); ++p) {
-                const Interval ga = intersectPieces(grown_[k][p], n.la);
+                const Interval ga = intersectPieces(grown_[k][p].pieces, n.la);
                 if (!ga.isEmpty()) found.add(ga, n.ua, p);
-                const Interval gb = intersectPieces(grown_[k][p], n.lb);
+                const Interval gb = intersectPieces(grown_[k][p].pieces, n.lb);
                 if (!gb.isEmpty()) found.add(gb, n.ub, p);
             }
             continue;

@@ -123,13 +123,11 @@ class TurningSweep {
     std::vector<Ball> balls_;  ///< none, or the lowest part's ball
     /// Chords per ball: enough that the centre's path lies within epsilon / 2 of them.
     int chords_ = 0;
-    /// grown_[k][p]: part p of parts_ grown by speed / 2^(k + 1) - epsilon, the reach of a node
-    /// of width 2^-k less the depth guarantee 2 leaves out (turning.cpp), for the levels k whose
-    /// reach exceeds epsilon.
-    std::vector<std::vector<std::vector<ProfilePiece>>> grown_;
-    /// grownOuter_[k][p]: grown_[k][p] with tangent cones for its tori, within kSettleSlack of
-    /// its growth (outerOffsetPart): the settling test's.
-    std::vector<std::vector<OuterPart>> grownOuter_;
+    /// grown_[k][p]: part p of parts_ grown by g_k = speed / 2^(k + 1) - epsilon, the reach of a
+    /// node of width 2^-k less the depth guarantee 2 leaves out (turning.cpp), for the levels k
+    /// whose reach exceeds epsilon: its pieces (closing nodes take them), with tangent cones for
+    /// its tori within kSettleSlack g_k (outerOffsetPart; the settling test takes those).
+    std::vector<std::vector<OuterPart>> grown_;
     /// Each part of parts_, then each ball, grown by epsilon: the reach that closes a gap between
     /// two intervals. An output piece's part index counts the same way.
     std::vector<std::vector<ProfilePiece>> grownEpsilon_;
