@@ -51,9 +51,13 @@ OuterPart outerOffsetPart(const Tool& tool, const ConvexPart& part, double r, do
 /// Most cones that replace one torus piece in outerOffsetPart.
 constexpr int kMaxTangentCones = 6;
 
-/// @brief An interval of `line` that holds its interval in the grown part and lies within the
-/// part's chains: exact, except where a torus would need root finding (the line crosses its
-/// surface), where its chain's interval stands in. So it lies within r + slack of the part.
+/// @brief An interval that holds the line's interval in piece i of the grown part, in the line's
+/// local parameters: exact, except for a torus with a chain where it would need root finding (the
+/// line crosses its surface): there the chain's interval. So it lies within r + slack of the part.
+Interval outerPieceInterval(const OuterPart& outer, std::size_t i, const LocalLine& line);
+
+/// @brief An interval of `line` that holds its interval in the grown part: the hull of
+/// outerPieceInterval over the pieces, in the line's own parameters (LocalLine::vShift added back).
 Interval intersectOuter(const OuterPart& outer, const LocalLine& line);
 
 /// @brief Whether `held` accepts, for each piece of the grown part, an interval that holds the
@@ -62,7 +66,7 @@ Interval intersectOuter(const OuterPart& outer, const LocalLine& line);
 /// the axis), so this is the test "does `held` accept the whole interval" for any `held` that
 /// accepts an interval whenever it accepts a larger one; made piece by piece it can stop early.
 /// A torus piece with a chain is first offered its slab within the outer cylinder (one square
-/// root), then what intersectOuter takes for it.
+/// root), then outerPieceInterval.
 template <class Held>
 bool allPiecesHeld(const OuterPart& outer, const LocalLine& line, Held&& held) {
     const auto shifted = [&](const Interval& iv) {
@@ -70,17 +74,12 @@ bool allPiecesHeld(const OuterPart& outer, const LocalLine& line, Held&& held) {
     };
     for (std::size_t i = 0; i < outer.pieces.size(); ++i) {
         const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
-        if (!a || outer.chains[i].empty()) {
-            if (!held(shifted(intersectPiece(outer.pieces[i], line)))) return false;
-            continue;
+        if (a && !outer.chains[i].empty()) {
+            const Interval slab = detail::slabRange(line, a->z0, a->z1);
+            if (slab.isEmpty() || held(shifted(slab.intersect(detail::cylinderRange(line, a->rc + a->rho)))))
+                continue;
         }
-        const Interval slab = detail::slabRange(line, a->z0, a->z1);
-        if (slab.isEmpty()) continue;
-        if (held(shifted(slab.intersect(detail::cylinderRange(line, a->rc + a->rho))))) continue;
-        Interval iv;
-        if (!detail::torusClosedForm(*a, line, slab, iv))
-            for (const ConePiece& c : outer.chains[i]) iv = iv.hull(detail::intersectCone(c, line));
-        if (!held(shifted(iv))) return false;
+        if (!held(shifted(outerPieceInterval(outer, i, line)))) return false;
     }
     return true;
 }
