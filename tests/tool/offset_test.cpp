@@ -16,6 +16,8 @@
 
 #include <cmath>
 #include <random>
+#include <sstream>
+#include <string>
 
 #include "dexelmill/tool/offset.h"
 #include "sweep/tool_models.h"
@@ -102,6 +104,39 @@ double polygonDistance(const Polygon& poly, double rho, double z, double cap) {
 /// The tool frame's meridian coordinates of a point: tip at the origin, axis +z.
 double rhoOf(const Vec3& p) { return std::hypot(p.x, p.y); }
 
+/// Line l of a batch: through a random point near the part (within 2 r of its section's box), at
+/// parameter 100; every fourth along the axis, the next across it, the others at random. False
+/// where the random direction is too short to normalise.
+bool randomLineNear(const oracle::Part& part, double r, int l, std::mt19937_64& rng, Line& line) {
+    const double zc = models::uniform(rng, part.za - 2 * r, part.zb + 2 * r);
+    const double rc = models::uniform(rng, 0.0, part.rBound + 2 * r);
+    const Vec3 through(rc, 0.0, zc);
+    Vec3 dir(models::uniform(rng, -1, 1), models::uniform(rng, -1, 1), models::uniform(rng, -1, 1));
+    if (l % 4 == 0) dir = Vec3(0.0, 0.0, 1.0);  // along the axis
+    if (l % 4 == 1) dir = Vec3(0.0, 1.0, 0.0);  // across it
+    if (glm::length(dir) < 1e-3) return false;
+    dir = glm::normalize(dir);
+    line = Line{through - 100.0 * dir, dir};
+    return true;
+}
+
+std::string describe(const Line& line) {
+    std::ostringstream out;
+    const Vec3 through = line.at(100.0);
+    out << "line through (" << through.x << ", " << through.y << ", " << through.z << ") along (" << line.dir.x
+        << ", " << line.dir.y << ", " << line.dir.z << ")";
+    return out.str();
+}
+
+/// For a line given no interval: no point of it near the part is within r of the part by the
+/// oracle's `distance` (the polygon, never nearer than the part).
+template <class Distance>
+void checkNothingWithin(const oracle::Part& part, double r, Distance&& distance) {
+    const double reach = part.zb - part.za + part.rBound + 3 * r;
+    for (double t = 100.0 - reach; t <= 100.0 + reach; t += kLineStep)
+        if (distance(t) < r - kRound) FAIL_CHECK("within r at t = " << t);
+}
+
 }  // namespace
 
 TEST_CASE("offsetPart: a grown convex part ends at distance r from the part", "[tool][offset]") {
@@ -118,30 +153,16 @@ TEST_CASE("offsetPart: a grown convex part ends at distance r from the part", "[
                 const double r = std::exp(models::uniform(rng, std::log(1e-4), std::log(5.0)));
                 const auto grown = offsetPart(m.tool, m.tool.convexParts()[p], r);
                 for (int l = 0; l < 20; ++l) {
-                    // A random line through a point near the part.
-                    const double zc = models::uniform(rng, part.za - 2 * r, part.zb + 2 * r);
-                    const double rc = models::uniform(rng, 0.0, part.rBound + 2 * r);
-                    const Vec3 through(rc, 0.0, zc);
-                    Vec3 dir(models::uniform(rng, -1, 1), models::uniform(rng, -1, 1), models::uniform(rng, -1, 1));
-                    if (l % 4 == 0) dir = Vec3(0.0, 0.0, 1.0);  // along the axis
-                    if (l % 4 == 1) dir = Vec3(0.0, 1.0, 0.0);  // across it
-                    if (glm::length(dir) < 1e-3) continue;
-                    dir = glm::normalize(dir);
-                    const Line line{through - 100.0 * dir, dir};
+                    Line line;
+                    if (!randomLineNear(part, r, l, rng, line)) continue;
                     const Interval iv = intersectPieces(grown, LocalLine::make(ToolPose{}, line));
-                    INFO(models::name(models::Kind(k)) << " part " << p << " r " << r << " line through ("
-                                                       << through.x << ", " << through.y << ", " << through.z
-                                                       << ") along (" << dir.x << ", " << dir.y << ", " << dir.z << ")");
+                    INFO(models::name(models::Kind(k)) << " part " << p << " r " << r << " " << describe(line));
                     auto distance = [&](double t) {
                         const Vec3 q = line.at(t);
                         return polygonDistance(poly, rhoOf(q), q.z, 2.0 * r + kGap);
                     };
                     if (iv.isEmpty()) {
-                        // No point of the line within r of the part: none where the polygon, which
-                        // is never nearer than the part, is already within r.
-                        const double reach = part.zb - part.za + part.rBound + 3 * r;
-                        for (double t = 100.0 - reach; t <= 100.0 + reach; t += kLineStep)
-                            if (distance(t) < r - kRound) FAIL_CHECK("within r at t = " << t);
+                        checkNothingWithin(part, r, distance);
                         ++missed;
                         continue;
                     }
@@ -203,15 +224,8 @@ TEST_CASE("outerOffsetPart: holds the grown part and lies within r + slack of th
                     if (a && a->rc > 0.0) (outer.chains[i].empty() ? kept : coned) += 1;
                 }
                 for (int l = 0; l < 20; ++l) {
-                    const double zc = models::uniform(rng, part.za - 2 * r, part.zb + 2 * r);
-                    const double rc = models::uniform(rng, 0.0, part.rBound + 2 * r);
-                    const Vec3 through(rc, 0.0, zc);
-                    Vec3 dir(models::uniform(rng, -1, 1), models::uniform(rng, -1, 1), models::uniform(rng, -1, 1));
-                    if (l % 4 == 0) dir = Vec3(0.0, 0.0, 1.0);
-                    if (l % 4 == 1) dir = Vec3(0.0, 1.0, 0.0);
-                    if (glm::length(dir) < 1e-3) continue;
-                    dir = glm::normalize(dir);
-                    const Line line{through - 100.0 * dir, dir};
+                    Line line;
+                    if (!randomLineNear(part, r, l, rng, line)) continue;
                     const LocalLine local = LocalLine::make(ToolPose{}, line);
                     const Interval iv = intersectOuter(outer, local);
                     // allPiecesHeld against a random window W: accepting means the grown part's
@@ -232,18 +246,14 @@ TEST_CASE("outerOffsetPart: holds the grown part and lies within r + slack of th
                         if (iv.isEmpty() || (iv.lo >= window.lo && iv.hi <= window.hi)) CHECK(accepted);
                         (accepted ? windowsAccepted : windowsRefused) += 1;
                     }
-                    INFO(models::name(models::Kind(k)) << " part " << p << " r " << r << " slack " << slack
-                                                       << " line through (" << through.x << ", " << through.y
-                                                       << ", " << through.z << ") along (" << dir.x << ", " << dir.y
-                                                       << ", " << dir.z << ")");
+                    INFO(models::name(models::Kind(k)) << " part " << p << " r " << r << " slack " << slack << " "
+                                                       << describe(line));
                     auto distance = [&](double t) {
                         const Vec3 q = line.at(t);
                         return polygonDistance(poly, rhoOf(q), q.z, 2.0 * (r + slack) + kGap);
                     };
                     if (iv.isEmpty()) {
-                        const double reach = part.zb - part.za + part.rBound + 3 * r;
-                        for (double t = 100.0 - reach; t <= 100.0 + reach; t += kLineStep)
-                            if (distance(t) < r - kRound) FAIL_CHECK("within r at t = " << t);
+                        checkNothingWithin(part, r, distance);
                         ++missed;
                         continue;
                     }
