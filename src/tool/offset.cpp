@@ -107,17 +107,6 @@ OuterPart outerOffsetPart(const Tool& tool, const ConvexPart& part, double r, do
     return outer;
 }
 
-Interval outerPieceInterval(const OuterPart& outer, std::size_t i, const LocalLine& line) {
-    const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
-    if (!a || outer.chains[i].empty()) return intersectPiece(outer.pieces[i], line);
-    const Interval slab = detail::slabRange(line, a->z0, a->z1);
-    if (slab.isEmpty()) return slab;
-    Interval iv;
-    if (detail::torusClosedForm(*a, line, slab, iv)) return iv;
-    for (const ConePiece& c : outer.chains[i]) iv = iv.hull(detail::intersectCone(c, line));
-    return iv;
-}
-
 Interval intersectOuter(const OuterPart& outer, const LocalLine& line) {
     Interval hull;
     for (std::size_t i = 0; i < outer.pieces.size(); ++i) hull = hull.hull(outerPieceInterval(outer, i, line));

@@ -54,7 +54,17 @@ constexpr int kMaxTangentCones = 6;
 /// @brief An interval that holds the line's interval in piece i of the grown part, in the line's
 /// local parameters: exact, except for a torus with a chain where it would need root finding (the
 /// line crosses its surface): there the chain's interval. So it lies within r + slack of the part.
-Interval outerPieceInterval(const OuterPart& outer, std::size_t i, const LocalLine& line);
+/// Inline: the turning sweep's settling test calls it per piece.
+inline Interval outerPieceInterval(const OuterPart& outer, std::size_t i, const LocalLine& line) {
+    const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
+    if (!a || outer.chains[i].empty()) return intersectPiece(outer.pieces[i], line);
+    const Interval slab = detail::slabRange(line, a->z0, a->z1);
+    if (slab.isEmpty()) return slab;
+    Interval iv;
+    if (detail::torusClosedForm(*a, line, slab, iv)) return iv;
+    for (const ConePiece& c : outer.chains[i]) iv = iv.hull(detail::intersectCone(c, line));
+    return iv;
+}
 
 /// @brief An interval of `line` that holds its interval in the grown part: the hull of
 /// outerPieceInterval over the pieces, in the line's own parameters (LocalLine::vShift added back).
