@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
+#include "dexelmill/error.h"
 #include "dexelmill/geometry/rotation.h"
 #include "dexelmill/path/toolpath.h"
 
@@ -20,12 +22,6 @@ Vec3 turnVector(const RotaryTurn& t, double u, const Vec3& v) {
 Vec3 turnVector(const std::vector<RotaryTurn>& chain, std::size_t count, double u, Vec3 v) {
     for (std::size_t i = count; i-- > 0;) v = turnVector(chain[i], u, v);
     return v;
-}
-
-/// The whole chain at u, applied to a point: T_0 ... T_{n-1} x.
-Vec3 turnPoint(const std::vector<RotaryTurn>& chain, double u, Vec3 x) {
-    for (std::size_t i = chain.size(); i-- > 0;) x = chain[i].pivot + turnVector(chain[i], u, x - chain[i].pivot);
-    return x;
 }
 
 /// Adds to `sum` a chain's part of a point's velocity (see velocity), the point given as y_0 in
@@ -60,6 +56,9 @@ MotionLaw::MotionLaw(const Move& move) : start_(move.start), feed_(move.feed()),
         machineStart_ = r.machineStart;
         machineFeed_ = r.machineEnd - r.machineStart;
         heads_ = r.headTurns;
+        if (turns_.size() + heads_.size() > kMaxTurns)
+            throw Error("a move turns about " + std::to_string(turns_.size() + heads_.size()) + " axes; at most " +
+                        std::to_string(kMaxTurns) + " (A, B and C) are supported");
         return;
     }
     if (!move.startAxis) return;
@@ -76,18 +75,66 @@ MotionLaw::MotionLaw(const Move& move) : start_(move.start), feed_(move.feed()),
     turns_.push_back(turn);
 }
 
-ToolPose MotionLaw::pose(double u) const {
+TurnPhase MotionLaw::phase(double u) const {
+    TurnPhase p;
+    p.u = u;
+    std::size_t i = 0;
+    for (const std::vector<RotaryTurn>* chain : {&heads_, &turns_})
+        for (const RotaryTurn& t : *chain) {
+            const double angle = t.from + u * (t.to - t.from);
+            p.c[i] = std::cos(angle);
+            p.s[i++] = std::sin(angle);
+        }
+    return p;
+}
+
+TurnStep MotionLaw::step(double du) const {
+    TurnStep st;
+    st.du = du;
+    std::size_t i = 0;
+    for (const std::vector<RotaryTurn>* chain : {&heads_, &turns_})
+        for (const RotaryTurn& t : *chain) {
+            const double angle = du * (t.to - t.from);
+            st.c[i] = std::cos(angle);
+            st.s[i++] = std::sin(angle);
+        }
+    return st;
+}
+
+TurnPhase MotionLaw::advance(const TurnPhase& phase, const TurnStep& step) const {
+    TurnPhase p;
+    p.u = phase.u + step.du;
+    for (std::size_t i = 0; i < heads_.size() + turns_.size(); ++i) {
+        p.c[i] = phase.c[i] * step.c[i] - phase.s[i] * step.s[i];
+        p.s[i] = phase.s[i] * step.c[i] + phase.c[i] * step.s[i];
+    }
+    return p;
+}
+
+ToolPose MotionLaw::pose(const TurnPhase& phase) const {
+    const std::size_t h = heads_.size();
+    // R_0 ... R_{count-1} v for the chain whose first turn's phase is at index `first`.
+    const auto turn = [&](const std::vector<RotaryTurn>& chain, std::size_t first, Vec3 v) {
+        for (std::size_t i = chain.size(); i-- > 0;)
+            v = rotateAbout(v, chain[i].direction, phase.c[first + i], phase.s[first + i]);
+        return v;
+    };
+    // T_0 ... T_{n-1} x, each turn about its pivot.
+    const auto turnPoint = [&](const std::vector<RotaryTurn>& chain, std::size_t first, Vec3 x) {
+        for (std::size_t i = chain.size(); i-- > 0;)
+            x = chain[i].pivot + rotateAbout(x - chain[i].pivot, chain[i].direction, phase.c[first + i], phase.s[first + i]);
+        return x;
+    };
     ToolPose p;
-    Vec3 axis = toolAxis_;
-    axis = turnVector(turns_, turns_.size(), u, turnVector(heads_, heads_.size(), u, axis));
-    p.axis = glm::normalize(axis);
+    p.axis = glm::normalize(turn(turns_, h, turn(heads_, 0, toolAxis_)));
+    const double u = phase.u;
     if (!carried_) {
         p.tip = start_ + u * feed_;
         return p;
     }
     Vec3 x = machineStart_ + u * machineFeed_;
-    if (!heads_.empty()) x += turnPoint(heads_, u, Vec3(0.0));
-    p.tip = turnPoint(turns_, u, x);
+    if (!heads_.empty()) x += turnPoint(heads_, 0, Vec3(0.0));
+    p.tip = turnPoint(turns_, h, x);
     return p;
 }
 

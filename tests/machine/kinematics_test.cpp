@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "dexelmill/error.h"
@@ -209,6 +210,70 @@ TEST_CASE("machine: a head that turns in identity kinematics swings the tool abo
     REQUIRE(g.rotary);
     CHECK(g.rotary->headTurns.size() == 1);
     CHECK(distance(g.end, forward(Vec3(10, 0, 0), Vec3(0.0), 30, 0)) < 1e-11);
+}
+
+TEST_CASE("motion: poses stepped by the angle sum stay within kPhaseStepError of the exact ones", "[machine]") {
+    // Random bisection paths to the search's deepest level (60): each middle phase is stepped
+    // from its node's start, as TurningSweep does, and its pose is compared with the pose made
+    // from the middle's own sines and cosines. Bound: m steps, n turns, a point at distance d
+    // from the pivots moves by at most m n d kPhaseStepError (motion.h).
+    const Machine ac = loadMachine("xyzac-trt");
+    const Machine ht = parseMachine(
+        R"({"name": "ht", "axes": [{"letter": "C", "on": "table", "direction": [0, 0, 1]},
+            {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 150]}]})",
+        "ht.json");
+    std::mt19937 rng(23);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    std::size_t compared = 0;
+    for (int i = 0; i < 60; ++i) {
+        RotaryAngles from, to;
+        const Vec3 j0(80 * uni(rng), 80 * uni(rng), 80 * uni(rng)), j1(80 * uni(rng), 80 * uni(rng), 80 * uni(rng));
+        Move m;
+        m.start = j0, m.end = j1;
+        std::size_t turns = 1;
+        double d = 1.0 + std::max(glm::length(j0), glm::length(j1));
+        if (i % 3 == 0) {  // APT: one great circle
+            m.startAxis = glm::normalize(Vec3(uni(rng), uni(rng), uni(rng)));
+            m.axis = glm::normalize(*m.startAxis + 1.5 * Vec3(uni(rng), uni(rng), uni(rng)));
+        } else if (i % 3 == 1) {  // xyzac, TCP or identity
+            from['A'] = 90 * uni(rng), from['C'] = 360 * uni(rng);
+            to['A'] = 90 * uni(rng), to['C'] = 360 * uni(rng);
+            m.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, i % 2 == 0, j0, j1));
+            turns = 2;
+            d += 30.0;  // the pivots' offsets
+        } else {  // a turning head and table in identity kinematics
+            from['B'] = 60 * uni(rng), from['C'] = 360 * uni(rng);
+            to['B'] = 60 * uni(rng), to['C'] = 360 * uni(rng);
+            m.rotary = std::make_shared<const RotaryMotion>(ht.motion(from, to, false, j0, j1));
+            REQUIRE(m.rotary->headTurns.size() == 1);
+            turns = 2;
+            d += 300.0;
+        }
+        const MotionLaw law(m);
+        TurnPhase start = law.phase(0.0);
+        for (int level = 0; level < 60; ++level) {
+            const TurnPhase mid = law.advance(start, law.step(std::ldexp(1.0, -(level + 1))));
+            const ToolPose stepped = law.pose(mid), exact = law.pose(mid.u);
+            const double bound = double(level + 1) * double(turns) * kPhaseStepError;
+            INFO("case " << i << ", level " << level);
+            CHECK(distance(stepped.axis, exact.axis) <= bound + 4.0 * std::numeric_limits<double>::epsilon());
+            CHECK(distance(stepped.tip, exact.tip) <= bound * d);
+            ++compared;
+            if (rng() % 2) start = mid;
+        }
+    }
+    CHECK(compared == 3600);
+}
+
+TEST_CASE("motion: a law refuses more turns than A, B and C make", "[machine]") {
+    Move m;
+    RotaryMotion r;
+    r.turns.assign(kMaxTurns + 1, RotaryTurn{Vec3(0, 0, 1), Vec3(0.0), 0.0, 0.5});
+    m.rotary = std::make_shared<const RotaryMotion>(r);
+    CHECK_THROWS_WITH(MotionLaw(m), Contains("at most 3"));
+    r.turns.pop_back();
+    m.rotary = std::make_shared<const RotaryMotion>(r);
+    CHECK_NOTHROW(MotionLaw(m));
 }
 
 TEST_CASE("machine: description files and their errors", "[machine]") {
