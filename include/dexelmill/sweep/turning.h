@@ -128,6 +128,12 @@ class TurningSweep {
     /// whose reach exceeds epsilon: its pieces (closing nodes take them), with tangent cones for
     /// its tori within kSettleSlack g_k (outerOffsetPart; the settling test takes those).
     std::vector<std::vector<OuterPart>> grown_;
+    /// Per level k of grown_, the turns' change over half a node's width, 2^-(k + 1): the
+    /// search steps to a node's middle pose from its start's phase (MotionLaw::advance).
+    std::vector<TurnStep> halfSteps_;
+    /// The first level whose growth g_k is at most epsilon: from there on, a node that does not
+    /// settle is closed (turning.cpp, note c).
+    int closingLevel_ = 0;
     /// Each part of parts_, then each ball, grown by epsilon: the reach that closes a gap between
     /// two intervals. An output piece's part index counts the same way.
     std::vector<std::vector<ProfilePiece>> grownEpsilon_;
