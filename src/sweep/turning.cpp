@@ -1,6 +1,7 @@
 #include "dexelmill/sweep/turning.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -278,6 +279,10 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
         const double r = ball.rho + epsilon_;
         grownEpsilon_.push_back({ArcPiece{ball.zc - r, ball.zc + r, 0.0, ball.zc, r}});
     }
+    startPhase_ = law_.phase(0.0);
+    endPhase_ = law_.phase(1.0);
+    startPose_ = law_.pose(startPhase_);
+    endPose_ = law_.pose(endPhase_);
     for (int k = 0; k < kMaxLevel && std::ldexp(speed_, -(k + 1)) > epsilon_; ++k) {
         const double g = std::ldexp(speed_, -(k + 1)) - epsilon_;
         std::vector<OuterPart> level;
@@ -398,8 +403,9 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         TurnPhase phase;
     };
     std::vector<End> ends;
-    auto solve = [&](const TurnPhase& phase) {
-        const LocalLine local = LocalLine::make(law_.pose(phase), line);
+    ends.reserve(64);
+    auto solve = [&](const TurnPhase& phase, const ToolPose& pose) {
+        const LocalLine local = LocalLine::make(pose, line);
         for (std::size_t p = 0; p < parts.size(); ++p) {
             const Interval iv = tool_.intersectPart(parts[p], local);
             if (!iv.isEmpty()) found.add(iv, phase.u, p);
@@ -427,18 +433,20 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         std::uint32_t a, b;  ///< the ends' indices into `ends`
         bool aSettled;       ///< the end at a passed this level's test (as its left sibling's end)
     };
-    std::vector<Node> stack;
-    const std::uint32_t first = solve(law_.phase(0.0));
-    stack.push_back({0, first, solve(law_.phase(1.0)), false});
+    // A node of level k < levels pops itself and pushes two of level k + 1, so the stack holds
+    // at most one node per level and two of the deepest: kMaxLevel + 2 in all.
     const int levels = int(grown_.size());
-    while (!stack.empty()) {
-        const Node n = stack.back();
-        stack.pop_back();
+    std::array<Node, kMaxLevel + 2> stack;
+    std::size_t top = 0;
+    const std::uint32_t first = solve(startPhase_, startPose_);
+    stack[top++] = {0, first, solve(endPhase_, endPose_), false};
+    while (top > 0) {
+        const Node n = stack[--top];
         if (n.level >= levels) continue;  // a leaf: its reach is at most epsilon
         const std::size_t k = std::size_t(n.level);
         if ((n.aSettled || settled(ends[n.a].local, n.level)) && settled(ends[n.b].local, n.level)) {
             // The right sibling, still on the stack, starts at this node's end.
-            if (!stack.empty() && stack.back().level == n.level && stack.back().a == n.b) stack.back().aSettled = true;
+            if (top > 0 && stack[top - 1].level == n.level && stack[top - 1].a == n.b) stack[top - 1].aSettled = true;
             continue;
         }
         if (n.level >= closingLevel_) {  // closed: grown by at most epsilon
@@ -451,9 +459,10 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         }
         // The middle pose, stepped from the start's phase: within kPhaseStepError per level and
         // turn of the exact pose (1e-10 mm at most, well inside epsilon), see note c.
-        const std::uint32_t m = solve(law_.advance(ends[n.a].phase, halfSteps_[k]));
-        stack.push_back({n.level + 1, m, n.b, false});
-        stack.push_back({n.level + 1, n.a, m, false});
+        const TurnPhase middle = law_.advance(ends[n.a].phase, halfSteps_[k]);
+        const std::uint32_t m = solve(middle, law_.pose(middle));
+        stack[top++] = {n.level + 1, m, n.b, false};
+        stack[top++] = {n.level + 1, n.a, m, false};
     }
 
     // Close the gaps that lie within epsilon of the poses on both sides (d): where the line runs

@@ -128,6 +128,9 @@ class TurningSweep {
     /// whose reach exceeds epsilon: its pieces (closing nodes take them), with tangent cones for
     /// its tori within kSettleSlack g_k (outerOffsetPart; the settling test takes those).
     std::vector<std::vector<OuterPart>> grown_;
+    /// The phases and poses at u = 0 and 1, where every line's search starts.
+    TurnPhase startPhase_, endPhase_;
+    ToolPose startPose_, endPose_;
     /// Per level k of grown_, the turns' change over half a node's width, 2^-(k + 1): the
     /// search steps to a node's middle pose from its start's phase (MotionLaw::advance).
     std::vector<TurnStep> halfSteps_;
