@@ -458,7 +458,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             continue;
         }
         // The middle pose, stepped from the start's phase: within kPhaseStepError per level and
-        // turn of the exact pose (1e-10 mm at most, well inside epsilon), see note c.
+        // turn of the exact pose (1.6e-10 mm at most, well inside epsilon), see note c.
         const TurnPhase middle = law_.advance(ends[n.a].phase, halfSteps_[k]);
         const std::uint32_t m = solve(middle, law_.pose(middle));
         stack[top++] = {n.level + 1, m, n.b, false};
