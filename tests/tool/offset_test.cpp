@@ -137,6 +137,18 @@ void checkNothingWithin(const oracle::Part& part, double r, Distance&& distance)
         if (distance(t) < r - kRound) FAIL_CHECK("within r at t = " << t);
 }
 
+/// For a line's interval: both ends are outside the grown part (at least r from the part, by the
+/// oracle's `distance`, which includes up to kGap / 2 of the polygon's) and within `reach` of it.
+template <class Distance>
+void checkEnds(const Interval& iv, double r, double reach, Distance&& distance) {
+    for (const double t : {iv.lo, iv.hi}) {
+        const double d = distance(t);
+        INFO("end t = " << t << " of [" << iv.lo << ", " << iv.hi << "]");
+        CHECK(d >= r - kRound);
+        CHECK(d - kGap / 2 <= reach + kRound);
+    }
+}
+
 }  // namespace
 
 TEST_CASE("offsetPart: a grown convex part ends at distance r from the part", "[tool][offset]") {
@@ -166,11 +178,7 @@ TEST_CASE("offsetPart: a grown convex part ends at distance r from the part", "[
                         ++missed;
                         continue;
                     }
-                    for (const double t : {iv.lo, iv.hi}) {
-                        const double d = distance(t);
-                        CHECK(d >= r - kRound);
-                        CHECK(d - kGap / 2 <= r + kRound);
-                    }
+                    checkEnds(iv, r, r, distance);
                     CHECK(distance(0.5 * (iv.lo + iv.hi)) - kGap / 2 <= r + kRound);
                     ++checked;
                 }
@@ -258,12 +266,7 @@ TEST_CASE("outerOffsetPart: holds the grown part and lies within r + slack of th
                         continue;
                     }
                     // Ends: outside the grown part (a superset's boundary), within r + slack of the part.
-                    for (const double t : {iv.lo, iv.hi}) {
-                        const double d = distance(t);
-                        INFO("end t = " << t << " of [" << iv.lo << ", " << iv.hi << "]");
-                        CHECK(d >= r - kRound);
-                        CHECK(d - kGap / 2 <= r + slack + kRound);
-                    }
+                    checkEnds(iv, r, r + slack, distance);
                     // The line's points just outside the interval are farther than r from the part.
                     for (const double t : {iv.lo - kLineStep, iv.hi + kLineStep}) CHECK(distance(t) >= r - kRound);
                     ++checked;
