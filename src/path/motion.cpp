@@ -24,6 +24,19 @@ Vec3 turnVector(const std::vector<RotaryTurn>& chain, std::size_t count, double 
     return v;
 }
 
+/// The cosine and sine of angle(t) for each turn t, the heads' first: a TurnPhase's or TurnStep's.
+template <class Angle>
+void turnTrig(const std::vector<RotaryTurn>& heads, const std::vector<RotaryTurn>& turns, Angle&& angle,
+              std::array<double, kMaxTurns>& c, std::array<double, kMaxTurns>& s) {
+    std::size_t i = 0;
+    for (const std::vector<RotaryTurn>* chain : {&heads, &turns})
+        for (const RotaryTurn& t : *chain) {
+            const double a = angle(t);
+            c[i] = std::cos(a);
+            s[i++] = std::sin(a);
+        }
+}
+
 /// Adds to `sum` a chain's part of a point's velocity (see velocity), the point given as y_0 in
 /// the frame the chain's first turn acts in; leaves y at y_n, in the frame inside its last turn.
 void addChainVelocity(const std::vector<RotaryTurn>& chain, double u, Vec3& y, Vec3& sum) {
@@ -78,26 +91,14 @@ MotionLaw::MotionLaw(const Move& move) : start_(move.start), feed_(move.feed()),
 TurnPhase MotionLaw::phase(double u) const {
     TurnPhase p;
     p.u = u;
-    std::size_t i = 0;
-    for (const std::vector<RotaryTurn>* chain : {&heads_, &turns_})
-        for (const RotaryTurn& t : *chain) {
-            const double angle = t.from + u * (t.to - t.from);
-            p.c[i] = std::cos(angle);
-            p.s[i++] = std::sin(angle);
-        }
+    turnTrig(heads_, turns_, [u](const RotaryTurn& t) { return t.from + u * (t.to - t.from); }, p.c, p.s);
     return p;
 }
 
 TurnStep MotionLaw::step(double du) const {
     TurnStep st;
     st.du = du;
-    std::size_t i = 0;
-    for (const std::vector<RotaryTurn>* chain : {&heads_, &turns_})
-        for (const RotaryTurn& t : *chain) {
-            const double angle = du * (t.to - t.from);
-            st.c[i] = std::cos(angle);
-            st.s[i++] = std::sin(angle);
-        }
+    turnTrig(heads_, turns_, [du](const RotaryTurn& t) { return du * (t.to - t.from); }, st.c, st.s);
     return st;
 }
 
