@@ -51,6 +51,20 @@ OuterPart outerOffsetPart(const Tool& tool, const ConvexPart& part, double r, do
 /// Most cones that replace one torus piece in outerOffsetPart.
 constexpr int kMaxTangentCones = 6;
 
+namespace detail {
+
+/// outerPieceInterval for a torus piece `a` with its chain, given the line's range in its slab
+/// (not empty).
+inline Interval chainedTorusInterval(const ArcPiece& a, const std::vector<ConePiece>& chain, const LocalLine& line,
+                                     const Interval& slab) {
+    Interval iv;
+    if (torusClosedForm(a, line, slab, iv)) return iv;
+    for (const ConePiece& c : chain) iv = iv.hull(intersectCone(c, line));
+    return iv;
+}
+
+}  // namespace detail
+
 /// @brief An interval that holds the line's interval in piece i of the grown part, in the line's
 /// local parameters: exact, except for a torus with a chain where it would need root finding (the
 /// line crosses its surface): there the chain's interval. So it lies within r + slack of the part.
@@ -59,11 +73,7 @@ inline Interval outerPieceInterval(const OuterPart& outer, std::size_t i, const 
     const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
     if (!a || outer.chains[i].empty()) return intersectPiece(outer.pieces[i], line);
     const Interval slab = detail::slabRange(line, a->z0, a->z1);
-    if (slab.isEmpty()) return slab;
-    Interval iv;
-    if (detail::torusClosedForm(*a, line, slab, iv)) return iv;
-    for (const ConePiece& c : outer.chains[i]) iv = iv.hull(detail::intersectCone(c, line));
-    return iv;
+    return slab.isEmpty() ? slab : detail::chainedTorusInterval(*a, outer.chains[i], line, slab);
 }
 
 /// @brief An interval of `line` that holds its interval in the grown part: the hull of
@@ -84,12 +94,13 @@ bool allPiecesHeld(const OuterPart& outer, const LocalLine& line, Held&& held) {
     };
     for (std::size_t i = 0; i < outer.pieces.size(); ++i) {
         const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
-        if (a && !outer.chains[i].empty()) {
-            const Interval slab = detail::slabRange(line, a->z0, a->z1);
-            if (slab.isEmpty() || held(shifted(slab.intersect(detail::cylinderRange(line, a->rc + a->rho)))))
-                continue;
+        if (!a || outer.chains[i].empty()) {
+            if (!held(shifted(intersectPiece(outer.pieces[i], line)))) return false;
+            continue;
         }
-        if (!held(shifted(outerPieceInterval(outer, i, line)))) return false;
+        const Interval slab = detail::slabRange(line, a->z0, a->z1);
+        if (slab.isEmpty() || held(shifted(slab.intersect(detail::cylinderRange(line, a->rc + a->rho))))) continue;
+        if (!held(shifted(detail::chainedTorusInterval(*a, outer.chains[i], line, slab)))) return false;
     }
     return true;
 }
