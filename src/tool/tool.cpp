@@ -92,15 +92,28 @@ bool detail::torusClosedForm(const ArcPiece& a, const LocalLine& l, const Interv
 }
 
 // Torus slab: g(t) = rho(t) - R(z(t)) is convex on the slab (a norm of an affine map minus a
-// concave function of an affine map), so { g <= 0 } is one interval. Find the minimum by Brent's
-// method and the two ends by TOMS 748 on the brackets it leaves.
+// concave function of an affine map), so { g <= 0 } is one interval. Any point t with g(t) <= 0
+// splits it: its lower end lies in [range.lo, t] and its upper in [t, range.hi], each the one
+// root of g there, which TOMS 748 finds. (A point with g = 0 splits it only if it is the minimum:
+// the probes below need g < 0.) Two points come first, where g tends to be least: where
+// the line comes nearest the axis (rho least) and where it crosses the profile circle's height
+// (R greatest). Where neither lies inside, Brent's method finds the minimum, and a positive one
+// means the line misses. The ends do not depend on which inner point splits them, beyond the
+// root finder's tolerance.
 Interval detail::intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& slab) {
     Interval decided, range;
     double gLo = 0.0, gHi = 0.0;
     if (torusClosedFormOrStart(a, l, slab, decided, range, gLo, gHi)) return decided;
     auto g = [&](double t) { return torusGap(a, l, t); };
     double tMin = 0.0, gMin = 0.0;
-    {
+    // torusClosedFormOrStart has decided lines along the axis (l.A = 0) and at one height (zv = 0).
+    const auto inRange = [&](double t) { return std::clamp(t, range.lo, range.hi); };
+    const double nearAxis = inRange(-l.B / l.A), atCircle = inRange((a.zc - l.z0) / l.zv);
+    if (const double gAxis = g(nearAxis); gAxis < 0.0) {
+        tMin = nearAxis, gMin = gAxis;
+    } else if (const double gCircle = g(atCircle); gCircle < 0.0) {
+        tMin = atCircle, gMin = gCircle;
+    } else {
         boost::uintmax_t iters = 200;
         const auto m = boost::math::tools::brent_find_minima(
             g, range.lo, range.hi, std::numeric_limits<double>::digits / 2, iters);
