@@ -29,7 +29,8 @@ constexpr double kRimReach = 4.0;
 
 /// The settling test (note c) may take, for a grown torus that a line crosses, the interval of
 /// cones tangent to it that lie within this fraction of the growth beyond it (outerOffsetPart): a
-/// quarter-circle rim takes two (8.2 % out where they meet). Settling on a larger interval fails
+/// quarter-circle rim takes two (8.2 % out where they meet). Where more cones would be needed,
+/// the root finding stops once it has the ends to within this fraction of the growth. Settling on a larger interval fails
 /// more often, at most as a growth 10 % larger would. On BM_TurningQuery, with cones in place of
 /// every torus, three or four a rim (slack 0.04 or 0.02) were slower than two, and one (a square
 /// corner) far slower.
@@ -319,7 +320,8 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      ends, the grown intervals hold no point of `care` outside the union O of the intervals
 //      solved so far. The test is made piece by piece on intervals that hold each piece's
 //      (allPiecesHeld: a torus's slab within its outer cylinder first, then where it would need
-//      root finding its tangent cones, within kSettleSlack g_k of it): what a larger interval
+//      root finding its tangent cones, within kSettleSlack g_k of it, or where those would be too
+//      many its ends found to within kSettleSlack g_k, from outside): what a larger interval
 //      leaves outside O, a smaller one does too. A node whose reach r_k is
 //      at most epsilon is a leaf: g_k <= 0, so the ends' own intervals, which O holds, hold those
 //      points. A node that is not settled, at a level where g_k <= epsilon, is closed: its ends'

@@ -91,6 +91,8 @@ bool detail::torusClosedForm(const ArcPiece& a, const LocalLine& l, const Interv
     return torusClosedFormOrStart(a, l, slab, out, range, gLo, gHi);
 }
 
+namespace {
+
 // Torus slab: g(t) = rho(t) - R(z(t)) is convex on the slab (a norm of an affine map minus a
 // concave function of an affine map), so { g <= 0 } is one interval. Any point t with g(t) <= 0
 // splits it: its lower end lies in [range.lo, t] and its upper in [t, range.hi], each the one
@@ -100,7 +102,12 @@ bool detail::torusClosedForm(const ArcPiece& a, const LocalLine& l, const Interv
 // (R greatest). Where neither lies inside, Brent's method finds the minimum, and a positive one
 // means the line misses. The ends do not depend on which inner point splits them, beyond the
 // root finder's tolerance.
-Interval detail::intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& slab) {
+//
+// Each end is found to within `tolerance` along the line, and taken as the midpoint of the final
+// bracket, or with `outer` as its end outside the interval: then the result holds the exact
+// interval. (Where Brent's minimum is positive by less than its rounding, about 1e-16 of the
+// slab's size, the line grazes the torus and an empty interval is returned either way.)
+Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& slab, double tolerance, bool outer) {
     Interval decided, range;
     double gLo = 0.0, gHi = 0.0;
     if (torusClosedFormOrStart(a, l, slab, decided, range, gLo, gHi)) return decided;
@@ -129,7 +136,7 @@ Interval detail::intersectTorus(const ArcPiece& a, const LocalLine& l, const Int
         }
     }
     if (gMin > 0.0) return Interval::empty();
-    const auto stop = [](double x, double y) { return std::abs(y - x) <= tol::kRoot; };
+    const auto stop = [tolerance](double x, double y) { return std::abs(y - x) <= tolerance; };
     Interval out{range.lo, range.hi};
     if (gLo > 0.0) {
         if (gMin == 0.0) {
@@ -138,7 +145,7 @@ Interval detail::intersectTorus(const ArcPiece& a, const LocalLine& l, const Int
             boost::uintmax_t iters = 100;
             const auto r =
                 boost::math::tools::toms748_solve(g, range.lo, tMin, gLo, gMin, stop, iters);
-            out.lo = 0.5 * (r.first + r.second);
+            out.lo = outer ? r.first : 0.5 * (r.first + r.second);
         }
     }
     if (gHi > 0.0) {
@@ -148,10 +155,20 @@ Interval detail::intersectTorus(const ArcPiece& a, const LocalLine& l, const Int
             boost::uintmax_t iters = 100;
             const auto r =
                 boost::math::tools::toms748_solve(g, tMin, range.hi, gMin, gHi, stop, iters);
-            out.hi = 0.5 * (r.first + r.second);
+            out.hi = outer ? r.second : 0.5 * (r.first + r.second);
         }
     }
     return out;
+}
+
+}  // namespace
+
+Interval detail::intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& slab) {
+    return torusInterval(a, l, slab, tol::kRoot, false);
+}
+
+Interval detail::outerTorusInterval(const ArcPiece& a, const LocalLine& l, const Interval& slab, double slack) {
+    return torusInterval(a, l, slab, std::max(slack, tol::kRoot), true);
 }
 
 LocalLine LocalLine::make(const ToolPose& pose, const Line& line) {

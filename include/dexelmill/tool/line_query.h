@@ -124,6 +124,11 @@ inline Interval intersectSphere(const ArcPiece& a, const LocalLine& l, const Int
 /// The torus slab, by bracketed root finding (tool.cpp).
 Interval intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& slab);
 
+/// An interval that holds the torus slab's and whose ends lie within `slack` of its ends along the
+/// line (at least tol::kRoot): the same root finding, stopped sooner, with each end taken from
+/// the outer side of its bracket.
+Interval outerTorusInterval(const ArcPiece& a, const LocalLine& l, const Interval& slab, double slack);
+
 /// The torus slab's interval where a closed form gives it (a line along the axis, at a constant
 /// height, missing the slab's outer cylinder, or inside at both ends of its range there): returns
 /// true and sets `out`; false where intersectTorus needs its root finding.

@@ -33,7 +33,8 @@ std::vector<ProfilePiece> offsetPart(const Tool& tool, const ConvexPart& part, d
 /// @brief A part grown by r, for tests that need only a superset of a line's interval in it:
 /// offsetPart's pieces, with each torus piece (an arc off the axis) also as the chain of cones
 /// tangent to it at evenly spaced points, where at most kMaxTangentCones keep the chain within
-/// `slack` of the arc.
+/// `slack` of the arc. A torus without a chain has its interval's ends found to within `slack`
+/// along the line, each taken from the outer side of its bracket (detail::outerTorusInterval).
 ///
 /// The chain round an arc of radius a from normal angle psiA to psiB in n steps of d: the
 /// tangents at psiA + i d meet at distance a / cos(d / 2) from the arc's centre, so the chain
@@ -43,6 +44,8 @@ struct OuterPart {
     /// Per piece: its tangent cones, bottom to top, or none (a cone, a sphere, or a torus whose
     /// chain would need too many).
     std::vector<std::vector<ConePiece>> chains;
+    /// How far beyond the grown part a torus's interval may reach.
+    double slack = 0.0;
 };
 
 /// @brief `part` of `tool` grown by r >= 0, with tangent chains within slack > 0 of its tori.
@@ -53,10 +56,11 @@ constexpr int kMaxTangentCones = 6;
 
 namespace detail {
 
-/// outerPieceInterval for a torus piece `a` with its chain, given the line's range in its slab
-/// (not empty).
-inline Interval chainedTorusInterval(const ArcPiece& a, const std::vector<ConePiece>& chain, const LocalLine& line,
-                                     const Interval& slab) {
+/// outerPieceInterval for a torus piece `a` with its chain (possibly none), given the line's range
+/// in its slab (not empty).
+inline Interval chainedTorusInterval(const ArcPiece& a, const std::vector<ConePiece>& chain, double slack,
+                                     const LocalLine& line, const Interval& slab) {
+    if (chain.empty()) return outerTorusInterval(a, line, slab, slack);
     Interval iv;
     if (torusClosedForm(a, line, slab, iv)) return iv;
     for (const ConePiece& c : chain) iv = iv.hull(intersectCone(c, line));
@@ -66,14 +70,15 @@ inline Interval chainedTorusInterval(const ArcPiece& a, const std::vector<ConePi
 }  // namespace detail
 
 /// @brief An interval that holds the line's interval in piece i of the grown part, in the line's
-/// local parameters: exact, except for a torus with a chain where it would need root finding (the
-/// line crosses its surface): there the chain's interval. So it lies within r + slack of the part.
-/// Inline: the turning sweep's settling test calls it per piece.
+/// local parameters: exact, except for a torus where it would need root finding (the line crosses
+/// its surface): there the chain's interval, or without a chain the root finding's to within
+/// the slack. So it lies within r + slack of the part. Inline: the turning sweep's settling test
+/// calls it per piece.
 inline Interval outerPieceInterval(const OuterPart& outer, std::size_t i, const LocalLine& line) {
     const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
-    if (!a || outer.chains[i].empty()) return intersectPiece(outer.pieces[i], line);
+    if (!a || a->rc == 0.0) return intersectPiece(outer.pieces[i], line);
     const Interval slab = detail::slabRange(line, a->z0, a->z1);
-    return slab.isEmpty() ? slab : detail::chainedTorusInterval(*a, outer.chains[i], line, slab);
+    return slab.isEmpty() ? slab : detail::chainedTorusInterval(*a, outer.chains[i], outer.slack, line, slab);
 }
 
 /// @brief An interval of `line` that holds its interval in the grown part: the hull of
@@ -85,8 +90,8 @@ Interval intersectOuter(const OuterPart& outer, const LocalLine& line);
 /// The line's interval in a convex part is the union of its pieces' (the slab solids tile it along
 /// the axis), so this is the test "does `held` accept the whole interval" for any `held` that
 /// accepts an interval whenever it accepts a larger one; made piece by piece it can stop early.
-/// A torus piece with a chain is first offered its slab within the outer cylinder (one square
-/// root), then outerPieceInterval.
+/// A torus piece is first offered its slab within the outer cylinder (one square root), then
+/// outerPieceInterval.
 template <class Held>
 bool allPiecesHeld(const OuterPart& outer, const LocalLine& line, Held&& held) {
     const auto shifted = [&](const Interval& iv) {
@@ -94,13 +99,13 @@ bool allPiecesHeld(const OuterPart& outer, const LocalLine& line, Held&& held) {
     };
     for (std::size_t i = 0; i < outer.pieces.size(); ++i) {
         const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
-        if (!a || outer.chains[i].empty()) {
+        if (!a || a->rc == 0.0) {
             if (!held(shifted(intersectPiece(outer.pieces[i], line)))) return false;
             continue;
         }
         const Interval slab = detail::slabRange(line, a->z0, a->z1);
         if (slab.isEmpty() || held(shifted(slab.intersect(detail::cylinderRange(line, a->rc + a->rho))))) continue;
-        if (!held(shifted(detail::chainedTorusInterval(*a, outer.chains[i], line, slab)))) return false;
+        if (!held(shifted(detail::chainedTorusInterval(*a, outer.chains[i], outer.slack, line, slab)))) return false;
     }
     return true;
 }
