@@ -136,15 +136,37 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
         }
     }
     if (gMin > 0.0) return Interval::empty();
+    // The root finding works on q(t) = max(rho - rc, 0)^2 + dz^2 - rho_a^2, which inside the slab
+    // is zero where g is and has its sign (where rho < rc, q = dz^2 - rho_a^2 < 0 and g < 0), but
+    // has a finite slope where the line leaves through the slab's bottom or top face's rim, where
+    // g's square root has an infinite one, and needs one square root, not two. A bracket whose
+    // end q does not sign as g does (rounding, or an end on a face where q = 0) keeps g.
+    const auto q = [&](double t) {
+        const double r2 = std::max(0.0, (l.A * t + 2.0 * l.B) * t + l.C);
+        const double dz = l.z0 + l.zv * t - a.zc, out = std::max(std::sqrt(r2) - a.rc, 0.0);
+        return out * out + dz * dz - a.rho * a.rho;
+    };
+    const double qMin = q(tMin);
     const auto stop = [tolerance](double x, double y) { return std::abs(y - x) <= tolerance; };
+    // The root between x0 (outside, g > 0) and x1 (inside, g < 0), either way round.
+    const auto root = [&](double x0, double x1, double gOut) {
+        boost::uintmax_t iters = 100;
+        const double qOut = q(x0);
+        const bool smooth = qOut > 0.0 && qMin < 0.0;
+        const auto [lo, hi] = std::minmax(x0, x1);
+        if (smooth) {
+            const double qLo = x0 < x1 ? qOut : qMin, qHi = x0 < x1 ? qMin : qOut;
+            return boost::math::tools::toms748_solve(q, lo, hi, qLo, qHi, stop, iters);
+        }
+        const double gLo = x0 < x1 ? gOut : gMin, gHi = x0 < x1 ? gMin : gOut;
+        return boost::math::tools::toms748_solve(g, lo, hi, gLo, gHi, stop, iters);
+    };
     Interval out{range.lo, range.hi};
     if (gLo > 0.0) {
         if (gMin == 0.0) {
             out.lo = tMin;
         } else {
-            boost::uintmax_t iters = 100;
-            const auto r =
-                boost::math::tools::toms748_solve(g, range.lo, tMin, gLo, gMin, stop, iters);
+            const auto r = root(range.lo, tMin, gLo);
             out.lo = outer ? r.first : 0.5 * (r.first + r.second);
         }
     }
@@ -152,9 +174,7 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
         if (gMin == 0.0) {
             out.hi = tMin;
         } else {
-            boost::uintmax_t iters = 100;
-            const auto r =
-                boost::math::tools::toms748_solve(g, tMin, range.hi, gMin, gHi, stop, iters);
+            const auto r = root(range.hi, tMin, gHi);
             out.hi = outer ? r.second : 0.5 * (r.first + r.second);
         }
     }
