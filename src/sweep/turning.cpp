@@ -399,25 +399,29 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         }
     }
     // The poses solved, each with its line in the tool's frame and its phase; nodes refer to
-    // them by index.
+    // them by index. Pose e's interval in part p is exact[e * parts.size() + p].
     struct End {
         LocalLine local;
         TurnPhase phase;
     };
     std::vector<End> ends;
+    std::vector<Interval> exact;
     ends.reserve(64);
+    exact.reserve(64 * parts.size());
     auto solve = [&](const TurnPhase& phase, const ToolPose& pose) {
         const LocalLine local = LocalLine::make(pose, line);
         for (std::size_t p = 0; p < parts.size(); ++p) {
             const Interval iv = tool_.intersectPart(parts[p], local);
             if (!iv.isEmpty()) found.add(iv, phase.u, p);
+            exact.push_back(iv);
         }
         ends.push_back({local, phase});
         return std::uint32_t(ends.size() - 1);
     };
-    // Whether the tool at one end pose, grown by level k's reach, holds no point of care outside O
-    // (tested piece by piece, on intervals that hold each piece's).
-    auto settled = [&](const LocalLine& local, int k) {
+    // Whether the tool at end pose e, grown by level k's reach, holds no point of care outside O
+    // (tested piece by piece, on intervals that hold each piece's; each part's own interval at
+    // that pose is the root finding's hint).
+    auto settled = [&](std::uint32_t e, int k) {
         const auto held = [&](const Interval& g) {
             for (const Interval* c = careBegin; c != careEnd && !g.isEmpty(); ++c) {
                 const Interval part = g.intersect(*c);
@@ -425,8 +429,9 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             }
             return true;
         };
-        for (const OuterPart& grown : grown_[std::size_t(k)])
-            if (!allPiecesHeld(grown, local, held)) return false;
+        const std::vector<OuterPart>& level = grown_[std::size_t(k)];
+        for (std::size_t p = 0; p < level.size(); ++p)
+            if (!allPiecesHeld(level[p], ends[e].local, held, exact[e * parts.size() + p])) return false;
         return true;
     };
 
@@ -446,7 +451,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         const Node n = stack[--top];
         if (n.level >= levels) continue;  // a leaf: its reach is at most epsilon
         const std::size_t k = std::size_t(n.level);
-        if ((n.aSettled || settled(ends[n.a].local, n.level)) && settled(ends[n.b].local, n.level)) {
+        if ((n.aSettled || settled(n.a, n.level)) && settled(n.b, n.level)) {
             // The right sibling, still on the stack, starts at this node's end.
             if (top > 0 && stack[top - 1].level == n.level && stack[top - 1].a == n.b) stack[top - 1].aSettled = true;
             continue;

@@ -62,6 +62,7 @@ OuterPart outerOffsetPart(const Tool& tool, const ConvexPart& part, double r, do
     OuterPart outer;
     outer.pieces = offsetPart(tool, part, r);
     outer.chains.resize(outer.pieces.size());
+    outer.growth = r;
     outer.slack = slack;
     for (std::size_t k = 0; k < outer.pieces.size(); ++k) {
         const auto* a = std::get_if<ArcPiece>(&outer.pieces[k]);

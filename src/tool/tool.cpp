@@ -107,7 +107,14 @@ namespace {
 // bracket, or with `outer` as its end outside the interval: then the result holds the exact
 // interval. (Where Brent's minimum is positive by less than its rounding, about 1e-16 of the
 // slab's size, the line grazes the torus and an empty interval is returned either way.)
-Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& slab, double tolerance, bool outer) {
+//
+// `near`, where not empty, is an interval whose ends are likely about `reach` inside the torus's
+// ends (the ungrown tool's, for a torus grown by reach): each end of near that lies inside splits
+// the interval, and from it steps of 2 reach, 8 reach, ... outwards find a point outside, so that
+// the root finding starts on a bracket about as wide as the step (each point inside found on the
+// way replaces the inner end). Any `near` gives the same result; a good one only saves work.
+Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& slab, double tolerance, bool outer,
+                       const Interval& near, double reach) {
     Interval decided, range;
     double gLo = 0.0, gHi = 0.0;
     if (torusClosedFormOrStart(a, l, slab, decided, range, gLo, gHi)) return decided;
@@ -116,7 +123,18 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
     // torusClosedFormOrStart has decided lines along the axis (l.A = 0) and at one height (zv = 0).
     const auto inRange = [&](double t) { return std::clamp(t, range.lo, range.hi); };
     const double nearAxis = inRange(-l.B / l.A), atCircle = inRange((a.zc - l.z0) / l.zv);
-    if (const double gAxis = g(nearAxis); gAxis < 0.0) {
+    // The ends of `near` inside, with g there (NaN where not tried or not inside).
+    const double kUntried = std::numeric_limits<double>::quiet_NaN();
+    double nearLo = kUntried, gNearLo = kUntried, nearHi = kUntried, gNearHi = kUntried;
+    if (!near.isEmpty() && reach > 0.0) {
+        if (const double t = inRange(near.lo), gt = g(t); gt < 0.0) nearLo = t, gNearLo = gt;
+        if (const double t = inRange(near.hi), gt = g(t); gt < 0.0) nearHi = t, gNearHi = gt;
+    }
+    if (gNearLo < 0.0) {
+        tMin = nearLo, gMin = gNearLo;
+    } else if (gNearHi < 0.0) {
+        tMin = nearHi, gMin = gNearHi;
+    } else if (const double gAxis = g(nearAxis); gAxis < 0.0) {
         tMin = nearAxis, gMin = gAxis;
     } else if (const double gCircle = g(atCircle); gCircle < 0.0) {
         tMin = atCircle, gMin = gCircle;
@@ -146,11 +164,26 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
         const double dz = l.z0 + l.zv * t - a.zc, out = std::max(std::sqrt(r2) - a.rc, 0.0);
         return out * out + dz * dz - a.rho * a.rho;
     };
-    const double qMin = q(tMin);
+    const double qMin = near.isEmpty() ? q(tMin) : kUntried;
     const auto stop = [tolerance](double x, double y) { return std::abs(y - x) <= tolerance; };
-    // The root between x0 (outside, g > 0) and x1 (inside, g < 0), either way round.
-    const auto root = [&](double x0, double x1, double gOut) {
+    // The root between x0 (outside, g > 0) and x1 (inside, g < 0), either way round; `in`, where
+    // g < 0 there, is a point inside nearer the root.
+    const auto root = [&](double x0, double x1, double gOut, double in, double gIn) {
         boost::uintmax_t iters = 100;
+        if (gIn < 0.0) {
+            const double away = x0 < in ? -1.0 : 1.0;
+            for (double d = 2.0 * reach; away * (x0 - in) > d; d *= 4.0) {
+                const double t = in + away * d, gt = g(t);
+                if (gt > 0.0) {
+                    x0 = t, gOut = gt;
+                    break;
+                }
+                in = t, gIn = gt;
+            }
+            const auto [lo, hi] = std::minmax(x0, in);
+            return boost::math::tools::toms748_solve(g, lo, hi, x0 < in ? gOut : gIn, x0 < in ? gIn : gOut, stop,
+                                                     iters);
+        }
         const double qOut = q(x0);
         const bool smooth = qOut > 0.0 && qMin < 0.0;
         const auto [lo, hi] = std::minmax(x0, x1);
@@ -166,7 +199,7 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
         if (gMin == 0.0) {
             out.lo = tMin;
         } else {
-            const auto r = root(range.lo, tMin, gLo);
+            const auto r = root(range.lo, tMin, gLo, nearLo, gNearLo);
             out.lo = outer ? r.first : 0.5 * (r.first + r.second);
         }
     }
@@ -174,7 +207,7 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
         if (gMin == 0.0) {
             out.hi = tMin;
         } else {
-            const auto r = root(range.hi, tMin, gHi);
+            const auto r = root(range.hi, tMin, gHi, nearHi, gNearHi);
             out.hi = outer ? r.second : 0.5 * (r.first + r.second);
         }
     }
@@ -184,11 +217,12 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
 }  // namespace
 
 Interval detail::intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& slab) {
-    return torusInterval(a, l, slab, tol::kRoot, false);
+    return torusInterval(a, l, slab, tol::kRoot, false, Interval::empty(), 0.0);
 }
 
-Interval detail::outerTorusInterval(const ArcPiece& a, const LocalLine& l, const Interval& slab, double slack) {
-    return torusInterval(a, l, slab, std::max(slack, tol::kRoot), true);
+Interval detail::outerTorusInterval(const ArcPiece& a, const LocalLine& l, const Interval& slab, double slack,
+                                    const Interval& near, double reach) {
+    return torusInterval(a, l, slab, std::max(slack, tol::kRoot), true, near, reach);
 }
 
 LocalLine LocalLine::make(const ToolPose& pose, const Line& line) {

@@ -217,6 +217,7 @@ TEST_CASE("outerOffsetPart: holds the grown part and lies within r + slack of th
     std::mt19937_64 rng(20261124);
     const int perKind = std::max(2, int(30 * oracle::testScale()));
     int checked = 0, missed = 0, coned = 0, kept = 0, windowsAccepted = 0, windowsRefused = 0;
+    int hintedAccepted = 0, hintedRefused = 0;
     for (int k = 0; k < int(models::Kind::Count); ++k) {
         for (int n = 0; n < perKind; ++n) {
             const models::Model m = models::make(models::Kind(k), rng);
@@ -253,6 +254,28 @@ TEST_CASE("outerOffsetPart: holds the grown part and lies within r + slack of th
                         }
                         if (iv.isEmpty() || (iv.lo >= window.lo && iv.hi <= window.hi)) CHECK(accepted);
                         (accepted ? windowsAccepted : windowsRefused) += 1;
+                        // With the root finding's hint, the ungrown part's interval as the turning
+                        // sweep gives it: accepting still means the grown part lies in W, by the
+                        // oracle (the line's points just outside W are farther than r from the
+                        // part), and W holding both the interval without the hint and the exact one
+                        // with the slack both sides (a root-found torus's ends move within it)
+                        // still means accepting.
+                        const Interval inside = m.tool.intersectPart(m.tool.convexParts()[p], local);
+                        const bool hinted = allPiecesHeld(
+                            outer, local,
+                            [&](const Interval& x) { return x.isEmpty() || (x.lo >= window.lo && x.hi <= window.hi); },
+                            inside);
+                        if (hinted) {
+                            for (const double t : {window.lo - kLineStep, window.hi + kLineStep}) {
+                                const Vec3 q = line.at(t);
+                                CHECK(polygonDistance(poly, rhoOf(q), q.z, 2.0 * r + kGap) >= r - kRound);
+                            }
+                        }
+                        const auto within = [&](const Interval& x, double pad) {
+                            return x.isEmpty() || (x.lo - pad >= window.lo && x.hi + pad <= window.hi);
+                        };
+                        if (within(iv, 0.0) && within(exact, slack)) CHECK(hinted);
+                        if (!inside.isEmpty()) (hinted ? hintedAccepted : hintedRefused) += 1;
                     }
                     INFO(models::name(models::Kind(k)) << " part " << p << " r " << r << " slack " << slack << " "
                                                        << describe(line));
@@ -280,6 +303,8 @@ TEST_CASE("outerOffsetPart: holds the grown part and lies within r + slack of th
     CHECK(kept > 0);  // tori whose chain would need more than kMaxTangentCones cones stay
     CHECK(windowsAccepted > 500);
     CHECK(windowsRefused > 500);
+    CHECK(hintedAccepted > 300);
+    CHECK(hintedRefused > 300);
 }
 
 TEST_CASE("outerOffsetPart: a flat end mill's rims get two cones each, used where a line crosses them",

@@ -126,8 +126,11 @@ Interval intersectTorus(const ArcPiece& a, const LocalLine& l, const Interval& s
 
 /// An interval that holds the torus slab's and whose ends lie within `slack` of its ends along the
 /// line (at least tol::kRoot): the same root finding, stopped sooner, with each end taken from
-/// the outer side of its bracket.
-Interval outerTorusInterval(const ArcPiece& a, const LocalLine& l, const Interval& slab, double slack);
+/// the outer side of its bracket. `near` (possibly empty) is a hint, an interval whose ends are
+/// likely inside the torus by about `reach` (local parameters): the root finding starts there,
+/// and the result does not depend on it.
+Interval outerTorusInterval(const ArcPiece& a, const LocalLine& l, const Interval& slab, double slack,
+                            const Interval& near = Interval::empty(), double reach = 0.0);
 
 /// The torus slab's interval where a closed form gives it (a line along the axis, at a constant
 /// height, missing the slab's outer cylinder, or inside at both ends of its range there): returns

@@ -44,6 +44,8 @@ struct OuterPart {
     /// Per piece: its tangent cones, bottom to top, or none (a cone, a sphere, or a torus whose
     /// chain would need too many).
     std::vector<std::vector<ConePiece>> chains;
+    /// How far the part was grown.
+    double growth = 0.0;
     /// How far beyond the grown part a torus's interval may reach.
     double slack = 0.0;
 };
@@ -56,11 +58,11 @@ constexpr int kMaxTangentCones = 6;
 
 namespace detail {
 
-/// outerPieceInterval for a torus piece `a` with its chain (possibly none), given the line's range
-/// in its slab (not empty).
-inline Interval chainedTorusInterval(const ArcPiece& a, const std::vector<ConePiece>& chain, double slack,
-                                     const LocalLine& line, const Interval& slab) {
-    if (chain.empty()) return outerTorusInterval(a, line, slab, slack);
+/// outerPieceInterval for a torus piece `a` of `outer` with its chain (possibly none), given the
+/// line's range in its slab (not empty) and a hint for the root finding (outerTorusInterval).
+inline Interval chainedTorusInterval(const ArcPiece& a, const std::vector<ConePiece>& chain, const OuterPart& outer,
+                                     const LocalLine& line, const Interval& slab, const Interval& near) {
+    if (chain.empty()) return outerTorusInterval(a, line, slab, outer.slack, near, outer.growth);
     Interval iv;
     if (torusClosedForm(a, line, slab, iv)) return iv;
     for (const ConePiece& c : chain) iv = iv.hull(intersectCone(c, line));
@@ -78,7 +80,8 @@ inline Interval outerPieceInterval(const OuterPart& outer, std::size_t i, const 
     const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
     if (!a || a->rc == 0.0) return intersectPiece(outer.pieces[i], line);
     const Interval slab = detail::slabRange(line, a->z0, a->z1);
-    return slab.isEmpty() ? slab : detail::chainedTorusInterval(*a, outer.chains[i], outer.slack, line, slab);
+    return slab.isEmpty() ? slab
+                          : detail::chainedTorusInterval(*a, outer.chains[i], outer, line, slab, Interval::empty());
 }
 
 /// @brief An interval of `line` that holds its interval in the grown part: the hull of
@@ -91,9 +94,12 @@ Interval intersectOuter(const OuterPart& outer, const LocalLine& line);
 /// the axis), so this is the test "does `held` accept the whole interval" for any `held` that
 /// accepts an interval whenever it accepts a larger one; made piece by piece it can stop early.
 /// A torus piece is first offered its slab within the outer cylinder (one square root), then
-/// outerPieceInterval.
+/// outerPieceInterval. `inside` (possibly empty; line parameters) is a hint for a torus's root
+/// finding: the line's interval in the part before it was grown, whose ends lie about the growth
+/// inside the grown part's. The answer does not depend on it.
 template <class Held>
-bool allPiecesHeld(const OuterPart& outer, const LocalLine& line, Held&& held) {
+bool allPiecesHeld(const OuterPart& outer, const LocalLine& line, Held&& held,
+                   const Interval& inside = Interval::empty()) {
     const auto shifted = [&](const Interval& iv) {
         return iv.isEmpty() ? iv : Interval{iv.lo + line.vShift, iv.hi + line.vShift};
     };
@@ -105,7 +111,8 @@ bool allPiecesHeld(const OuterPart& outer, const LocalLine& line, Held&& held) {
         }
         const Interval slab = detail::slabRange(line, a->z0, a->z1);
         if (slab.isEmpty() || held(shifted(slab.intersect(detail::cylinderRange(line, a->rc + a->rho))))) continue;
-        if (!held(shifted(detail::chainedTorusInterval(*a, outer.chains[i], outer.slack, line, slab)))) return false;
+        const Interval near = inside.isEmpty() ? inside : Interval{inside.lo - line.vShift, inside.hi - line.vShift};
+        if (!held(shifted(detail::chainedTorusInterval(*a, outer.chains[i], outer, line, slab, near)))) return false;
     }
     return true;
 }
