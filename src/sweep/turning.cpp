@@ -30,10 +30,10 @@ constexpr double kRimReach = 4.0;
 /// The settling test (note c) may take, for a grown torus that a line crosses, the interval of
 /// cones tangent to it that lie within this fraction of the growth beyond it (outerOffsetPart): a
 /// quarter-circle rim takes two (8.2 % out where they meet). Where more cones would be needed,
-/// the root finding stops once it has the ends to within this fraction of the growth. Settling on a larger interval fails
-/// more often, at most as a growth 10 % larger would. On BM_TurningQuery, with cones in place of
-/// every torus, three or four a rim (slack 0.04 or 0.02) were slower than two, and one (a square
-/// corner) far slower.
+/// the root finding stops once it has the ends to within this fraction of the growth. Settling on
+/// a larger interval fails more often, at most as a growth 10 % larger would. On BM_TurningQuery,
+/// with cones in place of every torus, three or four a rim (slack 0.04 or 0.02) were slower than
+/// two, and one (a square corner) far slower.
 constexpr double kSettleSlack = 0.1;
 
 /// Two faces at a rim whose normals differ by less than this angle (rad) meet smoothly: about the

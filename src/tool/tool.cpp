@@ -158,7 +158,8 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
     // is zero where g is and has its sign (where rho < rc, q = dz^2 - rho_a^2 < 0 and g < 0), but
     // has a finite slope where the line leaves through the slab's bottom or top face's rim, where
     // g's square root has an infinite one, and needs one square root, not two. A bracket whose
-    // end q does not sign as g does (rounding, or an end on a face where q = 0) keeps g.
+    // end q does not sign as g does (rounding, or an end on a face where q = 0) keeps g, and so
+    // does a call with a hint (its brackets are narrow, and q's one evaluation more would not pay).
     const auto q = [&](double t) {
         const double r2 = std::max(0.0, (l.A * t + 2.0 * l.B) * t + l.C);
         const double dz = l.z0 + l.zv * t - a.zc, out = std::max(std::sqrt(r2) - a.rc, 0.0);
