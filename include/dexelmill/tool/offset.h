@@ -58,10 +58,12 @@ constexpr int kMaxTangentCones = 6;
 
 namespace detail {
 
-/// outerPieceInterval for a torus piece `a` of `outer` with its chain (possibly none), given the
-/// line's range in its slab (not empty) and a hint for the root finding (outerTorusInterval).
-inline Interval chainedTorusInterval(const ArcPiece& a, const std::vector<ConePiece>& chain, const OuterPart& outer,
-                                     const LocalLine& line, const Interval& slab, const Interval& near) {
+/// outerPieceInterval for piece i of `outer`, a torus, given the line's range in its slab (not
+/// empty) and a hint for the root finding (outerTorusInterval).
+inline Interval chainedTorusInterval(const OuterPart& outer, std::size_t i, const LocalLine& line,
+                                     const Interval& slab, const Interval& near) {
+    const ArcPiece& a = std::get<ArcPiece>(outer.pieces[i]);
+    const std::vector<ConePiece>& chain = outer.chains[i];
     if (chain.empty()) return outerTorusInterval(a, line, slab, outer.slack, near, outer.growth);
     Interval iv;
     if (torusClosedForm(a, line, slab, iv)) return iv;
@@ -80,8 +82,7 @@ inline Interval outerPieceInterval(const OuterPart& outer, std::size_t i, const 
     const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
     if (!a || a->rc == 0.0) return intersectPiece(outer.pieces[i], line);
     const Interval slab = detail::slabRange(line, a->z0, a->z1);
-    return slab.isEmpty() ? slab
-                          : detail::chainedTorusInterval(*a, outer.chains[i], outer, line, slab, Interval::empty());
+    return slab.isEmpty() ? slab : detail::chainedTorusInterval(outer, i, line, slab, Interval::empty());
 }
 
 /// @brief An interval of `line` that holds its interval in the grown part: the hull of
@@ -103,6 +104,7 @@ bool allPiecesHeld(const OuterPart& outer, const LocalLine& line, Held&& held,
     const auto shifted = [&](const Interval& iv) {
         return iv.isEmpty() ? iv : Interval{iv.lo + line.vShift, iv.hi + line.vShift};
     };
+    const Interval near = inside.isEmpty() ? inside : Interval{inside.lo - line.vShift, inside.hi - line.vShift};
     for (std::size_t i = 0; i < outer.pieces.size(); ++i) {
         const auto* a = std::get_if<ArcPiece>(&outer.pieces[i]);
         if (!a || a->rc == 0.0) {
@@ -111,8 +113,7 @@ bool allPiecesHeld(const OuterPart& outer, const LocalLine& line, Held&& held,
         }
         const Interval slab = detail::slabRange(line, a->z0, a->z1);
         if (slab.isEmpty() || held(shifted(slab.intersect(detail::cylinderRange(line, a->rc + a->rho))))) continue;
-        const Interval near = inside.isEmpty() ? inside : Interval{inside.lo - line.vShift, inside.hi - line.vShift};
-        if (!held(shifted(detail::chainedTorusInterval(*a, outer.chains[i], outer, line, slab, near)))) return false;
+        if (!held(shifted(detail::chainedTorusInterval(outer, i, line, slab, near)))) return false;
     }
     return true;
 }
