@@ -108,36 +108,51 @@ public:
             const Mesh::Triangle& t = mesh.triangles[corner / 3];
             const int k = int(corner % 3);
             const std::uint32_t out = t[kNext[k]], in = t[kPrev[k]];
-            sum += cornerArea(mesh, corner, pv);
+            // cornerArea's sum, bit for bit (checkNormal and FoldWatch take it so).
+            sum += glm::cross(mesh.vertices[out] - pv, mesh.vertices[in] - pv);
             if (out > v) outs[nOut++] = out;
             if (in > v) ins[nIn++] = in;
         }
-        // Each distinct neighbour once: its uses in each direction.
-        auto count = [](const std::uint32_t* list, std::size_t m, std::uint32_t w) {
-            std::size_t k = 0;
-            for (std::size_t i = 0; i < m; ++i) k += list[i] == w;
-            return k;
-        };
-        auto seenBefore = [](const std::uint32_t* list, std::size_t m, std::uint32_t w) {
-            for (std::size_t i = 0; i < m; ++i)
-                if (list[i] == w) return true;
-            return false;
-        };
-        auto tally = [&](std::size_t forward, std::size_t backward) {
+        // Sorted, each list holds a neighbour's uses in one direction as a run; walking the two
+        // together meets each distinct neighbour once (a star has a handful of corners, so an
+        // insertion sort is quickest).
+        sortSmall(outs, nOut);
+        sortSmall(ins, nIn);
+        // The common case, a closed oriented star: the same neighbours each way, each once.
+        if (nOut == nIn && std::equal(outs, outs + nOut, ins) &&
+            std::adjacent_find(outs, outs + nOut) == outs + nOut) {
+            c.edges += nOut;
+            return unitNormal(sum);
+        }
+        std::size_t i = 0, j = 0;
+        while (i < nOut || j < nIn) {
+            const std::uint32_t w = j == nIn || (i < nOut && outs[i] < ins[j]) ? outs[i] : ins[j];
+            std::size_t forward = 0, backward = 0;
+            for (; i < nOut && outs[i] == w; ++i) ++forward;
+            for (; j < nIn && ins[j] == w; ++j) ++backward;
             ++c.edges;
             const std::size_t uses = forward + backward;
             if (uses == 1) ++c.boundary;
             else if (uses > 2) ++c.nonManifold;
             else if (forward != 1) ++c.misoriented;
-        };
-        for (std::size_t i = 0; i < nOut; ++i)
-            if (!seenBefore(outs, i, outs[i])) tally(count(outs, nOut, outs[i]), count(ins, nIn, outs[i]));
-        for (std::size_t i = 0; i < nIn; ++i)
-            if (!seenBefore(ins, i, ins[i]) && !seenBefore(outs, nOut, ins[i])) tally(0, count(ins, nIn, ins[i]));
+        }
         return unitNormal(sum);
     }
 
 private:
+    static void sortSmall(std::uint32_t* a, std::size_t n) {
+        if (n > kStack) {
+            std::sort(a, a + n);
+            return;
+        }
+        for (std::size_t k = 1; k < n; ++k) {
+            const std::uint32_t x = a[k];
+            std::size_t m = k;
+            for (; m > 0 && a[m - 1] > x; --m) a[m] = a[m - 1];
+            a[m] = x;
+        }
+    }
+
     // The neighbours w > v reached by an edge leaving v (outs) and entering it (ins): on the
     // stack for ordinary stars.
     static constexpr std::size_t kStack = 32;
