@@ -121,14 +121,14 @@ static_assert(LeafT::DIM == kLeafDim, "FloatTree leaves must be 8^3");
 /// floor(i / 8) for negative i too.
 inline int blockOf(int i) { return (i >= 0 ? i : i - (kLeafDim - 1)) / kLeafDim; }
 
-/// For the `count` lattice points t = (i0 + m + 1/2) h, m = 0..count-1, along one dexel: whether
-/// each is in material and, if some segment endpoint lies within `reach` of one of them, each
-/// one's distance to the nearest endpoint (infinity if the dexel is empty). Returns whether it
-/// did: with no endpoint that close every distance exceeds `reach`, the points all lie on the
-/// same side, and `dist` is left alone. Endpoints alternate lo, hi, lo, hi ...: a point is in
-/// material when an odd number of them lie at or below it.
-inline bool scanDexel(const SegmentSpan& segs, int i0, double h, double reach, double* dist, bool* inside,
-                      int count = kLeafDim) {
+/// For the `count` (at most 32) lattice points t = (i0 + m + 1/2) h, m = 0..count-1, along one
+/// dexel: whether each is in material (bit m of `inside`) and, if some segment endpoint lies within
+/// `reach` of one of them, each one's distance to the nearest endpoint (infinity if the dexel is
+/// empty). Returns whether it did: with no endpoint that close every distance exceeds `reach`, the
+/// points all lie on the same side, and `dist` is left alone. Endpoints alternate lo, hi, lo, hi
+/// ...: a point is in material when an odd number of them lie at or below it.
+inline bool scanDexel(const SegmentSpan& segs, int i0, double h, double reach, double* dist, std::uint32_t& inside,
+                      int count) {
     const std::size_t ends = 2 * segs.size;
     auto endpoint = [&](std::size_t k) -> double {
         const Segment& s = segs.data[k >> 1];
@@ -145,19 +145,54 @@ inline bool scanDexel(const SegmentSpan& segs, int i0, double h, double reach, d
     // The same comparisons as the loop below makes for its first and last points.
     const double tLast = (i0 + count - 1 + 0.5) * h;
     if ((k == 0 || t0 - endpoint(k - 1) > reach) && (k == ends || endpoint(k) - tLast > reach)) {
-        std::fill(inside, inside + count, (k & 1) != 0);
+        inside = (k & 1) ? std::uint32_t((std::uint64_t(1) << count) - 1) : 0u;
         return false;
     }
     constexpr double inf = std::numeric_limits<double>::infinity();
+    double t[32];
     for (int m = 0; m < count; ++m) {
-        const double t = (i0 + m + 0.5) * h;
-        while (k < ends && endpoint(k) <= t) ++k;
-        inside[m] = (k & 1) != 0;
-        const double below = k > 0 ? t - endpoint(k - 1) : inf;
-        const double above = k < ends ? endpoint(k) - t : inf;
-        dist[m] = std::min(below, above);
+        t[m] = (i0 + m + 0.5) * h;
+        dist[m] = inf;
     }
+    // Only these endpoints can be a point's nearest: the last at or below t0 (every point lies
+    // above it), those in (t0, tLast], and the first above tLast (every point lies below it).
+    // Each one above t0 turns the points at or above it in or out of material.
+    std::uint32_t bits = (k & 1) ? std::uint32_t((std::uint64_t(1) << count) - 1) : 0u;
+    for (std::size_t j = k > 0 ? k - 1 : 0; j < ends; ++j) {
+        const double e = endpoint(j);
+        for (int m = 0; m < count; ++m) dist[m] = std::min(dist[m], std::abs(t[m] - e));
+        if (j < k) continue;
+        std::uint32_t reached = 0;
+        for (int m = 0; m < count; ++m) reached |= std::uint32_t(e <= t[m]) << m;
+        bits ^= reached;
+        if (e > tLast) break;
+    }
+    inside = bits;
     return true;
+}
+
+/// Bit m of a byte moved to bit 8 m of a word, for every m.
+struct ByteSpread {
+    std::uint64_t word[256];
+    constexpr ByteSpread() : word() {
+        for (int b = 0; b < 256; ++b)
+            for (int m = 0; m < 8; ++m)
+                if ((b >> m) & 1) word[b] |= std::uint64_t(1) << (8 * m);
+    }
+};
+constexpr ByteSpread kByteSpread;
+
+/// Sets, in a leaf's bit mask of its points (word x, bit y * 8 + z: bit `offset` of the leaf's
+/// x * 64 + y * 8 + z), the points of the dexel along axis a at (u, v) along axes (a + 1) % 3 and
+/// (a + 2) % 3 whose bit m in `bits` (the point m along a) is set.
+inline void depositRow(std::uint64_t* words, int a, int u, int v, std::uint32_t bits) {
+    if (a == 2) {  // x = u, y = v, z = m
+        words[u] |= std::uint64_t(bits) << (8 * v);
+    } else if (a == 1) {  // z = u, x = v, y = m
+        words[v] |= kByteSpread.word[bits] << u;
+    } else {  // y = u, z = v, x = m
+        for (int m = 0; m < kLeafDim; ++m) words[m] |= std::uint64_t((bits >> m) & 1u) << (8 * u + v);
+    }
 }
 
 /// The rebuild of one stock; see rebuildLevelSet.
@@ -344,24 +379,19 @@ private:
         for (int a = 0; a < 3; ++a) o[a] = (o[a] + blockLo_[a]) * kLeafDim;
 
         constexpr int kSize = LeafT::SIZE;
-        float invSq[kSize];        // sum over axes of d_a^-2
+        float invSq[kSize];  // sum over axes of d_a^-2
         std::fill(invSq, invSq + kSize, 0.0f);
-        // Votes on a block padded by one point on every side, so that with a missing axis the
-        // neighbours across it are known too.
-        constexpr int kPad = kLeafDim + 2;
-        constexpr int kPadSize = kPad * kPad * kPad;
-        std::uint8_t votes[kPadSize];  // families saying "in material"
-        bool first[kPadSize];          // what the first (tie-breaking) family says
-        std::fill(votes, votes + kPadSize, std::uint8_t(0));
-        std::fill(first, first + kPadSize, false);
-        auto padIndex = [](int x, int y, int z) { return ((x + 1) * kPad + (y + 1)) * kPad + (z + 1); };
-
-        double dist[kPad];
-        bool in[kPad];
+        // Per family (in axes_ order), whether each of the leaf's points is in material: a bit
+        // per point at its offset in the leaf, x * 64 + y * 8 + z.
+        std::uint64_t in[3][kLeafDim] = {};
+        // With fewer than three families the first family's bits on a ring of dexels around the
+        // leaf as well, one point beyond it at each end, so that the neighbours across a missing
+        // axis are known: [u + 1][v + 1], bit m + 1, for the point m along the family's axis on
+        // its dexel (u, v).
+        std::uint16_t firstRows[kLeafDim + 2][kLeafDim + 2];
+        double dist[kLeafDim + 2];
         // LeafNode offset of (x, y, z) within the leaf: x * 64 + y * 8 + z.
         constexpr int kStride[3] = {kLeafDim * kLeafDim, kLeafDim, 1};
-        constexpr int kPadStride[3] = {kPad * kPad, kPad, 1};
-        // The padding ring is needed only to see the neighbours across a missing axis.
         const int ring = axisCount_ < 3 ? 1 : 0;
         const double minDistance = kMinDistance * h_;
         for (int ai = 0; ai < axisCount_; ++ai) {
@@ -373,14 +403,12 @@ private:
                     SegmentSpan segs;
                     if (ib >= 0 && ib < fam.nb() && ic >= 0 && ic < fam.nc())
                         segs = fam.segments(ib, ic);
-                    const bool near = scanDexel(segs, o[a] - ring, h_, cutoff_, dist, in, kLeafDim + 2 * ring);
-                    // The dexel's points m = -ring .. kLeafDim + ring - 1 step by the axis'
-                    // stride from their start, in the padded block and in the leaf.
-                    const int padStart = padIndex(0, 0, 0) + u * kPadStride[b] + v * kPadStride[c];
-                    for (int m = -ring; m < kLeafDim + ring; ++m) votes[padStart + m * kPadStride[a]] += in[m + ring];
-                    if (ai == 0)
-                        for (int m = -ring; m < kLeafDim + ring; ++m) first[padStart + m * kPadStride[a]] = in[m + ring];
-                    if (!near || u < 0 || u >= kLeafDim || v < 0 || v >= kLeafDim) continue;
+                    std::uint32_t bits = 0;
+                    const bool near = scanDexel(segs, o[a] - ring, h_, cutoff_, dist, bits, kLeafDim + 2 * ring);
+                    if (ring && ai == 0) firstRows[u + 1][v + 1] = std::uint16_t(bits);
+                    if (u < 0 || u >= kLeafDim || v < 0 || v >= kLeafDim) continue;
+                    depositRow(in[ai], a, u, v, (bits >> ring) & 0xffu);
+                    if (!near) continue;
                     const int start = u * kStride[b] + v * kStride[c];
                     for (int m = 0; m < kLeafDim; ++m) {
                         const double d = std::max(dist[m + ring], minDistance);
@@ -389,26 +417,31 @@ private:
                 }
             }
         }
-        auto insideAt = [&](int pi) {
-            return 2 * votes[pi] > axisCount_ || (2 * votes[pi] == axisCount_ && first[pi]);
-        };
+        // The majority of the families' votes; a tie of two goes to the first family, so with
+        // one or two families a point is in material when the first family says so.
+        std::uint64_t inside[kLeafDim];
+        for (int w = 0; w < kLeafDim; ++w)
+            inside[w] = axisCount_ == 3 ? (in[0][w] & in[1][w]) | (in[0][w] & in[2][w]) | (in[1][w] & in[2][w])
+                                        : in[0][w];
         // Across a missing axis the crossing between two disagreeing neighbours is taken at the
         // midpoint: a distance of h/2.
         if (axisCount_ < 3) {
+            const int a = axes_[0], b = (a + 1) % 3, c = (a + 2) % 3;
+            auto firstAt = [&](const int* q) {  // q: a point of the leaf or its ring, leaf coordinates
+                return (firstRows[q[b] + 1][q[c] + 1] >> (q[a] + 1)) & 1u;
+            };
             const float wall = float(4.0 / (h_ * h_));
             for (int x = 0; x < kLeafDim; ++x)
                 for (int y = 0; y < kLeafDim; ++y)
                     for (int z = 0; z < kLeafDim; ++z) {
-                        const int pi = padIndex(x, y, z);
-                        const bool here = insideAt(pi);
                         const int q[3] = {x, y, z};
+                        const std::uint32_t here = firstAt(q);
                         for (int mm = 0; mm < 3; ++mm) {
                             if (hasAxis(mm)) continue;
-                            int lo[3] = {q[0], q[1], q[2]}, hi[3] = {q[0], q[1], q[2]};
+                            int lo[3] = {x, y, z}, hi[3] = {x, y, z};
                             --lo[mm];
                             ++hi[mm];
-                            if (insideAt(padIndex(lo[0], lo[1], lo[2])) != here ||
-                                insideAt(padIndex(hi[0], hi[1], hi[2])) != here)
+                            if (firstAt(lo) != here || firstAt(hi) != here)
                                 invSq[x * kStride[0] + y * kStride[1] + z * kStride[2]] += wall;
                         }
                     }
@@ -418,18 +451,16 @@ private:
         float* values = leaf->buffer().data();
         bool any = false;
         const float w2 = float(1.0 / (width_ * width_));
-        for (int x = 0, off = 0; x < kLeafDim; ++x)
-            for (int y = 0; y < kLeafDim; ++y)
-                for (int z = 0, pi = padIndex(x, y, 0); z < kLeafDim; ++z, ++off, ++pi) {
-                    const float s = insideAt(pi) ? -1.0f : 1.0f;
-                    if (invSq[off] > w2) {
-                        values[off] = s / std::sqrt(invSq[off]);
-                        leaf->setActiveState(openvdb::Index(off), true);
-                        any = true;
-                    } else {
-                        values[off] = s * background;
-                    }
-                }
+        for (int off = 0; off < kSize; ++off) {
+            const float s = (inside[off >> 6] >> (off & 63)) & 1u ? -1.0f : 1.0f;
+            if (invSq[off] > w2) {
+                values[off] = s / std::sqrt(invSq[off]);
+                leaf->setActiveState(openvdb::Index(off), true);
+                any = true;
+            } else {
+                values[off] = s * background;
+            }
+        }
         if (!any) {
             delete leaf;
             return nullptr;
