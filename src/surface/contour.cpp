@@ -262,10 +262,10 @@ public:
         stats.cornerVertices = corners;
         stats.flipped = flipped;
         // Only the mesh is needed from here on: free the rest before the check.
-        std::vector<PackedNormal>().swap(crossingNormal_);
-        std::vector<std::uint8_t>().swap(feature_);
-        std::vector<Block>().swap(blocks_);
-        std::vector<std::uint64_t>().swap(keys_);
+        decltype(crossingNormal_)().swap(crossingNormal_);
+        decltype(feature_)().swap(feature_);
+        decltype(blocks_)().swap(blocks_);
+        decltype(keys_)().swap(keys_);
         stats.check = repairAndCheck(stats.pulledBack);
         if (stats.check.foldedTriangles + stats.check.degenerateTriangles > 0 && unflip(unrepaired_) > 0) {
             std::size_t more = 0;
@@ -300,7 +300,7 @@ private:
             lo.minComponent(leaf->origin());
             hi.maxComponent(leaf->origin());
         }
-        std::vector<std::uint64_t> keys;
+        decltype(keys_) keys;
         if (!origins.empty()) {
             lo.offset(-kDim);
             const std::int64_t nx = (hi.x() - lo.x()) / kDim + 1, ny = (hi.y() - lo.y()) / kDim + 1,
@@ -948,11 +948,11 @@ private:
     double singular_ = 0.0;
     double cosHalfFeature_ = 1.0;
     double adaptivity_ = 0.0;
-    std::vector<Block> blocks_;
-    std::vector<std::uint64_t> keys_;
+    std::vector<Block, NoZeroAllocator<Block>> blocks_;
+    std::vector<std::uint64_t, NoZeroAllocator<std::uint64_t>> keys_;
     Mesh mesh_;
-    std::vector<PackedNormal> crossingNormal_;
-    std::vector<std::uint8_t> feature_;
+    std::vector<PackedNormal, NoZeroAllocator<PackedNormal>> crossingNormal_;
+    std::vector<std::uint8_t, NoZeroAllocator<std::uint8_t>> feature_;
     std::uint32_t patchVertexBase_ = 0;
     std::vector<std::uint32_t> unrepaired_;
 };

@@ -49,6 +49,9 @@ namespace {
 using detail::StarChunks;
 using detail::Stars;
 
+/// The vertices' unit normals (as the check takes them).
+using Normals = std::vector<glm::vec3, NoZeroAllocator<glm::vec3>>;
+
 /// The area vector of corner `corner` (3 t + k) of the star of the vertex at pv: the same for
 /// each corner of triangle t, taken from this one.
 inline Vec3 cornerArea(const Mesh& mesh, std::uint32_t corner, const Vec3& pv) {
@@ -168,7 +171,7 @@ VertexCounts addCounts(VertexCounts a, const VertexCounts& b) {
 
 /// One pass over the vertices' stars, chunk by chunk where the stars come so: every vertex's
 /// normal and the edge counts (VertexVisit).
-VertexCounts vertexPass(const Mesh& mesh, const StarChunks& stars, std::vector<glm::vec3>& normal) {
+VertexCounts vertexPass(const Mesh& mesh, const StarChunks& stars, Normals& normal) {
     const std::size_t nv = mesh.vertices.size();
     detail::reservePopulated(normal, nv);
     normal.resize(nv);
@@ -226,7 +229,7 @@ struct Facing {
 };
 
 inline Facing facingOf(const Mesh::Triangle& tri, const Vec3& a, const Vec3& b, const Vec3& d,
-                       const std::vector<glm::vec3>& normal) {
+                       const Normals& normal) {
     Facing f;
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) return f;
     const Vec3 areaVector = glm::cross(b - a, d - a);
@@ -240,7 +243,7 @@ inline Facing facingOf(const Mesh::Triangle& tri, const Vec3& a, const Vec3& b, 
 }
 
 /// Adds triangle t to the sums of trianglePass.
-inline void addTriangle(const Mesh& mesh, const std::vector<glm::vec3>& normal, const Vec3& centre, double minCosine,
+inline void addTriangle(const Mesh& mesh, const Normals& normal, const Vec3& centre, double minCosine,
                         std::size_t t, TriangleCounts& c) {
     const Mesh::Triangle& tri = mesh.triangles[t];
     const Vec3& a = mesh.vertices[tri[0]];
@@ -262,7 +265,7 @@ inline void addTriangle(const Mesh& mesh, const std::vector<glm::vec3>& normal, 
 /// `centre`), the folded ones (facing against the sum of their vertices' unit normals), and the
 /// suspects (folded, degenerate, or with minCosine > 0 facing their vertices' normals at a cosine
 /// below it). Ranges are reduced in a fixed order, so the sums do not depend on the thread count.
-TriangleCounts trianglePass(const Mesh& mesh, const std::vector<glm::vec3>& normal, const Vec3& centre,
+TriangleCounts trianglePass(const Mesh& mesh, const Normals& normal, const Vec3& centre,
                             double minCosine = 0.0) {
     return tbb::parallel_deterministic_reduce(
         tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 8192), TriangleCounts{},
@@ -281,7 +284,7 @@ TriangleCounts trianglePass(const Mesh& mesh, const std::vector<glm::vec3>& norm
 }
 
 /// The sums of trianglePass over some triangles, in their order.
-TriangleCounts triangleSums(const Mesh& mesh, const std::vector<glm::vec3>& normal, const Vec3& centre,
+TriangleCounts triangleSums(const Mesh& mesh, const Normals& normal, const Vec3& centre,
                             const std::vector<std::uint32_t>& triangles) {
     TriangleCounts c;
     for (std::uint32_t t : triangles) addTriangle(mesh, normal, centre, 0.0, t, c);
@@ -289,7 +292,7 @@ TriangleCounts triangleSums(const Mesh& mesh, const std::vector<glm::vec3>& norm
 }
 
 /// Whether triangle t folds, nearly folds or is degenerate (the test of trianglePass).
-bool suspect(const Mesh& mesh, const std::vector<glm::vec3>& normal, std::uint32_t t, double minCosine) {
+bool suspect(const Mesh& mesh, const Normals& normal, std::uint32_t t, double minCosine) {
     const Mesh::Triangle& tri = mesh.triangles[t];
     const Facing f = facingOf(tri, mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]], normal);
     return f.degenerate || f.below(minCosine);
@@ -345,7 +348,7 @@ struct RepairLog {
 };
 
 /// Keeps the triangles of `triangles` that are still suspect.
-void keepSuspects(const Mesh& mesh, const std::vector<glm::vec3>& normal, double minCosine,
+void keepSuspects(const Mesh& mesh, const Normals& normal, double minCosine,
                   std::vector<std::uint32_t>& triangles) {
     triangles.erase(std::remove_if(triangles.begin(), triangles.end(),
                                    [&](std::uint32_t t) { return !suspect(mesh, normal, t, minCosine); }),
@@ -355,7 +358,7 @@ void keepSuspects(const Mesh& mesh, const std::vector<glm::vec3>& normal, double
 /// The last resort of pullBack: each vertex of a triangle still suspect tries the candidate
 /// positions it is offered, and keeps the one that leaves the fewest suspect triangles around it
 /// and its neighbours (their normals follow the move).
-void tryCandidates(Mesh& mesh, const StarChunks& stars, std::vector<glm::vec3>& normal,
+void tryCandidates(Mesh& mesh, const StarChunks& stars, Normals& normal,
                    std::vector<std::uint32_t>& suspects, const FoldRepair& repair, RepairLog& log) {
     std::vector<std::uint32_t> neighbours;
     std::vector<Vec3> offered;
@@ -400,7 +403,7 @@ void tryCandidates(Mesh& mesh, const StarChunks& stars, std::vector<glm::vec3>& 
 /// The local repair of repairAndCheckMesh: rounds of pulls on the suspects' vertices, testing again
 /// only the triangles around moved vertices and their neighbours, then the candidates' last
 /// resort. Leaves in `suspects` the triangles that are still suspect.
-void pullBack(Mesh& mesh, const StarChunks& stars, std::vector<glm::vec3>& normal, std::vector<std::uint32_t>& suspects,
+void pullBack(Mesh& mesh, const StarChunks& stars, Normals& normal, std::vector<std::uint32_t>& suspects,
               const FoldRepair& repair, RepairLog& log) {
     std::vector<std::uint32_t> neighbours;
     for (int round = 0; round < repair.rounds && !suspects.empty(); ++round) {
@@ -441,7 +444,7 @@ MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, st
     if (r.invalidIndices > 0) return r;
 
     const StarChunks stars(mesh);
-    std::vector<glm::vec3> normal;
+    Normals normal;
     const VertexCounts v = vertexPass(mesh, stars, normal);
     r.edgeCount = v.edges;
     r.boundaryEdges = v.boundary;
@@ -504,7 +507,7 @@ MeshCheck repairAndCheckMesh(Mesh& mesh, const FoldRepair& repair, std::size_t* 
 struct FoldWatch::State {
     const Mesh& mesh;
     Stars stars;
-    std::vector<glm::vec3> normal;
+    Normals normal;
     std::vector<char> suspect;  ///< per triangle: check's suspect test with no margin
     /// Per vertex and per triangle, the update that last took it in (0: none): no sorting.
     std::vector<std::uint32_t> vertexSeen, triangleSeen;

@@ -95,7 +95,7 @@ Stars buildStars(const Mesh& mesh) {
     s.corners.resize(s.offset[nv]);
     tbb::parallel_for(std::size_t(0), parts, [&](std::size_t p) {
         const std::uint32_t lo = partStart(p), hi = partStart(p + 1);
-        std::vector<std::uint32_t> cursor(s.offset.begin() + lo, s.offset.begin() + hi);
+        std::vector<std::uint32_t, NoZeroAllocator<std::uint32_t>> cursor(s.offset.begin() + lo, s.offset.begin() + hi);
         for (std::size_t t = 0; t < nt; ++t)
             for (int k = 0; k < 3; ++k) {
                 const std::uint32_t v = mesh.triangles[t][std::size_t(k)];

@@ -17,8 +17,8 @@ namespace dexelmill::detail {
 /// The stars of the vertices first .. first + offset.size() - 2.
 struct Stars {
     std::uint32_t first = 0;
-    std::vector<std::uint32_t> offset;   ///< per vertex from `first`, into corners; one more at the end
-    std::vector<std::uint32_t> corners;
+    std::vector<std::uint32_t, NoZeroAllocator<std::uint32_t>> offset;  ///< per vertex from `first`, into corners; one more at the end
+    std::vector<std::uint32_t, NoZeroAllocator<std::uint32_t>> corners;
 
     const std::uint32_t* begin(std::uint32_t v) const { return corners.data() + offset[v - first]; }
     const std::uint32_t* end(std::uint32_t v) const { return corners.data() + offset[v - first + 1]; }

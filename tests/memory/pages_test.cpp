@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "dexelmill/surface/mesh.h"
 #include "memory/pages.h"
 
 namespace {
@@ -63,4 +64,28 @@ TEST_CASE("pages: a small buffer is only reserved", "[memory]") {
     dexelmill::detail::reservePopulated(small, 1000);
     CHECK(small.capacity() >= 1000);
     CHECK(small.empty());
+}
+
+TEST_CASE("pages: a large list's memory is a mapping of its own, aligned for huge pages", "[memory]") {
+    using List = std::vector<std::uint32_t, dexelmill::NoZeroAllocator<std::uint32_t>>;
+    List big(std::size_t(3) << 20);  // 12 MB
+    for (std::size_t i = 0; i < big.size(); i += 1024) big[i] = std::uint32_t(i);
+    CHECK(big[5 * 1024] == 5 * 1024);
+    const auto at = reinterpret_cast<std::uintptr_t>(big.data());
+    const std::string flags = vmFlagsAt(big.data());
+    if (!dexelmill::detail::hugePagesOnAdvice() || flags.empty()) {
+        WARN("no transparent huge pages on advice here: the list's mapping is not checked");
+        return;
+    }
+    CHECK(at % (std::size_t(2) << 20) == 0);
+    CHECK(hasFlag(flags, "hg"));
+    // Growing moves it to another such mapping and returns the first.
+    big.resize(big.size() * 2);
+    CHECK(reinterpret_cast<std::uintptr_t>(big.data()) % (std::size_t(2) << 20) == 0);
+    CHECK(big[5 * 1024] == 5 * 1024);
+    CHECK(vmFlagsAt(reinterpret_cast<const void*>(at)).empty());
+
+    // A small list comes from operator new as before.
+    List small(100, 7u);
+    CHECK(small[99] == 7u);
 }
