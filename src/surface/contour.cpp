@@ -731,7 +731,11 @@ private:
     /// A0 . n whatever s is, so the bound |A0_perp - s (n x e)|^2 <= kMaxFanTiltTan2 (A0 . n)^2 is
     /// a quadratic in s whose solutions form an interval about 0. The result lies in all of them.
     double fanOffset(const std::uint32_t* loop, int len, const Vec3& mass, const Vec3& n, double wanted) const {
-        double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
+        // Per fan triangle that bounds s: |perp - s w|^2 <= kMaxFanTiltTan2 along^2, that is
+        // a s^2 - 2 b s + c <= 0.
+        double qa[detail::kCellEdges], qb[detail::kCellEdges], qc[detail::kCellEdges];
+        int bounds = 0;
+        bool holds = true;  // every bound holds at `wanted`, as it does for most patches
         for (int i = 0; i < len; ++i) {
             const Vec3 p = mesh_.vertices[loop[i]] - mass;
             const Vec3 q = mesh_.vertices[loop[i + 1 == len ? 0 : i + 1]] - mass;
@@ -739,13 +743,19 @@ private:
             const double along = glm::dot(a0, n);
             const Vec3 perp = a0 - along * n;
             const Vec3 w = glm::cross(n, q - p);
-            // |perp - s w|^2 <= kMaxFanTiltTan2 along^2: a s^2 - 2 b s + c <= 0.
             const double a = glm::dot(w, w), b = glm::dot(perp, w);
             const double c = glm::dot(perp, perp) - kMaxFanTiltTan2 * along * along;
             if (!(along > 0.0) || !(c <= 0.0) || !(a > 0.0)) continue;  // steep already, or s moves nothing
-            const double root = std::sqrt(b * b - a * c);                 // real: c <= 0
-            lo = std::max(lo, (b - root) / a);
-            hi = std::min(hi, (b + root) / a);
+            qa[bounds] = a, qb[bounds] = b, qc[bounds] = c;
+            ++bounds;
+            holds = holds && (a * wanted - 2.0 * b) * wanted + c <= 0.0;
+        }
+        if (holds) return wanted;
+        double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
+        for (int k = 0; k < bounds; ++k) {
+            const double root = std::sqrt(qb[k] * qb[k] - qa[k] * qc[k]);  // real: c <= 0
+            lo = std::max(lo, (qb[k] - root) / qa[k]);
+            hi = std::min(hi, (qb[k] + root) / qa[k]);
         }
         return std::clamp(wanted, lo, hi);
     }
