@@ -397,21 +397,22 @@ private:
         for (int ai = 0; ai < axisCount_; ++ai) {
             const int a = axes_[ai], b = (a + 1) % 3, c = (a + 2) % 3;
             const DexelFamily& fam = stock_.family(axisFromIndex(a));
-            for (int v = -ring; v < kLeafDim + ring; ++v) {
-                for (int u = -ring; u < kLeafDim + ring; ++u) {
+            const int r = ai == 0 ? ring : 0;  // only the first family's ring is read
+            for (int v = -r; v < kLeafDim + r; ++v) {
+                for (int u = -r; u < kLeafDim + r; ++u) {
                     const int ib = o[b] + u, ic = o[c] + v;
                     SegmentSpan segs;
                     if (ib >= 0 && ib < fam.nb() && ic >= 0 && ic < fam.nc())
                         segs = fam.segments(ib, ic);
                     std::uint32_t bits = 0;
-                    const bool near = scanDexel(segs, o[a] - ring, h_, cutoff_, dist, bits, kLeafDim + 2 * ring);
-                    if (ring && ai == 0) firstRows[u + 1][v + 1] = std::uint16_t(bits);
+                    const bool near = scanDexel(segs, o[a] - r, h_, cutoff_, dist, bits, kLeafDim + 2 * r);
+                    if (r) firstRows[u + 1][v + 1] = std::uint16_t(bits);
                     if (u < 0 || u >= kLeafDim || v < 0 || v >= kLeafDim) continue;
-                    depositRow(in[ai], a, u, v, (bits >> ring) & 0xffu);
+                    depositRow(in[ai], a, u, v, (bits >> r) & 0xffu);
                     if (!near) continue;
                     const int start = u * kStride[b] + v * kStride[c];
                     for (int m = 0; m < kLeafDim; ++m) {
-                        const double d = std::max(dist[m + ring], minDistance);
+                        const double d = std::max(dist[m + r], minDistance);
                         if (d <= cutoff_) invSq[start + m * kStride[a]] += float(1.0 / (d * d));
                     }
                 }
