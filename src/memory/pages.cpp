@@ -40,7 +40,7 @@ void* allocateList(std::size_t bytes) {
     const auto base = reinterpret_cast<std::uintptr_t>(raw);
     const std::uintptr_t start = (base + kHugePage - 1) & ~std::uintptr_t(kHugePage - 1);
     if (start > base) munmap(raw, start - base);
-    if (base + kHugePage > start) munmap(reinterpret_cast<void*>(start + size), base + kHugePage - start);
+    munmap(reinterpret_cast<void*>(start + size), base + kHugePage - start);  // never empty: start < base + kHugePage
     // Failure only means small pages.
     (void)madvise(reinterpret_cast<void*>(start), size, MADV_HUGEPAGE);
     return reinterpret_cast<void*>(start);

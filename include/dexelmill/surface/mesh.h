@@ -33,9 +33,9 @@ void deallocateList(void* p, std::size_t bytes) noexcept;
 ///    hood's 760 MB took a third of a second for nothing).
 ///  - A large list's memory comes in whole huge pages (detail::allocateList): on the virtual
 ///    machines this project is measured on, the first write to each fresh 4 KiB page costs about
-///    14 us (64 MB in 0.23 s), and to a 2 MiB page about as much, 512 times fewer. A list from
-///    std::allocator is a mapping at an arbitrary 4 KiB boundary, of which advice reaches only
-///    the whole 2 MiB runs inside it.
+///    14 us (64 MB page by page in 0.23 s), to a 2 MiB page 0.1 to 3 ms (64 MB in 4 to 98 ms). A
+///    list from std::allocator is a mapping at an arbitrary 4 KiB boundary, of which advice
+///    reaches only the whole 2 MiB runs inside it.
 /// Anything else behaves as std::allocator.
 template <class T>
 struct NoZeroAllocator : std::allocator<T> {
