@@ -52,13 +52,23 @@ using detail::Stars;
 /// The vertices' unit normals (as the check takes them).
 using Normals = std::vector<glm::vec3, NoZeroAllocator<glm::vec3>>;
 
-/// The area vector of corner `corner` (3 t + k) of the star of the vertex at pv: the same for
-/// each corner of triangle t, taken from this one.
-inline Vec3 cornerArea(const Mesh& mesh, std::uint32_t corner, const Vec3& pv) {
+/// The vertices of corner `corner` (3 t + k)'s triangle after and before its own: the edges it
+/// leaves its vertex by (to `out`) and enters it by (from `in`).
+struct CornerSides {
+    std::uint32_t out, in;
+};
+
+inline CornerSides cornerSides(const Mesh& mesh, std::uint32_t corner) {
     constexpr int kNext[3] = {1, 2, 0}, kPrev[3] = {2, 0, 1};
     const Mesh::Triangle& t = mesh.triangles[corner / 3];
     const int k = int(corner % 3);
-    return glm::cross(mesh.vertices[t[kNext[k]]] - pv, mesh.vertices[t[kPrev[k]]] - pv);
+    return {t[kNext[k]], t[kPrev[k]]};
+}
+
+/// The area vector of a corner of the star of the vertex at pv: the same for each corner of a
+/// triangle, taken from this one.
+inline Vec3 cornerArea(const Mesh& mesh, const CornerSides& c, const Vec3& pv) {
+    return glm::cross(mesh.vertices[c.out] - pv, mesh.vertices[c.in] - pv);
 }
 
 /// A vertex's normal from the sum of its star's area vectors: unit, zero without area.
@@ -72,7 +82,7 @@ template <class StarsT>
 glm::vec3 checkNormal(const Mesh& mesh, const StarsT& stars, std::uint32_t v) {
     Vec3 sum(0.0);
     const Vec3& pv = mesh.vertices[v];
-    for (const std::uint32_t* c = stars.begin(v); c != stars.end(v); ++c) sum += cornerArea(mesh, *c, pv);
+    for (const std::uint32_t* c = stars.begin(v); c != stars.end(v); ++c) sum += cornerArea(mesh, cornerSides(mesh, *c), pv);
     return unitNormal(sum);
 }
 
@@ -92,7 +102,6 @@ class VertexVisit {
 public:
     glm::vec3 operator()(const Mesh& mesh, std::uint32_t v, const std::uint32_t* first, const std::uint32_t* last,
                          VertexCounts& c) {
-        constexpr int kNext[3] = {1, 2, 0}, kPrev[3] = {2, 0, 1};
         const std::size_t n = std::size_t(last - first);
         c.unused += n == 0;
         std::uint32_t* outs = outStack_;
@@ -107,12 +116,9 @@ public:
         Vec3 sum(0.0);
         const Vec3& pv = mesh.vertices[v];
         for (const std::uint32_t* i = first; i != last; ++i) {
-            const std::uint32_t corner = *i;
-            const Mesh::Triangle& t = mesh.triangles[corner / 3];
-            const int k = int(corner % 3);
-            const std::uint32_t out = t[kNext[k]], in = t[kPrev[k]];
-            // cornerArea's sum, bit for bit (checkNormal and FoldWatch take it so).
-            sum += glm::cross(mesh.vertices[out] - pv, mesh.vertices[in] - pv);
+            const CornerSides sides = cornerSides(mesh, *i);
+            const std::uint32_t out = sides.out, in = sides.in;
+            sum += cornerArea(mesh, sides, pv);
             if (out > v) outs[nOut++] = out;
             if (in > v) ins[nIn++] = in;
         }
