@@ -65,8 +65,8 @@ constexpr double kParam = 1e-12;
 constexpr double kTie = 1e-9;
 
 /// Below this kappa = |n.f| / |f| the stretch of a torus's grazing curve near the d-n plane is
-/// solved in the spine chart (see torusCrossings in sweep.cpp): the normal-angle chart resolves it
-/// only to about kAngleRoot / kappa there.
+/// solved in the spine chart (see torusCrossings in src/sweep/torus.cpp): the normal-angle chart
+/// resolves it only to about kAngleRoot / kappa there.
 constexpr double kSpineChart = 1e-3;
 
 /// Root brackets on the torus's grazing curve stop at this width of the half-angle tangent
@@ -174,9 +174,9 @@ public:
     std::size_t intersectParts(const LocalLine& q, Interval* out) const;
     std::size_t intersectParts(const LocalLine& q, LineHit* out, const EndFilter& wanted) const;
 
-    /// The precomputed sweep of one convex part (defined in sweep.cpp).
+    /// The precomputed sweep of one convex part (defined in src/sweep/parts.h).
     struct Part;
-    /// One convex part as the normals of its static tool need it (defined in sweep.cpp).
+    /// One convex part as the normals of its static tool need it (defined in src/sweep/parts.h).
     struct StaticProfile;
 
 private:
