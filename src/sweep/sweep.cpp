@@ -52,10 +52,6 @@ bool slopeJumps(const ProfilePiece& below, const ProfilePiece& above, double zj)
     return std::abs(sBelow - sAbove) > tol::kSlope * std::max(1.0, std::abs(sBelow));
 }
 
-}  // namespace
-
-namespace {
-
 /// The tool-frame line coefficients of the foundation's static queries (tool.h): height
 /// z0 + zv t, squared axis distance A t^2 + 2 B t + C, with t the local line parameter.
 LocalLine localLine(const Vec3& o, const Vec3& w) {
