@@ -9,7 +9,8 @@
 //     +x, +y or +z), and the configuration of every cell whose lower corner it holds and that the
 //     surface crosses (a mixed cell), with its patches and triangles;
 //  2. crossings: each owned crossing's position goes to the mesh, its normal to a side array;
-//  3. patches: each patch's vertex from its crossings (quadric error function), and its fan;
+//  3. patches: each patch's vertex from its crossings (quadric error function, detail/patch_vertex.h),
+//     and its fan;
 //  4. flips: the fan chords of feature patches that cross a crease are turned to run along it;
 // then the mesh is checked, and the vertices of folded triangles are pulled back towards their
 // loops (repairAndCheckMesh), and with adaptivity flat regions are merged (mergeFlatRegions).
@@ -24,7 +25,6 @@
 #include <memory>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -38,6 +38,7 @@
 #include "dexelmill/surface/simplify.h"
 #include "memory/pages.h"
 #include "surface/detail/cell_table.h"
+#include "surface/detail/patch_vertex.h"
 
 namespace dexelmill {
 
@@ -56,11 +57,6 @@ static_assert(openvdb::FloatTree::LeafNodeType::DIM == kDim, "FloatTree leaves m
 /// a crossing by at most this much.
 constexpr double kCornerGap = 1e-3;
 
-/// A crossing this far (in h) on the material side of another's tangent plane reveals a convex
-/// crease. Well above the packed normals' error (1.3e-4 rad over at most sqrt(3) h: 2.3e-4 h), so
-/// a smooth concave patch never shows one.
-constexpr double kConvexGap = 1e-3;
-
 /// A triangle whose normal makes a cosine below this with the sum of its vertices' normals is
 /// treated as folded and repaired: rounding vertices to float, as mesh files do (relative 6e-8,
 /// so 1e-4 mm at 1.7 m), turns a triangle a lattice cell across (1 mm at that size) by 1e-4 rad
@@ -71,13 +67,6 @@ constexpr double kFoldMargin = 1e-3;
 /// a crease each lies in one face, whose normal is half the crease's turn from the pair's: this
 /// admits creases up to 174 degrees sharp.
 constexpr double kFlipFacing = 0.05;
-
-/// A smooth patch's vertex leaves the loop's mass point along the mean normal only as far as keeps
-/// each fan triangle within this angle of that normal. Its crossing normals lie within half the
-/// feature angle of the mean, so a fan triangle steeper than this cannot follow the surface; where
-/// the loop is a sliver (two crossings a micrometre apart near one lattice point), the least-squares
-/// offset would otherwise stand two fan triangles on edge over it. Kept as its squared tangent.
-constexpr double kMaxFanTiltTan2 = 3.0;  // tan^2(60 degrees)
 
 /// How far from a loop's mass point towards a crossing, or the midpoint of two, the last resort of
 /// fold repair tries its candidate positions.
@@ -229,10 +218,7 @@ const std::array<EdgeStart, detail::kCellEdges>& edgeStarts() {
 class Contourer {
 public:
     Contourer(const openvdb::FloatGrid& grid, const TriDexelStock& stock, const ContourOptions& options)
-        : grid_(grid), stock_(stock), lattice_(stock.lattice()), h_(lattice_.h) {
-        const double half = 0.5 * options.featureAngle;
-        singular_ = std::tan(half) * std::tan(half);
-        cosHalfFeature_ = std::cos(half);
+        : grid_(grid), stock_(stock), lattice_(stock.lattice()), h_(lattice_.h), vertexRule_(h_, options.featureAngle) {
         if (!(options.adaptivity >= 0.0 && options.adaptivity <= 1.0))
             throw Error("contouring: adaptivity must lie in [0, 1], got " + std::to_string(options.adaptivity));
         adaptivity_ = options.adaptivity;
@@ -623,7 +609,8 @@ private:
             for (int k = 0; k < patches.count; ++k) {
                 const int len = loopOf(near, p, patches, k, loop);
                 int qefRank = 0;
-                mesh_.vertices[at] = placeVertex(p, loop, len, qefRank);
+                const detail::PatchVertexRule::Loop crossings{mesh_.vertices.data(), crossingNormal_.data(), loop, len};
+                mesh_.vertices[at] = vertexRule_.place(crossings, lattice_.point(p.x(), p.y(), p.z()), qefRank);
                 feature_[at - patchVertexBase_] = std::uint8_t(qefRank >= 2);
                 edges += qefRank == 2;
                 corners += qefRank == 3;
@@ -634,144 +621,6 @@ private:
         });
         edgeCount += edges;
         cornerCount += corners;
-    }
-
-    Vec3 massPoint(const std::uint32_t* loop, int len) const {
-        Vec3 mass(0.0);
-        for (int i = 0; i < len; ++i) mass += mesh_.vertices[loop[i]];
-        return mass / double(len);
-    }
-
-    /// The vertex of a patch: where the tangent planes at its crossings meet best, within its
-    /// cell. Minimises sum_i (n_i . (x - p_i))^2 about the loop's mass point m by a truncated
-    /// SVD (the symmetric eigen-decomposition of A^T A): directions whose eigenvalue is below
-    /// tan^2(featureAngle / 2) times the largest are left at m. That keeps a smooth patch's
-    /// vertex on its mean plane, and puts an edge's on the crease line (rank 2) and a corner's on
-    /// the corner (rank 3). Crossings with no known normal, or marked sharp, add no plane.
-    ///
-    /// Every machined surface is the stock's boundary minus convex swept volumes, so its smooth
-    /// pieces are concave (seen from the material) and its convex creases are where two cuts
-    /// meet. A concave crease is one cutter's own edge (a pocket's floor-wall corner, a V-groove's
-    /// bottom): its tangent planes are that cutter's faces, and their meeting point is exact. A
-    /// convex crease may be cut lower by a third cut between the crossings that no lattice edge
-    /// saw (a cusp next to a wall's top, say): there the vertex is kept within the box of its
-    /// crossings rather than extrapolated past them. A crease is convex when a crossing lies on
-    /// the material side of another's tangent plane (by more than kConvexGap h).
-    Vec3 placeVertex(const Coord& p, const std::uint32_t* loop, int len, int& rank) const {
-        const Vec3 mass = massPoint(loop, len);
-        Vec3 normal[detail::kCellEdges], offset[detail::kCellEdges];
-        Vec3 mean(0.0);
-        int planes = 0;
-        for (int i = 0; i < len; ++i) {
-            const PackedNormal pn = crossingNormal_[loop[i]];
-            if (!pn.present() || pn.sharp()) continue;
-            normal[planes] = pn.unpack();
-            offset[planes] = mesh_.vertices[loop[i]] - mass;
-            mean += normal[planes++];
-        }
-        rank = 0;
-        Vec3 v = mass;
-        // A smooth patch: every normal within featureAngle / 2 of the mean. Then the second
-        // eigenvalue of A^T A is at most tan^2(featureAngle / 2) times the first (on the plane
-        // across the mean normal, sum (n_i . u)^2 <= k sin^2, while sum (n_i . mean)^2 >= k cos^2),
-        // so the truncated SVD keeps rank 1; the least-squares point is taken along the mean normal
-        // rather than the first eigenvector, without the eigen-decomposition.
-        const double meanLength = glm::length(mean);
-        bool smooth = planes > 0 && meanLength > 0.0;
-        if (smooth) {
-            mean /= meanLength;
-            for (int i = 0; i < planes && smooth; ++i) smooth = glm::dot(normal[i], mean) >= cosHalfFeature_;
-        }
-        if (smooth) {
-            double num = 0.0, den = 0.0;
-            for (int i = 0; i < planes; ++i) {
-                const double c = glm::dot(normal[i], mean);
-                num += c * glm::dot(normal[i], offset[i]);
-                den += c * c;
-            }
-            rank = 1;
-            v = mass + mean * fanOffset(loop, len, mass, mean, num / den);
-        } else if (planes > 0) {
-            Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-            Eigen::Vector3d atb = Eigen::Vector3d::Zero();
-            for (int i = 0; i < planes; ++i) {
-                const Eigen::Vector3d n(normal[i].x, normal[i].y, normal[i].z);
-                ata += n * n.transpose();
-                atb += n * glm::dot(normal[i], offset[i]);
-            }
-            Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-            eig.computeDirect(ata);
-            const Eigen::Vector3d w = eig.eigenvalues();
-            const double wmax = w.maxCoeff();
-            Eigen::Vector3d sol = Eigen::Vector3d::Zero();
-            for (int k = 0; k < 3; ++k) {
-                if (!(w[k] > singular_ * wmax)) continue;
-                ++rank;
-                const Eigen::Vector3d vk = eig.eigenvectors().col(k);
-                sol += vk * (vk.dot(atb) / w[k]);
-            }
-            v = mass + Vec3(sol[0], sol[1], sol[2]);
-        }
-        Vec3 lo = lattice_.point(p.x(), p.y(), p.z());
-        Vec3 hi = lo + h_;
-        if (rank >= 2 && convexCrease(loop, len)) {
-            // The box of the crossings (they lie on the cell's edges, so inside the cell).
-            lo = hi = mesh_.vertices[loop[0]];
-            for (int i = 1; i < len; ++i) {
-                lo = glm::min(lo, mesh_.vertices[loop[i]]);
-                hi = glm::max(hi, mesh_.vertices[loop[i]]);
-            }
-        }
-        return glm::clamp(v, lo, hi);
-    }
-
-    /// The offset s, nearest `wanted`, of the vertex mass + s n at which every fan triangle that is
-    /// within 60 degrees of n at s = 0 stays so. The fan triangle over crossings p, q has area
-    /// vector A0 - s (n x e), with A0 = (p - m) x (q - m) and e = q - p; its component along n is
-    /// A0 . n whatever s is, so the bound |A0_perp - s (n x e)|^2 <= kMaxFanTiltTan2 (A0 . n)^2 is
-    /// a quadratic in s whose solutions form an interval about 0. The result lies in all of them.
-    double fanOffset(const std::uint32_t* loop, int len, const Vec3& mass, const Vec3& n, double wanted) const {
-        // Per fan triangle that bounds s: |perp - s w|^2 <= kMaxFanTiltTan2 along^2, that is
-        // a s^2 - 2 b s + c <= 0.
-        double qa[detail::kCellEdges], qb[detail::kCellEdges], qc[detail::kCellEdges];
-        int bounds = 0;
-        bool holds = true;  // every bound holds at `wanted`, as it does for most patches
-        for (int i = 0; i < len; ++i) {
-            const Vec3 p = mesh_.vertices[loop[i]] - mass;
-            const Vec3 q = mesh_.vertices[loop[i + 1 == len ? 0 : i + 1]] - mass;
-            const Vec3 a0 = glm::cross(p, q);
-            const double along = glm::dot(a0, n);
-            const Vec3 perp = a0 - along * n;
-            const Vec3 w = glm::cross(n, q - p);
-            const double a = glm::dot(w, w), b = glm::dot(perp, w);
-            const double c = glm::dot(perp, perp) - kMaxFanTiltTan2 * along * along;
-            if (!(along > 0.0) || !(c <= 0.0) || !(a > 0.0)) continue;  // steep already, or s moves nothing
-            qa[bounds] = a, qb[bounds] = b, qc[bounds] = c;
-            ++bounds;
-            holds = holds && (a * wanted - 2.0 * b) * wanted + c <= 0.0;
-        }
-        if (holds) return wanted;
-        double lo = -std::numeric_limits<double>::infinity(), hi = std::numeric_limits<double>::infinity();
-        for (int k = 0; k < bounds; ++k) {
-            const double root = std::sqrt(qb[k] * qb[k] - qa[k] * qc[k]);  // real: c <= 0
-            lo = std::max(lo, (qb[k] - root) / qa[k]);
-            hi = std::min(hi, (qb[k] + root) / qa[k]);
-        }
-        return std::clamp(wanted, lo, hi);
-    }
-
-    /// Whether a patch's crossings span a convex crease: one lies on the material side of
-    /// another's tangent plane (the normals point out of the material).
-    bool convexCrease(const std::uint32_t* loop, int len) const {
-        const double gap = kConvexGap * h_;
-        for (int i = 0; i < len; ++i) {
-            const PackedNormal pn = crossingNormal_[loop[i]];
-            if (!pn.present() || pn.sharp()) continue;
-            const Vec3 n = pn.unpack();
-            for (int j = 0; j < len; ++j)
-                if (j != i && glm::dot(n, mesh_.vertices[loop[j]] - mesh_.vertices[loop[i]]) < -gap) return true;
-        }
-        return false;
     }
 
     // ------------------------------------------------------------------ pass 4: triangles
@@ -974,8 +823,7 @@ private:
     const TriDexelStock& stock_;
     const Lattice& lattice_;
     double h_;
-    double singular_ = 0.0;
-    double cosHalfFeature_ = 1.0;
+    detail::PatchVertexRule vertexRule_;
     double adaptivity_ = 0.0;
     std::vector<Block, NoZeroAllocator<Block>> blocks_;
     std::vector<std::uint64_t, NoZeroAllocator<std::uint64_t>> keys_;

@@ -1,0 +1,46 @@
+/// @file patch_vertex.h
+/// @brief The dexel mesher's vertex inside a cell: where the tangent planes of a patch's
+/// crossings meet best (the quadric error function of dual contouring, solved by a truncated
+/// SVD), kept within its cell and, on a smooth patch, where no fan triangle stands on edge. Pass 3
+/// of contour.cpp. No OpenVDB here.
+#pragma once
+
+#include <cstdint>
+
+#include "dexelmill/geometry/packed_normal.h"
+#include "dexelmill/geometry/types.h"
+
+namespace dexelmill::detail {
+
+/// @brief Places patch vertices (see place) for one lattice spacing and feature angle.
+class PatchVertexRule {
+public:
+    /// @param h the lattice spacing (mm)
+    /// @param featureAngle ContourOptions::featureAngle: normals of one patch closer than this
+    /// (radians) count as one smooth surface
+    PatchVertexRule(double h, double featureAngle);
+
+    /// @brief A patch's loop of crossings: `len` indices into the crossings' positions and packed
+    /// normals (a normal that is absent or marked sharp adds no tangent plane).
+    struct Loop {
+        const Vec3* points;
+        const PackedNormal* normals;
+        const std::uint32_t* index;
+        int len;
+    };
+
+    /// @brief The mean of the loop's crossings.
+    static Vec3 massPoint(const Loop& loop);
+
+    /// @brief The patch's vertex in the cell whose lowest corner is `cellLo`; `rank` is the rank
+    /// the truncated SVD kept: 0 (no plane: the mass point), 1 (a smooth patch), 2 (a crease,
+    /// the vertex on it) or 3 (a corner).
+    Vec3 place(const Loop& loop, const Vec3& cellLo, int& rank) const;
+
+private:
+    double h_;
+    double singular_;        ///< tan^2(featureAngle / 2): the eigenvalue ratio the SVD keeps
+    double cosHalfFeature_;  ///< cos(featureAngle / 2): the smooth patch's test
+};
+
+}  // namespace dexelmill::detail
