@@ -21,7 +21,8 @@ public:
     PatchVertexRule(double h, double featureAngle);
 
     /// @brief A patch's loop of crossings: `len` indices into the crossings' positions and packed
-    /// normals (a normal that is absent or marked sharp adds no tangent plane).
+    /// normals (a normal that is absent or marked sharp adds no tangent plane). A cell's loop has
+    /// 3 to kCellEdges (12) crossings.
     struct Loop {
         const Vec3* points;
         const PackedNormal* normals;
