@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <random>
 #include <vector>
 
@@ -56,10 +57,6 @@ double det3(const Vec3& a, const Vec3& b, const Vec3& c) {
 Vec3 cramer3(const Vec3& c0, const Vec3& c1, const Vec3& c2, const Vec3& r) {
     const double d = det3(c0, c1, c2);
     return Vec3(det3(r, c1, c2) / d, det3(c0, r, c2) / d, det3(c0, c1, r) / d);
-}
-
-Vec3 clampBox(const Vec3& v, const Vec3& lo, const Vec3& hi) {
-    return Vec3(std::clamp(v.x, lo.x, hi.x), std::clamp(v.y, lo.y, hi.y), std::clamp(v.z, lo.z, hi.z));
 }
 
 /// A rotation from three uniform numbers (Shoemake's uniform unit quaternion), as its columns.
@@ -121,7 +118,7 @@ TEST_CASE("patch vertex: a concave corner is where its three planes meet, within
             rhs += u * glm::dot(u, patch.points[j]);
         }
         const Vec3 meet = cramer3(col[0], col[1], col[2], rhs);
-        const Vec3 want = clampBox(meet, cellLo, cellLo + h);
+        const Vec3 want = glm::clamp(meet, cellLo, cellLo + h);
         INFO("trial " << trial);
         CHECK(rank == 3);
         CHECK(glm::length(v - want) <= 1e-9 * h);
@@ -130,41 +127,58 @@ TEST_CASE("patch vertex: a concave corner is where its three planes meet, within
     }
 }
 
+namespace {
+
+/// Two faces whose normals n1, n2 lie beta (random in [0.8, 2.3]) apart about the line through
+/// `apex` along d, in a random frame. Concave: the air lies on the outer side of both (a V-groove's
+/// bottom when beta is small, an obtuse floor-wall corner when it is large). Convex: the material is
+/// the wedge where n1 . (x - apex) <= 0 and n2 . (x - apex) <= 0 (a ridge). Crossing k lies on face
+/// faces[k], `reach` h from the line across its face and up to 0.3 h along it. `line` is the point
+/// of the packed planes' line nearest the crossings' mean, by a 2x2 solve.
+struct Wedge {
+    Patch patch;
+    Vec3 line;
+    double beta;
+};
+
+Wedge makeWedge(std::mt19937& rng, bool concave, std::uniform_real_distribution<double>& reach,
+                std::uniform_real_distribution<double>& where, std::initializer_list<int> faces, double h) {
+    std::uniform_real_distribution<double> side(-0.3, 0.3), turn(0.8, 2.3);
+    Vec3 ex, ey, d;
+    randomFrame(rng, ex, ey, d);
+    Wedge w;
+    w.beta = turn(rng);
+    const Vec3 n[2] = {ex, std::cos(w.beta) * ex + std::sin(w.beta) * ey};
+    // Along each face, away from the line: into the other face's air side (concave) or material
+    // side (convex).
+    Vec3 t[2] = {glm::cross(d, n[0]), glm::cross(d, n[1])};
+    for (int f = 0; f < 2; ++f)
+        if ((glm::dot(n[1 - f], t[f]) < 0.0) == concave) t[f] = -t[f];
+    const Vec3 apex = h * Vec3(where(rng), where(rng), where(rng));
+    std::vector<Vec3> on[2];
+    for (int f : faces) {
+        on[f].push_back(apex + h * (reach(rng) * t[f] + side(rng) * d));
+        w.patch.add(on[f].back(), PackedNormal::pack(n[f]));
+    }
+    const Vec3 u1 = PackedNormal::pack(n[0]).unpack(), u2 = PackedNormal::pack(n[1]).unpack();
+    w.line = nearestOnLine(w.patch.mass(), u1, meanOffset(u1, on[0]), u2, meanOffset(u2, on[1]));
+    return w;
+}
+
+}  // namespace
+
 TEST_CASE("patch vertex: a concave crease puts the vertex on it, nearest the crossings' mean",
           "[surface][contour]") {
     std::mt19937 rng(7);
-    std::uniform_real_distribution<double> inward(0.05, 0.4), side(-0.3, 0.3), turn(0.8, 2.3), where(0.2, 0.8);
+    std::uniform_real_distribution<double> inward(0.05, 0.4), where(0.2, 0.8);
     const double h = 1.0;
     const PatchVertexRule rule(h, kFeatureAngle);
     for (int trial = 0; trial < 300; ++trial) {
-        Vec3 ex, ey, d;
-        randomFrame(rng, ex, ey, d);
-        // Two faces with normals beta apart about the crease direction d (a V-groove's bottom when
-        // beta is small, an obtuse floor-wall corner when it is large); the air lies on the
-        // outer side of both.
-        const double beta = turn(rng);
-        const Vec3 n1 = ex, n2 = std::cos(beta) * ex + std::sin(beta) * ey;
-        Vec3 t1 = glm::cross(d, n1), t2 = glm::cross(d, n2);
-        if (glm::dot(n2, t1) < 0.0) t1 = -t1;  // along face 1, into the air side of face 2
-        if (glm::dot(n1, t2) < 0.0) t2 = -t2;
-        const Vec3 cellLo(0.0);
-        const Vec3 onCrease = h * Vec3(where(rng), where(rng), where(rng));
-        Patch patch;
-        std::vector<Vec3> face1, face2;
-        for (int k = 0; k < 3; ++k) {
-            face1.push_back(onCrease + h * (inward(rng) * t1 + side(rng) * d));
-            patch.add(face1.back(), PackedNormal::pack(n1));
-        }
-        for (int k = 0; k < 2; ++k) {
-            face2.push_back(onCrease + h * (inward(rng) * t2 + side(rng) * d));
-            patch.add(face2.back(), PackedNormal::pack(n2));
-        }
+        const Wedge w = makeWedge(rng, true, inward, where, {0, 0, 0, 1, 1}, h);
         int rank = -1;
-        const Vec3 v = rule.place(patch.loop(), cellLo, rank);
-        const Vec3 u1 = PackedNormal::pack(n1).unpack(), u2 = PackedNormal::pack(n2).unpack();
-        const Vec3 line = nearestOnLine(patch.mass(), u1, meanOffset(u1, face1), u2, meanOffset(u2, face2));
-        const Vec3 want = clampBox(line, cellLo, cellLo + h);
-        INFO("trial " << trial << " beta " << beta);
+        const Vec3 v = rule.place(w.patch.loop(), Vec3(0.0), rank);
+        const Vec3 want = glm::clamp(w.line, Vec3(0.0), Vec3(h));
+        INFO("trial " << trial << " beta " << w.beta);
         CHECK(rank == 2);
         CHECK(glm::length(v - want) <= 1e-9 * h);
     }
@@ -172,37 +186,17 @@ TEST_CASE("patch vertex: a concave crease puts the vertex on it, nearest the cro
 
 TEST_CASE("patch vertex: a convex ridge stays within its crossings' box", "[surface][contour]") {
     std::mt19937 rng(11);
-    std::uniform_real_distribution<double> down(0.1, 0.4), side(-0.3, 0.3), turn(0.8, 2.3), where(0.3, 0.7);
+    std::uniform_real_distribution<double> down(0.1, 0.4), where(0.3, 0.7);
     const double h = 1.0;
     const PatchVertexRule rule(h, kFeatureAngle);
     int clamped = 0;
     for (int trial = 0; trial < 300; ++trial) {
-        Vec3 ex, ey, d;
-        randomFrame(rng, ex, ey, d);
-        // The material is the wedge where n1 . (x - r) <= 0 and n2 . (x - r) <= 0: its faces run
-        // from the ridge r into the material side of each other.
-        const double beta = turn(rng);
-        const Vec3 n1 = ex, n2 = std::cos(beta) * ex + std::sin(beta) * ey;
-        Vec3 t1 = glm::cross(d, n1), t2 = glm::cross(d, n2);
-        if (glm::dot(n2, t1) > 0.0) t1 = -t1;
-        if (glm::dot(n1, t2) > 0.0) t2 = -t2;
-        const Vec3 cellLo(0.0);
-        const Vec3 ridge = h * Vec3(where(rng), where(rng), where(rng));
-        Patch patch;
-        std::vector<Vec3> face1, face2;
-        for (int k = 0; k < 2; ++k) {
-            face1.push_back(ridge + h * (down(rng) * t1 + side(rng) * d));
-            patch.add(face1.back(), PackedNormal::pack(n1));
-            face2.push_back(ridge + h * (down(rng) * t2 + side(rng) * d));
-            patch.add(face2.back(), PackedNormal::pack(n2));
-        }
+        const Wedge w = makeWedge(rng, false, down, where, {0, 1, 0, 1}, h);
         int rank = -1;
-        const Vec3 v = rule.place(patch.loop(), cellLo, rank);
-        const Vec3 u1 = PackedNormal::pack(n1).unpack(), u2 = PackedNormal::pack(n2).unpack();
-        const Vec3 line = nearestOnLine(patch.mass(), u1, meanOffset(u1, face1), u2, meanOffset(u2, face2));
-        const Vec3 want = clampBox(line, patch.boxLo(), patch.boxHi());
-        clamped += glm::length(want - line) > 1e-6 * h;
-        INFO("trial " << trial << " beta " << beta);
+        const Vec3 v = rule.place(w.patch.loop(), Vec3(0.0), rank);
+        const Vec3 want = glm::clamp(w.line, w.patch.boxLo(), w.patch.boxHi());
+        clamped += glm::length(want - w.line) > 1e-6 * h;
+        INFO("trial " << trial << " beta " << w.beta);
         CHECK(rank == 2);
         CHECK(glm::length(v - want) <= 1e-9 * h);
     }
@@ -252,7 +246,7 @@ TEST_CASE("patch vertex: a smooth patch moves along its mean normal to the plane
             const double a = lo + (hi - lo) / 3.0, b = hi - (hi - lo) / 3.0;
             (cost(a) < cost(b) ? hi : lo) = cost(a) < cost(b) ? b : a;
         }
-        const Vec3 want = clampBox(m + 0.5 * (lo + hi) * mean, Vec3(0.0), Vec3(h));
+        const Vec3 want = glm::clamp(m + 0.5 * (lo + hi) * mean, Vec3(0.0), Vec3(h));
         INFO("trial " << trial);
         CHECK(rank == 1);
         CHECK(glm::length(v - want) <= 1e-9 * h);
