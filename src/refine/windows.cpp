@@ -21,9 +21,11 @@ namespace {
 constexpr std::size_t kChunk = std::size_t(1) << 22;
 /// Moves whose sweeps are built at once and shared by the buckets.
 constexpr std::size_t kBatch = 4096;
-/// The bucket grid's cells are this many windows long (kBucketReach x 2 reach); 3 and 5 measured
-/// no different on bear.
-constexpr double kBucketReach = 8.0;
+/// The bucket grid's cells are this many windows long (kBucketReach x 2 reach). Smaller cells give
+/// each window fewer moves to test and each move more cells to enter: bear's refinement (one
+/// round, callgrind) counted 24.9, 24.6, 24.7, 25.0 and 26.0 G instructions at 2, 3, 4, 5 and 8;
+/// scorpion's 21.0 at 3 and 21.1 at 8.
+constexpr double kBucketReach = 3.0;
 
 /// The material left on one window: up to kPieces disjoint intervals, offsets from the window's
 /// point along its axis, in increasing order. A float offset within reach (half a spacing) is
