@@ -130,15 +130,20 @@ struct Block {
     /// Cells (by lower corner) with surface in them; the mixed cells in the words before each.
     std::uint64_t mixed[8] = {};
     std::uint16_t mixedBefore[8] = {};
+    /// The mixed cells that are plain (Contourer::plainCell): a square of a face, two triangles
+    /// and no patch vertex.
+    std::uint64_t plain[8] = {};
     /// Per mixed cell in rank order: its corners in material (low byte) and its ambiguous faces
     /// whose inside corners are joined (high byte).
     std::vector<std::uint16_t> config;
-    /// Patches of the mixed cells before the n-th one, and in all (one more entry).
+    /// Patch vertices of the mixed cells before the n-th one, and in all (one more entry): one
+    /// per patch, none in a plain cell.
     std::vector<std::uint16_t> patchBefore;
     std::uint32_t crossings = 0, patches = 0, triangles = 0;
     std::uint32_t crossingBase = 0, patchBase = 0, triangleBase = 0;
 
     int rankOf(int off) const { return mixedBefore[off >> 6] + popcountBelow(mixed[off >> 6], off & 63); }
+    bool isPlain(int off) const { return (plain[off >> 6] >> (off & 63)) & 1; }
     const CellPatches& patchesOf(int rank) const {
         const std::uint16_t c = config[std::size_t(rank)];
         return detail::cellPatches(std::uint8_t(c & 0xff), std::uint8_t(c >> 8));
@@ -229,7 +234,7 @@ public:
         keepSurfaceBlocks();
         countPass();
         // Prefix sums: crossings first, then patch vertices, in block order.
-        std::uint64_t crossings = 0, patches = 0, triangles = 0, cells = 0;
+        std::uint64_t crossings = 0, patches = 0, triangles = 0, cells = 0, plainCells = 0;
         for (Block& b : blocks_) {
             b.crossingBase = std::uint32_t(crossings);
             crossings += b.crossings;
@@ -240,6 +245,7 @@ public:
             b.triangleBase = std::uint32_t(triangles);
             triangles += b.triangles;
             cells += b.config.size();
+            for (std::uint64_t w : b.plain) plainCells += std::uint64_t(popcount(w));
         }
         if (crossings + patches > std::numeric_limits<std::uint32_t>::max() ||
             triangles > std::numeric_limits<std::uint32_t>::max())
@@ -260,6 +266,7 @@ public:
         stats.cells = cells;
         stats.crossings = crossings;
         stats.patches = patches;
+        stats.plainCells = plainCells;
         stats.exactCrossings = exact;
         stats.edgeVertices = edges;
         stats.cornerVertices = corners;
@@ -468,6 +475,11 @@ private:
             const std::uint8_t joined = joinedFaces(acc, b.origin.offsetBy(x, y, z), inside);
             b.config.push_back(std::uint16_t(inside | (joined << 8)));
             b.patchBefore.push_back(std::uint16_t(patches));
+            if (plainCell(b.origin.offsetBy(x, y, z), inside)) {
+                b.plain[off >> 6] |= std::uint64_t(1) << (off & 63);
+                triangles += 2;
+                return;
+            }
             const CellPatches& p = detail::cellPatches(inside, joined);
             patches += p.count;
             for (int k = 0; k < p.count; ++k) triangles += p.size[k];
@@ -501,6 +513,39 @@ private:
             if (detail::insideJoinedAcrossFace(f[k[0]], f[k[1]], f[k[2]], f[k[3]])) joined |= std::uint8_t(1u << face);
         }
         return joined;
+    }
+
+    /// @brief Whether the cell at p is plain: the surface crosses it as one flat square across an
+    /// axis a (its four corners on one side of a in material, the other four not), at one height
+    /// along a, with one normal, +a or -a, at all four crossings, which are dexel ends. That is a
+    /// face of the stock box, or a floor or wall a flat face of a tool made, and two triangles
+    /// between the crossings are that square exactly; a patch vertex would have been placed on it
+    /// (its crossings' planes are one plane), with four triangles. On the hood at 2 mm three
+    /// quarters of the fan triangles lay on the stock box's faces.
+    bool plainCell(const Coord& p, std::uint8_t inside) const {
+        // Per axis, the corners (bit k: corner k = x + 2y + 4z) on its lower side.
+        static constexpr std::uint8_t kLower[3] = {0x55, 0x33, 0x0f};
+        int a = 0;
+        while (a < 3 && inside != kLower[a] && inside != std::uint8_t(~kLower[a])) ++a;
+        if (a == 3) return false;
+        const bool in0 = inside == kLower[a];
+        Vec3 outward(0.0);
+        outward[a] = in0 ? 1.0 : -1.0;
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        float first = 0.0f;
+        for (int k = 0; k < 4; ++k) {
+            Coord lower = p;
+            lower[b] += k & 1;
+            lower[c] += k >> 1;
+            float t = 0.0f;
+            PackedNormal n;
+            // Compared unpacked: an axis has more than one packing (the octahedral square's four
+            // corners are all -z).
+            if (!dexelEnd(lower, a, in0, t, n) || n.sharp() || n.unpack() != outward) return false;
+            if (k == 0) first = t;
+            else if (t != first) return false;
+        }
+        return true;
     }
 
     // ------------------------------------------------------------------ lookups
@@ -553,33 +598,11 @@ private:
     /// with the level set's vote, the field is interpolated linearly and the normal is unknown.
     Crossing findCrossing(const Coord& lower, int a, bool in0) const {
         const double t0 = (lower[a] + 0.5) * h_, t1 = t0 + h_;
-        const int b = (a + 1) % 3, c = (a + 2) % 3;
         Crossing x;
         x.p = lattice_.point(lower.x(), lower.y(), lower.z());
-        double t = 0.0;
-        const Axis axis = axisFromIndex(a);
-        if (stock_.has(axis) && lower[b] >= 0 && lower[c] >= 0 && lower[b] < lattice_.n[b] && lower[c] < lattice_.n[c]) {
-            const SegmentSpan segs = stock_.family(axis).segments(lower[b], lower[c]);
-            if (in0) {
-                // The segment holding t0 ends in (t0, t1].
-                const Segment* s = std::partition_point(segs.begin(), segs.end(),
-                                                        [t0](const Segment& g) { return double(g.hi) < t0; });
-                if (s != segs.end() && double(s->lo) <= t0 && double(s->hi) <= t1) {
-                    t = s->hi;
-                    x.n = s->nhi;
-                    x.exact = true;
-                }
-            } else {
-                // The segment holding t1 starts in [t0, t1].
-                const Segment* s = std::partition_point(segs.begin(), segs.end(),
-                                                        [t1](const Segment& g) { return double(g.hi) <= t1; });
-                if (s != segs.end() && double(s->lo) <= t1 && double(s->lo) >= t0) {
-                    t = s->lo;
-                    x.n = s->nlo;
-                    x.exact = true;
-                }
-            }
-        }
+        float end = 0.0f;
+        x.exact = dexelEnd(lower, a, in0, end, x.n);
+        double t = end;
         if (!x.exact) {
             const auto acc = grid_.getConstAccessor();
             Coord upper = lower;
@@ -591,6 +614,34 @@ private:
         t = std::clamp(t, t0 + gap, t1 - gap);
         x.p[a] = lattice_.origin[a] + t;
         return x;
+    }
+
+    /// The dexel end on the edge from lattice point `lower` along axis a (in0 as findCrossing's):
+    /// its offset t along the dexel and its normal n; false when there is none (a family not
+    /// kept, or a dexel that disagrees with the level set's vote).
+    bool dexelEnd(const Coord& lower, int a, bool in0, float& t, PackedNormal& n) const {
+        const double t0 = (lower[a] + 0.5) * h_, t1 = t0 + h_;
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        const Axis axis = axisFromIndex(a);
+        if (!stock_.has(axis) || lower[b] < 0 || lower[c] < 0 || lower[b] >= lattice_.n[b] || lower[c] >= lattice_.n[c])
+            return false;
+        const SegmentSpan segs = stock_.family(axis).segments(lower[b], lower[c]);
+        if (in0) {
+            // The segment holding t0 ends in (t0, t1].
+            const Segment* s = std::partition_point(segs.begin(), segs.end(),
+                                                    [t0](const Segment& g) { return double(g.hi) < t0; });
+            if (s == segs.end() || !(double(s->lo) <= t0 && double(s->hi) <= t1)) return false;
+            t = s->hi;
+            n = s->nhi;
+            return true;
+        }
+        // The segment holding t1 starts in [t0, t1].
+        const Segment* s = std::partition_point(segs.begin(), segs.end(),
+                                                [t1](const Segment& g) { return double(g.hi) <= t1; });
+        if (s == segs.end() || !(double(s->lo) <= t1 && double(s->lo) >= t0)) return false;
+        t = s->lo;
+        n = s->nlo;
+        return true;
     }
 
     // ------------------------------------------------------------------ pass 3: patch vertices
@@ -606,6 +657,13 @@ private:
         forEachSetBit(b.mixed, kCells / 64, [&](int off) {
             const CellPatches& patches = b.patchesOf(rank++);
             const Coord p = b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7);
+            if (b.isPlain(off)) {
+                // One square (plainCell): its loop is convex and flat, so any diagonal serves.
+                loopOf(near, p, patches, 0, loop);
+                mesh_.triangles[tri++] = {loop[0], loop[1], loop[2]};
+                mesh_.triangles[tri++] = {loop[0], loop[2], loop[3]};
+                return;
+            }
             for (int k = 0; k < patches.count; ++k) {
                 const int len = loopOf(near, p, patches, k, loop);
                 int qefRank = 0;
@@ -646,12 +704,15 @@ private:
 
     bool isFeature(std::uint32_t patchVertex) const { return feature_[patchVertex - patchVertexBase_] != 0; }
 
-    /// The cell whose lower corner is p: its patches and the mesh index of its first patch.
-    void cellAt(const Around& near, const Coord& p, const CellPatches*& patches, std::uint32_t& firstPatch) const {
+    /// The cell whose lower corner is p: its patches and the mesh index of its first patch;
+    /// false for a plain cell, which has no patch vertex.
+    bool cellAt(const Around& near, const Coord& p, const CellPatches*& patches, std::uint32_t& firstPatch) const {
         const Block& b = near.at(p);
-        const int rank = b.rankOf(localOffset(p.x(), p.y(), p.z()));
+        const int off = localOffset(p.x(), p.y(), p.z());
+        const int rank = b.rankOf(off);
         patches = &b.patchesOf(rank);
         firstPatch = b.patchBase + b.patchBefore[std::size_t(rank)];
+        return !b.isPlain(off);
     }
 
     /// Flips the fan chords of the block's feature patches that run across a crease (flipChord).
@@ -667,6 +728,10 @@ private:
         int rank = 0;
         forEachSetBit(b.mixed, kCells / 64, [&](int off) {
             const CellPatches& patches = b.patchesOf(rank++);
+            if (b.isPlain(off)) {
+                tri += 2;
+                return;
+            }
             int start = 0;
             for (int k = 0; k < patches.count; ++k, ++patch) {
                 const int len = patches.size[k];
@@ -688,7 +753,8 @@ private:
                     np[face >> 1] += (face & 1) ? 1 : -1;
                     const CellPatches* other = nullptr;
                     std::uint32_t otherFirst = 0;
-                    cellAt(*near, np, other, otherFirst);
+                    // A plain neighbour has no vertex to join, and no crease.
+                    if (!cellAt(*near, np, other, otherFirst)) continue;
                     const int ok = other->patchOf[tables.across[edges[i]][face]];
                     const std::uint32_t partner = otherFirst + std::uint32_t(ok);
                     if (isFeature(partner) && flipChord(edges, len, i, *other, ok, face, patch, partner, loop)) {

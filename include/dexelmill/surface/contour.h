@@ -26,7 +26,8 @@ struct ContourOptions {
 /// @brief What contourStock did.
 struct ContourStats {
     std::size_t cells = 0;           ///< lattice cells the surface crosses
-    std::size_t patches = 0;         ///< surface patches (one vertex each)
+    std::size_t patches = 0;         ///< surface patches with a vertex (one each)
+    std::size_t plainCells = 0;      ///< cells crossed by one flat square: two triangles, no vertex
     std::size_t crossings = 0;       ///< edge crossings (one vertex each)
     std::size_t exactCrossings = 0;  ///< of which dexel endpoints (the rest: interpolated)
     std::size_t edgeVertices = 0;    ///< patch vertices placed on a sharp edge
