@@ -105,7 +105,8 @@ std::string reportJson(const SimulateReport& r) {
         j["mesh"]["dexel_mesher"] = {{"exact_crossings", r.exactCrossings},
                                      {"interpolated_crossings", r.interpolatedCrossings},
                                      {"edge_vertices", r.edgeVertices},
-                                     {"corner_vertices", r.cornerVertices}};
+                                     {"corner_vertices", r.cornerVertices},
+                                     {"plain_cells", r.plainCells}};
     if (r.refineRounds > 0)
         j["mesh"]["refine"] = {{"rounds", r.refineRounds},
                                {"points_tested", r.refineQueries},

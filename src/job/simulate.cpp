@@ -513,6 +513,7 @@ Simulation runStages(const SimulateOptions& o) {
         report.interpolatedCrossings = stats.crossings - stats.exactCrossings;
         report.edgeVertices = stats.edgeVertices;
         report.cornerVertices = stats.cornerVertices;
+        report.plainCells = stats.plainCells;
     } else {
         MeshOptions meshOptions;
         meshOptions.adaptivity = o.adaptivity;

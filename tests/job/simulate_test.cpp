@@ -77,6 +77,10 @@ TEST_CASE("a slot removes its analytic volume and the report says so", "[job]") 
         CHECK(j.contains(key));
     CHECK(j["removed_volume_mm3"].get<double>() == Approx(kSlotVolume).epsilon(0.01));
     CHECK(j["mesh"]["closed"].get<bool>());
+    // The block's bottom, which no move reaches, is (160 - 1) x (120 - 1) plain cells (two
+    // triangles each, no patch vertex); its sides and the slot's floor add more.
+    CHECK(j["mesh"]["dexel_mesher"]["plain_cells"].get<std::size_t>() == r.plainCells);
+    CHECK(r.plainCells > std::size_t(159 * 119));
     CHECK(j["lattice"]["nx"].get<int>() == 160);
     CHECK(j["family_volumes_mm3"].contains("y"));
     for (const char* key : {"parse", "cut", "rebuild", "mesh", "write", "total"}) CHECK(j["timing_s"].contains(key));

@@ -199,8 +199,9 @@ struct SimulateReport {
     std::size_t meshDegenerateTriangles = 0;  ///< MeshCheck::degenerateTriangles
     double meshVolumeMm3 = 0.0;
     /// The dexel mesher's edge crossings: dexel endpoints, and interpolated ones (no dexel along
-    /// the edge: a family not kept); its vertices on sharp edges and corners.
-    std::size_t exactCrossings = 0, interpolatedCrossings = 0, edgeVertices = 0, cornerVertices = 0;
+    /// the edge: a family not kept); its vertices on sharp edges and corners; its cells crossed by
+    /// one flat square (two triangles, no vertex).
+    std::size_t exactCrossings = 0, interpolatedCrossings = 0, edgeVertices = 0, cornerVertices = 0, plainCells = 0;
     /// Refinement (RefineStats): rounds made, vertices and midpoints tested, vertices moved onto
     /// the part, edges split, splits refused, midpoints without a crossing.
     int refineRounds = 0;
