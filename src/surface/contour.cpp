@@ -19,6 +19,7 @@
 #include "dexelmill/surface/contour.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -227,6 +228,15 @@ public:
         if (!(options.adaptivity >= 0.0 && options.adaptivity <= 1.0))
             throw Error("contouring: adaptivity must lie in [0, 1], got " + std::to_string(options.adaptivity));
         adaptivity_ = options.adaptivity;
+        for (int a = 0; a < 3; ++a)
+            for (int side = 0; side < 2; ++side)
+                for (int k = 0; k < 4; ++k) {
+                    Vec3 n(0.0);
+                    n[(a + 1) % 3] = (k & 1) ? -0.0 : 0.0;
+                    n[(a + 2) % 3] = (k & 2) ? -0.0 : 0.0;
+                    n[a] = side ? -1.0 : 1.0;
+                    axisNormal_[std::size_t(2 * a + side)][std::size_t(k)] = PackedNormal::pack(n).bits;
+                }
     }
 
     Mesh run(ContourStats& stats) {
@@ -529,8 +539,8 @@ private:
         while (a < 3 && inside != kLower[a] && inside != std::uint8_t(~kLower[a])) ++a;
         if (a == 3) return false;
         const bool in0 = inside == kLower[a];
-        Vec3 outward(0.0);
-        outward[a] = in0 ? 1.0 : -1.0;
+        // The outward normal is +a with material on the lower side.
+        const std::array<std::uint32_t, 4>& outward = axisNormal_[std::size_t(2 * a + (in0 ? 0 : 1))];
         const int b = (a + 1) % 3, c = (a + 2) % 3;
         float first = 0.0f;
         for (int k = 0; k < 4; ++k) {
@@ -539,9 +549,9 @@ private:
             lower[c] += k >> 1;
             float t = 0.0f;
             PackedNormal n;
-            // Compared unpacked: an axis has more than one packing (the octahedral square's four
-            // corners are all -z).
-            if (!dexelEnd(lower, a, in0, t, n) || n.sharp() || n.unpack() != outward) return false;
+            // A normal marked sharp has another packing, and is not taken.
+            if (!dexelEnd(lower, a, in0, t, n) || std::find(outward.begin(), outward.end(), n.bits) == outward.end())
+                return false;
             if (k == 0) first = t;
             else if (t != first) return false;
         }
@@ -891,6 +901,10 @@ private:
     double h_;
     detail::PatchVertexRule vertexRule_;
     double adaptivity_ = 0.0;
+    /// Per axis a and side (2 a for +a, 2 a + 1 for -a), the packings of that unit normal, not
+    /// marked sharp: the other components +0 or -0, which the octahedral square folds to its four
+    /// corners for -z (and to one code otherwise).
+    std::array<std::array<std::uint32_t, 4>, 6> axisNormal_{};
     std::vector<Block, NoZeroAllocator<Block>> blocks_;
     std::vector<std::uint64_t, NoZeroAllocator<std::uint64_t>> keys_;
     Mesh mesh_;
