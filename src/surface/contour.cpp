@@ -7,10 +7,11 @@
 //  1. count: per block, from the signs of the grid's values (read bit-parallel, a row of 9 bits
 //     along z at a time), the crossings on the edges its points own (the edge from a point along
 //     +x, +y or +z), and the configuration of every cell whose lower corner it holds and that the
-//     surface crosses (a mixed cell), with its patches and triangles;
+//     surface crosses (a mixed cell), with its patches and triangles, and whether it is plain (one
+//     flat square across an axis, read from the dexels: two triangles, no patch vertex);
 //  2. crossings: each owned crossing's position goes to the mesh, its normal to a side array;
 //  3. patches: each patch's vertex from its crossings (quadric error function, detail/patch_vertex.h),
-//     and its fan;
+//     and its fan; a plain cell's square;
 //  4. flips: the fan chords of feature patches that cross a crease are turned to run along it;
 // then the mesh is checked, and the vertices of folded triangles are pulled back towards their
 // loops (repairAndCheckMesh), and with adaptivity flat regions are merged (mergeFlatRegions).

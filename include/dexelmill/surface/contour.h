@@ -47,8 +47,10 @@ struct ContourStats {
 /// neighbouring cells agree). Each patch gets one vertex inside its cell, where the tangent
 /// planes at its crossings meet best (a quadric error function solved by a truncated SVD, as in
 /// dual contouring, Ju et al. 2002), and is triangulated as a fan from that vertex to its
-/// crossings (as in extended marching cubes, Kobbelt et al. 2001). The mesh is closed and
-/// consistently oriented by construction; its vertices on cell edges are the exact crossings.
+/// crossings (as in extended marching cubes, Kobbelt et al. 2001). A cell crossed by one flat
+/// square across a lattice axis (the block's faces, a flat tool's floors and walls) takes the
+/// square's two triangles instead, and no vertex. The mesh is closed and consistently oriented by
+/// construction; its vertices on cell edges are the exact crossings.
 /// @throw Error if the level set holds no grid or was not rebuilt from this stock's lattice.
 Mesh contourStock(const LevelSet& levelSet, const TriDexelStock& stock, const ContourOptions& options = {},
                   ContourStats* stats = nullptr);
