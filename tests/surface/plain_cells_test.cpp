@@ -39,6 +39,13 @@ Vec3 outwardNormal(const CarvedPart& part, const Vec3& x, int a) {
     return n;
 }
 
+/// Lattice points per axis of a box at spacing h: ceil(size / h).
+std::array<int, 3> pointsPerAxis(const Box& box, double h) {
+    std::array<int, 3> n{};
+    for (int a = 0; a < 3; ++a) n[std::size_t(a)] = int(std::ceil((box.hi[a] - box.lo[a]) / h));
+    return n;
+}
+
 /// The lattice point (i, j, k): spacing h from the box's lower corner, half a spacing in.
 Vec3 latticePoint(const Box& box, double h, int i, int j, int k) {
     return box.lo + (Vec3(double(i), double(j), double(k)) + 0.5) * h;
@@ -48,8 +55,7 @@ Vec3 latticePoint(const Box& box, double h, int i, int j, int k) {
 /// exact part's surface crosses as one square across an axis: corners split by that axis alone,
 /// four crossings at one height, each with the part's normal along the axis.
 std::size_t expectedPlainCells(const CarvedPart& part, double h) {
-    std::array<int, 3> n{};
-    for (int a = 0; a < 3; ++a) n[std::size_t(a)] = int(std::ceil((part.box.hi[a] - part.box.lo[a]) / h));
+    const std::array<int, 3> n = pointsPerAxis(part.box, h);
     std::size_t plain = 0;
     for (int i = -1; i < n[0]; ++i)
         for (int j = -1; j < n[1]; ++j)
@@ -219,10 +225,9 @@ TEST_CASE("contour: plain cells leave the block's volume and faces as they were"
     CHECK(r.stats.plainCells == expectedPlainCells(part, h));
     // The cells across each face, less the rows along its edges: (n_b - 1)(n_c - 1) per face
     // from n lattice points per axis, which the oracle counted one by one.
-    std::array<std::size_t, 3> n{};
-    for (int a = 0; a < 3; ++a) n[std::size_t(a)] = std::size_t(std::ceil((box.hi[a] - box.lo[a]) / h));
+    const std::array<int, 3> n = pointsPerAxis(box, h);
     std::size_t faces = 0;
-    for (int a = 0; a < 3; ++a) faces += 2 * (n[std::size_t((a + 1) % 3)] - 1) * (n[std::size_t((a + 2) % 3)] - 1);
+    for (int a = 0; a < 3; ++a) faces += std::size_t(2 * (n[std::size_t((a + 1) % 3)] - 1) * (n[std::size_t((a + 2) % 3)] - 1));
     CHECK(r.stats.plainCells == faces);
     CHECK(r.check.signedVolume == Approx(box.volume()).epsilon(1e-7));
     CHECK(r.stats.patches + r.stats.plainCells == r.stats.cells);
@@ -245,9 +250,8 @@ TEST_CASE("contour: a floor at one height on the lattice's edges but tilted ther
     const std::size_t expected = expectedPlainCells(part, h);
     CHECK(r.stats.plainCells == expected);
     // The bottom's cells are among them, and no triangle at the floor's height has no patch vertex.
-    std::array<std::size_t, 3> n{};
-    for (int a = 0; a < 3; ++a) n[std::size_t(a)] = std::size_t(std::ceil((box.hi[a] - box.lo[a]) / h));
-    CHECK(expected >= (n[0] - 1) * (n[1] - 1));
+    const std::array<int, 3> n = pointsPerAxis(box, h);
+    CHECK(expected >= std::size_t((n[0] - 1) * (n[1] - 1)));
     std::size_t atFloor = 0;
     for (const Mesh::Triangle& tri : r.mesh.triangles) {
         bool plain = true, floor = true;
