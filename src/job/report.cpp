@@ -118,6 +118,7 @@ std::string reportJson(const SimulateReport& r) {
                      {"mesh", r.timingS.mesh},   {"refine", r.timingS.refine}, {"write", r.timingS.write},
                      {"total", r.timingS.total}};
     j["peak_memory_mb"] = r.peakMemoryMb;
+    j["heap_huge_pages"] = r.heapOnHugePages;
     j["threads_started"] = r.threadsStarted;
     j["stock_memory_mb"] = double(r.stockMemoryBytes) / (1024.0 * 1024.0);
     return j.dump(2) + "\n";

@@ -581,6 +581,7 @@ Simulation runStages(const SimulateOptions& o) {
     report.meshVolumeMm3 = check.signedVolume;
     report.timingS.total = seconds(tStart);
     report.peakMemoryMb = peakMemoryMb();
+    report.heapOnHugePages = heapOnHugePages();
     report.threadsStarted = threadsSince(threadsBefore);
     return sim;
 }
@@ -623,6 +624,7 @@ SimulateReport simulateInArena(const SimulateOptions& o) {
     report.timingS.write = seconds(t);
     report.timingS.total = seconds(tStart);
     report.peakMemoryMb = peakMemoryMb();
+    report.heapOnHugePages = heapOnHugePages();
     report.threadsStarted = threadsSince(threadsBefore);
     if (!o.reportPath.empty()) {
         const std::string text = reportJson(report);

@@ -29,17 +29,24 @@ namespace dexelmill::detail {
 /// Below this the faults are too few to matter.
 constexpr std::size_t kPopulateBytes = std::size_t(4) << 20;
 
+/// The kernel's transparent huge page mode, the bracketed word of its setting: "always",
+/// "madvise" or "never"; empty where the setting does not exist.
+inline const std::string& hugePageMode() {
+    static const std::string mode = [] {
+        std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
+        std::string line;
+        std::getline(in, line);
+        const std::size_t open = line.find('['), close = line.find(']');
+        return open != std::string::npos && close != std::string::npos && close > open
+                   ? line.substr(open + 1, close - open - 1)
+                   : std::string();
+    }();
+    return mode;
+}
+
 /// Whether memory advised with MADV_HUGEPAGE gets transparent huge pages: the kernel's mode is
 /// "always" or "madvise" (not "never", and the setting exists).
-inline bool hugePagesOnAdvice() {
-    static const bool on = [] {
-        std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
-        std::string mode;
-        std::getline(in, mode);
-        return mode.find("[always]") != std::string::npos || mode.find("[madvise]") != std::string::npos;
-    }();
-    return on;
-}
+inline bool hugePagesOnAdvice() { return hugePageMode() == "always" || hugePageMode() == "madvise"; }
 
 /// @brief Reserves room for n elements and, for a large buffer, makes its pages cheap to fault
 /// in: advised for huge pages where the kernel gives them, else faulted in by the kernel at once,

@@ -29,10 +29,11 @@ std::string slurp(const fs::path& p) {
 class Cli {
 public:
     explicit Cli(const std::string& name) : dir_(dexelmill::testing::scratchFolder("dexelmill_cli_", name)) {}
-    /// Runs `dexelmill ARGS` (shell words) in the folder.
-    Run operator()(const std::string& args) const {
-        const std::string cmd =
-            "cd '" + dir_.string() + "' && '" + DEXELMILL_CLI_PATH + "' " + args + " > out.txt 2> err.txt";
+    /// Runs `dexelmill ARGS` (shell words) in the folder, with the environment's variables `env`
+    /// ("NAME=value ...") added.
+    Run operator()(const std::string& args, const std::string& env = "") const {
+        const std::string cmd = "cd '" + dir_.string() + "' && " + env + " '" + DEXELMILL_CLI_PATH + "' " + args +
+                                " > out.txt 2> err.txt";
         const int status = std::system(cmd.c_str());
         Run r;
         r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -202,6 +203,48 @@ TEST_CASE("every stage honours --threads N: the job starts at most N - 1 workers
         const int started = std::atoi(json.c_str() + at + 19);
         CHECK(started <= threads - 1);
     }
+}
+
+/// The kernel's transparent huge page mode, as its setting shows it ("[madvise]" -> "madvise").
+std::string hugePageMode() {
+    const std::string line = slurp("/sys/kernel/mm/transparent_hugepage/enabled");
+    const std::size_t open = line.find('['), close = line.find(']');
+    return open == std::string::npos || close == std::string::npos ? "" : line.substr(open + 1, close - open - 1);
+}
+
+/// Whether this build's malloc is glibc's, reading glibc.malloc.hugetlb (2.35 and later).
+bool glibcMallocWithHugeHeapTunable() {
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+    return false;
+#elif defined(__GLIBC__)
+    return __GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 35);
+#else
+    return false;
+#endif
+}
+
+TEST_CASE("malloc's heap asks for huge pages where the kernel gives them on advice, unless the user says not",
+          "[cli][memory]") {
+    const Cli cli("hugeheap");
+    cli.file("slot.ngc", "G21 G90\nT1 M6\nG0 X5 Y15 Z15\nG1 Z7 F100\nG1 X35\nG0 Z15\nM30\n");
+    auto heapOnHugePages = [&](const std::string& env) {
+        const Run r = cli("simulate slot.ngc --stock box:0,0,0,40,30,10 --tool 1=flat:d=6 --resolution 0.5 -q "
+                          "--report r.json", env);
+        REQUIRE(r.code == 0);
+        const std::string json = slurp(cli.dir() / "r.json");
+        const bool on = json.find("\"heap_huge_pages\": true") != std::string::npos;
+        CHECK(on != (json.find("\"heap_huge_pages\": false") != std::string::npos));
+        return on;
+    };
+    const bool glibc = glibcMallocWithHugeHeapTunable();
+    // The tool relaunches itself with the tunable only where advice alone gives huge pages.
+    CHECK(heapOnHugePages("env -u GLIBC_TUNABLES") == (glibc && hugePageMode() == "madvise"));
+    CHECK(heapOnHugePages("GLIBC_TUNABLES=glibc.malloc.check=0") == (glibc && hugePageMode() == "madvise"));
+    // A user's own setting is kept, either way.
+    CHECK_FALSE(heapOnHugePages("GLIBC_TUNABLES=glibc.malloc.hugetlb=0"));
+    CHECK(heapOnHugePages("GLIBC_TUNABLES=glibc.malloc.hugetlb=1") == glibc);
+    // Under valgrind (seen by its preloaded library) the tool does not start afresh.
+    CHECK_FALSE(heapOnHugePages("env -u GLIBC_TUNABLES LD_PRELOAD=/nonexistent/vgpreload_core-amd64-linux.so"));
 }
 
 TEST_CASE("a successful run writes every output and a one-line summary in mm", "[cli]") {

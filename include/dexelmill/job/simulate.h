@@ -211,6 +211,8 @@ struct SimulateReport {
         double parse = 0, design = 0, cut = 0, rebuild = 0, mesh = 0, refine = 0, write = 0, total = 0;
     } timingS;
     double peakMemoryMb = 0.0;
+    /// Whether malloc's heap asks for transparent huge pages (heapOnHugePages).
+    bool heapOnHugePages = false;
     /// Threads the process started while the job ran: TBB's workers, which start only when a
     /// stage's arena asks for them. In a fresh process with `threads` = N, at most N - 1; 0 when
     /// an earlier job in the same process already started them.
