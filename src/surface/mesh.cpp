@@ -128,8 +128,10 @@ public:
         sortSmall(outs, nOut);
         sortSmall(ins, nIn);
         // The common case, a closed oriented star: the same neighbours each way, each once.
-        if (nOut == nIn && std::equal(outs, outs + nOut, ins) &&
-            std::adjacent_find(outs, outs + nOut) == outs + nOut) {
+        // (Compared in a loop: std::equal calls memcmp for these few words.)
+        bool closed = nOut == nIn;
+        for (std::size_t k = 0; closed && k < nOut; ++k) closed = outs[k] == ins[k] && (k == 0 || outs[k] != outs[k - 1]);
+        if (closed) {
             c.edges += nOut;
             return unitNormal(sum);
         }
@@ -226,6 +228,7 @@ struct TriangleCounts {
 /// The fold test of one triangle, shared by the pass over the triangles and the repair.
 struct Facing {
     bool degenerate = true;  ///< a repeated index, or (numerically) no area
+    Vec3 areaVector{0.0};    ///< (b - a) x (d - a): twice the area, along the normal
     double twiceArea = 0.0;
     double facing = 0.0;     ///< the area vector's dot product with `sum`
     Vec3 sum{0.0};           ///< the sum of the vertices' unit normals
@@ -237,14 +240,16 @@ struct Facing {
 inline Facing facingOf(const Mesh::Triangle& tri, const Vec3& a, const Vec3& b, const Vec3& d,
                        const Normals& normal) {
     Facing f;
+    const Vec3 ab = b - a, ad = d - a;
+    f.areaVector = glm::cross(ab, ad);
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) return f;
-    const Vec3 areaVector = glm::cross(b - a, d - a);
-    f.twiceArea = glm::length(areaVector);
-    const double longest2 = std::max({glm::dot(b - a, b - a), glm::dot(d - b, d - b), glm::dot(a - d, a - d)});
+    f.twiceArea = glm::length(f.areaVector);
+    const Vec3 bd = d - b;
+    const double longest2 = std::max({glm::dot(ab, ab), glm::dot(bd, bd), glm::dot(ad, ad)});
     if (!(f.twiceArea > tol::kDegenerateTriangle * longest2)) return f;
     f.degenerate = false;
     f.sum = Vec3(normal[tri[0]]) + Vec3(normal[tri[1]]) + Vec3(normal[tri[2]]);
-    f.facing = glm::dot(areaVector, f.sum);
+    f.facing = glm::dot(f.areaVector, f.sum);
     return f;
 }
 
@@ -255,8 +260,11 @@ inline void addTriangle(const Mesh& mesh, const Normals& normal, const Vec3& cen
     const Vec3& a = mesh.vertices[tri[0]];
     const Vec3& b = mesh.vertices[tri[1]];
     const Vec3& d = mesh.vertices[tri[2]];
-    c.volume6 += glm::dot(a - centre, glm::cross(b - centre, d - centre));
     const Facing f = facingOf(tri, a, b, d, normal);
+    // Six times the signed volume of the tetrahedron (centre, a, b, d): (a - centre) . ((b - a) x
+    // (d - a)), the same in exact arithmetic as the triple product about the centre, since the
+    // terms the shift adds are orthogonal to a - centre.
+    c.volume6 += glm::dot(a - centre, f.areaVector);
     if (f.degenerate) {
         ++c.degenerate;
         c.suspects.push_back(std::uint32_t(t));
