@@ -7,6 +7,9 @@
 #include <mutex>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/SignedFloodFill.h>
@@ -193,6 +196,47 @@ inline void depositRow(std::uint64_t* words, int a, int u, int v, std::uint32_t 
     } else {  // y = u, z = v, x = m
         for (int m = 0; m < kLeafDim; ++m) words[m] |= std::uint64_t((bits >> m) & 1u) << (8 * u + v);
     }
+}
+
+/// Per four bits: the float sign bit in each lane whose bit is set.
+struct SignLanes {
+    std::uint32_t lane[16][4];
+    constexpr SignLanes() : lane() {
+        for (int b = 0; b < 16; ++b)
+            for (int m = 0; m < 4; ++m) lane[b][m] = (b >> m) & 1 ? 0x80000000u : 0u;
+    }
+};
+constexpr SignLanes kSignLanes;
+
+/// The values of a leaf's row of eight points from their sums q of inverse squared axis
+/// distances: 1 / sqrt(q) within the band (q above `limit`), `background` beyond it, negated
+/// where bit m of `signs` is set (the point is in material). Returns the bits of the points
+/// within the band. -(1 / sqrt(q)) is the same float as -1 / sqrt(q), so the values are those
+/// of a point-by-point loop, four at a time.
+inline std::uint32_t bandRow(const float* q, float limit, float background, std::uint32_t signs, float* out) {
+#if defined(__SSE2__)
+    const __m128 lim = _mm_set1_ps(limit), one = _mm_set1_ps(1.0f), far = _mm_set1_ps(background);
+    std::uint32_t on = 0;
+    for (int half = 0; half < 2; ++half) {
+        const __m128 v = _mm_loadu_ps(q + 4 * half);
+        const __m128 in = _mm_cmpgt_ps(v, lim);
+        const __m128 magnitude = _mm_or_ps(_mm_and_ps(in, _mm_div_ps(one, _mm_sqrt_ps(v))), _mm_andnot_ps(in, far));
+        const __m128 sign =
+            _mm_castsi128_ps(_mm_loadu_si128(reinterpret_cast<const __m128i*>(kSignLanes.lane[(signs >> (4 * half)) & 0xfu])));
+        _mm_storeu_ps(out + 4 * half, _mm_xor_ps(magnitude, sign));
+        on |= std::uint32_t(_mm_movemask_ps(in)) << (4 * half);
+    }
+    return on;
+#else
+    std::uint32_t on = 0;
+    for (int m = 0; m < 8; ++m) {
+        const bool in = q[m] > limit;
+        const float magnitude = in ? 1.0f / std::sqrt(q[m]) : background;
+        out[m] = (signs >> m) & 1u ? -magnitude : magnitude;
+        on |= std::uint32_t(in) << m;
+    }
+    return on;
+#endif
 }
 
 /// The rebuild of one stock; see rebuildLevelSet.
@@ -450,22 +494,26 @@ private:
 
         auto* leaf = new LeafT(openvdb::Coord(o[0], o[1], o[2]), background, false);
         float* values = leaf->buffer().data();
-        bool any = false;
         const float w2 = float(1.0 / (width_ * width_));
-        for (int off = 0; off < kSize; ++off) {
-            const float s = (inside[off >> 6] >> (off & 63)) & 1u ? -1.0f : 1.0f;
-            if (invSq[off] > w2) {
-                values[off] = s / std::sqrt(invSq[off]);
-                leaf->setActiveState(openvdb::Index(off), true);
-                any = true;
-            } else {
-                values[off] = s * background;
+        // Within the band a point gets its distance estimate, signed, and is active; beyond it
+        // +-background. Row by row along z (offsets x * 64 + y * 8 + z).
+        LeafT::NodeMaskType active;
+        bool any = false;
+        for (int x = 0; x < kLeafDim; ++x) {
+            std::uint64_t on = 0;
+            for (int y = 0; y < kLeafDim; ++y) {
+                const int off = x * kStride[0] + y * kStride[1];
+                const auto signs = std::uint32_t(inside[x] >> (kLeafDim * y)) & 0xffu;
+                on |= std::uint64_t(bandRow(invSq + off, w2, background, signs, values + off)) << (kLeafDim * y);
             }
+            active.template getWord<std::uint64_t>(openvdb::Index(x)) = on;
+            any = any || on != 0;
         }
         if (!any) {
             delete leaf;
             return nullptr;
         }
+        leaf->setValueMask(active);
         return leaf;
     }
 
