@@ -1,7 +1,5 @@
 // dexelmill: the command-line tool. It parses options, calls the library and prints; nothing
-// else, but first it may start itself again with malloc's heap on huge pages
-// (relaunchWithHugePageHeap). Exit codes: 0 success, 1 an input or processing error, 2 a usage
-// error.
+// else. Exit codes: 0 success, 1 an input or processing error, 2 a usage error.
 #include <cstdio>
 #include <iostream>
 #include <new>
@@ -27,7 +25,6 @@ const char* kDescription =
 }  // namespace
 
 int main(int argc, char** argv) {
-    dexelmill::relaunchWithHugePageHeap(argv);
     CLI::App app{kDescription, "dexelmill"};
     app.set_version_flag("--version", std::string("dexelmill ") + DEXELMILL_VERSION);
     app.require_subcommand(1);

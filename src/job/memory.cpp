@@ -2,17 +2,12 @@
 
 #include <malloc.h>
 #include <sys/resource.h>
-#include <unistd.h>
-#if defined(__GLIBC__)
-#include <gnu/libc-version.h>
-#endif
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <fstream>
 #include <limits>
 #include <string>
@@ -21,16 +16,7 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/path/toolpath.h"
-#include "memory/pages.h"
-
-// Sanitizers bring their own malloc, which glibc's tunables do not reach.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define DEXELMILL_OWN_MALLOC 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) || __has_feature(memory_sanitizer)
-#define DEXELMILL_OWN_MALLOC 1
-#endif
-#endif
+#include "memory/heap_tunable.h"
 
 namespace dexelmill {
 
@@ -82,32 +68,6 @@ int cgroupCpus() {
     return int(std::max(1.0, std::ceil(quota / period)));
 }
 
-/// glibc's tunable that has malloc advise its heap for transparent huge pages.
-constexpr const char* kHugeHeapTunable = "glibc.malloc.hugetlb";
-
-/// The value GLIBC_TUNABLES gives the tunable `name` ("name=value" entries joined by ':'), or
-/// null when it gives none.
-const char* tunableValue(const char* tunables, const char* name) {
-    const std::size_t n = std::strlen(name);
-    for (const char* at = tunables; at && *at;) {
-        if (std::strncmp(at, name, n) == 0 && at[n] == '=') return at + n + 1;
-        at = std::strchr(at, ':');
-        if (at) ++at;
-    }
-    return nullptr;
-}
-
-/// Whether the glibc running this process reads glibc.malloc.hugetlb (2.35 and later).
-bool glibcHasHugeHeapTunable() {
-#if defined(__GLIBC__)
-    int major = 0, minor = 0;
-    return std::sscanf(gnu_get_libc_version(), "%d.%d", &major, &minor) == 2 &&
-           (major > 2 || (major == 2 && minor >= 35));
-#else
-    return false;
-#endif
-}
-
 }  // namespace
 
 double peakMemoryMb() { return procNumber("/proc/self/status", "VmHWM:") / 1024.0; }
@@ -146,33 +106,7 @@ bool resetPeakMemory() {
 }
 
 bool heapOnHugePages() {
-#if defined(DEXELMILL_OWN_MALLOC)
-    return false;
-#else
-    const char* value = tunableValue(std::getenv("GLIBC_TUNABLES"), kHugeHeapTunable);
-    return glibcHasHugeHeapTunable() && value && (value[0] == '1' || value[0] == '2') &&
-           (value[1] == '\0' || value[1] == ':');
-#endif
-}
-
-void relaunchWithHugePageHeap(char** argv) {
-#if defined(__linux__) && !defined(DEXELMILL_OWN_MALLOC)
-    if (detail::hugePageMode() != "madvise" || !glibcHasHugeHeapTunable()) return;
-    const char* old = std::getenv("GLIBC_TUNABLES");
-    if (tunableValue(old, kHugeHeapTunable)) return;  // the user's setting, or this relaunch's
-    // valgrind preloads its own malloc, and would not follow the program into a new image.
-    const char* preload = std::getenv("LD_PRELOAD");
-    if (preload && std::strstr(preload, "vgpreload")) return;
-    const std::string before = old ? old : "";
-    const std::string tunables = (before.empty() ? "" : before + ":") + kHugeHeapTunable + "=1";
-    if (setenv("GLIBC_TUNABLES", tunables.c_str(), 1) != 0) return;
-    execv("/proc/self/exe", argv);
-    // Still here: the program runs on as it started.
-    if (old) setenv("GLIBC_TUNABLES", before.c_str(), 1);
-    else unsetenv("GLIBC_TUNABLES");
-#else
-    (void)argv;
-#endif
+    return detail::mallocReadsHugeHeapTunable() && detail::asksHugeHeap(std::getenv("GLIBC_TUNABLES"));
 }
 
 std::size_t residentBytes() { return std::size_t(procNumber("/proc/self/status", "VmRSS:") * 1024.0); }

@@ -32,9 +32,11 @@ public:
     /// Runs `dexelmill ARGS` (shell words) in the folder, with the environment's variables `env`
     /// ("NAME=value ...") added.
     Run operator()(const std::string& args, const std::string& env = "") const {
-        const std::string cmd = "cd '" + dir_.string() + "' && " + env + " '" + DEXELMILL_CLI_PATH + "' " + args +
-                                " > out.txt 2> err.txt";
-        const int status = std::system(cmd.c_str());
+        return runIn(env + " '" + DEXELMILL_CLI_PATH + "' " + args);
+    }
+    /// Runs a shell command line in the folder.
+    Run runIn(const std::string& line) const {
+        const int status = std::system(("cd '" + dir_.string() + "' && " + line + " > out.txt 2> err.txt").c_str());
         Run r;
         r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
         r.out = slurp(dir_ / "out.txt");
@@ -223,28 +225,39 @@ bool glibcMallocWithHugeHeapTunable() {
 #endif
 }
 
-TEST_CASE("malloc's heap asks for huge pages where the kernel gives them on advice, unless the user says not",
+TEST_CASE("the launcher starts the tool with malloc's heap on huge pages where the kernel gives them on advice",
           "[cli][memory]") {
     const Cli cli("hugeheap");
     cli.file("slot.ngc", "G21 G90\nT1 M6\nG0 X5 Y15 Z15\nG1 Z7 F100\nG1 X35\nG0 Z15\nM30\n");
-    auto heapOnHugePages = [&](const std::string& env) {
+    auto run = [&](const std::string& env, bool& onHugePages) {
         const Run r = cli("simulate slot.ngc --stock box:0,0,0,40,30,10 --tool 1=flat:d=6 --resolution 0.5 -q "
                           "--report r.json", env);
         REQUIRE(r.code == 0);
         const std::string json = slurp(cli.dir() / "r.json");
-        const bool on = json.find("\"heap_huge_pages\": true") != std::string::npos;
-        CHECK(on != (json.find("\"heap_huge_pages\": false") != std::string::npos));
-        return on;
+        onHugePages = json.find("\"heap_huge_pages\": true") != std::string::npos;
+        CHECK(onHugePages != (json.find("\"heap_huge_pages\": false") != std::string::npos));
+        return r;
     };
     const bool glibc = glibcMallocWithHugeHeapTunable();
-    // The tool relaunches itself with the tunable only where advice alone gives huge pages.
-    CHECK(heapOnHugePages("env -u GLIBC_TUNABLES") == (glibc && hugePageMode() == "madvise"));
-    CHECK(heapOnHugePages("GLIBC_TUNABLES=glibc.malloc.check=0") == (glibc && hugePageMode() == "madvise"));
+    bool on = false;
+    // The launcher adds the tunable only where advice alone gives huge pages, and keeps others.
+    run("env -u GLIBC_TUNABLES", on);
+    CHECK(on == (glibc && hugePageMode() == "madvise"));
+    run("GLIBC_TUNABLES=glibc.malloc.check=0", on);
+    CHECK(on == (glibc && hugePageMode() == "madvise"));
     // A user's own setting is kept, either way.
-    CHECK_FALSE(heapOnHugePages("GLIBC_TUNABLES=glibc.malloc.hugetlb=0"));
-    CHECK(heapOnHugePages("GLIBC_TUNABLES=glibc.malloc.hugetlb=1") == glibc);
-    // Under valgrind (seen by its preloaded library) the tool does not start afresh.
-    CHECK_FALSE(heapOnHugePages("env -u GLIBC_TUNABLES LD_PRELOAD=/nonexistent/vgpreload_core-amd64-linux.so"));
+    run("GLIBC_TUNABLES=glibc.malloc.hugetlb=0", on);
+    CHECK_FALSE(on);
+    run("GLIBC_TUNABLES=glibc.malloc.hugetlb=1", on);
+    CHECK(on == glibc);
+    // Under valgrind (seen by its preloaded library) it says how to follow into the tool.
+    const Run valgrind = run("LD_PRELOAD=/nonexistent/vgpreload_core-amd64-linux.so", on);
+    CHECK_THAT(valgrind.err, Contains("valgrind") && Contains("dexelmill-core"));
+    // Without the tool beside it, the launcher says which file it could not start.
+    fs::copy_file(DEXELMILL_CLI_PATH, cli.dir() / "dexelmill");
+    const Run alone = cli.runIn("./dexelmill --version");
+    CHECK(alone.code == 1);
+    CHECK_THAT(alone.err, Contains("cannot start") && Contains((cli.dir() / "dexelmill-core").string()));
 }
 
 TEST_CASE("a successful run writes every output and a one-line summary in mm", "[cli]") {

@@ -61,25 +61,8 @@ bool resetPeakMemory();
 
 /// @brief Whether glibc's malloc was told, in the environment this process started with, to ask the
 /// kernel for transparent huge pages for its heap (the tunable glibc.malloc.hugetlb set to 1 or 2
-/// in GLIBC_TUNABLES).
+/// in GLIBC_TUNABLES), as the tool's launcher does where that helps (src/launch).
 bool heapOnHugePages();
-
-/// @brief Executes this program again, with the same arguments, with glibc's malloc told to ask for
-/// transparent huge pages for its heap, where that helps; returns (having changed nothing) where
-/// it does not.
-///
-/// The level set's leaves (2 KiB each: 111,500 fresh 4 KiB pages, 0.44 GB, in the hood's rebuild at 1 mm) and the dexels' tiles are small
-/// allocations from malloc's heap, whose memory the kernel gives a 4 KiB page at a time, one fault
-/// per page; on virtual machines a fault is dear. glibc (2.35 and later) advises its heap for huge
-/// pages when its tunable glibc.malloc.hugetlb is 1, but reads tunables only from the environment
-/// at start. Measured on the hood at 1 mm on one thread (runs in turn, medians of three): 152,500
-/// page faults in all became 4,900, and the rebuild took 1.95 s instead of 2.53 s.
-///
-/// It relaunches only where the kernel gives huge pages on advice alone (mode "madvise"; with
-/// "always" the heap has them already), with glibc's own malloc (not under a sanitizer or
-/// valgrind, which bring theirs, and not where GLIBC_TUNABLES already names the tunable: a
-/// user's glibc.malloc.hugetlb=0 turns it off). `argv` is main's, ending in a null pointer.
-void relaunchWithHugePageHeap(char** argv);
 
 /// @brief Reads a size such as "4G", "512M", "1.5GiB" or "800000000" (bytes; K, M, G and T are
 /// powers of 1024). @throw Error for anything else.
