@@ -11,11 +11,6 @@ namespace {
 constexpr std::size_t kMaxSegments = std::numeric_limits<std::uint16_t>::max();
 }
 
-SegmentSpan DexelTile::segments(int local) const {
-    if (offset_.empty()) return {};
-    return {segs_.data() + offset_[local], count_[local]};
-}
-
 void DexelTile::grow(int local, std::size_t needed) {
     if (needed > kMaxSegments) throw Error("a dexel would hold more than 65535 segments");
     if (offset_.empty()) {

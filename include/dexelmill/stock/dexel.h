@@ -43,7 +43,11 @@ public:
     static constexpr int kDexels = kTile * kTile;
 
     /// @brief Segments of dexel `local` (0 .. kDexels-1, index b + kTile * c within the tile).
-    SegmentSpan segments(int local) const;
+    /// Inline: the rebuild and the mesher ask for millions of dexels.
+    SegmentSpan segments(int local) const {
+        if (offset_.empty()) return {};
+        return {segs_.data() + offset_[std::size_t(local)], count_[std::size_t(local)]};
+    }
     /// @brief Replaces the segments of a dexel. They must be sorted and disjoint.
     void setSegments(int local, const Segment* segs, std::size_t count);
     /// @brief Replaces the whole tile at once: `counts[i]` segments for dexel i (kDexels entries),
@@ -101,16 +105,19 @@ public:
     const DexelTile& tile(int tb, int tc) const {
         return tiles_[std::size_t(tb) + std::size_t(tilesB_) * tc];
     }
-    static int localIndex(int ib, int ic) { return (ib % kTile) + kTile * (ic % kTile); }
+    /// Dexel (ib, ic)'s index within its tile. Indexes are never negative (0 <= ib < nb, 0 <= ic
+    /// < nc), so unsigned arithmetic turns the division by kTile into a shift and a mask.
+    static int localIndex(int ib, int ic) { return int(unsigned(ib) % kTile + kTile * (unsigned(ic) % kTile)); }
+    /// The tile holding dexel (ib, ic).
+    const DexelTile& tileOf(int ib, int ic) const { return tile(int(unsigned(ib) / kTile), int(unsigned(ic) / kTile)); }
+    DexelTile& tileOf(int ib, int ic) { return tile(int(unsigned(ib) / kTile), int(unsigned(ic) / kTile)); }
 
-    SegmentSpan segments(int ib, int ic) const {
-        return tile(ib / kTile, ic / kTile).segments(localIndex(ib, ic));
-    }
+    SegmentSpan segments(int ib, int ic) const { return tileOf(ib, ic).segments(localIndex(ib, ic)); }
     void setSegments(int ib, int ic, const Segment* segs, std::size_t count) {
-        tile(ib / kTile, ic / kTile).setSegments(localIndex(ib, ic), segs, count);
+        tileOf(ib, ic).setSegments(localIndex(ib, ic), segs, count);
     }
     double subtract(int ib, int ic, float lo, float hi, PackedNormal atLo = {}, PackedNormal atHi = {}) {
-        return tile(ib / kTile, ic / kTile).subtract(localIndex(ib, ic), lo, hi, atLo, atHi);
+        return tileOf(ib, ic).subtract(localIndex(ib, ic), lo, hi, atLo, atHi);
     }
     /// @brief Sum of all segment lengths (mm).
     double materialLength() const;
