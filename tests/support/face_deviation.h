@@ -5,6 +5,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -36,7 +37,26 @@ struct FaceDeviation {
     Vec3 worst{0.0};
 };
 
-/// Samples `count` points uniformly over the triangles' area (fixed seed). Each is classified,
+/// The triangles in an order that depends only on the surface: by their corners (each triangle
+/// turned to start at its least corner), so that the same surface listed in another order (a
+/// mesher that walks its blocks differently) gets the same sample points.
+inline std::vector<std::size_t> surfaceOrder(const Mesh& mesh) {
+    using Corners = std::array<std::array<double, 3>, 3>;
+    std::vector<Corners> key(mesh.triangles.size());
+    for (std::size_t t = 0; t < key.size(); ++t) {
+        Corners c;
+        for (int k = 0; k < 3; ++k)
+            for (int a = 0; a < 3; ++a) c[std::size_t(k)][std::size_t(a)] = mesh.vertices[mesh.triangles[t][std::size_t(k)]][a];
+        key[t] = std::min({c, Corners{c[1], c[2], c[0]}, Corners{c[2], c[0], c[1]}});
+    }
+    std::vector<std::size_t> order(key.size());
+    for (std::size_t t = 0; t < order.size(); ++t) order[t] = t;
+    std::sort(order.begin(), order.end(), [&](std::size_t x, std::size_t y) { return key[x] < key[y]; });
+    return order;
+}
+
+/// Samples `count` points uniformly over the triangles' area (fixed seed, triangles in
+/// surfaceOrder). Each is classified,
 /// and the nearest change of membership is searched along its face normal and, so that a point
 /// by a sharp edge of the part finds the other face too, along the axes and the cube diagonals:
 /// steps of reach / 48 in both directions of each, the first change bisected to 1e-10 mm. The
@@ -45,9 +65,10 @@ struct FaceDeviation {
 /// samples.
 inline FaceDeviation measureFaces(const Mesh& mesh, const CarvedPart& part, double reach, std::size_t count = 20000) {
     if (mesh.triangles.empty()) return {};
+    const std::vector<std::size_t> order = surfaceOrder(mesh);
     std::vector<double> cumulative;
     double total = 0.0;
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    for (std::size_t t : order) {
         total += 0.5 * glm::length(mesh.areaVector(t));
         cumulative.push_back(total);
     }
@@ -58,7 +79,7 @@ inline FaceDeviation measureFaces(const Mesh& mesh, const CarvedPart& part, doub
     for (std::size_t s = 0; s < count; ++s) {
         const std::size_t t = std::size_t(std::lower_bound(cumulative.begin(), cumulative.end(), unit(rng) * total) -
                                           cumulative.begin());
-        const Mesh::Triangle& tri = mesh.triangles[std::min(t, mesh.triangles.size() - 1)];
+        const Mesh::Triangle& tri = mesh.triangles[order[std::min(t, order.size() - 1)]];
         double r1 = unit(rng), r2 = unit(rng);
         if (r1 + r2 > 1.0) r1 = 1.0 - r1, r2 = 1.0 - r2;
         const Vec3 &a = mesh.vertices[tri[0]], &b = mesh.vertices[tri[1]], &c = mesh.vertices[tri[2]];
