@@ -104,7 +104,7 @@ static void BM_SurfaceRebuildAndMesh512(benchmark::State& state) {
         const double before = currentMemoryMb() * kMiB;
         arena.execute([&] {
             const auto t0 = std::chrono::steady_clock::now();
-            LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "bench freeform"});
+            LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "bench freeform", std::nullopt});
             const auto t1 = std::chrono::steady_clock::now();
             Mesh mesh;
             MeshCheck check;

@@ -40,6 +40,7 @@
 #include "dexelmill/surface/simplify.h"
 #include "memory/pages.h"
 #include "surface/detail/cell_table.h"
+#include "surface/detail/grid_meta.h"
 #include "surface/detail/patch_vertex.h"
 
 namespace dexelmill {
@@ -226,6 +227,8 @@ class Contourer {
 public:
     Contourer(const openvdb::FloatGrid& grid, const TriDexelStock& stock, const ContourOptions& options)
         : grid_(grid), stock_(stock), lattice_(stock.lattice()), h_(lattice_.h), vertexRule_(h_, options.featureAngle) {
+        const std::array<int, 3> off = detail::latticeOffset(grid, lattice_);
+        offset_ = Coord(off[0], off[1], off[2]);
         if (!(options.adaptivity >= 0.0 && options.adaptivity <= 1.0))
             throw Error("contouring: adaptivity must lie in [0, 1], got " + std::to_string(options.adaptivity));
         adaptivity_ = options.adaptivity;
@@ -608,9 +611,10 @@ private:
     /// holding the upper point). With no dexel there (a family not kept) or one that disagrees
     /// with the level set's vote, the field is interpolated linearly and the normal is unknown.
     Crossing findCrossing(const Coord& lower, int a, bool in0) const {
-        const double t0 = (lower[a] + 0.5) * h_, t1 = t0 + h_;
+        const Coord l = lower - offset_;
+        const double t0 = (l[a] + 0.5) * h_, t1 = t0 + h_;
         Crossing x;
-        x.p = lattice_.point(lower.x(), lower.y(), lower.z());
+        x.p = lattice_.point(l.x(), l.y(), l.z());
         float end = 0.0f;
         x.exact = dexelEnd(lower, a, in0, end, x.n);
         double t = end;
@@ -631,12 +635,12 @@ private:
     /// its offset t along the dexel and its normal n; false when there is none (a family not
     /// kept, or a dexel that disagrees with the level set's vote).
     bool dexelEnd(const Coord& lower, int a, bool in0, float& t, PackedNormal& n) const {
-        const double t0 = (lower[a] + 0.5) * h_, t1 = t0 + h_;
+        const Coord l = lower - offset_;
+        const double t0 = (l[a] + 0.5) * h_, t1 = t0 + h_;
         const int b = (a + 1) % 3, c = (a + 2) % 3;
         const Axis axis = axisFromIndex(a);
-        if (!stock_.has(axis) || lower[b] < 0 || lower[c] < 0 || lower[b] >= lattice_.n[b] || lower[c] >= lattice_.n[c])
-            return false;
-        const SegmentSpan segs = stock_.family(axis).segments(lower[b], lower[c]);
+        if (!stock_.has(axis) || l[b] < 0 || l[c] < 0 || l[b] >= lattice_.n[b] || l[c] >= lattice_.n[c]) return false;
+        const SegmentSpan segs = stock_.family(axis).segments(l[b], l[c]);
         if (in0) {
             // The segment holding t0 ends in (t0, t1].
             const Segment* s = std::partition_point(segs.begin(), segs.end(),
@@ -679,7 +683,8 @@ private:
                 const int len = loopOf(near, p, patches, k, loop);
                 int qefRank = 0;
                 const detail::PatchVertexRule::Loop crossings{mesh_.vertices.data(), crossingNormal_.data(), loop, len};
-                mesh_.vertices[at] = vertexRule_.place(crossings, lattice_.point(p.x(), p.y(), p.z()), qefRank);
+                const Coord l = p - offset_;
+                mesh_.vertices[at] = vertexRule_.place(crossings, lattice_.point(l.x(), l.y(), l.z()), qefRank);
                 feature_[at - patchVertexBase_] = std::uint8_t(qefRank >= 2);
                 edges += qefRank == 2;
                 corners += qefRank == 3;
@@ -899,6 +904,7 @@ private:
     const openvdb::FloatGrid& grid_;
     const TriDexelStock& stock_;
     const Lattice& lattice_;
+    Coord offset_;  ///< the grid index of lattice point (0, 0, 0); the passes work in grid indexes
     double h_;
     detail::PatchVertexRule vertexRule_;
     double adaptivity_ = 0.0;

@@ -390,7 +390,7 @@ TEST_CASE("STL: welding many corners agrees with a brute-force weld", "[io]") {
 
 TEST_CASE("VDB: a level set written and read back is identical", "[io]") {
     TempDir dir;
-    const LevelSet ls = rebuildLevelSet(dentedBox(), {3, FamilySet::all(), "dented box"});
+    const LevelSet ls = rebuildLevelSet(dentedBox(), {3, FamilySet::all(), "dented box", std::nullopt});
     writeVdb(dir.file("part.vdb"), ls);
     const LevelSet back = readVdb(dir.file("part.vdb"));
     CHECK(back.source() == "dented box");
@@ -485,7 +485,7 @@ TEST_CASE("stock from a mesh: a faceted sphere", "[io][surface]") {
 TEST_CASE("stock from files: STL and VDB", "[io]") {
     TempDir dir;
     const TriDexelStock original = dentedBox();
-    const LevelSet ls = rebuildLevelSet(original, {3, FamilySet::all(), "dented"});
+    const LevelSet ls = rebuildLevelSet(original, {3, FamilySet::all(), "dented", std::nullopt});
     writeVdb(dir.file("part.vdb"), ls);
     writeStl(dir.file("part.stl"), meshLevelSet(ls));
     const double v = original.volume(Axis::Z);

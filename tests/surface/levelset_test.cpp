@@ -1,8 +1,11 @@
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
+#include <set>
 #include <utility>
 
 #include "dexelmill/error.h"
@@ -43,7 +46,7 @@ Accuracy measureVertices(const Mesh& mesh, const testing::PartSurfaces& part, do
 void checkPart(const std::vector<Cutter>& cuts) {
     TriDexelStock stock = TriDexelStock::fromBox(kStockBox, kH);
     for (const Cutter& c : cuts) testing::carve(stock, c);
-    const LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "test"});
+    const LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "test", std::nullopt});
     const Mesh mesh = meshLevelSet(ls);
     const MeshCheck check = checkMesh(mesh);
     INFO("vertices " << check.vertexCount << " triangles " << check.triangleCount);
@@ -66,13 +69,20 @@ void checkPart(const std::vector<Cutter>& cuts) {
     CHECK(acc.rmsError <= 0.02 * kH);
 }
 
+/// floor(i / 8): the 8^3 block of grid index i.
+int blockOf8(int i) { return i >= 0 ? i / 8 : -((7 - i) / 8); }
+
 /// The estimate of method.md section 7 worked out per voxel of the stock's lattice (and 4 points
 /// around it) with no block marks, binary searches or early outs: each family's dexel through the
 /// voxel scanned end to end. Returns the active voxels the oracle finds (the grid must hold the
-/// same number) and how many voxels it compared.
-std::pair<std::size_t, std::size_t> checkAgainstBruteForce(const TriDexelStock& stock) {
+/// same number) and how many voxels it compared. With an index offset given, the grid must also
+/// have a leaf exactly at each 8^3 block of grid indexes (lattice point + offset) that holds an
+/// active voxel.
+std::pair<std::size_t, std::size_t> checkAgainstBruteForce(const TriDexelStock& stock,
+                                                           std::optional<std::array<int, 3>> offset = std::nullopt) {
     const int halfWidth = 3;
-    const LevelSet ls = rebuildLevelSet(stock, {halfWidth, FamilySet::all(), "test"});
+    const LevelSet ls = rebuildLevelSet(stock, {halfWidth, FamilySet::all(), "test", offset});
+    std::set<std::array<int, 3>> activeBlocks;
     const double h = stock.lattice().h;
     const double width = halfWidth * h;
     // Crossings beyond this along an axis are left out (the rebuild's cut-off: twice the reach
@@ -108,11 +118,15 @@ std::pair<std::size_t, std::size_t> checkAgainstBruteForce(const TriDexelStock& 
                 if (std::abs(invSq - w2) <= kFloatSum * w2) continue;  // on the band's edge
                 const double expected = invSq > w2 ? s / std::sqrt(invSq) : s * width;
                 active += invSq > w2;
+                if (offset && invSq > w2)
+                    activeBlocks.insert({blockOf8(i + (*offset)[0]), blockOf8(j + (*offset)[1]), blockOf8(k + (*offset)[2])});
                 ++compared;
                 INFO("voxel (" << i << ", " << j << ", " << k << ")");
                 REQUIRE(std::abs(ls.voxelValue(i, j, k) - expected) <= kFloatSum * std::abs(expected));
             }
     CHECK(active == ls.activeVoxelCount());
+    // Points on the band's edge were skipped: none of them may be all that holds a leaf.
+    if (offset) CHECK(ls.leafCount() == activeBlocks.size());
     return {active, compared};
 }
 
@@ -120,14 +134,14 @@ std::pair<std::size_t, std::size_t> checkAgainstBruteForce(const TriDexelStock& 
 
 TEST_CASE("rebuild: grid convention, class, name and metadata", "[surface]") {
     const TriDexelStock stock = TriDexelStock::fromBox(kStockBox, kH);
-    const LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "box"});
+    const LevelSet ls = rebuildLevelSet(stock, {3, FamilySet::all(), "box", std::nullopt});
     CHECK(ls.voxelSize() == Approx(kH));
     CHECK(ls.halfWidth() == Approx(3.0));
     CHECK(ls.source() == "box");
     REQUIRE(ls.lattice().has_value());
     CHECK(ls.lattice()->n == stock.lattice().n);
-    // Voxel (i,j,k) is lattice point (i,j,k): point 0 lies h/2 inside the box face, point -1
-    // h/2 outside, and both are exact distances to the plane.
+    // voxelValue takes lattice indexes: point 0 lies h/2 inside the box face, point -1 h/2
+    // outside, and both are exact distances to the plane.
     CHECK(ls.voxelValue(0, 30, 30) == Approx(-0.5 * kH));
     CHECK(ls.voxelValue(-1, 30, 30) == Approx(0.5 * kH));
     CHECK(ls.voxelValue(2, 30, 30) == Approx(-2.5 * kH));
@@ -136,7 +150,7 @@ TEST_CASE("rebuild: grid convention, class, name and metadata", "[surface]") {
     // Near a box corner the three axis distances combine: h/2 from each face.
     CHECK(ls.voxelValue(0, 0, 0) == Approx(-0.5 * kH / std::sqrt(3.0)));
     CHECK(ls.valueAt(stock.lattice().point(10, 0, 30)) == Approx(-0.5 * kH));
-    CHECK_THROWS_AS(rebuildLevelSet(stock, {2, FamilySet::all(), ""}), Error);
+    CHECK_THROWS_AS(rebuildLevelSet(stock, {2, FamilySet::all(), "", std::nullopt}), Error);
 }
 
 TEST_CASE("rebuild: every voxel holds the axis-distance estimate, by brute force", "[surface]") {
@@ -146,6 +160,46 @@ TEST_CASE("rebuild: every voxel holds the axis-distance estimate, by brute force
     const auto [active, compared] = checkAgainstBruteForce(stock);
     CHECK(active > 10000);
     CHECK(compared > 300000);
+}
+
+TEST_CASE("rebuild: any index offset gives the same values, and leaves exactly where the band is", "[surface]") {
+    // A pocket's flat floor and walls across all three axes, a sphere and a torus: offsets 0 and
+    // 7 on every axis, and random ones (fixed seed).
+    TriDexelStock stock = TriDexelStock::fromBox(kStockBox, kH);
+    testing::carve(stock, testing::boxCutter({kC + Vec3(-9.3, -7.1, 4.2), kC + Vec3(8.8, 6.4, 20.0)}));
+    testing::carve(stock, testing::sphere(kC + Vec3(4.0, -3.0, 5.0), 4.0));
+    testing::carve(stock, testing::torus(kC + Vec3(0.0, 0.0, -6.0), Vec3(0.2, -0.1, 1.0), 9.0, 4.0));
+    std::mt19937 rng(21);
+    std::uniform_int_distribution<int> phase(0, 7);
+    for (const std::array<int, 3>& offset :
+         {std::array<int, 3>{0, 0, 0}, std::array<int, 3>{7, 7, 7}, std::array<int, 3>{phase(rng), phase(rng), phase(rng)}}) {
+        INFO("offset " << offset[0] << ", " << offset[1] << ", " << offset[2]);
+        const auto [active, compared] = checkAgainstBruteForce(stock, offset);
+        CHECK(active > 10000);
+        CHECK(compared > 300000);
+    }
+    CHECK_THROWS_AS(rebuildLevelSet(stock, {3, FamilySet::all(), "", std::array<int, 3>{0, 8, 0}}), Error);
+    CHECK_THROWS_AS(rebuildLevelSet(stock, {3, FamilySet::all(), "", std::array<int, 3>{-1, 0, 0}}), Error);
+}
+
+TEST_CASE("rebuild: the chosen offset puts each face of a box into one layer of leaves", "[surface]") {
+    // A 64^3 lattice: each face's band is six points deep, [-3, 2] and [61, 66]. Offset 0 splits
+    // both between two layers of leaves; 3 and 5 put each in one, visiting two layers of blocks
+    // (4 puts the search reach of the low face into three).
+    const TriDexelStock stock = TriDexelStock::fromBox(kStockBox, kH);
+    checkAgainstBruteForce(stock, std::array<int, 3>{3, 3, 3});
+    const std::size_t one = rebuildLevelSet(stock, {3, FamilySet::all(), "", std::array<int, 3>{3, 3, 3}}).leafCount();
+    const std::size_t two = rebuildLevelSet(stock, {3, FamilySet::all(), "", std::array<int, 3>{0, 0, 0}}).leafCount();
+    const LevelSet chosen = rebuildLevelSet(stock);
+    INFO("leaves: one layer " << one << ", two layers " << two << ", chosen " << chosen.leafCount());
+    CHECK(chosen.leafCount() == one);
+    // Measured 438 against 680: the faces halve, the edges and corners (a large share of a box
+    // of 8^3 leaves) less.
+    CHECK(double(one) < 0.7 * double(two));
+    // The values are the lattice's, whatever the offset (as in the grid convention's case).
+    CHECK(chosen.voxelValue(0, 30, 30) == Approx(-0.5 * kH));
+    CHECK(chosen.voxelValue(-1, 30, 30) == Approx(0.5 * kH));
+    CHECK(chosen.valueAt(stock.lattice().point(10, 0, 30)) == Approx(-0.5 * kH));
 }
 
 TEST_CASE("rebuild: crossings exactly on lattice points, by brute force", "[surface]") {

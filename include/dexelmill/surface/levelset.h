@@ -4,6 +4,7 @@
 /// openvdb::FloatGrid itself includes dexelmill/surface/levelset_vdb.h.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <memory>
 #include <optional>
@@ -52,7 +53,8 @@ public:
     std::optional<Lattice> lattice() const;
     /// @brief The level-set value at a world point, trilinearly interpolated (mm).
     double valueAt(const Vec3& world) const;
-    /// @brief The grid value at index (i, j, k), which is lattice point (i, j, k).
+    /// @brief The grid value at lattice point (i, j, k) (grid index (i, j, k) plus the rebuild's
+    /// index offset; for a grid without a lattice, grid index (i, j, k)).
     float voxelValue(int i, int j, int k) const;
 
     /// @brief The shared implementation (holds the openvdb grid); see levelset_vdb.h.
@@ -73,12 +75,21 @@ struct RebuildOptions {
     FamilySet families = FamilySet::all();
     /// Written to the grid's "source" metadata: what the stock came from.
     std::string source;
+    /// The grid index of lattice point (0, 0, 0) per axis, each in 0..7; chosen by the rebuild
+    /// when empty (see rebuildLevelSet). The values do not depend on it, only which 8^3 blocks
+    /// hold them.
+    std::optional<std::array<int, 3>> indexOffset;
 };
 
 /// @brief Rebuilds the stock as an OpenVDB narrow-band level set (method.md section 7).
 ///
-/// The transform is scale h plus translation origin + h/2, so voxel (i,j,k) is lattice point
-/// (i,j,k). A lattice point lies on one dexel per family; along each, the distance d_a to the
+/// The transform is scale h plus translation origin + (1/2 - o) h, so voxel (i,j,k) + o is lattice
+/// point (i,j,k). The offset o (0..7 per axis) shifts the 8^3 leaves against the lattice: a flat
+/// face across axis a, such as the stock box's, has a band six points deep along a, which two
+/// leaves hold at one phase and a single leaf at another. The rebuild counts, over a sample of
+/// the dexel ends along each axis, the blocks each end's band and its search reach would fill,
+/// and takes the offset with the fewest (the box of the hood at 1 mm: about half the leaves).
+/// A lattice point lies on one dexel per family; along each, the distance d_a to the
 /// nearest dexel endpoint (an exact surface crossing) is known. The value is
 ///   phi = s / sqrt(dx^-2 + dy^-2 + dz^-2),   s = -1 in material, +1 outside,
 /// exact for a locally planar surface. Points with |phi| < halfWidth h are active; all others

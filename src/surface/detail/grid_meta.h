@@ -2,6 +2,8 @@
 /// @brief Names and helpers for the metadata dexelmill writes on its level-set grids.
 #pragma once
 
+#include <array>
+#include <cmath>
 #include <optional>
 #include <string>
 
@@ -42,6 +44,23 @@ inline std::optional<Lattice> latticeFromMeta(const openvdb::GridBase& grid) {
     l.n = {size->value().x(), size->value().y(), size->value().z()};
     if (!(l.h > 0.0) || l.n[0] < 1 || l.n[1] < 1 || l.n[2] < 1) return std::nullopt;
     return l;
+}
+
+/// @brief The grid index of lattice point (0, 0, 0), per axis: the rebuild shifts the index space
+/// by a whole number of voxels (rebuildLevelSet), which the transform records. Zero where the
+/// transform's index origin is not a lattice point (a grid from elsewhere).
+inline std::array<int, 3> latticeOffset(const openvdb::GridBase& grid, const Lattice& lattice) {
+    const openvdb::Vec3d zero = grid.transform().indexToWorld(openvdb::Vec3d(0.0));
+    // Lattice and transform come from the same h and origin: a whole number of voxels, to
+    // rounding far below this.
+    constexpr double kWholeVoxels = 1e-6;
+    std::array<int, 3> offset{0, 0, 0};
+    for (int a = 0; a < 3; ++a) {
+        const double voxels = (lattice.origin[a] + 0.5 * lattice.h - zero[a]) / lattice.h;
+        const double whole = std::round(voxels);
+        if (std::abs(voxels - whole) < kWholeVoxels) offset[std::size_t(a)] = int(whole);
+    }
+    return offset;
 }
 
 }  // namespace dexelmill::detail
