@@ -549,13 +549,19 @@ private:
                     }
         }
 
+        // A point is within the band when its sum exceeds w2. A block with none (one the marks
+        // could not rule out, such as the one beyond a flat face's band) gets no leaf, tested
+        // before a leaf is made.
+        const float w2 = float(1.0 / (width_ * width_));
+        float most = 0.0f;
+        for (float q : invSq) most = std::max(most, q);
+        if (!(most > w2)) return nullptr;
+
         auto* leaf = new LeafT(openvdb::Coord(o[0], o[1], o[2]), background, false);
         float* values = leaf->buffer().data();
-        const float w2 = float(1.0 / (width_ * width_));
         // Within the band a point gets its distance estimate, signed, and is active; beyond it
         // +-background. Row by row along z (offsets x * 64 + y * 8 + z).
         LeafT::NodeMaskType active;
-        bool any = false;
         for (int x = 0; x < kLeafDim; ++x) {
             std::uint64_t on = 0;
             for (int y = 0; y < kLeafDim; ++y) {
@@ -564,11 +570,6 @@ private:
                 on |= std::uint64_t(bandRow(invSq + off, w2, background, signs, values + off)) << (kLeafDim * y);
             }
             active.template getWord<std::uint64_t>(openvdb::Index(x)) = on;
-            any = any || on != 0;
-        }
-        if (!any) {
-            delete leaf;
-            return nullptr;
         }
         leaf->setValueMask(active);
         return leaf;
