@@ -257,6 +257,7 @@ public:
         // The tie of two votes goes to z, else x: put that axis first.
         std::sort(axes_, axes_ + axisCount_, [](int x, int y) { return (x + 1) % 3 > (y + 1) % 3; });
         width_ = options.halfWidth * h_;
+        w2_ = float(1.0 / (width_ * width_));
         // A point with phi < w has an axis distance below sqrt(3) w (equality for a surface at
         // equal angles to the three axes), so it lies that close to a crossing on its own dexel.
         reach_ = std::sqrt(3.0) * width_;
@@ -331,7 +332,7 @@ private:
     /// or eleven points of the reach in two at seven or six. Other axes keep 0. The counts are whole
     /// numbers summed in a fixed order: the choice does not depend on the thread count.
     void chooseOffsets() {
-        const double band = width_ / h_, reach = reach_ / h_;
+        const double band = width_ / h_;
         for (int ai = 0; ai < axisCount_; ++ai) {
             const int a = axes_[ai];
             const DexelFamily& fam = stock_.family(axisFromIndex(a));
@@ -342,7 +343,7 @@ private:
                         for (double e : {double(s.lo), double(s.hi)}) {
                             const double x = e / h_ - 0.5;  // e in lattice indexes
                             const int b0 = int(std::floor(x - band)) + 1, b1 = int(std::ceil(x + band)) - 1;
-                            const int r0 = int(std::ceil(x - reach)), r1 = int(std::floor(x + reach));
+                            const auto [r0, r1] = markedRange(e, lattice_.n[a]);
                             for (int o = 0; o < kLeafDim; ++o)
                                 blocks[o] += std::uint64_t(blockOf(b1 + o) - blockOf(b0 + o) + 1 +
                                                            kVisitWeight * (blockOf(r1 + o) - blockOf(r0 + o) + 1));
@@ -351,7 +352,36 @@ private:
         }
     }
 
-    /// Marks every 8^3 block holding a lattice point within reach_ of a crossing on its dexel.
+    /// The lattice points along an a-dexel (n of them) whose blocks an end e on it marks: those
+    /// within reach_ of e, except beyond the lattice along a, where only those within the band.
+    /// A point there lies on no dexel of the other families, so its value is its distance along
+    /// a alone (reach_ allows for three axes' distances combining), and beyond a face of the
+    /// stock box the marks end with the band. The points are tested with the rebuild's own
+    /// arithmetic (scanDexel's distance, buildLeaf's float sum, bandRow's comparison), so that
+    /// rounding leaves none out. Segment ends never leave the stock's box (cuts only remove), so
+    /// these indexes lie within the lattice's n, which Lattice::fromBox keeps below INT_MAX / 2.
+    std::pair<int, int> markedRange(double e, int n) const {
+        int i0 = int(std::ceil((e - reach_) / h_ - 0.5));
+        int i1 = int(std::floor((e + reach_) / h_ - 0.5));
+        auto inBand = [&](int i) {
+            const double d = std::max(std::abs((i + 0.5) * h_ - e), kMinDistance * h_);
+            return float(1.0 / (d * d)) > w2_;
+        };
+        if (i0 < 0) {
+            int i = 0;
+            while (i > i0 && inBand(i - 1)) --i;
+            i0 = i;
+        }
+        if (i1 >= n) {
+            int i = n - 1;
+            while (i < i1 && inBand(i + 1)) ++i;
+            i1 = i;
+        }
+        return {i0, i1};
+    }
+
+    /// Marks every 8^3 block holding a lattice point within reach_ of a crossing on its dexel
+    /// (markedRange).
     void markBlocks() {
         marks_ = std::vector<std::atomic<std::uint8_t>>(std::size_t(blockN_[0]) * blockN_[1] *
                                                         blockN_[2]);
@@ -367,11 +397,7 @@ private:
                         int lastBlock = std::numeric_limits<int>::min();
                         for (const Segment& s : fam.segments(ib, ic)) {
                             for (double e : {double(s.lo), double(s.hi)}) {
-                                // Points (i + 1/2) h within reach_ of e. Segment ends never leave
-                                // the stock's box (cuts only remove), so these indexes lie within
-                                // the lattice's n, which Lattice::fromBox keeps below INT_MAX / 2.
-                                const int i0 = int(std::ceil((e - reach_) / h_ - 0.5));
-                                const int i1 = int(std::floor((e + reach_) / h_ - 0.5));
+                                const auto [i0, i1] = markedRange(e, lattice_.n[a]);
                                 const int last = blockOf(i1 + off_[a]);
                                 for (int blk = std::max(blockOf(i0 + off_[a]), lastBlock); blk <= last; ++blk) {
                                     blk3[a] = blk;
@@ -552,7 +578,7 @@ private:
         // A point is within the band when its sum exceeds w2. A block with none (one the marks
         // could not rule out, such as the one beyond a flat face's band) gets no leaf, tested
         // before a leaf is made.
-        const float w2 = float(1.0 / (width_ * width_));
+        const float w2 = w2_;
         float most = 0.0f;
         for (float q : invSq) most = std::max(most, q);
         if (!(most > w2)) return nullptr;
@@ -585,6 +611,7 @@ private:
     int axes_[3] = {0, 0, 0};
     int axisCount_ = 0;
     double width_ = 0.0, reach_ = 0.0, cutoff_ = 0.0;
+    float w2_ = 0.0f;  ///< a point is within the band when its sum of inverse squares exceeds this
     int off_[3] = {0, 0, 0};  ///< the grid index of lattice point (0, 0, 0)
     int blockLo_[3] = {0, 0, 0}, blockN_[3] = {0, 0, 0};
     std::vector<std::atomic<std::uint8_t>> marks_;
