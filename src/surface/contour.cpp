@@ -605,16 +605,20 @@ private:
 
     static bool testBit(const std::uint64_t* words, int bit) { return (words[bit >> 6] >> (bit & 63)) & 1; }
 
+    /// The world position of the lattice point at grid index g.
+    Vec3 latticePoint(const Coord& g) const {
+        return lattice_.point(g.x() - offset_.x(), g.y() - offset_.y(), g.z() - offset_.z());
+    }
+
     /// The crossing on the edge from lattice point `lower` along axis a (in0: whether `lower` is
     /// in material; the upper point is not, or the other way round): the dexel's end next to the
     /// point in material (the end of the segment holding the lower point, or the start of the one
     /// holding the upper point). With no dexel there (a family not kept) or one that disagrees
     /// with the level set's vote, the field is interpolated linearly and the normal is unknown.
     Crossing findCrossing(const Coord& lower, int a, bool in0) const {
-        const Coord l = lower - offset_;
-        const double t0 = (l[a] + 0.5) * h_, t1 = t0 + h_;
+        const double t0 = (lower[a] - offset_[a] + 0.5) * h_, t1 = t0 + h_;
         Crossing x;
-        x.p = lattice_.point(l.x(), l.y(), l.z());
+        x.p = latticePoint(lower);
         float end = 0.0f;
         x.exact = dexelEnd(lower, a, in0, end, x.n);
         double t = end;
@@ -635,12 +639,15 @@ private:
     /// its offset t along the dexel and its normal n; false when there is none (a family not
     /// kept, or a dexel that disagrees with the level set's vote).
     bool dexelEnd(const Coord& lower, int a, bool in0, float& t, PackedNormal& n) const {
-        const Coord l = lower - offset_;
-        const double t0 = (l[a] + 0.5) * h_, t1 = t0 + h_;
         const int b = (a + 1) % 3, c = (a + 2) % 3;
+        // Lattice indexes, as plain integers: a Coord made here (lower - offset_) and indexed by
+        // axis had made the count pass, which calls this four times per plain cell, take 2.4
+        // times as long on the hood.
+        const int la = lower[a] - offset_[a], lb = lower[b] - offset_[b], lc = lower[c] - offset_[c];
+        const double t0 = (la + 0.5) * h_, t1 = t0 + h_;
         const Axis axis = axisFromIndex(a);
-        if (!stock_.has(axis) || l[b] < 0 || l[c] < 0 || l[b] >= lattice_.n[b] || l[c] >= lattice_.n[c]) return false;
-        const SegmentSpan segs = stock_.family(axis).segments(l[b], l[c]);
+        if (!stock_.has(axis) || lb < 0 || lc < 0 || lb >= lattice_.n[b] || lc >= lattice_.n[c]) return false;
+        const SegmentSpan segs = stock_.family(axis).segments(lb, lc);
         if (in0) {
             // The segment holding t0 ends in (t0, t1].
             const Segment* s = std::partition_point(segs.begin(), segs.end(),
@@ -683,8 +690,7 @@ private:
                 const int len = loopOf(near, p, patches, k, loop);
                 int qefRank = 0;
                 const detail::PatchVertexRule::Loop crossings{mesh_.vertices.data(), crossingNormal_.data(), loop, len};
-                const Coord l = p - offset_;
-                mesh_.vertices[at] = vertexRule_.place(crossings, lattice_.point(l.x(), l.y(), l.z()), qefRank);
+                mesh_.vertices[at] = vertexRule_.place(crossings, latticePoint(p), qefRank);
                 feature_[at - patchVertexBase_] = std::uint8_t(qefRank >= 2);
                 edges += qefRank == 2;
                 corners += qefRank == 3;
