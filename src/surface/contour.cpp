@@ -227,7 +227,8 @@ class Contourer {
 public:
     Contourer(const openvdb::FloatGrid& grid, const TriDexelStock& stock, const ContourOptions& options)
         : grid_(grid), stock_(stock), lattice_(stock.lattice()), h_(lattice_.h), vertexRule_(h_, options.featureAngle) {
-        const std::array<int, 3> off = detail::latticeOffset(grid, lattice_);
+        // From the lattice the grid records (contourStock checked it is the stock's).
+        const std::array<int, 3> off = detail::latticeOffset(grid);
         offset_ = Coord(off[0], off[1], off[2]);
         if (!(options.adaptivity >= 0.0 && options.adaptivity <= 1.0))
             throw Error("contouring: adaptivity must lie in [0, 1], got " + std::to_string(options.adaptivity));

@@ -86,8 +86,7 @@ double LevelSet::valueAt(const Vec3& world) const {
 
 float LevelSet::voxelValue(int i, int j, int k) const {
     const openvdb::FloatGrid& g = requireGrid(impl_);
-    const std::optional<Lattice> lat = detail::latticeFromMeta(g);
-    const std::array<int, 3> off = lat ? detail::latticeOffset(g, *lat) : std::array<int, 3>{0, 0, 0};
+    const std::array<int, 3> off = detail::latticeOffset(g);
     return g.tree().getValue(openvdb::Coord(i + off[0], j + off[1], k + off[2]));
 }
 
@@ -109,6 +108,7 @@ LevelSet levelSetFromGrid(openvdb::FloatGrid::Ptr grid) {
         throw Error("level set: grid '" + grid->getName() + "' needs a uniform linear transform");
     if (!(grid->background() > 0.0f))
         throw Error("level set: grid '" + grid->getName() + "' has a non-positive background");
+    detail::latticeOffset(*grid);  // throws if a recorded lattice does not sit on the voxels
     auto impl = std::make_shared<LevelSet::Impl>();
     impl->grid = std::move(grid);
     return LevelSet(std::move(impl));

@@ -24,7 +24,8 @@ void ensureOpenVdbInitialized();
 openvdb::FloatGrid::ConstPtr gridOf(const LevelSet& levelSet);
 
 /// @brief Wraps a grid. It must be a level set: class GRID_LEVEL_SET (or unknown), a uniform
-/// linear transform, and a positive background.
+/// linear transform, and a positive background; a lattice it records must sit on its voxels, 0
+/// to 7 from index 0 (detail::latticeOffset).
 /// @throw Error otherwise.
 LevelSet levelSetFromGrid(openvdb::FloatGrid::Ptr grid);
 

@@ -4,11 +4,13 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <string>
 
 #include <openvdb/openvdb.h>
 
+#include "dexelmill/error.h"
 #include "dexelmill/stock/lattice.h"
 
 namespace dexelmill::detail {
@@ -46,19 +48,28 @@ inline std::optional<Lattice> latticeFromMeta(const openvdb::GridBase& grid) {
     return l;
 }
 
-/// @brief The grid index of lattice point (0, 0, 0), per axis: the rebuild shifts the index space
-/// by a whole number of voxels (rebuildLevelSet), which the transform records. Zero where the
-/// transform's index origin is not a lattice point (a grid from elsewhere).
-inline std::array<int, 3> latticeOffset(const openvdb::GridBase& grid, const Lattice& lattice) {
-    const openvdb::Vec3d zero = grid.transform().indexToWorld(openvdb::Vec3d(0.0));
-    // Lattice and transform come from the same h and origin: a whole number of voxels, to
-    // rounding far below this.
-    constexpr double kWholeVoxels = 1e-6;
+/// @brief The grid index of lattice point (0, 0, 0), per axis, for the lattice the grid records
+/// (latticeFromMeta): the rebuild shifts the index space by 0 to 7 voxels (rebuildLevelSet),
+/// which the transform holds. Zero for a grid that records no lattice.
+/// @throw Error if the transform does not put that point on a voxel 0 to 7 from index 0.
+inline std::array<int, 3> latticeOffset(const openvdb::GridBase& grid) {
     std::array<int, 3> offset{0, 0, 0};
+    const std::optional<Lattice> lattice = latticeFromMeta(grid);
+    if (!lattice) return offset;
+    const openvdb::Vec3d zero = grid.transform().indexToWorld(openvdb::Vec3d(0.0));
+    // The rebuild made the transform from this origin and h, so the offset is a whole number of
+    // voxels up to the rounding of the sums below: a few DBL_EPSILON of their magnitudes, in
+    // voxels; kWholeVoxels allows far more.
+    constexpr double kWholeVoxels = 1e-6;
     for (int a = 0; a < 3; ++a) {
-        const double voxels = (lattice.origin[a] + 0.5 * lattice.h - zero[a]) / lattice.h;
+        const double h = lattice->h, origin = lattice->origin[a];
+        const double voxels = (origin + 0.5 * h - zero[a]) / h;
+        const double rounding = 16.0 * std::numeric_limits<double>::epsilon() * (std::abs(origin) + std::abs(zero[a]) + h) / h;
         const double whole = std::round(voxels);
-        if (std::abs(voxels - whole) < kWholeVoxels) offset[std::size_t(a)] = int(whole);
+        if (!(std::abs(voxels - whole) <= kWholeVoxels + rounding) || whole < 0.0 || whole > 7.0)
+            throw Error("level set: grid '" + grid.getName() +
+                        "' records a lattice its transform does not place on whole voxels 0 to 7 from index 0");
+        offset[std::size_t(a)] = int(whole);
     }
     return offset;
 }
