@@ -357,14 +357,16 @@ private:
     /// A point there lies on no dexel of the other families, so its value is its distance along
     /// a alone (reach_ allows for three axes' distances combining), and beyond a face of the
     /// stock box the marks end with the band. The points are tested with the rebuild's own
-    /// arithmetic (scanDexel's distance, buildLeaf's float sum, bandRow's comparison), so that
-    /// rounding leaves none out. Segment ends never leave the stock's box (cuts only remove), so
+    /// arithmetic (scanDexel's distance, buildLeaf's float sum, bandRow's comparison), the
+    /// distance taken kFusedSlack smaller: where the compiler fuses scanDexel's (i + 1/2) h - e
+    /// into one multiply-add, or this one, the two differ by at most an ulp of it, so no band
+    /// point is left out; only points that near the band's edge are marked the more. Segment ends never leave the stock's box (cuts only remove), so
     /// these indexes lie within the lattice's n, which Lattice::fromBox keeps below INT_MAX / 2.
     std::pair<int, int> markedRange(double e, int n) const {
         int i0 = int(std::ceil((e - reach_) / h_ - 0.5));
         int i1 = int(std::floor((e + reach_) / h_ - 0.5));
         auto inBand = [&](int i) {
-            const double d = std::max(std::abs((i + 0.5) * h_ - e), kMinDistance * h_);
+            const double d = std::max(std::abs((i + 0.5) * h_ - e) * (1.0 - kFusedSlack), kMinDistance * h_);
             return float(1.0 / (d * d)) > w2_;
         };
         if (i0 < 0) {
@@ -604,6 +606,8 @@ private:
     /// Axis distances are clamped below at this fraction of h, so that a point on a crossing
     /// gets a tiny non-zero value instead of a division by zero.
     static constexpr double kMinDistance = 1e-6;
+    /// Relative: four times an ulp of a distance (markedRange).
+    static constexpr double kFusedSlack = 4.0 * std::numeric_limits<double>::epsilon();
 
     const TriDexelStock& stock_;
     const Lattice& lattice_;
