@@ -329,8 +329,8 @@ private:
     /// ends on a's dexels: each end's band (the points within width_ of it, which a flat face
     /// across a puts into leaves) and its reach (the points markBlocks marks, whose blocks
     /// buildLeaf visits). Six band points fit in one block at three phases of eight, and the ten
-    /// or eleven points of the reach in two at seven or six. Other axes keep 0. The counts are whole
-    /// numbers summed in a fixed order: the choice does not depend on the thread count.
+    /// or eleven points of the reach in two at seven or six. Other axes keep 0. The counts are
+    /// whole numbers summed in a fixed order: the choice does not depend on the thread count.
     void chooseOffsets() {
         const double band = width_ / h_;
         for (int ai = 0; ai < axisCount_; ++ai) {
@@ -360,8 +360,9 @@ private:
     /// arithmetic (scanDexel's distance, buildLeaf's float sum, bandRow's comparison), the
     /// distance taken kFusedSlack smaller: where the compiler fuses scanDexel's (i + 1/2) h - e
     /// into one multiply-add, or this one, the two differ by at most an ulp of it, so no band
-    /// point is left out; only points that near the band's edge are marked the more. Segment ends never leave the stock's box (cuts only remove), so
-    /// these indexes lie within the lattice's n, which Lattice::fromBox keeps below INT_MAX / 2.
+    /// point is left out; only points that near the band's edge are marked the more. Segment
+    /// ends never leave the stock's box (cuts only remove), so these indexes lie within the
+    /// lattice's n, which Lattice::fromBox keeps below INT_MAX / 2.
     std::pair<int, int> markedRange(double e, int n) const {
         int i0 = int(std::ceil((e - reach_) / h_ - 0.5));
         int i1 = int(std::floor((e + reach_) / h_ - 0.5));
