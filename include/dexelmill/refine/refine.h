@@ -12,7 +12,8 @@
 ///     crossings' planes meet may sit on a corner that a cusp the lattice did not see has cut
 ///     away: it moves onto the part, along the coordinate axis nearest its normal, or, where that
 ///     axis finds no crossing or the move would fold the mesh, along another axis (the shortest
-///     move that does not fold). (Vertices on crossings are exact and stay.)
+///     move that does not fold, and only into the material: a vertex inside a wall thinner than
+///     the lattice showed stays). (Vertices on crossings are exact and stay.)
 ///  2. Each edge is tested at its midpoint. One farther than a tolerance from the crossing there
 ///     is split at it, and its triangles with it (into two, three or four, the same way on both
 ///     sides of every edge, so the mesh stays closed). Later rounds test only the new edges.
