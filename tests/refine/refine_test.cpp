@@ -230,35 +230,56 @@ TEST_CASE("refine: a round that would not fit in memory is not started", "[refin
     CHECK(none.check.ok());
 }
 
-TEST_CASE("refine: a vertex whose nearest axis finds no crossing is moved along another", "[refine]") {
-    // A flat mill faces the block down to z = 5. The mesh is one tetrahedron: its apex 0.1 mm
-    // above the floor, its base deep in the material and tilted so that the apex's normal is
-    // (-0.90, 0, 0.44). Along x the apex's window runs through air (no crossing); along z it
-    // meets the floor 0.1 mm below.
+namespace {
+
+/// A flat mill D6 faces the block [0, 10]^3 down to z = 5.
+Simulation facedBlock() {
     const std::string facing = "G21 G90\nT1 M6\nG0 X-5 Y0 Z12\nG1 Z5 F500\nG1 X15\nG1 Y3\nG1 X-5\nG1 Y6\nG1 X15\n"
                                "G1 Y9\nG1 X-5\nG1 Y12\nG1 X15\nG0 Z12\nM30\n";
     SimulateOptions o = job(facing, 0);
     o.stockBox = Box{Vec3(0.0), Vec3(10.0)};
     o.tools.clear();
     o.tools.emplace(1, flatEndMill(6.0, {20.0, 40.0}));
-    const Simulation s = runSimulation(o);
+    return runSimulation(o);
+}
 
+/// A closed tetrahedron, its triangles facing outwards; vertex 0 is the apex.
+Mesh tetrahedron(const std::array<Vec3, 4>& corners) {
     Mesh tetra;
-    tetra.vertices = {Vec3(5.0, 5.0, 5.1), Vec3(6.0, 3.0, 4.4), Vec3(6.0, 7.0, 4.4), Vec3(5.02, 5.0, 2.4)};
-    const Vec3 centre = 0.25 * (tetra.vertices[0] + tetra.vertices[1] + tetra.vertices[2] + tetra.vertices[3]);
+    tetra.vertices.assign(corners.begin(), corners.end());
+    const Vec3 centre = 0.25 * (corners[0] + corners[1] + corners[2] + corners[3]);
     for (Mesh::Triangle t : {Mesh::Triangle{0, 1, 2}, Mesh::Triangle{0, 1, 3}, Mesh::Triangle{0, 2, 3},
                              Mesh::Triangle{1, 2, 3}}) {
         const Vec3 a = tetra.vertices[t[0]], b = tetra.vertices[t[1]], c = tetra.vertices[t[2]];
         if (glm::dot(glm::cross(b - a, c - a), a - centre) < 0.0) std::swap(t[1], t[2]);
         tetra.triangles.push_back(t);
     }
-    REQUIRE(checkMesh(tetra).ok());
+    return tetra;
+}
 
+/// One round of refinement of `mesh` against the faced block, with windows of 0.5 mm.
+RefineStats refineAgainst(const Simulation& s, Mesh& mesh) {
     RefineOptions ro;
     ro.rounds = 1;
-    ro.window = 0.5;  // the base lies 0.6 mm or more inside: its windows find no surface
+    ro.window = 0.5;
     RefineStats stats;
-    refineMesh(tetra, *o.stockBox, s.program.path, s.tools, ro, &stats);
+    refineMesh(mesh, Box{Vec3(0.0), Vec3(10.0)}, s.program.path, s.tools, ro, &stats);
+    return stats;
+}
+
+}  // namespace
+
+TEST_CASE("refine: a vertex whose nearest axis finds no crossing is moved along another", "[refine]") {
+    // A flat mill faces the block down to z = 5. The mesh is one tetrahedron: its apex 0.1 mm
+    // above the floor, its base deep in the material and tilted so that the apex's normal is
+    // (-0.90, 0, 0.44). Along x the apex's window runs through air (no crossing); along z it
+    // meets the floor 0.1 mm below. The base lies 0.6 mm or more inside: its windows (0.5 mm)
+    // find no surface.
+    const Simulation s = facedBlock();
+    Mesh tetra = tetrahedron({Vec3(5.0, 5.0, 5.1), Vec3(6.0, 3.0, 4.4), Vec3(6.0, 7.0, 4.4), Vec3(5.02, 5.0, 2.4)});
+    REQUIRE(checkMesh(tetra).ok());
+
+    const RefineStats stats = refineAgainst(s, tetra);
     const Vec3 apex = tetra.vertices[0];
     INFO("queries " << stats.queries << " snapped " << stats.snapped << " refused " << stats.snapRefused << " split " << stats.split);
     INFO("apex at (" << apex.x << ", " << apex.y << ", " << apex.z << ")");
@@ -273,24 +294,10 @@ TEST_CASE("refine: a vertex inside the material is not moved out along another a
     // The block of the case above, faced down to z = 5, and the same tetrahedron with its apex
     // 0.1 mm below the floor instead of above it: inside the material, as a vertex the mesher put
     // in a wall thinner than the lattice showed. Along x its window finds no crossing; along z
-    // the floor lies 0.1 mm above, outwards, and the vertex stays.
-    const std::string facing = "G21 G90\nT1 M6\nG0 X-5 Y0 Z12\nG1 Z5 F500\nG1 X15\nG1 Y3\nG1 X-5\nG1 Y6\nG1 X15\n"
-                               "G1 Y9\nG1 X-5\nG1 Y12\nG1 X15\nG0 Z12\nM30\n";
-    SimulateOptions o = job(facing, 0);
-    o.stockBox = Box{Vec3(0.0), Vec3(10.0)};
-    o.tools.clear();
-    o.tools.emplace(1, flatEndMill(6.0, {20.0, 40.0}));
-    const Simulation s = runSimulation(o);
-
-    Mesh tetra;
-    tetra.vertices = {Vec3(5.0, 5.0, 4.9), Vec3(6.0, 3.0, 4.2), Vec3(6.0, 7.0, 4.2), Vec3(5.02, 5.0, 2.2)};
-    const Vec3 centre = 0.25 * (tetra.vertices[0] + tetra.vertices[1] + tetra.vertices[2] + tetra.vertices[3]);
-    for (Mesh::Triangle t : {Mesh::Triangle{0, 1, 2}, Mesh::Triangle{0, 1, 3}, Mesh::Triangle{0, 2, 3},
-                             Mesh::Triangle{1, 2, 3}}) {
-        const Vec3 a = tetra.vertices[t[0]], b = tetra.vertices[t[1]], c = tetra.vertices[t[2]];
-        if (glm::dot(glm::cross(b - a, c - a), a - centre) < 0.0) std::swap(t[1], t[2]);
-        tetra.triangles.push_back(t);
-    }
+    // the floor lies 0.1 mm above, outwards, and the vertex stays. The base lies 0.7 mm or more
+    // inside.
+    const Simulation s = facedBlock();
+    Mesh tetra = tetrahedron({Vec3(5.0, 5.0, 4.9), Vec3(6.0, 3.0, 4.2), Vec3(6.0, 7.0, 4.2), Vec3(5.02, 5.0, 2.2)});
     REQUIRE(checkMesh(tetra).ok());
     // The apex's normal (the sum of its triangles' area vectors) is nearest x and within 75
     // degrees of z, so its z window is asked.
@@ -303,11 +310,7 @@ TEST_CASE("refine: a vertex inside the material is not moved out along another a
     REQUIRE(std::abs(apexNormal.x) > std::abs(apexNormal.z));
     REQUIRE(apexNormal.z > 0.2588);
 
-    RefineOptions ro;
-    ro.rounds = 1;
-    ro.window = 0.5;  // the base lies 0.7 mm or more inside: its windows find no surface
-    RefineStats stats;
-    refineMesh(tetra, *o.stockBox, s.program.path, s.tools, ro, &stats);
+    const RefineStats stats = refineAgainst(s, tetra);
     INFO("queries " << stats.queries << " snapped " << stats.snapped << " split " << stats.split);
     CHECK(stats.snapped == 0);
     CHECK(tetra.vertices[0] == Vec3(5.0, 5.0, 4.9));
