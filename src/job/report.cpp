@@ -29,6 +29,17 @@ nlohmann::json deviationJson(const Deviation& d) {
             {"histogram", bins}};
 }
 
+namespace {
+
+nlohmann::json stretchesJson(const FineStretches& s) {
+    return {{"stretches", s.count},
+            {"volume_mm3", s.volumeMm3},
+            {"widest_mm", s.widestMm},
+            {"widest_at_mm", {s.widestAt.x, s.widestAt.y, s.widestAt.z}}};
+}
+
+}  // namespace
+
 std::string reportJson(const SimulateReport& r) {
     using nlohmann::json;
     json j;
@@ -52,6 +63,8 @@ std::string reportJson(const SimulateReport& r) {
     for (int a = 0; a < 3; ++a)
         if (r.familyVolumesMm3[a]) fam[std::string(1, axisName(axisFromIndex(a)))] = *r.familyVolumesMm3[a];
     j["family_volumes_mm3"] = fam;
+    j["finer_than_lattice"] = {{"material", stretchesJson(r.fineFeatures.material)},
+                               {"gaps", stretchesJson(r.fineFeatures.gaps)}};
     json collisions = json::array();
     for (const ReportCollision& c : r.collisions)
         collisions.push_back({{"move", c.move},

@@ -24,6 +24,7 @@
 #include "dexelmill/path/camotics.h"
 #include "dexelmill/refine/refine.h"
 #include "dexelmill/stock/cut.h"
+#include "dexelmill/stock/fine_features.h"
 #include "dexelmill/sweep/turning.h"
 #include "dexelmill/surface/contour.h"
 #include "dexelmill/surface/levelset.h"
@@ -105,6 +106,25 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
                                       "=SPEC");
     }
     return table;
+}
+
+/// Warns of what the lattice cannot show (finerThanLattice): material the surface leaves out, and
+/// gaps it fills. The dexels keep both, so the volumes reported count them.
+void noteFineFeatures(const FineFeatures& f, double h, std::vector<ReportWarning>& notes) {
+    const auto note = [&](const FineStretches& s, const char* what) {
+        if (s.count == 0) return;
+        char text[400];
+        std::snprintf(text, sizeof text,
+                      "%s %zu stretch%s that hold no lattice point (spacing %.4g mm), about %.3g mm^3 in all; the "
+                      "widest, %.3g mm, at (%.3f, %.3f, %.3f); the volumes count them, a finer --resolution shows them",
+                      what, s.count, s.count == 1 ? "" : "es", h, s.volumeMm3, s.widestMm, s.widestAt.x, s.widestAt.y,
+                      s.widestAt.z);
+        ReportWarning w;
+        w.message = text;
+        notes.push_back(w);
+    };
+    note(f.material, "the mesh leaves out material thinner than the lattice (walls, fins, ridge tops):");
+    note(f.gaps, "the mesh fills gaps narrower than the lattice (slots, grooves):");
 }
 
 /// Moves whose tool axis turns. A feed move is swept turning (TurningSweep, within the job's
@@ -479,6 +499,8 @@ Simulation runStages(const SimulateOptions& o) {
         report.collisions.push_back({c.move, {at.file, at.line}, c.kind == CollisionKind::Rapid ? "rapid" : "shank",
                                      c.volume});
     }
+    report.fineFeatures = finerThanLattice(stock);
+    noteFineFeatures(report.fineFeatures, stock.lattice().h, notes);
     // The job's own notes first (a thread count cut, the stock it chose, an open design): a long
     // program's diagnostics would push them past what the summary prints.
     for (ReportWarning& n : notes) report.warnings.push_back(std::move(n));

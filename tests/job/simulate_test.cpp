@@ -73,8 +73,12 @@ TEST_CASE("a slot removes its analytic volume and the report says so", "[job]") 
     const nlohmann::json j = nlohmann::json::parse(read(dir / "report.json"));
     for (const char* key : {"version", "inputs", "resolution_mm", "families", "moves", "rapids", "tool_changes",
                             "lattice", "dexels", "stock_volume_mm3", "final_volume_mm3", "removed_volume_mm3",
-                            "family_volumes_mm3", "collisions", "warnings", "mesh", "timing_s", "peak_memory_mb"})
+                            "family_volumes_mm3", "finer_than_lattice", "collisions", "warnings", "mesh", "timing_s",
+                            "peak_memory_mb"})
         CHECK(j.contains(key));
+    // Nothing the lattice cannot show: the slot's walls and floor lie between lattice planes.
+    CHECK(r.fineFeatures.material.count == 0);
+    CHECK(r.fineFeatures.gaps.count == 0);
     CHECK(j["removed_volume_mm3"].get<double>() == Approx(kSlotVolume).epsilon(0.01));
     CHECK(j["mesh"]["closed"].get<bool>());
     // The block's bottom, which no move reaches, is (160 - 1) x (120 - 1) plain cells (two
@@ -89,6 +93,37 @@ TEST_CASE("a slot removes its analytic volume and the report says so", "[job]") 
     for (const auto& w : j["warnings"]) feedWarned = feedWarned || w["line"].get<int>() == 4;
     CHECK(feedWarned);
     CHECK(fs::file_size(dir / "part.stl") == 84 + 50 * r.meshTriangles);
+}
+
+TEST_CASE("simulate: a wall thinner than the spacing is reported, not dropped silently", "[job][fine]") {
+    // Two slots 6 mm wide along y at x = 10 and 16.3 leave a wall 0.3 mm thick between x = 13 and
+    // 13.3, where the lattice (spacing 1) has planes at 12.5 and 13.5: the mesh cannot show it.
+    const fs::path dir = scratch("thin-wall");
+    SimulateOptions o;
+    o.inputs = {write(dir / "walls.ngc", "G21 G90\nG0 X10 Y5 Z15\nG1 Z7 F100\nG1 Y25\nG0 Z15\nG0 X16.3 Y5\n"
+                                         "G1 Z7\nG1 Y25\nG0 Z15\nM30\n")};
+    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
+    o.defaultTool = flatEndMill(6, {20, 40});
+    o.resolution = 1.0;
+    o.reportPath = (dir / "report.json").string();
+    const SimulateReport r = simulate(o);
+    const FineStretches& wall = r.fineFeatures.material;
+    // Every x-dexel through the wall's straight part (y 5.5 to 24.5, z 7.5 to 9.5) at least.
+    CHECK(wall.count >= std::size_t(20 * 3));
+    CHECK(wall.widestMm >= 0.3);
+    CHECK(wall.widestMm < 1.0);
+    CHECK(wall.widestAt.x > 12.5);
+    CHECK(wall.widestAt.x < 13.5);
+    CHECK(r.fineFeatures.gaps.count == 0);
+    bool warned = false;
+    for (const ReportWarning& w : r.warnings)
+        warned = warned || (w.message.find("leaves out material thinner than the lattice") != std::string::npos &&
+                            w.message.find(std::to_string(wall.count) + " stretches") != std::string::npos);
+    CHECK(warned);
+    const nlohmann::json j = nlohmann::json::parse(read(dir / "report.json"));
+    CHECK(j["finer_than_lattice"]["material"]["stretches"].get<std::size_t>() == wall.count);
+    CHECK(j["finer_than_lattice"]["material"]["widest_mm"].get<double>() == wall.widestMm);
+    CHECK(j["finer_than_lattice"]["gaps"]["stretches"].get<std::size_t>() == 0);
 }
 
 TEST_CASE("z-only and x-only stocks measure the same slot", "[job]") {

@@ -12,6 +12,7 @@
 #include <string>
 #include <random>
 
+#include "dexelmill/stock/fine_features.h"
 #include "dexelmill/surface/contour.h"
 #include "dexelmill/surface/levelset.h"
 #include "support/analytic_parts.h"
@@ -150,6 +151,28 @@ TEST_CASE("contour: a wall thinner than a cell", "[surface][contour]") {
     INFO(summary("thin wall", r));
     CHECK(r.check.ok());
     CHECK(r.faces.max <= 1e-3 * h);
+}
+
+TEST_CASE("contour: a wall thinner than a cell between two lattice planes is left out, as reported",
+          "[surface][contour][fine]") {
+    // The same pockets with the wall between x = 15.6 and 16.3: no lattice point (at 15.5 and
+    // 16.5) lies in it, so the level set and the mesh take it as empty; finerThanLattice counts
+    // it, and the mesh holds the part less that wall.
+    const double h = 1.0, y0 = 5.2, y1 = 27.1, z0 = 8.3;
+    const Part part{kBox, {testing::boxCutter({Vec3(4.0, y0, z0), Vec3(15.6, y1, 30.0)}),
+                           testing::boxCutter({Vec3(16.3, y0, z0), Vec3(28.0, y1, 30.0)})}};
+    TriDexelStock stock = TriDexelStock::fromBox(part.box, h);
+    for (const Cutter& c : part.cuts) testing::carve(stock, c);
+    const FineFeatures fine = finerThanLattice(stock);
+    const Mesh mesh = contourStock(rebuildLevelSet(stock), stock);
+    const MeshCheck check = checkMesh(mesh);
+    CHECK(check.ok());
+    const double across = (y1 - y0) * (kBox.hi.z - z0);
+    const double wall = 0.7 * across, oneCut = kBox.volume() - (28.0 - 4.0) * across;
+    CHECK(check.signedVolume == Approx(oneCut).margin(1e-3));
+    CHECK(fine.material.count == 22 * 16);
+    // The dexels' estimate: 0.7 mm per dexel, h^2 each, against the wall's exact volume.
+    CHECK(fine.material.volumeMm3 == Approx(wall).epsilon(0.03));
 }
 
 TEST_CASE("contour: ball passes closer than a cell", "[surface][contour]") {

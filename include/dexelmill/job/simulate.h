@@ -19,6 +19,7 @@
 #include "dexelmill/path/apt.h"
 #include "dexelmill/path/gcode.h"
 #include "dexelmill/path/toolpath.h"
+#include "dexelmill/stock/fine_features.h"
 #include "dexelmill/stock/primitive.h"
 #include "dexelmill/stock/tridexel.h"
 #include "dexelmill/surface/levelset.h"
@@ -191,6 +192,10 @@ struct SimulateReport {
     /// The machined surface against the design (measureDeviation); its per-vertex distances are in
     /// Simulation::deviation, not here.
     std::optional<Deviation> surfaceDeviation;
+
+    /// What the lattice cannot show (finerThanLattice): the mesh leaves that material out and fills
+    /// those gaps; the volumes above count both.
+    FineFeatures fineFeatures;
 
     std::string mesher;  ///< "dexel" or "vdb"
     std::size_t meshVertices = 0, meshTriangles = 0;
