@@ -32,10 +32,20 @@ nlohmann::json deviationJson(const Deviation& d) {
 namespace {
 
 nlohmann::json stretchesJson(const FineStretches& s) {
+    nlohmann::json regions = nlohmann::json::array();
+    for (const FineRegion& r : s.regions)
+        regions.push_back({{"volume_mm3", r.volumeMm3},
+                           {"box_mm",
+                            {{"min", {r.box.lo.x, r.box.lo.y, r.box.lo.z}}, {"max", {r.box.hi.x, r.box.hi.y, r.box.hi.z}}}},
+                           {"widest_mm", r.widestMm},
+                           {"widest_at_mm", {r.widestAt.x, r.widestAt.y, r.widestAt.z}},
+                           {"stretches", r.stretches}});
     return {{"stretches", s.count},
             {"volume_mm3", s.volumeMm3},
             {"widest_mm", s.widestMm},
-            {"widest_at_mm", {s.widestAt.x, s.widestAt.y, s.widestAt.z}}};
+            {"widest_at_mm", {s.widestAt.x, s.widestAt.y, s.widestAt.z}},
+            {"places", s.regionCount},
+            {"regions", regions}};
 }
 
 }  // namespace

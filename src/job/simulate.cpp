@@ -113,12 +113,15 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
 void noteFineFeatures(const FineFeatures& f, double h, std::vector<ReportWarning>& notes) {
     const auto note = [&](const FineStretches& s, const char* what) {
         if (s.count == 0) return;
-        char text[400];
+        const FineRegion& most = s.regions.front();
+        char text[600];
         std::snprintf(text, sizeof text,
-                      "%s %zu stretch%s that hold no lattice point (spacing %.4g mm), about %.3g mm^3 in all; the "
-                      "widest, %.3g mm, at (%.3f, %.3f, %.3f); the volumes count them, a finer --resolution shows them",
-                      what, s.count, s.count == 1 ? "" : "es", h, s.volumeMm3, s.widestMm, s.widestAt.x, s.widestAt.y,
-                      s.widestAt.z);
+                      "%s %zu dexel stretch%s with no lattice point in them (spacing %.4g mm), in %zu place%s, about "
+                      "%.3g mm^3 in all; the most, %.3g mm^3, within (%.3f, %.3f, %.3f)-(%.3f, %.3f, %.3f), up to "
+                      "%.3g mm across at (%.3f, %.3f, %.3f); the volumes count them, a finer --resolution shows them",
+                      what, s.count, s.count == 1 ? "" : "es", h, s.regionCount, s.regionCount == 1 ? "" : "s",
+                      s.volumeMm3, most.volumeMm3, most.box.lo.x, most.box.lo.y, most.box.lo.z, most.box.hi.x,
+                      most.box.hi.y, most.box.hi.z, most.widestMm, most.widestAt.x, most.widestAt.y, most.widestAt.z);
         ReportWarning w;
         w.message = text;
         notes.push_back(w);

@@ -3,41 +3,20 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_for.h>
+#include <boost/pending/disjoint_sets.hpp>
 
 namespace dexelmill {
 
 namespace {
 
-/// One family's stretches, and the longest's place on its dexel.
-struct FamilyStretches {
-    std::size_t count = 0;
-    double length = 0.0;  ///< sum of lengths (mm)
-    double widest = 0.0;
+/// One stretch: its family, its dexel and its ends along it (mm from the lattice origin).
+struct Stretch {
+    int family = 0;
     int ib = 0, ic = 0;
-    double middle = 0.0;  ///< the longest's middle, along the dexel (mm)
-
-    void add(float lo, float hi, int b, int c) {
-        ++count;
-        const double l = double(hi) - double(lo);
-        length += l;
-        if (l > widest) widest = l, ib = b, ic = c, middle = 0.5 * (double(lo) + double(hi));
-    }
-    void join(const FamilyStretches& o) {
-        count += o.count;
-        length += o.length;
-        if (o.widest > widest) widest = o.widest, ib = o.ib, ic = o.ic, middle = o.middle;
-    }
-};
-
-struct FamilyFeatures {
-    FamilyStretches material, gaps;
-    void join(const FamilyFeatures& o) {
-        material.join(o.material);
-        gaps.join(o.gaps);
-    }
+    float lo = 0.0f, hi = 0.0f;
 };
 
 /// Whether a lattice point of a dexel with n points at (i + 1/2) h lies in [lo, hi]: strictly
@@ -55,54 +34,135 @@ bool holdsPoint(float lo, float hi, double h, int n, bool open) {
     return false;
 }
 
-FamilyFeatures familyFeatures(const TriDexelStock& stock, Axis a) {
-    const DexelFamily& fam = stock.family(a);
+/// Every stretch of the kept families that holds no lattice point, material and gaps apart, in
+/// family, row and dexel order.
+void findStretches(const TriDexelStock& stock, std::vector<Stretch>& material,
+                   std::vector<Stretch>& gaps) {
     const double h = stock.lattice().h;
-    const int n = stock.lattice().n[std::size_t(index(a))];
-    return tbb::parallel_reduce(
-        tbb::blocked_range<int>(0, fam.nc()), FamilyFeatures{},
-        [&](const tbb::blocked_range<int>& r, FamilyFeatures f) {
-            for (int ic = r.begin(); ic < r.end(); ++ic)
-                for (int ib = 0; ib < fam.nb(); ++ib) {
-                    const SegmentSpan segs = fam.segments(ib, ic);
-                    for (std::size_t k = 0; k < segs.size; ++k) {
-                        const Segment& s = segs[k];
-                        if (!holdsPoint(s.lo, s.hi, h, n, true)) f.material.add(s.lo, s.hi, ib, ic);
-                        if (k + 1 < segs.size && segs[k + 1].lo > s.hi &&
-                            !holdsPoint(s.hi, segs[k + 1].lo, h, n, false))
-                            f.gaps.add(s.hi, segs[k + 1].lo, ib, ic);
-                    }
+    for (int a = 0; a < 3; ++a) {
+        if (!stock.has(axisFromIndex(a))) continue;
+        const DexelFamily& fam = stock.family(axisFromIndex(a));
+        const int n = stock.lattice().n[std::size_t(a)];
+        std::vector<std::vector<Stretch>> rowMaterial(std::size_t(fam.nc())),
+            rowGaps(std::size_t(fam.nc()));
+        tbb::parallel_for(0, fam.nc(), [&](int ic) {
+            for (int ib = 0; ib < fam.nb(); ++ib) {
+                const SegmentSpan segs = fam.segments(ib, ic);
+                for (std::size_t k = 0; k < segs.size; ++k) {
+                    const Segment& s = segs[k];
+                    if (!holdsPoint(s.lo, s.hi, h, n, true))
+                        rowMaterial[std::size_t(ic)].push_back({a, ib, ic, s.lo, s.hi});
+                    if (k + 1 < segs.size && segs[k + 1].lo > s.hi &&
+                        !holdsPoint(s.hi, segs[k + 1].lo, h, n, false))
+                        rowGaps[std::size_t(ic)].push_back({a, ib, ic, s.hi, segs[k + 1].lo});
                 }
-            return f;
-        },
-        [](FamilyFeatures x, const FamilyFeatures& y) {
-            x.join(y);
-            return x;
+            }
         });
+        for (const auto& row : rowMaterial) material.insert(material.end(), row.begin(), row.end());
+        for (const auto& row : rowGaps) gaps.insert(gaps.end(), row.begin(), row.end());
+    }
 }
 
-/// Folds one family's stretches into the stock's.
-void addFamily(const TriDexelStock& stock, Axis a, const FamilyStretches& f, FineStretches& out) {
-    const double h = stock.lattice().h;
-    out.count += f.count;
-    out.volumeMm3 = std::max(out.volumeMm3, h * h * f.length);
-    if (f.widest > out.widestMm) {
-        out.widestMm = f.widest;
-        out.widestAt = stock.dexelLine(a, f.ib, f.ic).at(f.middle);
+/// The stretches grouped into regions (FineStretches::regionCount), the regions summed up.
+FineStretches summarise(const TriDexelStock& stock, const std::vector<Stretch>& stretches) {
+    FineStretches out;
+    out.count = stretches.size();
+    if (stretches.empty()) return out;
+    const Lattice& lat = stock.lattice();
+    const double h = lat.h, cellSize = kFineRegionJoin * h;
+    std::array<std::int64_t, 3> dims{};
+    for (int a = 0; a < 3; ++a)
+        dims[std::size_t(a)] = std::int64_t(std::ceil(lat.n[std::size_t(a)] * h / cellSize)) + 1;
+    const auto middleOf = [&](const Stretch& s) {
+        return stock.dexelLine(axisFromIndex(s.family), s.ib, s.ic)
+            .at(0.5 * (double(s.lo) + double(s.hi)));
+    };
+    const auto cellOf = [&](const Vec3& p) {
+        std::array<std::int64_t, 3> c{};
+        for (int a = 0; a < 3; ++a)
+            c[std::size_t(a)] =
+                std::clamp(std::int64_t(std::floor((p[a] - lat.origin[a]) / cellSize)),
+                           std::int64_t(0), dims[std::size_t(a)] - 1);
+        return std::size_t(c[0] + dims[0] * (c[1] + dims[1] * c[2]));
+    };
+
+    // The cells the stretches' middles lie in, joined where they touch.
+    std::vector<std::size_t> cellOfStretch(stretches.size());
+    for (std::size_t i = 0; i < stretches.size(); ++i)
+        cellOfStretch[i] = cellOf(middleOf(stretches[i]));
+    std::vector<std::size_t> cells = cellOfStretch;
+    std::sort(cells.begin(), cells.end());
+    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+    const auto indexOf = [&](std::size_t cell) {
+        return std::size_t(std::lower_bound(cells.begin(), cells.end(), cell) - cells.begin());
+    };
+    boost::disjoint_sets_with_storage<> sets(cells.size());
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+        const auto k = std::int64_t(cells[i]);
+        const std::int64_t x = k % dims[0], y = (k / dims[0]) % dims[1],
+                           z = k / (dims[0] * dims[1]);
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const std::int64_t nx = x + dx, ny = y + dy, nz = z + dz;
+                    if (nx < 0 || ny < 0 || nz < 0 || nx >= dims[0] || ny >= dims[1] ||
+                        nz >= dims[2])
+                        continue;
+                    const auto neighbour = std::size_t(nx + dims[0] * (ny + dims[1] * nz));
+                    const std::size_t j = indexOf(neighbour);
+                    if (j < cells.size() && cells[j] == neighbour) sets.union_set(i, j);
+                }
     }
+
+    // The regions, numbered as their first stretch comes, with their lengths per family.
+    constexpr std::size_t kNone = ~std::size_t(0);
+    std::vector<std::size_t> regionOfRoot(cells.size(), kNone);
+    std::vector<FineRegion> regions;
+    std::vector<std::array<double, 3>> lengths;
+    for (std::size_t i = 0; i < stretches.size(); ++i) {
+        const Stretch& s = stretches[i];
+        std::size_t& r = regionOfRoot[sets.find_set(indexOf(cellOfStretch[i]))];
+        if (r == kNone) {
+            r = regions.size();
+            regions.emplace_back();
+            lengths.push_back({0.0, 0.0, 0.0});
+        }
+        FineRegion& region = regions[r];
+        const double length = double(s.hi) - double(s.lo);
+        lengths[r][std::size_t(s.family)] += length;
+        ++region.stretches;
+        const Line line = stock.dexelLine(axisFromIndex(s.family), s.ib, s.ic);
+        Vec3 lo = line.at(s.lo), hi = line.at(s.hi);
+        for (int a = 0; a < 3; ++a)
+            if (a != s.family) lo[a] -= 0.5 * h, hi[a] += 0.5 * h;
+        region.box.expand(lo);
+        region.box.expand(hi);
+        if (length > region.widestMm) region.widestMm = length, region.widestAt = middleOf(s);
+    }
+    for (std::size_t r = 0; r < regions.size(); ++r) {
+        FineRegion& region = regions[r];
+        region.volumeMm3 = h * h * *std::max_element(lengths[r].begin(), lengths[r].end());
+        out.volumeMm3 += region.volumeMm3;
+        if (region.widestMm > out.widestMm)
+            out.widestMm = region.widestMm, out.widestAt = region.widestAt;
+    }
+    out.regionCount = regions.size();
+    std::stable_sort(regions.begin(), regions.end(), [](const FineRegion& x, const FineRegion& y) {
+        return x.volumeMm3 > y.volumeMm3;
+    });
+    if (regions.size() > kFineRegionsKept) regions.resize(kFineRegionsKept);
+    out.regions = std::move(regions);
+    return out;
 }
 
 }  // namespace
 
 FineFeatures finerThanLattice(const TriDexelStock& stock) {
+    std::vector<Stretch> material, gaps;
+    findStretches(stock, material, gaps);
     FineFeatures out;
-    for (int i = 0; i < 3; ++i) {
-        const Axis a = axisFromIndex(i);
-        if (!stock.has(a)) continue;
-        const FamilyFeatures f = familyFeatures(stock, a);
-        addFamily(stock, a, f.material, out.material);
-        addFamily(stock, a, f.gaps, out.gaps);
-    }
+    out.material = summarise(stock, material);
+    out.gaps = summarise(stock, gaps);
     return out;
 }
 

@@ -118,12 +118,19 @@ TEST_CASE("simulate: a wall thinner than the spacing is reported, not dropped si
     bool warned = false;
     for (const ReportWarning& w : r.warnings)
         warned = warned || (w.message.find("leaves out material thinner than the lattice") != std::string::npos &&
-                            w.message.find(std::to_string(wall.count) + " stretches") != std::string::npos);
+                            w.message.find(std::to_string(wall.count) + " dexel stretches") != std::string::npos &&
+                            w.message.find("in 1 place,") != std::string::npos);
     CHECK(warned);
     const nlohmann::json j = nlohmann::json::parse(read(dir / "report.json"));
     CHECK(j["finer_than_lattice"]["material"]["stretches"].get<std::size_t>() == wall.count);
     CHECK(j["finer_than_lattice"]["material"]["widest_mm"].get<double>() == wall.widestMm);
     CHECK(j["finer_than_lattice"]["gaps"]["stretches"].get<std::size_t>() == 0);
+    // One place: the wall, between the slots.
+    CHECK(j["finer_than_lattice"]["material"]["places"].get<std::size_t>() == 1);
+    const auto& place = j["finer_than_lattice"]["material"]["regions"].at(0);
+    CHECK(place["box_mm"]["min"][0].get<double>() > 12.9);
+    CHECK(place["box_mm"]["max"][0].get<double>() < 13.5);
+    CHECK(place["stretches"].get<std::size_t>() == wall.count);
 }
 
 TEST_CASE("z-only and x-only stocks measure the same slot", "[job]") {

@@ -46,7 +46,9 @@ std::vector<Stretch> oracle(const TriDexelStock& stock, bool gaps) {
                         if (k + 1 == s.size || !(s[k + 1].lo > s[k].hi)) continue;
                         lo = s[k].hi, hi = s[k + 1].lo;
                     }
-                    if (empty(lo, hi)) out.push_back({a, hi - lo, stock.dexelLine(axis, ib, ic).at(0.5 * (lo + hi))});
+                    if (empty(lo, hi))
+                        out.push_back(
+                            {a, hi - lo, stock.dexelLine(axis, ib, ic).at(0.5 * (lo + hi))});
                 }
             }
     }
@@ -57,9 +59,21 @@ std::vector<Stretch> oracle(const TriDexelStock& stock, bool gaps) {
 void checkAgainst(const FineStretches& found, const std::vector<Stretch>& expected, double h) {
     CHECK(found.count == expected.size());
     double perFamily[3] = {0.0, 0.0, 0.0}, widest = 0.0;
-    for (const Stretch& s : expected) perFamily[s.family] += s.length, widest = std::max(widest, s.length);
-    CHECK(found.volumeMm3 == Approx(h * h * *std::max_element(perFamily, perFamily + 3)));
+    for (const Stretch& s : expected)
+        perFamily[s.family] += s.length, widest = std::max(widest, s.length);
+    // Each region's volume is its best family's: at least one family's total, at most all three.
+    CHECK(found.volumeMm3 >= h * h * *std::max_element(perFamily, perFamily + 3) * (1.0 - 1e-12));
+    CHECK(found.volumeMm3 <= h * h * (perFamily[0] + perFamily[1] + perFamily[2]) * (1.0 + 1e-12));
     CHECK(found.widestMm == widest);
+    // The regions kept: most volume first, and all of the stretches when all are kept.
+    REQUIRE(found.regionCount >= 1);
+    CHECK(found.regions.size() == std::min(found.regionCount, kFineRegionsKept));
+    std::size_t inRegions = 0;
+    for (std::size_t r = 0; r < found.regions.size(); ++r) {
+        inRegions += found.regions[r].stretches;
+        if (r > 0) CHECK(found.regions[r - 1].volumeMm3 >= found.regions[r].volumeMm3);
+    }
+    if (found.regionCount <= kFineRegionsKept) CHECK(inRegions == found.count);
     // Several stretches may be the widest: the one named is one of them.
     CHECK(std::any_of(expected.begin(), expected.end(), [&](const Stretch& s) {
         return s.length == widest && s.middle == found.widestAt;
@@ -83,12 +97,14 @@ TEST_CASE("fine features: random dexels against every lattice point", "[stock][f
                 for (int ib = 0; ib < fam.nb(); ++ib)
                     for (int c = cuts(rng); c > 0; --c) {
                         const int q0 = quarter(rng), q1 = quarter(rng);
-                        fam.subtract(ib, ic, 0.25f * float(std::min(q0, q1)), 0.25f * float(std::max(q0, q1)));
+                        fam.subtract(ib, ic, 0.25f * float(std::min(q0, q1)),
+                                     0.25f * float(std::max(q0, q1)));
                     }
         }
         const FineFeatures f = finerThanLattice(stock);
         const std::vector<Stretch> material = oracle(stock, false), gaps = oracle(stock, true);
-        INFO("seed " << seed << ": " << material.size() << " material and " << gaps.size() << " gap stretches");
+        INFO("seed " << seed << ": " << material.size() << " material and " << gaps.size()
+                     << " gap stretches");
         REQUIRE(!material.empty());
         REQUIRE(!gaps.empty());
         checkAgainst(f.material, material, h);
@@ -102,7 +118,9 @@ TEST_CASE("fine features: a wall and a slot thinner than the spacing", "[stock][
     const Box block{Vec3(0.0), Vec3(32.0, 32.0, 24.0)};
     const double y0 = 5.2, y1 = 27.1, z0 = 8.3;
     const std::size_t dexels = 22 * 16;
-    const auto pocket = [&](double x0, double x1) { return testing::boxCutter({Vec3(x0, y0, z0), Vec3(x1, y1, 30.0)}); };
+    const auto pocket = [&](double x0, double x1) {
+        return testing::boxCutter({Vec3(x0, y0, z0), Vec3(x1, y1, 30.0)});
+    };
     const auto features = [&](const std::vector<testing::Cutter>& cuts) {
         TriDexelStock stock = TriDexelStock::fromBox(block, 1.0);
         for (const testing::Cutter& c : cuts) testing::carve(stock, c);
@@ -116,6 +134,33 @@ TEST_CASE("fine features: a wall and a slot thinner than the spacing", "[stock][
         CHECK(f.material.volumeMm3 == Approx(0.7 * double(dexels)).margin(1e-3));
         CHECK(f.material.widestAt.x == Approx(15.95).margin(1e-5));
         CHECK(f.gaps.count == 0);
+        // One region: the wall, its dexels' cells from y 5 to 27 and z 8 to 24.
+        REQUIRE(f.material.regionCount == 1);
+        const FineRegion& wall = f.material.regions.at(0);
+        CHECK(wall.stretches == dexels);
+        CHECK(wall.volumeMm3 == Approx(f.material.volumeMm3));
+        CHECK(wall.box.lo.x == Approx(15.6).margin(1e-5));
+        CHECK(wall.box.hi.x == Approx(16.3).margin(1e-5));
+        CHECK(wall.box.lo.y == Approx(5.0));
+        CHECK(wall.box.hi.y == Approx(27.0));
+        CHECK(wall.box.lo.z == Approx(8.0));
+        CHECK(wall.box.hi.z == Approx(24.0));
+    }
+    SECTION("two walls apart are two regions, the larger first") {
+        // 0.7 thick over y 5.2 to 15 (10 x 16 dexels), and 0.3 thick at x 20.6 over y 18 to 27.1
+        // (9 x 16), 3 mm further on: more than a region's cells join.
+        const auto cut = [&](double x0, double ya, double x1, double yb) {
+            return testing::boxCutter({Vec3(x0, ya, z0), Vec3(x1, yb, 30.0)});
+        };
+        const FineFeatures f = features({cut(4.0, y0, 15.6, 15.0), cut(16.3, y0, 28.0, 15.0),
+                                         cut(4.0, 18.0, 20.6, y1), cut(20.9, 18.0, 28.0, y1)});
+        CHECK(f.material.count == 160 + 144);
+        REQUIRE(f.material.regionCount == 2);
+        CHECK(f.material.regions.at(0).volumeMm3 == Approx(0.7 * 160).margin(1e-3));
+        CHECK(f.material.regions.at(0).widestAt.x == Approx(15.95).margin(1e-5));
+        CHECK(f.material.regions.at(1).volumeMm3 == Approx(0.3 * 144).margin(1e-3));
+        CHECK(f.material.regions.at(1).widestAt.x == Approx(20.75).margin(1e-5));
+        CHECK(f.material.volumeMm3 == Approx(0.7 * 160 + 0.3 * 144).margin(1e-3));
     }
     SECTION("a wall 0.6 thick holding a lattice plane") {
         const FineFeatures f = features({pocket(4.0, 15.3), pocket(15.9, 28.0)});
@@ -135,7 +180,8 @@ TEST_CASE("fine features: a wall and a slot thinner than the spacing", "[stock][
         CHECK(f.material.count == 0);
     }
     SECTION("a skin 0.3 thick on the block's face, outside its first lattice plane") {
-        const FineFeatures f = features({testing::boxCutter({Vec3(-1.0, y0, z0), Vec3(31.7, y1, 30.0)})});
+        const FineFeatures f =
+            features({testing::boxCutter({Vec3(-1.0, y0, z0), Vec3(31.7, y1, 30.0)})});
         CHECK(f.material.count == dexels);
         CHECK(f.material.widestMm == Approx(0.3).margin(1e-5));
         CHECK(f.material.widestAt.x == Approx(31.85).margin(1e-5));

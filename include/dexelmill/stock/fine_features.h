@@ -13,23 +13,44 @@
 #pragma once
 
 #include <cstddef>
+#include <vector>
 
 #include "dexelmill/geometry/types.h"
 #include "dexelmill/stock/tridexel.h"
 
 namespace dexelmill {
 
-/// @brief Stretches of one kind (material, or gaps between material) that no lattice point lies
-/// in, over every kept family.
-struct FineStretches {
-    std::size_t count = 0;  ///< stretches, all families together
+/// @brief Stretches near one another: one thin wall, fin or slot, as far as the dexels show it.
+struct FineRegion {
     /// Their volume as the family that sees the most of them measures it: h^2 times their lengths
     /// (mm^3). A feature thin along one axis is seen by that axis's family alone, so this is the
     /// best single estimate; what no family crosses is not in it.
     double volumeMm3 = 0.0;
-    double widestMm = 0.0;  ///< the longest stretch (mm): the thickest such feature seen
+    Box box;                ///< the stretches' extent, each as wide as its dexel's cell (mm)
+    double widestMm = 0.0;  ///< the longest stretch (mm): the thickest part seen
     Vec3 widestAt{0.0};     ///< the middle of the longest stretch (mm)
+    std::size_t stretches = 0;
 };
+
+/// @brief Stretches of one kind (material, or gaps between material) that no lattice point lies
+/// in, over every kept family.
+struct FineStretches {
+    std::size_t count = 0;   ///< stretches, all families together
+    double volumeMm3 = 0.0;  ///< over all regions (FineRegion::volumeMm3 per region, summed)
+    double widestMm = 0.0;   ///< the longest stretch (mm)
+    Vec3 widestAt{0.0};      ///< the middle of the longest stretch (mm)
+    /// How many regions the stretches form: those within kFineRegionJoin lattice spacings of one
+    /// another (by cells of that size that touch) are one region.
+    std::size_t regionCount = 0;
+    /// The regions with the most volume, most first, at most kFineRegionsKept.
+    std::vector<FineRegion> regions;
+};
+
+/// Stretches whose middles lie in cells of this many spacings that touch (by a face, an edge or a
+/// corner) are one region: a wall's stretches lie one spacing apart.
+constexpr double kFineRegionJoin = 2.0;
+/// Regions kept in FineStretches::regions.
+constexpr std::size_t kFineRegionsKept = 10;
 
 /// @brief What the lattice of a stock cannot show.
 struct FineFeatures {
@@ -41,7 +62,8 @@ struct FineFeatures {
 };
 
 /// @brief Finds the stretches of `stock`'s dexels that no lattice point lies in (see the file
-/// comment). A lattice point is in material for a family exactly as TriDexelStock::inside says.
+/// comment), and groups them into regions. A lattice point is in material for a family exactly
+/// as TriDexelStock::inside says.
 FineFeatures finerThanLattice(const TriDexelStock& stock);
 
 }  // namespace dexelmill
