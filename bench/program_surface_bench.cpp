@@ -1,5 +1,6 @@
-// Level-set rebuild and meshing of real programs' stocks: each program is cut once, then its
-// stock is rebuilt and meshed on every iteration, as `simulate` does after cutting.
+// What `simulate` does with real programs' stocks after cutting: each program is cut once, then
+// its stock is rebuilt and meshed (BM_ProgramRebuildAndMesh), or searched for what the lattice
+// cannot show (BM_ProgramFinerThanLattice), on every iteration.
 //
 //   ./build/dexelmill_bench --benchmark_filter=BM_ProgramRebuildAndMesh --benchmark_repetitions=5
 //
@@ -20,6 +21,7 @@
 #include <tbb/task_arena.h>
 
 #include "dexelmill/job/simulate.h"
+#include "dexelmill/stock/fine_features.h"
 #include "dexelmill/surface/contour.h"
 #include "dexelmill/surface/levelset.h"
 #include "dexelmill/tool/builders.h"
@@ -96,6 +98,27 @@ static void BM_ProgramRebuildAndMesh(benchmark::State& state) {
     state.counters["triangles"] = tris;
 }
 BENCHMARK(BM_ProgramRebuildAndMesh)
+    ->ArgNames({"program", "threads"})
+    ->Args({0, 1})
+    ->Args({0, 2})
+    ->Args({1, 1})
+    ->Args({1, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+static void BM_ProgramFinerThanLattice(benchmark::State& state) {
+    const TriDexelStock* stock = cutStock(int(state.range(0)));
+    if (!stock) {
+        state.SkipWithError("the program's files are missing");
+        return;
+    }
+    tbb::task_arena arena(int(state.range(1)));
+    FineFeatures found;
+    for (auto _ : state) arena.execute([&] { found = finerThanLattice(*stock); });
+    state.counters["material_stretches"] = double(found.material.count);
+    state.counters["gap_stretches"] = double(found.gaps.count);
+}
+BENCHMARK(BM_ProgramFinerThanLattice)
     ->ArgNames({"program", "threads"})
     ->Args({0, 1})
     ->Args({0, 2})
