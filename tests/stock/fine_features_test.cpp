@@ -187,3 +187,38 @@ TEST_CASE("fine features: a wall and a slot thinner than the spacing", "[stock][
         CHECK(f.material.widestAt.x == Approx(31.85).margin(1e-5));
     }
 }
+
+TEST_CASE("fine features: degenerate stocks", "[stock][fine][degenerate]") {
+    const Box block{Vec3(0.0), Vec3(8.0, 4.0, 4.0)};
+    SECTION("no material at all") {
+        const FineFeatures f = finerThanLattice(TriDexelStock(Lattice::fromBox(block, 1.0)));
+        CHECK(f.material.count == 0);
+        CHECK(f.gaps.count == 0);
+        CHECK(f.material.regions.empty());
+        CHECK(f.material.volumeMm3 == 0.0);
+    }
+    SECTION("one family: only its dexels are searched") {
+        // An uncut z-only block holds no stretch, and the families it lacks are not asked for. A
+        // sliver from x 2.6 to 2.9 (lattice points at 2.5 and 3.5) left on an x-only block's dexel
+        // is one.
+        CHECK(finerThanLattice(TriDexelStock::fromBox(block, 1.0, FamilySet::only(Axis::Z))).material.count == 0);
+        TriDexelStock x = TriDexelStock::fromBox(block, 1.0, FamilySet::only(Axis::X));
+        x.family(Axis::X).subtract(1, 1, 0.0f, 2.6f);
+        x.family(Axis::X).subtract(1, 1, 2.9f, 8.0f);
+        const FineFeatures f = finerThanLattice(x);
+        REQUIRE(f.material.count == 1);
+        CHECK(f.material.widestMm == Approx(0.3).margin(1e-6));
+        CHECK(f.material.widestAt.x == Approx(2.75).margin(1e-6));
+        CHECK(f.material.widestAt.y == 1.5);
+        CHECK(f.material.widestAt.z == 1.5);
+        CHECK(f.material.regionCount == 1);
+        CHECK(f.material.volumeMm3 == Approx(0.3).margin(1e-6));
+    }
+    SECTION("segments that touch leave no gap") {
+        TriDexelStock x = TriDexelStock::fromBox(block, 1.0, FamilySet::only(Axis::X));
+        const Segment touching[2] = {{0.0f, 2.75f, {}, {}}, {2.75f, 8.0f, {}, {}}};
+        x.family(Axis::X).setSegments(0, 0, touching, 2);
+        CHECK(finerThanLattice(x).gaps.count == 0);
+        CHECK(finerThanLattice(x).material.count == 0);
+    }
+}
