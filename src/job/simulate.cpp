@@ -109,19 +109,22 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
 }
 
 /// Warns of what the lattice cannot show (finerThanLattice): material the surface leaves out, and
-/// gaps it fills. The dexels keep both, so the volumes reported count them.
-void noteFineFeatures(const FineFeatures& f, double h, std::vector<ReportWarning>& notes) {
+/// gaps it fills, with their share of the part's volume (`part`, mm^3). The dexels keep both, so
+/// the volumes reported count them.
+void noteFineFeatures(const FineFeatures& f, double h, double part, std::vector<ReportWarning>& notes) {
     const auto note = [&](const FineStretches& s, const char* what) {
         if (s.count == 0) return;
         const FineRegion& most = s.regions.front();
         char text[600];
         std::snprintf(text, sizeof text,
                       "%s %zu dexel stretch%s with no lattice point in them (spacing %.4g mm), in %zu place%s, about "
-                      "%.3g mm^3 in all; the most, %.3g mm^3, within (%.3f, %.3f, %.3f)-(%.3f, %.3f, %.3f), up to "
-                      "%.3g mm across at (%.3f, %.3f, %.3f); the volumes count them, a finer --resolution shows them",
+                      "%.3g mm^3 in all (%.2g %% of the part); the most, %.3g mm^3, within (%.3f, %.3f, %.3f)-(%.3f, "
+                      "%.3f, %.3f), up to %.3g mm across at (%.3f, %.3f, %.3f); the volumes count them, a finer "
+                      "--resolution shows them",
                       what, s.count, s.count == 1 ? "" : "es", h, s.regionCount, s.regionCount == 1 ? "" : "s",
-                      s.volumeMm3, most.volumeMm3, most.box.lo.x, most.box.lo.y, most.box.lo.z, most.box.hi.x,
-                      most.box.hi.y, most.box.hi.z, most.widestMm, most.widestAt.x, most.widestAt.y, most.widestAt.z);
+                      s.volumeMm3, part > 0.0 ? 100.0 * s.volumeMm3 / part : 0.0, most.volumeMm3, most.box.lo.x,
+                      most.box.lo.y, most.box.lo.z, most.box.hi.x, most.box.hi.y, most.box.hi.z, most.widestMm,
+                      most.widestAt.x, most.widestAt.y, most.widestAt.z);
         ReportWarning w;
         w.message = text;
         notes.push_back(w);
@@ -502,17 +505,17 @@ Simulation runStages(const SimulateOptions& o) {
         report.collisions.push_back({c.move, {at.file, at.line}, c.kind == CollisionKind::Rapid ? "rapid" : "shank",
                                      c.volume});
     }
+    for (int a = 0; a < 3; ++a)
+        if (stock.has(axisFromIndex(a))) report.familyVolumesMm3[a] = stock.volume(axisFromIndex(a));
+    report.finalVolumeMm3 = stock.volume(measure);
+    report.removedVolumeMm3 = report.stockVolumeMm3 - report.finalVolumeMm3;
     report.fineFeatures = finerThanLattice(stock);
-    noteFineFeatures(report.fineFeatures, stock.lattice().h, notes);
+    noteFineFeatures(report.fineFeatures, stock.lattice().h, report.finalVolumeMm3, notes);
     // The job's own notes first (a thread count cut, the stock it chose, an open design): a long
     // program's diagnostics would push them past what the summary prints.
     for (ReportWarning& n : notes) report.warnings.push_back(std::move(n));
     for (const Diagnostic& d : program.diagnostics)
         report.warnings.push_back({{d.where.file, d.where.line}, d.message});
-    for (int a = 0; a < 3; ++a)
-        if (stock.has(axisFromIndex(a))) report.familyVolumesMm3[a] = stock.volume(axisFromIndex(a));
-    report.finalVolumeMm3 = stock.volume(measure);
-    report.removedVolumeMm3 = report.stockVolumeMm3 - report.finalVolumeMm3;
     report.stockMemoryBytes = stock.memoryBytes();
     checkSurfaceFits(stock, budget);
 
