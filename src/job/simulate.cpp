@@ -115,7 +115,7 @@ void noteFineFeatures(const FineFeatures& f, double h, double part, std::vector<
     const auto note = [&](const FineStretches& s, const char* what) {
         if (s.count == 0) return;
         const FineRegion& most = s.regions.front();
-        char text[600];
+        char text[800];
         std::snprintf(text, sizeof text,
                       "%s %zu dexel stretch%s with no lattice point in them (spacing %.4g mm), in %zu place%s, about "
                       "%.3g mm^3 in all (%.2g %% of the part); the most, %.3g mm^3, within (%.3f, %.3f, %.3f)-(%.3f, "
@@ -129,8 +129,9 @@ void noteFineFeatures(const FineFeatures& f, double h, double part, std::vector<
         w.message = text;
         notes.push_back(w);
     };
-    note(f.material, "the mesh leaves out material thinner than the lattice (walls, fins, ridge tops):");
-    note(f.gaps, "the mesh fills gaps narrower than the lattice (slots, grooves):");
+    note(f.material, "material thinner than the lattice (walls, fins, ridge tops) is left out of the level set and the "
+                     "mesh (--refine restores only what the mesh passes near):");
+    note(f.gaps, "gaps narrower than the lattice (slots, grooves) are filled in the level set and the mesh:");
 }
 
 /// Moves whose tool axis turns. A feed move is swept turning (TurningSweep, within the job's

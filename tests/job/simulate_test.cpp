@@ -117,7 +117,7 @@ TEST_CASE("simulate: a wall thinner than the spacing is reported, not dropped si
     CHECK(r.fineFeatures.gaps.count == 0);
     bool warned = false;
     for (const ReportWarning& w : r.warnings)
-        warned = warned || (w.message.find("leaves out material thinner than the lattice") != std::string::npos &&
+        warned = warned || (w.message.find("material thinner than the lattice (walls, fins, ridge tops) is left out") != std::string::npos &&
                             w.message.find(std::to_string(wall.count) + " dexel stretches") != std::string::npos &&
                             w.message.find("in 1 place,") != std::string::npos);
     CHECK(warned);
