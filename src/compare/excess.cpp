@@ -14,6 +14,7 @@
 
 #include "compare/detail/deepest.h"
 #include "dexelmill/error.h"
+#include "dexelmill/geometry/cell_regions.h"
 #include "memory/pages.h"
 
 namespace dexelmill {
@@ -168,11 +169,6 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
     constexpr std::uint32_t kNone = ~0u;
     std::vector<std::uint32_t> idOf(cellCount, kNone);  // each searched cell's number
     std::vector<std::size_t> idCell;                     // each number's cell
-    std::vector<std::uint32_t> parent;
-    auto find = [&](std::uint32_t i) {
-        while (parent[i] != i) i = parent[i] = parent[parent[i]];
-        return i;
-    };
     // A piece's cells follow one another, so they join; its first names its region.
     std::vector<std::size_t> firstCell(search.size());
     for (std::size_t i = 0; i < search.size(); ++i) {
@@ -183,31 +179,19 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
         for (double t = std::floor(s.lo / cell) * cell; t < s.hi; t += cell) {
             const std::size_t k = cellOf(a, std::clamp(t + 0.5 * cell, s.lo, s.hi), b, atB, c, atC);
             if (idOf[k] == kNone) {
-                idOf[k] = std::uint32_t(parent.size());
-                parent.push_back(std::uint32_t(parent.size()));
+                idOf[k] = std::uint32_t(idCell.size());
                 idCell.push_back(k);
             }
         }
     }
-    for (std::uint32_t i = 0; i < idCell.size(); ++i) {
-        const auto k = std::int64_t(idCell[i]);
-        const std::int64_t x = k % cells[0], y = (k / cells[0]) % cells[1], z = k / (cells[0] * cells[1]);
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const std::int64_t nx = x + dx, ny = y + dy, nz = z + dz;
-                    if (nx < 0 || ny < 0 || nz < 0 || nx >= cells[0] || ny >= cells[1] || nz >= cells[2]) continue;
-                    const std::uint32_t j = idOf[std::size_t(nx + cells[0] * (ny + cells[1] * nz))];
-                    if (j != kNone) parent[find(j)] = find(i);
-                }
-    }
+    const std::vector<std::uint32_t> label = touchingRegions(cells, idCell);  // by number
     // Each region's pieces, gathered region by region (in their order within a region), and its
     // cells.
-    std::vector<std::uint32_t> regionOf(parent.size(), kNone);  // by root
+    std::vector<std::uint32_t> regionOf(idCell.size(), kNone);  // by label
     std::vector<std::uint32_t> pieceRegion(search.size());
     std::vector<std::size_t> regionStart{0};
     for (std::size_t i = 0; i < search.size(); ++i) {
-        std::uint32_t& r = regionOf[find(idOf[firstCell[i]])];
+        std::uint32_t& r = regionOf[label[idOf[firstCell[i]]]];
         if (r == kNone) {
             r = std::uint32_t(regionStart.size() - 1);
             regionStart.push_back(0);
@@ -228,7 +212,7 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
     }
     std::vector<std::vector<std::size_t>> regionCells(regions);
     for (std::uint32_t i = 0; i < idCell.size(); ++i) {
-        const std::uint32_t r = regionOf[find(i)];
+        const std::uint32_t r = regionOf[label[i]];
         if (r != kNone) regionCells[r].push_back(idCell[i]);
     }
     const double eps = depthBound(tolerance, lattice.h);
