@@ -6,7 +6,8 @@
 #include <cstdint>
 
 #include <tbb/parallel_for.h>
-#include <boost/pending/disjoint_sets.hpp>
+
+#include "dexelmill/geometry/cell_regions.h"
 
 namespace dexelmill {
 
@@ -90,43 +91,15 @@ FineStretches summarise(const TriDexelStock& stock, const std::vector<Stretch>& 
     std::vector<std::size_t> cellOfStretch(stretches.size());
     for (std::size_t i = 0; i < stretches.size(); ++i)
         cellOfStretch[i] = cellOf(middleOf(stretches[i]));
-    std::vector<std::size_t> cells = cellOfStretch;
-    std::sort(cells.begin(), cells.end());
-    cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-    const auto indexOf = [&](std::size_t cell) {
-        return std::size_t(std::lower_bound(cells.begin(), cells.end(), cell) - cells.begin());
-    };
-    boost::disjoint_sets_with_storage<> sets(cells.size());
-    for (std::size_t i = 0; i < cells.size(); ++i) {
-        const auto k = std::int64_t(cells[i]);
-        const std::int64_t x = k % dims[0], y = (k / dims[0]) % dims[1],
-                           z = k / (dims[0] * dims[1]);
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const std::int64_t nx = x + dx, ny = y + dy, nz = z + dz;
-                    if (nx < 0 || ny < 0 || nz < 0 || nx >= dims[0] || ny >= dims[1] ||
-                        nz >= dims[2])
-                        continue;
-                    const auto neighbour = std::size_t(nx + dims[0] * (ny + dims[1] * nz));
-                    const std::size_t j = indexOf(neighbour);
-                    if (j < cells.size() && cells[j] == neighbour) sets.union_set(i, j);
-                }
-    }
+    const std::vector<std::uint32_t> regionOf = touchingRegions(dims, cellOfStretch);
 
     // The regions, numbered as their first stretch comes, with their lengths per family.
-    constexpr std::size_t kNone = ~std::size_t(0);
-    std::vector<std::size_t> regionOfRoot(cells.size(), kNone);
-    std::vector<FineRegion> regions;
-    std::vector<std::array<double, 3>> lengths;
+    std::vector<FineRegion> regions(*std::max_element(regionOf.begin(), regionOf.end()) +
+                                    std::size_t(1));
+    std::vector<std::array<double, 3>> lengths(regions.size(), {0.0, 0.0, 0.0});
     for (std::size_t i = 0; i < stretches.size(); ++i) {
         const Stretch& s = stretches[i];
-        std::size_t& r = regionOfRoot[sets.find_set(indexOf(cellOfStretch[i]))];
-        if (r == kNone) {
-            r = regions.size();
-            regions.emplace_back();
-            lengths.push_back({0.0, 0.0, 0.0});
-        }
+        const std::size_t r = regionOf[i];
         FineRegion& region = regions[r];
         const double length = double(s.hi) - double(s.lo);
         lengths[r][std::size_t(s.family)] += length;
