@@ -130,7 +130,7 @@ void noteFineFeatures(const FineFeatures& f, double h, double part, std::vector<
         notes.push_back(w);
     };
     note(f.material, "material thinner than the lattice (walls, fins, ridge tops) is left out of the level set and the "
-                     "mesh (--refine restores only what the mesh passes near):");
+                     "mesh (refinement restores only what the mesh passes near):");
     note(f.gaps, "gaps narrower than the lattice (slots, grooves) are filled in the level set and the mesh:");
 }
 
