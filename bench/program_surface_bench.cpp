@@ -68,14 +68,30 @@ double median(std::vector<double> v) {
     return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
+/// The stock of the program the benchmark's first argument names, or null (the benchmark skipped)
+/// when its files are missing.
+const TriDexelStock* stockOrSkip(benchmark::State& state) {
+    const TriDexelStock* stock = cutStock(int(state.range(0)));
+    if (!stock) state.SkipWithError("the program's files are missing");
+    return stock;
+}
+
+/// Both programs on one thread and on two, timed by the wall clock.
+void programsAndThreads(benchmark::internal::Benchmark* b) {
+    b->ArgNames({"program", "threads"})
+        ->Args({0, 1})
+        ->Args({0, 2})
+        ->Args({1, 1})
+        ->Args({1, 2})
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime();
+}
+
 }  // namespace
 
 static void BM_ProgramRebuildAndMesh(benchmark::State& state) {
-    const TriDexelStock* stock = cutStock(int(state.range(0)));
-    if (!stock) {
-        state.SkipWithError("the program's files are missing");
-        return;
-    }
+    const TriDexelStock* stock = stockOrSkip(state);
+    if (!stock) return;
     tbb::task_arena arena(int(state.range(1)));
     std::vector<double> rebuildS, meshS, both;
     double tris = 0.0;
@@ -97,32 +113,15 @@ static void BM_ProgramRebuildAndMesh(benchmark::State& state) {
     state.counters["both_s"] = median(both);
     state.counters["triangles"] = tris;
 }
-BENCHMARK(BM_ProgramRebuildAndMesh)
-    ->ArgNames({"program", "threads"})
-    ->Args({0, 1})
-    ->Args({0, 2})
-    ->Args({1, 1})
-    ->Args({1, 2})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+BENCHMARK(BM_ProgramRebuildAndMesh)->Apply(programsAndThreads);
 
 static void BM_ProgramFinerThanLattice(benchmark::State& state) {
-    const TriDexelStock* stock = cutStock(int(state.range(0)));
-    if (!stock) {
-        state.SkipWithError("the program's files are missing");
-        return;
-    }
+    const TriDexelStock* stock = stockOrSkip(state);
+    if (!stock) return;
     tbb::task_arena arena(int(state.range(1)));
     FineFeatures found;
     for (auto _ : state) arena.execute([&] { found = finerThanLattice(*stock); });
     state.counters["material_stretches"] = double(found.material.count);
     state.counters["gap_stretches"] = double(found.gaps.count);
 }
-BENCHMARK(BM_ProgramFinerThanLattice)
-    ->ArgNames({"program", "threads"})
-    ->Args({0, 1})
-    ->Args({0, 2})
-    ->Args({1, 1})
-    ->Args({1, 2})
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+BENCHMARK(BM_ProgramFinerThanLattice)->Apply(programsAndThreads);
