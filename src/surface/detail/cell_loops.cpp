@@ -1,0 +1,320 @@
+#include "surface/detail/cell_loops.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+#include "surface/detail/cell_table.h"
+
+namespace dexelmill::detail {
+
+namespace {
+
+/// A face vertex lies at least this far (in spacings) from the face's edges.
+constexpr double kFaceVertexGap = 1e-3;
+/// A path across a face that goes round another on the same edge lies at least this much deeper.
+constexpr double kNestedDepthStep = 1.0 / 16.0;
+/// Samples along the line into the face on which a face vertex's depth is searched, and the
+/// bisection steps after the first change of sign (to 2^-20 of a spacing).
+constexpr int kDepthSamples = 32;
+constexpr int kDepthBisections = 20;
+
+/// A face in its own frame: across axis a at offset s of the cell, with in-face axes u = (a + 1) % 3
+/// and v = (a + 2) % 3, which turn counter-clockwise about +a. Its corners and edges are listed in
+/// the order of the walk round it: corners (0, 0), (1, 0), (1, 1), (0, 1) in (u, v); edges
+/// E0 (v = 0, walked up u), E1 (u = 1, up v), E2 (v = 1, down u), E3 (u = 0, down v).
+struct Frame {
+    int a = 0, s = 0, u = 0, v = 0;
+    std::array<int, 4> corner{}, edge{};
+};
+
+int edgeFromCorner(int k, int axis) {
+    return 4 * axis + cornerOffset(k, (axis + 1) % 3) + 2 * cornerOffset(k, (axis + 2) % 3);
+}
+
+Frame frameOf(int face) {
+    Frame f;
+    f.a = face >> 1;
+    f.s = face & 1;
+    f.u = (f.a + 1) % 3;
+    f.v = (f.a + 2) % 3;
+    const auto corner = [&](int cu, int cv) { return (f.s << f.a) | (cu << f.u) | (cv << f.v); };
+    f.corner = {corner(0, 0), corner(1, 0), corner(1, 1), corner(0, 1)};
+    f.edge = {edgeFromCorner(f.corner[0], f.u), edgeFromCorner(f.corner[1], f.v), edgeFromCorner(f.corner[3], f.u),
+              edgeFromCorner(f.corner[0], f.v)};
+    return f;
+}
+
+/// A crossing met on the walk: its id, the walk edge (0 to 3), its offset along that lattice edge
+/// and its walk position (edge + fraction walked along it).
+struct WalkCrossing {
+    std::uint32_t id;
+    int side;
+    double at, walk;
+};
+
+/// One face's edges, with membership and the blend of cell_loops.h.
+class FaceField {
+public:
+    FaceField(const CellCrossings& cell, const Frame& f) : cell_(cell), f_(f) {}
+
+    /// Whether the point at offset s along walk edge i (from its lattice lower end) is in material.
+    bool member(int i, double s) const {
+        const int e = f_.edge[std::size_t(i)];
+        bool in = (cell_.inside >> edgeCorner(e, 0)) & 1;
+        for (double t : cell_.edges[std::size_t(e)].at)
+            if (t < s) in = !in;
+        return in;
+    }
+
+    /// The signed distance along walk edge i to its nearest crossing, at most 1, negative in material.
+    double edgeValue(int i, double s) const {
+        double d = 1.0;
+        for (double t : cell_.edges[std::size_t(f_.edge[std::size_t(i)])].at) d = std::min(d, std::abs(s - t));
+        return member(i, s) ? -d : d;
+    }
+
+    double cornerValue(int k) const { return (cell_.inside >> f_.corner[std::size_t(k)]) & 1 ? -1.0 : 1.0; }
+
+    /// The Coons blend of the four edges at (u, v).
+    double blend(double u, double v) const {
+        const double edges = (1.0 - v) * edgeValue(0, u) + v * edgeValue(2, u) + (1.0 - u) * edgeValue(3, v) +
+                             u * edgeValue(1, v);
+        const double corners = (1.0 - u) * (1.0 - v) * cornerValue(0) + u * (1.0 - v) * cornerValue(1) +
+                               u * v * cornerValue(2) + (1.0 - u) * v * cornerValue(3);
+        return edges - corners;
+    }
+
+private:
+    const CellCrossings& cell_;
+    const Frame& f_;
+};
+
+/// The breakpoints 0, crossings, 1 of two parallel edges and the middles between consecutive ones,
+/// sorted and unique: the sample lines across the face along that direction.
+std::vector<double> sampleLines(const EdgeCrossings& e0, const EdgeCrossings& e1) {
+    std::vector<double> out{0.0, 1.0};
+    for (const EdgeCrossings* e : {&e0, &e1}) {
+        double prev = 0.0;
+        for (double t : e->at) {
+            out.push_back(0.5 * (prev + t));
+            prev = t;
+        }
+        out.push_back(0.5 * (prev + 1.0));
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+}
+
+int find(std::vector<int>& parent, int i) {
+    while (parent[std::size_t(i)] != i) i = parent[std::size_t(i)] = parent[std::size_t(parent[std::size_t(i)])];
+    return i;
+}
+
+/// A path across a face between two crossings, through a face vertex when `lens` (both on one edge).
+struct Path {
+    std::uint32_t from, to;
+    bool lens = false;
+    int side = 0;              ///< the walk edge of a lens
+    double lo = 0.0, hi = 0.0; ///< a lens's span along its edge
+    double depth = 0.0;        ///< a lens's face vertex: how far into the face
+};
+
+/// The face's paths, oriented in its own frame: material on their left seen from +a.
+std::vector<Path> facePaths(const CellCrossings& cell, const Frame& f, bool severalOnAnEdge, bool joined) {
+    std::vector<WalkCrossing> walk;
+    for (int i = 0; i < 4; ++i) {
+        const EdgeCrossings& e = cell.edges[std::size_t(f.edge[std::size_t(i)])];
+        const bool backwards = i >= 2;
+        const std::size_t n = e.ids.size();
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::size_t j = backwards ? n - 1 - k : k;
+            walk.push_back({e.ids[j], i, e.at[j], i + (backwards ? 1.0 - e.at[j] : e.at[j])});
+        }
+    }
+    std::vector<Path> paths;
+    const std::size_t n = walk.size();
+    if (n == 0) return paths;
+    // Arcs in material, by the index of the crossing that enters them.
+    std::vector<std::size_t> arcs;
+    bool in = (cell.inside >> f.corner[0]) & 1;
+    for (std::size_t k = 0; k < n; ++k) {
+        in = !in;
+        if (in) arcs.push_back(k);
+    }
+    std::vector<int> region(arcs.size());
+    if (!severalOnAnEdge) {
+        // Two arcs only when the corners alternate: joined, or each on its own.
+        std::iota(region.begin(), region.end(), 0);
+        if (arcs.size() == 2 && joined) region[1] = 0;
+    } else {
+        const FaceField field(cell, f);
+        const std::vector<double> us = sampleLines(cell.edges[std::size_t(f.edge[0])], cell.edges[std::size_t(f.edge[2])]);
+        const std::vector<double> vs = sampleLines(cell.edges[std::size_t(f.edge[3])], cell.edges[std::size_t(f.edge[1])]);
+        const int nu = int(us.size()), nv = int(vs.size());
+        std::vector<char> material(std::size_t(nu * nv));
+        for (int j = 0; j < nv; ++j)
+            for (int i = 0; i < nu; ++i) {
+                bool m = false;
+                if (j == 0) m = field.member(0, us[std::size_t(i)]);
+                else if (j == nv - 1) m = field.member(2, us[std::size_t(i)]);
+                else if (i == 0) m = field.member(3, vs[std::size_t(j)]);
+                else if (i == nu - 1) m = field.member(1, vs[std::size_t(j)]);
+                else m = field.blend(us[std::size_t(i)], vs[std::size_t(j)]) < 0.0;
+                material[std::size_t(j * nu + i)] = m;
+            }
+        std::vector<int> parent(material.size());
+        std::iota(parent.begin(), parent.end(), 0);
+        for (int j = 0; j < nv; ++j)
+            for (int i = 0; i < nu; ++i) {
+                const int k = j * nu + i;
+                if (!material[std::size_t(k)]) continue;
+                if (i + 1 < nu && material[std::size_t(k + 1)]) parent[std::size_t(find(parent, k))] = find(parent, k + 1);
+                if (j + 1 < nv && material[std::size_t(k + nu)]) parent[std::size_t(find(parent, k))] = find(parent, k + nu);
+            }
+        const auto index = [](const std::vector<double>& lines, double x) {
+            return int(std::lower_bound(lines.begin(), lines.end(), x) - lines.begin());
+        };
+        for (std::size_t r = 0; r < arcs.size(); ++r) {
+            const WalkCrossing& enter = walk[arcs[r]];
+            const WalkCrossing& leave = walk[(arcs[r] + 1) % n];
+            int i = 0, j = 0;
+            if (enter.side == leave.side && enter.walk < leave.walk) {
+                // The arc lies on one edge: the sample at its middle.
+                const double mid = 0.5 * (std::min(enter.at, leave.at) + std::max(enter.at, leave.at));
+                switch (enter.side) {
+                case 0: i = index(us, mid), j = 0; break;
+                case 1: i = nu - 1, j = index(vs, mid); break;
+                case 2: i = index(us, mid), j = nv - 1; break;
+                default: i = 0, j = index(vs, mid); break;
+                }
+            } else {
+                // The arc holds the corner that follows its first crossing.
+                const int c = (enter.side + 1) % 4;
+                i = c == 1 || c == 2 ? nu - 1 : 0;
+                j = c >= 2 ? nv - 1 : 0;
+            }
+            region[r] = find(parent, j * nu + i);
+        }
+    }
+    // Each region's arcs in walk order; its boundary leaves one and enters the next.
+    for (std::size_t r = 0; r < arcs.size(); ++r) {
+        std::size_t next = r;
+        for (std::size_t k = 1; k <= arcs.size(); ++k) {
+            const std::size_t q = (r + k) % arcs.size();
+            if (region[q] == region[r]) {
+                next = q;
+                break;
+            }
+        }
+        const WalkCrossing& leave = walk[(arcs[r] + 1) % n];
+        const WalkCrossing& enter = walk[arcs[next]];
+        Path p{leave.id, enter.id};
+        if (leave.side == enter.side) {
+            p.lens = true;
+            p.side = leave.side;
+            p.lo = std::min(leave.at, enter.at);
+            p.hi = std::max(leave.at, enter.at);
+        }
+        paths.push_back(p);
+    }
+    // Lens depths: where the blend, on the line into the face from the lens's middle, first
+    // leaves the membership the edge has there; a lens round others on its edge goes deeper.
+    const FaceField field(cell, f);
+    const auto pointAt = [](int side, double along, double depth, double& u, double& v) {
+        switch (side) {
+        case 0: u = along, v = depth; break;
+        case 1: u = 1.0 - depth, v = along; break;
+        case 2: u = along, v = 1.0 - depth; break;
+        default: u = depth, v = along; break;
+        }
+    };
+    std::vector<std::size_t> lenses;
+    for (std::size_t k = 0; k < paths.size(); ++k)
+        if (paths[k].lens) lenses.push_back(k);
+    std::sort(lenses.begin(), lenses.end(),
+              [&](std::size_t x, std::size_t y) { return paths[x].hi - paths[x].lo < paths[y].hi - paths[y].lo; });
+    for (std::size_t li = 0; li < lenses.size(); ++li) {
+        Path& p = paths[lenses[li]];
+        const double mid = 0.5 * (p.lo + p.hi);
+        const bool edgeIn = field.member(p.side, mid);
+        const auto differs = [&](double d) {
+            double u = 0.0, v = 0.0;
+            pointAt(p.side, mid, d, u, v);
+            return (field.blend(u, v) < 0.0) != edgeIn;
+        };
+        double depth = 0.5;
+        for (int k = 1; k <= kDepthSamples; ++k) {
+            const double d = double(k) / kDepthSamples;
+            if (!differs(d)) continue;
+            double lo = double(k - 1) / kDepthSamples, hi = d;
+            for (int b = 0; b < kDepthBisections; ++b) (differs(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
+            depth = 0.5 * (lo + hi);
+            break;
+        }
+        for (std::size_t lj = 0; lj < li; ++lj) {
+            const Path& q = paths[lenses[lj]];
+            if (q.side == p.side && p.lo <= q.lo && q.hi <= p.hi) depth = std::max(depth, q.depth + kNestedDepthStep);
+        }
+        p.depth = std::clamp(depth, kFaceVertexGap, 1.0 - kFaceVertexGap);
+    }
+    for (Path& p : paths)
+        if (p.lens) {
+            double u = 0.0, v = 0.0;
+            pointAt(p.side, 0.5 * (p.lo + p.hi), p.depth, u, v);
+            p.lo = u, p.hi = v;  // from here on: the face vertex's (u, v)
+        }
+    return paths;
+}
+
+}  // namespace
+
+std::vector<std::vector<std::uint32_t>> cellLoops(const CellCrossings& cell, const FaceVertexFn& faceVertex) {
+    // Directed links (from, to) of the cell's paths. A face's own frame has material on the left
+    // seen from +a: as cell_table.h orients, the face at offset 0 keeps that direction and the
+    // face at offset 1 (seen from outside the cell, from +a) reverses it.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> links;
+    for (int face = 0; face < kCellFaces; ++face) {
+        const Frame f = frameOf(face);
+        bool several = false;
+        for (int e : f.edge) several = several || cell.edges[std::size_t(e)].ids.size() > 1;
+        for (const Path& p : facePaths(cell, f, several, (cell.joined >> face) & 1)) {
+            const std::uint32_t from = f.s ? p.to : p.from, to = f.s ? p.from : p.to;
+            if (p.lens) {
+                const std::uint32_t mid = faceVertex(face, from, to, p.lo, p.hi);
+                links.push_back({from, mid});
+                links.push_back({mid, to});
+            } else {
+                links.push_back({from, to});
+            }
+        }
+    }
+    std::sort(links.begin(), links.end());
+    for (std::size_t k = 1; k < links.size(); ++k)
+        if (links[k].first == links[k - 1].first)
+            throw std::logic_error("cellLoops: a crossing starts two paths (its edge disagrees with its corners)");
+    std::vector<std::vector<std::uint32_t>> loops;
+    std::vector<char> used(links.size(), 0);
+    const auto linkFrom = [&](std::uint32_t id) {
+        const auto it = std::lower_bound(links.begin(), links.end(), std::make_pair(id, std::uint32_t(0)));
+        if (it == links.end() || it->first != id)
+            throw std::logic_error("cellLoops: a crossing starts no path (its edge disagrees with its corners)");
+        return std::size_t(it - links.begin());
+    };
+    for (std::size_t start = 0; start < links.size(); ++start) {
+        if (used[start]) continue;
+        std::vector<std::uint32_t> loop;
+        for (std::size_t k = start; !used[k]; k = linkFrom(links[k].second)) {
+            used[k] = 1;
+            loop.push_back(links[k].first);
+        }
+        if (links[linkFrom(loop.back())].second != loop.front())
+            throw std::logic_error("cellLoops: paths do not close into loops");
+        loops.push_back(std::move(loop));
+    }
+    return loops;
+}
+
+}  // namespace dexelmill::detail

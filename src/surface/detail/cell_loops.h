@@ -1,0 +1,61 @@
+/// @file cell_loops.h
+/// @brief The surface patches inside one lattice cell whose edges may each hold any number of
+/// crossings: the general form of cell_table.h, for cells around an edge whose dexel has several
+/// ends between its two lattice points (a wall, fin or slot thinner than the spacing). No
+/// OpenVDB here.
+///
+/// Each face is walked round its boundary, and its crossings split the boundary into arcs in
+/// material and arcs out of it. The arcs in material that one region of material on the face
+/// joins are found by the face rule (below); each region's boundary then runs along its arcs and,
+/// between one arc's last crossing and the next arc's first, across the face. A path across the
+/// face whose two ends lie on one edge (the face's slice of a thin wall's end, say) gets a face
+/// vertex in between, so that no two triangles share that edge's chord from four sides. The
+/// cell's paths, oriented as cell_table.h orients its segments, chain into loops.
+///
+/// The face rule. A face with at most one crossing per edge follows the cell table: its
+/// ambiguous case by the `joined` bit (the asymptotic decider on the level set's values). On a
+/// face with several crossings on an edge the dexels say nothing about the inside of the face, so
+/// the rule reads a transfinite (Coons) blend of the four edges: along each edge the signed
+/// distance to its nearest crossing (negative in material, at most 1), blended across the face
+/// and sampled on a grid whose lines pass through the middle of every arc. Material samples that
+/// touch along a grid line are one region. The samples on the boundary are the edges' own, so
+/// every arc holds one; the rule reads only the face's edges, so both cells sharing the face see
+/// the same regions.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace dexelmill::detail {
+
+/// @brief The crossings on one cell edge, in increasing order along its axis.
+struct EdgeCrossings {
+    std::vector<std::uint32_t> ids;  ///< the caller's vertex ids
+    std::vector<double> at;          ///< offsets from the edge's lower end, in (0, 1) spacings
+};
+
+/// @brief What one cell's loops are made from.
+struct CellCrossings {
+    std::uint8_t inside = 0;  ///< bit k: corner k (cell_table.h numbering) in material
+    /// Per face: on a face with at most one crossing per edge and corners in, out, in, out, whether
+    /// its inside corners are joined (cell_table.h's `joined`); other faces ignore it.
+    std::uint8_t joined = 0;
+    std::array<EdgeCrossings, 12> edges;  ///< per edge (cell_table.h numbering)
+};
+
+/// @brief Gives the id of the vertex on a face of the cell, at (u, v) in [0, 1]^2 of that face,
+/// between crossings `from` and `to`, which lie on one edge. (u, v) run along axes (a + 1) % 3
+/// and (a + 2) % 3 of the face across axis a, from its lowest corner. Both cells sharing the face
+/// ask for it with the same (from, to) pair, in either order, and the same point.
+using FaceVertexFn = std::function<std::uint32_t(int face, std::uint32_t from, std::uint32_t to, double u, double v)>;
+
+/// @brief The cell's loops: ids in order, each oriented as cell_table.h orients its loops (the fan
+/// from a point inside the cell faces out of the material). Every crossing lies on exactly one
+/// loop, once; face vertices come from `faceVertex`.
+/// @pre the crossings on each edge agree with its corners: their number is odd exactly where the
+/// two corners differ.
+std::vector<std::vector<std::uint32_t>> cellLoops(const CellCrossings& cell, const FaceVertexFn& faceVertex);
+
+}  // namespace dexelmill::detail

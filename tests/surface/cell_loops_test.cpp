@@ -1,0 +1,258 @@
+// The general cell loops (cell_loops.h): the cell table's loops where every edge holds at most one
+// crossing, and closed oriented manifolds from lattices whose edges hold several.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <map>
+#include <random>
+#include <tuple>
+
+#include "dexelmill/surface/mesh.h"
+#include "surface/detail/cell_loops.h"
+#include "surface/detail/cell_table.h"
+
+using namespace dexelmill;
+using namespace dexelmill::detail;
+
+namespace {
+
+/// A loop turned to start at its least id, so that equal cycles compare equal.
+std::vector<std::uint32_t> canonical(std::vector<std::uint32_t> loop) {
+    std::rotate(loop.begin(), std::min_element(loop.begin(), loop.end()), loop.end());
+    return loop;
+}
+
+using EdgeKey = std::tuple<int, int, int, int>;  // lower lattice point and axis
+
+/// A small lattice: signs (and level set values for the decider) at its points, and on chosen
+/// edges the offsets of their crossings; other edges cross once, at the middle, where their ends
+/// differ.
+struct TestLattice {
+    int n = 0;
+    std::vector<char> in;
+    std::vector<float> value;
+    std::map<EdgeKey, std::vector<double>> crossings;
+
+    explicit TestLattice(int size) : n(size), in(std::size_t(size * size * size), 0), value(in.size(), 1.0f) {}
+    int at(int x, int y, int z) const { return (z * n + y) * n + x; }
+    void set(int x, int y, int z, bool inside, float magnitude = 1.0f) {
+        in[std::size_t(at(x, y, z))] = inside;
+        value[std::size_t(at(x, y, z))] = inside ? -magnitude : magnitude;
+    }
+};
+
+struct Built {
+    Mesh mesh;
+    std::size_t loops = 0, faceVertices = 0;
+    std::vector<std::size_t> loopSizes;
+};
+
+/// The mesh of every cell's loops, each fanned from its mass point.
+Built build(const TestLattice& L) {
+    Built out;
+    std::map<std::tuple<int, int, int, int, int>, std::uint32_t> edgeVertex;  // edge, index
+    std::map<std::tuple<int, int, int, int, std::uint32_t, std::uint32_t>, std::uint32_t> faceVertex;
+    for (int z = 0; z + 1 < L.n; ++z)
+        for (int y = 0; y + 1 < L.n; ++y)
+            for (int x = 0; x + 1 < L.n; ++x) {
+                const int cell[3] = {x, y, z};
+                CellCrossings c;
+                float f[8];
+                for (int k = 0; k < 8; ++k) {
+                    const int i = L.at(x + (k & 1), y + ((k >> 1) & 1), z + ((k >> 2) & 1));
+                    f[k] = L.value[std::size_t(i)];
+                    if (L.in[std::size_t(i)]) c.inside |= std::uint8_t(1u << k);
+                }
+                for (int face = 0; face < kCellFaces; ++face) {
+                    const auto k = faceCorners(face);
+                    if (insideJoinedAcrossFace(f[k[0]], f[k[1]], f[k[2]], f[k[3]])) c.joined |= std::uint8_t(1u << face);
+                }
+                bool any = false;
+                for (int e = 0; e < kCellEdges; ++e) {
+                    const int c0 = edgeCorner(e, 0), a = edgeAxis(e);
+                    const EdgeKey key{x + (c0 & 1), y + ((c0 >> 1) & 1), z + ((c0 >> 2) & 1), a};
+                    std::vector<double> at;
+                    const auto it = L.crossings.find(key);
+                    if (it != L.crossings.end()) at = it->second;
+                    else if (((c.inside >> c0) & 1) != ((c.inside >> edgeCorner(e, 1)) & 1)) at = {0.5};
+                    for (std::size_t j = 0; j < at.size(); ++j) {
+                        const auto vk = std::make_tuple(std::get<0>(key), std::get<1>(key), std::get<2>(key), a, int(j));
+                        auto v = edgeVertex.find(vk);
+                        if (v == edgeVertex.end()) {
+                            Vec3 p(std::get<0>(key), std::get<1>(key), std::get<2>(key));
+                            p[a] += at[j];
+                            v = edgeVertex.emplace(vk, std::uint32_t(out.mesh.vertices.size())).first;
+                            out.mesh.vertices.push_back(p);
+                        }
+                        c.edges[std::size_t(e)].ids.push_back(v->second);
+                        c.edges[std::size_t(e)].at.push_back(at[j]);
+                        any = true;
+                    }
+                }
+                if (!any) continue;
+                const auto vertexOnFace = [&](int face, std::uint32_t from, std::uint32_t to, double u, double v) {
+                    const int a = face >> 1;
+                    int lo[3] = {cell[0], cell[1], cell[2]};
+                    lo[a] += face & 1;
+                    const auto key = std::make_tuple(lo[0], lo[1], lo[2], a, std::min(from, to), std::max(from, to));
+                    auto it = faceVertex.find(key);
+                    if (it == faceVertex.end()) {
+                        Vec3 p(lo[0], lo[1], lo[2]);
+                        p[(a + 1) % 3] += u;
+                        p[(a + 2) % 3] += v;
+                        it = faceVertex.emplace(key, std::uint32_t(out.mesh.vertices.size())).first;
+                        out.mesh.vertices.push_back(p);
+                        ++out.faceVertices;
+                    }
+                    return it->second;
+                };
+                for (const auto& loop : cellLoops(c, vertexOnFace)) {
+                    Vec3 m(0.0);
+                    for (std::uint32_t i : loop) m += out.mesh.vertices[i];
+                    const std::uint32_t centre = std::uint32_t(out.mesh.vertices.size());
+                    out.mesh.vertices.push_back(m / double(loop.size()));
+                    for (std::size_t i = 0; i < loop.size(); ++i)
+                        out.mesh.triangles.push_back({centre, loop[i], loop[(i + 1) % loop.size()]});
+                    ++out.loops;
+                    out.loopSizes.push_back(loop.size());
+                }
+            }
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("cell loops: one crossing per edge gives the cell table's loops", "[surface][contour]") {
+    for (int m = 0; m < 256; ++m)
+        for (int j = 0; j < 64; ++j) {
+            CellCrossings c;
+            c.inside = std::uint8_t(m);
+            c.joined = std::uint8_t(j);
+            for (int e = 0; e < kCellEdges; ++e)
+                if (((m >> edgeCorner(e, 0)) & 1) != ((m >> edgeCorner(e, 1)) & 1)) {
+                    c.edges[std::size_t(e)].ids = {std::uint32_t(e)};
+                    c.edges[std::size_t(e)].at = {0.5};
+                }
+            bool askedForFaceVertex = false;
+            const auto loops = cellLoops(c, [&](int, std::uint32_t, std::uint32_t, double, double) {
+                askedForFaceVertex = true;
+                return std::uint32_t(100);
+            });
+            const CellPatches& p = cellPatches(std::uint8_t(m), std::uint8_t(j));
+            std::vector<std::vector<std::uint32_t>> expected;
+            int off = 0;
+            for (int k = 0; k < p.count; ++k) {
+                expected.emplace_back(p.edges.begin() + off, p.edges.begin() + off + p.size[k]);
+                off += p.size[k];
+            }
+            std::vector<std::vector<std::uint32_t>> got;
+            for (const auto& l : loops) got.push_back(canonical(l));
+            for (auto& l : expected) l = canonical(l);
+            std::sort(got.begin(), got.end());
+            std::sort(expected.begin(), expected.end());
+            INFO("config " << m << " joined " << j);
+            CHECK_FALSE(askedForFaceVertex);
+            CHECK(got == expected);
+        }
+}
+
+TEST_CASE("cell loops: a stretch of material on an edge between empty points is a closed lens", "[surface][contour]") {
+    TestLattice L(4);
+    L.crossings[{1, 1, 1, 0}] = {0.3, 0.6};
+    const Built b = build(L);
+    const MeshCheck check = checkMesh(b.mesh);
+    CHECK(check.closedManifold());
+    CHECK(check.signedVolume > 0.0);
+    // The four cells round the edge hold one loop each: the two ends and a vertex on each face.
+    CHECK(b.loops == 4);
+    CHECK(b.faceVertices == 4);
+    for (std::size_t s : b.loopSizes) CHECK(s == 4);
+}
+
+TEST_CASE("cell loops: a gap on an edge between points in material is a closed hole", "[surface][contour]") {
+    TestLattice L(5);
+    for (int z = 1; z < 4; ++z)
+        for (int y = 1; y < 4; ++y)
+            for (int x = 1; x < 4; ++x) L.set(x, y, z, true);
+    const double solid = checkMesh(build(L).mesh).signedVolume;
+    L.crossings[{1, 2, 2, 0}] = {0.4, 0.45};
+    const Built b = build(L);
+    const MeshCheck check = checkMesh(b.mesh);
+    CHECK(check.closedManifold());
+    // The same block less a lens-shaped hole round the gap.
+    CHECK(check.signedVolume > 0.0);
+    CHECK(check.signedVolume < solid);
+    CHECK(b.faceVertices == 4);
+}
+
+TEST_CASE("cell loops: stretches on parallel edges that overlap are one wall", "[surface][contour]") {
+    TestLattice L(4);
+    // A wall across x, between the lattice planes x = 1 and x = 2, crossing the edges along x at
+    // y = 1, 2 and z = 1, 2: each cell round it holds one band of the wall, no face vertex.
+    for (int y = 1; y <= 2; ++y)
+        for (int z = 1; z <= 2; ++z) L.crossings[{1, y, z, 0}] = {0.4, 0.5 + 0.02 * y};
+    const Built b = build(L);
+    const MeshCheck check = checkMesh(b.mesh);
+    CHECK(check.closedManifold());
+    CHECK(check.signedVolume > 0.0);
+    // The face between the four edges joins them; the outer faces close the wall's edges.
+    std::size_t fourOrMore = 0;
+    for (std::size_t s : b.loopSizes) fourOrMore += s >= 4;
+    CHECK(fourOrMore == b.loops);
+    CHECK(b.faceVertices == 8);
+}
+
+TEST_CASE("cell loops: stretches on parallel edges that do not overlap stay apart", "[surface][contour]") {
+    TestLattice L(4);
+    L.crossings[{1, 1, 1, 0}] = {0.1, 0.2};
+    L.crossings[{1, 2, 1, 0}] = {0.7, 0.8};
+    const Built b = build(L);
+    const MeshCheck check = checkMesh(b.mesh);
+    CHECK(check.closedManifold());
+    CHECK(check.signedVolume > 0.0);
+    // Two lenses: each of its four cells holds one loop of two ends and two face vertices.
+    CHECK(b.loops == 8);
+    CHECK(b.faceVertices == 8);
+}
+
+TEST_CASE("cell loops: random lattices with several crossings on edges give closed oriented manifolds",
+          "[surface][contour]") {
+    for (std::uint64_t seed : {3u, 17u, 29u}) {
+        std::mt19937_64 rng(seed);
+        for (int trial = 0; trial < 60; ++trial) {
+            const int n = 6;  // the border is outside
+            TestLattice L(n);
+            const double density = 0.2 + 0.6 * double(trial % 4) / 3.0;
+            std::bernoulli_distribution coin(density), several(0.25);
+            std::uniform_real_distribution<float> mag(0.1f, 1.0f);
+            std::uniform_real_distribution<double> offset(0.01, 0.99);
+            for (int z = 1; z < n - 1; ++z)
+                for (int y = 1; y < n - 1; ++y)
+                    for (int x = 1; x < n - 1; ++x) L.set(x, y, z, coin(rng), mag(rng));
+            // Inner edges: some get extra pairs of crossings.
+            for (int z = 1; z < n - 1; ++z)
+                for (int y = 1; y < n - 1; ++y)
+                    for (int x = 1; x < n - 1; ++x)
+                        for (int a = 0; a < 3; ++a) {
+                            int q[3] = {x, y, z};
+                            ++q[a];
+                            if (q[a] >= n - 1 || !several(rng)) continue;
+                            const bool differ = L.in[std::size_t(L.at(x, y, z))] != L.in[std::size_t(L.at(q[0], q[1], q[2]))];
+                            const int count = (differ ? 1 : 0) + 2 * (1 + int(rng() % 2));
+                            std::vector<double> at;
+                            while (int(at.size()) < count) {
+                                const double t = offset(rng);
+                                if (std::none_of(at.begin(), at.end(), [&](double s) { return std::abs(s - t) < 1e-3; }))
+                                    at.push_back(t);
+                            }
+                            std::sort(at.begin(), at.end());
+                            L.crossings[{x, y, z, a}] = at;
+                        }
+            const Built b = build(L);
+            const MeshCheck check = checkMesh(b.mesh);
+            INFO("seed " << seed << " trial " << trial);
+            REQUIRE(check.closedManifold());
+            if (!b.mesh.empty()) CHECK(check.signedVolume > 0.0);
+        }
+    }
+}
