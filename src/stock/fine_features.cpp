@@ -13,13 +13,6 @@ namespace dexelmill {
 
 namespace {
 
-/// One stretch: its family, its dexel and its ends along it (mm from the lattice origin).
-struct Stretch {
-    int family = 0;
-    int ib = 0, ic = 0;
-    float lo = 0.0f, hi = 0.0f;
-};
-
 /// Whether a lattice point of a dexel with n points at (i + 1/2) h lies in [lo, hi]: strictly
 /// inside when `open` (a point on a segment's end is not in its material), ends included when
 /// not. The points are the floats TriDexelStock::inside compares with. The first point at or
@@ -35,37 +28,8 @@ bool holdsPoint(float lo, float hi, double h, int n, bool open) {
     return false;
 }
 
-/// Every stretch of the kept families that holds no lattice point, material and gaps apart, in
-/// family, row and dexel order.
-void findStretches(const TriDexelStock& stock, std::vector<Stretch>& material,
-                   std::vector<Stretch>& gaps) {
-    const double h = stock.lattice().h;
-    for (int a = 0; a < 3; ++a) {
-        if (!stock.has(axisFromIndex(a))) continue;
-        const DexelFamily& fam = stock.family(axisFromIndex(a));
-        const int n = stock.lattice().n[std::size_t(a)];
-        std::vector<std::vector<Stretch>> rowMaterial(std::size_t(fam.nc())),
-            rowGaps(std::size_t(fam.nc()));
-        tbb::parallel_for(0, fam.nc(), [&](int ic) {
-            for (int ib = 0; ib < fam.nb(); ++ib) {
-                const SegmentSpan segs = fam.segments(ib, ic);
-                for (std::size_t k = 0; k < segs.size; ++k) {
-                    const Segment& s = segs[k];
-                    if (!holdsPoint(s.lo, s.hi, h, n, true))
-                        rowMaterial[std::size_t(ic)].push_back({a, ib, ic, s.lo, s.hi});
-                    if (k + 1 < segs.size && segs[k + 1].lo > s.hi &&
-                        !holdsPoint(s.hi, segs[k + 1].lo, h, n, false))
-                        rowGaps[std::size_t(ic)].push_back({a, ib, ic, s.hi, segs[k + 1].lo});
-                }
-            }
-        });
-        for (const auto& row : rowMaterial) material.insert(material.end(), row.begin(), row.end());
-        for (const auto& row : rowGaps) gaps.insert(gaps.end(), row.begin(), row.end());
-    }
-}
-
 /// The stretches grouped into regions (FineStretches::regionCount), the regions summed up.
-FineStretches summarise(const TriDexelStock& stock, const std::vector<Stretch>& stretches) {
+FineStretches summarise(const TriDexelStock& stock, const std::vector<FineStretch>& stretches) {
     FineStretches out;
     out.count = stretches.size();
     if (stretches.empty()) return out;
@@ -74,7 +38,7 @@ FineStretches summarise(const TriDexelStock& stock, const std::vector<Stretch>& 
     std::array<std::int64_t, 3> dims{};
     for (int a = 0; a < 3; ++a)
         dims[std::size_t(a)] = std::int64_t(std::ceil(lat.n[std::size_t(a)] * h / cellSize)) + 1;
-    const auto middleOf = [&](const Stretch& s) {
+    const auto middleOf = [&](const FineStretch& s) {
         return stock.dexelLine(axisFromIndex(s.family), s.ib, s.ic)
             .at(0.5 * (double(s.lo) + double(s.hi)));
     };
@@ -98,7 +62,7 @@ FineStretches summarise(const TriDexelStock& stock, const std::vector<Stretch>& 
                                     std::size_t(1));
     std::vector<std::array<double, 3>> lengths(regions.size(), {0.0, 0.0, 0.0});
     for (std::size_t i = 0; i < stretches.size(); ++i) {
-        const Stretch& s = stretches[i];
+        const FineStretch& s = stretches[i];
         const std::size_t r = regionOf[i];
         FineRegion& region = regions[r];
         const double length = double(s.hi) - double(s.lo);
@@ -130,9 +94,36 @@ FineStretches summarise(const TriDexelStock& stock, const std::vector<Stretch>& 
 
 }  // namespace
 
+void findFineStretches(const TriDexelStock& stock, std::vector<FineStretch>& material,
+                       std::vector<FineStretch>& gaps) {
+    const double h = stock.lattice().h;
+    for (int a = 0; a < 3; ++a) {
+        if (!stock.has(axisFromIndex(a))) continue;
+        const DexelFamily& fam = stock.family(axisFromIndex(a));
+        const int n = stock.lattice().n[std::size_t(a)];
+        std::vector<std::vector<FineStretch>> rowMaterial(std::size_t(fam.nc())),
+            rowGaps(std::size_t(fam.nc()));
+        tbb::parallel_for(0, fam.nc(), [&](int ic) {
+            for (int ib = 0; ib < fam.nb(); ++ib) {
+                const SegmentSpan segs = fam.segments(ib, ic);
+                for (std::size_t k = 0; k < segs.size; ++k) {
+                    const Segment& s = segs[k];
+                    if (!holdsPoint(s.lo, s.hi, h, n, true))
+                        rowMaterial[std::size_t(ic)].push_back({a, ib, ic, s.lo, s.hi});
+                    if (k + 1 < segs.size && segs[k + 1].lo > s.hi &&
+                        !holdsPoint(s.hi, segs[k + 1].lo, h, n, false))
+                        rowGaps[std::size_t(ic)].push_back({a, ib, ic, s.hi, segs[k + 1].lo});
+                }
+            }
+        });
+        for (const auto& row : rowMaterial) material.insert(material.end(), row.begin(), row.end());
+        for (const auto& row : rowGaps) gaps.insert(gaps.end(), row.begin(), row.end());
+    }
+}
+
 FineFeatures finerThanLattice(const TriDexelStock& stock) {
-    std::vector<Stretch> material, gaps;
-    findStretches(stock, material, gaps);
+    std::vector<FineStretch> material, gaps;
+    findFineStretches(stock, material, gaps);
     FineFeatures out;
     out.material = summarise(stock, material);
     out.gaps = summarise(stock, gaps);

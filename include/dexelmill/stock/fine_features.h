@@ -52,6 +52,18 @@ constexpr double kFineRegionJoin = 2.0;
 /// Regions kept in FineStretches::regions.
 constexpr std::size_t kFineRegionsKept = 10;
 
+/// @brief One stretch of a dexel that holds no lattice point.
+struct FineStretch {
+    int family = 0;          ///< the dexel's axis (0 x, 1 y, 2 z)
+    int ib = 0, ic = 0;      ///< the dexel in its family
+    float lo = 0.0f, hi = 0.0f;  ///< its ends along the dexel (mm from the lattice origin)
+};
+
+/// @brief The stretches of `stock`'s kept families that no lattice point lies in (see the file
+/// comment), material and gaps apart, in family, row and dexel order.
+void findFineStretches(const TriDexelStock& stock, std::vector<FineStretch>& material,
+                       std::vector<FineStretch>& gaps);
+
 /// @brief What the lattice of a stock cannot show.
 struct FineFeatures {
     /// Segments of material with no lattice point strictly inside: left out of the level set.
