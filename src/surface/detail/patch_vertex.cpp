@@ -6,7 +6,6 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "surface/detail/cell_table.h"
 
 namespace dexelmill::detail {
 
@@ -32,7 +31,7 @@ constexpr double kMaxFanTiltTan2 = 3.0;  // tan^2(60 degrees)
 double fanOffset(const PatchVertexRule::Loop& loop, const Vec3& mass, const Vec3& n, double wanted) {
     // Per fan triangle that bounds s: |perp - s w|^2 <= kMaxFanTiltTan2 along^2, that is
     // a s^2 - 2 b s + c <= 0.
-    double qa[kCellEdges], qb[kCellEdges], qc[kCellEdges];
+    double qa[PatchVertexRule::kMaxPlanes], qb[PatchVertexRule::kMaxPlanes], qc[PatchVertexRule::kMaxPlanes];
     int bounds = 0;
     bool holds = true;  // every bound holds at `wanted`, as it does for most patches
     for (int i = 0; i < loop.len; ++i) {
@@ -104,7 +103,9 @@ Vec3 PatchVertexRule::massPoint(const Loop& loop) {
 /// the material side of another's tangent plane (by more than kConvexGap h).
 Vec3 PatchVertexRule::place(const Loop& loop, const Vec3& cellLo, int& rank) const {
     const Vec3 mass = massPoint(loop);
-    Vec3 normal[kCellEdges], offset[kCellEdges];
+    rank = 0;
+    if (loop.len > kMaxPlanes) return glm::clamp(mass, cellLo, cellLo + h_);
+    Vec3 normal[kMaxPlanes], offset[kMaxPlanes];
     Vec3 mean(0.0);
     int planes = 0;
     for (int i = 0; i < loop.len; ++i) {
@@ -114,7 +115,6 @@ Vec3 PatchVertexRule::place(const Loop& loop, const Vec3& cellLo, int& rank) con
         offset[planes] = loop.points[loop.index[i]] - mass;
         mean += normal[planes++];
     }
-    rank = 0;
     Vec3 v = mass;
     // A smooth patch: every normal within featureAngle / 2 of the mean. Then the second
     // eigenvalue of A^T A is at most tan^2(featureAngle / 2) times the first (on the plane

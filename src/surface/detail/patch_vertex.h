@@ -21,8 +21,9 @@ public:
     PatchVertexRule(double h, double featureAngle);
 
     /// @brief A patch's loop of crossings: `len` indices into the crossings' positions and packed
-    /// normals (a normal that is absent or marked sharp adds no tangent plane). A cell's loop has
-    /// 3 to kCellEdges (12) crossings.
+    /// normals (a normal that is absent or marked sharp adds no tangent plane). A cell table's
+    /// loop has 3 to 12 crossings; a split cell's (split_cells.h) may have more, and one longer
+    /// than kMaxPlanes takes its mass point.
     struct Loop {
         const Vec3* points;
         const PackedNormal* normals;
@@ -32,6 +33,9 @@ public:
 
     /// @brief The mean of the loop's crossings.
     static Vec3 massPoint(const Loop& loop);
+
+    /// @brief Loops with more crossings than this are not fitted (see Loop).
+    static constexpr int kMaxPlanes = 64;
 
     /// @brief The patch's vertex in the cell whose lowest corner is `cellLo`; `rank` is the rank
     /// the truncated SVD kept: 0 (no plane: the mass point), 1 (a smooth patch), 2 (a crease,
