@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
+
+#include <glm/geometric.hpp>
 
 #include "surface/detail/cell_table.h"
 
@@ -13,12 +16,23 @@ namespace {
 
 /// A face vertex lies at least this far (in spacings) from the face's edges.
 constexpr double kFaceVertexGap = 1e-3;
+/// A face vertex lies at least this fraction of its lens's chord into the face: on a flatter lens
+/// the fan triangles on its two sides, in the two cells sharing the face, would stand nearly flat
+/// against each other and fold (the lens of a quarter of a circle rises 0.21 of its chord).
+constexpr double kMinLensRise = 0.2;
 /// A path across a face that goes round another on the same edge lies at least this much deeper.
 constexpr double kNestedDepthStep = 1.0 / 16.0;
 /// Samples along the line into the face on which a face vertex's depth is searched, and the
 /// bisection steps after the first change of sign (to 2^-20 of a spacing).
 constexpr int kDepthSamples = 32;
 constexpr int kDepthBisections = 20;
+/// Tangent lines in a face whose normals make a sine below this are taken as parallel.
+constexpr double kParallelSine = 1e-6;
+/// A normal whose part in the face is shorter than this gives no direction there.
+constexpr double kInFace = 1e-3;
+/// Evenly spaced sample lines of the face rule, per direction, besides those between crossings.
+constexpr int kUniformLines = 8;
+constexpr double kPi = 3.14159265358979323846;
 
 /// A face in its own frame: across axis a at offset s of the cell, with in-face axes u = (a + 1) % 3
 /// and v = (a + 2) % 3, which turn counter-clockwise about +a. Its corners and edges are listed in
@@ -52,12 +66,31 @@ struct WalkCrossing {
     std::uint32_t id;
     int side;
     double at, walk;
+    Vec3 normal;  ///< zero where unknown
 };
 
 /// One face's edges, with membership and the blend of cell_loops.h.
 class FaceField {
 public:
-    FaceField(const CellCrossings& cell, const Frame& f) : cell_(cell), f_(f) {}
+    FaceField(const CellCrossings& cell, const Frame& f) : cell_(cell), f_(f) {
+        for (int i = 0; i < 4; ++i) {
+            const EdgeCrossings& e = cell.edges[std::size_t(f.edge[std::size_t(i)])];
+            if (e.at.size() < 2) continue;
+            for (std::size_t k = 0; k < e.at.size(); ++k) {
+                const double t = e.at[k];
+                const std::array<double, 2> x = i == 0 ? std::array<double, 2>{t, 0.0}
+                                                : i == 1 ? std::array<double, 2>{1.0, t}
+                                                : i == 2 ? std::array<double, 2>{t, 1.0}
+                                                         : std::array<double, 2>{0.0, t};
+                std::array<double, 2> m{0.0, 0.0};
+                if (k < e.normals.size()) {
+                    const double a = e.normals[k][f.u], b = e.normals[k][f.v], l = std::hypot(a, b);
+                    if (l > kInFace) m = {a / l, b / l};
+                }
+                tangents_.push_back({x, m});
+            }
+        }
+    }
 
     /// Whether the point at offset s along walk edge i (from its lattice lower end) is in material.
     bool member(int i, double s) const {
@@ -77,6 +110,24 @@ public:
 
     double cornerValue(int k) const { return (cell_.inside >> f_.corner[std::size_t(k)]) & 1 ? -1.0 : 1.0; }
 
+    /// The field the face rule reads at (u, v), negative in material: where the nearest of the
+    /// crossings on edges with several has a normal with a part in the face, the signed distance
+    /// to its tangent line there (a thin wall or slot runs on along its sides' tangents, also past
+    /// the middle of its stretch, or at a slant); elsewhere the Coons blend. Crossings on edges
+    /// with one are left out: near the foot of a thin wall the floor's tangent would cut the wall
+    /// off.
+    double value(double u, double v) const {
+        double best = std::numeric_limits<double>::infinity();
+        const Tangent* nearest = nullptr;
+        for (const Tangent& t : tangents_) {
+            const double d = std::hypot(u - t.at[0], v - t.at[1]);
+            if (d < best) best = d, nearest = &t;
+        }
+        if (nearest && (nearest->normal[0] != 0.0 || nearest->normal[1] != 0.0))
+            return nearest->normal[0] * (u - nearest->at[0]) + nearest->normal[1] * (v - nearest->at[1]);
+        return blend(u, v);
+    }
+
     /// The Coons blend of the four edges at (u, v).
     double blend(double u, double v) const {
         const double edges = (1.0 - v) * edgeValue(0, u) + v * edgeValue(2, u) + (1.0 - u) * edgeValue(3, v) +
@@ -87,22 +138,27 @@ public:
     }
 
 private:
+    /// A crossing in the face's (u, v) and its unit normal in the face (zero when unknown).
+    struct Tangent {
+        std::array<double, 2> at, normal;
+    };
     const CellCrossings& cell_;
     const Frame& f_;
+    std::vector<Tangent> tangents_;
 };
 
-/// The breakpoints 0, crossings, 1 of two parallel edges and the middles between consecutive ones,
-/// sorted and unique: the sample lines across the face along that direction.
+/// The sample lines across a face along one direction: its ends, the middles between consecutive
+/// crossings of its two parallel edges taken together (so that a line runs between any two
+/// crossings, on one edge or across), and kUniformLines more, evenly spaced; sorted and unique.
 std::vector<double> sampleLines(const EdgeCrossings& e0, const EdgeCrossings& e1) {
+    std::vector<double> breaks{0.0, 1.0};
+    breaks.insert(breaks.end(), e0.at.begin(), e0.at.end());
+    breaks.insert(breaks.end(), e1.at.begin(), e1.at.end());
+    std::sort(breaks.begin(), breaks.end());
     std::vector<double> out{0.0, 1.0};
-    for (const EdgeCrossings* e : {&e0, &e1}) {
-        double prev = 0.0;
-        for (double t : e->at) {
-            out.push_back(0.5 * (prev + t));
-            prev = t;
-        }
-        out.push_back(0.5 * (prev + 1.0));
-    }
+    for (std::size_t k = 0; k + 1 < breaks.size(); ++k)
+        if (breaks[k + 1] > breaks[k]) out.push_back(0.5 * (breaks[k] + breaks[k + 1]));
+    for (int k = 1; k < kUniformLines; ++k) out.push_back(double(k) / kUniformLines);
     std::sort(out.begin(), out.end());
     out.erase(std::unique(out.begin(), out.end()), out.end());
     return out;
@@ -116,11 +172,24 @@ int find(std::vector<int>& parent, int i) {
 /// A path across a face between two crossings, through a face vertex when `lens` (both on one edge).
 struct Path {
     std::uint32_t from, to;
+    Vec3 fromNormal{0.0}, toNormal{0.0};  ///< zero where unknown
+    double fromAt = 0.0, toAt = 0.0;      ///< offsets along their edges
     bool lens = false;
-    int side = 0;              ///< the walk edge of a lens
-    double lo = 0.0, hi = 0.0; ///< a lens's span along its edge
-    double depth = 0.0;        ///< a lens's face vertex: how far into the face
+    int side = 0;                 ///< the walk edge of a lens
+    double lo = 0.0, hi = 0.0;    ///< a lens's span along its edge
+    double along = 0.0, depth = 0.0;      ///< a lens's face vertex: along its edge, into the face
+    std::array<double, 2> vertex{};       ///< the same in the face's (u, v)
 };
+
+/// The point of a face at offset `along` on walk edge `side` and `depth` into the face, in (u, v).
+std::array<double, 2> lensPoint(int side, double along, double depth) {
+    switch (side) {
+    case 0: return {along, depth};
+    case 1: return {1.0 - depth, along};
+    case 2: return {along, 1.0 - depth};
+    default: return {depth, along};
+    }
+}
 
 /// The face's paths, oriented in its own frame: material on their left seen from +a.
 std::vector<Path> facePaths(const CellCrossings& cell, const Frame& f, bool severalOnAnEdge, bool joined) {
@@ -131,7 +200,8 @@ std::vector<Path> facePaths(const CellCrossings& cell, const Frame& f, bool seve
         const std::size_t n = e.ids.size();
         for (std::size_t k = 0; k < n; ++k) {
             const std::size_t j = backwards ? n - 1 - k : k;
-            walk.push_back({e.ids[j], i, e.at[j], i + (backwards ? 1.0 - e.at[j] : e.at[j])});
+            walk.push_back({e.ids[j], i, e.at[j], i + (backwards ? 1.0 - e.at[j] : e.at[j]),
+                            e.normals.empty() ? Vec3(0.0) : e.normals[j]});
         }
     }
     std::vector<Path> paths;
@@ -162,7 +232,7 @@ std::vector<Path> facePaths(const CellCrossings& cell, const Frame& f, bool seve
                 else if (j == nv - 1) m = field.member(2, us[std::size_t(i)]);
                 else if (i == 0) m = field.member(3, vs[std::size_t(j)]);
                 else if (i == nu - 1) m = field.member(1, vs[std::size_t(j)]);
-                else m = field.blend(us[std::size_t(i)], vs[std::size_t(j)]) < 0.0;
+                else m = field.value(us[std::size_t(i)], vs[std::size_t(j)]) < 0.0;
                 material[std::size_t(j * nu + i)] = m;
             }
         std::vector<int> parent(material.size());
@@ -174,21 +244,22 @@ std::vector<Path> facePaths(const CellCrossings& cell, const Frame& f, bool seve
                 if (i + 1 < nu && material[std::size_t(k + 1)]) parent[std::size_t(find(parent, k))] = find(parent, k + 1);
                 if (j + 1 < nv && material[std::size_t(k + nu)]) parent[std::size_t(find(parent, k))] = find(parent, k + nu);
             }
-        const auto index = [](const std::vector<double>& lines, double x) {
-            return int(std::lower_bound(lines.begin(), lines.end(), x) - lines.begin());
+        // The first sample line strictly inside (lo, hi): one lies between any two crossings.
+        const auto index = [](const std::vector<double>& lines, double lo) {
+            return int(std::upper_bound(lines.begin(), lines.end(), lo) - lines.begin());
         };
         for (std::size_t r = 0; r < arcs.size(); ++r) {
             const WalkCrossing& enter = walk[arcs[r]];
             const WalkCrossing& leave = walk[(arcs[r] + 1) % n];
             int i = 0, j = 0;
             if (enter.side == leave.side && enter.walk < leave.walk) {
-                // The arc lies on one edge: the sample at its middle.
-                const double mid = 0.5 * (std::min(enter.at, leave.at) + std::max(enter.at, leave.at));
+                // The arc lies on one edge: a sample inside it.
+                const double lo = std::min(enter.at, leave.at);
                 switch (enter.side) {
-                case 0: i = index(us, mid), j = 0; break;
-                case 1: i = nu - 1, j = index(vs, mid); break;
-                case 2: i = index(us, mid), j = nv - 1; break;
-                default: i = 0, j = index(vs, mid); break;
+                case 0: i = index(us, lo), j = 0; break;
+                case 1: i = nu - 1, j = index(vs, lo); break;
+                case 2: i = index(us, lo), j = nv - 1; break;
+                default: i = 0, j = index(vs, lo); break;
                 }
             } else {
                 // The arc holds the corner that follows its first crossing.
@@ -211,7 +282,7 @@ std::vector<Path> facePaths(const CellCrossings& cell, const Frame& f, bool seve
         }
         const WalkCrossing& leave = walk[(arcs[r] + 1) % n];
         const WalkCrossing& enter = walk[arcs[next]];
-        Path p{leave.id, enter.id};
+        Path p{leave.id, enter.id, leave.normal, enter.normal, leave.at, enter.at};
         if (leave.side == enter.side) {
             p.lens = true;
             p.side = leave.side;
@@ -220,17 +291,11 @@ std::vector<Path> facePaths(const CellCrossings& cell, const Frame& f, bool seve
         }
         paths.push_back(p);
     }
-    // Lens depths: where the blend, on the line into the face from the lens's middle, first
-    // leaves the membership the edge has there; a lens round others on its edge goes deeper.
+    // Face vertices: from the ends' tangent lines (cell_loops.h), else where the blend, on the
+    // line into the face from the lens's middle, first leaves the membership the edge has there;
+    // a lens round others on its edge goes deeper. Worked in the lens's edge frame: along the
+    // edge (its lattice offset) and into the face.
     const FaceField field(cell, f);
-    const auto pointAt = [](int side, double along, double depth, double& u, double& v) {
-        switch (side) {
-        case 0: u = along, v = depth; break;
-        case 1: u = 1.0 - depth, v = along; break;
-        case 2: u = along, v = 1.0 - depth; break;
-        default: u = depth, v = along; break;
-        }
-    };
     std::vector<std::size_t> lenses;
     for (std::size_t k = 0; k < paths.size(); ++k)
         if (paths[k].lens) lenses.push_back(k);
@@ -238,34 +303,53 @@ std::vector<Path> facePaths(const CellCrossings& cell, const Frame& f, bool seve
               [&](std::size_t x, std::size_t y) { return paths[x].hi - paths[x].lo < paths[y].hi - paths[y].lo; });
     for (std::size_t li = 0; li < lenses.size(); ++li) {
         Path& p = paths[lenses[li]];
-        const double mid = 0.5 * (p.lo + p.hi);
-        const bool edgeIn = field.member(p.side, mid);
-        const auto differs = [&](double d) {
-            double u = 0.0, v = 0.0;
-            pointAt(p.side, mid, d, u, v);
-            return (field.blend(u, v) < 0.0) != edgeIn;
-        };
-        double depth = 0.5;
-        for (int k = 1; k <= kDepthSamples; ++k) {
-            const double d = double(k) / kDepthSamples;
-            if (!differs(d)) continue;
-            double lo = double(k - 1) / kDepthSamples, hi = d;
-            for (int b = 0; b < kDepthBisections; ++b) (differs(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
-            depth = 0.5 * (lo + hi);
-            break;
+        const int alongAxis = p.side % 2 == 0 ? f.u : f.v, inAxis = p.side % 2 == 0 ? f.v : f.u;
+        const double inSign = p.side == 0 || p.side == 3 ? 1.0 : -1.0;
+        const double a1 = p.fromNormal[alongAxis], b1 = inSign * p.fromNormal[inAxis];
+        const double a2 = p.toNormal[alongAxis], b2 = inSign * p.toNormal[inAxis];
+        const double l1 = std::hypot(a1, b1), l2 = std::hypot(a2, b2);
+        double along = 0.5 * (p.lo + p.hi), depth = -1.0;
+        if (l1 > kInFace && l2 > kInFace) {
+            // The tangent lines meet at (x, y); on the face's side (y > 0) the arc between the
+            // ends turns by less than half a turn.
+            const double det = a1 * b2 - b1 * a2;
+            const double turn = std::acos(std::clamp((a1 * a2 + b1 * b2) / (l1 * l2), -1.0, 1.0));
+            const double y = std::abs(det) > kParallelSine * l1 * l2 ? a1 * a2 * (p.toAt - p.fromAt) / det : 0.0;
+            const bool smooth = glm::dot(p.fromNormal, p.toNormal) >= cell.creaseCosine;
+            if (smooth) {
+                // A circular arc over the chord c that turns by theta rises c/2 tan(theta/4).
+                const double theta = y >= 0.0 ? turn : 2.0 * kPi - turn;
+                depth = 0.5 * (p.hi - p.lo) * std::tan(0.25 * theta);
+            } else if (y > 0.0) {
+                along = std::clamp((a1 * p.fromAt * b2 - b1 * a2 * p.toAt) / det, p.lo, p.hi);
+                depth = y;
+            }
+        }
+        if (depth < 0.0) {
+            const bool edgeIn = field.member(p.side, along);
+            const auto differs = [&](double d) {
+                const std::array<double, 2> uv = lensPoint(p.side, along, d);
+                return (field.value(uv[0], uv[1]) < 0.0) != edgeIn;
+            };
+            depth = 0.5;
+            for (int k = 1; k <= kDepthSamples; ++k) {
+                const double d = double(k) / kDepthSamples;
+                if (!differs(d)) continue;
+                double lo = double(k - 1) / kDepthSamples, hi = d;
+                for (int b = 0; b < kDepthBisections; ++b) (differs(0.5 * (lo + hi)) ? hi : lo) = 0.5 * (lo + hi);
+                depth = 0.5 * (lo + hi);
+                break;
+            }
         }
         for (std::size_t lj = 0; lj < li; ++lj) {
             const Path& q = paths[lenses[lj]];
             if (q.side == p.side && p.lo <= q.lo && q.hi <= p.hi) depth = std::max(depth, q.depth + kNestedDepthStep);
         }
-        p.depth = std::clamp(depth, kFaceVertexGap, 1.0 - kFaceVertexGap);
+        p.depth = std::clamp(depth, std::max(kFaceVertexGap, kMinLensRise * (p.hi - p.lo)), 1.0 - kFaceVertexGap);
+        p.along = along;
     }
     for (Path& p : paths)
-        if (p.lens) {
-            double u = 0.0, v = 0.0;
-            pointAt(p.side, 0.5 * (p.lo + p.hi), p.depth, u, v);
-            p.lo = u, p.hi = v;  // from here on: the face vertex's (u, v)
-        }
+        if (p.lens) p.vertex = lensPoint(p.side, p.along, p.depth);
     return paths;
 }
 
@@ -283,7 +367,7 @@ std::vector<std::vector<std::uint32_t>> cellLoops(const CellCrossings& cell, con
         for (const Path& p : facePaths(cell, f, several, (cell.joined >> face) & 1)) {
             const std::uint32_t from = f.s ? p.to : p.from, to = f.s ? p.from : p.to;
             if (p.lens) {
-                const std::uint32_t mid = faceVertex(face, from, to, p.lo, p.hi);
+                const std::uint32_t mid = faceVertex(face, from, to, p.vertex[0], p.vertex[1]);
                 links.push_back({from, mid});
                 links.push_back({mid, to});
             } else {

@@ -9,8 +9,12 @@
 /// joins are found by the face rule (below); each region's boundary then runs along its arcs and,
 /// between one arc's last crossing and the next arc's first, across the face. A path across the
 /// face whose two ends lie on one edge (the face's slice of a thin wall's end, say) gets a face
-/// vertex in between, so that no two triangles share that edge's chord from four sides. The
-/// cell's paths, oriented as cell_table.h orients its segments, chain into loops.
+/// vertex in between, so that no two triangles share that edge's chord from four sides. The face
+/// vertex lies where the surface's slice through the face is expected: from the two ends'
+/// tangent lines in the face, at their meeting point across a sharp edge (a wedge's tip) and
+/// halfway to it on a smooth surface (the middle of the parabola with those tangents); where the
+/// lines meet on the wrong side or not at all, on the blend's zero below the edge. The cell's
+/// paths, oriented as cell_table.h orients its segments, chain into loops.
 ///
 /// The face rule. A face with at most one crossing per edge follows the cell table: its
 /// ambiguous case by the `joined` bit (the asymptotic decider on the level set's values). On a
@@ -28,12 +32,16 @@
 #include <functional>
 #include <vector>
 
+#include "dexelmill/geometry/types.h"
+
 namespace dexelmill::detail {
 
 /// @brief The crossings on one cell edge, in increasing order along its axis.
 struct EdgeCrossings {
     std::vector<std::uint32_t> ids;  ///< the caller's vertex ids
     std::vector<double> at;          ///< offsets from the edge's lower end, in (0, 1) spacings
+    /// The material's outward unit normals there (zero where unknown), or none at all.
+    std::vector<Vec3> normals;
 };
 
 /// @brief What one cell's loops are made from.
@@ -43,6 +51,8 @@ struct CellCrossings {
     /// its inside corners are joined (cell_table.h's `joined`); other faces ignore it.
     std::uint8_t joined = 0;
     std::array<EdgeCrossings, 12> edges;  ///< per edge (cell_table.h numbering)
+    /// Two crossings whose normals make a cosine below this bound a sharp edge (face vertices).
+    double creaseCosine = 0.8253356149096783;  // cos(0.6 rad), ContourOptions::featureAngle
 };
 
 /// @brief Gives the id of the vertex on a face of the cell, at (u, v) in [0, 1]^2 of that face,
