@@ -1,5 +1,9 @@
 // Contouring a stock's level set with its Hermite data (contour.h).
 //
+// First the split cells are found (detail/split_cells.h): those round a lattice edge whose dexel
+// has several ends between its two points, a wall or slot thinner than the spacing. They are
+// meshed apart, one after another (they are few), and the passes below skip them.
+//
 // The work is split by OpenVDB leaf blocks (8^3 lattice points) whose points, with the next
 // blocks' first ones, are not all of one sign (their cells hold surface), in passes that each run
 // in parallel over the blocks and write to disjoint places, so the mesh is the same for any thread
@@ -13,8 +17,10 @@
 //  3. patches: each patch's vertex from its crossings (quadric error function, detail/patch_vertex.h),
 //     and its fan; a plain cell's square;
 //  4. flips: the fan chords of feature patches that cross a crease are turned to run along it;
-// then the mesh is checked, and the vertices of folded triangles are pulled back towards their
-// loops (repairAndCheckMesh), and with adaptivity flat regions are merged (mergeFlatRegions).
+// the split cells' vertices and fans come between passes 3 and 4. Then the mesh is checked, and
+// the vertices of folded triangles are pulled back towards their loops (repairAndCheckMesh); split
+// cells whose triangles still fold are left to the table path in a new run (contourStock). With
+// adaptivity flat regions are merged (mergeFlatRegions).
 // Passes 2 to 4 read only what pass 1 stored per block: bit masks with prefix counts, which turn a
 // lattice point or cell into a mesh index, and the mixed cells' configurations.
 #include "dexelmill/surface/contour.h"
@@ -42,6 +48,7 @@
 #include "surface/detail/cell_table.h"
 #include "surface/detail/grid_meta.h"
 #include "surface/detail/patch_vertex.h"
+#include "surface/detail/split_cells.h"
 
 namespace dexelmill {
 
@@ -77,6 +84,14 @@ constexpr double kCandidateReach[] = {0.5, 0.9};
 
 /// Rounds of fold repair; after the last a patch vertex that still folds sits on its mass point.
 constexpr int kPullRounds = 8;
+
+/// Runs of the contourer that leave the split cells with folds to the table path, before a last
+/// run without split cells.
+constexpr int kSplitRetries = 2;
+
+/// How far towards the middle of its lens's chord the last resort of fold repair tries a split
+/// cell's face vertex (split_cells.h).
+constexpr double kFaceVertexReach[] = {0.25, 0.5, 0.75};
 
 /// Adaptivity 1 merges flat regions whose normals stay within this angle (15 degrees) and whose
 /// vertices stay within this fraction of h of the merged surface; smaller adaptivities scale both.
@@ -136,6 +151,8 @@ struct Block {
     /// The mixed cells that are plain (Contourer::plainCell): a square of a face, two triangles
     /// and no patch vertex.
     std::uint64_t plain[8] = {};
+    /// The mixed cells that are split (split_cells.h): the general path meshes them.
+    std::uint64_t split[8] = {};
     /// Per mixed cell in rank order: its corners in material (low byte) and its ambiguous faces
     /// whose inside corners are joined (high byte).
     std::vector<std::uint16_t> config;
@@ -147,6 +164,7 @@ struct Block {
 
     int rankOf(int off) const { return mixedBefore[off >> 6] + popcountBelow(mixed[off >> 6], off & 63); }
     bool isPlain(int off) const { return (plain[off >> 6] >> (off & 63)) & 1; }
+    bool isSplit(int off) const { return (split[off >> 6] >> (off & 63)) & 1; }
     const CellPatches& patchesOf(int rank) const {
         const std::uint16_t c = config[std::size_t(rank)];
         return detail::cellPatches(std::uint8_t(c & 0xff), std::uint8_t(c >> 8));
@@ -225,8 +243,10 @@ const std::array<EdgeStart, detail::kCellEdges>& edgeStarts() {
 
 class Contourer {
 public:
-    Contourer(const openvdb::FloatGrid& grid, const TriDexelStock& stock, const ContourOptions& options)
-        : grid_(grid), stock_(stock), lattice_(stock.lattice()), h_(lattice_.h), vertexRule_(h_, options.featureAngle) {
+    Contourer(const openvdb::FloatGrid& grid, const TriDexelStock& stock, const ContourOptions& options,
+              std::vector<std::pair<detail::GridPoint, int>> excluded, bool noSplit)
+        : grid_(grid), stock_(stock), lattice_(stock.lattice()), h_(lattice_.h), featureAngle_(options.featureAngle),
+          vertexRule_(h_, options.featureAngle), excluded_(std::move(excluded)), noSplit_(noSplit) {
         // From the lattice the grid records (contourStock checked it is the stock's).
         const std::array<int, 3> off = detail::latticeOffset(grid);
         offset_ = Coord(off[0], off[1], off[2]);
@@ -244,45 +264,61 @@ public:
                 }
     }
 
+    /// The edges with several crossings round split cells whose triangles still folded after
+    /// repair, in the last run: contourStock runs again with them left to the table path.
+    const std::vector<std::pair<detail::GridPoint, int>>& foldedSplitEdges() const { return foldedSplitEdges_; }
+
     Mesh run(ContourStats& stats) {
         findBlocks();
         keepSurfaceBlocks();
+        findSplit();
         countPass();
-        // Prefix sums: crossings first, then patch vertices, in block order.
+        // Prefix sums: crossings first, then the split cells' vertices, then patch vertices in
+        // block order, then the split cells' patch vertices; the split cells' triangles last.
         std::uint64_t crossings = 0, patches = 0, triangles = 0, cells = 0, plainCells = 0;
         for (Block& b : blocks_) {
             b.crossingBase = std::uint32_t(crossings);
             crossings += b.crossings;
         }
+        const std::uint64_t splitPoints = split_.points.size();
         for (Block& b : blocks_) {
-            b.patchBase = std::uint32_t(crossings + patches);
+            b.patchBase = std::uint32_t(crossings + splitPoints + patches);
             patches += b.patches;
             b.triangleBase = std::uint32_t(triangles);
             triangles += b.triangles;
             cells += b.config.size();
             for (std::uint64_t w : b.plain) plainCells += std::uint64_t(popcount(w));
         }
-        if (crossings + patches > std::numeric_limits<std::uint32_t>::max() ||
-            triangles > std::numeric_limits<std::uint32_t>::max())
+        splitPatchBase_ = crossings + splitPoints + patches;
+        splitTriangleBase_ = triangles;
+        const std::uint64_t vertices = splitPatchBase_ + split_.patches();
+        triangles += split_.loopIds.size();
+        if (vertices > std::numeric_limits<std::uint32_t>::max() || triangles > std::numeric_limits<std::uint32_t>::max())
             throw Error("contouring: the mesh would have more than 2^32 vertices or triangles; use a larger spacing");
-        detail::reservePopulated(mesh_.vertices, crossings + patches);
+        detail::reservePopulated(mesh_.vertices, vertices);
         detail::reservePopulated(mesh_.triangles, triangles);
-        detail::reservePopulated(crossingNormal_, crossings);
-        mesh_.vertices.resize(crossings + patches);
+        detail::reservePopulated(crossingNormal_, crossings + splitPoints);
+        mesh_.vertices.resize(vertices);
         mesh_.triangles.resize(triangles);
-        crossingNormal_.resize(crossings);
-        feature_.assign(patches, 0);
-        patchVertexBase_ = std::uint32_t(crossings);
+        crossingNormal_.resize(crossings + splitPoints);
+        feature_.assign(patches + split_.patches(), 0);
+        patchVertexBase_ = std::uint32_t(crossings + splitPoints);
+        std::copy(split_.points.begin(), split_.points.end(), mesh_.vertices.begin() + std::ptrdiff_t(crossings));
+        std::copy(split_.normals.begin(), split_.normals.end(), crossingNormal_.begin() + std::ptrdiff_t(crossings));
 
         std::atomic<std::size_t> exact{0}, edges{0}, corners{0}, flipped{0};
         forEachBlock([&](std::size_t i) { crossingPass(i, exact); });
         forEachBlock([&](std::size_t i) { patchPass(i, edges, corners); });
+        splitPatchPass(std::uint32_t(crossings), edges, corners);
         forEachBlock([&](std::size_t i) { flipPass(i, flipped); });
         stats.cells = cells;
-        stats.crossings = crossings;
-        stats.patches = patches;
+        stats.crossings = crossings + split_.edgeEnds;
+        stats.patches = patches + split_.patches();
+        stats.splitCells = split_.cells.size();
+        stats.splitEdges = split_.edges.size();
+        stats.faceVertices = split_.points.size() - split_.edgeEnds;
         stats.plainCells = plainCells;
-        stats.exactCrossings = exact;
+        stats.exactCrossings = exact + split_.edgeEnds;
         stats.edgeVertices = edges;
         stats.cornerVertices = corners;
         stats.flipped = flipped;
@@ -291,12 +327,21 @@ public:
         decltype(feature_)().swap(feature_);
         decltype(blocks_)().swap(blocks_);
         decltype(keys_)().swap(keys_);
+        faceVertexBase_ = std::uint32_t(crossings + split_.edgeEnds);
+        faceVertexEnds_.clear();
+        for (const auto& [a, b] : split_.faceVertexEnds)
+            faceVertexEnds_.push_back({std::uint32_t(crossings) + a, std::uint32_t(crossings) + b});
+        decltype(split_.points)().swap(split_.points);
+        decltype(split_.normals)().swap(split_.normals);
+        decltype(split_.loopIds)().swap(split_.loopIds);
         stats.check = repairAndCheck(stats.pulledBack);
         if (stats.check.foldedTriangles + stats.check.degenerateTriangles > 0 && unflip(unrepaired_) > 0) {
             std::size_t more = 0;
             stats.check = repairAndCheck(more);
             stats.pulledBack += more;
         }
+        findFoldedSplitEdges();
+        split_ = detail::SplitCells();
         if (adaptivity_ > 0.0) {
             FlatMergeOptions merge;
             merge.maxAngle = adaptivity_ * kMergeAngle;
@@ -375,6 +420,48 @@ private:
         detail::reservePopulated(blocks_, kept);
         blocks_.resize(kept);
         for (std::size_t i = 0; i < kept; ++i) blocks_[i].origin = blockOrigin(keys_[i]);
+    }
+
+    /// The split cells (split_cells.h) and their loops, and per block the bits of its split cells
+    /// and of the edges it owns that hold several crossings.
+    void findSplit() {
+        detail::SplitInputs in;
+        in.offset = {offset_.x(), offset_.y(), offset_.z()};
+        in.cornerGap = kCornerGap;
+        in.featureAngle = featureAngle_;
+        const auto acc = grid_.getConstAccessor();
+        in.value = [&](const detail::GridPoint& g) { return acc.getValue(Coord(g[0], g[1], g[2])); };
+        in.crossing = [&](const detail::GridPoint& g, int a, bool lowerInside) {
+            const Coord lower(g[0], g[1], g[2]);
+            const Crossing x = findCrossing(lower, a, lowerInside);
+            const Vec3 n = x.n.present() && !x.n.sharp() ? x.n.unpack() : Vec3(0.0);
+            return std::make_pair((x.p[a] - latticePoint(lower)[a]) / h_, n);
+        };
+        in.excluded = &excluded_;
+        if (!noSplit_) split_ = detail::findSplitCells(stock_, in);
+        const auto bitOf = [](const detail::GridPoint& g) {
+            const Coord p(g[0], g[1], g[2]);
+            return std::make_pair(blockKey(p), localOffset(p.x(), p.y(), p.z()));
+        };
+        splitCellBits_.clear();
+        splitEdgeBits_.clear();
+        for (const detail::GridPoint& g : split_.cells) splitCellBits_.push_back(bitOf(g));
+        for (const auto& [g, a] : split_.edges) {
+            auto bit = bitOf(g);
+            bit.second += a * kCells;
+            splitEdgeBits_.push_back(bit);
+        }
+        std::sort(splitCellBits_.begin(), splitCellBits_.end());
+        std::sort(splitEdgeBits_.begin(), splitEdgeBits_.end());
+    }
+
+    /// The bits of `bits` (sorted by block key) in the block at `origin`.
+    template <class F>
+    static void forBitsOf(const std::vector<std::pair<std::uint64_t, int>>& bits, const Coord& origin, F&& f) {
+        const std::uint64_t key = blockKey(origin);
+        for (auto it = std::lower_bound(bits.begin(), bits.end(), std::make_pair(key, 0)); it != bits.end() && it->first == key;
+             ++it)
+            f(it->second);
     }
 
     static constexpr std::int64_t kKeyBias = std::int64_t(1) << 20;
@@ -477,6 +564,9 @@ private:
                 b.mixed[x] |= std::uint64_t(mixed) << shift;
             }
         }
+        // Edges with several crossings get theirs from the split cells; their cells are split.
+        forBitsOf(splitEdgeBits_, b.origin, [&](int bit) { b.owned[bit >> 6] &= ~(std::uint64_t(1) << (bit & 63)); });
+        forBitsOf(splitCellBits_, b.origin, [&](int off) { b.split[off >> 6] |= b.mixed[off >> 6] & (std::uint64_t(1) << (off & 63)); });
         // The mixed cells in rank order (offset order), with their configurations.
         int mixedCells = 0;
         for (int w = 0; w < kCells / 64; ++w) mixedCells += popcount(b.mixed[w]);
@@ -490,6 +580,7 @@ private:
             const std::uint8_t joined = joinedFaces(acc, b.origin.offsetBy(x, y, z), inside);
             b.config.push_back(std::uint16_t(inside | (joined << 8)));
             b.patchBefore.push_back(std::uint16_t(patches));
+            if (b.isSplit(off)) return;
             if (plainCell(b.origin.offsetBy(x, y, z), inside)) {
                 b.plain[off >> 6] |= std::uint64_t(1) << (off & 63);
                 triangles += 2;
@@ -679,6 +770,7 @@ private:
         int rank = 0;
         forEachSetBit(b.mixed, kCells / 64, [&](int off) {
             const CellPatches& patches = b.patchesOf(rank++);
+            if (b.isSplit(off)) return;
             const Coord p = b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7);
             if (b.isPlain(off)) {
                 // One square (plainCell): its loop is convex and flat, so any diagonal serves.
@@ -702,6 +794,59 @@ private:
         });
         edgeCount += edges;
         cornerCount += corners;
+    }
+
+    /// The split cells' patch vertices and fans (split_cells.h), one after another: they are few.
+    /// `crossings` is the number of the table path's crossings, after which the split cells' own
+    /// vertices lie. Their fans are never flipped.
+    void splitPatchPass(std::uint32_t crossings, std::atomic<std::size_t>& edgeCount, std::atomic<std::size_t>& cornerCount) {
+        std::vector<std::uint32_t> loop;
+        std::uint32_t tri = std::uint32_t(splitTriangleBase_);
+        for (std::size_t k = 0; k < split_.patches(); ++k) {
+            loop.clear();
+            for (std::uint32_t i = split_.loopStart[k]; i < split_.loopStart[k + 1]; ++i) {
+                const std::uint32_t id = split_.loopIds[i];
+                if (id & detail::SplitCells::kOrdinary) {
+                    const auto& [g, a] = split_.ordinary[id & ~detail::SplitCells::kOrdinary];
+                    const Coord lower(g[0], g[1], g[2]);
+                    const Block& b = blockAt(lower);
+                    const int bit = a * kCells + localOffset(lower.x(), lower.y(), lower.z());
+                    loop.push_back(b.crossingBase + b.ownedBefore[bit >> 6] + std::uint32_t(popcountBelow(b.owned[bit >> 6], bit & 63)));
+                } else {
+                    loop.push_back(crossings + id);
+                }
+            }
+            const std::uint32_t at = std::uint32_t(splitPatchBase_ + k);
+            const detail::GridPoint& g = split_.patchCell[k];
+            int qefRank = 0;
+            const int len = int(loop.size());
+            const detail::PatchVertexRule::Loop crossingsOf{mesh_.vertices.data(), crossingNormal_.data(), loop.data(), len};
+            mesh_.vertices[at] = vertexRule_.place(crossingsOf, latticePoint(Coord(g[0], g[1], g[2])), qefRank);
+            edgeCount += qefRank == 2;
+            cornerCount += qefRank == 3;
+            for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[std::size_t(i)], loop[std::size_t(i + 1 == len ? 0 : i + 1)]};
+        }
+    }
+
+    /// The edges with several crossings of the split cells whose triangles still fold or have no
+    /// area after repair (foldedSplitEdges).
+    void findFoldedSplitEdges() {
+        foldedSplitEdges_.clear();
+        for (std::uint32_t t : unrepaired_) {
+            if (t < splitTriangleBase_) continue;
+            const std::uint32_t at = std::uint32_t(t - splitTriangleBase_);
+            const std::size_t k = std::size_t(std::upper_bound(split_.loopStart.begin(), split_.loopStart.end(), at) -
+                                              split_.loopStart.begin()) - 1;
+            const detail::GridPoint& cell = split_.patchCell[k];
+            for (int e = 0; e < detail::kCellEdges; ++e) {
+                const int c0 = detail::edgeCorner(e, 0);
+                const std::pair<detail::GridPoint, int> edge{
+                    {cell[0] + (c0 & 1), cell[1] + ((c0 >> 1) & 1), cell[2] + ((c0 >> 2) & 1)}, detail::edgeAxis(e)};
+                if (std::binary_search(split_.edges.begin(), split_.edges.end(), edge)) foldedSplitEdges_.push_back(edge);
+            }
+        }
+        std::sort(foldedSplitEdges_.begin(), foldedSplitEdges_.end());
+        foldedSplitEdges_.erase(std::unique(foldedSplitEdges_.begin(), foldedSplitEdges_.end()), foldedSplitEdges_.end());
     }
 
     // ------------------------------------------------------------------ pass 4: triangles
@@ -735,7 +880,7 @@ private:
         const int rank = b.rankOf(off);
         patches = &b.patchesOf(rank);
         firstPatch = b.patchBase + b.patchBefore[std::size_t(rank)];
-        return !b.isPlain(off);
+        return !b.isPlain(off) && !b.isSplit(off);
     }
 
     /// Flips the fan chords of the block's feature patches that run across a crease (flipChord).
@@ -751,6 +896,7 @@ private:
         int rank = 0;
         forEachSetBit(b.mixed, kCells / 64, [&](int off) {
             const CellPatches& patches = b.patchesOf(rank++);
+            if (b.isSplit(off)) return;
             if (b.isPlain(off)) {
                 tri += 2;
                 return;
@@ -854,6 +1000,14 @@ private:
         // and each pair of crossings from the mass point. Convex combinations of the crossings,
         // which lie on the cell's edges, stay inside the cell.
         repair.candidates = [&](std::uint32_t v, const std::vector<std::uint32_t>& neighbours, std::vector<Vec3>& out) {
+            if (v >= faceVertexBase_ && v < patchVertexBase_) {
+                // A split cell's face vertex, an estimate: towards the middle of its lens's chord,
+                // staying on its face.
+                const auto& ends = faceVertexEnds_[v - faceVertexBase_];
+                const Vec3 x = mesh_.vertices[v], mid = 0.5 * (mesh_.vertices[ends[0]] + mesh_.vertices[ends[1]]);
+                for (double t : kFaceVertexReach) out.push_back(x + t * (mid - x));
+                return;
+            }
             if (v < patchVertexBase_) return;
             std::vector<Vec3> loop;
             for (std::uint32_t w : neighbours)
@@ -913,6 +1067,7 @@ private:
     const Lattice& lattice_;
     Coord offset_;  ///< the grid index of lattice point (0, 0, 0); the passes work in grid indexes
     double h_;
+    double featureAngle_;
     detail::PatchVertexRule vertexRule_;
     double adaptivity_ = 0.0;
     /// Per axis a and side (2 a for +a, 2 a + 1 for -a), the packings of that unit normal, not
@@ -926,6 +1081,17 @@ private:
     std::vector<std::uint8_t, NoZeroAllocator<std::uint8_t>> feature_;
     std::uint32_t patchVertexBase_ = 0;
     std::vector<std::uint32_t> unrepaired_;
+    detail::SplitCells split_;
+    /// Per split cell and per edge with several crossings: (block key, bit in that block's words).
+    std::vector<std::pair<std::uint64_t, int>> splitCellBits_, splitEdgeBits_;
+    std::uint64_t splitPatchBase_ = 0, splitTriangleBase_ = 0;
+    /// The split cells' face vertices: their first mesh index, and per face vertex its two ends.
+    std::uint32_t faceVertexBase_ = 0;
+    std::vector<std::array<std::uint32_t, 2>> faceVertexEnds_;
+    /// Edges the general path leaves to the table path (contourStock's retries), sorted; all when
+    /// `noSplit_`.
+    std::vector<std::pair<detail::GridPoint, int>> excluded_, foldedSplitEdges_;
+    bool noSplit_ = false;
 };
 
 }  // namespace
@@ -939,11 +1105,24 @@ Mesh contourStock(const LevelSet& levelSet, const TriDexelStock& stock, const Co
     if (!lat || lat->n != own.n || std::abs(lat->h - own.h) > 1e-12 * own.h ||
         glm::length(lat->origin - own.origin) > 1e-9 * std::max(1.0, glm::length(own.origin)))
         throw Error("contouring: the level set was not rebuilt from this stock's lattice");
-    ContourStats local;
-    Contourer c(*grid, stock, options);
-    Mesh mesh = c.run(local);
-    if (stats) *stats = local;
-    return mesh;
+    // Split cells whose triangles fold are left to the table path, and the mesh made again: after
+    // kSplitRetries runs with folds there, without any split cells (the mesh of before they were).
+    std::vector<std::pair<detail::GridPoint, int>> excluded;
+    std::size_t found = 0;
+    for (int run = 0;; ++run) {
+        ContourStats local;
+        Contourer c(*grid, stock, options, excluded, run > kSplitRetries);
+        Mesh mesh = c.run(local);
+        if (run == 0) found = local.splitEdges;
+        if (c.foldedSplitEdges().empty() || run > kSplitRetries) {
+            local.splitRuns = run + 1;
+            local.splitEdgesDropped = found - local.splitEdges;
+            if (stats) *stats = local;
+            return mesh;
+        }
+        excluded.insert(excluded.end(), c.foldedSplitEdges().begin(), c.foldedSplitEdges().end());
+        std::sort(excluded.begin(), excluded.end());
+    }
 }
 
 }  // namespace dexelmill

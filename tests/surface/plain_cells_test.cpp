@@ -25,6 +25,9 @@ namespace {
 /// Two crossings at the same height differ by less than this (mm): the carving bisects each dexel
 /// end to 1e-12 mm, and the lattice is a few tens of mm across.
 constexpr double kSameHeight = 1e-9;
+/// Points sampled along each edge of a cell that may be plain: the features the tests cut are
+/// at least a twentieth of a cell thick.
+constexpr int kEdgeSamples = 256;
 
 /// The outward normal of the part at x, a point of its surface: the stock box's face, or the
 /// reversed normal of the cutter whose boundary passes through x (the one whose membership
@@ -92,6 +95,25 @@ std::size_t expectedPlainCells(const CarvedPart& part, double h) {
                         if (glm::length(normal - want) > 1e-12) flat = false;
                         if (c == 0) height = x[a];
                         else if (std::abs(x[a] - height) > kSameHeight) flat = false;
+                    }
+                    // No other surface meets the cell's edges: a wall or slot thinner than the
+                    // spacing across one of them is not in a flat square's cell.
+                    for (int e = 0; e < 12 && flat; ++e) {
+                        const int axis = e >> 2, b = (axis + 1) % 3, c = (axis + 2) % 3;
+                        std::array<int, 3> lo{i, j, k};
+                        lo[std::size_t(b)] += e & 1;
+                        lo[std::size_t(c)] += (e >> 1) & 1;
+                        const Vec3 p0 = latticePoint(part.box, h, lo[0], lo[1], lo[2]);
+                        int changes = 0;
+                        bool prev = part.inside(p0);
+                        for (int s = 1; s <= kEdgeSamples; ++s) {
+                            Vec3 x = p0;
+                            x[axis] += h * double(s) / kEdgeSamples;
+                            const bool now = part.inside(x);
+                            changes += now != prev;
+                            prev = now;
+                        }
+                        flat = changes == (axis == a ? 1 : 0);
                     }
                     plain += flat;
                 }

@@ -35,6 +35,16 @@ struct ContourStats {
     std::size_t pulledBack = 0;      ///< patch vertices moved towards their loop to avoid a fold
     std::size_t flipped = 0;         ///< chords flipped to run along a crease
     std::size_t merged = 0;          ///< vertices merged away in flat regions (adaptivity)
+    /// Lattice edges whose dexel has several ends between its two lattice points (a wall, fin or
+    /// slot thinner than the spacing that no lattice point falls in); each end is a crossing.
+    std::size_t splitEdges = 0;
+    std::size_t splitCells = 0;    ///< cells round those edges, meshed by the general path
+    std::size_t faceVertices = 0;  ///< vertices on cell faces that the general path added
+    /// Runs of the contourer: one, and one more each time split cells' triangles folded and
+    /// their edges were left to the table path (at most 4, the last without split cells).
+    int splitRuns = 1;
+    /// Edges with several crossings left to the table path because their cells' triangles folded.
+    std::size_t splitEdgesDropped = 0;
     MeshCheck check;                 ///< checkMesh of the mesh returned
 };
 
@@ -51,6 +61,15 @@ struct ContourStats {
 /// square across a lattice axis (the block's faces, a flat tool's floors and walls) takes the
 /// square's two triangles instead, and no vertex. The mesh is closed and consistently oriented by
 /// construction; its vertices on cell edges are the exact crossings.
+///
+/// A wall, fin or slot thinner than the spacing that no lattice point falls in has no sign change
+/// in the level set, but its dexels cross it: an edge then holds several crossings. The cells
+/// round such an edge are meshed by a general path (cell_loops.h) that joins the crossings on
+/// each face by the cell table's rule where each edge has one, and by their tangents where an
+/// edge has several, with a vertex on the face where a path's two ends lie on one edge. Stretches
+/// thinner than 0.02 h, and those where the surface grazes the dexel, are left out; so are split
+/// cells whose triangles fold after repair: the mesh is made again with their edges left to the
+/// table path (at most three times, the last time without split cells).
 /// @throw Error if the level set holds no grid or was not rebuilt from this stock's lattice.
 Mesh contourStock(const LevelSet& levelSet, const TriDexelStock& stock, const ContourOptions& options = {},
                   ContourStats* stats = nullptr);

@@ -1,0 +1,211 @@
+#include "surface/detail/split_cells.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <tuple>
+
+#include "dexelmill/stock/fine_features.h"
+#include "surface/detail/cell_loops.h"
+#include "surface/detail/cell_table.h"
+
+namespace dexelmill::detail {
+
+namespace {
+
+using EdgeKey = std::pair<GridPoint, int>;
+
+/// A stretch whose two ends have normals this close to square to the dexel (below this cosine
+/// with it, 14.5 degrees) is where the surface grazes the dexel: the cap of a rounded surface
+/// just past a lattice edge or face, a fraction of the stretch's length deep (on a sphere of
+/// radius R a stretch of length L is L^2 / 8R deep and its ends' normals make a cosine of L / 2R
+/// with the dexel). Its cells' loops would lie in a lattice face and stand their triangles on
+/// edge. The family across such a feature sees it with normals along its dexels: of three
+/// families one makes a cosine of at least 1/sqrt(3) with any normal.
+constexpr double kGrazing = 0.25;
+
+/// An end of a dexel's segment: its offset along the dexel (mm from the lattice origin) and
+/// the material's outward normal there.
+struct End {
+    double t;
+    PackedNormal n;
+};
+
+/// Whether the dexel holds the point at v, ends included (as TriDexelStock::inside).
+bool holds(const SegmentSpan& segs, float v) {
+    const Segment* s = std::partition_point(segs.begin(), segs.end(), [v](const Segment& g) { return g.hi < v; });
+    return s != segs.end() && s->lo <= v;
+}
+
+/// The lattice edge a stretch lies on: the index i along its dexel with points i and i + 1 at
+/// or beyond its ends; -1 when it lies outside the lattice's first or last point.
+int edgeOfStretch(const FineStretch& s, double h, int n) {
+    const int i = int(std::floor(double(s.lo) / h - 0.5));
+    for (int k = std::max(0, i - 1); k <= i + 1 && k + 1 < n; ++k)
+        if (float((k + 0.5) * h) <= s.lo && s.hi <= float((k + 1.5) * h)) return k;
+    return -1;
+}
+
+}  // namespace
+
+SplitCells findSplitCells(const TriDexelStock& stock, const SplitInputs& in) {
+    SplitCells out;
+    const Lattice& lattice = stock.lattice();
+    const double h = lattice.h, gap = in.cornerGap * h, thinnest = in.minStretch * h;
+    const auto toGrid = [&](const GridPoint& l) { return GridPoint{l[0] + in.offset[0], l[1] + in.offset[1], l[2] + in.offset[2]}; };
+    const auto world = [&](const GridPoint& g) {
+        return lattice.point(g[0] - in.offset[0], g[1] - in.offset[1], g[2] - in.offset[2]);
+    };
+    const auto insideAt = [&](const GridPoint& g) { return in.value(g) < 0.0f; };
+
+    // The candidate edges: those a stretch no lattice point lies in falls on.
+    std::vector<FineStretch> material, gaps;
+    findFineStretches(stock, material, gaps);
+    std::vector<std::tuple<int, int, int, int>> candidates;  // axis, ib, ic, index along the dexel
+    for (const auto* list : {&material, &gaps})
+        for (const FineStretch& s : *list) {
+            const int i = edgeOfStretch(s, h, lattice.n[std::size_t(s.family)]);
+            if (i >= 0) candidates.emplace_back(s.family, s.ib, s.ic, i);
+        }
+    std::sort(candidates.begin(), candidates.end());
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+
+    // Each candidate's ends strictly between its points; kept when it has two or more after
+    // thin stretches are dropped, and it agrees with the level set at both points.
+    struct SplitEdge {
+        EdgeKey key;
+        std::uint32_t first;
+        std::vector<double> at;
+        std::vector<Vec3> normals;  ///< zero where unknown or sharp
+    };
+    std::vector<SplitEdge> split;
+    for (const auto& [a, ib, ic, i] : candidates) {
+        const int b = (a + 1) % 3, c = (a + 2) % 3;
+        const SegmentSpan segs = stock.family(axisFromIndex(a)).segments(ib, ic);
+        const float v0 = float((i + 0.5) * h), v1 = float((i + 1.5) * h);
+        std::vector<End> ends;
+        for (const Segment* s = std::partition_point(segs.begin(), segs.end(), [v0](const Segment& g) { return g.hi <= v0; });
+             s != segs.end() && s->lo < v1; ++s) {
+            if (v0 < s->lo) ends.push_back({double(s->lo), s->nlo});
+            if (s->hi < v1) ends.push_back({double(s->hi), s->nhi});
+        }
+        const bool in0 = holds(segs, v0), in1 = holds(segs, v1);
+        GridPoint lo{}, hi{};
+        lo[std::size_t(a)] = i, lo[std::size_t(b)] = ib, lo[std::size_t(c)] = ic;
+        lo = toGrid(lo);
+        if (in.excluded && std::binary_search(in.excluded->begin(), in.excluded->end(), EdgeKey{lo, a})) continue;
+        hi = lo;
+        ++hi[std::size_t(a)];
+        if (in1 != (in0 != (ends.size() % 2 == 1)) || insideAt(lo) != in0 || insideAt(hi) != in1) continue;
+        // Away from the lattice points, as the contourer keeps its crossings; two ends closer
+        // than minStretch leave a stretch too thin to mesh, and two where the surface grazes the
+        // dexel a shallow one, each dropped with both its ends.
+        const double t0 = (i + 0.5) * h, t1 = t0 + h;
+        for (End& e : ends) e.t = std::clamp(e.t, t0 + gap, t1 - gap);
+        const auto grazes = [a](const End& e) {
+            return e.n.present() && !e.n.sharp() && std::abs(e.n.unpack()[a]) < kGrazing;
+        };
+        for (std::size_t k = 0; k + 1 < ends.size();) {
+            if (ends[k + 1].t - ends[k].t < thinnest || (grazes(ends[k]) && grazes(ends[k + 1]))) {
+                ends.erase(ends.begin() + std::ptrdiff_t(k), ends.begin() + std::ptrdiff_t(k + 2));
+                k = k > 0 ? k - 1 : 0;
+            } else {
+                ++k;
+            }
+        }
+        if (ends.size() < 2) continue;
+        SplitEdge e{{lo, a}, std::uint32_t(out.points.size()), {}, {}};
+        for (const End& end : ends) {
+            Vec3 p = world(lo);
+            p[a] = lattice.origin[a] + end.t;
+            out.points.push_back(p);
+            out.normals.push_back(end.n);
+            e.at.push_back((end.t - t0) / h);
+            e.normals.push_back(end.n.present() && !end.n.sharp() ? end.n.unpack() : Vec3(0.0));
+        }
+        split.push_back(std::move(e));
+    }
+    out.edgeEnds = out.points.size();
+    std::sort(split.begin(), split.end(), [](const SplitEdge& x, const SplitEdge& y) { return x.key < y.key; });
+    for (const SplitEdge& e : split) out.edges.push_back(e.key);
+
+    // The cells round them (also those past the lattice's last points, which the level set's
+    // band reaches: their crossings on these edges are these).
+    for (const SplitEdge& e : split) {
+        const int a = e.key.second, b = (a + 1) % 3, c = (a + 2) % 3;
+        for (int d = 0; d < 4; ++d) {
+            GridPoint cell = e.key.first;
+            cell[std::size_t(b)] -= d & 1;
+            cell[std::size_t(c)] -= d >> 1;
+            out.cells.push_back(cell);
+        }
+    }
+    std::sort(out.cells.begin(), out.cells.end());
+    out.cells.erase(std::unique(out.cells.begin(), out.cells.end()), out.cells.end());
+
+    // Their loops.
+    std::map<EdgeKey, std::uint32_t> ordinary;
+    std::map<std::tuple<GridPoint, int, std::uint32_t, std::uint32_t>, std::uint32_t> faceVertices;
+    for (const GridPoint& cell : out.cells) {
+        CellCrossings cc;
+        cc.creaseCosine = std::cos(in.featureAngle);
+        float f[kCellCorners];
+        for (int k = 0; k < kCellCorners; ++k) {
+            f[k] = in.value({cell[0] + (k & 1), cell[1] + ((k >> 1) & 1), cell[2] + ((k >> 2) & 1)});
+            if (f[k] < 0.0f) cc.inside |= std::uint8_t(1u << k);
+        }
+        for (int face = 0; face < kCellFaces; ++face) {
+            const std::array<int, 4> k = faceCorners(face);
+            if (insideJoinedAcrossFace(f[k[0]], f[k[1]], f[k[2]], f[k[3]])) cc.joined |= std::uint8_t(1u << face);
+        }
+        for (int e = 0; e < kCellEdges; ++e) {
+            const int c0 = edgeCorner(e, 0), a = edgeAxis(e);
+            const EdgeKey key{{cell[0] + (c0 & 1), cell[1] + ((c0 >> 1) & 1), cell[2] + ((c0 >> 2) & 1)}, a};
+            EdgeCrossings& x = cc.edges[std::size_t(e)];
+            const auto s = std::lower_bound(split.begin(), split.end(), key,
+                                            [](const SplitEdge& se, const EdgeKey& k) { return se.key < k; });
+            if (s != split.end() && s->key == key) {
+                for (std::size_t j = 0; j < s->at.size(); ++j) x.ids.push_back(s->first + std::uint32_t(j));
+                x.at = s->at;
+                x.normals = s->normals;
+                continue;
+            }
+            const bool lowerIn = (cc.inside >> c0) & 1;
+            if (lowerIn == bool((cc.inside >> edgeCorner(e, 1)) & 1)) continue;
+            auto o = ordinary.find(key);
+            if (o == ordinary.end()) {
+                o = ordinary.emplace(key, std::uint32_t(out.ordinary.size()) | SplitCells::kOrdinary).first;
+                out.ordinary.push_back(key);
+            }
+            const auto [at, normal] = in.crossing(key.first, a, lowerIn);
+            x.ids.push_back(o->second);
+            x.at.push_back(at);
+            x.normals.push_back(normal);
+        }
+        const auto faceVertex = [&](int face, std::uint32_t from, std::uint32_t to, double u, double v) {
+            const int a = face >> 1;
+            GridPoint lo = cell;
+            lo[std::size_t(a)] += face & 1;
+            const auto key = std::make_tuple(lo, a, std::min(from, to), std::max(from, to));
+            auto it = faceVertices.find(key);
+            if (it == faceVertices.end()) {
+                Vec3 p = world(lo);
+                p[(a + 1) % 3] += u * h;
+                p[(a + 2) % 3] += v * h;
+                it = faceVertices.emplace(key, std::uint32_t(out.points.size())).first;
+                out.points.push_back(p);
+                out.normals.push_back(PackedNormal{});
+                out.faceVertexEnds.push_back({from, to});
+            }
+            return it->second;
+        };
+        for (const auto& loop : cellLoops(cc, faceVertex)) {
+            out.loopIds.insert(out.loopIds.end(), loop.begin(), loop.end());
+            out.loopStart.push_back(std::uint32_t(out.loopIds.size()));
+            out.patchCell.push_back(cell);
+        }
+    }
+    return out;
+}
+
+}  // namespace dexelmill::detail
