@@ -129,7 +129,11 @@ std::string reportJson(const SimulateReport& r) {
                                      {"interpolated_crossings", r.interpolatedCrossings},
                                      {"edge_vertices", r.edgeVertices},
                                      {"corner_vertices", r.cornerVertices},
-                                     {"plain_cells", r.plainCells}};
+                                     {"plain_cells", r.plainCells},
+                                     {"edges_with_several_crossings", r.splitEdges},
+                                     {"edges_with_several_crossings_left_out", r.splitEdgesDropped},
+                                     {"split_cells", r.splitCells},
+                                     {"face_vertices", r.faceVertices}};
     if (r.refineRounds > 0)
         j["mesh"]["refine"] = {{"rounds", r.refineRounds},
                                {"points_tested", r.refineQueries},

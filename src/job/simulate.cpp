@@ -111,7 +111,7 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
 /// Warns of what the lattice cannot show (finerThanLattice): material the surface leaves out, and
 /// gaps it fills, with their share of the part's volume (`part`, mm^3). The dexels keep both, so
 /// the volumes reported count them.
-void noteFineFeatures(const FineFeatures& f, double h, double part, std::vector<ReportWarning>& notes) {
+void noteFineFeatures(const FineFeatures& f, double h, double part, Mesher mesher, std::vector<ReportWarning>& notes) {
     const auto note = [&](const FineStretches& s, const char* what) {
         if (s.count == 0) return;
         const FineRegion& most = s.regions.front();
@@ -129,6 +129,15 @@ void noteFineFeatures(const FineFeatures& f, double h, double part, std::vector<
         w.message = text;
         notes.push_back(w);
     };
+    // The dexel mesher meshes what the dexels cross of them (contour.h); the level set, and with
+    // it the picture, the .vdb and the vdb mesher, cannot.
+    if (mesher == Mesher::Dexel) {
+        note(f.material, "material thinner than the lattice (walls, fins, ridge tops) is left out of the level set, and "
+                         "so of the picture and the .vdb; the mesh shows it where the dexels cross it:");
+        note(f.gaps, "gaps narrower than the lattice (slots, grooves) are filled in the level set, and so in the picture "
+                     "and the .vdb; the mesh shows them where the dexels cross them:");
+        return;
+    }
     note(f.material, "material thinner than the lattice (walls, fins, ridge tops) is left out of the level set and the "
                      "mesh (refinement restores only what the mesh passes near):");
     note(f.gaps, "gaps narrower than the lattice (slots, grooves) are filled in the level set and the mesh:");
@@ -511,7 +520,7 @@ Simulation runStages(const SimulateOptions& o) {
     report.finalVolumeMm3 = stock.volume(measure);
     report.removedVolumeMm3 = report.stockVolumeMm3 - report.finalVolumeMm3;
     report.fineFeatures = finerThanLattice(stock);
-    noteFineFeatures(report.fineFeatures, stock.lattice().h, report.finalVolumeMm3, notes);
+    noteFineFeatures(report.fineFeatures, stock.lattice().h, report.finalVolumeMm3, o.mesher, notes);
     // The job's own notes first (a thread count cut, the stock it chose, an open design): a long
     // program's diagnostics would push them past what the summary prints.
     for (ReportWarning& n : notes) report.warnings.push_back(std::move(n));
@@ -543,6 +552,20 @@ Simulation runStages(const SimulateOptions& o) {
         report.edgeVertices = stats.edgeVertices;
         report.cornerVertices = stats.cornerVertices;
         report.plainCells = stats.plainCells;
+        report.splitEdges = stats.splitEdges;
+        report.splitEdgesDropped = stats.splitEdgesDropped;
+        report.splitCells = stats.splitCells;
+        report.faceVertices = stats.faceVertices;
+        if (stats.splitEdgesDropped > 0) {
+            char text[300];
+            std::snprintf(text, sizeof text,
+                          "the mesh leaves out the thin walls and slots on %zu of the %zu lattice edges that cross "
+                          "them more than once, where their triangles would fold",
+                          stats.splitEdgesDropped, stats.splitEdgesDropped + stats.splitEdges);
+            ReportWarning w;
+            w.message = text;
+            report.warnings.push_back(w);
+        }
     } else {
         MeshOptions meshOptions;
         meshOptions.adaptivity = o.adaptivity;

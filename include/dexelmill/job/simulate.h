@@ -207,6 +207,9 @@ struct SimulateReport {
     /// the edge: a family not kept); its vertices on sharp edges and corners; its cells crossed by
     /// one flat square (two triangles, no vertex).
     std::size_t exactCrossings = 0, interpolatedCrossings = 0, edgeVertices = 0, cornerVertices = 0, plainCells = 0;
+    /// Its general path (ContourStats): edges with several crossings meshed and left out (their
+    /// cells' triangles folded), the cells round the meshed ones, and the vertices it put on faces.
+    std::size_t splitEdges = 0, splitEdgesDropped = 0, splitCells = 0, faceVertices = 0;
     /// Refinement (RefineStats): rounds made, vertices and midpoints tested, vertices moved onto
     /// the part, edges split, splits refused, midpoints without a crossing.
     int refineRounds = 0;
