@@ -4,10 +4,10 @@
 // has several ends between its two points, a wall or slot thinner than the spacing. They are
 // meshed apart, one after another (they are few), and the passes below skip them.
 //
-// The work is split by OpenVDB leaf blocks (8^3 lattice points) whose points, with the next
-// blocks' first ones, are not all of one sign (their cells hold surface), in passes that each run
-// in parallel over the blocks and write to disjoint places, so the mesh is the same for any thread
-// count:
+// The work is split by OpenVDB leaf blocks (8^3 lattice points, detail/contour_blocks.h) whose
+// points, with the next blocks' first ones, are not all of one sign (their cells hold surface), in
+// passes that each run in parallel over the blocks and write to disjoint places, so the mesh is the
+// same for any thread count:
 //  1. count: per block, from the signs of the grid's values (read bit-parallel, a row of 9 bits
 //     along z at a time), the crossings on the edges its points own (the edge from a point along
 //     +x, +y or +z), and the configuration of every cell whose lower corner it holds and that the
@@ -33,9 +33,6 @@
 #include <memory>
 #include <vector>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
 #include <openvdb/openvdb.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -46,6 +43,7 @@
 #include "dexelmill/surface/simplify.h"
 #include "memory/pages.h"
 #include "surface/detail/cell_table.h"
+#include "surface/detail/contour_blocks.h"
 #include "surface/detail/grid_meta.h"
 #include "surface/detail/patch_vertex.h"
 #include "surface/detail/split_cells.h"
@@ -54,12 +52,16 @@ namespace dexelmill {
 
 namespace {
 
+using detail::Block;
 using detail::CellPatches;
+using detail::forEachSetBit;
+using detail::kCells;
+using detail::kDim;
+using detail::localOffset;
+using detail::popcount;
+using detail::popcountBelow;
 using openvdb::Coord;
 
-constexpr int kDim = 8;                      // OpenVDB leaf blocks are 8^3 lattice points
-constexpr int kCells = kDim * kDim * kDim;   // cells (by lower corner) per block
-static_assert(openvdb::FloatTree::LeafNodeType::DIM == kDim, "FloatTree leaves must be 8^3");
 
 /// A crossing is kept at least this fraction of h away from the lattice points at its edge's
 /// ends, so that crossings on different edges never coincide (a surface through a lattice point
@@ -97,79 +99,6 @@ constexpr double kFaceVertexReach[] = {0.25, 0.5, 0.75};
 /// vertices stay within this fraction of h of the merged surface; smaller adaptivities scale both.
 constexpr double kMergeAngle = 0.2617993877991494;
 constexpr double kMergeDistance = 0.05;
-
-/// floor(i / 8) for negative i too.
-inline int blockOf(int i) { return i >> 3; }
-
-/// Local offset of a point in its block: x * 64 + y * 8 + z (OpenVDB's leaf order).
-inline int localOffset(int x, int y, int z) { return ((x & 7) << 6) | ((y & 7) << 3) | (z & 7); }
-
-/// Set bits of a word (a few shifts and adds, without the instruction older x86-64 CPUs lack).
-inline int popcount(std::uint64_t x) {
-    x = x - ((x >> 1) & 0x5555555555555555ull);
-    x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
-    x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0full;
-    return int((x * 0x0101010101010101ull) >> 56);
-}
-
-/// Bit z set when p[z] < 0, for the eight floats p[0 .. 7] (a leaf's row along z).
-inline std::uint32_t negativeBits(const float* p) {
-#if defined(__SSE2__)
-    const __m128 zero = _mm_setzero_ps();
-    return std::uint32_t(_mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(p), zero))) |
-           std::uint32_t(_mm_movemask_ps(_mm_cmplt_ps(_mm_loadu_ps(p + 4), zero))) << 4;
-#else
-    std::uint32_t bits = 0;
-    for (int z = 0; z < kDim; ++z) bits |= std::uint32_t(p[z] < 0.0f) << z;
-    return bits;
-#endif
-}
-
-/// Calls f(offset) for every set bit of words[0 .. n), in increasing offset order.
-template <class F>
-void forEachSetBit(const std::uint64_t* words, int n, F&& f) {
-    for (int w = 0; w < n; ++w)
-        for (std::uint64_t word = words[w]; word; word &= word - 1) f(w * 64 + __builtin_ctzll(word));
-}
-
-inline int popcountBelow(std::uint64_t word, int bit) {
-    return popcount(word & ((std::uint64_t(1) << bit) - 1));
-}
-
-/// Per block: what it owns, and where its parts start in the mesh.
-struct Block {
-    Coord origin;
-    /// Whether each of the block's points is in material (bit = local offset).
-    std::uint64_t inside[8] = {};
-    /// Owned crossings: bit (axis * 512 + offset) for the edge from the point at `offset` along
-    /// the axis; and the crossings in the words before each word.
-    std::uint64_t owned[24] = {};
-    std::uint16_t ownedBefore[24] = {};
-    /// Cells (by lower corner) with surface in them; the mixed cells in the words before each.
-    std::uint64_t mixed[8] = {};
-    std::uint16_t mixedBefore[8] = {};
-    /// The mixed cells that are plain (Contourer::plainCell): a square of a face, two triangles
-    /// and no patch vertex.
-    std::uint64_t plain[8] = {};
-    /// The mixed cells that are split (split_cells.h): the general path meshes them.
-    std::uint64_t split[8] = {};
-    /// Per mixed cell in rank order: its corners in material (low byte) and its ambiguous faces
-    /// whose inside corners are joined (high byte).
-    std::vector<std::uint16_t> config;
-    /// Patch vertices of the mixed cells before the n-th one, and in all (one more entry): one
-    /// per patch, none in a plain cell.
-    std::vector<std::uint16_t> patchBefore;
-    std::uint32_t crossings = 0, patches = 0, triangles = 0;
-    std::uint32_t crossingBase = 0, patchBase = 0, triangleBase = 0;
-
-    int rankOf(int off) const { return mixedBefore[off >> 6] + popcountBelow(mixed[off >> 6], off & 63); }
-    bool isPlain(int off) const { return (plain[off >> 6] >> (off & 63)) & 1; }
-    bool isSplit(int off) const { return (split[off >> 6] >> (off & 63)) & 1; }
-    const CellPatches& patchesOf(int rank) const {
-        const std::uint16_t c = config[std::size_t(rank)];
-        return detail::cellPatches(std::uint8_t(c & 0xff), std::uint8_t(c >> 8));
-    }
-};
 
 /// A surface crossing on a lattice edge.
 struct Crossing {
@@ -269,19 +198,18 @@ public:
     const std::vector<std::pair<detail::GridPoint, int>>& foldedSplitEdges() const { return foldedSplitEdges_; }
 
     Mesh run(ContourStats& stats) {
-        findBlocks();
-        keepSurfaceBlocks();
+        index_.find(grid_);
         findSplit();
         countPass();
         // Prefix sums: crossings first, then the split cells' vertices, then patch vertices in
         // block order, then the split cells' patch vertices; the split cells' triangles last.
         std::uint64_t crossings = 0, patches = 0, triangles = 0, cells = 0, plainCells = 0;
-        for (Block& b : blocks_) {
+        for (Block& b : index_.blocks) {
             b.crossingBase = std::uint32_t(crossings);
             crossings += b.crossings;
         }
         const std::uint64_t splitPoints = split_.points.size();
-        for (Block& b : blocks_) {
+        for (Block& b : index_.blocks) {
             b.patchBase = std::uint32_t(crossings + splitPoints + patches);
             patches += b.patches;
             b.triangleBase = std::uint32_t(triangles);
@@ -307,10 +235,10 @@ public:
         std::copy(split_.normals.begin(), split_.normals.end(), crossingNormal_.begin() + std::ptrdiff_t(crossings));
 
         std::atomic<std::size_t> exact{0}, edges{0}, corners{0}, flipped{0};
-        forEachBlock([&](std::size_t i) { crossingPass(i, exact); });
-        forEachBlock([&](std::size_t i) { patchPass(i, edges, corners); });
+        index_.forEach([&](std::size_t i) { crossingPass(i, exact); });
+        index_.forEach([&](std::size_t i) { patchPass(i, edges, corners); });
         splitPatchPass(std::uint32_t(crossings), edges, corners);
-        forEachBlock([&](std::size_t i) { flipPass(i, flipped); });
+        index_.forEach([&](std::size_t i) { flipPass(i, flipped); });
         stats.cells = cells;
         stats.crossings = crossings + split_.edgeEnds;
         stats.patches = patches + split_.patches();
@@ -325,8 +253,7 @@ public:
         // Only the mesh is needed from here on: free the rest before the check.
         decltype(crossingNormal_)().swap(crossingNormal_);
         decltype(feature_)().swap(feature_);
-        decltype(blocks_)().swap(blocks_);
-        decltype(keys_)().swap(keys_);
+        index_ = detail::BlockIndex();
         faceVertexBase_ = std::uint32_t(crossings + split_.edgeEnds);
         faceVertexEnds_.clear();
         for (const auto& [a, b] : split_.faceVertexEnds)
@@ -355,73 +282,6 @@ public:
 private:
     // ------------------------------------------------------------------ blocks
 
-    /// The blocks holding a cell's lower corner that may have surface: every grid leaf, and the
-    /// blocks below one (a cell at a block's upper faces reaches into the next block). Cells with
-    /// all corners in tiles have one sign: the flood fill puts leaves between inside and outside.
-    void findBlocks() {
-        // A bit per block position in the leaves' box, grown by one block downwards, read back
-        // in the keys' order (x, then y, then z) instead of sorting eight keys per leaf. The box
-        // lies within the lattice and its band: at most a bit per 512 lattice points.
-        std::vector<Coord> origins;
-        origins.reserve(grid_.tree().leafCount());
-        Coord lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
-        for (auto leaf = grid_.tree().cbeginLeaf(); leaf; ++leaf) {
-            origins.push_back(leaf->origin());
-            lo.minComponent(leaf->origin());
-            hi.maxComponent(leaf->origin());
-        }
-        decltype(keys_) keys;
-        if (!origins.empty()) {
-            lo.offset(-kDim);
-            const std::int64_t nx = (hi.x() - lo.x()) / kDim + 1, ny = (hi.y() - lo.y()) / kDim + 1,
-                               nz = (hi.z() - lo.z()) / kDim + 1;
-            std::vector<std::uint64_t> bits(std::size_t((nx * ny * nz + 63) / 64), 0);
-            for (const Coord& o : origins)
-                for (int d = 0; d < 8; ++d) {
-                    const Coord c = o.offsetBy(-kDim * (d & 1), -kDim * ((d >> 1) & 1), -kDim * ((d >> 2) & 1));
-                    const std::int64_t b = ((c.x() - lo.x()) / kDim * ny + (c.y() - lo.y()) / kDim) * nz + (c.z() - lo.z()) / kDim;
-                    bits[std::size_t(b / 64)] |= std::uint64_t(1) << (b % 64);
-                }
-            std::size_t marked = 0;
-            for (std::uint64_t word : bits) marked += std::size_t(popcount(word));
-            detail::reservePopulated(keys, marked);
-            for (std::size_t w = 0; w < bits.size(); ++w)
-                for (std::uint64_t word = bits[w]; word != 0; word &= word - 1) {
-                    const std::int64_t b = std::int64_t(64 * w) + __builtin_ctzll(word);
-                    keys.push_back(blockKey(Coord(lo.x() + kDim * int(b / (ny * nz)), lo.y() + kDim * int(b / nz % ny),
-                                                  lo.z() + kDim * int(b % nz))));
-                }
-        }
-        keys_ = std::move(keys);
-    }
-
-    /// Keeps the blocks whose points (with the next blocks' first points) are not all of one sign:
-    /// those have a mixed cell, so a patch, and every lookup asks for one of those. Only they get a
-    /// Block: on the hood at 1 mm more than half the candidates have none, and making and then
-    /// dropping theirs had cost a tenth of the mesh's time.
-    void keepSurfaceBlocks() {
-        std::vector<std::uint8_t> keep(keys_.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, keys_.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
-            const auto acc = grid_.getConstAccessor();
-            SignRows rows;
-            for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                readSigns(acc, blockOrigin(keys_[i]), rows);
-                std::uint16_t any = 0, all = 0x1ff;
-                for (const auto& row : rows)
-                    for (std::uint16_t v : row) any |= v, all &= v;
-                keep[i] = any != 0 && all != 0x1ff;
-            }
-        });
-        std::size_t kept = 0;
-        for (std::size_t i = 0; i < keys_.size(); ++i)
-            if (keep[i]) keys_[kept++] = keys_[i];
-        keys_.resize(kept);
-        keys_.shrink_to_fit();
-        detail::reservePopulated(blocks_, kept);
-        blocks_.resize(kept);
-        for (std::size_t i = 0; i < kept; ++i) blocks_[i].origin = blockOrigin(keys_[i]);
-    }
-
     /// The split cells (split_cells.h) and their loops, and per block the bits of its split cells
     /// and of the edges it owns that hold several crossings.
     void findSplit() {
@@ -441,7 +301,7 @@ private:
         if (!noSplit_) split_ = detail::findSplitCells(stock_, in);
         const auto bitOf = [](const detail::GridPoint& g) {
             const Coord p(g[0], g[1], g[2]);
-            return std::make_pair(blockKey(p), localOffset(p.x(), p.y(), p.z()));
+            return std::make_pair(detail::BlockIndex::blockKey(p), localOffset(p.x(), p.y(), p.z()));
         };
         splitCellBits_.clear();
         splitEdgeBits_.clear();
@@ -458,96 +318,24 @@ private:
     /// The bits of `bits` (sorted by block key) in the block at `origin`.
     template <class F>
     static void forBitsOf(const std::vector<std::pair<std::uint64_t, int>>& bits, const Coord& origin, F&& f) {
-        const std::uint64_t key = blockKey(origin);
+        const std::uint64_t key = detail::BlockIndex::blockKey(origin);
         for (auto it = std::lower_bound(bits.begin(), bits.end(), std::make_pair(key, 0)); it != bits.end() && it->first == key;
              ++it)
             f(it->second);
     }
 
-    static constexpr std::int64_t kKeyBias = std::int64_t(1) << 20;
-    static std::uint64_t blockKey(const Coord& origin) {
-        return (std::uint64_t(blockOf(origin.x()) + kKeyBias) << 42) | (std::uint64_t(blockOf(origin.y()) + kKeyBias) << 21) |
-               std::uint64_t(blockOf(origin.z()) + kKeyBias);
-    }
-    static Coord blockOrigin(std::uint64_t key) {
-        const int mask = (1 << 21) - 1;
-        return Coord(kDim * (int((key >> 42) & mask) - int(kKeyBias)), kDim * (int((key >> 21) & mask) - int(kKeyBias)),
-                     kDim * (int(key & mask) - int(kKeyBias)));
-    }
-    /// The block holding lattice point p; it exists for every point this code asks about (the
-    /// lower corner of a mixed cell, or of one of its edges with a crossing).
-    const Block& blockAt(const Coord& p) const {
-        const std::uint64_t key = blockKey(p);
-        return blocks_[std::size_t(std::lower_bound(keys_.begin(), keys_.end(), key) - keys_.begin())];
-    }
-
-    /// The blocks around one block (3 x 3 x 3, null where there is none), so that the lookups
-    /// of its cells and their neighbours need no search.
-    struct Around {
-        Coord origin;
-        const Block* near[27] = {};
-        const Block& at(const Coord& p) const {
-            const int i = (blockOf(p.x() - origin.x() + kDim) * 3 + blockOf(p.y() - origin.y() + kDim)) * 3 +
-                          blockOf(p.z() - origin.z() + kDim);
-            return *near[i];
-        }
-    };
-
-    Around around(const Block& b) const {
-        Around a;
-        a.origin = b.origin;
-        for (int i = 0; i < 27; ++i) {
-            const std::uint64_t key = blockKey(b.origin.offsetBy(kDim * (i / 9 - 1), kDim * (i / 3 % 3 - 1), kDim * (i % 3 - 1)));
-            const auto it = std::lower_bound(keys_.begin(), keys_.end(), key);
-            if (it != keys_.end() && *it == key) a.near[i] = &blocks_[std::size_t(it - keys_.begin())];
-        }
-        return a;
-    }
-
-    /// Calls f(block) in parallel for every block.
-    template <class F>
-    void forEachBlock(F&& f) {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks_.size(), 8), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t i = r.begin(); i < r.end(); ++i) f(i);
-        });
-    }
-
     // ------------------------------------------------------------------ pass 1: counts
 
-    /// rows[x][y]: bit z set when lattice point origin + (x, y, z) is in material; x, y, z in 0..8.
-    using SignRows = std::uint16_t[kDim + 1][kDim + 1];
-
-    void readSigns(const openvdb::FloatGrid::ConstAccessor& acc, const Coord& origin, SignRows& rows) const {
-        for (auto& r : rows)
-            for (auto& v : r) v = 0;
-        for (int d = 0; d < 8; ++d) {
-            const int dx = d & 1, dy = (d >> 1) & 1, dz = (d >> 2) & 1;
-            const auto* leaf = acc.probeConstLeaf(origin.offsetBy(kDim * dx, kDim * dy, kDim * dz));
-            const float tile = leaf ? 0.0f : acc.getValue(origin.offsetBy(kDim * dx, kDim * dy, kDim * dz));
-            const float* data = leaf ? leaf->buffer().data() : nullptr;
-            const int x0 = dx ? kDim : 0, x1 = dx ? kDim : kDim - 1;
-            const int y0 = dy ? kDim : 0, y1 = dy ? kDim : kDim - 1;
-            for (int x = x0; x <= x1; ++x)
-                for (int y = y0; y <= y1; ++y) {
-                    // The block's own row z = 0..7, or the next block's first point z = 8.
-                    if (dz)
-                        rows[x][y] |= std::uint16_t(((data ? data[localOffset(x, y, 0)] : tile) < 0.0f) << kDim);
-                    else
-                        rows[x][y] |= std::uint16_t(data ? negativeBits(data + localOffset(x, y, 0)) : tile < 0.0f ? 0xffu : 0u);
-                }
-        }
-    }
-
     void countPass() {
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks_.size(), 8), [&](const tbb::blocked_range<std::size_t>& r) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, index_.blocks.size(), 8), [&](const tbb::blocked_range<std::size_t>& r) {
             const auto acc = grid_.getConstAccessor();
-            SignRows rows;
-            for (std::size_t i = r.begin(); i < r.end(); ++i) countBlock(blocks_[i], acc, rows);
+            detail::BlockIndex::SignRows rows;
+            for (std::size_t i = r.begin(); i < r.end(); ++i) countBlock(index_.blocks[i], acc, rows);
         });
     }
 
-    void countBlock(Block& b, const openvdb::FloatGrid::ConstAccessor& acc, SignRows& rows) const {
-        readSigns(acc, b.origin, rows);
+    void countBlock(Block& b, const openvdb::FloatGrid::ConstAccessor& acc, detail::BlockIndex::SignRows& rows) const {
+        detail::BlockIndex::readSigns(acc, b.origin, rows);
         std::uint32_t patches = 0, triangles = 0;
         b.config.clear();
         b.patchBefore.clear();
@@ -657,14 +445,14 @@ private:
     // ------------------------------------------------------------------ lookups
 
     /// The mesh index of the crossing on the edge from lattice point p along axis a.
-    std::uint32_t crossingIndex(const Around& near, const Coord& p, int a) const {
+    std::uint32_t crossingIndex(const detail::BlockIndex::Around& near, const Coord& p, int a) const {
         const Block& b = near.at(p);
         const int bit = a * kCells + localOffset(p.x(), p.y(), p.z());
         return b.crossingBase + b.ownedBefore[bit >> 6] + std::uint32_t(popcountBelow(b.owned[bit >> 6], bit & 63));
     }
 
     /// The loop of patch k of the cell at p: its crossings' mesh indices, in order.
-    int loopOf(const Around& near, const Coord& p, const CellPatches& patches, int k, std::uint32_t* out) const {
+    int loopOf(const detail::BlockIndex::Around& near, const Coord& p, const CellPatches& patches, int k, std::uint32_t* out) const {
         const auto& starts = edgeStarts();
         int at = 0;
         for (int j = 0; j < k; ++j) at += patches.size[j];
@@ -679,7 +467,7 @@ private:
     // ------------------------------------------------------------------ pass 2: crossings
 
     void crossingPass(std::size_t bi, std::atomic<std::size_t>& exactCount) {
-        const Block& b = blocks_[bi];
+        const Block& b = index_.blocks[bi];
         std::size_t exact = 0;
         std::uint32_t at = b.crossingBase;
         for (int a = 0; a < 3; ++a) {
@@ -761,8 +549,8 @@ private:
     // ------------------------------------------------------------------ pass 3: patch vertices
 
     void patchPass(std::size_t bi, std::atomic<std::size_t>& edgeCount, std::atomic<std::size_t>& cornerCount) {
-        const Block& b = blocks_[bi];
-        const Around near = around(b);
+        const Block& b = index_.blocks[bi];
+        const detail::BlockIndex::Around near = index_.around(b);
         std::size_t edges = 0, corners = 0;
         std::uint32_t loop[detail::kCellEdges];
         std::uint32_t at = b.patchBase;
@@ -809,7 +597,7 @@ private:
                 if (id & detail::SplitCells::kOrdinary) {
                     const auto& [g, a] = split_.ordinary[id & ~detail::SplitCells::kOrdinary];
                     const Coord lower(g[0], g[1], g[2]);
-                    const Block& b = blockAt(lower);
+                    const Block& b = index_.blockAt(lower);
                     const int bit = a * kCells + localOffset(lower.x(), lower.y(), lower.z());
                     loop.push_back(b.crossingBase + b.ownedBefore[bit >> 6] + std::uint32_t(popcountBelow(b.owned[bit >> 6], bit & 63)));
                 } else {
@@ -874,7 +662,7 @@ private:
 
     /// The cell whose lower corner is p: its patches and the mesh index of its first patch;
     /// false for a plain cell, which has no patch vertex.
-    bool cellAt(const Around& near, const Coord& p, const CellPatches*& patches, std::uint32_t& firstPatch) const {
+    bool cellAt(const detail::BlockIndex::Around& near, const Coord& p, const CellPatches*& patches, std::uint32_t& firstPatch) const {
         const Block& b = near.at(p);
         const int off = localOffset(p.x(), p.y(), p.z());
         const int rank = b.rankOf(off);
@@ -886,13 +674,13 @@ private:
     /// Flips the fan chords of the block's feature patches that run across a crease (flipChord).
     /// Each of the two cells sharing a chord decides alike and turns its own triangle.
     void flipPass(std::size_t bi, std::atomic<std::size_t>& flippedCount) {
-        const Block& b = blocks_[bi];
+        const Block& b = index_.blocks[bi];
         const EdgeTables& tables = edgeTables();
         std::size_t flipped = 0;
         std::uint32_t loop[detail::kCellEdges];
         std::uint32_t tri = b.triangleBase;
         std::uint32_t patch = b.patchBase;
-        std::unique_ptr<Around> near;  // made for the first feature patch of the block
+        std::unique_ptr<detail::BlockIndex::Around> near;  // made for the first feature patch of the block
         int rank = 0;
         forEachSetBit(b.mixed, kCells / 64, [&](int off) {
             const CellPatches& patches = b.patchesOf(rank++);
@@ -910,7 +698,7 @@ private:
                     tri += std::uint32_t(len);
                     continue;
                 }
-                if (!near) near = std::make_unique<Around>(around(b));
+                if (!near) near = std::make_unique<detail::BlockIndex::Around>(index_.around(b));
                 const Coord p = b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7);
                 loopOf(*near, p, patches, k, loop);
                 for (int i = 0; i < len; ++i, ++tri) {
@@ -1074,8 +862,7 @@ private:
     /// marked sharp: the other components +0 or -0, which the octahedral square folds to its four
     /// corners for -z (and to one code otherwise).
     std::array<std::array<std::uint32_t, 4>, 6> axisNormal_{};
-    std::vector<Block, NoZeroAllocator<Block>> blocks_;
-    std::vector<std::uint64_t, NoZeroAllocator<std::uint64_t>> keys_;
+    detail::BlockIndex index_;
     Mesh mesh_;
     std::vector<PackedNormal, NoZeroAllocator<PackedNormal>> crossingNormal_;
     std::vector<std::uint8_t, NoZeroAllocator<std::uint8_t>> feature_;
