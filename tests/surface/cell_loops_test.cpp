@@ -215,6 +215,36 @@ TEST_CASE("cell loops: stretches on parallel edges that do not overlap stay apar
     CHECK(b.faceVertices == 8);
 }
 
+TEST_CASE("cell loops: a lens's face vertex follows its ends' tangents", "[surface][contour]") {
+    // One cell, a stretch of material on edge 0 (along x at y = z = 0) from 0.3 to 0.7, bulging
+    // into face 4 (across z at 0: u = x, v = y). Its ends' outward normals, in that face, turn 60
+    // degrees from the edge: (-sin 60, cos 60) and (sin 60, cos 60).
+    //  - As they are, 120 degrees apart (a sharp edge), the face vertex is the wedge's tip, where
+    //    the tangent lines meet: 0.2 tan 60 = 0.346 into the face.
+    //  - Leaning mostly out of the face (their part in it a fifth), 19 degrees apart (smooth), it
+    //    lies on the circular arc that turns 120 degrees over the chord of 0.4: 0.2 tan 30 = 0.115.
+    const double s60 = std::sqrt(3.0) / 2.0, lean = 0.2, out = -std::sqrt(1.0 - lean * lean);
+    struct Case {
+        Vec3 n1, n2;
+        double depth;
+    };
+    for (const Case& k : {Case{Vec3(-s60, 0.5, 0.0), Vec3(s60, 0.5, 0.0), 0.2 * std::sqrt(3.0)},
+                          Case{Vec3(-lean * s60, lean * 0.5, out), Vec3(lean * s60, lean * 0.5, out), 0.2 / std::sqrt(3.0)}}) {
+        CellCrossings c;
+        c.edges[0].ids = {0, 1};
+        c.edges[0].at = {0.3, 0.7};
+        c.edges[0].normals = {k.n1, k.n2};
+        double u = -1.0, v = -1.0;
+        cellLoops(c, [&](int face, std::uint32_t, std::uint32_t, double fu, double fv) {
+            if (face == 4) u = fu, v = fv;
+            return std::uint32_t(10 + face);
+        });
+        INFO("normals " << k.n1.x << ", " << k.n1.y << ", " << k.n1.z << ": face vertex at (" << u << ", " << v << ")");
+        CHECK(u == Approx(0.5).margin(1e-9));
+        CHECK(v == Approx(k.depth).margin(1e-9));
+    }
+}
+
 TEST_CASE("cell loops: random lattices with several crossings on edges give closed oriented manifolds",
           "[surface][contour]") {
     for (std::uint64_t seed : {3u, 17u, 29u}) {

@@ -183,6 +183,23 @@ TEST_CASE("contour: a wall thinner than a cell between two lattice planes is mes
     CHECK(fine.material.volumeMm3 == Approx(wall).epsilon(0.03));
 }
 
+TEST_CASE("contour: a slot narrower than a cell between two lattice planes is meshed from its dexels",
+          "[surface][contour][fine]") {
+    // A slot 0.4 mm wide between x = 15.6 and 16.0, through the top: no lattice point (at 15.5 and
+    // 16.5) lies in it, so the level set fills it; its x dexels have a gap on each lattice edge
+    // across it, and the split cells mesh it.
+    const double h = 1.0, y0 = 5.2, y1 = 27.1, z0 = 8.3;
+    const Part part{kBox, {testing::boxCutter({Vec3(15.6, y0, z0), Vec3(16.0, y1, 30.0)})}};
+    const Result r = contourPart(part, h);
+    INFO(summary("slot between lattice planes", r) << "; " << r.stats.splitEdges << " split edges");
+    CHECK(r.check.ok());
+    const double slot = 0.4 * (y1 - y0) * (kBox.hi.z - z0);
+    // Its floor lies between lattice planes, where no dexel crosses the slot: its height there
+    // is the face rule's estimate, within a spacing.
+    CHECK(r.stats.splitEdges > 0);
+    CHECK(r.check.signedVolume == Approx(kBox.volume() - slot).margin(0.4 * (y1 - y0) * h));
+}
+
 TEST_CASE("contour: ball passes closer than a cell", "[surface][contour]") {
     // Parallel passes of a ball of radius 3 mm at a stepover of 0.3 h: the cusps between them,
     // s^2 / (8 R) = 0.0009 mm high, are finer than the lattice can show.
