@@ -201,8 +201,18 @@ public:
         index_.find(grid_);
         findSplit();
         countPass();
+        unplacedPatches_ = unplacedTriangles_ = 0;
+        for (std::size_t c = 0; c < split_.cells.size(); ++c) {
+            if (splitPlaced_[c]) continue;
+            const std::uint32_t p0 = split_.cellPatchStart[c], p1 = split_.cellPatchStart[c + 1];
+            unplacedPatches_ += p1 - p0;
+            unplacedTriangles_ += split_.loopStart[p1] - split_.loopStart[p0];
+        }
         // Prefix sums: crossings first, then the split cells' vertices, then patch vertices in
-        // block order, then the split cells' patch vertices; the split cells' triangles last.
+        // block order, each block's split cells' after its own; the split cells of blocks with no
+        // surface of their own last. Their triangles the same way: kept with their blocks, the
+        // mesh's vertices and triangles stay in step, so that checking it builds its vertex
+        // stars piece by piece (StarChunks).
         std::uint64_t crossings = 0, patches = 0, triangles = 0, cells = 0, plainCells = 0;
         for (Block& b : index_.blocks) {
             b.crossingBase = std::uint32_t(crossings);
@@ -217,10 +227,9 @@ public:
             cells += b.config.size();
             for (std::uint64_t w : b.plain) plainCells += std::uint64_t(popcount(w));
         }
-        splitPatchBase_ = crossings + splitPoints + patches;
-        splitTriangleBase_ = triangles;
-        const std::uint64_t vertices = splitPatchBase_ + split_.patches();
-        triangles += split_.loopIds.size();
+        const std::uint64_t vertices = crossings + splitPoints + patches + unplacedPatches_;
+        placeSplitPatches(crossings + splitPoints + patches, triangles);
+        triangles += unplacedTriangles_;
         if (vertices > std::numeric_limits<std::uint32_t>::max() || triangles > std::numeric_limits<std::uint32_t>::max())
             throw Error("contouring: the mesh would have more than 2^32 vertices or triangles; use a larger spacing");
         detail::reservePopulated(mesh_.vertices, vertices);
@@ -229,7 +238,7 @@ public:
         mesh_.vertices.resize(vertices);
         mesh_.triangles.resize(triangles);
         crossingNormal_.resize(crossings + splitPoints);
-        feature_.assign(patches + split_.patches(), 0);
+        feature_.assign(patches + unplacedPatches_, 0);
         patchVertexBase_ = std::uint32_t(crossings + splitPoints);
         std::copy(split_.points.begin(), split_.points.end(), mesh_.vertices.begin() + std::ptrdiff_t(crossings));
         std::copy(split_.normals.begin(), split_.normals.end(), crossingNormal_.begin() + std::ptrdiff_t(crossings));
@@ -305,7 +314,12 @@ private:
         };
         splitCellBits_.clear();
         splitEdgeBits_.clear();
-        for (const detail::GridPoint& g : split_.cells) splitCellBits_.push_back(bitOf(g));
+        for (std::size_t c = 0; c < split_.cells.size(); ++c) {
+            auto bit = bitOf(split_.cells[c]);
+            bit.second |= int(c) << 9;  // the cell's index above its 9 bits of offset
+            splitCellBits_.push_back(bit);
+        }
+        splitPlaced_.assign(split_.cells.size(), 0);
         for (const auto& [g, a] : split_.edges) {
             auto bit = bitOf(g);
             bit.second += a * kCells;
@@ -313,6 +327,36 @@ private:
         }
         std::sort(splitCellBits_.begin(), splitCellBits_.end());
         std::sort(splitEdgeBits_.begin(), splitEdgeBits_.end());
+    }
+
+    /// Where each split patch's vertex and first triangle go: after the table path's in the
+    /// block holding its cell's lower corner, or, for cells in no block (they have no surface
+    /// of the table path's), from `patchEnd` and `triangleEnd` on.
+    void placeSplitPatches(std::uint64_t patchEnd, std::uint64_t triangleEnd) {
+        splitPatchVertex_.assign(split_.patches(), 0);
+        splitPatchTriangle_.assign(split_.patches(), 0);
+        const auto place = [&](std::size_t c, std::uint64_t& vertex, std::uint64_t& triangle) {
+            for (std::uint32_t k = split_.cellPatchStart[c]; k < split_.cellPatchStart[c + 1]; ++k) {
+                splitPatchVertex_[k] = std::uint32_t(vertex++);
+                splitPatchTriangle_[k] = std::uint32_t(triangle);
+                triangle += split_.loopStart[k + 1] - split_.loopStart[k];
+            }
+        };
+        // In the order countBlock counted them: by block, then by offset.
+        for (std::size_t i = 0; i < splitCellBits_.size();) {
+            const std::uint64_t key = splitCellBits_[i].first;
+            const std::size_t c0 = std::size_t(splitCellBits_[i].second >> 9);
+            if (!splitPlaced_[c0]) {
+                for (; i < splitCellBits_.size() && splitCellBits_[i].first == key; ++i) {}
+                continue;
+            }
+            const Block& b = index_.blockAt(detail::BlockIndex::blockOrigin(key));
+            std::uint64_t vertex = b.patchBase + b.patchBefore.back(), triangle = b.triangleBase + b.tableTriangles;
+            for (; i < splitCellBits_.size() && splitCellBits_[i].first == key; ++i)
+                place(std::size_t(splitCellBits_[i].second >> 9), vertex, triangle);
+        }
+        for (std::size_t c = 0; c < split_.cells.size(); ++c)
+            if (!splitPlaced_[c]) place(c, patchEnd, triangleEnd);
     }
 
     /// The bits of `bits` (sorted by block key) in the block at `origin`.
@@ -334,7 +378,7 @@ private:
         });
     }
 
-    void countBlock(Block& b, const openvdb::FloatGrid::ConstAccessor& acc, detail::BlockIndex::SignRows& rows) const {
+    void countBlock(Block& b, const openvdb::FloatGrid::ConstAccessor& acc, detail::BlockIndex::SignRows& rows) {
         detail::BlockIndex::readSigns(acc, b.origin, rows);
         std::uint32_t patches = 0, triangles = 0;
         b.config.clear();
@@ -354,7 +398,8 @@ private:
         }
         // Edges with several crossings get theirs from the split cells; their cells are split.
         forBitsOf(splitEdgeBits_, b.origin, [&](int bit) { b.owned[bit >> 6] &= ~(std::uint64_t(1) << (bit & 63)); });
-        forBitsOf(splitCellBits_, b.origin, [&](int off) { b.split[off >> 6] |= b.mixed[off >> 6] & (std::uint64_t(1) << (off & 63)); });
+        std::uint64_t split[8] = {};
+        forBitsOf(splitCellBits_, b.origin, [&](int bit) { split[(bit & 511) >> 6] |= std::uint64_t(1) << (bit & 63); });
         // The mixed cells in rank order (offset order), with their configurations.
         int mixedCells = 0;
         for (int w = 0; w < kCells / 64; ++w) mixedCells += popcount(b.mixed[w]);
@@ -365,10 +410,13 @@ private:
             std::uint8_t inside = 0;
             for (int k = 0; k < 8; ++k)
                 inside |= std::uint8_t(((rows[x + (k & 1)][y + ((k >> 1) & 1)] >> (z + (k >> 2))) & 1u) << k);
+            b.patchBefore.push_back(std::uint16_t(patches));
+            if ((split[off >> 6] >> (off & 63)) & 1) {
+                b.config.push_back(Block::kSplit);
+                return;
+            }
             const std::uint8_t joined = joinedFaces(acc, b.origin.offsetBy(x, y, z), inside);
             b.config.push_back(std::uint16_t(inside | (joined << 8)));
-            b.patchBefore.push_back(std::uint16_t(patches));
-            if (b.isSplit(off)) return;
             if (plainCell(b.origin.offsetBy(x, y, z), inside)) {
                 b.plain[off >> 6] |= std::uint64_t(1) << (off & 63);
                 triangles += 2;
@@ -390,6 +438,14 @@ private:
             m = std::uint16_t(m + popcount(b.mixed[w]));
         }
         b.crossings = n;
+        b.tableTriangles = triangles;
+        forBitsOf(splitCellBits_, b.origin, [&](int bit) {
+            const std::size_t c = std::size_t(bit >> 9);
+            const std::uint32_t p0 = split_.cellPatchStart[c], p1 = split_.cellPatchStart[c + 1];
+            patches += p1 - p0;
+            triangles += split_.loopStart[p1] - split_.loopStart[p0];
+            splitPlaced_[c] = 1;
+        });
         b.patches = patches;
         b.triangles = triangles;
     }
@@ -557,8 +613,11 @@ private:
         std::uint32_t tri = b.triangleBase;
         int rank = 0;
         forEachSetBit(b.mixed, kCells / 64, [&](int off) {
+            if (b.isSplit(rank)) {
+                ++rank;
+                return;
+            }
             const CellPatches& patches = b.patchesOf(rank++);
-            if (b.isSplit(off)) return;
             const Coord p = b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7);
             if (b.isPlain(off)) {
                 // One square (plainCell): its loop is convex and flat, so any diagonal serves.
@@ -589,8 +648,8 @@ private:
     /// vertices lie. Their fans are never flipped.
     void splitPatchPass(std::uint32_t crossings, std::atomic<std::size_t>& edgeCount, std::atomic<std::size_t>& cornerCount) {
         std::vector<std::uint32_t> loop;
-        std::uint32_t tri = std::uint32_t(splitTriangleBase_);
         for (std::size_t k = 0; k < split_.patches(); ++k) {
+            std::uint32_t tri = splitPatchTriangle_[k];
             loop.clear();
             for (std::uint32_t i = split_.loopStart[k]; i < split_.loopStart[k + 1]; ++i) {
                 const std::uint32_t id = split_.loopIds[i];
@@ -604,7 +663,7 @@ private:
                     loop.push_back(crossings + id);
                 }
             }
-            const std::uint32_t at = std::uint32_t(splitPatchBase_ + k);
+            const std::uint32_t at = splitPatchVertex_[k];
             const detail::GridPoint& g = split_.patchCell[k];
             int qefRank = 0;
             const int len = int(loop.size());
@@ -620,11 +679,16 @@ private:
     /// area after repair (foldedSplitEdges).
     void findFoldedSplitEdges() {
         foldedSplitEdges_.clear();
+        // The split patches by their first triangle.
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> byTriangle;
+        for (std::uint32_t k = 0; k < split_.patches(); ++k) byTriangle.push_back({splitPatchTriangle_[k], k});
+        std::sort(byTriangle.begin(), byTriangle.end());
         for (std::uint32_t t : unrepaired_) {
-            if (t < splitTriangleBase_) continue;
-            const std::uint32_t at = std::uint32_t(t - splitTriangleBase_);
-            const std::size_t k = std::size_t(std::upper_bound(split_.loopStart.begin(), split_.loopStart.end(), at) -
-                                              split_.loopStart.begin()) - 1;
+            auto it = std::upper_bound(byTriangle.begin(), byTriangle.end(),
+                                       std::make_pair(t, std::numeric_limits<std::uint32_t>::max()));
+            if (it == byTriangle.begin()) continue;
+            const std::uint32_t k = (--it)->second;
+            if (t >= it->first + split_.loopStart[k + 1] - split_.loopStart[k]) continue;
             const detail::GridPoint& cell = split_.patchCell[k];
             for (int e = 0; e < detail::kCellEdges; ++e) {
                 const int c0 = detail::edgeCorner(e, 0);
@@ -661,14 +725,15 @@ private:
     bool isFeature(std::uint32_t patchVertex) const { return feature_[patchVertex - patchVertexBase_] != 0; }
 
     /// The cell whose lower corner is p: its patches and the mesh index of its first patch;
-    /// false for a plain cell, which has no patch vertex.
+    /// false for a plain cell, which has no patch vertex, and for a split cell, whose fans are
+    /// never flipped.
     bool cellAt(const detail::BlockIndex::Around& near, const Coord& p, const CellPatches*& patches, std::uint32_t& firstPatch) const {
         const Block& b = near.at(p);
         const int off = localOffset(p.x(), p.y(), p.z());
         const int rank = b.rankOf(off);
         patches = &b.patchesOf(rank);
         firstPatch = b.patchBase + b.patchBefore[std::size_t(rank)];
-        return !b.isPlain(off) && !b.isSplit(off);
+        return !b.isPlain(off) && !b.isSplit(rank);
     }
 
     /// Flips the fan chords of the block's feature patches that run across a crease (flipChord).
@@ -683,8 +748,11 @@ private:
         std::unique_ptr<detail::BlockIndex::Around> near;  // made for the first feature patch of the block
         int rank = 0;
         forEachSetBit(b.mixed, kCells / 64, [&](int off) {
+            if (b.isSplit(rank)) {
+                ++rank;
+                return;
+            }
             const CellPatches& patches = b.patchesOf(rank++);
-            if (b.isSplit(off)) return;
             if (b.isPlain(off)) {
                 tri += 2;
                 return;
@@ -871,7 +939,11 @@ private:
     detail::SplitCells split_;
     /// Per split cell and per edge with several crossings: (block key, bit in that block's words).
     std::vector<std::pair<std::uint64_t, int>> splitCellBits_, splitEdgeBits_;
-    std::uint64_t splitPatchBase_ = 0, splitTriangleBase_ = 0;
+    /// Per split cell, whether a block holds it (countBlock); the patches and triangles of those
+    /// no block holds; per split patch, its vertex and first triangle (placeSplitPatches).
+    std::vector<std::uint8_t> splitPlaced_;
+    std::uint64_t unplacedPatches_ = 0, unplacedTriangles_ = 0;
+    std::vector<std::uint32_t> splitPatchVertex_, splitPatchTriangle_;
     /// The split cells' face vertices: their first mesh index, and per face vertex its two ends.
     std::uint32_t faceVertexBase_ = 0;
     std::vector<std::array<std::uint32_t, 2>> faceVertexEnds_;

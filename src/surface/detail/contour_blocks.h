@@ -82,20 +82,24 @@ struct Block {
     /// The mixed cells that are plain (Contourer::plainCell): a square of a face, two triangles
     /// and no patch vertex.
     std::uint64_t plain[8] = {};
-    /// The mixed cells that are split (split_cells.h): the general path meshes them.
-    std::uint64_t split[8] = {};
     /// Per mixed cell in rank order: its corners in material (low byte) and its ambiguous faces
-    /// whose inside corners are joined (high byte).
+    /// whose inside corners are joined (high byte); kSplit for a split cell.
     std::vector<std::uint16_t> config;
     /// Patch vertices of the mixed cells before the n-th one, and in all (one more entry): one
     /// per patch, none in a plain cell.
     std::vector<std::uint16_t> patchBefore;
     std::uint32_t crossings = 0, patches = 0, triangles = 0;
+    /// Of `triangles`, the table path's: the split cells whose lower corner the block holds come
+    /// after them, and after its table path's patch vertices (patchBefore.back()) theirs.
+    std::uint32_t tableTriangles = 0;
     std::uint32_t crossingBase = 0, patchBase = 0, triangleBase = 0;
 
     int rankOf(int off) const { return mixedBefore[off >> 6] + popcountBelow(mixed[off >> 6], off & 63); }
     bool isPlain(int off) const { return (plain[off >> 6] >> (off & 63)) & 1; }
-    bool isSplit(int off) const { return (split[off >> 6] >> (off & 63)) & 1; }
+    /// Whether the mixed cell of this rank is split (split_cells.h): the general path meshes it.
+    /// Its configuration is kSplit, which no mixed cell has (no corner in material).
+    bool isSplit(int rank) const { return config[std::size_t(rank)] == kSplit; }
+    static constexpr std::uint16_t kSplit = 0xff00;
     const CellPatches& patchesOf(int rank) const {
         const std::uint16_t c = config[std::size_t(rank)];
         return detail::cellPatches(std::uint8_t(c & 0xff), std::uint8_t(c >> 8));

@@ -204,6 +204,7 @@ SplitCells findSplitCells(const TriDexelStock& stock, const SplitInputs& in) {
             out.loopStart.push_back(std::uint32_t(out.loopIds.size()));
             out.patchCell.push_back(cell);
         }
+        out.cellPatchStart.push_back(std::uint32_t(out.patchCell.size()));
     }
     return out;
 }

@@ -59,8 +59,10 @@ struct SplitCells {
     std::vector<std::pair<GridPoint, int>> edges;
     /// Cells (by lower grid point), sorted: the contourer's table path skips them.
     std::vector<GridPoint> cells;
-    /// Patches: loop k is loopIds[loopStart[k] .. loopStart[k + 1]), in cell patchCell[k].
+    /// Patches: loop k is loopIds[loopStart[k] .. loopStart[k + 1]), in cell patchCell[k]; the
+    /// patches of cells[c] are cellPatchStart[c] .. cellPatchStart[c + 1].
     std::vector<std::uint32_t> loopStart{0};
+    std::vector<std::uint32_t> cellPatchStart{0};
     std::vector<std::uint32_t> loopIds;
     std::vector<GridPoint> patchCell;
 
