@@ -10,21 +10,23 @@
 /// between one arc's last crossing and the next arc's first, across the face. A path across the
 /// face whose two ends lie on one edge (the face's slice of a thin wall's end, say) gets a face
 /// vertex in between, so that no two triangles share that edge's chord from four sides. The face
-/// vertex lies where the surface's slice through the face is expected: from the two ends'
-/// tangent lines in the face, at their meeting point across a sharp edge (a wedge's tip) and
-/// halfway to it on a smooth surface (the middle of the parabola with those tangents); where the
-/// lines meet on the wrong side or not at all, on the blend's zero below the edge. The cell's
-/// paths, oriented as cell_table.h orients its segments, chain into loops.
+/// vertex lies where the surface's slice through the face is expected, from the two ends'
+/// normals: at their tangent lines' meeting point across a sharp edge (a wedge's tip), on the
+/// circular arc the normals turn by on a smooth surface, and otherwise on the face rule's zero
+/// below the edge; at least a fifth of its chord into the face. The cell's paths, oriented as
+/// cell_table.h orients its segments, chain into loops.
 ///
 /// The face rule. A face with at most one crossing per edge follows the cell table: its
 /// ambiguous case by the `joined` bit (the asymptotic decider on the level set's values). On a
 /// face with several crossings on an edge the dexels say nothing about the inside of the face, so
-/// the rule reads a transfinite (Coons) blend of the four edges: along each edge the signed
-/// distance to its nearest crossing (negative in material, at most 1), blended across the face
-/// and sampled on a grid whose lines pass through the middle of every arc. Material samples that
-/// touch along a grid line are one region. The samples on the boundary are the edges' own, so
-/// every arc holds one; the rule reads only the face's edges, so both cells sharing the face see
-/// the same regions.
+/// the rule reads a field sampled on a grid of lines: the face's edges, a line between every two
+/// crossings of parallel edges, and eight evenly spaced more. Inside the face the field is the
+/// signed distance to the tangent line of the nearest crossing on an edge with several (a thin
+/// wall or slot runs on along its sides), or, where that has no normal in the face, a
+/// transfinite (Coons) blend of the four edges' signed distances to their nearest crossings. The
+/// samples on the boundary are the edges' own membership, so every arc holds one. Material
+/// samples that touch along a grid line are one region. The rule reads only the face's edges,
+/// so both cells sharing the face see the same regions.
 #pragma once
 
 #include <array>
