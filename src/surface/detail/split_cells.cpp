@@ -102,8 +102,9 @@ SplitCells findSplitCells(const TriDexelStock& stock, const SplitInputs& in) {
         // dexel a shallow one, each dropped with both its ends.
         const double t0 = (i + 0.5) * h, t1 = t0 + h;
         for (End& e : ends) e.t = std::clamp(e.t, t0 + gap, t1 - gap);
-        const auto grazes = [a](const End& e) {
-            return e.n.present() && !e.n.sharp() && std::abs(e.n.unpack()[a]) < kGrazing;
+        const int along = a;
+        const auto grazes = [along](const End& e) {
+            return e.n.present() && !e.n.sharp() && std::abs(e.n.unpack()[along]) < kGrazing;
         };
         for (std::size_t k = 0; k + 1 < ends.size();) {
             if (ends[k + 1].t - ends[k].t < thinnest || (grazes(ends[k]) && grazes(ends[k + 1]))) {
