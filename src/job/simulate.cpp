@@ -613,6 +613,7 @@ Simulation runStages(const SimulateOptions& o) {
         report.refineSnapped = stats.snapped;
         report.refineRefused = stats.refused;
         report.refineNoCrossing = stats.noCrossing;
+        report.refineLaterAxis = stats.laterAxis;
         report.timingS.refine = seconds(t);
     }
     const Mesh& mesh = sim.mesh;

@@ -317,6 +317,101 @@ TEST_CASE("refine: a vertex inside the material is not moved out along another a
     CHECK(stats.check.ok());
 }
 
+TEST_CASE("refine: a midpoint whose window slides along the part is split along a nearer axis", "[refine]") {
+    // A ball D3.175 plunged to z = 8 at (5, 5) leaves a spherical dimple in the block [0, 10]^3,
+    // centred at (5, 5, 8 + r). The edge from (4.6, 5, zs) to (5.4, 5, zs) has both ends on it,
+    // and its midpoint lies r - sqrt(r^2 - 0.4^2) = 0.0512 mm above the dimple's bottom. Its two
+    // triangles face nearly +y (a wall) and up-and-+y, as at the crease of a wall's top, so the
+    // window runs along y: it meets the sphere 0.4 mm away, at (5, 4.6, zs), half the edge's
+    // length along the part, and a split there would cut across the dimple. Along z the bottom
+    // lies 0.0512 mm below. The other corners lie 1.45 mm inside the material and 0.6 mm above
+    // the block, beyond the windows' 0.5 mm.
+    const double r = 3.175 / 2.0;
+    const double zs = 8.0 + r - std::sqrt(r * r - 0.16);
+    const Simulation s = [&] {
+        SimulateOptions o = job("G21 G90\nT1 M6\nG0 X5 Y5 Z12\nG1 Z8 F500\nG0 Z12\nM30\n", 0);
+        o.stockBox = Box{Vec3(0.0), Vec3(10.0)};
+        return runSimulation(o);
+    }();
+    Mesh tetra = tetrahedron({Vec3(4.6, 5.0, zs), Vec3(5.4, 5.0, zs), Vec3(5.0, 5.3, 6.55), Vec3(5.0, 3.0, 10.6)});
+    REQUIRE(checkMesh(tetra).ok());
+    // The premise: the edge's normal is nearest y, and z lies within 75 degrees of it.
+    Vec3 edgeNormal(0.0);
+    for (std::size_t t = 0; t < tetra.triangles.size(); ++t) {
+        const Mesh::Triangle& tri = tetra.triangles[t];
+        if (std::count(tri.begin(), tri.end(), 0u) && std::count(tri.begin(), tri.end(), 1u))
+            edgeNormal += glm::normalize(tetra.areaVector(t));
+    }
+    edgeNormal = glm::normalize(edgeNormal);
+    INFO("edge normal (" << edgeNormal.x << ", " << edgeNormal.y << ", " << edgeNormal.z << ")");
+    REQUIRE(edgeNormal.y > edgeNormal.z);
+    REQUIRE(edgeNormal.z > 0.2588);
+
+    RefineOptions ro;
+    ro.rounds = 1;
+    ro.window = 0.5;
+    RefineStats stats;
+    refineMesh(tetra, Box{Vec3(0.0), Vec3(10.0)}, s.program.path, s.tools, ro, &stats);
+    INFO("queries " << stats.queries << " snapped " << stats.snapped << " split " << stats.split << " refused "
+                    << stats.refused << " along another axis " << stats.laterAxis);
+    const auto near = [&](const Vec3& p) {
+        return std::any_of(tetra.vertices.begin(), tetra.vertices.end(),
+                           [&](const Vec3& v) { return glm::length(v - p) < 1e-5; });
+    };
+    CHECK(near(Vec3(4.6, 5.0, zs)));
+    CHECK(near(Vec3(5.4, 5.0, zs)));
+    CHECK(near(Vec3(5.0, 5.0, 8.0)));
+    CHECK_FALSE(near(Vec3(5.0, 4.6, zs)));
+    CHECK(stats.laterAxis >= 1);
+    CHECK(stats.check.ok());
+}
+
+TEST_CASE("refine: a vertex whose window slides along the part is moved along a nearer axis", "[refine]") {
+    // A ball D10 plunged to z = 8 at (10, 10) leaves a spherical dimple, centred at (10, 10, 13),
+    // in the block [0, 20]^3. The apex of the tetrahedron lies 0.05 mm off its side where the side
+    // is 80 degrees from the bottom, nearly vertical, in the dimple's air; the apex's normal is
+    // (0.55, 0, 0.835), nearest z, as at the crease of a wall's top. Along z its window slides down
+    // the side and meets it 0.252 mm below, a fifth of the apex's longest edge (1.3 mm); along x
+    // the side is 0.051 mm away. The base lies 0.59 mm or more inside the material.
+    const Vec3 centre(10.0, 10.0, 13.0);
+    const double r = 5.0, phi = 80.0 * M_PI / 180.0;
+    const Vec3 side = centre + r * Vec3(-std::sin(phi), 0.0, -std::cos(phi));
+    const Vec3 apex = side + 0.05 * glm::normalize(centre - side);
+    const Vec3 n = glm::normalize(Vec3(0.55, 0.0, 0.835));
+    const Vec3 u = glm::normalize(glm::cross(n, Vec3(0.0, 1.0, 0.0))), w = glm::cross(n, u);
+    std::array<Vec3, 4> corners{apex};
+    for (int k = 0; k < 3; ++k) {
+        const double a = (90.0 + 120.0 * k) * M_PI / 180.0;
+        corners[std::size_t(k + 1)] = apex - 1.2 * n + 0.5 * (std::cos(a) * u + std::sin(a) * w);
+    }
+    Mesh tetra = tetrahedron(corners);
+    REQUIRE(checkMesh(tetra).ok());
+    const Simulation s = [&] {
+        SimulateOptions o = job("G21 G90\nT1 M6\nG0 X10 Y10 Z25\nG1 Z8 F500\nG0 Z25\nM30\n", 0);
+        o.stockBox = Box{Vec3(0.0), Vec3(20.0)};
+        o.tools.clear();
+        o.tools.emplace(1, ballEndMill(10.0, {20.0, 40.0}));
+        return runSimulation(o);
+    }();
+
+    RefineOptions ro;
+    ro.rounds = 1;
+    ro.window = 0.5;
+    RefineStats stats;
+    refineMesh(tetra, Box{Vec3(0.0), Vec3(20.0)}, s.program.path, s.tools, ro, &stats);
+    INFO("queries " << stats.queries << " snapped " << stats.snapped << " split " << stats.split
+                    << " along another axis " << stats.laterAxis);
+    const Vec3 moved = tetra.vertices[0];
+    INFO("apex at (" << moved.x << ", " << moved.y << ", " << moved.z << ")");
+    // On the side along x: the sphere's point at the apex's y and z, on the near side.
+    const double dz = apex.z - centre.z;
+    CHECK(moved.x == Approx(centre.x - std::sqrt(r * r - dz * dz)).margin(1e-5));
+    CHECK(moved.y == apex.y);
+    CHECK(moved.z == apex.z);
+    CHECK(stats.laterAxis >= 1);
+    CHECK(stats.check.ok());
+}
+
 namespace {
 
 /// A ball-end mill (radius r, reaching `length` above its tip) on APT MULTAX moves: the tip runs

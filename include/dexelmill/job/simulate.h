@@ -211,9 +211,11 @@ struct SimulateReport {
     /// cells' triangles folded), the cells round the meshed ones, and the vertices it put on faces.
     std::size_t splitEdges = 0, splitEdgesDropped = 0, splitCells = 0, faceVertices = 0;
     /// Refinement (RefineStats): rounds made, vertices and midpoints tested, vertices moved onto
-    /// the part, edges split, splits refused, midpoints without a crossing.
+    /// the part, edges split, splits refused, midpoints without a crossing, vertices and midpoints moved or
+    /// split at a nearer crossing along another axis than the nearest to their normal.
     int refineRounds = 0;
-    std::size_t refineQueries = 0, refineSnapped = 0, refineSplit = 0, refineRefused = 0, refineNoCrossing = 0;
+    std::size_t refineQueries = 0, refineSnapped = 0, refineSplit = 0, refineRefused = 0, refineNoCrossing = 0,
+                refineLaterAxis = 0;
 
     struct Timing {
         double parse = 0, design = 0, cut = 0, rebuild = 0, mesh = 0, refine = 0, write = 0, total = 0;

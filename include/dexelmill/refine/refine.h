@@ -18,6 +18,12 @@
 ///     is split at it, and its triangles with it (into two, three or four, the same way on both
 ///     sides of every edge, so the mesh stays closed). Later rounds test only the new edges.
 ///
+/// A window along an axis nearly tangent to the part slides along it: at a wall's crease the
+/// normal is the wall's and the top's together, and the crossing found may lie far along one of
+/// them. So where the nearest axis's crossing lies farther than a tenth of the edge (of the
+/// vertex's longest edge), the other axes within 75 degrees of the normal are asked too, and the
+/// nearest crossing into the material is taken.
+///
 /// Error bound: every moved or new vertex lies on the exact part's surface to the sweep's
 /// accuracy (1e-6 mm; the windows are cut in double and kept as float offsets within half a
 /// spacing, about 1e-8 mm), or, where a move whose tool axis turns makes the surface, to that
@@ -76,6 +82,9 @@ struct RefineStats {
     std::size_t snapRefused = 0;  ///< vertex moves undone because the mesh folded there
     std::size_t split = 0;        ///< edges split (one new vertex each)
     std::size_t noCrossing = 0;   ///< midpoints with no crossing of the right side in the window
+    /// Vertices and midpoints whose crossing along the axis nearest their normal lay far, moved or
+    /// split at a nearer one along another axis.
+    std::size_t laterAxis = 0;
     std::size_t refused = 0;      ///< splits given up: a piece would fold or be a sliver
     int rounds = 0;               ///< rounds made (fewer than asked when one split nothing)
     /// The memory the first round not started for lack of it would have needed (bytes), or 0.
