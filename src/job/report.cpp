@@ -133,7 +133,8 @@ std::string reportJson(const SimulateReport& r) {
                                      {"edges_with_several_crossings", r.splitEdges},
                                      {"edges_with_several_crossings_left_out", r.splitEdgesDropped},
                                      {"split_cells", r.splitCells},
-                                     {"face_vertices", r.faceVertices}};
+                                     {"face_vertices", r.faceVertices},
+                                     {"runs", r.meshRuns}};
     if (r.refineRounds > 0)
         j["mesh"]["refine"] = {{"rounds", r.refineRounds},
                                {"points_tested", r.refineQueries},

@@ -556,6 +556,7 @@ Simulation runStages(const SimulateOptions& o) {
         report.splitEdgesDropped = stats.splitEdgesDropped;
         report.splitCells = stats.splitCells;
         report.faceVertices = stats.faceVertices;
+        report.meshRuns = stats.splitRuns;
         if (stats.splitEdgesDropped > 0) {
             char text[300];
             std::snprintf(text, sizeof text,

@@ -133,7 +133,9 @@ TEST_CASE("simulate: a wall thinner than the spacing is reported and meshed", "[
     CHECK(r.meshFoldedTriangles == 0);
     CHECK(r.splitEdges > 0);
     CHECK(r.splitEdgesDropped == 0);
+    CHECK(r.meshRuns == 1);
     const nlohmann::json j = nlohmann::json::parse(read(dir / "report.json"));
+    CHECK(j["mesh"]["dexel_mesher"]["runs"].get<int>() == 1);
     CHECK(j["finer_than_lattice"]["material"]["stretches"].get<std::size_t>() == wall.count);
     CHECK(j["finer_than_lattice"]["material"]["widest_mm"].get<double>() == wall.widestMm);
     CHECK(j["finer_than_lattice"]["gaps"]["stretches"].get<std::size_t>() == 0);

@@ -210,6 +210,9 @@ struct SimulateReport {
     /// Its general path (ContourStats): edges with several crossings meshed and left out (their
     /// cells' triangles folded), the cells round the meshed ones, and the vertices it put on faces.
     std::size_t splitEdges = 0, splitEdgesDropped = 0, splitCells = 0, faceVertices = 0;
+    /// Times the dexel mesher meshed the part: one, and one more each time split cells' triangles
+    /// folded and their edges were left out.
+    int meshRuns = 0;
     /// Refinement (RefineStats): rounds made, vertices and midpoints tested, vertices moved onto
     /// the part, edges split, splits refused, midpoints without a crossing, vertices and midpoints moved or
     /// split at a nearer crossing along another axis than the nearest to their normal.
