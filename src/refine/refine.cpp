@@ -163,6 +163,23 @@ std::vector<detail::Window> windowsFor(std::vector<std::uint32_t>& asked, const 
     return windows;
 }
 
+/// The windows of `items` along their normals' second and third nearest axes, those within 75
+/// degrees of the normal (windowsFor ranks 1 and 2, one list: the cut's set-up over every move
+/// is paid once); owner[k] is the item of window k.
+template <class Along>
+std::vector<detail::Window> laterAxesWindows(const std::vector<std::uint32_t>& items, const Along& along,
+                                             std::vector<std::uint32_t>& owner) {
+    std::vector<detail::Window> all;
+    owner.clear();
+    for (int rank = 1; rank < 3; ++rank) {
+        std::vector<std::uint32_t> kept = items;
+        const std::vector<detail::Window> windows = windowsFor(kept, along, rank);
+        all.insert(all.end(), windows.begin(), windows.end());
+        owner.insert(owner.end(), kept.begin(), kept.end());
+    }
+    return all;
+}
+
 /// Given the vertex moves in `moved` (vertex, position before), already made, undoes those around
 /// any fold of the mesh, one ring farther each pass, until it folds no more or the folds are not
 /// the moves' doing. `watch` follows the mesh's folds (every earlier move told). Returns the
@@ -261,20 +278,26 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
         for (std::size_t i = 0; i < asked.size(); ++i)
             if (std::abs(offsets[i]) > std::max(o.tolerance, kSlidFraction * longest[asked[i]]))
                 far.push_back(std::uint32_t(i));
-        for (int rank = 1; rank < 3 && !far.empty(); ++rank) {
-            std::vector<std::uint32_t> items = far;
-            std::vector<detail::Window> later;
-            const std::vector<double> d = ask(items, rank, later, [&](std::uint32_t i) { return asked[i]; });
-            for (std::size_t k = 0; k < items.size(); ++k) {
-                const std::uint32_t i = items[k];
-                if (std::isnan(d[k]) || std::abs(d[k]) >= std::abs(offsets[i]) ||
-                    !inward(normal[asked[i]], later[k].axis, d[k]))
-                    continue;
-                offsets[i] = d[k];
-                windows[i] = later[k];
-                ++st.laterAxis;
-            }
+        std::vector<std::uint32_t> owner;
+        const std::vector<detail::Window> later = laterAxesWindows(
+            far,
+            [&](std::uint32_t i, Vec3& point, Vec3& n) {
+                point = mesh.vertices[asked[i]];
+                n = normal[asked[i]];
+            },
+            owner);
+        st.queries += later.size();
+        const std::vector<double> d = exactOffsets(later, cells, stock, path, tools, o, "snap 2");
+        std::vector<char> nearer(asked.size(), 0);
+        for (std::size_t k = 0; k < later.size(); ++k) {
+            const std::uint32_t i = owner[k];
+            if (std::isnan(d[k]) || std::abs(d[k]) >= std::abs(offsets[i]) || !inward(normal[asked[i]], later[k].axis, d[k]))
+                continue;
+            offsets[i] = d[k];
+            windows[i] = later[k];
+            nearer[i] = 1;
         }
+        st.laterAxis += std::size_t(std::count(nearer.begin(), nearer.end(), char(1)));
     }
     struct Candidate {
         int axis = 0;
@@ -473,29 +496,29 @@ private:
         for (std::size_t i = 0; i < asked.size(); ++i)
             if (std::isnan(offsets[i]) || std::abs(offsets[i]) > kSlidFraction * edgeLength(asked[i]))
                 again.push_back(std::uint32_t(i));
-        for (int rank = 1; rank < 3 && !again.empty(); ++rank) {
-            std::vector<std::uint32_t> items = again;
-            const std::vector<detail::Window> windows = windowsFor(
-                items,
-                [&](std::uint32_t i, Vec3& point, Vec3& n) {
-                    point = first[i].point;
-                    n = edgeNormal(asked[i]);
-                },
-                rank);
-            stats.queries += windows.size();
-            const std::vector<double> later =
-                exactOffsets(windows, cells, stock, path, tools, o_, "refine " + std::to_string(stats.rounds));
-            for (std::size_t k = 0; k < items.size(); ++k) {
-                const std::uint32_t i = items[k];
-                const double d = later[k];
-                if (std::isnan(d) || !inward(edgeNormal(asked[i]), windows[k].axis, d)) continue;
-                if (!std::isnan(offsets[i]) && std::abs(d) >= std::abs(offsets[i])) continue;
-                offsets[i] = d;
-                found[i] = windows[k].point;
-                found[i][windows[k].axis] += d;
-                ++stats.laterAxis;
-            }
+        std::vector<std::uint32_t> owner;
+        const std::vector<detail::Window> windows = laterAxesWindows(
+            again,
+            [&](std::uint32_t i, Vec3& point, Vec3& n) {
+                point = first[i].point;
+                n = edgeNormal(asked[i]);
+            },
+            owner);
+        stats.queries += windows.size();
+        const std::vector<double> later =
+            exactOffsets(windows, cells, stock, path, tools, o_, "refine " + std::to_string(stats.rounds));
+        std::vector<char> moved(asked.size(), 0);
+        for (std::size_t k = 0; k < windows.size(); ++k) {
+            const std::uint32_t i = owner[k];
+            const double d = later[k];
+            if (std::isnan(d) || !inward(edgeNormal(asked[i]), windows[k].axis, d)) continue;
+            if (!std::isnan(offsets[i]) && std::abs(d) >= std::abs(offsets[i])) continue;
+            offsets[i] = d;
+            found[i] = windows[k].point;
+            found[i][windows[k].axis] += d;
+            moved[i] = 1;
         }
+        stats.laterAxis += std::size_t(std::count(moved.begin(), moved.end(), char(1)));
     }
 
     /// The sum of the unit normals of edge e's two triangles.
