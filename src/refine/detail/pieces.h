@@ -15,8 +15,8 @@ using Local = std::array<int, 3>;
 /// @brief The pieces of a triangle whose edges in `mask` (bit k: edge k) are split, oriented as the
 /// triangle, from the positions `p` (indexed as Local) and the triangle's unit normal `n`.
 /// Returns the count (2, 3 or 4), or 0 if some piece would face away from the triangle (a cosine
-/// below kMinCosine) or be a sliver (kSliver); for two split edges the quad's other diagonal is
-/// tried before giving up.
+/// below kMinCosine), be a sliver (kSliver) or a cap, with an angle above 170 degrees (kCapCosine);
+/// for two split edges the quad's other diagonal is tried before giving up.
 int splitPieces(const std::array<Vec3, 6>& p, unsigned mask, const Vec3& n, std::array<Local, 4>& out);
 
 }  // namespace dexelmill::detail
