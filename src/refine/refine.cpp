@@ -251,24 +251,13 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
     for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
         if (normal[v] != Vec3(0.0) && cells.reached(mesh.vertices[v])) asked.push_back(v);
     FoldWatch watch(mesh);
-    // The windows of some items (vertexOf gives each one's vertex) along their vertices' normals'
-    // rank-th nearest axes, and their offsets.
-    const auto ask = [&](std::vector<std::uint32_t>& items, int rank, std::vector<detail::Window>& windows,
-                         const auto& vertexOf) {
-        windows = windowsFor(
-            items,
-            [&](std::uint32_t item, Vec3& point, Vec3& n) {
-                point = mesh.vertices[vertexOf(item)];
-                n = normal[vertexOf(item)];
-            },
-            rank);
-        st.queries += windows.size();
-        return exactOffsets(windows, cells, stock, path, tools, o, "snap " + std::to_string(rank + 1));
-    };
-
     // Along the nearest axis.
-    std::vector<detail::Window> windows;
-    std::vector<double> offsets = ask(asked, 0, windows, [](std::uint32_t v) { return v; });
+    std::vector<detail::Window> windows = windowsFor(asked, [&](std::uint32_t v, Vec3& point, Vec3& n) {
+        point = mesh.vertices[v];
+        n = normal[v];
+    });
+    st.queries += windows.size();
+    std::vector<double> offsets = exactOffsets(windows, cells, stock, path, tools, o, "snap 1");
     // A crossing farther than kSlidFraction of the vertex's longest edge may lie along the part
     // rather than across it (a wall's crease vertex 0.01 mm outside a nearly vertical wall moved
     // down it by 0.1 mm along z, bear at (58.40, 26.89, -4.13)): the other axes within 75 degrees
@@ -331,12 +320,21 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
         candidates[unanswered + b][0] = first[back[b]];
         count[unanswered + b] = 1;
     }
-    for (int rank = 1; rank < 3 && !retry.empty(); ++rank) {
+    if (!retry.empty()) {
         std::vector<std::uint32_t> items(retry.size());  // indices into retry
         for (std::size_t k = 0; k < retry.size(); ++k) items[k] = std::uint32_t(k);
-        offsets = ask(items, rank, windows, [&](std::uint32_t k) { return retry[k]; });
-        for (std::size_t i = 0; i < items.size(); ++i) {
-            const std::uint32_t k = items[i];
+        std::vector<std::uint32_t> owner;
+        windows = laterAxesWindows(
+            items,
+            [&](std::uint32_t k, Vec3& point, Vec3& n) {
+                point = mesh.vertices[retry[k]];
+                n = normal[retry[k]];
+            },
+            owner);
+        st.queries += windows.size();
+        offsets = exactOffsets(windows, cells, stock, path, tools, o, "snap 2");
+        for (std::size_t i = 0; i < windows.size(); ++i) {
+            const std::uint32_t k = owner[i];
             if (std::abs(offsets[i]) <= o.tolerance) onPart[k] = 1;
             else if (!std::isnan(offsets[i]) && inward(normal[retry[k]], windows[i].axis, offsets[i]))
                 candidates[k][std::size_t(count[k]++)] = {windows[i].axis, offsets[i]};

@@ -64,9 +64,9 @@ struct RefineOptions {
     /// The most memory a round may add (bytes; 0: no limit). A round that would need more, by
     /// kRoundBytesPerTriangle, is not started: the mesh keeps the rounds done so far.
     double memoryBytes = 0.0;
-    /// Called from the calling thread as the windows are cut: the stage ("snap 1" to "snap 3" for
-    /// the vertices along each axis, "refine 1", "refine 2", ... for the rounds' edges) and the
-    /// share of its work done, as done / total. May be empty.
+    /// Called from the calling thread as the windows are cut: the stage ("snap 1" for the vertices
+    /// along the axis nearest their normals, "snap 2" along the others, "refine 1", "refine 2", ...
+    /// for the rounds' edges) and the share of its work done, as done / total. May be empty.
     std::function<void(const char* stage, std::size_t done, std::size_t total)> progress;
 };
 
