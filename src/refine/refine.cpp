@@ -38,7 +38,7 @@ constexpr double kLaterAxisCosine = 0.2588;
 
 /// A crossing farther from a midpoint than this fraction of its edge's length, or from a vertex
 /// than this fraction of its longest edge, is asked again along the other axes within 75 degrees
-/// of the normal, and the nearest inward is kept (Round::shortenAlongLaterAxes, snapVertices): a
+/// of the normal, and the nearest inward is kept (takeNearerAlongLaterAxes): a
 /// window along an axis nearly tangent to the part slides along it. On a smooth part the midpoint
 /// of an edge whose ends lie on it is off by about L^2 k / 8 (k the curvature across the edge);
 /// at bear's grid that is under 0.02 L for its 1.59 mm ball, so only edges across creases, and
@@ -180,6 +180,34 @@ std::vector<detail::Window> laterAxesWindows(const std::vector<std::uint32_t>& i
     return all;
 }
 
+/// Asks the windows of the items `far` (indices into `windows` and `offsets`) again along their
+/// later axes (laterAxesWindows), and where one finds a crossing nearer than the first, or the
+/// first found none, and reaching it takes the point into the material (inward), puts that window
+/// and offset in place of the first (kSlidFraction). `along(i, point, normal)` gives item i's
+/// point and normal, `cut(windows)` the windows' offsets. Returns the number of items changed;
+/// `queries` counts the windows asked.
+template <class Along, class Cut>
+std::size_t takeNearerAlongLaterAxes(const std::vector<std::uint32_t>& far, const Along& along, const Cut& cut,
+                                     std::vector<detail::Window>& windows, std::vector<double>& offsets,
+                                     std::size_t& queries) {
+    std::vector<std::uint32_t> owner;
+    const std::vector<detail::Window> later = laterAxesWindows(far, along, owner);
+    queries += later.size();
+    const std::vector<double> d = cut(later);
+    std::vector<char> nearer(windows.size(), 0);
+    for (std::size_t k = 0; k < later.size(); ++k) {
+        const std::uint32_t i = owner[k];
+        Vec3 point(0.0), normal(0.0);
+        along(i, point, normal);
+        if (std::isnan(d[k]) || !inward(normal, later[k].axis, d[k])) continue;
+        if (!std::isnan(offsets[i]) && std::abs(d[k]) >= std::abs(offsets[i])) continue;
+        offsets[i] = d[k];
+        windows[i] = later[k];
+        nearer[i] = 1;
+    }
+    return std::size_t(std::count(nearer.begin(), nearer.end(), char(1)));
+}
+
 /// Given the vertex moves in `moved` (vertex, position before), already made, undoes those around
 /// any fold of the mesh, one ring farther each pass, until it folds no more or the folds are not
 /// the moves' doing. `watch` follows the mesh's folds (every earlier move told). Returns the
@@ -267,26 +295,16 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
         for (std::size_t i = 0; i < asked.size(); ++i)
             if (std::abs(offsets[i]) > std::max(o.tolerance, kSlidFraction * longest[asked[i]]))
                 far.push_back(std::uint32_t(i));
-        std::vector<std::uint32_t> owner;
-        const std::vector<detail::Window> later = laterAxesWindows(
+        st.laterAxis += takeNearerAlongLaterAxes(
             far,
             [&](std::uint32_t i, Vec3& point, Vec3& n) {
                 point = mesh.vertices[asked[i]];
                 n = normal[asked[i]];
             },
-            owner);
-        st.queries += later.size();
-        const std::vector<double> d = exactOffsets(later, cells, stock, path, tools, o, "snap 2");
-        std::vector<char> nearer(asked.size(), 0);
-        for (std::size_t k = 0; k < later.size(); ++k) {
-            const std::uint32_t i = owner[k];
-            if (std::isnan(d[k]) || std::abs(d[k]) >= std::abs(offsets[i]) || !inward(normal[asked[i]], later[k].axis, d[k]))
-                continue;
-            offsets[i] = d[k];
-            windows[i] = later[k];
-            nearer[i] = 1;
-        }
-        st.laterAxis += std::size_t(std::count(nearer.begin(), nearer.end(), char(1)));
+            [&](const std::vector<detail::Window>& later) {
+                return exactOffsets(later, cells, stock, path, tools, o, "snap 2");
+            },
+            windows, offsets, st.queries);
     }
     struct Candidate {
         int axis = 0;
@@ -446,19 +464,31 @@ private:
         for (std::size_t e = 0; e < nEdges; ++e)
             if (edges_.ends[e][1] >= firstNew && edges_.triangles[e][0] != kNoTriangle) asked.push_back(std::uint32_t(e));
         // Two triangles facing apart (a fin) give no direction: left alone.
-        const std::vector<detail::Window> windows = windowsFor(asked, [&](std::uint32_t e, Vec3& point, Vec3& n) {
+        std::vector<detail::Window> windows = windowsFor(asked, [&](std::uint32_t e, Vec3& point, Vec3& n) {
             n = edgeNormal(e);
             point = 0.5 * (mesh_.vertices[edges_.ends[e][0]] + mesh_.vertices[edges_.ends[e][1]]);
         });
         stats.queries += windows.size();
-        std::vector<double> offsets =
-            exactOffsets(windows, cells, stock, path, tools, o_, "refine " + std::to_string(stats.rounds));
-        std::vector<Vec3> found(asked.size());
-        for (std::size_t i = 0; i < asked.size(); ++i) {
-            found[i] = windows[i].point;
-            if (!std::isnan(offsets[i])) found[i][windows[i].axis] += offsets[i];
-        }
-        shortenAlongLaterAxes(asked, windows, offsets, found, cells, stock, path, tools, stats);
+        const auto cut = [&](const std::vector<detail::Window>& w) {
+            return exactOffsets(w, cells, stock, path, tools, o_, "refine " + std::to_string(stats.rounds));
+        };
+        std::vector<double> offsets = cut(windows);
+        // Midpoints whose crossing lies far along the nearest axis, or that found none, are asked
+        // along the other axes too (kSlidFraction). On a wall's rounded top, the edge along the
+        // crease has the wall's and the top's normals: its window ran along y and met the top
+        // 0.12 mm from the corner, and the pieces cut the corner off by 0.23 h (bear,
+        // `--refine 1`, at (23.13, 26.84, -4.12)); along z the corner lies 0.017 mm below.
+        std::vector<std::uint32_t> again;  // indices into asked
+        for (std::size_t i = 0; i < asked.size(); ++i)
+            if (std::isnan(offsets[i]) || std::abs(offsets[i]) > kSlidFraction * edgeLength(asked[i]))
+                again.push_back(std::uint32_t(i));
+        stats.laterAxis += takeNearerAlongLaterAxes(
+            again,
+            [&](std::uint32_t i, Vec3& point, Vec3& n) {
+                point = windows[i].point;
+                n = edgeNormal(asked[i]);
+            },
+            cut, windows, offsets, stats.queries);
 
         for (std::size_t i = 0; i < asked.size(); ++i) {
             const double d = offsets[i];
@@ -468,55 +498,16 @@ private:
             }
             if (std::abs(d) <= o_.tolerance) continue;
             const std::uint32_t e = asked[i];
+            Vec3 q = windows[i].point;
+            q[windows[i].axis] += d;
             split_[e] = 1;
-            at_[e] = found[i];
+            at_[e] = q;
             moved_[e] = std::abs(d) / edgeLength(e);
         }
     }
 
     double edgeLength(std::uint32_t e) const {
         return glm::length(mesh_.vertices[edges_.ends[e][1]] - mesh_.vertices[edges_.ends[e][0]]);
-    }
-
-    /// Asks again, along the other axes within 75 degrees of its normal, each midpoint whose window
-    /// found no crossing or one farther than kSlidFraction of its edge's length, and keeps the
-    /// nearest crossing, where the move takes the midpoint into the material (inward, as for the
-    /// vertices). A window along an axis nearly tangent to the part slides along it: on a wall's
-    /// rounded top, the edge along the crease has the wall's and the top's normals, its window ran
-    /// along y and met the top 0.12 mm from the corner, and the pieces cut the corner off by
-    /// 0.23 h (bear, `--refine 1`, at (23.13, 26.84, -4.12)); along z the corner lies 0.017 mm
-    /// below. `offsets` and `found` (the crossing per item) are updated in place.
-    void shortenAlongLaterAxes(const std::vector<std::uint32_t>& asked, const std::vector<detail::Window>& first,
-                               std::vector<double>& offsets, std::vector<Vec3>& found,
-                               const detail::SweptCells& cells, const Box& stock, const ToolPath& path,
-                               const ToolTable& tools, RefineStats& stats) {
-        std::vector<std::uint32_t> again;  // indices into asked
-        for (std::size_t i = 0; i < asked.size(); ++i)
-            if (std::isnan(offsets[i]) || std::abs(offsets[i]) > kSlidFraction * edgeLength(asked[i]))
-                again.push_back(std::uint32_t(i));
-        std::vector<std::uint32_t> owner;
-        const std::vector<detail::Window> windows = laterAxesWindows(
-            again,
-            [&](std::uint32_t i, Vec3& point, Vec3& n) {
-                point = first[i].point;
-                n = edgeNormal(asked[i]);
-            },
-            owner);
-        stats.queries += windows.size();
-        const std::vector<double> later =
-            exactOffsets(windows, cells, stock, path, tools, o_, "refine " + std::to_string(stats.rounds));
-        std::vector<char> moved(asked.size(), 0);
-        for (std::size_t k = 0; k < windows.size(); ++k) {
-            const std::uint32_t i = owner[k];
-            const double d = later[k];
-            if (std::isnan(d) || !inward(edgeNormal(asked[i]), windows[k].axis, d)) continue;
-            if (!std::isnan(offsets[i]) && std::abs(d) >= std::abs(offsets[i])) continue;
-            offsets[i] = d;
-            found[i] = windows[k].point;
-            found[i][windows[k].axis] += d;
-            moved[i] = 1;
-        }
-        stats.laterAxis += std::size_t(std::count(moved.begin(), moved.end(), char(1)));
     }
 
     /// The sum of the unit normals of edge e's two triangles.
