@@ -257,14 +257,28 @@ Mesh tetrahedron(const std::array<Vec3, 4>& corners) {
     return tetra;
 }
 
-/// One round of refinement of `mesh` against the faced block, with windows of 0.5 mm.
-RefineStats refineAgainst(const Simulation& s, Mesh& mesh) {
+/// One round of refinement of `mesh` against the job `s` on the block [0, size]^3 (the faced
+/// block's by default), with windows of 0.5 mm.
+RefineStats refineAgainst(const Simulation& s, Mesh& mesh, double size = 10.0) {
     RefineOptions ro;
     ro.rounds = 1;
     ro.window = 0.5;
     RefineStats stats;
-    refineMesh(mesh, Box{Vec3(0.0), Vec3(10.0)}, s.program.path, s.tools, ro, &stats);
+    refineMesh(mesh, Box{Vec3(0.0), Vec3(size)}, s.program.path, s.tools, ro, &stats);
     return stats;
+}
+
+/// A ball-end mill of diameter d plunged to z = 8 at the middle of the block [0, size]^3.
+Simulation plungedBall(double d, double size) {
+    const double mid = size / 2.0;
+    std::ostringstream g;
+    g << "G21 G90\nT1 M6\nG0 X" << mid << " Y" << mid << " Z" << size + 5.0 << "\nG1 Z8 F500\nG0 Z" << size + 5.0
+      << "\nM30\n";
+    SimulateOptions o = job(g.str(), 0);
+    o.stockBox = Box{Vec3(0.0), Vec3(size)};
+    o.tools.clear();
+    o.tools.emplace(1, ballEndMill(d, {20.0, 40.0}));
+    return runSimulation(o);
 }
 
 }  // namespace
@@ -328,11 +342,7 @@ TEST_CASE("refine: a midpoint whose window slides along the part is split along 
     // the block, beyond the windows' 0.5 mm.
     const double r = 3.175 / 2.0;
     const double zs = 8.0 + r - std::sqrt(r * r - 0.16);
-    const Simulation s = [&] {
-        SimulateOptions o = job("G21 G90\nT1 M6\nG0 X5 Y5 Z12\nG1 Z8 F500\nG0 Z12\nM30\n", 0);
-        o.stockBox = Box{Vec3(0.0), Vec3(10.0)};
-        return runSimulation(o);
-    }();
+    const Simulation s = plungedBall(3.175, 10.0);
     Mesh tetra = tetrahedron({Vec3(4.6, 5.0, zs), Vec3(5.4, 5.0, zs), Vec3(5.0, 5.3, 6.55), Vec3(5.0, 3.0, 10.6)});
     REQUIRE(checkMesh(tetra).ok());
     // The premise: the edge's normal is nearest y, and z lies within 75 degrees of it.
@@ -347,11 +357,7 @@ TEST_CASE("refine: a midpoint whose window slides along the part is split along 
     REQUIRE(edgeNormal.y > edgeNormal.z);
     REQUIRE(edgeNormal.z > 0.2588);
 
-    RefineOptions ro;
-    ro.rounds = 1;
-    ro.window = 0.5;
-    RefineStats stats;
-    refineMesh(tetra, Box{Vec3(0.0), Vec3(10.0)}, s.program.path, s.tools, ro, &stats);
+    const RefineStats stats = refineAgainst(s, tetra);
     INFO("queries " << stats.queries << " snapped " << stats.snapped << " split " << stats.split << " refused "
                     << stats.refused << " along another axis " << stats.laterAxis);
     const auto near = [&](const Vec3& p) {
@@ -386,19 +392,9 @@ TEST_CASE("refine: a vertex whose window slides along the part is moved along a 
     }
     Mesh tetra = tetrahedron(corners);
     REQUIRE(checkMesh(tetra).ok());
-    const Simulation s = [&] {
-        SimulateOptions o = job("G21 G90\nT1 M6\nG0 X10 Y10 Z25\nG1 Z8 F500\nG0 Z25\nM30\n", 0);
-        o.stockBox = Box{Vec3(0.0), Vec3(20.0)};
-        o.tools.clear();
-        o.tools.emplace(1, ballEndMill(10.0, {20.0, 40.0}));
-        return runSimulation(o);
-    }();
+    const Simulation s = plungedBall(10.0, 20.0);
 
-    RefineOptions ro;
-    ro.rounds = 1;
-    ro.window = 0.5;
-    RefineStats stats;
-    refineMesh(tetra, Box{Vec3(0.0), Vec3(20.0)}, s.program.path, s.tools, ro, &stats);
+    const RefineStats stats = refineAgainst(s, tetra, 20.0);
     INFO("queries " << stats.queries << " snapped " << stats.snapped << " split " << stats.split
                     << " along another axis " << stats.laterAxis);
     const Vec3 moved = tetra.vertices[0];
