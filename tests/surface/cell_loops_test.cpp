@@ -245,6 +245,37 @@ TEST_CASE("cell loops: a lens's face vertex follows its ends' tangents", "[surfa
     }
 }
 
+TEST_CASE("cell loops: a wedge whose side lies nearly in the face gets its face vertex near the tip",
+          "[surface][contour]") {
+    // Material inside two balls: A, centred 0.6 below the face z = 0 at (0.5, 0), whose slice is
+    // the circle of radius 0.2 round (0.5, 0), and B, centred in the face at (0.2, -0.3) with
+    // radius 0.5. On edge 0 their common part runs from 0.3 (A's side) to 0.6 (B's); in face 4 it
+    // ends where the two circles meet. At 0.3, A's normal lies mostly out of the face (its part in
+    // the face 0.32), and the slice turns at once round the small circle: the tangent lines meet
+    // at (0.3, 0.4), 0.25 from the tip.
+    const Vec3 ca(0.5, 0.0, -0.6), cb(0.2, -0.3, 0.0);
+    const double ra = std::sqrt(0.6 * 0.6 + 0.2 * 0.2), rb = 0.5;
+    const double x1 = 0.3, x2 = 0.2 + std::sqrt(rb * rb - 0.3 * 0.3);
+    // The circles' meeting point above the edge: x + y = 0.55 from their difference, then A's.
+    const double ty = (0.1 + std::sqrt(0.01 + 8.0 * (0.04 - 0.05 * 0.05))) / 4.0, tx = 0.55 - ty;
+    REQUIRE(std::abs(std::hypot(tx - 0.5, ty) - 0.2) < 1e-12);
+    REQUIRE(std::abs(std::hypot(tx - 0.2, ty + 0.3) - rb) < 1e-12);
+    CellCrossings c;
+    c.edges[0].ids = {0, 1};
+    c.edges[0].at = {x1, x2};
+    c.edges[0].normals = {(Vec3(x1, 0.0, 0.0) - ca) / ra, (Vec3(x2, 0.0, 0.0) - cb) / rb};
+    REQUIRE(glm::dot(c.edges[0].normals[0], c.edges[0].normals[1]) < c.creaseCosine);  // a sharp edge
+    double u = -1.0, v = -1.0;
+    cellLoops(c, [&](int face, std::uint32_t, std::uint32_t, double fu, double fv) {
+        if (face == 4) u = fu, v = fv;
+        return std::uint32_t(10 + face);
+    });
+    INFO("face vertex at (" << u << ", " << v << "), the tip at (" << tx << ", " << ty << ")");
+    CHECK(std::hypot(u - tx, v - ty) < 0.1);
+    CHECK(v > 0.0);
+    CHECK(v < 0.4);  // short of the tangents' meeting point
+}
+
 TEST_CASE("cell loops: random lattices with several crossings on edges give closed oriented manifolds",
           "[surface][contour]") {
     for (std::uint64_t seed : {3u, 17u, 29u}) {
