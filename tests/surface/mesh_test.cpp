@@ -12,35 +12,11 @@
 #include <tbb/task_arena.h>
 
 #include "dexelmill/surface/mesh.h"
+#include "support/uv_sphere.h"
 
 using namespace dexelmill;
 
 namespace {
-
-/// A closed, outward-facing UV sphere: a pole vertex at each end, `rings` x `sectors` between.
-Mesh sphere(int rings, int sectors, double r) {
-    Mesh m;
-    m.vertices.push_back(Vec3(0, 0, r));
-    for (int i = 1; i < rings; ++i) {
-        const double th = M_PI * i / rings;
-        for (int j = 0; j < sectors; ++j) {
-            const double ph = 2 * M_PI * j / sectors;
-            m.vertices.push_back(r * Vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
-        }
-    }
-    m.vertices.push_back(Vec3(0, 0, -r));
-    const auto at = [&](int i, int j) { return std::uint32_t(1 + (i - 1) * sectors + (j % sectors)); };
-    const std::uint32_t south = std::uint32_t(m.vertices.size() - 1);
-    for (int j = 0; j < sectors; ++j) {
-        m.triangles.push_back({0, at(1, j), at(1, j + 1)});
-        for (int i = 1; i + 1 < rings; ++i) {
-            m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
-            m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-        }
-        m.triangles.push_back({at(rings - 1, j), south, at(rings - 1, j + 1)});
-    }
-    return m;
-}
 
 /// Triangles within 1e-5 (cosine) of facing across their vertices' normals, by the oracle.
 std::size_t& nearlyFoldedCount() {
@@ -120,7 +96,7 @@ void compare(const MeshCheck& got, const MeshCheck& want) {
 }  // namespace
 
 TEST_CASE("checkMesh: a closed sphere is ok", "[surface][mesh]") {
-    const Mesh m = sphere(12, 24, 5.0);
+    const Mesh m = testing::uvSphere(12, 24, 5.0);
     const MeshCheck c = checkMesh(m);
     CHECK(c.ok());
     compare(c, bruteForce(m));
@@ -130,7 +106,7 @@ TEST_CASE("checkMesh: a closed sphere is ok", "[surface][mesh]") {
 TEST_CASE("checkMesh: every kind of damage counted as a brute-force oracle counts it", "[surface][mesh]") {
     std::mt19937_64 rng(42);
     for (int trial = 0; trial < 200; ++trial) {
-        Mesh m = sphere(6 + int(rng() % 6), 8 + int(rng() % 10), 3.0);
+        Mesh m = testing::uvSphere(6 + int(rng() % 6), 8 + int(rng() % 10), 3.0);
         const int damages = 1 + int(rng() % 4);
         for (int d = 0; d < damages; ++d) {
             const std::size_t t = rng() % m.triangles.size();
@@ -166,7 +142,7 @@ TEST_CASE("checkMesh: every kind of damage counted as a brute-force oracle count
 }
 
 TEST_CASE("checkMesh: an index past the vertex list", "[surface][mesh]") {
-    Mesh m = sphere(6, 8, 1.0);
+    Mesh m = testing::uvSphere(6, 8, 1.0);
     m.triangles[3][1] = 999;
     const MeshCheck c = checkMesh(m);
     CHECK(c.invalidIndices == 1);
@@ -174,7 +150,7 @@ TEST_CASE("checkMesh: an index past the vertex list", "[surface][mesh]") {
 }
 
 TEST_CASE("checkMesh lists the folded triangles it counts", "[surface][mesh]") {
-    Mesh m = sphere(10, 16, 4.0);
+    Mesh m = testing::uvSphere(10, 16, 4.0);
     std::vector<std::uint32_t> folded{7};
     CHECK(checkMesh(m, &folded).foldedTriangles == 0);
     CHECK(folded.empty());
@@ -189,7 +165,7 @@ TEST_CASE("checkMesh lists the folded triangles it counts", "[surface][mesh]") {
 TEST_CASE("FoldWatch follows the folds checkMesh finds while vertices move", "[surface][mesh]") {
     std::mt19937_64 rng(7);
     for (int trial = 0; trial < 20; ++trial) {
-        Mesh m = sphere(8 + int(rng() % 6), 10 + int(rng() % 10), 3.0);
+        Mesh m = testing::uvSphere(8 + int(rng() % 6), 10 + int(rng() % 10), 3.0);
         const std::vector<Vec3, NoZeroAllocator<Vec3>> start = m.vertices;
         const int threads = 1 + int(rng() % 3);
         tbb::task_arena arena(threads);
@@ -227,7 +203,7 @@ TEST_CASE("FoldWatch follows the folds checkMesh finds while vertices move", "[s
 }
 
 TEST_CASE("repairAndCheckMesh: pulls fold vertices until none folds", "[surface][mesh]") {
-    Mesh m = sphere(10, 16, 4.0);
+    Mesh m = testing::uvSphere(10, 16, 4.0);
     const auto original = m.vertices;
     // Move three vertices across a neighbour, past it along the surface: the triangles between
     // turn over.
@@ -255,7 +231,7 @@ TEST_CASE("repairAndCheckMesh: pulls fold vertices until none folds", "[surface]
 TEST_CASE("repairAndCheckMesh: a fold no pull can mend stays listed while others are mended", "[surface][mesh]") {
     // Two folds far apart; the pull only knows how to mend the first. The second must still be
     // listed as unrepaired (it used to be dropped once the first one's vertices moved).
-    Mesh m = sphere(10, 16, 4.0);
+    Mesh m = testing::uvSphere(10, 16, 4.0);
     const auto original = m.vertices;
     const std::uint32_t mendable = 20, stuck = 77;
     for (std::uint32_t v : {mendable, stuck})
@@ -281,7 +257,7 @@ TEST_CASE("repairAndCheckMesh: a fold no pull can mend stays listed while others
 }
 
 TEST_CASE("repairAndCheckMesh: the last resort takes the candidate that mends the fold", "[surface][mesh]") {
-    Mesh m = sphere(10, 16, 4.0);
+    Mesh m = testing::uvSphere(10, 16, 4.0);
     const auto original = m.vertices;
     const std::uint32_t bad = 45;
     m.vertices[bad] = m.vertices[bad + 1] + 1.5 * (m.vertices[bad + 1] - m.vertices[bad]);
