@@ -1,7 +1,9 @@
 #include "dexelmill/surface/simplify.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "dexelmill/geometry/tolerance.h"
@@ -10,42 +12,30 @@ namespace dexelmill {
 
 namespace {
 
-class FlatMerger {
+constexpr std::uint32_t kNoStar = std::numeric_limits<std::uint32_t>::max();
+
+/// Edge collapses on a closed mesh: the stars (triangles around) of the vertices that may take
+/// part, the link condition, and the mesh compacted at the end.
+class Collapser {
 public:
-    FlatMerger(Mesh& mesh, const FlatMergeOptions& options)
-        : mesh_(mesh), cosAngle_(std::cos(options.maxAngle)), maxDistance_(options.maxDistance),
-          around_(mesh.vertices.size()), alive_(mesh.triangles.size(), true) {
+    /// Stars of every vertex, or, with `tracked`, of the vertices it flags.
+    Collapser(Mesh& mesh, const std::vector<char>* tracked)
+        : mesh_(mesh), slot_(mesh.vertices.size(), kNoStar), alive_(mesh.triangles.size(), true) {
+        for (std::uint32_t v = 0; v < mesh.vertices.size(); ++v)
+            if (!tracked || (*tracked)[v]) slot_[v] = std::uint32_t(around_.size()), around_.emplace_back();
         for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
-            for (std::uint32_t v : mesh.triangles[t]) around_[v].push_back(t);
+            for (std::uint32_t v : mesh.triangles[t])
+                if (slot_[v] != kNoStar) around_[slot_[v]].push_back(t);
     }
 
-    std::size_t run() {
-        std::size_t merged = 0;
-        for (bool again = true; again;) {
-            again = false;
-            for (std::uint32_t u = 0; u < mesh_.vertices.size(); ++u) {
-                if (around_[u].empty()) continue;
-                if (tryMerge(u)) {
-                    ++merged;
-                    again = true;
-                }
-            }
-        }
-        compact();
-        return merged;
-    }
-
-private:
-    Vec3 unitNormal(const Mesh::Triangle& t) const {
-        const Vec3 n = glm::cross(mesh_.vertices[t[1]] - mesh_.vertices[t[0]], mesh_.vertices[t[2]] - mesh_.vertices[t[0]]);
-        const double l = glm::length(n);
-        return l > 0.0 ? n / l : Vec3(0.0);
-    }
+    const Mesh& mesh() const { return mesh_; }
+    /// The triangles around u (a tracked vertex); empty once u has been collapsed away.
+    const std::vector<std::uint32_t>& star(std::uint32_t u) const { return around_[slot_[u]]; }
 
     /// The vertices joined to u by an edge, sorted.
     std::vector<std::uint32_t> neighbours(std::uint32_t u) const {
         std::vector<std::uint32_t> out;
-        for (std::uint32_t t : around_[u])
+        for (std::uint32_t t : star(u))
             for (std::uint32_t w : mesh_.triangles[t])
                 if (w != u) out.push_back(w);
         std::sort(out.begin(), out.end());
@@ -53,91 +43,79 @@ private:
         return out;
     }
 
-    bool tryMerge(std::uint32_t u) {
-        // Flat around u: every triangle within the angle of the mean normal.
-        Vec3 mean(0.0);
-        for (std::uint32_t t : around_[u]) mean += mesh_.areaVector(t);
-        const double ml = glm::length(mean);
-        if (!(ml > 0.0)) return false;
-        mean /= ml;
-        for (std::uint32_t t : around_[u])
-            if (!(glm::dot(unitNormal(mesh_.triangles[t]), mean) >= cosAngle_)) return false;
-        const std::vector<std::uint32_t> nu = neighbours(u);
-        const Vec3& pu = mesh_.vertices[u];
-        // Try the nearest neighbours first.
-        std::vector<std::uint32_t> order = nu;
-        std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-            const double da = glm::dot(mesh_.vertices[a] - pu, mesh_.vertices[a] - pu);
-            const double db = glm::dot(mesh_.vertices[b] - pu, mesh_.vertices[b] - pu);
-            return da < db || (da == db && a < b);
-        });
-        for (std::uint32_t v : order)
-            if (collapse(u, v, nu, mean)) return true;
-        return false;
-    }
-
-    bool collapse(std::uint32_t u, std::uint32_t v, const std::vector<std::uint32_t>& nu, const Vec3& mean) {
-        // The triangles on edge u-v, and the link condition.
-        std::vector<std::uint32_t> shared, opposite;
-        for (std::uint32_t t : around_[u]) {
+    /// The two triangles on edge u-v, when the vertices next to both u and v (`nu`: u's
+    /// neighbours) are exactly the two across it (the link condition of Dey et al. 1999), which
+    /// keeps a closed 2-manifold closed and manifold; false otherwise.
+    bool linked(std::uint32_t u, std::uint32_t v, const std::vector<std::uint32_t>& nu,
+                std::array<std::uint32_t, 2>& shared) const {
+        std::vector<std::uint32_t> opposite;
+        std::size_t found = 0;
+        for (std::uint32_t t : star(u)) {
             const Mesh::Triangle& tri = mesh_.triangles[t];
             if (tri[0] != v && tri[1] != v && tri[2] != v) continue;
-            shared.push_back(t);
+            if (found == 2) return false;
+            shared[found++] = t;
             for (std::uint32_t w : tri)
                 if (w != u && w != v) opposite.push_back(w);
         }
-        if (shared.size() != 2) return false;
+        if (found != 2) return false;
         std::sort(opposite.begin(), opposite.end());
         const std::vector<std::uint32_t> nv = neighbours(v);
         std::vector<std::uint32_t> common;
         std::set_intersection(nu.begin(), nu.end(), nv.begin(), nv.end(), std::back_inserter(common));
-        if (common != opposite) return false;
-        // The triangles u leaves, with v in its place: flat, not degenerate, and near u.
-        const Vec3& pu = mesh_.vertices[u];
-        for (std::uint32_t t : around_[u]) {
-            if (t == shared[0] || t == shared[1]) continue;
-            Mesh::Triangle tri = mesh_.triangles[t];
-            for (std::uint32_t& w : tri)
-                if (w == u) w = v;
-            const Vec3& a = mesh_.vertices[tri[0]];
-            const Vec3 area = glm::cross(mesh_.vertices[tri[1]] - a, mesh_.vertices[tri[2]] - a);
-            const double twiceArea = glm::length(area);
-            double longest2 = 0.0;
-            for (int k = 0; k < 3; ++k) {
-                const Vec3 e = mesh_.vertices[tri[(k + 1) % 3]] - mesh_.vertices[tri[k]];
-                longest2 = std::max(longest2, glm::dot(e, e));
-            }
-            if (!(twiceArea > tol::kDegenerateTriangle * longest2)) return false;
-            const Vec3 n = area / twiceArea;
-            if (!(glm::dot(n, mean) >= cosAngle_)) return false;
-            if (!(std::abs(glm::dot(n, pu - a)) <= maxDistance_)) return false;
+        return common == opposite;
+    }
+
+    /// Triangle t of u's star with v in u's place.
+    Mesh::Triangle moved(std::uint32_t t, std::uint32_t u, std::uint32_t v) const {
+        Mesh::Triangle tri = mesh_.triangles[t];
+        for (std::uint32_t& w : tri)
+            if (w == u) w = v;
+        return tri;
+    }
+
+    /// Twice the area vector of `tri`, or zero where it is degenerate against its longest edge.
+    Vec3 areaUnlessDegenerate(const Mesh::Triangle& tri) const {
+        const Vec3& a = mesh_.vertices[tri[0]];
+        const Vec3 area = glm::cross(mesh_.vertices[tri[1]] - a, mesh_.vertices[tri[2]] - a);
+        double longest2 = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 e = mesh_.vertices[tri[(k + 1) % 3]] - mesh_.vertices[tri[k]];
+            longest2 = std::max(longest2, glm::dot(e, e));
         }
-        // Collapse: drop the two triangles on the edge, hand u's others to v.
+        return glm::length(area) > tol::kDegenerateTriangle * longest2 ? area : Vec3(0.0);
+    }
+
+    /// Collapses u into v (which keeps its place): drops the two triangles on their edge and hands
+    /// u's others to v (tracked too).
+    void collapse(std::uint32_t u, std::uint32_t v, const std::array<std::uint32_t, 2>& shared) {
         for (std::uint32_t t : shared) {
             alive_[t] = false;
             for (std::uint32_t w : mesh_.triangles[t]) {
-                auto& list = around_[w];
+                if (slot_[w] == kNoStar) continue;
+                auto& list = around_[slot_[w]];
                 list.erase(std::remove(list.begin(), list.end(), t), list.end());
             }
         }
-        for (std::uint32_t t : around_[u]) {
+        auto& from = around_[slot_[u]];
+        for (std::uint32_t t : from) {
             for (std::uint32_t& w : mesh_.triangles[t])
                 if (w == u) w = v;
-            around_[v].push_back(t);
+            around_[slot_[v]].push_back(t);
         }
-        around_[u].clear();
-        return true;
+        from.clear();
     }
 
+    /// Drops the collapsed triangles and the vertices no triangle uses any more.
     void compact() {
-        std::vector<std::uint32_t> remap(mesh_.vertices.size(), ~0u);
+        std::vector<std::uint32_t> remap(mesh_.vertices.size(), kNoStar);
         decltype(mesh_.vertices) vertices;
         decltype(mesh_.triangles) triangles;
         for (std::uint32_t t = 0; t < mesh_.triangles.size(); ++t) {
             if (!alive_[t]) continue;
             Mesh::Triangle tri = mesh_.triangles[t];
             for (std::uint32_t& w : tri) {
-                if (remap[w] == ~0u) {
+                if (remap[w] == kNoStar) {
                     remap[w] = std::uint32_t(vertices.size());
                     vertices.push_back(mesh_.vertices[w]);
                 }
@@ -149,10 +127,83 @@ private:
         mesh_.triangles = std::move(triangles);
     }
 
+private:
     Mesh& mesh_;
-    double cosAngle_, maxDistance_;
+    std::vector<std::uint32_t> slot_;  ///< vertex -> its star in around_, or kNoStar
     std::vector<std::vector<std::uint32_t>> around_;
     std::vector<bool> alive_;
+};
+
+Vec3 unit(const Vec3& v) {
+    const double l = glm::length(v);
+    return l > 0.0 ? v / l : Vec3(0.0);
+}
+
+class FlatMerger {
+public:
+    FlatMerger(Mesh& mesh, const FlatMergeOptions& options)
+        : c_(mesh, nullptr), cosAngle_(std::cos(options.maxAngle)), maxDistance_(options.maxDistance) {}
+
+    std::size_t run() {
+        std::size_t merged = 0;
+        for (bool again = true; again;) {
+            again = false;
+            for (std::uint32_t u = 0; u < c_.mesh().vertices.size(); ++u) {
+                if (c_.star(u).empty()) continue;
+                if (tryMerge(u)) {
+                    ++merged;
+                    again = true;
+                }
+            }
+        }
+        c_.compact();
+        return merged;
+    }
+
+private:
+    bool tryMerge(std::uint32_t u) {
+        const Mesh& mesh = c_.mesh();
+        // Flat around u: every triangle within the angle of the mean normal.
+        Vec3 mean(0.0);
+        for (std::uint32_t t : c_.star(u)) mean += mesh.areaVector(t);
+        mean = unit(mean);
+        if (mean == Vec3(0.0)) return false;
+        for (std::uint32_t t : c_.star(u))
+            if (!(glm::dot(unit(mesh.areaVector(t)), mean) >= cosAngle_)) return false;
+        const std::vector<std::uint32_t> nu = c_.neighbours(u);
+        const Vec3& pu = mesh.vertices[u];
+        // Try the nearest neighbours first.
+        std::vector<std::uint32_t> order = nu;
+        std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+            const double da = glm::dot(mesh.vertices[a] - pu, mesh.vertices[a] - pu);
+            const double db = glm::dot(mesh.vertices[b] - pu, mesh.vertices[b] - pu);
+            return da < db || (da == db && a < b);
+        });
+        for (std::uint32_t v : order)
+            if (collapse(u, v, nu, mean)) return true;
+        return false;
+    }
+
+    bool collapse(std::uint32_t u, std::uint32_t v, const std::vector<std::uint32_t>& nu, const Vec3& mean) {
+        std::array<std::uint32_t, 2> shared{};
+        if (!c_.linked(u, v, nu, shared)) return false;
+        // The triangles u leaves, with v in its place: flat, not degenerate, and near u.
+        const Mesh& mesh = c_.mesh();
+        const Vec3& pu = mesh.vertices[u];
+        for (std::uint32_t t : c_.star(u)) {
+            if (t == shared[0] || t == shared[1]) continue;
+            const Mesh::Triangle tri = c_.moved(t, u, v);
+            const Vec3 n = unit(c_.areaUnlessDegenerate(tri));
+            if (n == Vec3(0.0)) return false;
+            if (!(glm::dot(n, mean) >= cosAngle_)) return false;
+            if (!(std::abs(glm::dot(n, pu - mesh.vertices[tri[0]])) <= maxDistance_)) return false;
+        }
+        c_.collapse(u, v, shared);
+        return true;
+    }
+
+    Collapser c_;
+    double cosAngle_, maxDistance_;
 };
 
 }  // namespace
