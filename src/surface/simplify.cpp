@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <vector>
 
 #include "dexelmill/geometry/tolerance.h"
@@ -211,6 +212,107 @@ private:
 std::size_t mergeFlatRegions(Mesh& mesh, const FlatMergeOptions& options) {
     if (!(options.maxAngle > 0.0) && !(options.maxDistance > 0.0)) return 0;
     return FlatMerger(mesh, options).run();
+}
+
+std::size_t collapseShortEdges(Mesh& mesh, double length) {
+    if (!(length > 0.0)) return 0;
+    // The short edges, shortest first, each once (from the triangle it runs down the indices in)
+    // as its newer end u and older end v.
+    struct Edge {
+        double length2;
+        std::uint32_t u, v;
+    };
+    std::vector<Edge> edges;
+    for (const Mesh::Triangle& tri : mesh.triangles)
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t a = tri[std::size_t(k)], b = tri[std::size_t((k + 1) % 3)];
+            const Vec3 d = mesh.vertices[a] - mesh.vertices[b];
+            if (a > b && glm::dot(d, d) < length * length) edges.push_back({glm::dot(d, d), a, b});
+        }
+    if (edges.empty()) return 0;
+    std::sort(edges.begin(), edges.end(), [](const Edge& x, const Edge& y) {
+        return std::tie(x.length2, x.u, x.v) < std::tie(y.length2, y.u, y.v);
+    });
+    // A collapse changes the stars of its ends and of their neighbours, so their normals: those
+    // stars are kept, and every vertex's normal (checkMesh's: the unit sum of its triangles' area
+    // vectors), to test the triangles round them for folds before the collapse is made.
+    std::vector<char> ends(mesh.vertices.size(), 0), tracked(mesh.vertices.size(), 0);
+    for (const Edge& e : edges) ends[e.u] = ends[e.v] = 1;
+    for (const Mesh::Triangle& tri : mesh.triangles)
+        if (ends[tri[0]] || ends[tri[1]] || ends[tri[2]]) tracked[tri[0]] = tracked[tri[1]] = tracked[tri[2]] = 1;
+    std::vector<Vec3> normal(mesh.vertices.size(), Vec3(0.0));
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+        for (std::uint32_t w : mesh.triangles[t]) normal[w] += mesh.areaVector(t);
+    for (Vec3& n : normal) n = unit(n);
+    Collapser c(mesh, &tracked);
+    const auto area = [&](const Mesh::Triangle& tri) {
+        return glm::cross(mesh.vertices[tri[1]] - mesh.vertices[tri[0]], mesh.vertices[tri[2]] - mesh.vertices[tri[0]]);
+    };
+    std::vector<char> tookIn(mesh.vertices.size(), 0);  // a vertex that took another in stays
+    std::vector<std::uint32_t> near;
+    std::vector<Vec3> nearNormal;
+    const auto tryCollapse = [&](std::uint32_t u, std::uint32_t v) {
+        // An end already collapsed away has handed its triangles on; its edges are gone.
+        if (c.star(u).empty() || c.star(v).empty() || tookIn[u]) return false;
+        const std::vector<std::uint32_t> nu = c.neighbours(u);
+        if (!std::binary_search(nu.begin(), nu.end(), v)) return false;
+        std::array<std::uint32_t, 2> shared{};
+        if (!c.linked(u, v, nu, shared)) return false;
+        const auto kept = [&](std::uint32_t t) { return t != shared[0] && t != shared[1]; };
+        // v and the ends' neighbours get new stars: their normals after the collapse.
+        near = nu;
+        const std::vector<std::uint32_t> nv = c.neighbours(v);
+        near.insert(near.end(), nv.begin(), nv.end());
+        std::sort(near.begin(), near.end());
+        near.erase(std::unique(near.begin(), near.end()), near.end());
+        near.erase(std::remove(near.begin(), near.end(), u), near.end());
+        nearNormal.assign(near.size(), Vec3(0.0));
+        for (std::size_t i = 0; i < near.size(); ++i) {
+            for (std::uint32_t t : c.star(near[i]))
+                if (kept(t)) nearNormal[i] += area(c.moved(t, u, v));
+            if (near[i] == v)
+                for (std::uint32_t t : c.star(u)) {
+                    if (!kept(t)) continue;
+                    const Mesh::Triangle tri = c.moved(t, u, v);
+                    if (c.areaUnlessDegenerate(tri) == Vec3(0.0)) return false;
+                    nearNormal[i] += area(tri);
+                }
+            nearNormal[i] = unit(nearNormal[i]);
+        }
+        const auto normalAfter = [&](std::uint32_t w) {
+            const auto it = std::lower_bound(near.begin(), near.end(), w);
+            return it != near.end() && *it == w ? nearNormal[std::size_t(it - near.begin())] : normal[w];
+        };
+        // No triangle round them may come to face against its corners' normals (checkMesh's
+        // fold); one that did already (a crumple's next to it) is that one's to mend.
+        const auto folded = [](const Vec3& a, const Vec3& n) { return glm::dot(a, n) < 0.0; };
+        for (std::size_t i = 0; i < near.size(); ++i)
+            for (const std::vector<std::uint32_t>* star : {&c.star(near[i]), near[i] == v ? &c.star(u) : nullptr}) {
+                if (!star) continue;
+                for (std::uint32_t t : *star) {
+                    if (!kept(t)) continue;
+                    const Mesh::Triangle& was = mesh.triangles[t];
+                    const Mesh::Triangle tri = c.moved(t, u, v);
+                    if (folded(area(tri), normalAfter(tri[0]) + normalAfter(tri[1]) + normalAfter(tri[2])) &&
+                        !folded(area(was), normal[was[0]] + normal[was[1]] + normal[was[2]]))
+                        return false;
+                }
+            }
+        c.collapse(u, v, shared);
+        tookIn[v] = 1;
+        for (std::size_t i = 0; i < near.size(); ++i) normal[near[i]] = nearNormal[i];
+        return true;
+    };
+    // A collapse refused for a fold that a crumple next to it made may be made once that one is
+    // gone: passes until one collapses nothing.
+    std::size_t collapsed = 0;
+    for (std::size_t pass = std::size_t(-1); pass != 0;) {
+        pass = 0;
+        for (const Edge& e : edges) pass += tryCollapse(e.u, e.v) ? 1 : 0;
+        collapsed += pass;
+    }
+    c.compact();
+    return collapsed;
 }
 
 }  // namespace dexelmill

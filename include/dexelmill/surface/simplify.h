@@ -1,6 +1,6 @@
 /// @file simplify.h
-/// @brief Merging the flat regions of a closed mesh by edge collapses that keep it a closed,
-/// oriented 2-manifold without folds. No OpenVDB here.
+/// @brief Edge collapses that keep a closed mesh a closed, oriented 2-manifold without folds:
+/// merging its flat regions, and removing its shortest edges. No OpenVDB here.
 #pragma once
 
 #include <cstddef>
@@ -31,5 +31,16 @@ struct FlatMergeOptions {
 /// Unused vertices are removed at the end.
 /// @return the number of vertices merged away.
 std::size_t mergeFlatRegions(Mesh& mesh, const FlatMergeOptions& options);
+
+/// @brief Collapses the edges shorter than `length` (mm), shortest first: the newer end (the higher
+/// index) goes into the older, which keeps its place and is not collapsed itself afterwards, so
+/// every vertex removed lies within `length` of one kept, and the surface moves by less than that.
+/// A collapse is made only under the link condition (above), and when every triangle the newer
+/// end leaves is not degenerate and faces the way of the two ends' triangles together (the sum of
+/// their area vectors): a crumple, where triangles a few micrometres across face every way round
+/// vertices that nearly coincide, is smoothed out, and nothing is turned over. Unused vertices are
+/// removed at the end.
+/// @return the number of edges collapsed.
+std::size_t collapseShortEdges(Mesh& mesh, double length);
 
 }  // namespace dexelmill
