@@ -142,7 +142,8 @@ std::string reportJson(const SimulateReport& r) {
                                {"edges_split", r.refineSplit},
                                {"splits_refused", r.refineRefused},
                                {"midpoints_without_crossing", r.refineNoCrossing},
-                               {"nearer_along_another_axis", r.refineLaterAxis}};
+                               {"nearer_along_another_axis", r.refineLaterAxis},
+                               {"short_edges_collapsed", r.refineCollapsed}};
     j["timing_s"] = {{"parse", r.timingS.parse}, {"design", r.timingS.design}, {"cut", r.timingS.cut},     {"rebuild", r.timingS.rebuild},
                      {"mesh", r.timingS.mesh},   {"refine", r.timingS.refine}, {"write", r.timingS.write},
                      {"total", r.timingS.total}};

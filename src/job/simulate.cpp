@@ -615,6 +615,7 @@ Simulation runStages(const SimulateOptions& o) {
         report.refineRefused = stats.refused;
         report.refineNoCrossing = stats.noCrossing;
         report.refineLaterAxis = stats.laterAxis;
+        report.refineCollapsed = stats.collapsed;
         report.timingS.refine = seconds(t);
     }
     const Mesh& mesh = sim.mesh;

@@ -17,6 +17,9 @@
 ///  2. Each edge is tested at its midpoint. One farther than a tolerance from the crossing there
 ///     is split at it, and its triangles with it (into two, three or four, the same way on both
 ///     sides of every edge, so the mesh stays closed). Later rounds test only the new edges.
+///  3. Edges shorter than a sixteenth of a spacing are collapsed into their older end
+///     (collapseShortEdges): a split next to a vertex leaves pieces too small for their normals to
+///     mean anything. The vertices kept are on the part, and the surface moves by less than that.
 ///
 /// A window along an axis nearly tangent to the part slides along it: at a wall's crease the
 /// normal is the wall's and the top's together, and the crossing found may lie far along one of
@@ -86,6 +89,7 @@ struct RefineStats {
     /// split at a nearer one along another axis.
     std::size_t laterAxis = 0;
     std::size_t refused = 0;      ///< splits given up: a piece would fold or be a sliver
+    std::size_t collapsed = 0;    ///< short edges collapsed after the rounds
     int rounds = 0;               ///< rounds made (fewer than asked when one split nothing)
     /// The memory the first round not started for lack of it would have needed (bytes), or 0.
     double roundNeeded = 0.0;
