@@ -107,25 +107,26 @@ public:
         from.clear();
     }
 
-    /// Drops the collapsed triangles and the vertices no triangle uses any more.
+    /// Drops the collapsed triangles and the vertices no triangle uses any more, in place: the
+    /// vertices kept keep their order, so a list never needs a second copy.
     void compact() {
         std::vector<std::uint32_t> remap(mesh_.vertices.size(), kNoStar);
-        decltype(mesh_.vertices) vertices;
-        decltype(mesh_.triangles) triangles;
-        for (std::uint32_t t = 0; t < mesh_.triangles.size(); ++t) {
+        std::size_t kept = 0;
+        for (std::size_t t = 0; t < mesh_.triangles.size(); ++t) {
             if (!alive_[t]) continue;
-            Mesh::Triangle tri = mesh_.triangles[t];
-            for (std::uint32_t& w : tri) {
-                if (remap[w] == kNoStar) {
-                    remap[w] = std::uint32_t(vertices.size());
-                    vertices.push_back(mesh_.vertices[w]);
-                }
-                w = remap[w];
-            }
-            triangles.push_back(tri);
+            for (std::uint32_t w : mesh_.triangles[t]) remap[w] = 0;
+            mesh_.triangles[kept++] = mesh_.triangles[t];
         }
-        mesh_.vertices = std::move(vertices);
-        mesh_.triangles = std::move(triangles);
+        mesh_.triangles.resize(kept);
+        std::uint32_t next = 0;
+        for (std::size_t v = 0; v < mesh_.vertices.size(); ++v) {
+            if (remap[v] == kNoStar) continue;
+            remap[v] = next;
+            mesh_.vertices[next++] = mesh_.vertices[v];
+        }
+        mesh_.vertices.resize(next);
+        for (Mesh::Triangle& tri : mesh_.triangles)
+            for (std::uint32_t& w : tri) w = remap[w];
     }
 
 private:
