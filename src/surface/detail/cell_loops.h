@@ -12,8 +12,9 @@
 /// vertex in between, so that no two triangles share that edge's chord from four sides. The face
 /// vertex lies where the surface's slice through the face is expected, from the two ends'
 /// normals: at their tangent lines' meeting point across a sharp edge (a wedge's tip), on the
-/// circular arc the normals turn by on a smooth surface, and otherwise on the face rule's zero
-/// below the edge; at least a fifth of its chord into the face. The cell's paths, oriented as
+/// circular arc the normals turn by on a smooth surface or where one end's sheet meets the face
+/// at a grazing angle (its slice curls round too fast for its tangent), and otherwise on the face
+/// rule's zero below the edge; at least a fifth of its chord into the face. The cell's paths, oriented as
 /// cell_table.h orients its segments, chain into loops.
 ///
 /// The face rule. A face with at most one crossing per edge follows the cell table: its
