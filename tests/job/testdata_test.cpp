@@ -82,3 +82,27 @@ TEST_CASE("every shared test program runs end to end with a closed mesh without 
         CHECK(s.report.finalVolumeMm3 <= s.report.stockVolumeMm3);
     }
 }
+
+TEST_CASE("the shared CAMotics projects refined once give closed meshes without folds", "[job][testdata][refine]") {
+    // Refinement splits edges and collapses the short ones it leaves; on real parts (cusps finer
+    // than the lattice, walls thinner than it, crossings whose dexels graze the part) the mesh
+    // must stay closed, without folded or degenerate triangles.
+    if (!test::haveSharedData()) return;
+    std::size_t projects = 0;
+    for (const fs::path& p : programs(test::sharedData())) {
+        if (p.extension() != ".camotics") continue;
+        ++projects;
+        INFO(p.string());
+        SimulateOptions o;
+        o.inputs = {p.string()};  // at the project's own spacing
+        o.refineRounds = 1;
+        o.threads = 2;
+        const Simulation s = runSimulation(o);
+        CHECK(s.report.refineRounds == 1);
+        CHECK(s.report.refineSplit > 0);
+        CHECK(s.report.meshClosed);
+        CHECK(s.report.meshFoldedTriangles == 0);
+        CHECK(s.report.meshDegenerateTriangles == 0);
+    }
+    CHECK(projects >= 5);
+}
