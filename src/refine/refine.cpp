@@ -54,6 +54,14 @@ constexpr double kSlidFraction = 0.1;
 /// on a y dexel left triangles 90 degrees off the part's slope, measured 3 h off (a miss).
 constexpr double kShortEdge = 0.125;
 
+/// A vertex whose windows found no crossing on any axis is asked along the nearest axis this many
+/// windows far (a spacing, with the default window of half a spacing). A wedge thinner than the
+/// spacing whose tip reaches past a lattice line has no crossing on that line's dexels, and the
+/// mesher ends it at the last line that saw it: scorpion, `--refine 1`, at (133.80, 110.34), a
+/// tip 0.16 mm beyond the line y = 110.321 was cut off, and the faces there measured 0.34 h.
+/// Only the nearest axis is asked, so the move follows the vertex's normal, outward or inward.
+constexpr double kFarReach = 2.0;
+
 /// Whether a move of `offset` along `axis` takes a vertex with (outward) normal n into the
 /// material: the surface found lies behind the vertex, which the mesher put outside the part.
 /// Only such moves are made along axes other than the nearest. A vertex outside sits on a corner
@@ -103,11 +111,13 @@ std::vector<std::uint32_t> activeTriangles(const Mesh& mesh, const detail::Swept
 }
 
 /// The offsets along their axes from the windows' points to the exact part's surface facing their
-/// way (NaN where there is none within reach): windows no sweep comes near (`cells`) find the
-/// stock box alone and are answered here; the others are cut by the moves.
+/// way (NaN where there is none within `reach`, by default the options' window): windows no sweep
+/// comes near (`cells`) find the stock box alone and are answered here; the others are cut by the
+/// moves.
 std::vector<double> exactOffsets(const std::vector<detail::Window>& windows, const detail::SweptCells& cells,
                                  const Box& stock, const ToolPath& path, const ToolTable& tools,
-                                 const RefineOptions& o, const std::string& stage) {
+                                 const RefineOptions& o, const std::string& stage, double reach = 0.0) {
+    if (!(reach > 0.0)) reach = o.window;
     std::vector<double> offsets;
     std::vector<char> nearSweep;
     detail::reservePopulated(offsets, windows.size());
@@ -116,7 +126,7 @@ std::vector<double> exactOffsets(const std::vector<detail::Window>& windows, con
     nearSweep.assign(windows.size(), 0);
     tbb::parallel_for(std::size_t(0), windows.size(), [&](std::size_t i) {
         nearSweep[i] = cells.reached(windows[i].point);
-        if (!nearSweep[i]) offsets[i] = detail::stockCrossing(windows[i], o.window, stock);
+        if (!nearSweep[i]) offsets[i] = detail::stockCrossing(windows[i], reach, stock);
     });
     std::vector<std::uint32_t> cutIndex;
     std::vector<detail::Window> cut;
@@ -127,7 +137,7 @@ std::vector<double> exactOffsets(const std::vector<detail::Window>& windows, con
         if (nearSweep[i]) cutIndex.push_back(std::uint32_t(i)), cut.push_back(windows[i]);
     std::function<void(std::size_t, std::size_t)> progress;
     if (o.progress) progress = [&](std::size_t done, std::size_t total) { o.progress(stage.c_str(), done, total); };
-    const std::vector<double> exact = detail::exactCrossings(cut, o.window, stock, path, tools, o.removeShankMaterial,
+    const std::vector<double> exact = detail::exactCrossings(cut, reach, stock, path, tools, o.removeShankMaterial,
                                                                o.turnTolerance, progress);
     for (std::size_t k = 0; k < cutIndex.size(); ++k) offsets[cutIndex[k]] = exact[k];
     return offsets;
@@ -366,6 +376,20 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
             else if (!std::isnan(offsets[i]) && inward(normal[retry[k]], windows[i].axis, offsets[i]))
                 candidates[k][std::size_t(count[k]++)] = {windows[i].axis, offsets[i]};
         }
+        // A vertex no axis found a crossing for is asked again along the nearest, kFarReach times
+        // as far (a wedge's tip past the next lattice line).
+        std::vector<std::uint32_t> lost;  // indices into retry
+        for (std::uint32_t k = 0; k < unanswered; ++k)
+            if (count[k] == 0 && !onPart[k]) lost.push_back(k);
+        windows = windowsFor(lost, [&](std::uint32_t k, Vec3& point, Vec3& n) {
+            point = mesh.vertices[retry[k]];
+            n = normal[retry[k]];
+        });
+        st.queries += windows.size();
+        offsets = exactOffsets(windows, cells, stock, path, tools, o, "snap 3", kFarReach * o.window);
+        for (std::size_t i = 0; i < windows.size(); ++i)
+            if (!std::isnan(offsets[i]) && std::abs(offsets[i]) > o.tolerance)
+                candidates[lost[i]][std::size_t(count[lost[i]]++)] = {windows[i].axis, offsets[i]};
     }
     std::vector<std::uint32_t> trying;  // indices into retry
     for (std::size_t k = 0; k < retry.size(); ++k) {

@@ -338,6 +338,34 @@ TEST_CASE("refine: a vertex inside the material is not moved out along another a
     CHECK(stats.check.ok());
 }
 
+TEST_CASE("refine: a vertex no window reaches is asked again a spacing away along its nearest axis", "[refine]") {
+    // The faced block again (floor at z = 5), and a tetrahedron standing on a base at z = 2.8,
+    // deep in the material, with its apex inside it too, below the floor: the end of a wedge that
+    // the mesher stopped short of its tip. The apex's normal is +z (its triangles' area vectors
+    // sum to minus the base's), so x and y are not asked; along z the floor lies `depth` above,
+    // outwards. Windows reach 0.5 mm, and the second try twice as far.
+    const Simulation s = facedBlock();
+    const double depth = GENERATE(0.3, 0.7, 0.95, 1.2);
+    Mesh tetra = tetrahedron({Vec3(5.0, 5.0, 5.0 - depth), Vec3(4.0, 4.0, 2.8), Vec3(6.0, 4.0, 2.8), Vec3(5.0, 6.0, 2.8)});
+    REQUIRE(checkMesh(tetra).ok());
+
+    const RefineStats stats = refineAgainst(s, tetra);
+    const Vec3 apex = tetra.vertices[0];
+    INFO("depth " << depth << ": apex at (" << apex.x << ", " << apex.y << ", " << apex.z << "), snapped "
+                  << stats.snapped << ", split " << stats.split);
+    CHECK(apex.x == 5.0);
+    CHECK(apex.y == 5.0);
+    if (depth < 1.0) {
+        CHECK(stats.snapped == 1);
+        CHECK(apex.z == Approx(5.0).margin(1e-6));
+    } else {
+        CHECK(stats.snapped == 0);
+        CHECK(apex.z == 5.0 - depth);
+    }
+    for (std::uint32_t v = 1; v < 4; ++v) CHECK(tetra.vertices[v].z == 2.8);
+    CHECK(stats.check.ok());
+}
+
 TEST_CASE("refine: a midpoint whose window slides along the part is split along a nearer axis", "[refine]") {
     // A ball D3.175 plunged to z = 8 at (5, 5) leaves a spherical dimple in the block [0, 10]^3,
     // centred at (5, 5, 8 + r). The edge from (4.6, 5, zs) to (5.4, 5, zs) has both ends on it,

@@ -13,7 +13,9 @@
 ///     away: it moves onto the part, along the coordinate axis nearest its normal, or, where that
 ///     axis finds no crossing or the move would fold the mesh, along another axis (the shortest
 ///     move that does not fold, and only into the material: a vertex inside a wall thinner than
-///     the lattice showed stays). (Vertices on crossings are exact and stay.)
+///     the lattice showed stays). A vertex no axis finds a crossing for is asked once more along
+///     the nearest, twice as far: a wedge's tip past the next lattice line. (Vertices on
+///     crossings are exact and stay.)
 ///  2. Each edge is tested at its midpoint. One farther than a tolerance from the crossing there
 ///     is split at it, and its triangles with it (into two, three or four, the same way on both
 ///     sides of every edge, so the mesh stays closed). Later rounds test only the new edges.
