@@ -17,6 +17,7 @@
 #include "dexelmill/surface/levelset.h"
 #include "support/analytic_parts.h"
 #include "support/face_deviation.h"
+#include "support/self_intersection.h"
 
 using namespace dexelmill;
 using dexelmill::testing::Cutter;
@@ -48,6 +49,12 @@ Result contourPart(const Part& part, double h, FamilySet families = FamilySet::a
     r.mesh = contourStock(ls, stock, {}, &r.stats);
     r.check = checkMesh(r.mesh);
     r.faces = measureFaces(r.mesh, part, 3.0 * h);
+    // Every case's mesh is embedded: no two triangles meet but in what they share.
+    const testing::SelfIntersections crossing = testing::countSelfIntersections(r.mesh);
+    INFO("h " << h << ": " << crossing.pairs << " pairs of triangles meet, the first " << crossing.first[0] << " and "
+              << crossing.first[1] << " at (" << crossing.at.x << ", " << crossing.at.y << ", " << crossing.at.z
+              << "); " << crossing.tested << " pairs tested");
+    CHECK(crossing.pairs == 0);
     return r;
 }
 
@@ -266,6 +273,7 @@ TEST_CASE("contour: adaptivity merges flat regions and keeps the mesh closed", "
                            << stats.check.degenerateTriangles << " degenerate, closed "
                            << stats.check.closedManifold());
         CHECK(stats.check.ok());
+        CHECK(testing::countSelfIntersections(merged).pairs == 0);
         CHECK(stats.merged > 0);
         CHECK(merged.triangles.size() < full.triangles.size() / 4);
         // The surface moves by at most adaptivity * 0.05 h.
