@@ -141,6 +141,7 @@ std::string reportJson(const SimulateReport& r) {
                                {"vertices_snapped", r.refineSnapped},
                                {"edges_split", r.refineSplit},
                                {"splits_refused", r.refineRefused},
+                               {"crossing_triangles_found", r.refineCrossed},
                                {"midpoints_without_crossing", r.refineNoCrossing},
                                {"nearer_along_another_axis", r.refineLaterAxis},
                                {"short_edges_collapsed", r.refineCollapsed}};

@@ -613,6 +613,7 @@ Simulation runStages(const SimulateOptions& o) {
         report.refineSplit = stats.split;
         report.refineSnapped = stats.snapped;
         report.refineRefused = stats.refused;
+        report.refineCrossed = stats.crossed;
         report.refineNoCrossing = stats.noCrossing;
         report.refineLaterAxis = stats.laterAxis;
         report.refineCollapsed = stats.collapsed;

@@ -19,6 +19,7 @@
 #include "dexelmill/tool/builders.h"
 #include "support/face_deviation.h"
 #include "support/scratch.h"
+#include "support/self_intersection.h"
 
 using namespace dexelmill;
 using dexelmill::testing::CarvedPart;
@@ -102,6 +103,8 @@ TEST_CASE("refine: ball passes come out with the cusps the lattice cannot see", 
 
     const MeshCheck check = checkMesh(refined.mesh);
     CHECK(check.ok());
+    CHECK(testing::countSelfIntersections(plain.mesh).pairs == 0);
+    CHECK(testing::countSelfIntersections(refined.mesh).pairs == 0);
     CHECK(refined.report.meshClosed);
     CHECK(refined.report.meshFoldedTriangles == 0);
     CHECK(refined.report.refineRounds == 2);
@@ -557,6 +560,7 @@ TEST_CASE("refine: moves whose tool axis turns are followed within their toleran
     CHECK(refined.report.refineSplit > 0);
     CHECK(refined.report.refineSnapped > 0);
     CHECK(checkMesh(refined.mesh).ok());
+    CHECK(testing::countSelfIntersections(refined.mesh).pairs == 0);
     for (const ReportWarning& w : refined.report.warnings) CHECK(w.message.find("--refine") == std::string::npos);
 
     // Every vertex refinement moved or made lies within the turn tolerance (1e-4 mm) of the swept
