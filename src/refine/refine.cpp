@@ -251,18 +251,20 @@ std::vector<std::uint32_t> changedCrossings(const Mesh& mesh, const std::vector<
 /// ring farther each pass, until there are none or they are not the moves' doing. `watch` follows
 /// the mesh's folds (every earlier move told). A crossing's triangles have their moves undone in
 /// the pass that finds it, so each pass after the first looks only at the triangles round the
-/// vertices it put back. Returns the indices in `moved` of the moves undone; `back` counts them.
+/// vertices it put back. Returns the indices in `moved` of the moves undone; `back` counts them,
+/// `crossed` the triangles found passing through another.
 std::vector<std::uint32_t> moveUnlessFolding(Mesh& mesh, const std::vector<std::uint32_t>& active,
                                              const std::vector<std::pair<std::uint32_t, Vec3>>& moved,
-                                             FoldWatch& watch, std::size_t& back) {
+                                             FoldWatch& watch, std::size_t& back, std::size_t& crossed) {
     std::vector<std::uint32_t> changed;
     for (const auto& [v, old] : moved) changed.push_back(v);
     std::vector<char> near, grown;
     for (int pass = 0; !moved.empty(); ++pass) {
         watch.moved(changed);
         std::vector<std::uint32_t> folded = watch.folded();
-        const std::vector<std::uint32_t> crossed = changedCrossings(mesh, active, changed);
-        folded.insert(folded.end(), crossed.begin(), crossed.end());
+        const std::vector<std::uint32_t> through = changedCrossings(mesh, active, changed);
+        crossed += through.size();
+        folded.insert(folded.end(), through.begin(), through.end());
         if (folded.empty()) break;
         near.assign(mesh.vertices.size(), 0);
         for (std::uint32_t t : folded)
@@ -365,7 +367,7 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
             mesh.vertices[v][windows[i].axis] += offsets[i];
         }
     }
-    const std::vector<std::uint32_t> back = moveUnlessFolding(mesh, active, moved, watch, st.snapRefused);
+    const std::vector<std::uint32_t> back = moveUnlessFolding(mesh, active, moved, watch, st.snapRefused, st.crossed);
     std::size_t done = moved.size() - back.size();
     const std::size_t unanswered = retry.size();
     for (std::uint32_t i : back) retry.push_back(moved[i].first);
@@ -431,7 +433,7 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
             movedK.push_back(k);
             mesh.vertices[v][c.axis] += c.offset;
         }
-        const std::vector<std::uint32_t> undone = moveUnlessFolding(mesh, active, moved, watch, st.snapRefused);
+        const std::vector<std::uint32_t> undone = moveUnlessFolding(mesh, active, moved, watch, st.snapRefused, st.crossed);
         done += moved.size() - undone.size();
         trying.clear();
         for (std::uint32_t i : undone) trying.push_back(movedK[i]);

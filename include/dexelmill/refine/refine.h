@@ -91,8 +91,8 @@ struct RefineStats {
     /// split at a nearer one along another axis.
     std::size_t laterAxis = 0;
     std::size_t refused = 0;      ///< splits given up: a piece would fold or be a sliver
-    /// Triangles of a round found passing through another (each time the round's splits were
-    /// tried); the splits there are refused as a fold's are.
+    /// Triangles found passing through another, each time the snap's moves or a round's splits
+    /// were tried; the moves there are undone and the splits refused, as a fold's are.
     std::size_t crossed = 0;
     std::size_t collapsed = 0;    ///< short edges collapsed after the rounds
     int rounds = 0;               ///< rounds made (fewer than asked when one split nothing)
