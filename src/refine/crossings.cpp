@@ -1,6 +1,7 @@
 #include "refine/detail/crossings.h"
 
 #include <algorithm>
+#include <atomic>
 #include <mutex>
 
 #include <tbb/blocked_range.h>
@@ -195,7 +196,6 @@ std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh, const std::vector
             c1[std::size_t(a)] = coord(a, b.hi[std::size_t(a)]);
         }
     };
-    std::vector<std::uint32_t> start(grid.cellCount() + 1, 0);
     const auto eachCell = [&](const FloatBox& b, auto&& visit) {
         std::array<int, 3> c0{}, c1{};
         cells(b, c0, c1);
@@ -203,13 +203,23 @@ std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh, const std::vector
             for (int y = c0[1]; y <= c1[1]; ++y)
                 for (int x = c0[0]; x <= c1[0]; ++x) visit(grid.index({x, y, z}));
     };
-    for (const FloatBox& b : boxes) eachCell(b, [&](std::size_t c) { ++start[c + 1]; });
-    for (std::size_t c = 0; c + 1 < start.size(); ++c) start[c + 1] += start[c];
-    std::vector<std::uint32_t> inCell(start.back());
-    {
-        std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-        for (std::uint32_t i = 0; i < pieces.size(); ++i) eachCell(boxes[i], [&](std::size_t c) { inCell[fill[c]++] = i; });
+    // Counted and filled in parallel; each cell's list is then sorted, as the pair loop needs.
+    std::vector<std::atomic<std::uint32_t>> count(grid.cellCount());
+    tbb::parallel_for(std::size_t(0), boxes.size(), [&](std::size_t i) {
+        eachCell(boxes[i], [&](std::size_t c) { count[c].fetch_add(1, std::memory_order_relaxed); });
+    });
+    std::vector<std::uint32_t> start(grid.cellCount() + 1, 0);
+    for (std::size_t c = 0; c < count.size(); ++c) {
+        start[c + 1] = start[c] + count[c].load(std::memory_order_relaxed);
+        count[c].store(start[c], std::memory_order_relaxed);
     }
+    std::vector<std::uint32_t> inCell(start.back());
+    tbb::parallel_for(std::size_t(0), boxes.size(), [&](std::size_t i) {
+        eachCell(boxes[i], [&](std::size_t c) { inCell[count[c].fetch_add(1, std::memory_order_relaxed)] = std::uint32_t(i); });
+    });
+    tbb::parallel_for(std::size_t(0), grid.cellCount(), [&](std::size_t c) {
+        if (start[c + 1] - start[c] > 1) std::sort(inCell.begin() + start[c], inCell.begin() + start[c + 1]);
+    });
 
     std::mutex lock;
     tbb::parallel_for(std::size_t(0), partners.size(), [&](std::size_t k) {
