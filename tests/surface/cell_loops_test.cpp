@@ -317,3 +317,47 @@ TEST_CASE("cell loops: random lattices with several crossings on edges give clos
         }
     }
 }
+
+TEST_CASE("cell loops: lenses on two edges near their corner do not cross in the face", "[surface][contour]") {
+    // From tort.ngc at h = 0.5 mm, the cell below the lattice plane z = -2.442 at (3.94, -5.06),
+    // all of its corners empty. Edge 0 (along x at y = z = 0) holds material from 0.774 to 0.979,
+    // and edge 6 (along y at x = 1, z = 0) from 0.0088 to 0.0753: two thin wedges that come
+    // within 0.021 of corner (1, 0, 0). Their face vertices in face 4 (u = x, v = y), placed each
+    // on its own, were 0.197 and 0.124 into the face, and the second wedge's path through its
+    // vertex crossed the first's: the fan triangles over them passed through each other. The
+    // paths must not cross, and each face vertex stays inside the face.
+    REQUIRE(edgeAxis(0) == 0);
+    REQUIRE(edgeCorner(0, 0) == 0);
+    REQUIRE(edgeAxis(6) == 1);
+    REQUIRE(edgeCorner(6, 0) == 1);
+    CellCrossings c;
+    c.edges[0].ids = {0, 1};
+    c.edges[0].at = {0.77420806884765625, 0.97872161865234375};
+    c.edges[0].normals = {Vec3(-0.22498124282009768, 0.77636969858410754, 0.58875591844120456),
+                          Vec3(0.38263822493471256, -0.92389825674627846, 0.0)};
+    c.edges[6].ids = {2, 3};
+    c.edges[6].at = {0.00881195068359375, 0.07526397705078125};
+    c.edges[6].normals = {Vec3(0.38263822493471256, -0.92389825674627846, 0.0),
+                          Vec3(-0.25196998128860199, 0.66651400073986511, 0.70161970849396793)};
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::array<double, 2>> vertex;
+    cellLoops(c, [&](int face, std::uint32_t from, std::uint32_t to, double u, double v) {
+        if (face == 4) vertex[{std::min(from, to), std::max(from, to)}] = {u, v};
+        return std::uint32_t(10 + face * 16 + std::min(from, to));
+    });
+    REQUIRE(vertex.size() == 2);
+    const std::array<double, 2> a = vertex.at({0, 1}), b = vertex.at({2, 3});
+    INFO("face vertices (" << a[0] << ", " << a[1] << ") and (" << b[0] << ", " << b[1] << ")");
+    CHECK(a[1] > 0.0);
+    CHECK(b[0] < 1.0);
+    using P = std::array<double, 2>;
+    const auto orient = [](const P& p, const P& q, const P& r) {
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]);
+    };
+    const auto cross = [&](const P& p, const P& q, const P& r, const P& s) {
+        return orient(p, q, r) * orient(p, q, s) < 0.0 && orient(r, s, p) * orient(r, s, q) < 0.0;
+    };
+    const std::array<P, 3> first{P{c.edges[0].at[0], 0.0}, a, P{c.edges[0].at[1], 0.0}};
+    const std::array<P, 3> second{P{1.0, c.edges[6].at[0]}, b, P{1.0, c.edges[6].at[1]}};
+    for (std::size_t i = 0; i < 2; ++i)
+        for (std::size_t j = 0; j < 2; ++j) CHECK_FALSE(cross(first[i], first[i + 1], second[j], second[j + 1]));
+}

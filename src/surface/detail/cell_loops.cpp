@@ -38,6 +38,8 @@ constexpr double kInFace = 1e-3;
 /// one end's normal 0.36 in the face; its tangent met the other's 0.114 mm in, near that end,
 /// where the tip lies 0.055 mm in at the middle; the arc the normals turn by puts it 0.062 mm in.)
 constexpr double kGrazingInFace = 0.5;
+/// Halvings of a lens's depth tried at a time where its path crosses another path of the face.
+constexpr int kUncrossHalvings = 24;
 /// Evenly spaced sample lines of the face rule, per direction, besides those between crossings.
 constexpr int kUniformLines = 8;
 constexpr double kPi = 3.14159265358979323846;
@@ -184,6 +186,7 @@ struct Path {
     double fromAt = 0.0, toAt = 0.0;      ///< offsets along their edges
     bool lens = false;
     int side = 0;                 ///< the walk edge of a lens
+    int fromSide = 0, toSide = 0; ///< the walk edges of its ends
     double lo = 0.0, hi = 0.0;    ///< a lens's span along its edge
     double along = 0.0, depth = 0.0;      ///< a lens's face vertex: along its edge, into the face
     std::array<double, 2> vertex{};       ///< the same in the face's (u, v)
@@ -196,6 +199,68 @@ std::array<double, 2> lensPoint(int side, double along, double depth) {
     case 1: return {1.0 - depth, along};
     case 2: return {along, 1.0 - depth};
     default: return {depth, along};
+    }
+}
+
+/// The least depth of a lens's face vertex (kFaceVertexGap, kMinLensRise).
+double minDepth(const Path& p) { return std::max(kFaceVertexGap, kMinLensRise * (p.hi - p.lo)); }
+
+/// A path's points in the face's (u, v): its ends, and a lens's face vertex between them.
+std::vector<std::array<double, 2>> pathPoints(const Path& p) {
+    std::vector<std::array<double, 2>> out{lensPoint(p.fromSide, p.fromAt, 0.0)};
+    if (p.lens) out.push_back(p.vertex);
+    out.push_back(lensPoint(p.toSide, p.toAt, 0.0));
+    return out;
+}
+
+/// Whether two paths of a face cross: a segment of one passes strictly through a segment of the
+/// other (they share no end: every crossing ends one path).
+bool pathsCross(const Path& p, const Path& q) {
+    const auto orient = [](const std::array<double, 2>& a, const std::array<double, 2>& b, const std::array<double, 2>& c) {
+        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    };
+    const std::vector<std::array<double, 2>> a = pathPoints(p), b = pathPoints(q);
+    for (std::size_t i = 0; i + 1 < a.size(); ++i)
+        for (std::size_t j = 0; j + 1 < b.size(); ++j) {
+            const double o1 = orient(a[i], a[i + 1], b[j]), o2 = orient(a[i], a[i + 1], b[j + 1]);
+            const double o3 = orient(b[j], b[j + 1], a[i]), o4 = orient(b[j], b[j + 1], a[i + 1]);
+            if (((o1 > 0.0 && o2 < 0.0) || (o1 < 0.0 && o2 > 0.0)) && ((o3 > 0.0 && o4 < 0.0) || (o3 < 0.0 && o4 > 0.0)))
+                return true;
+        }
+    return false;
+}
+
+/// Lenses on two edges of a face that meet at a corner are placed each on its own, and one's face
+/// vertex may reach past the other's path: the slices of the surface cannot cross, but the chords
+/// through the face vertices can, and the fans over them in the cell then pass through each other.
+/// (tort.ngc at h = 0.5 mm, the lattice plane z = -2.442 at (3.94, -5.06): a lens 0.033 mm long on
+/// one edge, its face vertex 0.062 mm in, crossed the path of a lens on the next edge, 0.011 mm
+/// from their corner; two pairs of fan triangles crossed.) Where two paths cross, the deeper lens
+/// (or the one lens) is brought halfway nearer its edge, down to its least depth, until they do
+/// not; then the other lens. The face's data alone decides, so both cells sharing it agree.
+void uncross(std::vector<Path>& paths) {
+    const auto shallower = [&](Path& p) {
+        if (!p.lens || p.depth <= minDepth(p)) return false;
+        p.depth = std::max(minDepth(p), 0.5 * p.depth);
+        p.vertex = lensPoint(p.side, p.along, p.depth);
+        return true;
+    };
+    // Depths only fall, each to its least at most, so the sweeps end; a sweep that changed a
+    // depth is followed by another, since a lens brought nearer its edge may now cross one it
+    // went round.
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (std::size_t i = 0; i < paths.size(); ++i)
+            for (std::size_t j = i + 1; j < paths.size(); ++j) {
+                if (!paths[i].lens && !paths[j].lens) continue;
+                Path* first = &paths[i];
+                Path* second = &paths[j];
+                if (!first->lens || (second->lens && second->depth > first->depth)) std::swap(first, second);
+                for (int k = 0; k < kUncrossHalvings && pathsCross(*first, *second); ++k) {
+                    if (!shallower(*first) && !shallower(*second)) break;
+                    changed = true;
+                }
+            }
     }
 }
 
@@ -291,6 +356,8 @@ std::vector<Path> facePaths(const CellCrossings& cell, const Frame& f, bool seve
         const WalkCrossing& leave = walk[(arcs[r] + 1) % n];
         const WalkCrossing& enter = walk[arcs[next]];
         Path p{leave.id, enter.id, leave.normal, enter.normal, leave.at, enter.at};
+        p.fromSide = leave.side;
+        p.toSide = enter.side;
         if (leave.side == enter.side) {
             p.lens = true;
             p.side = leave.side;
@@ -354,11 +421,12 @@ std::vector<Path> facePaths(const CellCrossings& cell, const Frame& f, bool seve
             const Path& q = paths[lenses[lj]];
             if (q.side == p.side && p.lo <= q.lo && q.hi <= p.hi) depth = std::max(depth, q.depth + kNestedDepthStep);
         }
-        p.depth = std::clamp(depth, std::max(kFaceVertexGap, kMinLensRise * (p.hi - p.lo)), 1.0 - kFaceVertexGap);
+        p.depth = std::clamp(depth, minDepth(p), 1.0 - kFaceVertexGap);
         p.along = along;
     }
     for (Path& p : paths)
         if (p.lens) p.vertex = lensPoint(p.side, p.along, p.depth);
+    uncross(paths);
     return paths;
 }
 
