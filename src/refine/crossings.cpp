@@ -17,7 +17,8 @@ namespace {
 /// Whether the segment pq crosses triangle t (unit normal u): its ends lie either side of t's
 /// plane by more than tol, and the point where it passes lies inside each of t's edges by more
 /// than tol.
-bool edgeCrosses(const Vec3& p, const Vec3& q, const std::array<Vec3, 3>& t, const Vec3& u, double tol) {
+bool edgeCrosses(const Vec3& p, const Vec3& q, const std::array<Vec3, 3>& t, const Vec3& u,
+                 double tol) {
     const double dp = glm::dot(u, p - t[0]), dq = glm::dot(u, q - t[0]);
     if (!((dp > tol && dq < -tol) || (dp < -tol && dq > tol))) return false;
     const Vec3 x = p + (dp / (dp - dq)) * (q - p);
@@ -25,7 +26,8 @@ bool edgeCrosses(const Vec3& p, const Vec3& q, const std::array<Vec3, 3>& t, con
         const Vec3 e = t[std::size_t((k + 1) % 3)] - t[std::size_t(k)];
         const double length = glm::length(e);
         // The distance of x from the edge's line, in the plane, positive on the triangle's side.
-        if (!(length > 0.0) || !(glm::dot(glm::cross(e, x - t[std::size_t(k)]), u) > tol * length)) return false;
+        if (!(length > 0.0) || !(glm::dot(glm::cross(e, x - t[std::size_t(k)]), u) > tol * length))
+            return false;
     }
     return true;
 }
@@ -42,8 +44,8 @@ Vec3 unitNormal(const std::array<Vec3, 3>& t) {
 /// other, the same corners, or, sharing an edge, the other corners on the same side of it (one
 /// folded onto the other); each by more than tol.
 bool overlapInPlane(const std::array<std::uint32_t, 3>& ia, const std::array<Vec3, 3>& a,
-                    const std::array<std::uint32_t, 3>& ib, const std::array<Vec3, 3>& b, const Vec3& u,
-                    double tol) {
+                    const std::array<std::uint32_t, 3>& ib, const std::array<Vec3, 3>& b,
+                    const Vec3& u, double tol) {
     // The distance of p from the line through e0 and e1, in the plane: positive to the left of
     // e0 -> e1 seen from u's side.
     const auto side = [&](const Vec3& e0, const Vec3& e1, const Vec3& p) {
@@ -66,11 +68,14 @@ bool overlapInPlane(const std::array<std::uint32_t, 3>& ia, const std::array<Vec
         const double sa = side(e0, e1, a[oa]), sb = side(e0, e1, b[ob]);
         return (sa > tol && sb > tol) || (sa < -tol && sb < -tol);
     }
-    const auto strictlyApart = [&](double x, double y) { return (x > tol && y < -tol) || (x < -tol && y > tol); };
+    const auto strictlyApart = [&](double x, double y) {
+        return (x > tol && y < -tol) || (x < -tol && y > tol);
+    };
     for (std::size_t i = 0; i < 3; ++i)
         for (std::size_t j = 0; j < 3; ++j) {
             const Vec3 &p0 = a[i], &p1 = a[(i + 1) % 3], &q0 = b[j], &q1 = b[(j + 1) % 3];
-            if (strictlyApart(side(p0, p1, q0), side(p0, p1, q1)) && strictlyApart(side(q0, q1, p0), side(q0, q1, p1)))
+            if (strictlyApart(side(p0, p1, q0), side(p0, p1, q1)) &&
+                strictlyApart(side(q0, q1, p0), side(q0, q1, p1)))
                 return true;
         }
     const auto inside = [&](const std::array<Vec3, 3>& t, const Vec3& p) {
@@ -97,7 +102,8 @@ Box boxOf(const std::array<Vec3, 3>& p) {
 }  // namespace
 
 bool trianglesCross(const std::array<std::uint32_t, 3>& ia, const std::array<Vec3, 3>& a,
-                    const std::array<std::uint32_t, 3>& ib, const std::array<Vec3, 3>& b, double tol) {
+                    const std::array<std::uint32_t, 3>& ib, const std::array<Vec3, 3>& b,
+                    double tol) {
     int shared = 0, sa = 0, sb = 0;
     std::array<bool, 3> aShared{}, bShared{};
     for (int i = 0; i < 3; ++i)
@@ -132,13 +138,16 @@ bool trianglesCross(const std::array<std::uint32_t, 3>& ia, const std::array<Vec
         return edgeCrosses(at(a, sa + 1), at(a, sa + 2), b, ub, tol) ||
                edgeCrosses(at(b, sb + 1), at(b, sb + 2), a, ua, tol);
     for (int k = 0; k < 3; ++k)
-        if (edgeCrosses(at(a, k), at(a, k + 1), b, ub, tol) || edgeCrosses(at(b, k), at(b, k + 1), a, ua, tol))
+        if (edgeCrosses(at(a, k), at(a, k + 1), b, ub, tol) ||
+            edgeCrosses(at(b, k), at(b, k + 1), a, ua, tol))
             return true;
     return false;
 }
 
-std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh, const std::vector<std::uint32_t>& pieces,
-                                             const std::vector<std::uint32_t>& partners, double tol) {
+std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh,
+                                             const std::vector<std::uint32_t>& pieces,
+                                             const std::vector<std::uint32_t>& partners,
+                                             double tol) {
     std::vector<std::uint32_t> found;
     if (pieces.empty()) return found;
     // The pieces' boxes, grown by tol and rounded outwards to float (padded by 2^-20 of each
@@ -188,7 +197,9 @@ std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh, const std::vector
     // The cell coordinate along axis a of x, clamped to the grid (CoarseGrid::coord, inline).
     const auto coord = [&](int a, float x) {
         const double c = std::floor((double(x) - grid.origin[a]) * inverse);
-        return c < 0.0 ? 0 : c >= double(grid.n[std::size_t(a)]) ? grid.n[std::size_t(a)] - 1 : int(c);
+        return c < 0.0                               ? 0
+               : c >= double(grid.n[std::size_t(a)]) ? grid.n[std::size_t(a)] - 1
+                                                     : int(c);
     };
     const auto cells = [&](const FloatBox& b, std::array<int, 3>& c0, std::array<int, 3>& c1) {
         for (int a = 0; a < 3; ++a) {
@@ -206,7 +217,8 @@ std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh, const std::vector
     // Counted and filled in parallel; each cell's list is then sorted, as the pair loop needs.
     std::vector<std::atomic<std::uint32_t>> count(grid.cellCount());
     tbb::parallel_for(std::size_t(0), boxes.size(), [&](std::size_t i) {
-        eachCell(boxes[i], [&](std::size_t c) { count[c].fetch_add(1, std::memory_order_relaxed); });
+        eachCell(boxes[i],
+                 [&](std::size_t c) { count[c].fetch_add(1, std::memory_order_relaxed); });
     });
     std::vector<std::uint32_t> start(grid.cellCount() + 1, 0);
     for (std::size_t c = 0; c < count.size(); ++c) {
@@ -215,10 +227,13 @@ std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh, const std::vector
     }
     std::vector<std::uint32_t> inCell(start.back());
     tbb::parallel_for(std::size_t(0), boxes.size(), [&](std::size_t i) {
-        eachCell(boxes[i], [&](std::size_t c) { inCell[count[c].fetch_add(1, std::memory_order_relaxed)] = std::uint32_t(i); });
+        eachCell(boxes[i], [&](std::size_t c) {
+            inCell[count[c].fetch_add(1, std::memory_order_relaxed)] = std::uint32_t(i);
+        });
     });
     tbb::parallel_for(std::size_t(0), grid.cellCount(), [&](std::size_t c) {
-        if (start[c + 1] - start[c] > 1) std::sort(inCell.begin() + start[c], inCell.begin() + start[c + 1]);
+        if (start[c + 1] - start[c] > 1)
+            std::sort(inCell.begin() + start[c], inCell.begin() + start[c + 1]);
     });
 
     std::mutex lock;
@@ -232,7 +247,8 @@ std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh, const std::vector
         // t's index among the pieces (their count if it is none): a pair of pieces is tested once,
         // from the later, and a cell lists its pieces in order.
         const auto it = std::lower_bound(pieces.begin(), pieces.end(), t);
-        const std::size_t self = it != pieces.end() && *it == t ? std::size_t(it - pieces.begin()) : pieces.size();
+        const std::size_t self =
+            it != pieces.end() && *it == t ? std::size_t(it - pieces.begin()) : pieces.size();
         eachCell(tb, [&](std::size_t c) {
             for (std::uint32_t j = start[c]; j < start[c + 1]; ++j) {
                 const std::uint32_t i = inCell[j];
@@ -246,8 +262,7 @@ std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh, const std::vector
                 }
                 if (apart) continue;
                 // A pair in several cells is tested in the first both boxes overlap.
-                if (grid.index({coord(0, lo[0]), coord(1, lo[1]), coord(2, lo[2])}) != c)
-                    continue;
+                if (grid.index({coord(0, lo[0]), coord(1, lo[1]), coord(2, lo[2])}) != c) continue;
                 const std::uint32_t p = pieces[i];
                 const Mesh::Triangle& pi = mesh.triangles[p];
                 if (!trianglesCross(ti, tp, pi, corners(mesh, pi), tol)) continue;

@@ -9,7 +9,8 @@
 ///    planes cross (Moller's interval test); the triangles meet where the two segments overlap. A
 ///    shared corner lies on both segments, so the overlap counts only where it is longer than the
 ///    tolerance; a shared edge is all that two such triangles can have in common.
-///  - **Coplanar** (every corner of one within the tolerance of the other's plane, or normals within
+///  - **Coplanar** (every corner of one within the tolerance of the other's plane, or normals
+///  within
 ///    1e-12 rad): in the plane, an edge of one properly crossing an edge of the other, a corner of
 ///    one strictly inside the other, or the same three corners.
 /// The tolerance is 1e-9 of the mesh's bounding box diagonal: contacts shorter than that (about
@@ -32,8 +33,8 @@ namespace dexelmill::testing {
 struct SelfIntersections {
     std::size_t pairs = 0;   ///< pairs of triangles that meet other than in what they share
     std::size_t tested = 0;  ///< pairs whose boxes overlap, tested exactly
-    std::array<std::uint32_t, 2> first{0, 0};  ///< the first such pair found
-    Vec3 at{0.0};            ///< a corner of its first triangle
+    std::array<std::uint32_t, 2> first{0, 0};        ///< the first such pair found
+    Vec3 at{0.0};                                    ///< a corner of its first triangle
     std::vector<std::array<std::uint32_t, 2>> some;  ///< the first kMaxListed pairs found
     static constexpr std::size_t kMaxListed = 64;
 };
@@ -77,8 +78,10 @@ inline bool coplanarOverlap(const Tri& a, const Tri& b, int shared, double tol) 
         return (s0 > tol && s1 > tol && s2 > tol) || (s0 < -tol && s1 < -tol && s2 < -tol);
     };
     for (int k = 0; k < 3; ++k) {
-        if (std::find(b.id.begin(), b.id.end(), a.id[k]) == b.id.end() && strictlyInside(b, a.p[k])) return true;
-        if (std::find(a.id.begin(), a.id.end(), b.id[k]) == a.id.end() && strictlyInside(a, b.p[k])) return true;
+        if (std::find(b.id.begin(), b.id.end(), a.id[k]) == b.id.end() && strictlyInside(b, a.p[k]))
+            return true;
+        if (std::find(a.id.begin(), a.id.end(), b.id[k]) == a.id.end() && strictlyInside(a, b.p[k]))
+            return true;
     }
     return false;
 }
@@ -86,7 +89,8 @@ inline bool coplanarOverlap(const Tri& a, const Tri& b, int shared, double tol) 
 /// The interval of line parameters (along the unit direction d) where triangle t meets the plane
 /// from which its corners' signed distances are `dist` (exactly 0 for a shared corner); false if
 /// it does not.
-inline bool planeInterval(const Tri& t, const std::array<double, 3>& dist, const Vec3& d, double& lo, double& hi) {
+inline bool planeInterval(const Tri& t, const std::array<double, 3>& dist, const Vec3& d,
+                          double& lo, double& hi) {
     lo = INFINITY;
     hi = -INFINITY;
     for (int k = 0; k < 3; ++k) {
@@ -154,7 +158,8 @@ inline SelfIntersections countSelfIntersections(const Mesh& mesh) {
     double edges = 0.0;
     for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
         sid::Tri tri;
-        for (int k = 0; k < 3; ++k) tri.id[k] = mesh.triangles[t][k], tri.p[k] = mesh.vertices[tri.id[k]];
+        for (int k = 0; k < 3; ++k)
+            tri.id[k] = mesh.triangles[t][k], tri.p[k] = mesh.vertices[tri.id[k]];
         const Vec3 c = glm::cross(tri.p[1] - tri.p[0], tri.p[2] - tri.p[0]);
         const double area2 = glm::length(c);
         if (!(area2 > 0.0)) continue;
@@ -171,7 +176,8 @@ inline SelfIntersections countSelfIntersections(const Mesh& mesh) {
                                            std::int64_t(std::floor((p.z - lo.z) / cell))};
     };
     const auto key = [](const std::array<std::int64_t, 3>& c) {
-        return (std::uint64_t(c[0]) * 73856093u) ^ (std::uint64_t(c[1]) * 19349663u) ^ (std::uint64_t(c[2]) * 83492791u);
+        return (std::uint64_t(c[0]) * 73856093u) ^ (std::uint64_t(c[1]) * 19349663u) ^
+               (std::uint64_t(c[2]) * 83492791u);
     };
     struct Cell {
         std::array<std::int64_t, 3> c;
@@ -190,7 +196,8 @@ inline SelfIntersections countSelfIntersections(const Mesh& mesh) {
                 for (std::int64_t z = c0[2]; z <= c1[2]; ++z) {
                     const std::array<std::int64_t, 3> c{x, y, z};
                     std::vector<Cell>& bucket = grid[key(c)];
-                    auto it = std::find_if(bucket.begin(), bucket.end(), [&](const Cell& e) { return e.c == c; });
+                    auto it = std::find_if(bucket.begin(), bucket.end(),
+                                           [&](const Cell& e) { return e.c == c; });
                     if (it == bucket.end()) bucket.push_back({c, {}}), it = bucket.end() - 1;
                     it->tris.push_back(t);
                 }
@@ -200,13 +207,16 @@ inline SelfIntersections countSelfIntersections(const Mesh& mesh) {
             for (std::size_t i = 0; i < cell.tris.size(); ++i)
                 for (std::size_t j = i + 1; j < cell.tris.size(); ++j) {
                     const std::uint32_t a = cell.tris[i], b = cell.tris[j];
-                    const Vec3 olo = glm::max(boxes[a][0], boxes[b][0]), ohi = glm::min(boxes[a][1], boxes[b][1]);
+                    const Vec3 olo = glm::max(boxes[a][0], boxes[b][0]),
+                               ohi = glm::min(boxes[a][1], boxes[b][1]);
                     if (olo.x > ohi.x || olo.y > ohi.y || olo.z > ohi.z) continue;
-                    if (cellOf(olo) != cell.c) continue;  // tested in the first cell the boxes share
+                    if (cellOf(olo) != cell.c)
+                        continue;  // tested in the first cell the boxes share
                     ++out.tested;
                     if (!sid::meet(tris[a], tris[b], tol)) continue;
                     if (out.pairs++ == 0) out.first = {index[a], index[b]}, out.at = tris[a].p[0];
-                    if (out.some.size() < SelfIntersections::kMaxListed) out.some.push_back({index[a], index[b]});
+                    if (out.some.size() < SelfIntersections::kMaxListed)
+                        out.some.push_back({index[a], index[b]});
                 }
     return out;
 }

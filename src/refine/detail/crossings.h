@@ -26,13 +26,16 @@ namespace dexelmill::detail {
 ///    triangle over its neighbour this way without checkMesh seeing a fold.
 /// Contacts within `tol` are not counted, nor triangles of no area.
 bool trianglesCross(const std::array<std::uint32_t, 3>& ia, const std::array<Vec3, 3>& a,
-                    const std::array<std::uint32_t, 3>& ib, const std::array<Vec3, 3>& b, double tol);
+                    const std::array<std::uint32_t, 3>& ib, const std::array<Vec3, 3>& b,
+                    double tol);
 
 /// @brief The triangles of `mesh` that take part in a crossing (trianglesCross) of a triangle
 /// listed in `pieces` (increasing) with one listed in `partners` (which should hold the pieces),
 /// each listed once, in increasing order. Pieces are found through a coarse grid of their boxes.
 /// Runs in the caller's task arena; the answer does not depend on the thread count.
-std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh, const std::vector<std::uint32_t>& pieces,
-                                             const std::vector<std::uint32_t>& partners, double tol);
+std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh,
+                                             const std::vector<std::uint32_t>& pieces,
+                                             const std::vector<std::uint32_t>& partners,
+                                             double tol);
 
 }  // namespace dexelmill::detail
