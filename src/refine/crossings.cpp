@@ -187,12 +187,7 @@ std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh,
             return a;
         });
     const CoarseGrid grid(sum.all.padded(tol), std::max(sum.extents / double(pieces.size()), 1e-6));
-    FloatBox reach;  // every piece's box lies inside it
-    for (std::size_t i = 0; i < boxes.size(); ++i)
-        for (std::size_t a = 0; a < 3; ++a) {
-            reach.lo[a] = i == 0 ? boxes[i].lo[a] : std::min(reach.lo[a], boxes[i].lo[a]);
-            reach.hi[a] = i == 0 ? boxes[i].hi[a] : std::max(reach.hi[a], boxes[i].hi[a]);
-        }
+    const FloatBox reach = floatBox(sum.all);  // every piece's box lies inside it
     const double inverse = 1.0 / grid.size;
     // The cell coordinate along axis a of x, clamped to the grid (CoarseGrid::coord, inline).
     const auto coord = [&](int a, float x) {
