@@ -46,14 +46,6 @@ std::vector<fs::path> programs(const fs::path& root) {
     return out;
 }
 
-/// Pairs of triangles that the dexel mesher itself makes meet (support/self_intersection.h), as
-/// measured: on heart at (1.16, 19.50, -4.67), triangles that lie in the lattice plane x = 1.165
-/// fold over each other. A known fault of the mesher, in the notes of the surface issue: the test
-/// holds heart to this count, and any other crossing fails it. (Lenses on two edges of a face that
-/// crossed near their corner, 4 more pairs on heart, 4 on tort.ngc and 8 on the twp-g68.2
-/// example, no longer do: cell_loops.cpp's uncross.)
-std::size_t knownMesherCrossings(const fs::path& program) { return program.filename() == "heart.camotics" ? 3 : 0; }
-
 /// The pairs of the mesh's triangles that meet (support/self_intersection.h), told where the first
 /// lies to the next assertion when there are any.
 std::size_t crossingPairs(const Mesh& mesh) {
@@ -97,7 +89,7 @@ TEST_CASE("every shared test program runs end to end with a closed mesh without 
         CHECK(s.report.meshClosed);
         CHECK(s.report.meshFoldedTriangles == 0);
         CHECK(s.report.meshDegenerateTriangles == 0);
-        CHECK(crossingPairs(s.mesh) <= knownMesherCrossings(p));
+        CHECK(crossingPairs(s.mesh) == 0);
         CHECK(s.report.finalVolumeMm3 > 0);
         CHECK(s.report.finalVolumeMm3 <= s.report.stockVolumeMm3);
     }
@@ -108,7 +100,7 @@ TEST_CASE("the shared CAMotics projects refined once give closed meshes without 
     // than the lattice, walls thinner than it, crossings whose dexels graze the part) the mesh
     // must stay closed, without folded or degenerate triangles, and no triangle may pass through
     // another (before the crossing test, vcarve, slant_test, botomata_bottom and heart had 10, 8,
-    // 53 and 779 such pairs; one round moves heart's mesher's own 3 apart).
+    // 53 and 779 such pairs).
     if (!test::haveSharedData()) return;
     std::size_t projects = 0;
     for (const fs::path& p : programs(test::sharedData())) {

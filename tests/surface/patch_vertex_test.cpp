@@ -3,7 +3,8 @@
 // smooth patch's offset along its mean normal by a ternary search of the squared distances, a
 // convex ridge held within its crossings' box, and loops without planes. The planes are the packed
 // normals' (as the mesher sees them), so each answer is exact; the true corner or crease lies
-// within the packing's error of it. Random cases on fixed seeds.
+// within the packing's error of it. A crease's or corner's vertex is kept a thousandth of a
+// spacing inside its cell's faces. Random cases on fixed seeds.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -48,6 +49,12 @@ struct Patch {
         return hi;
     }
 };
+
+/// The rule's margin: a crease's or corner's vertex stays a thousandth of a spacing inside its
+/// cell's faces.
+Vec3 insideCell(const Vec3& p, const Vec3& cellLo, double h) {
+    return glm::clamp(p, cellLo + 1e-3 * h, cellLo + Vec3(h - 1e-3 * h));
+}
 
 double det3(const Vec3& a, const Vec3& b, const Vec3& c) {
     return a.x * (b.y * c.z - b.z * c.y) - a.y * (b.x * c.z - b.z * c.x) + a.z * (b.x * c.y - b.y * c.x);
@@ -118,7 +125,7 @@ TEST_CASE("patch vertex: a concave corner is where its three planes meet, within
             rhs += u * glm::dot(u, patch.points[j]);
         }
         const Vec3 meet = cramer3(col[0], col[1], col[2], rhs);
-        const Vec3 want = glm::clamp(meet, cellLo, cellLo + h);
+        const Vec3 want = insideCell(meet, cellLo, h);
         INFO("trial " << trial);
         CHECK(rank == 3);
         CHECK(glm::length(v - want) <= 1e-9 * h);
@@ -177,7 +184,7 @@ TEST_CASE("patch vertex: a concave crease puts the vertex on it, nearest the cro
         const Wedge w = makeWedge(rng, true, inward, where, {0, 0, 0, 1, 1}, h);
         int rank = -1;
         const Vec3 v = rule.place(w.patch.loop(), Vec3(0.0), rank);
-        const Vec3 want = glm::clamp(w.line, Vec3(0.0), Vec3(h));
+        const Vec3 want = insideCell(w.line, Vec3(0.0), h);
         INFO("trial " << trial << " beta " << w.beta);
         CHECK(rank == 2);
         CHECK(glm::length(v - want) <= 1e-9 * h);
@@ -194,7 +201,7 @@ TEST_CASE("patch vertex: a convex ridge stays within its crossings' box", "[surf
         const Wedge w = makeWedge(rng, false, down, where, {0, 1, 0, 1}, h);
         int rank = -1;
         const Vec3 v = rule.place(w.patch.loop(), Vec3(0.0), rank);
-        const Vec3 want = glm::clamp(w.line, w.patch.boxLo(), w.patch.boxHi());
+        const Vec3 want = insideCell(glm::clamp(w.line, w.patch.boxLo(), w.patch.boxHi()), Vec3(0.0), h);
         clamped += glm::length(want - w.line) > 1e-6 * h;
         INFO("trial " << trial << " beta " << w.beta);
         CHECK(rank == 2);
@@ -202,6 +209,30 @@ TEST_CASE("patch vertex: a convex ridge stays within its crossings' box", "[surf
     }
     // The box binds in some cases (the ridge lies beyond the crossings), or the test shows nothing.
     CHECK(clamped > 30);
+}
+
+TEST_CASE("patch vertex: a ridge beyond a cell face leaves the vertex a thousandth of a spacing inside it",
+          "[surface][contour]") {
+    // The roof z <= 0.5 h, x + z >= 0.3 h has its ridge at x = -0.2 h, outside the cell: the
+    // crossings' box puts the vertex on the face x = 0, where its fan over a lens on that face
+    // would lie in the face (on heart, three such fan triangles overlapped). It stays 1e-3 h in.
+    const double h = 0.25;
+    const Vec3 cellLo(3.0, -2.0, 1.0);
+    const PatchVertexRule rule(h, kFeatureAngle);
+    Patch roof;
+    const PackedNormal top = PackedNormal::pack(Vec3(0.0, 0.0, 1.0));
+    const PackedNormal slope = PackedNormal::pack(glm::normalize(Vec3(-1.0, 0.0, -1.0)));
+    roof.add(cellLo + h * Vec3(0.3, 0.2, 0.5), top);
+    roof.add(cellLo + h * Vec3(0.8, 0.7, 0.5), top);
+    roof.add(cellLo + h * Vec3(0.2, 0.8, 0.1), slope);
+    roof.add(cellLo + h * Vec3(0.0, 0.3, 0.3), slope);
+    int rank = -1;
+    const Vec3 v = rule.place(roof.loop(), cellLo, rank);
+    CHECK(rank == 2);
+    // The ridge line runs along y, so the vertex takes the crossings' mean y.
+    const Vec3 want = cellLo + h * Vec3(1e-3, 0.5, 0.5);
+    CHECK(glm::length(v - want) <= 2e-4 * h);  // the packed normals' error (1.3e-4 rad) over 0.5 h
+    CHECK(v.x - cellLo.x >= 1e-3 * h * (1.0 - 1e-9));
 }
 
 TEST_CASE("patch vertex: a smooth patch moves along its mean normal to the planes' least squares",
