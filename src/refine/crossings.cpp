@@ -93,6 +93,9 @@ std::array<Vec3, 3> corners(const Mesh& mesh, const Mesh::Triangle& t) {
     return {mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]};
 }
 
+/// The relative padding of a float box's coordinates (crossingTriangles): 2^-20.
+constexpr double kFloatPad = 1.0 / 1048576.0;
+
 Box boxOf(const std::array<Vec3, 3>& p) {
     Box b;
     for (const Vec3& v : p) b.expand(v);
@@ -101,9 +104,12 @@ Box boxOf(const std::array<Vec3, 3>& p) {
 
 }  // namespace
 
-bool trianglesCross(const std::array<std::uint32_t, 3>& ia, const std::array<Vec3, 3>& a,
-                    const std::array<std::uint32_t, 3>& ib, const std::array<Vec3, 3>& b,
-                    double tol) {
+namespace {
+
+/// trianglesCross with a's unit normal given (unitNormal: zero for no area), so that a triangle
+/// tested against many makes it once.
+bool crossWithNormal(const std::array<std::uint32_t, 3>& ia, const std::array<Vec3, 3>& a, const Vec3& ua,
+                     const std::array<std::uint32_t, 3>& ib, const std::array<Vec3, 3>& b, double tol) {
     int shared = 0, sa = 0, sb = 0;
     std::array<bool, 3> aShared{}, bShared{};
     for (int i = 0; i < 3; ++i)
@@ -124,7 +130,6 @@ bool trianglesCross(const std::array<std::uint32_t, 3>& ia, const std::array<Vec
         }
         return above || below;
     };
-    const Vec3 ua = unitNormal(a);
     if (ua == Vec3(0.0)) return false;
     bool bFlat = false, aFlat = false;
     if (sides(a, b, bShared, ua, bFlat)) return false;
@@ -144,6 +149,14 @@ bool trianglesCross(const std::array<std::uint32_t, 3>& ia, const std::array<Vec
     return false;
 }
 
+}  // namespace
+
+bool trianglesCross(const std::array<std::uint32_t, 3>& ia, const std::array<Vec3, 3>& a,
+                    const std::array<std::uint32_t, 3>& ib, const std::array<Vec3, 3>& b,
+                    double tol) {
+    return crossWithNormal(ia, a, unitNormal(a), ib, b, tol);
+}
+
 std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh,
                                              const std::vector<std::uint32_t>& pieces,
                                              const std::vector<std::uint32_t>& partners,
@@ -151,16 +164,17 @@ std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh,
     std::vector<std::uint32_t> found;
     if (pieces.empty()) return found;
     // The pieces' boxes, grown by tol and rounded outwards to float (padded by 2^-20 of each
-    // coordinate, above float's relative rounding of 2^-24: a box may only grow), and a grid of
-    // cells about as large as an average box, each listing the pieces whose boxes overlap it.
+    // coordinate, above float's relative rounding of 2^-24: a box may only grow; the product by a
+    // power of two is exact), and a grid of cells about as large as an average box, each listing
+    // the pieces whose boxes overlap it.
     struct FloatBox {
         std::array<float, 3> lo, hi;
     };
     const auto floatBox = [&](const Box& b) {
         FloatBox f;
         for (int a = 0; a < 3; ++a) {
-            f.lo[std::size_t(a)] = float(b.lo[a] - tol - std::ldexp(std::abs(b.lo[a]), -20));
-            f.hi[std::size_t(a)] = float(b.hi[a] + tol + std::ldexp(std::abs(b.hi[a]), -20));
+            f.lo[std::size_t(a)] = float(b.lo[a] - tol - std::abs(b.lo[a]) * kFloatPad);
+            f.hi[std::size_t(a)] = float(b.hi[a] + tol + std::abs(b.hi[a]) * kFloatPad);
         }
         return f;
     };
@@ -239,6 +253,8 @@ std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh,
         const FloatBox tb = floatBox(boxOf(tp));
         for (std::size_t a = 0; a < 3; ++a)
             if (tb.lo[a] > reach.hi[a] || reach.lo[a] > tb.hi[a]) return;
+        bool haveNormal = false;  // t's, made when a box first overlaps
+        Vec3 tn(0.0);
         // t's index among the pieces (their count if it is none): a pair of pieces is tested once,
         // from the later, and a cell lists its pieces in order.
         const auto it = std::lower_bound(pieces.begin(), pieces.end(), t);
@@ -258,9 +274,10 @@ std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh,
                 if (apart) continue;
                 // A pair in several cells is tested in the first both boxes overlap.
                 if (grid.index({coord(0, lo[0]), coord(1, lo[1]), coord(2, lo[2])}) != c) continue;
+                if (!haveNormal) tn = unitNormal(tp), haveNormal = true;
                 const std::uint32_t p = pieces[i];
                 const Mesh::Triangle& pi = mesh.triangles[p];
-                if (!trianglesCross(ti, tp, pi, corners(mesh, pi), tol)) continue;
+                if (!crossWithNormal(ti, tp, tn, pi, corners(mesh, pi), tol)) continue;
                 const std::lock_guard<std::mutex> guard(lock);
                 found.push_back(t);
                 found.push_back(p);
