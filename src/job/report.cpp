@@ -139,6 +139,7 @@ std::string reportJson(const SimulateReport& r) {
         j["mesh"]["refine"] = {{"rounds", r.refineRounds},
                                {"points_tested", r.refineQueries},
                                {"vertices_snapped", r.refineSnapped},
+                               {"vertices_snapped_part_way", r.refineSnapPartial},
                                {"edges_split", r.refineSplit},
                                {"splits_refused", r.refineRefused},
                                {"crossing_triangles_found", r.refineCrossed},

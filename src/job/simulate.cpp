@@ -612,6 +612,7 @@ Simulation runStages(const SimulateOptions& o) {
         report.refineQueries = stats.queries;
         report.refineSplit = stats.split;
         report.refineSnapped = stats.snapped;
+        report.refineSnapPartial = stats.snapPartial;
         report.refineRefused = stats.refused;
         report.refineCrossed = stats.crossed;
         report.refineNoCrossing = stats.noCrossing;

@@ -369,6 +369,49 @@ TEST_CASE("refine: a vertex no window reaches is asked again a spacing away alon
     CHECK(stats.check.ok());
 }
 
+TEST_CASE("refine: a vertex whose move onto the part folds is moved part of the way", "[refine]") {
+    // The faced block (floor at z = 5) with a groove along y: a ball D4 at x = 5, its tip at
+    // z = 3, so the groove's side is the circle (x - 5)^2 + (z - 5)^2 = 4, steep near its top
+    // edge x = 7. A mesh round that edge: a vertex 0.01 mm over the groove and 0.1 mm above the
+    // floor, two neighbours on the floor and two on the groove's side 0.1 mm below its edge (on
+    // the part, so they stay), closed below deep in the material. Along z the vertex's window
+    // falls to the groove's side at z = 4.80, below the side's neighbours, and the move folds the
+    // mesh; half way, at z = 4.95, it does not. (Bear's wall tops, whose corner a cusp lowered.)
+    const std::string program = "G21 G90\nT1 M6\nG0 X-5 Y0 Z12\nG1 Z5 F500\nG1 X15\nG1 Y3\nG1 X-5\nG1 Y6\n"
+                                "G1 X15\nG1 Y9\nG1 X-5\nG1 Y12\nG1 X15\nG0 Z12\nT2 M6\nG0 X5 Y-5 Z12\nG1 Z3\n"
+                                "G1 Y15\nG0 Z12\nM30\n";
+    SimulateOptions o = job(program, 0);
+    o.stockBox = Box{Vec3(0.0), Vec3(10.0)};
+    o.tools.clear();
+    o.tools.emplace(1, flatEndMill(6.0, {20.0, 40.0}));
+    o.tools.emplace(2, ballEndMill(4.0, {20.0, 40.0}));
+    const Simulation s = runSimulation(o);
+
+    const double side = 5.0 + std::sqrt(4.0 - 0.01);  // the groove's side at z = 4.9
+    Mesh mesh;
+    mesh.vertices = {Vec3(6.99, 5.0, 5.1), Vec3(7.5, 4.5, 5.0),  Vec3(7.5, 5.5, 5.0),
+                     Vec3(side, 5.5, 4.9), Vec3(side, 4.5, 4.9), Vec3(8.5, 5.0, 3.0)};
+    // The ring round vertex 0, anticlockwise seen from above, and vertex 5 below it.
+    const std::array<std::uint32_t, 4> ring{1, 2, 3, 4};
+    for (std::size_t k = 0; k < 4; ++k) {
+        mesh.triangles.push_back({0, ring[k], ring[(k + 1) % 4]});
+        mesh.triangles.push_back({5, ring[(k + 1) % 4], ring[k]});
+    }
+    REQUIRE(checkMesh(mesh).ok());
+    REQUIRE(meshVolume(mesh) > 0.0);
+
+    const RefineStats stats = refineAgainst(s, mesh);
+    const Vec3 v = mesh.vertices[0];
+    INFO("vertex at (" << v.x << ", " << v.y << ", " << v.z << "), snapped " << stats.snapped << " ("
+                       << stats.snapPartial << " part of the way), refused " << stats.snapRefused);
+    CHECK(stats.snapPartial == 1);
+    CHECK(v.x == 6.99);
+    CHECK(v.y == 5.0);
+    CHECK(v.z == Approx(5.1 - 0.5 * (5.1 - (5.0 - std::sqrt(4.0 - 1.99 * 1.99)))).margin(1e-6));
+    CHECK(stats.check.ok());
+    CHECK(testing::countSelfIntersections(mesh).pairs == 0);
+}
+
 TEST_CASE("refine: a midpoint whose window slides along the part is split along a nearer axis", "[refine]") {
     // A ball D3.175 plunged to z = 8 at (5, 5) leaves a spherical dimple in the block [0, 10]^3,
     // centred at (5, 5, 8 + r). The edge from (4.6, 5, zs) to (5.4, 5, zs) has both ends on it,
@@ -565,7 +608,8 @@ TEST_CASE("refine: moves whose tool axis turns are followed within their toleran
 
     // Every vertex refinement moved or made lies within the turn tolerance (1e-4 mm) of the swept
     // part's surface, plus the oracle's sampling (2e-5 mm): onSurface's cube of half-side delta
-    // sees a plane within delta / sqrt(3) of its centre.
+    // sees a plane within delta / sqrt(3) of its centre. Those whose every move onto the part
+    // folded the mesh, moved part of the way, are the exception the report counts.
     const double delta = std::sqrt(3.0) * (kDefaultTurnTolerance + 3e-5);
     CarvedPart part{stock, {}};
     testing::Cutter sweep;
@@ -586,9 +630,11 @@ TEST_CASE("refine: moves whose tool axis turns are followed within their toleran
             UNSCOPED_INFO("off the part: (" << p.x << ", " << p.y << ", " << p.z << ")");
         }
     }
-    INFO(checked << " vertices moved or made, " << turningRegion << " of them under the turning moves");
+    INFO(checked << " vertices moved or made, " << turningRegion << " of them under the turning moves, "
+                 << refined.report.refineSnapPartial << " moved part of the way");
     CHECK(turningRegion > 100);
-    CHECK(off == 0);
+    CHECK(off <= refined.report.refineSnapPartial);
+    CHECK(refined.report.refineSnapPartial * 100 < checked);
     // The unrefined mesher's vertices are not all that close: the test can tell.
     bool plainOff = false;
     for (std::size_t v = 0; v < plain.mesh.vertices.size() && !plainOff; ++v)

@@ -218,7 +218,7 @@ struct SimulateReport {
     /// midpoints without a crossing, vertices and midpoints moved or split at a nearer crossing
     /// along another axis than the nearest to their normal, short edges collapsed.
     int refineRounds = 0;
-    std::size_t refineQueries = 0, refineSnapped = 0, refineSplit = 0, refineRefused = 0, refineCrossed = 0,
+    std::size_t refineQueries = 0, refineSnapped = 0, refineSnapPartial = 0, refineSplit = 0, refineRefused = 0, refineCrossed = 0,
                 refineNoCrossing = 0, refineLaterAxis = 0, refineCollapsed = 0;
 
     struct Timing {

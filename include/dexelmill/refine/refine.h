@@ -13,9 +13,10 @@
 ///     away: it moves onto the part, along the coordinate axis nearest its normal, or, where that
 ///     axis finds no crossing or the move would fold the mesh, along another axis (the shortest
 ///     move that does not fold, and only into the material: a vertex inside a wall thinner than
-///     the lattice showed stays). A vertex no axis finds a crossing for is asked once more along
-///     the nearest, twice as far: a wedge's tip past the next lattice line. (Vertices on
-///     crossings are exact and stay.)
+///     the lattice showed stays). Where every such move folds, the vertex goes half of its
+///     shortest, or a quarter, or an eighth: nearer the part, not onto it. A vertex no axis finds
+///     a crossing for is asked once more along the nearest, twice as far: a wedge's tip past the
+///     next lattice line. (Vertices on crossings are exact and stay.)
 ///  2. Each edge is tested at its midpoint. One farther than a tolerance from the crossing there
 ///     is split at it, and its triangles with it (into two, three or four, the same way on both
 ///     sides of every edge, so the mesh stays closed). Later rounds test only the new edges.
@@ -29,7 +30,8 @@
 /// vertex's longest edge), the other axes within 75 degrees of the normal are asked too, and the
 /// nearest crossing into the material is taken.
 ///
-/// Error bound: every moved or new vertex lies on the exact part's surface to the sweep's
+/// Error bound: every moved or new vertex (but those moved part of the way, which lie nearer the
+/// part than they did) lies on the exact part's surface to the sweep's
 /// accuracy (1e-6 mm; the windows are cut in double and kept as float offsets within half a
 /// spacing, about 1e-8 mm), or, where a move whose tool axis turns makes the surface, to that
 /// move's sweep tolerance (RefineOptions::turnTolerance). Between vertices the surface is still linear, so what remains is the
@@ -85,6 +87,8 @@ struct RefineStats {
     std::size_t queries = 0;      ///< vertices and edge midpoints tested (cut where a sweep comes near)
     std::size_t snapped = 0;      ///< mesher's vertices moved onto the exact part
     std::size_t snapRefused = 0;  ///< vertex moves undone because the mesh folded there
+    /// Of the snapped, those moved only part of the way: every move onto the part folded.
+    std::size_t snapPartial = 0;
     std::size_t split = 0;        ///< edges split (one new vertex each)
     std::size_t noCrossing = 0;   ///< midpoints with no crossing of the right side in the window
     /// Vertices and midpoints whose crossing along the axis nearest their normal lay far, moved or
