@@ -108,8 +108,9 @@ namespace {
 
 /// trianglesCross with a's unit normal given (unitNormal: zero for no area), so that a triangle
 /// tested against many makes it once.
-bool crossWithNormal(const std::array<std::uint32_t, 3>& ia, const std::array<Vec3, 3>& a, const Vec3& ua,
-                     const std::array<std::uint32_t, 3>& ib, const std::array<Vec3, 3>& b, double tol) {
+bool crossWithNormal(const std::array<std::uint32_t, 3>& ia, const std::array<Vec3, 3>& a,
+                     const Vec3& ua, const std::array<std::uint32_t, 3>& ib,
+                     const std::array<Vec3, 3>& b, double tol) {
     int shared = 0, sa = 0, sb = 0;
     std::array<bool, 3> aShared{}, bShared{};
     for (int i = 0; i < 3; ++i)

@@ -65,12 +65,13 @@ constexpr double kFarReach = 2.0;
 
 /// A vertex whose every move onto the part folded the mesh, or passed a triangle through another,
 /// is moved this fraction of its shortest move, then its square, and so on for kPartialTries
-/// tries; the first that does not fold is kept, and the vertex lies that much nearer the part. The mesher puts a sharp edge's vertex
-/// where the planes of its crossings meet; a cusp the lattice did not see may have lowered that
-/// edge past the crossings beside it, and a move onto the part then passes the vertex below them.
-/// (Bear, `--refine 1`, the top of a wall at (60.17, 25.92, -4.17): the vertex lay 0.069 mm, 0.23 h,
-/// above the part along z, the move folded, and the triangles round it stood out of the part so
-/// far that a measure along their normals found no surface within 3 h.)
+/// tries; the first that does not fold is kept, and the vertex lies that much nearer the part.
+/// The mesher puts a sharp edge's vertex where the planes of its crossings meet; a cusp the
+/// lattice did not see may have lowered that edge past the crossings beside it, and a move onto
+/// the part then passes the vertex below them. (Bear, `--refine 1`, the top of a wall at
+/// (60.17, 25.92, -4.17): the vertex lay 0.069 mm, 0.23 h, above the part along z, the move
+/// folded, and the triangles round it stood out of the part so far that a measure along their
+/// normals found no surface within 3 h.)
 constexpr double kPartialMove = 0.5;
 constexpr int kPartialTries = 3;
 
@@ -433,44 +434,40 @@ std::size_t snapVertices(Mesh& mesh, const std::vector<std::uint32_t>& active, c
                          [](const Candidate& a, const Candidate& b) { return std::abs(a.offset) < std::abs(b.offset); });
         if (!onPart[k]) trying.push_back(std::uint32_t(k));
     }
-    // Each vertex's candidates in turn, the shortest first.
+    // Moves each vertex retry[k] of `ks` by `scale` times its candidate pick(k), undoes the moves
+    // that fold (moveUnlessFolding) and returns the ks of those.
+    const auto tryMoves = [&](const std::vector<std::uint32_t>& ks, const auto& pick, double scale) {
+        moved.clear();
+        for (std::uint32_t k : ks) {
+            const Candidate& c = pick(k);
+            moved.push_back({retry[k], mesh.vertices[retry[k]]});
+            mesh.vertices[retry[k]][c.axis] += scale * c.offset;
+        }
+        const std::vector<std::uint32_t> undone =
+            moveUnlessFolding(mesh, active, moved, watch, st.snapRefused, st.crossed);
+        done += moved.size() - undone.size();
+        std::vector<std::uint32_t> folded;
+        for (std::uint32_t i : undone) folded.push_back(ks[i]);
+        return folded;
+    };
+    // Each vertex's candidates in turn, the shortest first; then, where every one folded, part of
+    // the shortest (kPartialMove).
     std::vector<std::uint32_t> exhausted;  // indices into retry: every candidate folded
     for (int attempt = 0; attempt < 3 && !trying.empty(); ++attempt) {
-        moved.clear();
-        std::vector<std::uint32_t> movedK;  // per move, its index into retry
+        std::vector<std::uint32_t> ks;
         for (std::uint32_t k : trying) {
-            if (attempt >= count[k]) {
-                if (count[k] > 0) exhausted.push_back(k);
-                continue;
-            }
-            const std::uint32_t v = retry[k];
-            const Candidate& c = candidates[k][std::size_t(attempt)];
-            moved.push_back({v, mesh.vertices[v]});
-            movedK.push_back(k);
-            mesh.vertices[v][c.axis] += c.offset;
+            if (attempt < count[k]) ks.push_back(k);
+            else if (count[k] > 0) exhausted.push_back(k);
         }
-        const std::vector<std::uint32_t> undone = moveUnlessFolding(mesh, active, moved, watch, st.snapRefused, st.crossed);
-        done += moved.size() - undone.size();
-        trying.clear();
-        for (std::uint32_t i : undone) trying.push_back(movedK[i]);
+        trying = tryMoves(ks, [&](std::uint32_t k) { return candidates[k][std::size_t(attempt)]; }, 1.0);
     }
     exhausted.insert(exhausted.end(), trying.begin(), trying.end());
-    // Part of the way along the shortest candidate (kPartialMove).
     double scale = 1.0;
     for (int t = 0; t < kPartialTries && !exhausted.empty(); ++t) {
         scale *= kPartialMove;
-        moved.clear();
-        for (std::uint32_t k : exhausted) {
-            const std::uint32_t v = retry[k];
-            moved.push_back({v, mesh.vertices[v]});
-            mesh.vertices[v][candidates[k][0].axis] += scale * candidates[k][0].offset;
-        }
-        const std::vector<std::uint32_t> undone = moveUnlessFolding(mesh, active, moved, watch, st.snapRefused, st.crossed);
-        done += moved.size() - undone.size();
-        st.snapPartial += moved.size() - undone.size();
-        std::vector<std::uint32_t> still;
-        for (std::uint32_t i : undone) still.push_back(exhausted[i]);
-        exhausted.swap(still);
+        const std::size_t tried = exhausted.size();
+        exhausted = tryMoves(exhausted, [&](std::uint32_t k) { return candidates[k][0]; }, scale);
+        st.snapPartial += tried - exhausted.size();
     }
     st.snapped += done;
     return done;

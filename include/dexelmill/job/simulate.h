@@ -214,12 +214,14 @@ struct SimulateReport {
     /// folded and their edges were left out.
     int meshRuns = 0;
     /// Refinement (RefineStats): rounds made, vertices and midpoints tested, vertices moved onto
-    /// the part, edges split, splits refused, triangles found passing through another,
-    /// midpoints without a crossing, vertices and midpoints moved or split at a nearer crossing
-    /// along another axis than the nearest to their normal, short edges collapsed.
+    /// the part (and of them, those moved part of the way), edges split, splits refused,
+    /// triangles found passing through another, midpoints without a crossing, vertices and
+    /// midpoints moved or split at a nearer crossing along another axis than the nearest to their
+    /// normal, short edges collapsed.
     int refineRounds = 0;
-    std::size_t refineQueries = 0, refineSnapped = 0, refineSnapPartial = 0, refineSplit = 0, refineRefused = 0, refineCrossed = 0,
-                refineNoCrossing = 0, refineLaterAxis = 0, refineCollapsed = 0;
+    std::size_t refineQueries = 0, refineSnapped = 0, refineSnapPartial = 0, refineSplit = 0,
+                refineRefused = 0, refineCrossed = 0, refineNoCrossing = 0, refineLaterAxis = 0,
+                refineCollapsed = 0;
 
     struct Timing {
         double parse = 0, design = 0, cut = 0, rebuild = 0, mesh = 0, refine = 0, write = 0, total = 0;
