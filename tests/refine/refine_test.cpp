@@ -242,14 +242,16 @@ TEST_CASE("refine: a round that would not fit in memory is not started", "[refin
 
 namespace {
 
-/// A flat mill D6 faces the block [0, 10]^3 down to z = 5.
-Simulation facedBlock() {
+/// A flat mill D6 (tool 1) faces the block [0, 10]^3 down to z = 5; `after` is G-code run next,
+/// with a ball end D4 as tool 2.
+Simulation facedBlock(const std::string& after = "") {
     const std::string facing = "G21 G90\nT1 M6\nG0 X-5 Y0 Z12\nG1 Z5 F500\nG1 X15\nG1 Y3\nG1 X-5\nG1 Y6\nG1 X15\n"
-                               "G1 Y9\nG1 X-5\nG1 Y12\nG1 X15\nG0 Z12\nM30\n";
-    SimulateOptions o = job(facing, 0);
+                               "G1 Y9\nG1 X-5\nG1 Y12\nG1 X15\nG0 Z12\n";
+    SimulateOptions o = job(facing + after + "M30\n", 0);
     o.stockBox = Box{Vec3(0.0), Vec3(10.0)};
     o.tools.clear();
     o.tools.emplace(1, flatEndMill(6.0, {20.0, 40.0}));
+    o.tools.emplace(2, ballEndMill(4.0, {20.0, 40.0}));
     return runSimulation(o);
 }
 
@@ -377,15 +379,7 @@ TEST_CASE("refine: a vertex whose move onto the part folds is moved part of the 
     // the part, so they stay), closed below deep in the material. Along z the vertex's window
     // falls to the groove's side at z = 4.80, below the side's neighbours, and the move folds the
     // mesh; half way, at z = 4.95, it does not. (Bear's wall tops, whose corner a cusp lowered.)
-    const std::string program = "G21 G90\nT1 M6\nG0 X-5 Y0 Z12\nG1 Z5 F500\nG1 X15\nG1 Y3\nG1 X-5\nG1 Y6\n"
-                                "G1 X15\nG1 Y9\nG1 X-5\nG1 Y12\nG1 X15\nG0 Z12\nT2 M6\nG0 X5 Y-5 Z12\nG1 Z3\n"
-                                "G1 Y15\nG0 Z12\nM30\n";
-    SimulateOptions o = job(program, 0);
-    o.stockBox = Box{Vec3(0.0), Vec3(10.0)};
-    o.tools.clear();
-    o.tools.emplace(1, flatEndMill(6.0, {20.0, 40.0}));
-    o.tools.emplace(2, ballEndMill(4.0, {20.0, 40.0}));
-    const Simulation s = runSimulation(o);
+    const Simulation s = facedBlock("T2 M6\nG0 X5 Y-5 Z12\nG1 Z3\nG1 Y15\nG0 Z12\n");
 
     const double side = 5.0 + std::sqrt(4.0 - 0.01);  // the groove's side at z = 4.9
     Mesh mesh;
