@@ -104,13 +104,33 @@ MoveSweep::~MoveSweep() = default;
 
 std::size_t MoveSweep::partCount() const { return parts_.size(); }
 
+namespace {
+
+/// The pieces of each convex part of `tool`, bottom to top.
+std::vector<std::vector<ProfilePiece>> partPieces(const Tool& tool) {
+    if (tool.convexParts().size() > MoveSweep::kMaxParts)
+        throw Error("tool '" + tool.description() + "' has " + std::to_string(tool.convexParts().size()) +
+                    " convex parts; the sweep handles at most " + std::to_string(MoveSweep::kMaxParts));
+    std::vector<std::vector<ProfilePiece>> parts;
+    for (const ConvexPart& cp : tool.convexParts())
+        parts.emplace_back(tool.pieces().begin() + std::ptrdiff_t(cp.first),
+                           tool.pieces().begin() + std::ptrdiff_t(cp.last));
+    return parts;
+}
+
+}  // namespace
+
 MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const Vec3& axis)
+    : MoveSweep(partPieces(tool), start, end, axis) {}
+
+MoveSweep::MoveSweep(const std::vector<ProfilePiece>& pieces, const Vec3& start, const Vec3& end, const Vec3& axis)
+    : MoveSweep(std::vector<std::vector<ProfilePiece>>{pieces}, start, end, axis) {}
+
+MoveSweep::MoveSweep(std::vector<std::vector<ProfilePiece>> partList, const Vec3& start, const Vec3& end,
+                     const Vec3& axis)
     : start_(start) {
     const Vec3 f = end - start;
     frame_ = ToolFrame::make(axis, f);  // validates the axis
-    if (tool.convexParts().size() > kMaxParts)
-        throw Error("tool '" + tool.description() + "' has " + std::to_string(tool.convexParts().size()) +
-                    " convex parts; the sweep handles at most " + std::to_string(kMaxParts));
     feedLength_ = glm::length(f);
     creaseU_ = sweep_tol::kCrease / feedLength_;
     const Vec3& n = frame_.n;
@@ -150,12 +170,11 @@ MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const
         meridianNormal(p, pieceRadius(p, z), z, nr, nz);
     };
 
-    for (const ConvexPart& cp : tool.convexParts()) {
+    for (std::vector<ProfilePiece>& pieces : partList) {
         Part part;
-        part.pieces.assign(tool.pieces().begin() + std::ptrdiff_t(cp.first),
-                           tool.pieces().begin() + std::ptrdiff_t(cp.last));
-        part.z0 = cp.z0;
-        part.z1 = cp.z1;
+        part.pieces = std::move(pieces);
+        part.z0 = pieceZ0(part.pieces.front());
+        part.z1 = pieceZ1(part.pieces.back());
         const ProfilePiece& bottom = part.pieces.front();
         const ProfilePiece& top = part.pieces.back();
         const double rBottom = pieceRadius(bottom, part.z0), rTop = pieceRadius(top, part.z1);

@@ -113,6 +113,10 @@ public:
     MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const Vec3& axis);
     /// @brief Sweeps `tool` along `move` (its start, end and axis; the move's tool id is ignored).
     MoveSweep(const Tool& tool, const Move& move);
+    /// @brief Sweeps one convex solid of revolution, given as its profile pieces bottom to top
+    /// (heights above the tip, which may be negative: a tool part grown by offsetPart).
+    /// @throw Error if the axis has zero length.
+    MoveSweep(const std::vector<ProfilePiece>& pieces, const Vec3& start, const Vec3& end, const Vec3& axis);
 
     MoveSweep(const MoveSweep&);
     MoveSweep(MoveSweep&&) noexcept;
@@ -180,6 +184,8 @@ public:
     struct StaticProfile;
 
 private:
+    MoveSweep(std::vector<std::vector<ProfilePiece>> parts, const Vec3& start, const Vec3& end, const Vec3& axis);
+
     struct EndTrace;
     /// The part's interval of the query line in local parameters. With kTrace, also where each end
     /// came from (`trace`), for endNormal; without it, `trace` is unused and nothing is recorded.
