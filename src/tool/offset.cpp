@@ -58,6 +58,66 @@ std::vector<ProfilePiece> offsetPart(const Tool& tool, const ConvexPart& part, d
     return out;
 }
 
+std::vector<ProfilePiece> mitredOffsetPart(const Tool& tool, const ConvexPart& part, double r) {
+    const auto& pieces = tool.pieces();
+    std::vector<ProfilePiece> out;
+    const double level = kLevelStep * r;
+    // Where the chain stands; it starts at the bottom face's rim, moved down by r.
+    const ProfilePiece& bottom = pieces[part.first];
+    double rAt = pieceRadius(bottom, pieceZ0(bottom)), zAt = pieceZ0(bottom) - r;
+    // A straight step to (rv, zv). A step level to within `level` makes no cone: before any piece
+    // it widens the bottom face, after a cone it raises and widens that cone's top (both only
+    // enlarge the solid, by at most the step's height). After an arc (a corner's tangent leaving
+    // it nearly level) the step is dropped, a gap in radius of at most the step's height over its
+    // slope.
+    const auto lineTo = [&](double rv, double zv) {
+        if (zv - zAt > level) {
+            out.push_back(ConePiece{zAt, zv, rAt, rv});
+            rAt = rv, zAt = zv;
+        } else if (!out.empty() && std::holds_alternative<ConePiece>(out.back())) {
+            ConePiece& last = std::get<ConePiece>(out.back());
+            last.z1 = std::max(last.z1, zv);
+            last.r1 = std::max(last.r1, rv);
+            rAt = last.r1, zAt = last.z1;
+        } else {
+            rAt = std::max(rAt, rv), zAt = std::max(zAt, zv);
+        }
+    };
+    // The corner (rc, zc) turning the normal from psiA to psiB: tangents to the circle of radius
+    // r about it, n steps of at most a quarter turn d, meeting at distance r / cos(d / 2).
+    const auto corner = [&](double rc, double zc, double psiA, double psiB) {
+        if (!(psiB > psiA)) return;
+        const int n = int(std::ceil((psiB - psiA) / kHalfPi));
+        const double d = (psiB - psiA) / n, far = r / std::cos(0.5 * d);
+        for (int i = 0; i < n; ++i) {
+            const double psi = psiA + (i + 0.5) * d;
+            lineTo(rc + far * std::cos(psi), zc + far * std::sin(psi));
+        }
+        lineTo(rc + r * std::cos(psiB), zc + r * std::sin(psiB));
+    };
+    double psi = -kHalfPi;  // the bottom face's normal
+    for (std::size_t i = part.first; i < part.last; ++i) {
+        const ProfilePiece& p = pieces[i];
+        const double z0 = pieceZ0(p), z1 = pieceZ1(p);
+        corner(pieceRadius(p, z0), z0, psi, normalAngle(p, z0));
+        if (const auto* c = std::get_if<ConePiece>(&p)) {
+            double nr = 0.0, nz = 0.0;
+            meridianNormal(p, c->r0, c->z0, nr, nz);
+            lineTo(c->r1 + r * nr, c->z1 + r * nz);
+        } else {
+            const ArcPiece& a = std::get<ArcPiece>(p);
+            const double grow = (a.rho + r) / a.rho;
+            const ArcPiece grown{a.zc + grow * (a.z0 - a.zc), a.zc + grow * (a.z1 - a.zc), a.rc, a.zc, a.rho + r};
+            out.push_back(grown);
+            rAt = pieceRadius(grown, grown.z1), zAt = grown.z1;
+        }
+        psi = normalAngle(p, z1);
+    }
+    const ProfilePiece& top = pieces[part.last - 1];
+    corner(pieceRadius(top, pieceZ1(top)), pieceZ1(top), psi, kHalfPi);
+    return out;
+}
+
 OuterPart outerOffsetPart(const Tool& tool, const ConvexPart& part, double r, double slack) {
     OuterPart outer;
     outer.pieces = offsetPart(tool, part, r);

@@ -341,3 +341,76 @@ TEST_CASE("outerOffsetPart: a flat end mill's rims get two cones each, used wher
     // No slack: no chains.
     for (const auto& chain : outerOffsetPart(flat, part, 1.0, 0.0).chains) CHECK(chain.empty());
 }
+
+TEST_CASE("mitredOffsetPart: holds the grown part and lies within r sqrt 2 of the part", "[tool][offset]") {
+    std::mt19937_64 rng(20261129);
+    const int perKind = std::max(2, int(30 * oracle::testScale()));
+    int checked = 0, missed = 0;
+    for (int k = 0; k < int(models::Kind::Count); ++k) {
+        for (int n = 0; n < perKind; ++n) {
+            const models::Model m = models::make(models::Kind(k), rng);
+            for (std::size_t p = 0; p < m.parts.size(); ++p) {
+                const oracle::Part& part = m.parts[p];
+                const Polygon poly = polygonOf(part);
+                // Down to a millionth of the part's size: the growths a turning sweep's last
+                // levels ask for.
+                const double r = std::exp(models::uniform(rng, std::log(1e-6), std::log(5.0)));
+                const auto mitred = mitredOffsetPart(m.tool, m.tool.convexParts()[p], r);
+                // A chain: each piece starts where the one below ends (to rounding: a grown arc's
+                // ends are scaled from its centre, a corner's steps stepped from the corner).
+                for (std::size_t i = 1; i < mitred.size(); ++i)
+                    CHECK(std::abs(pieceZ0(mitred[i]) - pieceZ1(mitred[i - 1])) <= kRound);
+                for (int l = 0; l < 20; ++l) {
+                    Line line;
+                    if (!randomLineNear(part, r, l, rng, line)) continue;
+                    const Interval iv = intersectPieces(mitred, LocalLine::make(ToolPose{}, line));
+                    INFO(models::name(models::Kind(k)) << " part " << p << " r " << r << " " << describe(line));
+                    auto distance = [&](double t) {
+                        const Vec3 q = line.at(t);
+                        return polygonDistance(poly, rhoOf(q), q.z, 2.0 * r + kGap);
+                    };
+                    if (iv.isEmpty()) {
+                        checkNothingWithin(part, r, distance);
+                        ++missed;
+                        continue;
+                    }
+                    checkEnds(iv, r, std::sqrt(2.0) * r, distance);
+                    for (const double t : {iv.lo - kLineStep, iv.hi + kLineStep}) CHECK(distance(t) >= r - kRound);
+                    ++checked;
+                }
+            }
+        }
+    }
+    CHECK(checked > 1000);
+    CHECK(missed > 10);
+}
+
+TEST_CASE("mitredOffsetPart: a flat end mill grows into a cylinder with square corners", "[tool][offset]") {
+    const Tool flat = flatEndMill(10.0, {20.0, 20.0});
+    const ConvexPart& part = flat.convexParts().front();
+    // Each rim turns the normal a quarter turn: one step, the two faces' planes moved out by r
+    // meeting at the corner (r sqrt 2 from the rim). The faces need no piece; the side is the
+    // rims' steps and the cylinder moved out, all at radius 6.
+    const auto mitred = mitredOffsetPart(flat, part, 1.0);
+    REQUIRE(mitred.size() == 3);
+    const double z[] = {-1.0, 0.0, 20.0, 21.0};
+    for (std::size_t i = 0; i < mitred.size(); ++i) {
+        REQUIRE(std::holds_alternative<ConePiece>(mitred[i]));
+        const ConePiece& c = std::get<ConePiece>(mitred[i]);
+        CHECK(c.z0 == Approx(z[i]));
+        CHECK(c.z1 == Approx(z[i + 1]));
+        CHECK(c.r0 == Approx(6.0));
+        CHECK(c.r1 == Approx(6.0));
+    }
+    // The corner of the grown solid lies r sqrt 2 from the rim: along a line through it, the
+    // interval reaches it where the rounded offset (offsetPart) stops r short of it.
+    const Vec3 corner(6.0, 0.0, -1.0), out = glm::normalize(Vec3(1.0, 0.0, -1.0));
+    const Line diagonal{corner - 50.0 * out, out};
+    CHECK(intersectPieces(mitred, LocalLine::make(ToolPose{}, diagonal)).hi == Approx(50.0));
+    CHECK(intersectPieces(offsetPart(flat, part, 1.0), LocalLine::make(ToolPose{}, diagonal)).hi ==
+          Approx(50.0 - (std::sqrt(2.0) - 1.0)));
+    // Growing by zero keeps the part.
+    const auto same = mitredOffsetPart(flat, part, 0.0);
+    REQUIRE(same.size() == 1);
+    CHECK(std::get<ConePiece>(same.front()).r0 == 5.0);
+}

@@ -30,6 +30,14 @@ namespace dexelmill {
 /// @brief The pieces of `part` of `tool` grown by r >= 0, bottom to top (see the file comment).
 std::vector<ProfilePiece> offsetPart(const Tool& tool, const ConvexPart& part, double r);
 
+/// @brief A superset of `part` of `tool` grown by r >= 0 whose corners are polygons: each corner's
+/// arc (offsetPart) is replaced by the tangents to it at steps of at most a quarter turn, which
+/// meet at most r (sqrt 2 - 1) outside the arc; everything else is offsetPart's. A flat or
+/// conical tool stays cones and faces, which sweep in closed form (MoveSweep), where offsetPart's
+/// rims would be tori. Built from the part's own normal angles, not from the grown arcs' heights,
+/// so it stays exact to rounding for r of any size against the part's.
+std::vector<ProfilePiece> mitredOffsetPart(const Tool& tool, const ConvexPart& part, double r);
+
 /// @brief A part grown by r, for tests that need only a superset of a line's interval in it:
 /// offsetPart's pieces, with each torus piece (an arc off the axis) also as the chain of cones
 /// tangent to it at evenly spaced points, where at most kMaxTangentCones keep the chain within
