@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
+#include <optional>
 
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
@@ -87,11 +90,13 @@ Interval lineInBox(const Line& line, const Box& box) {
 }
 
 /// One output interval with where each end came from: the pose u and the part whose interval
-/// made it.
+/// made it, or the linear node (note h) whose move made it.
 struct Piece {
     Interval range;
     double uLo = 0.0, uHi = 0.0;
     std::size_t partLo = 0, partHi = 0;
+    /// The heap index of the linear node whose sweep made the end; 0 when a pose made it.
+    std::uint32_t nodeLo = 0, nodeHi = 0;
 };
 
 /// The union of static-pose intervals found so far: sorted, disjoint.
@@ -99,15 +104,17 @@ class Union {
   public:
     void add(const Interval& iv, double u, std::size_t part) { add(iv, u, u, part); }
     /// Adds an interval whose ends were made at different poses.
-    void add(const Interval& iv, double uLo, double uHi, std::size_t part) {
-        Piece p{iv, uLo, uHi, part, part};
+    void add(const Interval& iv, double uLo, double uHi, std::size_t part, std::uint32_t node = 0) {
+        Piece p{iv, uLo, uHi, part, part, node, node};
         auto it = std::lower_bound(pieces_.begin(), pieces_.end(), iv.lo,
                                    [](const Piece& q, double lo) { return q.range.hi < lo; });
         // Merge every piece that overlaps or touches the new one.
         auto last = it;
         while (last != pieces_.end() && last->range.lo <= iv.hi) {
-            if (last->range.lo < p.range.lo) p.range.lo = last->range.lo, p.uLo = last->uLo, p.partLo = last->partLo;
-            if (last->range.hi > p.range.hi) p.range.hi = last->range.hi, p.uHi = last->uHi, p.partHi = last->partHi;
+            if (last->range.lo < p.range.lo)
+                p.range.lo = last->range.lo, p.uLo = last->uLo, p.partLo = last->partLo, p.nodeLo = last->nodeLo;
+            if (last->range.hi > p.range.hi)
+                p.range.hi = last->range.hi, p.uHi = last->uHi, p.partHi = last->partHi, p.nodeHi = last->nodeHi;
             ++last;
         }
         it = pieces_.erase(it, last);
@@ -203,7 +210,105 @@ bool ballEnd(const std::vector<ProfilePiece>& pieces, const ConvexPart& part, do
     return true;
 }
 
+/// The deepest level of the linear-node search (note h): a part has at most
+/// 2^(kMaxLinearLevel + 1) nodes. A move that would need deeper ones is searched by static poses.
+constexpr int kMaxLinearLevel = 14;
+
+/// How many levels above the static search's closing level (note c) the linear nodes' leaves
+/// must lie for a move to take them. A node costs a one-part MoveSweep, about 2 us to make and
+/// 2 kB to keep, against a static pose's solve; on the short moves of real programs, whose few
+/// lines share few nodes, that pays only where the nodes are far fewer. Measured on the impeller
+/// and on BM_TurningQuery (README, Performance).
+constexpr int kLinearLevelsSaved = 3;
+
+/// The linear nodes kept by every sweep alive, and how many they may keep.
+std::atomic<std::size_t> keptNodes{0};
+std::atomic<std::size_t> nodeBudget{kDefaultLinearNodeBudget};
+
+/// The level of the node with heap index `heap` (the root 1, node i's halves 2i and 2i + 1).
+int heapLevel(std::uint32_t heap) {
+    int level = 0;
+    while (heap >> (level + 1)) ++level;
+    return level;
+}
+
+/// The largest radius a profile piece reaches, or more.
+double pieceRadiusBound(const ProfilePiece& piece) {
+    if (const auto* c = std::get_if<ConePiece>(&piece)) return std::max(c->r0, c->r1);
+    const ArcPiece& a = std::get<ArcPiece>(piece);
+    return a.rc + a.rho;
+}
+
 }  // namespace
+
+/// The linear nodes made so far, per part by heap index: each made at most once, by whichever
+/// query needs it first (one that loses the race to publish its node drops it), and read by
+/// every query after.
+class TurningSweep::NodeCache {
+  public:
+    explicit NodeCache(const std::vector<LinearPart>& parts) {
+        for (const LinearPart& p : parts) {
+            sizes_.push_back(std::size_t(2) << p.leafLevel());
+            slots_.emplace_back(new std::atomic<const LinearNode*>[sizes_.back()]());
+        }
+    }
+    ~NodeCache() {
+        for (std::size_t p = 0; p < slots_.size(); ++p)
+            for (std::size_t i = 0; i < sizes_[p]; ++i) delete slots_[p][i].load(std::memory_order_relaxed);
+        keptNodes.fetch_sub(kept_.load(std::memory_order_relaxed), std::memory_order_relaxed);
+    }
+    NodeCache(const NodeCache&) = delete;
+    NodeCache& operator=(const NodeCache&) = delete;
+
+    /// The node, kept; or, when the sweeps alive keep their budget already, made in `scratch`.
+    template <class Make>
+    const LinearNode& get(std::size_t part, std::uint32_t heap, std::optional<LinearNode>& scratch, Make&& make) {
+        std::atomic<const LinearNode*>& slot = slots_[part][heap];
+        if (const LinearNode* n = slot.load(std::memory_order_acquire)) return *n;
+        if (keptNodes.fetch_add(1, std::memory_order_relaxed) >= nodeBudget.load(std::memory_order_relaxed)) {
+            keptNodes.fetch_sub(1, std::memory_order_relaxed);
+            return scratch.emplace(make());
+        }
+        kept_.fetch_add(1, std::memory_order_relaxed);
+        auto made = std::make_unique<const LinearNode>(make());
+        const LinearNode* seen = nullptr;
+        if (slot.compare_exchange_strong(seen, made.get(), std::memory_order_acq_rel, std::memory_order_acquire))
+            return *made.release();
+        kept_.fetch_sub(1, std::memory_order_relaxed);
+        keptNodes.fetch_sub(1, std::memory_order_relaxed);
+        return *seen;
+    }
+
+  private:
+    std::vector<std::unique_ptr<std::atomic<const LinearNode*>[]>> slots_;
+    std::vector<std::size_t> sizes_;
+    std::atomic<std::size_t> kept_{0};
+};
+
+std::size_t TurningSweep::keptLinearNodes() { return keptNodes.load(std::memory_order_relaxed); }
+
+void TurningSweep::setLinearNodeBudget(std::size_t nodes) { nodeBudget.store(nodes, std::memory_order_relaxed); }
+
+int TurningSweep::linearNodeLevels() const {
+    int levels = 0;
+    for (const LinearPart& m : models_) levels = std::max(levels, m.leafLevel());
+    return levels;
+}
+
+const TurningSweep::LinearNode& TurningSweep::linearNode(std::size_t part, std::uint32_t heap,
+                                                          std::optional<LinearNode>& scratch) const {
+    return nodes_->get(part, heap, scratch, [&] {
+        const int level = heapLevel(heap);
+        const double width = std::ldexp(1.0, -level);
+        const double ua = double(heap - (std::uint32_t(1) << level)) * width, ub = ua + width, um = ua + 0.5 * width;
+        const LinearPart& m = models_[part];
+        const ToolPose a = law_.pose(ua), b = law_.pose(ub), mid = law_.pose(um);
+        // The pivot runs on the chord from its place at ua to its place at ub, the axis held at
+        // the middle's: the tip is the pivot less pivot height times that axis.
+        const Vec3 start = a.tip + m.pivot * (a.axis - mid.axis), end = b.tip + m.pivot * (b.axis - mid.axis);
+        return LinearNode{MoveSweep(m.pieces[std::size_t(level)], start, end, mid.axis), mid, um};
+    });
+}
 
 Box turningMoveBox(const Move& m, double length, double radius) {
     if (m.rotary) {
@@ -284,6 +389,8 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     endPhase_ = law_.phase(1.0);
     startPose_ = law_.pose(startPhase_);
     endPose_ = law_.pose(endPhase_);
+    chooseLinearNodes();
+    if (!models_.empty()) return;
     for (int k = 0; k < kMaxLevel && std::ldexp(speed_, -(k + 1)) > epsilon_; ++k) {
         const double g = std::ldexp(speed_, -(k + 1)) - epsilon_;
         std::vector<OuterPart> level;
@@ -292,6 +399,45 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
         halfSteps_.push_back(law_.step(std::ldexp(1.0, -(k + 1))));
         if (g > epsilon_) closingLevel_ = k + 1;
     }
+}
+
+void TurningSweep::chooseLinearNodes() {
+    // Only a tip on the straight line bounds the pivot's bend (note h).
+    if (!std::isfinite(law_.axisPointAccelerationBound(0.0))) return;
+    // The static search closes its nodes at the first level whose growth is at most epsilon.
+    int staticLevels = 0;
+    while (staticLevels < kMaxLevel && std::ldexp(speed_, -(staticLevels + 1)) > 2.0 * epsilon_) ++staticLevels;
+    std::vector<LinearPart> models;
+    for (const ConvexPart& part : parts_) {
+        const auto& pieces = tool_.pieces();
+        double radius = 0.0;
+        for (std::size_t i = part.first; i < part.last; ++i) radius = std::max(radius, pieceRadiusBound(pieces[i]));
+        const double z0 = pieceZ0(pieces[part.first]), z1 = pieceZ1(pieces[part.last - 1]);
+        LinearPart m;
+        m.pivot = 0.5 * (z0 + z1);
+        const double turn = law_.turnBound(std::hypot(0.5 * (z1 - z0), radius));
+        const double bend = law_.axisPointAccelerationBound(m.pivot);
+        for (int k = 0;; ++k) {
+            const double width = std::ldexp(1.0, -k);
+            m.reach.push_back(0.5 * turn * width + 0.125 * bend * width * width);
+            if (m.reach.back() <= epsilon_) break;
+            if (k >= std::min(kMaxLinearLevel, staticLevels - kLinearLevelsSaved)) return;
+        }
+        for (int k = 0; k <= m.leafLevel(); ++k) {
+            // Above the leaves, the growth that settles; at the leaves, what is left of epsilon
+            // with the tangent cones' slack: within epsilon of S either way.
+            const double reach = m.reach[std::size_t(k)];
+            const double g = k < m.leafLevel() ? reach - epsilon_ : 0.0;
+            if (!(g > 0.0)) {
+                m.pieces.emplace_back(pieces.begin() + std::ptrdiff_t(part.first), pieces.begin() + std::ptrdiff_t(part.last));
+                continue;
+            }
+            m.pieces.push_back(mitredOffsetPart(tool_, part, g));
+        }
+        models.push_back(std::move(m));
+    }
+    models_ = std::move(models);
+    nodes_ = std::make_shared<NodeCache>(models_);
 }
 
 ToolPose TurningSweep::pose(double u) const { return law_.pose(u); }
@@ -371,6 +517,34 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      surface P's grown intervals are empty or held, so the search descends only where P
 //      itself comes near the line. A move whose law has no bound K (a tip the machine carries)
 //      or would need more than kMaxChords chords is searched whole.
+//  (h) Linear nodes. Where the tip runs on a straight line (an APT MULTAX move, a machine's move
+//      under tool centre point control), the tip's travel |f| is most of V on a typical move, and
+//      the search above pays for it at every level. A node can instead be taken as a fixed-axis
+//      linear move, which MoveSweep sweeps in closed form: the tool's axis point at height zc
+//      (the pivot, the middle of the part's heights) runs on the chord from c(ua) to c(ub), with
+//      c(u) = p(u) + zc a(u), and the axis is held at a(um), um the node's middle. Its pose M(u)
+//      is carried to T(u) by a rigid motion that moves a tool point at distance rho from the
+//      pivot by at most |c(u) - L(u)| + |Q(u) - Q(um)| rho <= K w^2 / 8 + omega (w / 2) rho =
+//      delta_k, for a node of width w = 2^-k: L is the chord (its error as in g, with
+//      K = MotionLaw::axisPointAccelerationBound(zc)), Q the turns' rotation, whose rate is at
+//      most omega (MotionLaw::turnBound), and rho at most hypot(half the part's height, its
+//      largest radius). As in (b), with M(u) in place of T(u'), a point deeper than epsilon inside
+//      T(u) lies inside M(u) grown by max(delta_k - epsilon, 0), and every point of M(u) lies
+//      within delta_k of T(u). The search runs part by part, with the static poses at u = 0 and
+//      1 in O. A node whose delta_k is at most epsilon is a leaf: the part's sweep along its move
+//      goes into O, within epsilon of S (1) and holding every point deeper than epsilon inside
+//      T(u) for u in the node (2). Any other node is settled when the part grown by
+//      delta_k - epsilon (mitredOffsetPart, a superset) swept along its move holds no point of
+//      care outside O; otherwise the static pose at its middle goes into O and both halves are
+//      searched. Every u lies in a settled node or a leaf, so (2) holds; O holds static poses
+//      and leaves' sweeps, so (1) holds. The gaps of (d) are closed between poses' ends only: a
+//      leaf's sweep already holds every point deeper than epsilon inside its node's poses.
+//      Cost: the reach falls as omega rho 2^-(k+1) instead of V 2^-(k+1), so the leaves lie
+//      about log2(V / (2 omega rho)) levels higher than the closing level of (c), and near a
+//      graze of the envelope the nodes a level are fewer by about the square root of that ratio.
+//      A node's sweep is made once per move, by the first query that needs it, and kept
+//      (NodeCache). A move whose leaves would lie deeper than kMaxLinearLevel, or no higher than
+//      the closing level of (c), keeps the search of (c).
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     const Interval reach = bound(line);
@@ -398,78 +572,111 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             found.add(iv, chordU(iv.lo), chordU(iv.hi), parts.size() + b);
         }
     }
-    // The poses solved, each with its line in the tool's frame and its phase; nodes refer to
-    // them by index. Pose e's interval in part p is exact[e * parts.size() + p].
-    struct End {
-        LocalLine local;
-        TurnPhase phase;
-    };
-    std::vector<End> ends;
-    std::vector<Interval> exact;
-    ends.reserve(64);
-    exact.reserve(64 * parts.size());
-    auto solve = [&](const TurnPhase& phase, const ToolPose& pose) {
-        const LocalLine local = LocalLine::make(pose, line);
-        for (std::size_t p = 0; p < parts.size(); ++p) {
-            const Interval iv = tool_.intersectPart(parts[p], local);
-            if (!iv.isEmpty()) found.add(iv, phase.u, p);
-            exact.push_back(iv);
+    // Whether `g` holds no point of care outside O.
+    const auto held = [&](const Interval& g) {
+        for (const Interval* c = careBegin; c != careEnd && !g.isEmpty(); ++c) {
+            const Interval part = g.intersect(*c);
+            if (!part.isEmpty() && !found.holds(part.lo, part.hi)) return false;
         }
-        ends.push_back({local, phase});
-        return std::uint32_t(ends.size() - 1);
-    };
-    // Whether the tool at end pose e, grown by level k's reach, holds no point of care outside O
-    // (tested piece by piece, on intervals that hold each piece's; each part's own interval at
-    // that pose is the root finding's hint).
-    auto settled = [&](std::uint32_t e, int k) {
-        const auto held = [&](const Interval& g) {
-            for (const Interval* c = careBegin; c != careEnd && !g.isEmpty(); ++c) {
-                const Interval part = g.intersect(*c);
-                if (!part.isEmpty() && !found.holds(part.lo, part.hi)) return false;
-            }
-            return true;
-        };
-        const std::vector<OuterPart>& level = grown_[std::size_t(k)];
-        for (std::size_t p = 0; p < level.size(); ++p)
-            if (!allPiecesHeld(level[p], ends[e].local, held, exact[e * parts.size() + p])) return false;
         return true;
     };
-
-    struct Node {
-        int level;
-        std::uint32_t a, b;  ///< the ends' indices into `ends`
-        bool aSettled;       ///< the end at a passed this level's test (as its left sibling's end)
-    };
-    // A node of level k < levels pops itself and pushes two of level k + 1, so the stack holds
-    // at most one node per level and two of the deepest: kMaxLevel + 2 in all.
-    const int levels = int(grown_.size());
-    std::array<Node, kMaxLevel + 2> stack;
-    std::size_t top = 0;
-    const std::uint32_t first = solve(startPhase_, startPose_);
-    stack[top++] = {0, first, solve(endPhase_, endPose_), false};
-    while (top > 0) {
-        const Node n = stack[--top];
-        if (n.level >= levels) continue;  // a leaf: its reach is at most epsilon
-        const std::size_t k = std::size_t(n.level);
-        if ((n.aSettled || settled(n.a, n.level)) && settled(n.b, n.level)) {
-            // The right sibling, still on the stack, starts at this node's end.
-            if (top > 0 && stack[top - 1].level == n.level && stack[top - 1].a == n.b) stack[top - 1].aSettled = true;
-            continue;
-        }
-        if (n.level >= closingLevel_) {  // closed: grown by at most epsilon
-            for (std::size_t p = 0; p < parts.size(); ++p)
-                for (const std::uint32_t e : {n.a, n.b}) {
-                    const Interval g = intersectPieces(grown_[k][p].pieces, ends[e].local);
-                    if (!g.isEmpty()) found.add(g, ends[e].phase.u, p);
+    if (!models_.empty()) {
+        // Linear nodes (note h), part by part: the static poses at both ends, then the nodes
+        // from the root down.
+        const LocalLine atStart = LocalLine::make(startPose_, line), atEnd = LocalLine::make(endPose_, line);
+        for (std::size_t p = 0; p < parts.size(); ++p) {
+            const Interval first = tool_.intersectPart(parts[p], atStart), last = tool_.intersectPart(parts[p], atEnd);
+            if (!first.isEmpty()) found.add(first, 0.0, p);
+            if (!last.isEmpty()) found.add(last, 1.0, p);
+            const int leaf = models_[p].leafLevel();
+            // A node pops itself and pushes its two halves: at most one node a level and two of
+            // the deepest.
+            std::array<std::uint32_t, kMaxLinearLevel + 2> stack;
+            std::size_t top = 0;
+            std::optional<LinearNode> scratch;
+            stack[top++] = 1;
+            while (top > 0) {
+                const std::uint32_t heap = stack[--top];
+                const LinearNode& node = linearNode(p, heap, scratch);
+                const Interval swept = node.sweep.intersect(line);
+                if (heapLevel(heap) == leaf) {  // closed: the part's own sweep along the node's move
+                    if (!swept.isEmpty()) found.add(swept, node.middleU, node.middleU, p, heap);
+                    continue;
                 }
-            continue;
+                if (held(swept)) continue;  // settled: the grown part's sweep is held
+                const Interval middle = tool_.intersectPart(parts[p], LocalLine::make(node.middle, line));
+                if (!middle.isEmpty()) found.add(middle, node.middleU, p);
+                stack[top++] = 2 * heap + 1;
+                stack[top++] = 2 * heap;
+            }
         }
-        // The middle pose, stepped from the start's phase: within kPhaseStepError per level and
-        // turn of the exact pose (1.6e-10 mm at most, well inside epsilon), see note c.
-        const TurnPhase middle = law_.advance(ends[n.a].phase, halfSteps_[k]);
-        const std::uint32_t m = solve(middle, law_.pose(middle));
-        stack[top++] = {n.level + 1, m, n.b, false};
-        stack[top++] = {n.level + 1, n.a, m, false};
+    } else {
+        // The poses solved, each with its line in the tool's frame and its phase; nodes refer to
+        // them by index. Pose e's interval in part p is exact[e * parts.size() + p].
+        struct End {
+            LocalLine local;
+            TurnPhase phase;
+        };
+        std::vector<End> ends;
+        std::vector<Interval> exact;
+        ends.reserve(64);
+        exact.reserve(64 * parts.size());
+        auto solve = [&](const TurnPhase& phase, const ToolPose& pose) {
+            const LocalLine local = LocalLine::make(pose, line);
+            for (std::size_t p = 0; p < parts.size(); ++p) {
+                const Interval iv = tool_.intersectPart(parts[p], local);
+                if (!iv.isEmpty()) found.add(iv, phase.u, p);
+                exact.push_back(iv);
+            }
+            ends.push_back({local, phase});
+            return std::uint32_t(ends.size() - 1);
+        };
+        // Whether the tool at end pose e, grown by level k's reach, holds no point of care outside O
+        // (tested piece by piece, on intervals that hold each piece's; each part's own interval at
+        // that pose is the root finding's hint).
+        auto settled = [&](std::uint32_t e, int k) {
+            const std::vector<OuterPart>& level = grown_[std::size_t(k)];
+            for (std::size_t p = 0; p < level.size(); ++p)
+                if (!allPiecesHeld(level[p], ends[e].local, held, exact[e * parts.size() + p])) return false;
+            return true;
+        };
+
+        struct Node {
+            int level;
+            std::uint32_t a, b;  ///< the ends' indices into `ends`
+            bool aSettled;       ///< the end at a passed this level's test (as its left sibling's end)
+        };
+        // A node of level k < levels pops itself and pushes two of level k + 1, so the stack holds
+        // at most one node per level and two of the deepest: kMaxLevel + 2 in all.
+        const int levels = int(grown_.size());
+        std::array<Node, kMaxLevel + 2> stack;
+        std::size_t top = 0;
+        const std::uint32_t first = solve(startPhase_, startPose_);
+        stack[top++] = {0, first, solve(endPhase_, endPose_), false};
+        while (top > 0) {
+            const Node n = stack[--top];
+            if (n.level >= levels) continue;  // a leaf: its reach is at most epsilon
+            const std::size_t k = std::size_t(n.level);
+            if ((n.aSettled || settled(n.a, n.level)) && settled(n.b, n.level)) {
+                // The right sibling, still on the stack, starts at this node's end.
+                if (top > 0 && stack[top - 1].level == n.level && stack[top - 1].a == n.b) stack[top - 1].aSettled = true;
+                continue;
+            }
+            if (n.level >= closingLevel_) {  // closed: grown by at most epsilon
+                for (std::size_t p = 0; p < parts.size(); ++p)
+                    for (const std::uint32_t e : {n.a, n.b}) {
+                        const Interval g = intersectPieces(grown_[k][p].pieces, ends[e].local);
+                        if (!g.isEmpty()) found.add(g, ends[e].phase.u, p);
+                    }
+                continue;
+            }
+            // The middle pose, stepped from the start's phase: within kPhaseStepError per level and
+            // turn of the exact pose (1.6e-10 mm at most, well inside epsilon), see note c.
+            const TurnPhase middle = law_.advance(ends[n.a].phase, halfSteps_[k]);
+            const std::uint32_t m = solve(middle, law_.pose(middle));
+            stack[top++] = {n.level + 1, m, n.b, false};
+            stack[top++] = {n.level + 1, n.a, m, false};
+        }
     }
 
     // Close the gaps that lie within epsilon of the poses on both sides (d): where the line runs
@@ -477,12 +684,12 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
     // the continuous motion sweeps, and that a stock must not keep.
     std::vector<Piece> pieces;
     for (const Piece& p : found.pieces()) {
-        if (!pieces.empty()) {
+        if (!pieces.empty() && pieces.back().nodeHi == 0 && p.nodeLo == 0) {
             Piece& last = pieces.back();
             const Interval left = intersectPieces(grownEpsilon_[last.partHi], LocalLine::make(pose(last.uHi), line));
             const Interval right = intersectPieces(grownEpsilon_[p.partLo], LocalLine::make(pose(p.uLo), line));
             if (left.hi >= right.lo) {
-                last.range.hi = p.range.hi, last.uHi = p.uHi, last.partHi = p.partHi;
+                last.range.hi = p.range.hi, last.uHi = p.uHi, last.partHi = p.partHi, last.nodeHi = p.nodeHi;
                 continue;
             }
         }
@@ -491,8 +698,21 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
     for (const Piece& p : pieces) {
         LineHit hit;
         hit.range = p.range;
-        endNormal(line, p.range.lo, p.uLo, p.partLo, hit.normalLo, hit.sharpLo);
-        endNormal(line, p.range.hi, p.uHi, p.partHi, hit.normalHi, hit.sharpHi);
+        // An end a linear node made takes the Hermite data of its sweep there (note h).
+        LineHit node;
+        std::optional<LinearNode> scratch;
+        if (p.nodeLo != 0) {
+            linearNode(p.partLo, p.nodeLo, scratch).sweep.intersectParts(line, &node);
+            hit.normalLo = node.normalLo, hit.sharpLo = node.sharpLo;
+        } else {
+            endNormal(line, p.range.lo, p.uLo, p.partLo, hit.normalLo, hit.sharpLo);
+        }
+        if (p.nodeHi != 0) {
+            linearNode(p.partHi, p.nodeHi, scratch).sweep.intersectParts(line, &node);
+            hit.normalHi = node.normalHi, hit.sharpHi = node.sharpHi;
+        } else {
+            endNormal(line, p.range.hi, p.uHi, p.partHi, hit.normalHi, hit.sharpHi);
+        }
         out.push_back(hit);
     }
     return out;

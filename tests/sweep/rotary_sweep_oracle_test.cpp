@@ -177,10 +177,13 @@ Move machineMove(const Case& c) {
     return mv;
 }
 
-int checkCase(const Case& c, const Solid& s, std::mt19937& rng, int lines) {
+/// Checks `lines` random lines; returns how many points the depth check tested. `linear`, when
+/// given, is set to whether the sweep searched by linear nodes (turning.cpp, note h).
+int checkCase(const Case& c, const Solid& s, std::mt19937& rng, int lines, bool* linear = nullptr) {
     const Tool tool = s.ball ? ballEndMill(2 * s.r, {s.l, s.l}) : flatEndMill(2 * s.r, {s.l, s.l});
     const Move mv = machineMove(c);
     const TurningSweep sweep(tool, mv, kEpsilon);
+    if (linear) *linear = sweep.linearNodes();
     const RotaryOracle oracle(c, s);
     std::uniform_real_distribution<double> uni(0.0, 1.0), sym(-1.0, 1.0);
     int checked = 0;
@@ -246,6 +249,36 @@ TEST_CASE("rotary sweep vs oracle: xyzac-trt moves with TCP and in identity kine
         checked += checkCase(c, s, rng, 6);
     }
     CHECK(checked > 1000);
+}
+
+TEST_CASE("rotary sweep vs oracle: TCP moves turning a degree or two over long travel", "[sweep][turning][machine]") {
+    // Small turns of A and C against 20 to 40 mm of travel: the search takes linear nodes, each
+    // a stretch of the move with the axis held (turning.cpp, note h); identity kinematics, whose
+    // tip path curves, never does.
+    std::mt19937 rng(20261129);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    int checked = 0, linear = 0;
+    for (int i = 0; i < 12; ++i) {
+        Case c;
+        c.tcp = i % 3 != 0;
+        c.j0 = Vec3(20 * uni(rng), 20 * uni(rng), 5 + 10 * uni(rng));
+        c.j1 = c.j0 + Vec3(30 * uni(rng), 30 * uni(rng), 5 * uni(rng));
+        c.a0 = -60 + 40 * uni(rng);
+        c.a1 = c.a0 + 2 * uni(rng);
+        c.c0 = 180 * uni(rng);
+        c.c1 = c.c0 + 2 * uni(rng);
+        Solid s;
+        s.ball = i % 2 == 0;
+        s.r = 2 + uni(rng);
+        s.l = 15 + 5 * uni(rng);
+        INFO("case " << i << (c.tcp ? " TCP" : " identity"));
+        bool byNodes = false;
+        checked += checkCase(c, s, rng, 6, &byNodes);
+        if (!c.tcp) CHECK_FALSE(byNodes);
+        linear += byNodes;
+    }
+    CHECK(checked > 500);
+    CHECK(linear >= 4);
 }
 
 TEST_CASE("rotary sweep vs oracle: a rotary table alone turning under a still tool", "[sweep][turning][machine]") {

@@ -404,6 +404,7 @@ Case randomCase(std::mt19937_64& rng, const Move& move, bool dexel = false) {
 
 struct Tally {
     int cases = 0, hits = 0, failures = 0;
+    int linear = 0;  ///< cases the sweep searched by linear nodes (turning.cpp, note h)
     std::string log;
 
     void fail(const Case& c, const std::string& what) {
@@ -422,6 +423,7 @@ constexpr double kInnerFractions[] = {0.25, 0.5, 0.75};
 std::vector<Interval> checkCase(const Case& c, Tally& tally, std::mt19937_64& rng) {
     ++tally.cases;
     const TurningSweep sweep(c.model->tool, c.move, c.epsilon);
+    if (sweep.linearNodes()) ++tally.linear;
     const SweepOracle o(c.model->parts, c.move);
     const std::vector<Interval> out = sweep.intersectAll(c.line);
     if (!out.empty()) ++tally.hits;
@@ -483,7 +485,8 @@ std::vector<Interval> checkCase(const Case& c, Tally& tally, std::mt19937_64& rn
 }
 
 void report(const Tally& t, bool requireHits = true) {
-    INFO(t.cases << " cases, " << t.hits << " with output, " << t.failures << " failures\n" << t.log);
+    INFO(t.cases << " cases (" << t.linear << " by linear nodes), " << t.hits << " with output, " << t.failures
+                 << " failures\n" << t.log);
     CHECK(t.failures == 0);
     // The cases must exercise the solver: a good share of the lines meet the sweep.
     if (requireHits) CHECK(t.hits >= t.cases / 4);
@@ -681,6 +684,9 @@ TEST_CASE("turning sweep vs oracle: turns from 0.001 to 90 degrees", "[sweep][tu
         for (int i = 0, n = scaled(30); i < n; ++i)
             checkCase(randomCase(rng, randomMove(rng, degrees(angle), cases::uniform(rng, 0, 30))), tally, rng);
     report(tally);
+    // Both searches are tried: linear nodes on small turns, static poses on large ones.
+    CHECK(tally.linear >= tally.cases / 4);
+    CHECK(tally.cases - tally.linear >= tally.cases / 10);
 }
 
 TEST_CASE("turning sweep vs oracle: a pure rotation about the tip", "[sweep][turning]") {

@@ -1,6 +1,8 @@
 // The box of a move whose tool axis turns, against poses sampled along the turn: every sampled
 // point of the tool's cylinder lies inside the box, and the box is the tip's segment box plus the
-// sampled box of the same turn made in place, to within the sampling's shortfall.
+// sampled box of the same turn made in place, to within the sampling's shortfall. And the linear
+// nodes a turning sweep keeps (turning.cpp, note h): counted, given back, and past the budget
+// made per query with the same answers.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -8,6 +10,7 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/sweep/turning.h"
+#include "dexelmill/tool/builders.h"
 
 using namespace dexelmill;
 
@@ -113,4 +116,53 @@ TEST_CASE("turning move box: fixed axes, a turn through +z and opposite axes", "
     m.startAxis = Vec3(0, 0, -1);
     m.axis = Vec3(0, 0, 1);
     CHECK_THROWS_WITH(turningMoveBox(m, 50, 5), Catch::Matchers::Contains("opposite"));
+}
+
+TEST_CASE("turning sweep: linear nodes are kept once, given back, and past the budget made per query",
+          "[sweep][turning]") {
+    // A flat end mill turning one degree over 30 mm: the tip's travel is most of the speed, so the
+    // search takes linear nodes.
+    const Tool tool = flatEndMill(10.0, {20.0, 20.0});
+    Move m;
+    m.start = Vec3(0.0);
+    m.end = Vec3(30.0, 10.0, -3.0);
+    m.axis = glm::normalize(Vec3(0.3, -0.2, 1.0));
+    m.startAxis = rotated(m.axis, glm::normalize(glm::cross(m.axis, Vec3(0, 0, 1))), kPi / 180.0);
+    std::vector<Line> lines;
+    for (int i = 0; i < 400; ++i) lines.push_back({Vec3(-20.0, -8.0 + 0.05 * i, -1.5 - 0.002 * i), Vec3(1, 0, 0)});
+    for (int i = 0; i < 400; ++i) lines.push_back({Vec3(-5.0 + 0.1 * i, 3.0, -20.0), Vec3(0, 0, 1)});
+    const std::size_t before = TurningSweep::keptLinearNodes();
+    std::vector<std::vector<LineHit>> kept;
+    std::size_t whileAlive = 0;
+    {
+        const TurningSweep sweep(tool, m);
+        REQUIRE(sweep.linearNodes());
+        for (const Line& l : lines) kept.push_back(sweep.intersect(l));
+        whileAlive = TurningSweep::keptLinearNodes() - before;
+        CHECK(whileAlive > 100);
+        // Asked again, the lines make no new nodes.
+        for (const Line& l : lines) sweep.intersect(l);
+        CHECK(TurningSweep::keptLinearNodes() - before == whileAlive);
+    }
+    CHECK(TurningSweep::keptLinearNodes() == before);
+    // With no budget, nothing is kept and every answer is the same to the bit.
+    TurningSweep::setLinearNodeBudget(0);
+    {
+        const TurningSweep sweep(tool, m);
+        int hits = 0;
+        for (std::size_t i = 0; i < lines.size(); ++i) {
+            const std::vector<LineHit> h = sweep.intersect(lines[i]);
+            REQUIRE(h.size() == kept[i].size());
+            for (std::size_t k = 0; k < h.size(); ++k) {
+                CHECK(h[k].range.lo == kept[i][k].range.lo);
+                CHECK(h[k].range.hi == kept[i][k].range.hi);
+                CHECK(h[k].normalLo == kept[i][k].normalLo);
+                CHECK(h[k].normalHi == kept[i][k].normalHi);
+            }
+            hits += !h.empty();
+        }
+        CHECK(hits > 200);
+        CHECK(TurningSweep::keptLinearNodes() == before);
+    }
+    TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget);
 }

@@ -12,11 +12,15 @@
 /// at that pose, and the swept volume S is the union of T(u).
 #pragma once
 
+#include <cstdint>
+#include <memory>
+#include <optional>
 #include <vector>
 
 #include "dexelmill/geometry/types.h"
 #include "dexelmill/path/motion.h"
 #include "dexelmill/path/toolpath.h"
+#include "dexelmill/sweep/sweep.h"
 #include "dexelmill/tool/line_query.h"
 #include "dexelmill/tool/offset.h"
 #include "dexelmill/tool/tool.h"
@@ -31,6 +35,11 @@ constexpr double kDefaultTurnTolerance = 1e-4;
 /// finer answer could not be kept; and the search's cost grows about as epsilon^-1/2 (a one-move
 /// job: 6 s at 1e-4 mm, 53 s at 1e-6, hours at 1e-9).
 constexpr double kMinTurnTolerance = 1e-6;
+
+/// @brief How many linear nodes (turning.cpp, note h) the turning sweeps alive at once keep, by
+/// default: about 2 kB each, so 128 MiB. The cutting loop builds the sweeps of a batch of moves
+/// together; past the budget a query makes the nodes it needs and drops them, slower but no larger.
+constexpr std::size_t kDefaultLinearNodeBudget = std::size_t(1) << 16;
 
 /// @brief The angle (radians, in [0, pi]) the axis of a move turns through; 0 for a fixed axis.
 double turnAngle(const Move& move);
@@ -57,7 +66,8 @@ Box turningMoveBox(const Move& move, double length, double radius);
 ///
 /// What a line query returns, for a unit-direction line and the set O of its output intervals:
 ///  1. O lies within epsilon of S: O is a union of exact static-pose intervals (inside S, up to
-///     their rounding), of intervals of poses grown by at most epsilon, and of gaps between them
+///     their rounding), of intervals of poses grown by at most epsilon, of sweeps of stretches of
+///     the move taken with the axis held (each within epsilon of S), and of gaps between them
 ///     whose every point is within epsilon of a pose.
 ///  2. Every point of the line deeper than epsilon inside some T(u) (farther than epsilon from the
 ///     complement of T(u)) lies in O. So O's ends lie in the band of width 2 epsilon about the
@@ -81,6 +91,14 @@ class TurningSweep {
     double epsilon() const { return epsilon_; }
     /// @brief A box that holds every pose of the tool.
     const Box& bounds() const { return bounds_; }
+    /// @brief Whether the search takes each stretch of the move as a fixed-axis linear move
+    /// (turning.cpp, note h) rather than as static poses, and how deep it goes at most.
+    bool linearNodes() const { return !models_.empty(); }
+    int linearNodeLevels() const;
+    /// @brief How many linear nodes the sweeps alive keep, and the most they may keep (default
+    /// kDefaultLinearNodeBudget); a budget of 0 keeps none.
+    static std::size_t keptLinearNodes();
+    static void setLinearNodeBudget(std::size_t nodes);
     /// @brief Whether the tool's ball end is swept as capsules along chords of its centre's path
     /// instead of searched (1) or not (0) (turning.cpp, note g), and into how many chords.
     std::size_t capsuleBalls() const { return balls_.size(); }
@@ -112,6 +130,33 @@ class TurningSweep {
         std::vector<Vec3> centres;   ///< the centre at u = j / chords, j = 0 .. chords
     };
 
+    /// The search that takes each node as a fixed-axis linear move (turning.cpp, note h), for
+    /// one part of parts_: the point of the axis the node's move carries exactly (the pivot, a
+    /// height above the tip), and per level k the reach delta_k of a node of width 2^-k; the
+    /// level whose reach is first at most epsilon is the last (a leaf). Per level above it, the
+    /// part grown by delta_k - epsilon (at least 0), each torus as its tangent cones where
+    /// outerOffsetPart makes them; at the leaf level, the part itself.
+    struct LinearPart {
+        double pivot = 0.0;
+        std::vector<double> reach;
+        std::vector<std::vector<ProfilePiece>> pieces;
+        int leafLevel() const { return int(reach.size()) - 1; }
+    };
+    /// A node's linear move, made the first time a query needs it: the part of its level swept
+    /// along it, and the pose at the node's middle.
+    struct LinearNode {
+        MoveSweep sweep;
+        ToolPose middle;
+        double middleU = 0.0;
+    };
+    class NodeCache;
+    /// Sets models_ and nodes_ when the linear-node search applies and goes less deep than the
+    /// static one.
+    void chooseLinearNodes();
+    /// Node `heap` of part `part`'s search, kept or, past the nodes the sweeps may keep, made in
+    /// `scratch`.
+    const LinearNode& linearNode(std::size_t part, std::uint32_t heap, std::optional<LinearNode>& scratch) const;
+
     Tool tool_;
     MotionLaw law_;
     double speed_ = 0.0;
@@ -137,6 +182,10 @@ class TurningSweep {
     /// The first level whose growth g_k is at most epsilon: from there on, a node that does not
     /// settle is closed (turning.cpp, note c).
     int closingLevel_ = 0;
+    /// The linear-node search's parts (empty: the search solves static poses), and its nodes,
+    /// shared by the copies of this sweep.
+    std::vector<LinearPart> models_;
+    std::shared_ptr<NodeCache> nodes_;
     /// Each part of parts_, then each ball, grown by epsilon: the reach that closes a gap between
     /// two intervals. An output piece's part index counts the same way.
     std::vector<std::vector<ProfilePiece>> grownEpsilon_;
