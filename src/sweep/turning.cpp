@@ -530,10 +530,10 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      most omega (MotionLaw::turnBound), and rho at most hypot(half the part's height, its
 //      largest radius). As in (b), with M(u) in place of T(u'), a point deeper than epsilon inside
 //      T(u) lies inside M(u) grown by max(delta_k - epsilon, 0), and every point of M(u) lies
-//      within delta_k of T(u). The search runs part by part, with the static poses at u = 0 and
-//      1 in O. A node whose delta_k is at most epsilon is a leaf: the part's sweep along its move
-//      goes into O, within epsilon of S (1) and holding every point deeper than epsilon inside
-//      T(u) for u in the node (2). Any other node is settled when the part grown by
+//      within delta_k of T(u). The search runs part by part; the static poses at u = 0 and 1 go
+//      into O when the root does not settle without them. A node whose delta_k is at most
+//      epsilon is a leaf: the part's sweep along its move goes into O, within epsilon of S (1)
+//      and holding every point deeper than epsilon inside T(u) for u in the node (2). Any other node is settled when the part grown by
 //      delta_k - epsilon (mitredOffsetPart, a superset) swept along its move holds no point of
 //      care outside O; otherwise the static pose at its middle goes into O and both halves are
 //      searched. Every u lies in a settled node or a leaf, so (2) holds; O holds static poses
@@ -543,8 +543,10 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      about log2(V / (2 omega rho)) levels higher than the closing level of (c), and near a
 //      graze of the envelope the nodes a level are fewer by about the square root of that ratio.
 //      A node's sweep is made once per move, by the first query that needs it, and kept
-//      (NodeCache). A move whose leaves would lie deeper than kMaxLinearLevel, or no higher than
-//      the closing level of (c), keeps the search of (c).
+//      (NodeCache, within the budget of every sweep alive). Making one costs far more than
+//      solving a pose, so a move takes linear nodes only when its leaves lie at least
+//      kLinearLevelsSaved levels above the closing level of (c), and no deeper than
+//      kMaxLinearLevel; it keeps the search of (c) otherwise.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     const Interval reach = bound(line);
@@ -581,13 +583,11 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         return true;
     };
     if (!models_.empty()) {
-        // Linear nodes (note h), part by part: the static poses at both ends, then the nodes
-        // from the root down.
-        const LocalLine atStart = LocalLine::make(startPose_, line), atEnd = LocalLine::make(endPose_, line);
+        // Linear nodes (note h), part by part from the root down. The static poses at both ends
+        // go into O where the root's sweep is not held without them (a line the grown part's
+        // sweep misses, or that a ball's capsules already hold, needs neither).
+        std::optional<LocalLine> atStart, atEnd;
         for (std::size_t p = 0; p < parts.size(); ++p) {
-            const Interval first = tool_.intersectPart(parts[p], atStart), last = tool_.intersectPart(parts[p], atEnd);
-            if (!first.isEmpty()) found.add(first, 0.0, p);
-            if (!last.isEmpty()) found.add(last, 1.0, p);
             const int leaf = models_[p].leafLevel();
             // A node pops itself and pushes its two halves: at most one node a level and two of
             // the deepest.
@@ -604,6 +604,14 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                     continue;
                 }
                 if (held(swept)) continue;  // settled: the grown part's sweep is held
+                if (heap == 1) {
+                    if (!atStart) atStart = LocalLine::make(startPose_, line), atEnd = LocalLine::make(endPose_, line);
+                    const Interval first = tool_.intersectPart(parts[p], *atStart);
+                    const Interval last = tool_.intersectPart(parts[p], *atEnd);
+                    if (!first.isEmpty()) found.add(first, 0.0, p);
+                    if (!last.isEmpty()) found.add(last, 1.0, p);
+                    if (held(swept)) continue;
+                }
                 const Interval middle = tool_.intersectPart(parts[p], LocalLine::make(node.middle, line));
                 if (!middle.isEmpty()) found.add(middle, node.middleU, p);
                 stack[top++] = 2 * heap + 1;
