@@ -226,25 +226,39 @@ int checkCase(const Case& c, const Solid& s, std::mt19937& rng, int lines, bool*
     return checked;
 }
 
+/// A random move: joints from a point near the table to up to `travel` away along each axis, A
+/// turning up to `turnA` degrees from [-100, -20] and C up to `turnC` from [-180, 180].
+Case randomMove(std::mt19937& rng, bool tcp, const Vec3& travel, double turnA, double turnC) {
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    Case c;
+    c.tcp = tcp;
+    c.j0 = Vec3(20 * uni(rng), 20 * uni(rng), 5 + 10 * uni(rng));
+    c.j1 = c.j0 + Vec3(travel.x * uni(rng), travel.y * uni(rng), travel.z * uni(rng));
+    c.a0 = -60 + 40 * uni(rng);
+    c.a1 = c.a0 + turnA * uni(rng);
+    c.c0 = 180 * uni(rng);
+    c.c1 = c.c0 + turnC * uni(rng);
+    return c;
+}
+
+/// A ball or flat end of radius 1 to 3 mm and length 10 to 20 mm.
+Solid randomSolid(std::mt19937& rng, bool ball) {
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    Solid s;
+    s.ball = ball;
+    s.r = 2 + uni(rng);
+    s.l = 15 + 5 * uni(rng);
+    return s;
+}
+
 }  // namespace
 
 TEST_CASE("rotary sweep vs oracle: xyzac-trt moves with TCP and in identity kinematics", "[sweep][turning][machine]") {
     std::mt19937 rng(20261123);
-    std::uniform_real_distribution<double> uni(-1.0, 1.0);
     int checked = 0;
     for (int i = 0; i < 24; ++i) {
-        Case c;
-        c.tcp = i % 2 == 0;
-        c.j0 = Vec3(20 * uni(rng), 20 * uni(rng), 5 + 10 * uni(rng));
-        c.j1 = c.j0 + Vec3(8 * uni(rng), 8 * uni(rng), 3 * uni(rng));
-        c.a0 = -60 + 40 * uni(rng);
-        c.a1 = c.a0 + 25 * uni(rng);
-        c.c0 = 180 * uni(rng);
-        c.c1 = c.c0 + 60 * uni(rng);
-        Solid s;
-        s.ball = i % 4 >= 2;
-        s.r = 2 + uni(rng);
-        s.l = 15 + 5 * uni(rng);
+        const Case c = randomMove(rng, i % 2 == 0, Vec3(8, 8, 3), 25, 60);
+        const Solid s = randomSolid(rng, i % 4 >= 2);
         INFO("case " << i << (c.tcp ? " TCP" : " identity"));
         checked += checkCase(c, s, rng, 6);
     }
@@ -256,21 +270,10 @@ TEST_CASE("rotary sweep vs oracle: TCP moves turning a degree or two over long t
     // a stretch of the move with the axis held (turning.cpp, note h); identity kinematics, whose
     // tip path curves, never does.
     std::mt19937 rng(20261129);
-    std::uniform_real_distribution<double> uni(-1.0, 1.0);
     int checked = 0, linear = 0;
     for (int i = 0; i < 12; ++i) {
-        Case c;
-        c.tcp = i % 3 != 0;
-        c.j0 = Vec3(20 * uni(rng), 20 * uni(rng), 5 + 10 * uni(rng));
-        c.j1 = c.j0 + Vec3(30 * uni(rng), 30 * uni(rng), 5 * uni(rng));
-        c.a0 = -60 + 40 * uni(rng);
-        c.a1 = c.a0 + 2 * uni(rng);
-        c.c0 = 180 * uni(rng);
-        c.c1 = c.c0 + 2 * uni(rng);
-        Solid s;
-        s.ball = i % 2 == 0;
-        s.r = 2 + uni(rng);
-        s.l = 15 + 5 * uni(rng);
+        const Case c = randomMove(rng, i % 3 != 0, Vec3(30, 30, 5), 2, 2);
+        const Solid s = randomSolid(rng, i % 2 == 0);
         INFO("case " << i << (c.tcp ? " TCP" : " identity"));
         bool byNodes = false;
         checked += checkCase(c, s, rng, 6, &byNodes);

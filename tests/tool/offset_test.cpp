@@ -15,9 +15,11 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "dexelmill/tool/offset.h"
 #include "sweep/tool_models.h"
@@ -149,11 +151,13 @@ void checkEnds(const Interval& iv, double r, double reach, Distance&& distance) 
     }
 }
 
-}  // namespace
-
-TEST_CASE("offsetPart: a grown convex part ends at distance r from the part", "[tool][offset]") {
-    std::mt19937_64 rng(20261123);
-    const int perKind = std::max(2, int(40 * oracle::testScale()));
+/// For `perKind` random tools of every kind, a random growth r in [rMin, 5] per part and 20
+/// random lines near it: the line's interval in the pieces grow(tool, part, r) gives, checked by
+/// checkHit(interval, r, distance) (distance: the oracle's, from the line parameter), or, where
+/// empty, no point of the line within r of the part.
+template <class Grow, class CheckHit>
+void checkGrownParts(std::uint64_t seed, int perKind, double rMin, Grow&& grow, CheckHit&& checkHit) {
+    std::mt19937_64 rng(seed);
     int checked = 0, missed = 0;
     for (int k = 0; k < int(models::Kind::Count); ++k) {
         for (int n = 0; n < perKind; ++n) {
@@ -162,8 +166,8 @@ TEST_CASE("offsetPart: a grown convex part ends at distance r from the part", "[
             for (std::size_t p = 0; p < m.parts.size(); ++p) {
                 const oracle::Part& part = m.parts[p];
                 const Polygon poly = polygonOf(part);
-                const double r = std::exp(models::uniform(rng, std::log(1e-4), std::log(5.0)));
-                const auto grown = offsetPart(m.tool, m.tool.convexParts()[p], r);
+                const double r = std::exp(models::uniform(rng, std::log(rMin), std::log(5.0)));
+                const std::vector<ProfilePiece> grown = grow(m.tool, m.tool.convexParts()[p], r);
                 for (int l = 0; l < 20; ++l) {
                     Line line;
                     if (!randomLineNear(part, r, l, rng, line)) continue;
@@ -178,8 +182,7 @@ TEST_CASE("offsetPart: a grown convex part ends at distance r from the part", "[
                         ++missed;
                         continue;
                     }
-                    checkEnds(iv, r, r, distance);
-                    CHECK(distance(0.5 * (iv.lo + iv.hi)) - kGap / 2 <= r + kRound);
+                    checkHit(iv, r, distance);
                     ++checked;
                 }
             }
@@ -187,6 +190,16 @@ TEST_CASE("offsetPart: a grown convex part ends at distance r from the part", "[
     }
     CHECK(checked > 1000);
     CHECK(missed > 10);
+}
+
+}  // namespace
+
+TEST_CASE("offsetPart: a grown convex part ends at distance r from the part", "[tool][offset]") {
+    checkGrownParts(20261123, std::max(2, int(40 * oracle::testScale())), 1e-4, offsetPart,
+                    [](const Interval& iv, double r, const auto& distance) {
+                        checkEnds(iv, r, r, distance);
+                        CHECK(distance(0.5 * (iv.lo + iv.hi)) - kGap / 2 <= r + kRound);
+                    });
 }
 
 TEST_CASE("offsetPart: growing by zero keeps the part, and a flat end mill's grown disk has rounded rims",
@@ -343,46 +356,21 @@ TEST_CASE("outerOffsetPart: a flat end mill's rims get two cones each, used wher
 }
 
 TEST_CASE("mitredOffsetPart: holds the grown part and lies within r sqrt 2 of the part", "[tool][offset]") {
-    std::mt19937_64 rng(20261129);
-    const int perKind = std::max(2, int(30 * oracle::testScale()));
-    int checked = 0, missed = 0;
-    for (int k = 0; k < int(models::Kind::Count); ++k) {
-        for (int n = 0; n < perKind; ++n) {
-            const models::Model m = models::make(models::Kind(k), rng);
-            for (std::size_t p = 0; p < m.parts.size(); ++p) {
-                const oracle::Part& part = m.parts[p];
-                const Polygon poly = polygonOf(part);
-                // Down to a millionth of the part's size: the growths a turning sweep's last
-                // levels ask for.
-                const double r = std::exp(models::uniform(rng, std::log(1e-6), std::log(5.0)));
-                const auto mitred = mitredOffsetPart(m.tool, m.tool.convexParts()[p], r);
-                // A chain: each piece starts where the one below ends (to rounding: a grown arc's
-                // ends are scaled from its centre, a corner's steps stepped from the corner).
-                for (std::size_t i = 1; i < mitred.size(); ++i)
-                    CHECK(std::abs(pieceZ0(mitred[i]) - pieceZ1(mitred[i - 1])) <= kRound);
-                for (int l = 0; l < 20; ++l) {
-                    Line line;
-                    if (!randomLineNear(part, r, l, rng, line)) continue;
-                    const Interval iv = intersectPieces(mitred, LocalLine::make(ToolPose{}, line));
-                    INFO(models::name(models::Kind(k)) << " part " << p << " r " << r << " " << describe(line));
-                    auto distance = [&](double t) {
-                        const Vec3 q = line.at(t);
-                        return polygonDistance(poly, rhoOf(q), q.z, 2.0 * r + kGap);
-                    };
-                    if (iv.isEmpty()) {
-                        checkNothingWithin(part, r, distance);
-                        ++missed;
-                        continue;
-                    }
-                    checkEnds(iv, r, std::sqrt(2.0) * r, distance);
-                    for (const double t : {iv.lo - kLineStep, iv.hi + kLineStep}) CHECK(distance(t) >= r - kRound);
-                    ++checked;
-                }
-            }
-        }
-    }
-    CHECK(checked > 1000);
-    CHECK(missed > 10);
+    // Down to a millionth of the part's size: the growths a turning sweep's last levels ask for.
+    const auto grow = [](const Tool& tool, const ConvexPart& part, double r) {
+        std::vector<ProfilePiece> mitred = mitredOffsetPart(tool, part, r);
+        // A chain: each piece starts where the one below ends (to rounding: a grown arc's ends
+        // are scaled from its centre, a corner's steps stepped from the corner).
+        for (std::size_t i = 1; i < mitred.size(); ++i)
+            CHECK(std::abs(pieceZ0(mitred[i]) - pieceZ1(mitred[i - 1])) <= kRound);
+        return mitred;
+    };
+    checkGrownParts(20261129, std::max(2, int(30 * oracle::testScale())), 1e-6, grow,
+                    [](const Interval& iv, double r, const auto& distance) {
+                        checkEnds(iv, r, std::sqrt(2.0) * r, distance);
+                        for (const double t : {iv.lo - kLineStep, iv.hi + kLineStep})
+                            CHECK(distance(t) >= r - kRound);
+                    });
 }
 
 TEST_CASE("mitredOffsetPart: a flat end mill grows into a cylinder with square corners", "[tool][offset]") {
