@@ -1,6 +1,7 @@
 #include "dexelmill/tool/offset.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace dexelmill {
@@ -10,9 +11,8 @@ namespace {
 constexpr double kHalfPi = 1.57079632679489661923;
 
 /// A step of a tangent chain this small against its arc's radius is level. At a rim where the arc
-/// meets a bottom or top face the first or last step is level, but the arc's end angles come from
-/// asin or atan2 next to +-pi/2, where a rounding of 1e-16 moves them by up to sqrt(2e-16), 1.5e-8
-/// rad, which tilts the step by about that: a cone of that height and a fraction of the radius
+/// meets a bottom or top face the first or last step is level up to the rounding of the arc's end
+/// angle (atan2 of a normal next to +-pi/2): a cone of that height and a fraction of the radius
 /// across is too steep to solve reliably. Merging a step this low enlarges the solid by at most
 /// its height.
 constexpr double kLevelStep = 1e-6;
@@ -25,23 +25,29 @@ double normalAngle(const ProfilePiece& piece, double z) {
 }
 
 /// Appends the arc of radius r round the corner (rc, zc) from normal angle psiA to psiB; nothing
-/// where the normal does not turn.
-void addCorner(std::vector<ProfilePiece>& out, double rc, double zc, double r, double psiA, double psiB) {
+/// where the normal does not turn. `angles` gets the arc's end normal angles.
+void addCorner(std::vector<ProfilePiece>& out, std::vector<std::array<double, 2>>& angles, double rc, double zc,
+               double r, double psiA, double psiB) {
     const double z0 = zc + r * std::sin(psiA), z1 = zc + r * std::sin(psiB);
     if (!(z1 > z0)) return;
     out.push_back(ArcPiece{z0, z1, rc, zc, r});
+    angles.push_back({psiA, psiB});
 }
 
-}  // namespace
-
-std::vector<ProfilePiece> offsetPart(const Tool& tool, const ConvexPart& part, double r) {
+/// offsetPart's pieces, with each piece's normal angles at its ends (psi, as normalAngle): taken
+/// from the part's own pieces, not read back from the grown arcs' heights, whose difference from
+/// the centre's height loses the digits a small growth needs (asin near +-1 magnifies them: for
+/// a growth of 1e-4 mm at heights of 13 mm, 1e-9 mm on a chain's vertices).
+std::vector<ProfilePiece> offsetPieces(const Tool& tool, const ConvexPart& part, double r,
+                                       std::vector<std::array<double, 2>>& angles) {
     const auto& pieces = tool.pieces();
     std::vector<ProfilePiece> out;
     double psi = -kHalfPi;  // the bottom face's normal
     for (std::size_t i = part.first; i < part.last; ++i) {
         const ProfilePiece& p = pieces[i];
         const double z0 = pieceZ0(p), z1 = pieceZ1(p);
-        addCorner(out, pieceRadius(p, z0), z0, r, psi, normalAngle(p, z0));
+        const double psi0 = normalAngle(p, z0), psi1 = normalAngle(p, z1);
+        addCorner(out, angles, pieceRadius(p, z0), z0, r, psi, psi0);
         if (const auto* c = std::get_if<ConePiece>(&p)) {
             double nr = 0.0, nz = 0.0;
             meridianNormal(p, c->r0, c->z0, nr, nz);
@@ -51,11 +57,19 @@ std::vector<ProfilePiece> offsetPart(const Tool& tool, const ConvexPart& part, d
             const double grow = (a.rho + r) / a.rho;
             out.push_back(ArcPiece{a.zc + grow * (a.z0 - a.zc), a.zc + grow * (a.z1 - a.zc), a.rc, a.zc, a.rho + r});
         }
-        psi = normalAngle(p, z1);
+        angles.push_back({psi0, psi1});
+        psi = psi1;
     }
     const ProfilePiece& top = pieces[part.last - 1];
-    addCorner(out, pieceRadius(top, pieceZ1(top)), pieceZ1(top), r, psi, kHalfPi);
+    addCorner(out, angles, pieceRadius(top, pieceZ1(top)), pieceZ1(top), r, psi, kHalfPi);
     return out;
+}
+
+}  // namespace
+
+std::vector<ProfilePiece> offsetPart(const Tool& tool, const ConvexPart& part, double r) {
+    std::vector<std::array<double, 2>> angles;
+    return offsetPieces(tool, part, r, angles);
 }
 
 std::vector<ProfilePiece> mitredOffsetPart(const Tool& tool, const ConvexPart& part, double r) {
@@ -120,7 +134,8 @@ std::vector<ProfilePiece> mitredOffsetPart(const Tool& tool, const ConvexPart& p
 
 OuterPart outerOffsetPart(const Tool& tool, const ConvexPart& part, double r, double slack) {
     OuterPart outer;
-    outer.pieces = offsetPart(tool, part, r);
+    std::vector<std::array<double, 2>> angles;
+    outer.pieces = offsetPieces(tool, part, r, angles);
     outer.chains.resize(outer.pieces.size());
     outer.growth = r;
     outer.slack = slack;
@@ -129,8 +144,7 @@ OuterPart outerOffsetPart(const Tool& tool, const ConvexPart& part, double r, do
         if (!a || a->rc == 0.0 || !(slack > 0.0)) continue;  // cones, and spheres (closed form)
         std::vector<ConePiece>& out = outer.chains[k];
         // Normal angles of the arc's ends; the outer half's heights rise with the angle.
-        const double psiA = std::asin(std::clamp((a->z0 - a->zc) / a->rho, -1.0, 1.0));
-        const double psiB = std::asin(std::clamp((a->z1 - a->zc) / a->rho, -1.0, 1.0));
+        const double psiA = angles[k][0], psiB = angles[k][1];
         // Steps d with a (1 / cos(d / 2) - 1) <= slack.
         const double maxStep = 2.0 * std::acos(1.0 / (1.0 + slack / a->rho));
         const double steps = std::ceil((psiB - psiA) / maxStep);

@@ -402,3 +402,29 @@ TEST_CASE("mitredOffsetPart: a flat end mill grows into a cylinder with square c
     REQUIRE(same.size() == 1);
     CHECK(std::get<ConePiece>(same.front()).r0 == 5.0);
 }
+
+TEST_CASE("outerOffsetPart: no tangent cone is nearly level, however small the growth against the tool's heights",
+          "[tool][offset]") {
+    // A chain's cones follow the corner's tangents, at most kMaxTangentCones a quarter turn, so
+    // none is flatter than about a sixth of a turn, except a step level to rounding at a face,
+    // which is merged. A drill 13.4 mm long grown by 1.3e-4 mm once made a cone 1e-9 mm high and
+    // 5e-5 mm across at its top rim, when the corner's angles were read back from the grown arc's
+    // heights (asin next to 1); the turning sweep's oracle found an end 1.5e-3 mm outside.
+    const Tool tools[] = {drill(1.02463, 104.477 * std::acos(-1.0) / 180.0, {13.355630114072722, 13.355630114072722}),
+                          flatEndMill(10.0, {100.0, 100.0}), bullNoseEndMill(10.0, 2.0, {60.0, 100.0}),
+                          chamferMill(0.5, 0.6, 8.0, {40.0, 80.0})};
+    int cones = 0;
+    for (const Tool& tool : tools)
+        for (const ConvexPart& part : tool.convexParts())
+            for (const double r : {1e-6, 1e-5, 1.3e-4, 1e-3, 0.1}) {
+                const OuterPart outer = outerOffsetPart(tool, part, r, 0.1 * r);
+                for (const auto& chain : outer.chains)
+                    for (const ConePiece& c : chain) {
+                        INFO(tool.description() << " r " << r << " cone z " << c.z0 << " .. " << c.z1 << " r " << c.r0
+                                                << " .. " << c.r1);
+                        CHECK(std::abs(c.r1 - c.r0) <= 10.0 * (c.z1 - c.z0));
+                        ++cones;
+                    }
+            }
+    CHECK(cones > 50);
+}
