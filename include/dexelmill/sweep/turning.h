@@ -134,8 +134,8 @@ class TurningSweep {
     /// one part of parts_: the point of the axis the node's move carries exactly (the pivot, a
     /// height above the tip), and per level k the reach delta_k of a node of width 2^-k; the
     /// level whose reach is first at most epsilon is the last (a leaf). Per level above it, the
-    /// part grown by delta_k - epsilon (at least 0), each torus as its tangent cones where
-    /// outerOffsetPart makes them; at the leaf level, the part itself.
+    /// part grown by delta_k - epsilon with square corners (mitredOffsetPart); at the leaf level,
+    /// the part itself.
     struct LinearPart {
         double pivot = 0.0;
         std::vector<double> reach;
@@ -150,8 +150,8 @@ class TurningSweep {
         double middleU = 0.0;
     };
     class NodeCache;
-    /// Sets models_ and nodes_ when the linear-node search applies and goes less deep than the
-    /// static one.
+    /// Sets models_ and nodes_ when the linear-node search applies and its leaves lie enough
+    /// levels above the static search's closing level (turning.cpp, note h).
     void chooseLinearNodes();
     /// Node `heap` of part `part`'s search, kept or, past the nodes the sweeps may keep, made in
     /// `scratch`.
