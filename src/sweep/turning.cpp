@@ -289,12 +289,6 @@ std::size_t TurningSweep::keptLinearNodes() { return keptNodes.load(std::memory_
 
 void TurningSweep::setLinearNodeBudget(std::size_t nodes) { nodeBudget.store(nodes, std::memory_order_relaxed); }
 
-int TurningSweep::linearNodeLevels() const {
-    int levels = 0;
-    for (const LinearPart& m : models_) levels = std::max(levels, m.leafLevel());
-    return levels;
-}
-
 const TurningSweep::LinearNode& TurningSweep::linearNode(std::size_t part, std::uint32_t heap,
                                                           std::optional<LinearNode>& scratch) const {
     return nodes_->get(part, heap, scratch, [&] {
@@ -389,6 +383,8 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     endPhase_ = law_.phase(1.0);
     startPose_ = law_.pose(startPhase_);
     endPose_ = law_.pose(endPhase_);
+    // The static search closes its nodes from the first level whose growth is at most epsilon.
+    while (closingLevel_ < kMaxLevel && std::ldexp(speed_, -(closingLevel_ + 1)) > 2.0 * epsilon_) ++closingLevel_;
     chooseLinearNodes();
     if (!models_.empty()) return;
     for (int k = 0; k < kMaxLevel && std::ldexp(speed_, -(k + 1)) > epsilon_; ++k) {
@@ -397,16 +393,12 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
         for (const ConvexPart& part : parts_) level.push_back(outerOffsetPart(tool_, part, g, kSettleSlack * g));
         grown_.push_back(std::move(level));
         halfSteps_.push_back(law_.step(std::ldexp(1.0, -(k + 1))));
-        if (g > epsilon_) closingLevel_ = k + 1;
     }
 }
 
 void TurningSweep::chooseLinearNodes() {
     // Only a tip on the straight line bounds the pivot's bend (note h).
     if (!std::isfinite(law_.axisPointAccelerationBound(0.0))) return;
-    // The static search closes its nodes at the first level whose growth is at most epsilon.
-    int staticLevels = 0;
-    while (staticLevels < kMaxLevel && std::ldexp(speed_, -(staticLevels + 1)) > 2.0 * epsilon_) ++staticLevels;
     std::vector<LinearPart> models;
     for (const ConvexPart& part : parts_) {
         const auto& pieces = tool_.pieces();
@@ -421,19 +413,13 @@ void TurningSweep::chooseLinearNodes() {
             const double width = std::ldexp(1.0, -k);
             m.reach.push_back(0.5 * turn * width + 0.125 * bend * width * width);
             if (m.reach.back() <= epsilon_) break;
-            if (k >= std::min(kMaxLinearLevel, staticLevels - kLinearLevelsSaved)) return;
+            if (k >= std::min(kMaxLinearLevel, closingLevel_ - kLinearLevelsSaved)) return;
         }
-        for (int k = 0; k <= m.leafLevel(); ++k) {
-            // Above the leaves, the growth that settles; at the leaves, what is left of epsilon
-            // with the tangent cones' slack: within epsilon of S either way.
-            const double reach = m.reach[std::size_t(k)];
-            const double g = k < m.leafLevel() ? reach - epsilon_ : 0.0;
-            if (!(g > 0.0)) {
-                m.pieces.emplace_back(pieces.begin() + std::ptrdiff_t(part.first), pieces.begin() + std::ptrdiff_t(part.last));
-                continue;
-            }
-            m.pieces.push_back(mitredOffsetPart(tool_, part, g));
-        }
+        // Above the leaves, grown by the reach less epsilon (more than 0 there); the leaves
+        // sweep the part itself.
+        for (int k = 0; k < m.leafLevel(); ++k)
+            m.pieces.push_back(mitredOffsetPart(tool_, part, m.reach[std::size_t(k)] - epsilon_));
+        m.pieces.emplace_back(pieces.begin() + std::ptrdiff_t(part.first), pieces.begin() + std::ptrdiff_t(part.last));
         models.push_back(std::move(m));
     }
     models_ = std::move(models);
@@ -533,9 +519,9 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      within delta_k of T(u). The search runs part by part; the static poses at u = 0 and 1 go
 //      into O when the root does not settle without them. A node whose delta_k is at most
 //      epsilon is a leaf: the part's sweep along its move goes into O, within epsilon of S (1)
-//      and holding every point deeper than epsilon inside T(u) for u in the node (2). Any other node is settled when the part grown by
-//      delta_k - epsilon (mitredOffsetPart, a superset) swept along its move holds no point of
-//      care outside O; otherwise the static pose at its middle goes into O and both halves are
+//      and holding every point deeper than epsilon inside T(u) for u in the node (2). Any other
+//      node is settled when the part grown by delta_k - epsilon (mitredOffsetPart, a superset)
+//      swept along its move holds no point of care outside O; otherwise the static pose at its middle goes into O and both halves are
 //      searched. Every u lies in a settled node or a leaf, so (2) holds; O holds static poses
 //      and leaves' sweeps, so (1) holds. The gaps of (d) are closed between poses' ends only: a
 //      leaf's sweep already holds every point deeper than epsilon inside its node's poses.

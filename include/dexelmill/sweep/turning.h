@@ -92,9 +92,8 @@ class TurningSweep {
     /// @brief A box that holds every pose of the tool.
     const Box& bounds() const { return bounds_; }
     /// @brief Whether the search takes each stretch of the move as a fixed-axis linear move
-    /// (turning.cpp, note h) rather than as static poses, and how deep it goes at most.
+    /// (turning.cpp, note h) rather than as static poses.
     bool linearNodes() const { return !models_.empty(); }
-    int linearNodeLevels() const;
     /// @brief How many linear nodes the sweeps alive keep, and the most they may keep (default
     /// kDefaultLinearNodeBudget); a budget of 0 keeps none.
     static std::size_t keptLinearNodes();
