@@ -24,6 +24,12 @@ double normalAngle(const ProfilePiece& piece, double z) {
     return std::atan2(nz, nr);
 }
 
+/// An arc piece grown by r: the same centre, radius rho + r, its ends moved out along their normals.
+ArcPiece grownArc(const ArcPiece& a, double r) {
+    const double grow = (a.rho + r) / a.rho;
+    return ArcPiece{a.zc + grow * (a.z0 - a.zc), a.zc + grow * (a.z1 - a.zc), a.rc, a.zc, a.rho + r};
+}
+
 /// Appends the arc of radius r round the corner (rc, zc) from normal angle psiA to psiB; nothing
 /// where the normal does not turn. `angles` gets the arc's end normal angles.
 void addCorner(std::vector<ProfilePiece>& out, std::vector<std::array<double, 2>>& angles, double rc, double zc,
@@ -54,8 +60,7 @@ std::vector<ProfilePiece> offsetPieces(const Tool& tool, const ConvexPart& part,
             out.push_back(ConePiece{c->z0 + r * nz, c->z1 + r * nz, c->r0 + r * nr, c->r1 + r * nr});
         } else {
             const ArcPiece& a = std::get<ArcPiece>(p);
-            const double grow = (a.rho + r) / a.rho;
-            out.push_back(ArcPiece{a.zc + grow * (a.z0 - a.zc), a.zc + grow * (a.z1 - a.zc), a.rc, a.zc, a.rho + r});
+            out.push_back(grownArc(a, r));
         }
         angles.push_back({psi0, psi1});
         psi = psi1;
@@ -120,8 +125,7 @@ std::vector<ProfilePiece> mitredOffsetPart(const Tool& tool, const ConvexPart& p
             lineTo(c->r1 + r * nr, c->z1 + r * nz);
         } else {
             const ArcPiece& a = std::get<ArcPiece>(p);
-            const double grow = (a.rho + r) / a.rho;
-            const ArcPiece grown{a.zc + grow * (a.z0 - a.zc), a.zc + grow * (a.z1 - a.zc), a.rc, a.zc, a.rho + r};
+            const ArcPiece grown = grownArc(a, r);
             out.push_back(grown);
             rAt = pieceRadius(grown, grown.z1), zAt = grown.z1;
         }
