@@ -4,6 +4,7 @@
 //    sweep's box is intersected with the sweep; the counter ns_per_query is the average.
 //  BM_SweepQueryNormals/<tool>/<move>: the same lines, each with the Hermite data (the normals at
 //    both ends of every part's interval), as the cutting loop asks for them.
+//  BM_SweepBuild/<tool>/<grown>: the cost of building one convex part's sweep (MoveSweep).
 //  BM_TurningQuery/<tool>/<turn in degrees>: the tilted move with its axis turning, against the
 //    same move with the axis held (turn 0), over the same lines: the cost of a 5-axis move per line.
 //  BM_Raster/<threads>/<h in um>: a 10,000-move ball-end finishing raster over a wavy surface on a
@@ -18,6 +19,7 @@
 #include "dexelmill/sweep/sweep.h"
 #include "dexelmill/sweep/turning.h"
 #include "dexelmill/tool/builders.h"
+#include "dexelmill/tool/offset.h"
 
 using namespace dexelmill;
 
@@ -101,6 +103,29 @@ void BM_SweepQueryNormals(benchmark::State& state) {
     });
 }
 BENCHMARK(BM_SweepQueryNormals)->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2}})->Unit(benchmark::kMicrosecond);
+
+/// BM_SweepBuild/<tool>/<grown>: building the sweep of one convex part on a short tilted move, the
+/// axis varied a little per iteration. A 3-axis or 3+2 program builds one per move and region; a
+/// turning move's linear nodes (turning.h) build one per node, of the part grown by a node's reach
+/// with square corners (grown = 1: mitredOffsetPart by 0.01 mm).
+void BM_SweepBuild(benchmark::State& state) {
+    const Tool tool = benchTool(int(state.range(0)));
+    const ConvexPart part = tool.convexParts().front();
+    const std::vector<ProfilePiece> pieces =
+        state.range(1) != 0 ? mitredOffsetPart(tool, part, 0.01)
+                            : std::vector<ProfilePiece>(tool.pieces().begin() + std::ptrdiff_t(part.first),
+                                                        tool.pieces().begin() + std::ptrdiff_t(part.last));
+    double sink = 0.0;
+    int i = 0;
+    for (auto _ : state) {
+        const Vec3 axis = glm::normalize(Vec3(0.3 + 1e-4 * (i++ & 255), -0.2, 1.0));
+        const MoveSweep sweep(pieces, Vec3(0.0), Vec3(1.0, 0.2, -0.1), axis);
+        sink += sweep.bounds().hi.x;
+    }
+    benchmark::DoNotOptimize(sink);
+    state.counters["pieces"] = double(pieces.size());
+}
+BENCHMARK(BM_SweepBuild)->ArgsProduct({{0, 1, 2, 3}, {0, 1}})->Unit(benchmark::kNanosecond);
 
 /// BM_TurningQuery/<tool>/<turn in degrees>: the tilted move of BM_SweepQuery, (0, 0, 0) to
 /// (30, 10, -3), with its axis turning by the angle in the plane of the tilt, ending at the tilted
