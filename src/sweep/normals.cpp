@@ -15,7 +15,7 @@ namespace {
 /// two of its faces meet at an angle, or of a cone's apex. There `n` is the normalised mean of the
 /// two faces' normals (the axis at an apex), a normal from the crease's cone of normals.
 bool staticNormal(const MoveSweep::StaticProfile& part, const Vec3& x, Vec3& n) {
-    const std::vector<ProfileSide>& sides = part.sides;
+    const auto& sides = part.sides;
     const double rho2 = x.x * x.x + x.y * x.y;
     // The outward unit normal of a piece's side at height z, at x's azimuth (meridianNormal). An
     // arc's is the point less its circle's centre over the radius: no root for a sphere.

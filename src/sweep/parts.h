@@ -10,6 +10,8 @@
 #include <type_traits>
 #include <vector>
 
+#include <boost/container/small_vector.hpp>
+
 #include "dexelmill/geometry/tolerance.h"
 #include "dexelmill/sweep/sweep.h"
 
@@ -21,6 +23,14 @@
 namespace dexelmill {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// A list that keeps up to N elements in place. A part's lists are built per move, and per node
+/// of a turning move's linear search (turning.h), where allocating them cost more than the
+/// geometry (BM_SweepBuild). The sizes hold what a turning move's nodes need (cones and
+/// cylinders, a ball's capsule); longer lists, and the rarer kinds (tori, a horizontal move's
+/// faces), go to the heap, so that a kept node stays small.
+template <class T, std::size_t N>
+using InlineList = boost::container::small_vector<T, N>;
 
 /// The slope dR/dz of a cone piece.
 inline double coneSlope(const ConePiece& c) { return (c.r1 - c.r0) / (c.z1 - c.z0); }
@@ -116,23 +126,27 @@ struct EndFace {
 /// A convex part of the tool as its static normals need it (staticNormal): its heights, its pieces'
 /// sides and its end faces. Kept apart from MoveSweep::Part, which the Interval queries read.
 struct MoveSweep::StaticProfile {
+    /// User-provided, so that emplace_back() does not zero the inline list's storage first.
+    StaticProfile() {}
     double z0 = 0.0, z1 = 0.0;
-    std::vector<ProfileSide> sides;
+    InlineList<ProfileSide, 4> sides;
     EndFace bottomFace, topFace;
 };
 
 struct MoveSweep::Part {
-    std::vector<ProfilePiece> pieces;  ///< for the static tool
+    /// User-provided, so that emplace_back() does not zero the inline lists' storage first.
+    Part() {}
+    InlineList<ProfilePiece, 4> pieces;  ///< for the static tool
     double z0 = 0.0, z1 = 0.0;
     // Plunge: the cylinder of the largest radius, reached on heights [zMax0, zMax1].
     double rMax = 0.0, zMax0 = 0.0, zMax1 = 0.0;
     // General and horizontal moves.
-    std::vector<GrazingStrip> strips;
-    std::vector<GrazingCapsule> capsules;  // general moves
-    std::vector<GrazingTorus> tori;        // general moves
-    std::vector<Circle> rims;              // general moves
-    std::vector<ArcPiece> meridianArcs;    // horizontal moves
-    std::vector<Circle> disks;             // horizontal moves
+    InlineList<GrazingStrip, 6> strips;
+    InlineList<GrazingCapsule, 1> capsules;  // general moves
+    InlineList<GrazingTorus, 0> tori;        // general moves
+    InlineList<Circle, 4> rims;              // general moves
+    InlineList<ArcPiece, 0> meridianArcs;    // horizontal moves
+    InlineList<Circle, 0> disks;             // horizontal moves
     /// The heights where R(z) >= r, one interval since R is concave on the part.
     Interval widerThan(double r) const {
         Interval z;

@@ -76,17 +76,20 @@ Interval staticPart(const MoveSweep::Part& part, const Vec3& o, const Vec3& w) {
 
 /// Support value max over the part of (z xn + R(z) xr): the part's extent in a direction with
 /// axial component xn and radial component xr >= 0, measured from the tip.
-double partSupport(const std::vector<ProfilePiece>& pieces, double xn, double xr) {
+double partSupport(const InlineList<ProfilePiece, 4>& pieces, double xn, double xr) {
     double h = -kInf;
     for (const ProfilePiece& p : pieces) {
         if (const auto* c = std::get_if<ConePiece>(&p)) {
             h = std::max({h, c->z0 * xn + c->r0 * xr, c->z1 * xn + c->r1 * xr});
         } else {
             const ArcPiece& a = std::get<ArcPiece>(p);
-            // On the arc the outward normal (xr, xn) is reached at z = zc + rho xn.
-            const double len = std::hypot(xn, xr);
+            // On the arc the outward normal (xr, xn) is reached at z = zc + rho xn / |(xn, xr)|
+            // (the callers' directions are unit vectors, so no overflow to guard against).
+            const double len = std::sqrt(xn * xn + xr * xr);
             const double z = std::clamp(a.zc + a.rho * xn / len, a.z0, a.z1);
-            h = std::max(h, z * xn + pieceRadius(p, z) * xr);
+            const double dz = z - a.zc;
+            const double radius = a.rc + std::sqrt(std::max(0.0, a.rho * a.rho - dz * dz));
+            h = std::max(h, z * xn + radius * xr);
         }
     }
     return h;
@@ -104,30 +107,34 @@ MoveSweep::~MoveSweep() = default;
 
 std::size_t MoveSweep::partCount() const { return parts_.size(); }
 
-namespace {
-
-/// The pieces of each convex part of `tool`, bottom to top.
-std::vector<std::vector<ProfilePiece>> partPieces(const Tool& tool) {
-    if (tool.convexParts().size() > MoveSweep::kMaxParts)
-        throw Error("tool '" + tool.description() + "' has " + std::to_string(tool.convexParts().size()) +
-                    " convex parts; the sweep handles at most " + std::to_string(MoveSweep::kMaxParts));
-    std::vector<std::vector<ProfilePiece>> parts;
-    for (const ConvexPart& cp : tool.convexParts())
-        parts.emplace_back(tool.pieces().begin() + std::ptrdiff_t(cp.first),
-                           tool.pieces().begin() + std::ptrdiff_t(cp.last));
-    return parts;
+MoveSweep::PartPieces MoveSweep::partPieces(const Tool& tool) {
+    const std::vector<ConvexPart>& convex = tool.convexParts();
+    if (convex.size() > kMaxParts)
+        throw Error("tool '" + tool.description() + "' has " + std::to_string(convex.size()) +
+                    " convex parts; the sweep handles at most " + std::to_string(kMaxParts));
+    PartPieces out;
+    for (const ConvexPart& cp : convex) {
+        out.first[out.parts] = tool.pieces().data() + cp.first;
+        out.count[out.parts++] = cp.last - cp.first;
+    }
+    return out;
 }
 
-}  // namespace
+MoveSweep::PartPieces MoveSweep::partPieces(const std::vector<ProfilePiece>& pieces) {
+    PartPieces out;
+    out.first[0] = pieces.data();
+    out.count[0] = pieces.size();
+    out.parts = 1;
+    return out;
+}
 
 MoveSweep::MoveSweep(const Tool& tool, const Vec3& start, const Vec3& end, const Vec3& axis)
     : MoveSweep(partPieces(tool), start, end, axis) {}
 
 MoveSweep::MoveSweep(const std::vector<ProfilePiece>& pieces, const Vec3& start, const Vec3& end, const Vec3& axis)
-    : MoveSweep(std::vector<std::vector<ProfilePiece>>{pieces}, start, end, axis) {}
+    : MoveSweep(partPieces(pieces), start, end, axis) {}
 
-MoveSweep::MoveSweep(std::vector<std::vector<ProfilePiece>> partList, const Vec3& start, const Vec3& end,
-                     const Vec3& axis)
+MoveSweep::MoveSweep(const PartPieces& partList, const Vec3& start, const Vec3& end, const Vec3& axis)
     : start_(start) {
     const Vec3 f = end - start;
     frame_ = ToolFrame::make(axis, f);  // validates the axis
@@ -170,9 +177,12 @@ MoveSweep::MoveSweep(std::vector<std::vector<ProfilePiece>> partList, const Vec3
         meridianNormal(p, pieceRadius(p, z), z, nr, nz);
     };
 
-    for (std::vector<ProfilePiece>& pieces : partList) {
-        Part part;
-        part.pieces = std::move(pieces);
+    parts_.reserve(partList.parts);
+    staticProfiles_.reserve(partList.parts);
+    for (std::size_t k = 0; k < partList.parts; ++k) {
+        Part& part = parts_.emplace_back();
+        part.pieces.assign(partList.first[k], partList.first[k] + partList.count[k]);
+        const std::size_t nPieces = part.pieces.size();
         part.z0 = pieceZ0(part.pieces.front());
         part.z1 = pieceZ1(part.pieces.back());
         const ProfilePiece& bottom = part.pieces.front();
@@ -180,6 +190,7 @@ MoveSweep::MoveSweep(std::vector<std::vector<ProfilePiece>> partList, const Vec3
         const double rBottom = pieceRadius(bottom, part.z0), rTop = pieceRadius(top, part.z1);
         StaticProfile& profile = staticProfiles_.emplace_back();
         profile.z0 = part.z0, profile.z1 = part.z1;
+        profile.sides.reserve(nPieces);
         for (std::size_t i = 0; i < part.pieces.size(); ++i) {
             const ProfilePiece& p = part.pieces[i];
             ProfileSide side;
@@ -220,6 +231,7 @@ MoveSweep::MoveSweep(std::vector<std::vector<ProfilePiece>> partList, const Vec3
             // Cones and cylinders: Eq. (28), the generators at azimuth phi with
             // cos(phi) = k (n.f) / (d.f) graze (k = dR/dz); Eq. (30), each sweeps the planar strip
             // O + t S + u f. Horizontal moves: cos(phi) = 0, the generators at +-e.
+            part.strips.reserve(2 * nPieces);
             for (const ProfilePiece& p : part.pieces) {
                 const auto* c = std::get_if<ConePiece>(&p);
                 if (!c) continue;
@@ -288,6 +300,7 @@ MoveSweep::MoveSweep(std::vector<std::vector<ProfilePiece>> partList, const Vec3
             // grazes where its cone of normals holds one perpendicular to f; its sweep is an
             // elliptic cylinder. Points of a rim that do not graze lie inside the shadow cylinder,
             // so they are harmless extra candidates.
+            part.rims.reserve(nPieces + 1);
             double nr0, nz0, nr1, nz1;
             if (rBottom > 0.0 && faceMeetsAtAngle(bottom, part.z0)) {
                 sideNormal(bottom, part.z0, nr1, nz1);
@@ -312,7 +325,6 @@ MoveSweep::MoveSweep(std::vector<std::vector<ProfilePiece>> partList, const Vec3
             if (rBottom > 0.0) part.disks.push_back({part.z0, rBottom});
             if (rTop > 0.0) part.disks.push_back({part.z1, rTop});
         }
-        parts_.push_back(std::move(part));
     }
 
     // The oriented boxes: e, and for a moving tool q across the feed and f / |f| along it (the

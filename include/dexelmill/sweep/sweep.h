@@ -184,7 +184,15 @@ public:
     struct StaticProfile;
 
 private:
-    MoveSweep(std::vector<std::vector<ProfilePiece>> parts, const Vec3& start, const Vec3& end, const Vec3& axis);
+    /// The convex parts to sweep, each as a run of profile pieces, bottom to top; read, not kept.
+    struct PartPieces {
+        std::array<const ProfilePiece*, kMaxParts> first{};
+        std::array<std::size_t, kMaxParts> count{};
+        std::size_t parts = 0;
+    };
+    static PartPieces partPieces(const Tool& tool);
+    static PartPieces partPieces(const std::vector<ProfilePiece>& pieces);
+    MoveSweep(const PartPieces& parts, const Vec3& start, const Vec3& end, const Vec3& axis);
 
     struct EndTrace;
     /// The part's interval of the query line in local parameters. With kTrace, also where each end
