@@ -334,6 +334,13 @@ MoveGeometry::MoveGeometry(const ToolRegions& regions, const Move& move, double 
     if (regions.shank) sweep(*regions.shank, shank);
 }
 
+std::size_t MoveGeometry::linearNodeBound() const {
+    std::size_t nodes = 0;
+    for (const RegionSweep* r : {&cutting, &shank})
+        if (r->turning) nodes += r->turning->linearNodeBound();
+    return nodes;
+}
+
 CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools, const CutOptions& options) {
     const std::size_t nMoves = path.moves.size();
     CutResult result;
@@ -395,16 +402,26 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
     std::vector<MoveGeometry> geoms;
     std::vector<DesignStretch> batchStretches;
 
-    for (std::size_t m0 = 0; m0 < nMoves; m0 += batch) {
-        const std::size_t m1 = std::min(nMoves, m0 + batch);
+    // geoms[i - m0] is the sweep of move i; the first `built` of them were built with the batch before.
+    std::size_t built = 0;
+    for (std::size_t m0 = 0, m1 = 0; m0 < nMoves; m0 = m1) {
         // The batch's sweeps, built once and shared read-only by the tiles.
-        geoms.assign(m1 - m0, MoveGeometry{});
+        const std::size_t end = std::min(nMoves, m0 + batch);
+        geoms.resize(end - m0);
         arena.execute([&] {
-            tbb::parallel_for(m0, m1, [&](std::size_t i) {
+            tbb::parallel_for(m0 + built, end, [&](std::size_t i) {
                 const Move& mv = path.moves[i];
                 geoms[i - m0] = MoveGeometry(regions.at(mv.tool), mv, options.turnTolerance);
             });
         });
+        // The batch ends before its turning sweeps could keep more linear nodes than the budget
+        // (past it, their queries would make nodes and drop them): at least one move.
+        const std::size_t budget = TurningSweep::linearNodeBudget();
+        std::size_t nodes = geoms.front().linearNodeBound();
+        for (m1 = m0 + 1; m1 < end; ++m1) {
+            nodes += geoms[m1 - m0].linearNodeBound();
+            if (nodes > budget) break;
+        }
         // Bucket the moves by the tiles their boxes overlap, in program order.
         active.clear();
         for (std::size_t i = m0; i < m1; ++i) {
@@ -458,6 +475,9 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
         result.designStretches.insert(result.designStretches.end(), batchStretches.begin(), batchStretches.end());
         batchStretches.clear();
         if (options.progress) options.progress(m1, nMoves);
+        // The sweeps built past the batch's end go with the next batch.
+        geoms.erase(geoms.begin(), geoms.begin() + std::ptrdiff_t(m1 - m0));
+        built = end - m1;
     }
 
     for (std::size_t i = 0; i < nMoves; ++i) {

@@ -289,6 +289,14 @@ std::size_t TurningSweep::keptLinearNodes() { return keptNodes.load(std::memory_
 
 void TurningSweep::setLinearNodeBudget(std::size_t nodes) { nodeBudget.store(nodes, std::memory_order_relaxed); }
 
+std::size_t TurningSweep::linearNodeBudget() { return nodeBudget.load(std::memory_order_relaxed); }
+
+std::size_t TurningSweep::linearNodeBound() const {
+    std::size_t nodes = 0;
+    for (const LinearPart& m : models_) nodes += (std::size_t(2) << m.leafLevel()) - 1;
+    return nodes;
+}
+
 const TurningSweep::LinearNode& TurningSweep::linearNode(std::size_t part, std::uint32_t heap,
                                                           std::optional<LinearNode>& scratch) const {
     return nodes_->get(part, heap, scratch, [&] {

@@ -2,7 +2,9 @@
 // across thread counts, collision reports, statistics.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <random>
 
 #include <tbb/global_control.h>
@@ -152,6 +154,59 @@ TEST_CASE("cut: 1 and N threads give identical results bit for bit", "[stock][cu
                 CHECK(same);
             }
         }
+    }
+}
+
+TEST_CASE("cut: batches ended by the linear-node budget give the same stock bit for bit", "[stock][cut][turning]") {
+    // Six feed moves across the block with the axis turning a degree each way: a flat end's
+    // sweeps take linear nodes (TurningSweep, note h), and each can keep a tree of them.
+    const ToolTable tools = testTools();
+    ToolPath path;
+    path.files.push_back("turning.nc");
+    const double tilt = std::acos(-1.0) / 180.0;
+    for (int i = 0; i < 6; ++i) {
+        Move m;
+        m.start = Vec3(i % 2 == 0 ? -3.0 : 23.0, 2.0 + 3.0 * i, 8.0);
+        m.end = Vec3(i % 2 == 0 ? 23.0 : -3.0, 3.0 + 3.0 * i, 7.5);
+        m.startAxis = Vec3(std::sin(-tilt), 0.0, std::cos(tilt));
+        m.axis = Vec3(std::sin(tilt), 0.0, std::cos(tilt));
+        m.tool = 1;
+        m.source = SourceRef{0, i + 1};
+        path.moves.push_back(m);
+    }
+    const std::map<int, ToolRegions> regions = toolRegions(path, tools);
+    std::vector<std::size_t> bounds;
+    for (const Move& m : path.moves) bounds.push_back(MoveGeometry(regions.at(1), m).linearNodeBound());
+    REQUIRE(std::all_of(bounds.begin(), bounds.end(), [](std::size_t b) { return b > 0; }));
+
+    const auto cut = [&](std::size_t budget, std::vector<std::size_t>& ends) {
+        TurningSweep::setLinearNodeBudget(budget);
+        TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.3);
+        CutOptions opt;
+        opt.threads = 2;
+        opt.progress = [&](std::size_t done, std::size_t) { ends.push_back(done); };
+        const CutResult r = cutStock(stock, path, tools, opt);
+        TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget);
+        return std::make_pair(std::move(stock), r);
+    };
+    std::vector<std::size_t> wholeEnds, pairEnds, singleEnds;
+    const std::size_t whole = std::accumulate(bounds.begin(), bounds.end(), std::size_t(0));
+    const auto [wholeStock, wholeResult] = cut(whole, wholeEnds);
+    // A budget that holds the first two moves' trees and not the third's: batches of two (the
+    // moves' trees are alike).
+    const auto [pairStock, pairResult] = cut(bounds[0] + bounds[1], pairEnds);
+    const auto [singleStock, singleResult] = cut(0, singleEnds);
+    CHECK(wholeEnds == std::vector<std::size_t>{6});
+    CHECK(pairEnds == std::vector<std::size_t>{2, 4, 6});
+    CHECK(singleEnds == std::vector<std::size_t>{1, 2, 3, 4, 5, 6});
+    REQUIRE(wholeResult.removedVolume > 100.0);
+    CHECK(sameStock(wholeStock, pairStock));
+    CHECK(sameStock(wholeStock, singleStock));
+    CHECK(pairResult.removedVolume == wholeResult.removedVolume);
+    CHECK(singleResult.removedVolume == wholeResult.removedVolume);
+    for (std::size_t i = 0; i < path.moves.size(); ++i) {
+        CHECK(pairResult.moves[i].removed == wholeResult.moves[i].removed);
+        CHECK(singleResult.moves[i].changed == wholeResult.moves[i].changed);
     }
 }
 

@@ -52,7 +52,8 @@ struct CutOptions {
     /// Worker threads: 0 uses TBB's default, 1 runs on the calling thread only.
     int threads = 0;
     /// Moves per batch (progress is reported after each batch). 0: about 1% of the program, at
-    /// least 64. Does not change the result.
+    /// least 64. A batch also ends before its turning sweeps could keep more linear nodes than
+    /// their budget (TurningSweep::linearNodeBound). Neither changes the result.
     std::size_t batchMoves = 0;
     /// Called after each batch with (moves done, total moves), on the calling thread, with the
     /// same sequence of values whatever the thread count.
@@ -164,6 +165,8 @@ struct MoveGeometry {
 
     MoveGeometry() = default;
     MoveGeometry(const ToolRegions& regions, const Move& move, double turnTolerance = kDefaultTurnTolerance);
+    /// @brief The most linear nodes the move's turning sweeps can keep (TurningSweep::linearNodeBound).
+    std::size_t linearNodeBound() const;
 };
 
 /// @brief Whether the cutting loop sweeps `move` of `tool` as a turning move with tolerance

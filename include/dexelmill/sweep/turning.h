@@ -38,7 +38,9 @@ constexpr double kMinTurnTolerance = 1e-6;
 
 /// @brief How many linear nodes (turning.cpp, note h) the turning sweeps alive at once keep, by
 /// default: about 2 kB each, so 128 MiB. The cutting loop builds the sweeps of a batch of moves
-/// together; past the budget a query makes the nodes it needs and drops them, slower but no larger.
+/// together, and ends a batch before its sweeps' trees of nodes could pass the budget
+/// (TurningSweep::linearNodeBound); past the budget a query makes the nodes it needs and drops
+/// them, slower but no larger.
 constexpr std::size_t kDefaultLinearNodeBudget = std::size_t(1) << 16;
 
 /// @brief The angle (radians, in [0, pi]) the axis of a move turns through; 0 for a fixed axis.
@@ -97,7 +99,12 @@ class TurningSweep {
     /// @brief How many linear nodes the sweeps alive keep, and the most they may keep (default
     /// kDefaultLinearNodeBudget); a budget of 0 keeps none.
     static std::size_t keptLinearNodes();
+    static std::size_t linearNodeBudget();
     static void setLinearNodeBudget(std::size_t nodes);
+    /// @brief The most linear nodes this sweep can keep: every node of its parts' trees (0
+    /// without linear nodes). The cutting loop keeps the sweeps it builds together within the
+    /// budget by this bound.
+    std::size_t linearNodeBound() const;
     /// @brief Whether the tool's ball end is swept as capsules along chords of its centre's path
     /// instead of searched (1) or not (0) (turning.cpp, note g), and into how many chords.
     std::size_t capsuleBalls() const { return balls_.size(); }
