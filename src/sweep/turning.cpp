@@ -215,11 +215,17 @@ bool ballEnd(const std::vector<ProfilePiece>& pieces, const ConvexPart& part, do
 constexpr int kMaxLinearLevel = 14;
 
 /// How many levels above the static search's closing level (note c) the linear nodes' leaves
-/// must lie for a move to take them. A node costs a one-part MoveSweep, about 2 us to make and
+/// must lie for a move to take them. A node costs a one-part MoveSweep, about 1 us to make and
 /// 2 kB to keep, against a static pose's solve; on the short moves of real programs, whose few
-/// lines share few nodes, that pays only where the nodes are far fewer. Measured on the impeller
-/// and on BM_TurningQuery (README, Performance).
-constexpr int kLinearLevelsSaved = 3;
+/// lines share few nodes, that pays only where the nodes are far fewer. A tool whose ball end is
+/// swept as capsules (note g) asks for one level more: both searches then run on the part above
+/// the ball alone, whose grown intervals the capsules mostly hold, so the static search settles
+/// early and costs less. Measured move by move, each move's queries timed with either search, one
+/// thread, h = 0.5 mm: on boat-xyzac (flat end) the moves 2 levels short took 5.6 s with linear
+/// nodes against 14.5 s with static poses; on the impeller (ball end) 5.0 s against 4.8 s, and
+/// the moves 3 levels short 1.2 s against 1.8 s (README, Performance, row h).
+constexpr int kLinearLevelsSaved = 2;
+constexpr int kLinearLevelsSavedBallEnd = 3;
 
 /// The linear nodes kept by every sweep alive, and how many they may keep.
 std::atomic<std::size_t> keptNodes{0};
@@ -407,6 +413,7 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
 void TurningSweep::chooseLinearNodes() {
     // Only a tip on the straight line bounds the pivot's bend (note h).
     if (!std::isfinite(law_.axisPointAccelerationBound(0.0))) return;
+    const int saved = balls_.empty() ? kLinearLevelsSaved : kLinearLevelsSavedBallEnd;
     std::vector<LinearPart> models;
     for (const ConvexPart& part : parts_) {
         const auto& pieces = tool_.pieces();
@@ -421,7 +428,7 @@ void TurningSweep::chooseLinearNodes() {
             const double width = std::ldexp(1.0, -k);
             m.reach.push_back(0.5 * turn * width + 0.125 * bend * width * width);
             if (m.reach.back() <= epsilon_) break;
-            if (k >= std::min(kMaxLinearLevel, closingLevel_ - kLinearLevelsSaved)) return;
+            if (k >= std::min(kMaxLinearLevel, closingLevel_ - saved)) return;
         }
         // Above the leaves, grown by the reach less epsilon (more than 0 there); the leaves
         // sweep the part itself.
@@ -539,8 +546,9 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      A node's sweep is made once per move, by the first query that needs it, and kept
 //      (NodeCache, within the budget of every sweep alive). Making one costs far more than
 //      solving a pose, so a move takes linear nodes only when its leaves lie at least
-//      kLinearLevelsSaved levels above the closing level of (c), and no deeper than
-//      kMaxLinearLevel; it keeps the search of (c) otherwise.
+//      kLinearLevelsSaved levels above the closing level of (c) (kLinearLevelsSavedBallEnd with a
+//      ball end swept as capsules), and no deeper than kMaxLinearLevel; it keeps the search of
+//      (c) otherwise.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     const Interval reach = bound(line);
