@@ -210,9 +210,17 @@ bool ballEnd(const std::vector<ProfilePiece>& pieces, const ConvexPart& part, do
     return true;
 }
 
-/// The deepest level of the linear-node search (note h): a part has at most
-/// 2^(kMaxLinearLevel + 1) nodes. A move that would need deeper ones is searched by static poses.
-constexpr int kMaxLinearLevel = 14;
+/// The deepest level of the linear-node search (note h). A move that would need deeper ones is
+/// searched by static poses.
+constexpr int kMaxLinearLevel = 20;
+
+/// The deepest level whose linear nodes are kept (NodeCache): a part keeps at most
+/// 2^(kMaxKeptLevel + 1) nodes, in a table of that many slots (1 MiB) made with the sweep. Deeper
+/// nodes are made by each query that needs them and dropped, as few lines share a node that deep
+/// (on boat-xyzac at h = 0.5 mm, about 2 queries a node at level 13 and 1 at level 14). On the
+/// 10 degree rows of BM_TurningQuery, whose leaves lie at level 16, keeping levels down to 14
+/// only was 1.3 times slower.
+constexpr int kMaxKeptLevel = 16;
 
 /// How many levels above the static search's closing level (note c) the linear nodes' leaves
 /// must lie for a move to take them. A node costs a one-part MoveSweep, about 1 us to make and
@@ -254,7 +262,7 @@ class TurningSweep::NodeCache {
   public:
     explicit NodeCache(const std::vector<LinearPart>& parts) {
         for (const LinearPart& p : parts) {
-            sizes_.push_back(std::size_t(2) << p.leafLevel());
+            sizes_.push_back(std::size_t(2) << std::min(p.leafLevel(), kMaxKeptLevel));
             slots_.emplace_back(new std::atomic<const LinearNode*>[sizes_.back()]());
         }
     }
@@ -269,6 +277,7 @@ class TurningSweep::NodeCache {
     /// The node, kept; or, when the sweeps alive keep their budget already, made in `scratch`.
     template <class Make>
     const LinearNode& get(std::size_t part, std::uint32_t heap, std::optional<LinearNode>& scratch, Make&& make) {
+        if (heap >= sizes_[part]) return scratch.emplace(make());  // deeper than kMaxKeptLevel
         std::atomic<const LinearNode*>& slot = slots_[part][heap];
         if (const LinearNode* n = slot.load(std::memory_order_acquire)) return *n;
         if (keptNodes.fetch_add(1, std::memory_order_relaxed) >= nodeBudget.load(std::memory_order_relaxed)) {
@@ -299,7 +308,7 @@ std::size_t TurningSweep::linearNodeBudget() { return nodeBudget.load(std::memor
 
 std::size_t TurningSweep::linearNodeBound() const {
     std::size_t nodes = 0;
-    for (const LinearPart& m : models_) nodes += (std::size_t(2) << m.leafLevel()) - 1;
+    for (const LinearPart& m : models_) nodes += (std::size_t(2) << std::min(m.leafLevel(), kMaxKeptLevel)) - 1;
     return nodes;
 }
 
@@ -544,7 +553,8 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      about log2(V / (2 omega rho)) levels higher than the closing level of (c), and near a
 //      graze of the envelope the nodes a level are fewer by about the square root of that ratio.
 //      A node's sweep is made once per move, by the first query that needs it, and kept
-//      (NodeCache, within the budget of every sweep alive). Making one costs far more than
+//      (NodeCache, within the budget of every sweep alive) down to kMaxKeptLevel; deeper nodes,
+//      which few lines share, are made by each query and dropped. Making one costs far more than
 //      solving a pose, so a move takes linear nodes only when its leaves lie at least
 //      kLinearLevelsSaved levels above the closing level of (c) (kLinearLevelsSavedBallEnd with a
 //      ball end swept as capsules), and no deeper than kMaxLinearLevel; it keeps the search of

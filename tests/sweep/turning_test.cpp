@@ -140,6 +140,7 @@ TEST_CASE("turning sweep: linear nodes are kept once, given back, and past the b
         for (const Line& l : lines) kept.push_back(sweep.intersect(l));
         whileAlive = TurningSweep::keptLinearNodes() - before;
         CHECK(whileAlive > 100);
+        CHECK(whileAlive <= sweep.linearNodeBound());
         // Asked again, the lines make no new nodes.
         for (const Line& l : lines) sweep.intersect(l);
         CHECK(TurningSweep::keptLinearNodes() - before == whileAlive);
@@ -164,5 +165,47 @@ TEST_CASE("turning sweep: linear nodes are kept once, given back, and past the b
         CHECK(hits > 200);
         CHECK(TurningSweep::keptLinearNodes() == before);
     }
+    TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget);
+}
+
+TEST_CASE("turning sweep: a deep tree keeps its upper levels, and its bound holds what it keeps",
+          "[sweep][turning]") {
+    // The flat end turning ten degrees over 30 mm: its leaves lie deeper than the levels a sweep
+    // keeps, so its deepest nodes are made by each query and dropped. The answers must not
+    // depend on what was kept: the same lines with no budget give the same bits.
+    const Tool tool = flatEndMill(10.0, {20.0, 20.0});
+    Move m;
+    m.start = Vec3(0.0);
+    m.end = Vec3(30.0, 10.0, -3.0);
+    m.axis = glm::normalize(Vec3(0.3, -0.2, 1.0));
+    m.startAxis = rotated(m.axis, glm::normalize(glm::cross(m.axis, Vec3(0, 0, 1))), 10.0 * kPi / 180.0);
+    std::vector<Line> lines;
+    for (int i = 0; i < 200; ++i) lines.push_back({Vec3(-20.0, -8.0 + 0.1 * i, -1.5 - 0.004 * i), Vec3(1, 0, 0)});
+    for (int i = 0; i < 200; ++i) lines.push_back({Vec3(-5.0 + 0.2 * i, 3.0, -20.0), Vec3(0, 0, 1)});
+    const std::size_t before = TurningSweep::keptLinearNodes();
+    std::vector<std::vector<LineHit>> kept;
+    {
+        const TurningSweep sweep(tool, m);
+        REQUIRE(sweep.linearNodes());
+        for (const Line& l : lines) kept.push_back(sweep.intersect(l));
+        const std::size_t alive = TurningSweep::keptLinearNodes() - before;
+        CHECK(alive > 100);
+        CHECK(alive <= sweep.linearNodeBound());
+    }
+    TurningSweep::setLinearNodeBudget(0);
+    const TurningSweep sweep(tool, m);
+    int hits = 0;
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+        const std::vector<LineHit> h = sweep.intersect(lines[i]);
+        REQUIRE(h.size() == kept[i].size());
+        for (std::size_t k = 0; k < h.size(); ++k) {
+            CHECK(h[k].range.lo == kept[i][k].range.lo);
+            CHECK(h[k].range.hi == kept[i][k].range.hi);
+            CHECK(h[k].normalLo == kept[i][k].normalLo);
+            CHECK(h[k].normalHi == kept[i][k].normalHi);
+        }
+        hits += !h.empty();
+    }
+    CHECK(hits > 100);
     TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget);
 }
