@@ -287,17 +287,22 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
         tbb::parallel_for(w0, w1, [&](std::size_t i) { material[i - w0] = stockMaterial(windows[i], freach, stock); });
         runMoves.assign(b.runStart.size() - 1, {});
 
-        for (std::size_t m0 = 0; m0 < path.moves.size(); m0 += kBatch) {
-            const std::size_t m1 = std::min(path.moves.size(), m0 + kBatch);
-            geoms.resize(m1 - m0);
-            cutReach.resize(m1 - m0);
-            shankReach.resize(m1 - m0);
-            tbb::parallel_for(m0, m1, [&](std::size_t i) {
+        // geoms[i - m0] is the sweep of move i (and the reaches alike); the first `built` of them
+        // were built with the batch before.
+        std::size_t built = 0;
+        for (std::size_t m0 = 0, m1 = 0; m0 < path.moves.size(); m0 = m1) {
+            const std::size_t end = std::min(path.moves.size(), m0 + kBatch);
+            geoms.resize(end - m0);
+            cutReach.resize(end - m0);
+            shankReach.resize(end - m0);
+            tbb::parallel_for(m0 + built, end, [&](std::size_t i) {
                 const ToolRegions& r = regions.at(path.moves[i].tool);
                 geoms[i - m0] = MoveGeometry(r, path.moves[i], turnTolerance);
                 cutReach[i - m0] = SweepReach(*r.cutting, path.moves[i]);
                 if (r.shank) shankReach[i - m0] = SweepReach(*r.shank, path.moves[i]);
             });
+            // The batch ends before its turning sweeps could keep more linear nodes than the budget.
+            m1 = m0 + movesWithinNodeBudget(geoms.data(), end - m0);
             // Each move to the runs of windows its box (grown by the reach) overlaps, in order.
             active.clear();
             for (std::size_t i = m0; i < m1; ++i) {
@@ -348,6 +353,11 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
             });
             done += m1 - m0;
             if (progress) progress(done, total);
+            // The sweeps built past the batch's end go with the next batch.
+            geoms.erase(geoms.begin(), geoms.begin() + std::ptrdiff_t(m1 - m0));
+            cutReach.erase(cutReach.begin(), cutReach.begin() + std::ptrdiff_t(m1 - m0));
+            shankReach.erase(shankReach.begin(), shankReach.begin() + std::ptrdiff_t(m1 - m0));
+            built = end - m1;
         }
         tbb::parallel_for(w0, w1, [&](std::size_t i) { out[i] = nearestCrossing(windows[i], material[i - w0], freach); });
     }

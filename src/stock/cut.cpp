@@ -341,6 +341,16 @@ std::size_t MoveGeometry::linearNodeBound() const {
     return nodes;
 }
 
+std::size_t movesWithinNodeBudget(const MoveGeometry* geoms, std::size_t count) {
+    const std::size_t budget = TurningSweep::linearNodeBudget();
+    std::size_t nodes = geoms[0].linearNodeBound(), n = 1;
+    for (; n < count; ++n) {
+        nodes += geoms[n].linearNodeBound();
+        if (nodes > budget) break;
+    }
+    return n;
+}
+
 CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& tools, const CutOptions& options) {
     const std::size_t nMoves = path.moves.size();
     CutResult result;
@@ -414,14 +424,8 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
                 geoms[i - m0] = MoveGeometry(regions.at(mv.tool), mv, options.turnTolerance);
             });
         });
-        // The batch ends before its turning sweeps could keep more linear nodes than the budget
-        // (past it, their queries would make nodes and drop them): at least one move.
-        const std::size_t budget = TurningSweep::linearNodeBudget();
-        std::size_t nodes = geoms.front().linearNodeBound();
-        for (m1 = m0 + 1; m1 < end; ++m1) {
-            nodes += geoms[m1 - m0].linearNodeBound();
-            if (nodes > budget) break;
-        }
+        // The batch ends before its turning sweeps could keep more linear nodes than the budget.
+        m1 = m0 + movesWithinNodeBudget(geoms.data(), end - m0);
         // Bucket the moves by the tiles their boxes overlap, in program order.
         active.clear();
         for (std::size_t i = m0; i < m1; ++i) {

@@ -169,6 +169,12 @@ struct MoveGeometry {
     std::size_t linearNodeBound() const;
 };
 
+/// @brief How many of `count` consecutive moves' sweeps, from the first, one batch may hold: as
+/// many as keep their turning sweeps' linear nodes within the budget (TurningSweep::
+/// linearNodeBudget, MoveGeometry::linearNodeBound), and at least one. Past the budget a query
+/// makes each node it needs and drops it.
+std::size_t movesWithinNodeBudget(const MoveGeometry* geoms, std::size_t count);
+
 /// @brief Whether the cutting loop sweeps `move` of `tool` as a turning move with tolerance
 /// `turnTolerance`: a feed move whose axis turns far enough to move some tool point (all within
 /// hypot(total length, max radius) of the tip) by more than the tolerance. A machine's rotary move
