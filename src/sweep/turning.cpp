@@ -274,10 +274,11 @@ class TurningSweep::NodeCache {
     NodeCache(const NodeCache&) = delete;
     NodeCache& operator=(const NodeCache&) = delete;
 
-    /// The node, kept; or, when the sweeps alive keep their budget already, made in `scratch`.
+    /// The node, kept; or, when it lies deeper than kMaxKeptLevel or the sweeps alive keep their
+    /// budget already, made in `scratch`.
     template <class Make>
     const LinearNode& get(std::size_t part, std::uint32_t heap, std::optional<LinearNode>& scratch, Make&& make) {
-        if (heap >= sizes_[part]) return scratch.emplace(make());  // deeper than kMaxKeptLevel
+        if (heap >= sizes_[part]) return scratch.emplace(make());
         std::atomic<const LinearNode*>& slot = slots_[part][heap];
         if (const LinearNode* n = slot.load(std::memory_order_acquire)) return *n;
         if (keptNodes.fetch_add(1, std::memory_order_relaxed) >= nodeBudget.load(std::memory_order_relaxed)) {

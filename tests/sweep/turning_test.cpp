@@ -118,6 +118,28 @@ TEST_CASE("turning move box: fixed axes, a turn through +z and opposite axes", "
     CHECK_THROWS_WITH(turningMoveBox(m, 50, 5), Catch::Matchers::Contains("opposite"));
 }
 
+namespace {
+
+/// How many of `lines` `sweep` hits, checking that each answer is `kept`'s to the bit: ends and
+/// normals.
+int sameHits(const TurningSweep& sweep, const std::vector<Line>& lines, const std::vector<std::vector<LineHit>>& kept) {
+    int hits = 0;
+    for (std::size_t i = 0; i < lines.size(); ++i) {
+        const std::vector<LineHit> h = sweep.intersect(lines[i]);
+        REQUIRE(h.size() == kept[i].size());
+        for (std::size_t k = 0; k < h.size(); ++k) {
+            CHECK(h[k].range.lo == kept[i][k].range.lo);
+            CHECK(h[k].range.hi == kept[i][k].range.hi);
+            CHECK(h[k].normalLo == kept[i][k].normalLo);
+            CHECK(h[k].normalHi == kept[i][k].normalHi);
+        }
+        hits += !h.empty();
+    }
+    return hits;
+}
+
+}  // namespace
+
 TEST_CASE("turning sweep: linear nodes are kept once, given back, and past the budget made per query",
           "[sweep][turning]") {
     // A flat end mill turning one degree over 30 mm: the tip's travel is most of the speed, so the
@@ -150,19 +172,7 @@ TEST_CASE("turning sweep: linear nodes are kept once, given back, and past the b
     TurningSweep::setLinearNodeBudget(0);
     {
         const TurningSweep sweep(tool, m);
-        int hits = 0;
-        for (std::size_t i = 0; i < lines.size(); ++i) {
-            const std::vector<LineHit> h = sweep.intersect(lines[i]);
-            REQUIRE(h.size() == kept[i].size());
-            for (std::size_t k = 0; k < h.size(); ++k) {
-                CHECK(h[k].range.lo == kept[i][k].range.lo);
-                CHECK(h[k].range.hi == kept[i][k].range.hi);
-                CHECK(h[k].normalLo == kept[i][k].normalLo);
-                CHECK(h[k].normalHi == kept[i][k].normalHi);
-            }
-            hits += !h.empty();
-        }
-        CHECK(hits > 200);
+        CHECK(sameHits(sweep, lines, kept) > 200);
         CHECK(TurningSweep::keptLinearNodes() == before);
     }
     TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget);
@@ -193,19 +203,6 @@ TEST_CASE("turning sweep: a deep tree keeps its upper levels, and its bound hold
         CHECK(alive <= sweep.linearNodeBound());
     }
     TurningSweep::setLinearNodeBudget(0);
-    const TurningSweep sweep(tool, m);
-    int hits = 0;
-    for (std::size_t i = 0; i < lines.size(); ++i) {
-        const std::vector<LineHit> h = sweep.intersect(lines[i]);
-        REQUIRE(h.size() == kept[i].size());
-        for (std::size_t k = 0; k < h.size(); ++k) {
-            CHECK(h[k].range.lo == kept[i][k].range.lo);
-            CHECK(h[k].range.hi == kept[i][k].range.hi);
-            CHECK(h[k].normalLo == kept[i][k].normalLo);
-            CHECK(h[k].normalHi == kept[i][k].normalHi);
-        }
-        hits += !h.empty();
-    }
-    CHECK(hits > 100);
+    CHECK(sameHits(TurningSweep(tool, m), lines, kept) > 100);
     TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget);
 }

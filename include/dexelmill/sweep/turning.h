@@ -101,8 +101,8 @@ class TurningSweep {
     static std::size_t keptLinearNodes();
     static std::size_t linearNodeBudget();
     static void setLinearNodeBudget(std::size_t nodes);
-    /// @brief The most linear nodes this sweep can keep: every node of its parts' trees (0
-    /// without linear nodes). The cutting loop keeps the sweeps it builds together within the
+    /// @brief The most linear nodes this sweep can keep: every node of its parts' trees down to
+    /// the deepest level kept (0 without linear nodes). The cutting loop keeps the sweeps it builds together within the
     /// budget by this bound.
     std::size_t linearNodeBound() const;
     /// @brief Whether the tool's ball end is swept as capsules along chords of its centre's path
