@@ -120,6 +120,17 @@ TEST_CASE("turning move box: fixed axes, a turn through +z and opposite axes", "
 
 namespace {
 
+/// A 30 mm move from the origin to (30, 10, -3), its axis ending tilted towards (0.3, -0.2, 1)
+/// and turning `degrees` on the way, in the plane of the tilt.
+Move tiltedTurn(double degrees) {
+    Move m;
+    m.start = Vec3(0.0);
+    m.end = Vec3(30.0, 10.0, -3.0);
+    m.axis = glm::normalize(Vec3(0.3, -0.2, 1.0));
+    m.startAxis = rotated(m.axis, glm::normalize(glm::cross(m.axis, Vec3(0, 0, 1))), degrees * kPi / 180.0);
+    return m;
+}
+
 /// How many of `lines` `sweep` hits, checking that each answer is `kept`'s to the bit: ends and
 /// normals.
 int sameHits(const TurningSweep& sweep, const std::vector<Line>& lines, const std::vector<std::vector<LineHit>>& kept) {
@@ -145,11 +156,7 @@ TEST_CASE("turning sweep: linear nodes are kept once, given back, and past the b
     // A flat end mill turning one degree over 30 mm: the tip's travel is most of the speed, so the
     // search takes linear nodes.
     const Tool tool = flatEndMill(10.0, {20.0, 20.0});
-    Move m;
-    m.start = Vec3(0.0);
-    m.end = Vec3(30.0, 10.0, -3.0);
-    m.axis = glm::normalize(Vec3(0.3, -0.2, 1.0));
-    m.startAxis = rotated(m.axis, glm::normalize(glm::cross(m.axis, Vec3(0, 0, 1))), kPi / 180.0);
+    const Move m = tiltedTurn(1.0);
     std::vector<Line> lines;
     for (int i = 0; i < 400; ++i) lines.push_back({Vec3(-20.0, -8.0 + 0.05 * i, -1.5 - 0.002 * i), Vec3(1, 0, 0)});
     for (int i = 0; i < 400; ++i) lines.push_back({Vec3(-5.0 + 0.1 * i, 3.0, -20.0), Vec3(0, 0, 1)});
@@ -184,11 +191,7 @@ TEST_CASE("turning sweep: a deep tree keeps its upper levels, and its bound hold
     // keeps, so its deepest nodes are made by each query and dropped. The answers must not
     // depend on what was kept: the same lines with no budget give the same bits.
     const Tool tool = flatEndMill(10.0, {20.0, 20.0});
-    Move m;
-    m.start = Vec3(0.0);
-    m.end = Vec3(30.0, 10.0, -3.0);
-    m.axis = glm::normalize(Vec3(0.3, -0.2, 1.0));
-    m.startAxis = rotated(m.axis, glm::normalize(glm::cross(m.axis, Vec3(0, 0, 1))), 10.0 * kPi / 180.0);
+    const Move m = tiltedTurn(10.0);
     std::vector<Line> lines;
     for (int i = 0; i < 200; ++i) lines.push_back({Vec3(-20.0, -8.0 + 0.1 * i, -1.5 - 0.004 * i), Vec3(1, 0, 0)});
     for (int i = 0; i < 200; ++i) lines.push_back({Vec3(-5.0 + 0.2 * i, 3.0, -20.0), Vec3(0, 0, 1)});
