@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
@@ -64,6 +65,10 @@ LocalLine localLine(const Vec3& o, const Vec3& w) {
     l.vShift = 0.0;
     return l;
 }
+
+/// The relative rounding of a sum of three terms, computed as one: the height of a point over a
+/// rim (o.z + v w.z - zr), known to this fraction of the terms' magnitudes.
+constexpr double kRimHeightRounding = 4.0 * std::numeric_limits<double>::epsilon();
 
 /// The line o + v w inside the static part (the tool at one pose): the hull of its pieces'
 /// intervals, which is exact because the part is convex.
@@ -517,7 +522,25 @@ Interval MoveSweep::intersectLocal(const Part& part, const LocalLine& q, [[maybe
             // where, with dq = o.q - fd zr / |f| (the rim's qc) and a = kappa^2 w.e^2 + (w.q)^2,
             //   v = (-(kappa^2 o.e w.e + dq w.q) +- kappa sqrt(r^2 a - (o.e w.q - w.e dq)^2)) / a,
             // a form in which nothing cancels when the move is nearly horizontal (kappa -> 0).
-            // The feed parameter follows from the axial row: u = (o.z + v w.z - zr) / fn.
+            // The feed parameter follows from the axial row: u = (o.z + v w.z - zr) / fn. That
+            // height is known to about kRimHeightRounding of its terms, so where fn is small
+            // enough for this to pass kParam in u (a tiny move nearly across the axis: fn at
+            // rounding level makes u anything), u is taken in the rim's plane instead: the circle
+            // centred at u fd on the d axis passes through the point where
+            //   u = (x -+ sqrt(r^2 - y^2)) / fd   (x, y the point's d and e coordinates),
+            // and of the two the one nearer the axial row's is the one it gives. Where that choice
+            // is unsure, the two points of the rim lie within the height's rounding of each
+            // other, so either answer is right to that.
+            const auto feedAt = [&](double v, const Circle& rim) {
+                const double height = o.z + v * w.z - rim.z;
+                const double u = height * invFn_;
+                const double rounding = kRimHeightRounding * (std::abs(o.z) + std::abs(v * w.z) + std::abs(rim.z));
+                if (!(rounding * std::abs(invFn_) > sweep_tol::kParam) || fd == 0.0) return u;
+                const double x = o.x + v * w.x, y = o.y + v * w.y;
+                const double half = std::sqrt(std::max(0.0, rim.r * rim.r - y * y));
+                const double u0 = (x - half) / fd, u1 = (x + half) / fd;
+                return std::abs(u0 - u) <= std::abs(u1 - u) ? u0 : u1;
+            };
             const double kappa2 = kappa_ * kappa_;
             const double oq = glm::dot(o, qDir_), wq = glm::dot(w, qDir_);
             const double a = kappa2 * w.y * w.y + wq * wq;
@@ -532,7 +555,7 @@ Interval MoveSweep::intersectLocal(const Part& part, const LocalLine& q, [[maybe
                 const double qq = -(b + std::copysign(kappa_ * std::sqrt(disc), b));
                 const double roots[2] = {qq * invA, qq != 0.0 ? c / qq : qq * invA};
                 const Source src = Source::of(Source::Rim, std::uint32_t(&rim - part.rims.data()));
-                for (double v : roots) ex.add(v, (o.z + v * w.z - rim.z) * invFn_, src);
+                for (double v : roots) ex.add(v, feedAt(v, rim), src);
             }
         }
     }

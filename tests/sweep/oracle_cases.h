@@ -32,6 +32,7 @@ enum class Family {
     DexelAlongMove,  ///< w x f = 0
     DexelAlongAxis,  ///< w parallel to the tool axis
     NearDegenerate,  ///< within 1e-14 .. 1e-3 rad of each of the above; tiny moves
+    TinyAcross,      ///< 1e-4 .. 1e-3 mm long, 1e-12 .. 1e-10 rad off horizontal, lines by a rim
     DexelInFace,     ///< horizontal move, the line lying in the bottom or top face's plane
     Regions,         ///< the cutting part [0, Lc] and the shank [Lc, L] swept separately
     SymmetryPlane    ///< axis z, a move along x or y, the line in the plane of the axis and feed
@@ -176,6 +177,17 @@ inline Case makeCase(Family family, std::mt19937_64& rng) {
         }
         break;
     }
+    case Family::TinyAcross: {
+        // The moves a turning sweep's pure rotation makes of its nodes (turning.cpp, note h): a
+        // tip stepping across the axis by a micrometre or less, its axial part near rounding (a
+        // rim's feed parameter is its height over that part). The line, within 30 degrees of
+        // the axis, crosses the bottom or top face's plane within two move lengths of its rim.
+        const double eps = std::pow(10.0, uniform(rng, -12.0, -10.0));
+        f = std::pow(10.0, uniform(rng, -4.0, -3.0)) *
+            glm::normalize(randomPerpendicular(rng, n) + (rng() % 2 ? eps : -eps) * n);
+        w = glm::normalize((rng() % 2 ? 1.0 : -1.0) * n + uniform(rng, 0.0, 0.58) * randomPerpendicular(rng, n));
+        break;
+    }
     case Family::SymmetryPlane: {
         // Exact coordinates, so that the line lies exactly in the move's plane of symmetry.
         const int along = int(rng() % 2);
@@ -208,6 +220,12 @@ inline Case makeCase(Family family, std::mt19937_64& rng) {
     line = Line{anchor - uniform(rng, 5.0, 60.0) * w, w};
     if (family == Family::DexelInFace) {
         line.origin.z = rng() % 2 ? ps.z + parts.front().za : ps.z + parts.back().zb;
+    }
+    if (family == Family::TinyAcross) {
+        const double face = rng() % 2 ? parts.front().za : parts.back().zb;
+        const double rim = parts.front().za == face ? parts.front().radius(face) : parts.back().radius(face);
+        const Vec3 near = ps + face * n + (rim + uniform(rng, -2.0, 2.0) * glm::length(f)) * radial;
+        line = Line{near - uniform(rng, 5.0, 60.0) * w, w};
     }
     if (family == Family::SymmetryPlane) {
         const int across = f.x != 0.0 ? 1 : 0;  // the coordinate the plane fixes

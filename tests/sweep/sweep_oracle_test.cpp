@@ -1,6 +1,6 @@
 // The sweep solver against the brute-force oracle (oracle.h): random tools of every kind, random
 // tool axes, moves and dexel directions, one test case per degenerate family of method.md
-// section 5. Fixed seeds; case counts scale with DEXELMILL_TEST_SCALE (default 1: 123,000 cases).
+// section 5. Fixed seeds; case counts scale with DEXELMILL_TEST_SCALE (default 1: 133,000 cases).
 //
 // Agreement: every removed interval longer than 2 kTolerance has a partner on the other side with
 // both ends within kTolerance = 1e-6 mm; a stretch they disagree on beyond that must lie within
@@ -156,6 +156,10 @@ TEST_CASE("sweep vs oracle: dexel parallel to the tool axis", "[sweep][oracle]")
 
 TEST_CASE("sweep vs oracle: nearly degenerate moves and dexels", "[sweep][oracle]") {
     check(Family::NearDegenerate, 108, 12000);
+}
+
+TEST_CASE("sweep vs oracle: tiny moves across the axis, nearly horizontal", "[sweep][oracle]") {
+    check(Family::TinyAcross, 112, 10000);
 }
 
 TEST_CASE("sweep vs oracle: dexel lying in a flat face's plane", "[sweep][oracle]") {
