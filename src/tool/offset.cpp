@@ -79,10 +79,16 @@ std::vector<ProfilePiece> offsetPart(const Tool& tool, const ConvexPart& part, d
 
 std::vector<ProfilePiece> mitredOffsetPart(const Tool& tool, const ConvexPart& part, double r) {
     const auto& pieces = tool.pieces();
+    return mitredOffsetChain(std::vector<ProfilePiece>(pieces.begin() + std::ptrdiff_t(part.first),
+                                                       pieces.begin() + std::ptrdiff_t(part.last)),
+                             r);
+}
+
+std::vector<ProfilePiece> mitredOffsetChain(const std::vector<ProfilePiece>& pieces, double r) {
     std::vector<ProfilePiece> out;
     const double level = kLevelStep * r;
     // Where the chain stands; it starts at the bottom face's rim, moved down by r.
-    const ProfilePiece& bottom = pieces[part.first];
+    const ProfilePiece& bottom = pieces.front();
     double rAt = pieceRadius(bottom, pieceZ0(bottom)), zAt = pieceZ0(bottom) - r;
     // A straight step to (rv, zv). A step level to within `level` makes no cone: before any piece
     // it widens the bottom face, after a cone it raises and widens that cone's top (both only
@@ -115,8 +121,7 @@ std::vector<ProfilePiece> mitredOffsetPart(const Tool& tool, const ConvexPart& p
         lineTo(rc + r * std::cos(psiB), zc + r * std::sin(psiB));
     };
     double psi = -kHalfPi;  // the bottom face's normal
-    for (std::size_t i = part.first; i < part.last; ++i) {
-        const ProfilePiece& p = pieces[i];
+    for (const ProfilePiece& p : pieces) {
         const double z0 = pieceZ0(p), z1 = pieceZ1(p);
         corner(pieceRadius(p, z0), z0, psi, normalAngle(p, z0));
         if (const auto* c = std::get_if<ConePiece>(&p)) {
@@ -131,7 +136,7 @@ std::vector<ProfilePiece> mitredOffsetPart(const Tool& tool, const ConvexPart& p
         }
         psi = normalAngle(p, z1);
     }
-    const ProfilePiece& top = pieces[part.last - 1];
+    const ProfilePiece& top = pieces.back();
     corner(pieceRadius(top, pieceZ1(top)), pieceZ1(top), psi, kHalfPi);
     return out;
 }

@@ -48,4 +48,21 @@ double pieceSlope(const ProfilePiece& piece, double z) {
                       piece);
 }
 
+std::vector<ProfilePiece> clipChain(const std::vector<ProfilePiece>& pieces, std::size_t first, std::size_t last,
+                                    double z0, double z1) {
+    std::vector<ProfilePiece> out;
+    for (std::size_t i = first; i < last; ++i) {
+        const double lo = std::max(pieceZ0(pieces[i]), z0), hi = std::min(pieceZ1(pieces[i]), z1);
+        if (!(hi > lo)) continue;
+        if (const auto* c = std::get_if<ConePiece>(&pieces[i])) {
+            out.push_back(ConePiece{lo, hi, pieceRadius(*c, lo), pieceRadius(*c, hi)});
+        } else {
+            ArcPiece a = std::get<ArcPiece>(pieces[i]);
+            a.z0 = lo, a.z1 = hi;
+            out.push_back(a);
+        }
+    }
+    return out;
+}
+
 }  // namespace dexelmill

@@ -373,6 +373,56 @@ TEST_CASE("mitredOffsetPart: holds the grown part and lies within r sqrt 2 of th
                     });
 }
 
+TEST_CASE("clipChain and mitredOffsetChain: a band of heights cut from a part, and grown", "[tool][offset]") {
+    // The band of a part between two random heights (the turning sweep's bands, turning.cpp note
+    // i), against the oracle's part cut to the same heights: the chain spans exactly those
+    // heights, its radius is the oracle's, and grown it ends between r and r sqrt 2 of the band.
+    std::mt19937_64 rng(20261130);
+    int checked = 0;
+    for (int k = 0; k < int(models::Kind::Count); ++k) {
+        for (int n = 0; n < std::max(2, int(20 * oracle::testScale())); ++n) {
+            const models::Model m = models::make(models::Kind(k), rng);
+            for (std::size_t p = 0; p < m.parts.size(); ++p) {
+                const ConvexPart& part = m.tool.convexParts()[p];
+                const double za = m.parts[p].za, zb = m.parts[p].zb;
+                const double lo = models::uniform(rng, za, za + 0.6 * (zb - za)), hi = models::uniform(rng, lo + 0.2 * (zb - za), zb);
+                const std::vector<ProfilePiece> band = clipChain(m.tool.pieces(), part.first, part.last, lo, hi);
+                const oracle::Part cut = models::clip({m.parts[p]}, lo, hi).front();
+                INFO(models::name(models::Kind(k)) << " part " << p << " band [" << lo << ", " << hi << "]");
+                REQUIRE(!band.empty());
+                CHECK(pieceZ0(band.front()) == lo);
+                CHECK(pieceZ1(band.back()) == hi);
+                for (std::size_t i = 1; i < band.size(); ++i) CHECK(pieceZ0(band[i]) == pieceZ1(band[i - 1]));
+                for (const ProfilePiece& piece : band)
+                    for (const double s : {0.0, 0.3, 1.0}) {
+                        const double z = pieceZ0(piece) + s * (pieceZ1(piece) - pieceZ0(piece));
+                        CHECK(std::abs(pieceRadius(piece, z) - cut.radius(z)) <= kRound);
+                    }
+                const Polygon poly = polygonOf(cut);
+                const double r = std::exp(models::uniform(rng, std::log(1e-6), std::log(5.0)));
+                const std::vector<ProfilePiece> grown = mitredOffsetChain(band, r);
+                for (int l = 0; l < 20; ++l) {
+                    Line line;
+                    if (!randomLineNear(cut, r, l, rng, line)) continue;
+                    const Interval iv = intersectPieces(grown, LocalLine::make(ToolPose{}, line));
+                    auto distance = [&](double t) {
+                        const Vec3 q = line.at(t);
+                        return polygonDistance(poly, rhoOf(q), q.z, 2.0 * r + kGap);
+                    };
+                    if (iv.isEmpty()) {
+                        checkNothingWithin(cut, r, distance);
+                        continue;
+                    }
+                    checkEnds(iv, r, std::sqrt(2.0) * r, distance);
+                    for (const double t : {iv.lo - kLineStep, iv.hi + kLineStep}) CHECK(distance(t) >= r - kRound);
+                    ++checked;
+                }
+            }
+        }
+    }
+    CHECK(checked > 1000);
+}
+
 TEST_CASE("mitredOffsetPart: a flat end mill grows into a cylinder with square corners", "[tool][offset]") {
     const Tool flat = flatEndMill(10.0, {20.0, 20.0});
     const ConvexPart& part = flat.convexParts().front();

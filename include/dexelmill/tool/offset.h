@@ -37,6 +37,9 @@ std::vector<ProfilePiece> offsetPart(const Tool& tool, const ConvexPart& part, d
 /// rims would be tori. Built from the part's own normal angles, not from the grown arcs' heights,
 /// so it stays exact to rounding for r of any size against the part's.
 std::vector<ProfilePiece> mitredOffsetPart(const Tool& tool, const ConvexPart& part, double r);
+/// @brief As mitredOffsetPart, for a convex chain of pieces given on its own (bottom to top; its
+/// solid closed by flat faces at its lowest and highest heights).
+std::vector<ProfilePiece> mitredOffsetChain(const std::vector<ProfilePiece>& chain, double r);
 
 /// @brief A part grown by r, for tests that need only a superset of a line's interval in it:
 /// offsetPart's pieces, with each torus piece (an arc off the axis) also as the chain of cones

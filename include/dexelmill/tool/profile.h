@@ -10,6 +10,7 @@
 #pragma once
 
 #include <variant>
+#include <vector>
 
 namespace dexelmill {
 
@@ -40,5 +41,12 @@ double pieceZ1(const ProfilePiece& piece);
 double pieceRadius(const ProfilePiece& piece, double z);
 /// @brief dR/dz of a piece at z (one-sided at the ends; +-infinity where an arc is vertical).
 double pieceSlope(const ProfilePiece& piece, double z);
+
+/// @brief The pieces [first, last) of a chain cut to the heights [z0, z1]: each piece that
+/// reaches into them, its ends moved to z0 and z1 where it passes them (a cone's radii
+/// interpolated, an arc keeping its circle). The caller keeps z0 and z1 off the chain's joints,
+/// so that no piece is cut to a sliver.
+std::vector<ProfilePiece> clipChain(const std::vector<ProfilePiece>& pieces, std::size_t first, std::size_t last,
+                                    double z0, double z1);
 
 }  // namespace dexelmill
