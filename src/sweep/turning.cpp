@@ -235,6 +235,17 @@ constexpr int kMaxKeptLevel = 16;
 constexpr int kLinearLevelsSaved = 2;
 constexpr int kLinearLevelsSavedBallEnd = 3;
 
+/// The linear-node search cuts each part into bands of heights (note i) no taller than this many
+/// times the part's largest radius, and into at most kMaxBands.
+constexpr double kBandHeight = 1.0;
+constexpr int kMaxBands = 8;
+/// How far (mm) a band's bounds, grown by epsilon, keep off the joints of its part's pieces, so
+/// that no piece is cut to a sliver.
+constexpr double kBandJointGap = 1e-3;
+/// A part is cut into bands only where their leaves lie at least this many levels above the whole
+/// part's.
+constexpr int kBandLevelsSaved = 2;
+
 /// The linear nodes kept by every sweep alive, and how many they may keep.
 std::atomic<std::size_t> keptNodes{0};
 std::atomic<std::size_t> nodeBudget{kDefaultLinearNodeBudget};
@@ -313,19 +324,20 @@ std::size_t TurningSweep::linearNodeBound() const {
     return nodes;
 }
 
-const TurningSweep::LinearNode& TurningSweep::linearNode(std::size_t part, std::uint32_t heap,
+const TurningSweep::LinearNode& TurningSweep::linearNode(std::size_t band, std::uint32_t heap,
                                                           std::optional<LinearNode>& scratch) const {
-    return nodes_->get(part, heap, scratch, [&] {
-        const int level = heapLevel(heap);
-        const double width = std::ldexp(1.0, -level);
-        const double ua = double(heap - (std::uint32_t(1) << level)) * width, ub = ua + width, um = ua + 0.5 * width;
-        const LinearPart& m = models_[part];
-        const ToolPose a = law_.pose(ua), b = law_.pose(ub), mid = law_.pose(um);
-        // The pivot runs on the chord from its place at ua to its place at ub, the axis held at
-        // the middle's: the tip is the pivot less pivot height times that axis.
-        const Vec3 start = a.tip + m.pivot * (a.axis - mid.axis), end = b.tip + m.pivot * (b.axis - mid.axis);
-        return LinearNode{MoveSweep(m.pieces[std::size_t(level)], start, end, mid.axis), mid, um};
-    });
+    return nodes_->get(band, heap, scratch, [&] { return makeNode(models_[band], heap); });
+}
+
+TurningSweep::LinearNode TurningSweep::makeNode(const LinearPart& m, std::uint32_t heap) const {
+    const int level = heapLevel(heap);
+    const double width = std::ldexp(1.0, -level);
+    const double ua = double(heap - (std::uint32_t(1) << level)) * width, ub = ua + width, um = ua + 0.5 * width;
+    const ToolPose a = law_.pose(ua), b = law_.pose(ub), mid = law_.pose(um);
+    // The pivot runs on the chord from its place at ua to its place at ub, the axis held at the
+    // middle's: the tip is the pivot less pivot height times that axis.
+    const Vec3 start = a.tip + m.pivot * (a.axis - mid.axis), end = b.tip + m.pivot * (b.axis - mid.axis);
+    return LinearNode{MoveSweep(m.pieces[std::size_t(level)], start, end, mid.axis), mid, um, width, start, end};
 }
 
 Box turningMoveBox(const Move& m, double length, double radius) {
@@ -420,34 +432,81 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     }
 }
 
+std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, double lo, double hi, int deepest) const {
+    const ConvexPart& part = parts_[p];
+    LinearPart m;
+    m.part = p;
+    m.cutLo = lo > part.z0 ? lo : -std::numeric_limits<double>::infinity();
+    m.cutHi = hi < part.z1 ? hi : std::numeric_limits<double>::infinity();
+    std::vector<ProfilePiece> band = clipChain(tool_.pieces(), part.first, part.last, lo, hi);
+    double radius = 0.0;
+    for (const ProfilePiece& piece : band) radius = std::max(radius, pieceRadiusBound(piece));
+    m.pivot = 0.5 * (lo + hi);
+    const double turn = law_.turnBound(std::hypot(0.5 * (hi - lo), radius));
+    const double bend = law_.axisPointAccelerationBound(m.pivot);
+    for (int k = 0;; ++k) {
+        const double width = std::ldexp(1.0, -k);
+        m.reach.push_back(0.5 * turn * width + 0.125 * bend * width * width);
+        if (m.reach.back() <= epsilon_) break;
+        if (k >= deepest) return std::nullopt;
+    }
+    // Above the leaves, grown by the reach less epsilon (more than 0 there); the leaves sweep the
+    // band itself.
+    for (int k = 0; k < m.leafLevel(); ++k) m.pieces.push_back(mitredOffsetChain(band, m.reach[std::size_t(k)] - epsilon_));
+    m.pieces.push_back(std::move(band));
+    return m;
+}
+
 void TurningSweep::chooseLinearNodes() {
     // Only a tip on the straight line bounds the pivot's bend (note h).
     if (!std::isfinite(law_.axisPointAccelerationBound(0.0))) return;
     const int saved = balls_.empty() ? kLinearLevelsSaved : kLinearLevelsSavedBallEnd;
+    const int deepest = std::min(kMaxLinearLevel, closingLevel_ - saved);
+    const auto& pieces = tool_.pieces();
     std::vector<LinearPart> models;
-    for (const ConvexPart& part : parts_) {
-        const auto& pieces = tool_.pieces();
+    std::vector<std::optional<LinearNode>> wholeRoots(parts_.size());
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+        const ConvexPart& part = parts_[p];
         double radius = 0.0;
         for (std::size_t i = part.first; i < part.last; ++i) radius = std::max(radius, pieceRadiusBound(pieces[i]));
-        const double z0 = pieceZ0(pieces[part.first]), z1 = pieceZ1(pieces[part.last - 1]);
-        LinearPart m;
-        m.pivot = 0.5 * (z0 + z1);
-        const double turn = law_.turnBound(std::hypot(0.5 * (z1 - z0), radius));
-        const double bend = law_.axisPointAccelerationBound(m.pivot);
-        for (int k = 0;; ++k) {
-            const double width = std::ldexp(1.0, -k);
-            m.reach.push_back(0.5 * turn * width + 0.125 * bend * width * width);
-            if (m.reach.back() <= epsilon_) break;
-            if (k >= std::min(kMaxLinearLevel, closingLevel_ - saved)) return;
+        // Bands of equal height (note i), their bounds grown by epsilon kept off the part's
+        // joints.
+        const double height = part.z1 - part.z0, apart = 2.0 * (epsilon_ + kBandJointGap);
+        const int count = int(std::clamp(std::ceil(height / (kBandHeight * radius)), 1.0, double(kMaxBands)));
+        std::vector<double> bounds{part.z0};
+        for (int b = 1; b < count; ++b) {
+            double z = part.z0 + height * b / count;
+            for (std::size_t i = part.first + 1; i < part.last; ++i)
+                if (std::abs(z - pieceZ0(pieces[i])) < 0.5 * apart) z = pieceZ0(pieces[i]) + apart;
+            if (z - bounds.back() > apart && part.z1 - z > apart) bounds.push_back(z);
         }
-        // Above the leaves, grown by the reach less epsilon (more than 0 there); the leaves
-        // sweep the part itself.
-        for (int k = 0; k < m.leafLevel(); ++k)
-            m.pieces.push_back(mitredOffsetPart(tool_, part, m.reach[std::size_t(k)] - epsilon_));
-        m.pieces.emplace_back(pieces.begin() + std::ptrdiff_t(part.first), pieces.begin() + std::ptrdiff_t(part.last));
-        models.push_back(std::move(m));
+        bounds.push_back(part.z1);
+        std::vector<LinearPart> bands;
+        int bandLeaf = 0;
+        for (std::size_t b = 0; b + 1 < bounds.size(); ++b) {
+            const double lo = b == 0 ? part.z0 : bounds[b] - epsilon_;
+            const double hi = b + 2 == bounds.size() ? part.z1 : bounds[b + 1] + epsilon_;
+            std::optional<LinearPart> band = linearBand(p, lo, hi, deepest);
+            if (!band) break;
+            bandLeaf = std::max(bandLeaf, band->leafLevel());
+            bands.push_back(std::move(*band));
+        }
+        // The whole part, searched down to its own leaves if need be: its root settles every band
+        // of a line far from the part.
+        std::optional<LinearPart> whole = linearBand(p, part.z0, part.z1, kMaxLevel);
+        const bool wholeFits = whole && whole->leafLevel() <= deepest;
+        const bool banded = bands.size() + 1 == bounds.size() && bands.size() > 1;
+        if (banded && (!wholeFits || whole->leafLevel() >= bandLeaf + kBandLevelsSaved)) {
+            if (whole && whole->leafLevel() > 0) wholeRoots[p].emplace(makeNode(*whole, 1));
+            for (LinearPart& band : bands) models.push_back(std::move(band));
+        } else if (wholeFits) {
+            models.push_back(std::move(*whole));
+        } else {
+            return;
+        }
     }
     models_ = std::move(models);
+    wholeRoots_ = std::move(wholeRoots);
     nodes_ = std::make_shared<NodeCache>(models_);
 }
 
@@ -541,15 +600,16 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      most omega (MotionLaw::turnBound), and rho at most hypot(half the part's height, its
 //      largest radius). As in (b), with M(u) in place of T(u'), a point deeper than epsilon inside
 //      T(u) lies inside M(u) grown by max(delta_k - epsilon, 0), and every point of M(u) lies
-//      within delta_k of T(u). The search runs part by part; the static poses at u = 0 and 1 go
-//      into O when the root does not settle without them. A node whose delta_k is at most
-//      epsilon is a leaf: the part's sweep along its move goes into O, within epsilon of S (1)
-//      and holding every point deeper than epsilon inside T(u) for u in the node (2). Any other
-//      node is settled when the part grown by delta_k - epsilon (mitredOffsetPart, a superset)
-//      swept along its move holds no point of care outside O; otherwise the static pose at its middle goes into O and both halves are
-//      searched. Every u lies in a settled node or a leaf, so (2) holds; O holds static poses
-//      and leaves' sweeps, so (1) holds. The gaps of (d) are closed between poses' ends only: a
-//      leaf's sweep already holds every point deeper than epsilon inside its node's poses.
+//      within delta_k of T(u). The search runs part by part (band by band, note i); the static
+//      poses at u = 0 and 1 go into O when the root does not settle without them. A node whose
+//      delta_k is at most epsilon is a leaf: the part's sweep along its move goes into O, within
+//      epsilon of S (1) and holding every point deeper than epsilon inside T(u) for u in the node
+//      (2). Any other node is settled when the part grown by delta_k - epsilon (mitredOffsetPart,
+//      a superset) swept along its move holds no point of care outside O; otherwise the static
+//      pose at its middle goes into O and both halves are searched. Every u lies in a settled
+//      node or a leaf, so (2) holds; O holds static poses and leaves' sweeps, so (1) holds. The
+//      gaps of (d) are closed between poses' ends only: a leaf's sweep already holds every point
+//      deeper than epsilon inside its node's poses.
 //      Cost: the reach falls as omega rho 2^-(k+1) instead of V 2^-(k+1), so the leaves lie
 //      about log2(V / (2 omega rho)) levels higher than the closing level of (c), and near a
 //      graze of the envelope the nodes a level are fewer by about the square root of that ratio.
@@ -560,6 +620,32 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      kLinearLevelsSaved levels above the closing level of (c) (kLinearLevelsSavedBallEnd with a
 //      ball end swept as capsules), and no deeper than kMaxLinearLevel; it keeps the search of
 //      (c) otherwise.
+//  (i) Bands. A line that meets the tool near its tip needs (h)'s bound only for the tool points
+//      near it, but rho bounds every point of the part from its one pivot: half the length of a
+//      long cutter. So each part is cut into bands of heights, each searched as (h) searches a
+//      part with its own pivot at its middle, rho_b = hypot(half its height, its largest radius)
+//      (on a flat D10 x 50, about 5.6 mm against 25.5). A band [zb0, zb1] is grown by epsilon at
+//      each end where it is cut (clipChain to [zb0 - epsilon, zb1 + epsilon]; the part's own ends
+//      stay), and (h)'s argument holds for it as for a part: a point x deeper than epsilon inside
+//      T(u), at a height of band b, is carried by band b's rigid motion to x' with
+//      |x - x'| <= delta_b, and the ball of radius epsilon about x' lies in the carried tool; the
+//      point of that ball nearest x (within delta_b - epsilon of x when delta_b > epsilon, x
+//      itself otherwise) lies within epsilon of x' in the tool's frame, so at a height of the
+//      grown band. So x lies inside the grown band carried and grown by max(delta_b - epsilon, 0):
+//      in a settled node's grown sweep, or in a leaf's. Every point of a leaf's sweep lies within
+//      delta_b <= epsilon of a pose, as in (h). Where a node is not settled, the static pose at
+//      its middle goes into O for the whole part, so every node's two ends are in O (they are
+//      its ancestors' middles, or u = 0 and 1): inside the tool, where a band's grown sweep
+//      reaches past its cut into the next band's heights, those poses hold it, and only near the
+//      envelope does each band descend. The leaves lie about log2(rho / rho_b) levels higher, and
+//      near a graze of the envelope, where the nodes a level grow by about the square root of 2
+//      per level, the search costs about the square root of rho / rho_b less. The cost of
+//      starting several searches per line is kept off lines far from the part by first testing
+//      the part's root whole ((h)'s node of level 0, wholeRoots_): when it settles, so does every
+//      band. A part is cut only where its bands' leaves lie kBandLevelsSaved levels above its
+//      own. An end that a band's leaf makes on a face where the band was cut (inside the tool,
+//      met only within epsilon of its rim on the envelope) takes the Hermite data of the part at
+//      the pose where that face's plane passes the end (nodeEndNormal).
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     const Interval reach = bound(line);
@@ -596,12 +682,32 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         return true;
     };
     if (!models_.empty()) {
-        // Linear nodes (note h), part by part from the root down. The static poses at both ends
-        // go into O where the root's sweep is not held without them (a line the grown part's
-        // sweep misses, or that a ball's capsules already hold, needs neither).
+        // Linear nodes (notes h and i), band by band from the root down. The static poses of a
+        // band's part at both ends go into O where the root's sweep is not held without them (a
+        // line the grown band's sweep misses, or that a ball's capsules already hold, needs
+        // neither); the static pose at a node's middle is its whole part's too.
         std::optional<LocalLine> atStart, atEnd;
-        for (std::size_t p = 0; p < parts.size(); ++p) {
-            const int leaf = models_[p].leafLevel();
+        std::size_t endsAdded = parts.size();  // the part whose end poses are in O already
+        const auto addEnds = [&](std::size_t p) {
+            if (!atStart) atStart = LocalLine::make(startPose_, line), atEnd = LocalLine::make(endPose_, line);
+            const Interval first = tool_.intersectPart(parts[p], *atStart);
+            const Interval last = tool_.intersectPart(parts[p], *atEnd);
+            if (!first.isEmpty()) found.add(first, 0.0, p);
+            if (!last.isEmpty()) found.add(last, 1.0, p);
+            endsAdded = p;
+        };
+        for (std::size_t b = 0; b < models_.size(); ++b) {
+            const std::size_t p = models_[b].part;
+            if ((b == 0 || models_[b - 1].part != p) && wholeRoots_[p]) {
+                // The part's root taken whole settles all its bands at once.
+                const Interval swept = wholeRoots_[p]->sweep.intersect(line);
+                if (!held(swept)) addEnds(p);
+                if (held(swept)) {
+                    while (b + 1 < models_.size() && models_[b + 1].part == p) ++b;
+                    continue;
+                }
+            }
+            const int leaf = models_[b].leafLevel();
             // A node pops itself and pushes its two halves: at most one node a level and two of
             // the deepest.
             std::array<std::uint32_t, kMaxLinearLevel + 2> stack;
@@ -610,19 +716,15 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             stack[top++] = 1;
             while (top > 0) {
                 const std::uint32_t heap = stack[--top];
-                const LinearNode& node = linearNode(p, heap, scratch);
+                const LinearNode& node = linearNode(b, heap, scratch);
                 const Interval swept = node.sweep.intersect(line);
-                if (heapLevel(heap) == leaf) {  // closed: the part's own sweep along the node's move
-                    if (!swept.isEmpty()) found.add(swept, node.middleU, node.middleU, p, heap);
+                if (heapLevel(heap) == leaf) {  // closed: the band's own sweep along the node's move
+                    if (!swept.isEmpty()) found.add(swept, node.middleU, node.middleU, b, heap);
                     continue;
                 }
-                if (held(swept)) continue;  // settled: the grown part's sweep is held
-                if (heap == 1) {
-                    if (!atStart) atStart = LocalLine::make(startPose_, line), atEnd = LocalLine::make(endPose_, line);
-                    const Interval first = tool_.intersectPart(parts[p], *atStart);
-                    const Interval last = tool_.intersectPart(parts[p], *atEnd);
-                    if (!first.isEmpty()) found.add(first, 0.0, p);
-                    if (!last.isEmpty()) found.add(last, 1.0, p);
+                if (held(swept)) continue;  // settled: the grown band's sweep is held
+                if (heap == 1 && endsAdded != p) {
+                    addEnds(p);
                     if (held(swept)) continue;
                 }
                 const Interval middle = tool_.intersectPart(parts[p], LocalLine::make(node.middle, line));
@@ -719,18 +821,13 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
     for (const Piece& p : pieces) {
         LineHit hit;
         hit.range = p.range;
-        // An end a linear node made takes the Hermite data of its sweep there (note h).
-        LineHit node;
-        std::optional<LinearNode> scratch;
         if (p.nodeLo != 0) {
-            linearNode(p.partLo, p.nodeLo, scratch).sweep.intersectParts(line, &node);
-            hit.normalLo = node.normalLo, hit.sharpLo = node.sharpLo;
+            nodeEndNormal(line, p.range.lo, p.partLo, p.nodeLo, false, hit.normalLo, hit.sharpLo);
         } else {
             endNormal(line, p.range.lo, p.uLo, p.partLo, hit.normalLo, hit.sharpLo);
         }
         if (p.nodeHi != 0) {
-            linearNode(p.partHi, p.nodeHi, scratch).sweep.intersectParts(line, &node);
-            hit.normalHi = node.normalHi, hit.sharpHi = node.sharpHi;
+            nodeEndNormal(line, p.range.hi, p.partHi, p.nodeHi, true, hit.normalHi, hit.sharpHi);
         } else {
             endNormal(line, p.range.hi, p.uHi, p.partHi, hit.normalHi, hit.sharpHi);
         }
@@ -743,6 +840,32 @@ std::vector<Interval> TurningSweep::intersectAll(const Line& line) const {
     std::vector<Interval> out;
     for (const LineHit& h : intersect(line)) out.push_back(h.range);
     return out;
+}
+
+// An end a linear node made takes the Hermite data of its sweep there (note h), unless it may lie
+// on a face where its band is cut from its part (note i): that face is inside the tool, so the
+// end lies on the envelope of the part's other faces, within epsilon of the band's rim there.
+// The band's height at the end point, measured from the node's tip, runs from za to zb as the
+// node's tip moves from its start to its end; where a cut lies within that range (grown by twice
+// epsilon), the end takes the part's Hermite data at the pose where the cut's plane meets it.
+void TurningSweep::nodeEndNormal(const Line& line, double t, std::size_t band, std::uint32_t heap, bool upper,
+                                 Vec3& normal, bool& sharp) const {
+    std::optional<LinearNode> scratch;
+    const LinearNode& node = linearNode(band, heap, scratch);
+    const LinearPart& m = models_[band];
+    const Vec3 x = line.at(t);
+    const double za = glm::dot(x - node.start, node.middle.axis), zb = glm::dot(x - node.end, node.middle.axis);
+    const double reach = 2.0 * epsilon_;
+    for (const double cut : {m.cutLo, m.cutHi}) {
+        if (cut < std::min(za, zb) - reach || cut > std::max(za, zb) + reach) continue;
+        const double s = za != zb ? std::clamp((za - cut) / (za - zb), 0.0, 1.0) : 0.5;
+        endNormal(line, t, node.middleU + (s - 0.5) * node.width, m.part, normal, sharp);
+        return;
+    }
+    LineHit hit;
+    node.sweep.intersectParts(line, &hit);
+    normal = upper ? hit.normalHi : hit.normalLo;
+    sharp = upper ? hit.sharpHi : hit.sharpLo;
 }
 
 // The faces of one convex part at an end point: the bottom face (normal -a), the top face (+a)

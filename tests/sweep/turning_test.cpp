@@ -2,11 +2,13 @@
 // point of the tool's cylinder lies inside the box, and the box is the tip's segment box plus the
 // sampled box of the same turn made in place, to within the sampling's shortfall. And the linear
 // nodes a turning sweep keeps (turning.cpp, note h): counted, given back, and past the budget
-// made per query with the same answers.
+// made per query with the same answers; and a long cutter's bands (note i) with the Hermite data
+// of the ends they make.
 #include <catch2/catch.hpp>
 
 #include <cmath>
 #include <random>
+#include <tuple>
 
 #include "dexelmill/error.h"
 #include "dexelmill/sweep/turning.h"
@@ -207,5 +209,55 @@ TEST_CASE("turning sweep: a deep tree keeps its upper levels, and its bound hold
     }
     TurningSweep::setLinearNodeBudget(0);
     CHECK(sameHits(TurningSweep(tool, m), lines, kept) > 100);
+    TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget);
+}
+
+TEST_CASE("turning sweep: a long cutter is searched in bands, and their ends take the lateral envelope's normal",
+          "[sweep][turning]") {
+    // A flat end mill 50 mm long turning one degree over 30 mm: cut into 8 bands (turning.cpp,
+    // note i) 6.25 mm high, whose cuts lie inside the tool. Lines in random directions through
+    // points of the tool's side at a cut's height, at random poses, meet the lateral envelope
+    // there (and elsewhere). Its normal is across the axis of the pose that makes it, so within
+    // the turn of the axis at the move's middle; a cut face's normal would lie along it. Ends
+    // more than 6 mm from the ends of the tool at the middle pose lie on the lateral envelope
+    // whatever pose made them (the tip travels 3.8 mm along the axis). The answers with no node
+    // budget are the same to the bit.
+    const Tool tool = flatEndMill(10.0, {50.0, 50.0});
+    const Move m = tiltedTurn(1.0);
+    const TurningSweep sweep(tool, m);
+    REQUIRE(sweep.linearNodes());
+    CHECK(sweep.linearBands() == 8);
+    const ToolPose middle = sweep.pose(0.5);
+    std::mt19937_64 rng(20261129);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    std::normal_distribution<double> gauss;
+    std::vector<Line> lines;
+    for (int i = 0; i < 3000; ++i) {
+        const ToolPose p = sweep.pose(uniform(rng));
+        const Vec3 dir = glm::normalize(Vec3(gauss(rng), gauss(rng), gauss(rng)));
+        const Vec3 out = glm::normalize(glm::cross(p.axis, glm::cross(p.axis, dir)));
+        const double height = 6.25 * (1 + int(uniform(rng) * 7)) + 0.02 * (uniform(rng) - 0.5);
+        lines.push_back({p.tip + height * p.axis + 5.0 * out - 40.0 * dir, dir});
+    }
+    const double turn = std::sin(kPi / 180.0);
+    std::vector<std::vector<LineHit>> kept;
+    int lateral = 0;
+    for (const Line& l : lines) {
+        kept.push_back(sweep.intersect(l));
+        for (const LineHit& h : kept.back())
+            for (const auto& [t, n, sharp] :
+                 {std::tuple(h.range.lo, h.normalLo, h.sharpLo), std::tuple(h.range.hi, h.normalHi, h.sharpHi)}) {
+                const double z = glm::dot(l.at(t) - middle.tip, middle.axis);
+                if (z < 6.0 || z > 44.0) continue;
+                INFO("line " << &l - lines.data() << " end t = " << t << " height " << z);
+                CHECK(std::abs(glm::length(n) - 1.0) <= 1e-9);
+                CHECK(std::abs(glm::dot(n, middle.axis)) <= turn + 1e-3);
+                CHECK_FALSE(sharp);
+                ++lateral;
+            }
+    }
+    CHECK(lateral > 2000);
+    TurningSweep::setLinearNodeBudget(0);
+    CHECK(sameHits(TurningSweep(tool, m), lines, kept) > 2000);
     TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget);
 }

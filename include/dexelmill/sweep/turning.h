@@ -96,14 +96,17 @@ class TurningSweep {
     /// @brief Whether the search takes each stretch of the move as a fixed-axis linear move
     /// (turning.cpp, note h) rather than as static poses.
     bool linearNodes() const { return !models_.empty(); }
+    /// @brief How many bands of heights the linear-node search runs on (turning.cpp, note i): one
+    /// per part unless its parts are cut; 0 without linear nodes.
+    std::size_t linearBands() const { return models_.size(); }
     /// @brief How many linear nodes the sweeps alive keep, and the most they may keep (default
     /// kDefaultLinearNodeBudget); a budget of 0 keeps none.
     static std::size_t keptLinearNodes();
     static std::size_t linearNodeBudget();
     static void setLinearNodeBudget(std::size_t nodes);
-    /// @brief The most linear nodes this sweep can keep: every node of its parts' trees down to
-    /// the deepest level kept (0 without linear nodes). The cutting loop keeps the sweeps it builds together within the
-    /// budget by this bound.
+    /// @brief The most linear nodes this sweep can keep: every node of its bands' trees down to
+    /// the deepest level kept (0 without linear nodes). The cutting loop keeps the sweeps it
+    /// builds together within the budget by this bound.
     std::size_t linearNodeBound() const;
     /// @brief Whether the tool's ball end is swept as capsules along chords of its centre's path
     /// instead of searched (1) or not (0) (turning.cpp, note g), and into how many chords.
@@ -137,31 +140,45 @@ class TurningSweep {
     };
 
     /// The search that takes each node as a fixed-axis linear move (turning.cpp, note h), for
-    /// one part of parts_: the point of the axis the node's move carries exactly (the pivot, a
-    /// height above the tip), and per level k the reach delta_k of a node of width 2^-k; the
-    /// level whose reach is first at most epsilon is the last (a leaf). Per level above it, the
-    /// part grown by delta_k - epsilon with square corners (mitredOffsetPart); at the leaf level,
-    /// the part itself.
+    /// one band of heights of one part of parts_ (note i): the point of the axis the node's move
+    /// carries exactly (the pivot, a height above the tip), and per level k the reach delta_k of a
+    /// node of width 2^-k; the level whose reach is first at most epsilon is the last (a leaf).
+    /// Per level above it, the band grown by delta_k - epsilon with square corners
+    /// (mitredOffsetChain); at the leaf level, the band itself.
     struct LinearPart {
+        std::size_t part = 0;  ///< the index in parts_ of the part the band is cut from
         double pivot = 0.0;
+        /// The heights where the band is cut from its part, or -+infinity where it ends with the part.
+        double cutLo = 0.0, cutHi = 0.0;
         std::vector<double> reach;
         std::vector<std::vector<ProfilePiece>> pieces;
         int leafLevel() const { return int(reach.size()) - 1; }
     };
-    /// A node's linear move, made the first time a query needs it: the part of its level swept
-    /// along it, and the pose at the node's middle.
+    /// A node's linear move, made the first time a query needs it: the band of its level swept
+    /// along it, the pose at the node's middle, and the tips its move runs between (its axis is
+    /// the middle's).
     struct LinearNode {
         MoveSweep sweep;
         ToolPose middle;
-        double middleU = 0.0;
+        double middleU = 0.0, width = 0.0;
+        Vec3 start{0.0}, end{0.0};
     };
     class NodeCache;
     /// Sets models_ and nodes_ when the linear-node search applies and its leaves lie enough
     /// levels above the static search's closing level (turning.cpp, note h).
     void chooseLinearNodes();
-    /// Node `heap` of part `part`'s search, kept or, past the nodes the sweeps may keep, made in
+    /// The linear-node search of part p's band of heights [lo, hi] (note i); none when its leaves
+    /// would lie below level `deepest`.
+    std::optional<LinearPart> linearBand(std::size_t p, double lo, double hi, int deepest) const;
+    /// Node `heap` of band `band`'s search, kept or, past the nodes the sweeps may keep, made in
     /// `scratch`.
-    const LinearNode& linearNode(std::size_t part, std::uint32_t heap, std::optional<LinearNode>& scratch) const;
+    const LinearNode& linearNode(std::size_t band, std::uint32_t heap, std::optional<LinearNode>& scratch) const;
+    /// Node `heap` of the search of `band`, made.
+    LinearNode makeNode(const LinearPart& band, std::uint32_t heap) const;
+    /// The Hermite data of an output end at line parameter t that band `band`'s leaf `heap` made
+    /// (turning.cpp, note i).
+    void nodeEndNormal(const Line& line, double t, std::size_t band, std::uint32_t heap, bool upper, Vec3& normal,
+                       bool& sharp) const;
 
     Tool tool_;
     MotionLaw law_;
@@ -188,10 +205,13 @@ class TurningSweep {
     /// The first level whose growth g_k is at most epsilon: from there on, a node that does not
     /// settle is closed (turning.cpp, note c).
     int closingLevel_ = 0;
-    /// The linear-node search's parts (empty: the search solves static poses), and its nodes,
-    /// shared by the copies of this sweep.
+    /// The linear-node search's bands, part by part (empty: the search solves static poses), and
+    /// their nodes, shared by the copies of this sweep.
     std::vector<LinearPart> models_;
     std::shared_ptr<NodeCache> nodes_;
+    /// Per part cut into more than one band, the root node of its search taken whole (note i).
+    /// A line it leaves held needs none of the part's bands.
+    std::vector<std::optional<LinearNode>> wholeRoots_;
     /// Each part of parts_, then each ball, grown by epsilon: the reach that closes a gap between
     /// two intervals. An output piece's part index counts the same way.
     std::vector<std::vector<ProfilePiece>> grownEpsilon_;
