@@ -189,9 +189,11 @@ TEST_CASE("turning sweep: linear nodes are kept once, given back, and past the b
 
 TEST_CASE("turning sweep: a deep tree keeps its upper levels, and its bound holds what it keeps",
           "[sweep][turning]") {
-    // The flat end turning ten degrees over 30 mm: its leaves lie deeper than the levels a sweep
-    // keeps, so its deepest nodes are made by each query and dropped. The answers must not
-    // depend on what was kept: the same lines with no budget give the same bits.
+    // The flat end turning ten degrees over 30 mm, within 1e-5 mm: its leaves lie at level 17
+    // (omega rho / 2 = 0.98 mm over 2^17 is below epsilon; rho = hypot(10, 5)), deeper than the
+    // levels a sweep keeps, so its deepest nodes are made by each query and dropped. The answers
+    // must not depend on what was kept: the same lines with no budget give the same bits.
+    const double epsilon = 1e-5;
     const Tool tool = flatEndMill(10.0, {20.0, 20.0});
     const Move m = tiltedTurn(10.0);
     std::vector<Line> lines;
@@ -200,15 +202,17 @@ TEST_CASE("turning sweep: a deep tree keeps its upper levels, and its bound hold
     const std::size_t before = TurningSweep::keptLinearNodes();
     std::vector<std::vector<LineHit>> kept;
     {
-        const TurningSweep sweep(tool, m);
+        const TurningSweep sweep(tool, m, epsilon);
         REQUIRE(sweep.linearNodes());
+        // Its one tree cut at the deepest level kept.
+        CHECK(sweep.linearNodeBound() == (std::size_t(2) << 16) - 1);
         for (const Line& l : lines) kept.push_back(sweep.intersect(l));
         const std::size_t alive = TurningSweep::keptLinearNodes() - before;
         CHECK(alive > 100);
         CHECK(alive <= sweep.linearNodeBound());
     }
     TurningSweep::setLinearNodeBudget(0);
-    CHECK(sameHits(TurningSweep(tool, m), lines, kept) > 100);
+    CHECK(sameHits(TurningSweep(tool, m, epsilon), lines, kept) > 100);
     TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget);
 }
 
