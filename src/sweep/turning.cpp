@@ -491,11 +491,11 @@ void TurningSweep::chooseLinearNodes() {
             bandLeaf = std::max(bandLeaf, band->leafLevel());
             bands.push_back(std::move(*band));
         }
-        // The whole part, searched down to its own leaves if need be: its root settles every band
-        // of a line far from the part.
-        std::optional<LinearPart> whole = linearBand(p, part.z0, part.z1, kMaxLevel);
-        const bool wholeFits = whole && whole->leafLevel() <= deepest;
+        // The whole part; with bands, made down to its own leaves if need be, as its root settles
+        // every band of a line far from the part.
         const bool banded = bands.size() + 1 == bounds.size() && bands.size() > 1;
+        std::optional<LinearPart> whole = linearBand(p, part.z0, part.z1, banded ? kMaxLevel : deepest);
+        const bool wholeFits = whole && whole->leafLevel() <= deepest;
         if (banded && (!wholeFits || whole->leafLevel() >= bandLeaf + kBandLevelsSaved)) {
             if (whole && whole->leafLevel() > 0) wholeRoots[p].emplace(makeNode(*whole, 1));
             for (LinearPart& band : bands) models.push_back(std::move(band));
