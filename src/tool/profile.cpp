@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "dexelmill/geometry/tolerance.h"
+
 namespace dexelmill {
 
 namespace {
@@ -53,7 +55,7 @@ std::vector<ProfilePiece> clipChain(const std::vector<ProfilePiece>& pieces, std
     std::vector<ProfilePiece> out;
     for (std::size_t i = first; i < last; ++i) {
         const double lo = std::max(pieceZ0(pieces[i]), z0), hi = std::min(pieceZ1(pieces[i]), z1);
-        if (!(hi > lo)) continue;
+        if (!(hi > lo + tol::kLength)) continue;
         if (const auto* c = std::get_if<ConePiece>(&pieces[i])) {
             out.push_back(ConePiece{lo, hi, pieceRadius(*c, lo), pieceRadius(*c, hi)});
         } else {

@@ -371,20 +371,8 @@ Tool Tool::region(double z0, double z1) const {
     if (!(z1 > z0 + tol::kLength))
         throw Error("tool '" + description_ + "': region " + num(z0) + " .. " + num(z1) +
                     " has no height");
-    std::vector<ProfilePiece> clipped;
-    for (const ProfilePiece& p : pieces_) {
-        const double a = std::max(pieceZ0(p), z0), b = std::min(pieceZ1(p), z1);
-        if (!(b > a + tol::kLength)) continue;
-        if (std::holds_alternative<ConePiece>(p)) {
-            clipped.push_back(ConePiece{a, b, pieceRadius(p, a), pieceRadius(p, b)});
-        } else {
-            ArcPiece arc = std::get<ArcPiece>(p);
-            arc.z0 = a;
-            arc.z1 = b;
-            clipped.push_back(arc);
-        }
-    }
-    return Tool(description_ + " [z " + num(z0) + ".." + num(z1) + "]", std::move(clipped), z1);
+    return Tool(description_ + " [z " + num(z0) + ".." + num(z1) + "]", clipChain(pieces_, 0, pieces_.size(), z0, z1),
+                z1);
 }
 
 }  // namespace dexelmill

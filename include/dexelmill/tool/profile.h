@@ -43,9 +43,9 @@ double pieceRadius(const ProfilePiece& piece, double z);
 double pieceSlope(const ProfilePiece& piece, double z);
 
 /// @brief The pieces [first, last) of a chain cut to the heights [z0, z1]: each piece that
-/// reaches into them, its ends moved to z0 and z1 where it passes them (a cone's radii
-/// interpolated, an arc keeping its circle). The caller keeps z0 and z1 off the chain's joints,
-/// so that no piece is cut to a sliver.
+/// reaches more than tol::kLength into them, its ends moved to z0 and z1 where it passes them (a
+/// cone's radii interpolated, an arc keeping its circle). A piece cut to a sliver is left out, so
+/// a caller that needs the whole range keeps z0 and z1 off the chain's joints.
 std::vector<ProfilePiece> clipChain(const std::vector<ProfilePiece>& pieces, std::size_t first, std::size_t last,
                                     double z0, double z1);
 
