@@ -133,6 +133,15 @@ Move tiltedTurn(double degrees) {
     return m;
 }
 
+/// While alive, the turning sweeps may keep no linear node: each query makes its nodes and drops
+/// them. The default budget comes back however the scope ends.
+struct NoNodeBudget {
+    NoNodeBudget() { TurningSweep::setLinearNodeBudget(0); }
+    ~NoNodeBudget() { TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget); }
+    NoNodeBudget(const NoNodeBudget&) = delete;
+    NoNodeBudget& operator=(const NoNodeBudget&) = delete;
+};
+
 /// How many of `lines` `sweep` hits, checking that each answer is `kept`'s to the bit: ends and
 /// normals.
 int sameHits(const TurningSweep& sweep, const std::vector<Line>& lines, const std::vector<std::vector<LineHit>>& kept) {
@@ -178,13 +187,10 @@ TEST_CASE("turning sweep: linear nodes are kept once, given back, and past the b
     }
     CHECK(TurningSweep::keptLinearNodes() == before);
     // With no budget, nothing is kept and every answer is the same to the bit.
-    TurningSweep::setLinearNodeBudget(0);
-    {
-        const TurningSweep sweep(tool, m);
-        CHECK(sameHits(sweep, lines, kept) > 200);
-        CHECK(TurningSweep::keptLinearNodes() == before);
-    }
-    TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget);
+    const NoNodeBudget none;
+    const TurningSweep sweep(tool, m);
+    CHECK(sameHits(sweep, lines, kept) > 200);
+    CHECK(TurningSweep::keptLinearNodes() == before);
 }
 
 TEST_CASE("turning sweep: a deep tree keeps its upper levels, and its bound holds what it keeps",
@@ -211,9 +217,8 @@ TEST_CASE("turning sweep: a deep tree keeps its upper levels, and its bound hold
         CHECK(alive > 100);
         CHECK(alive <= sweep.linearNodeBound());
     }
-    TurningSweep::setLinearNodeBudget(0);
+    const NoNodeBudget none;
     CHECK(sameHits(TurningSweep(tool, m, epsilon), lines, kept) > 100);
-    TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget);
 }
 
 TEST_CASE("turning sweep: a long cutter is searched in bands, and their ends take the lateral envelope's normal",
@@ -261,7 +266,6 @@ TEST_CASE("turning sweep: a long cutter is searched in bands, and their ends tak
             }
     }
     CHECK(lateral > 2000);
-    TurningSweep::setLinearNodeBudget(0);
+    const NoNodeBudget none;
     CHECK(sameHits(TurningSweep(tool, m), lines, kept) > 2000);
-    TurningSweep::setLinearNodeBudget(kDefaultLinearNodeBudget);
 }
