@@ -660,6 +660,21 @@ std::size_t MoveSweep::intersectParts(const LocalLine& q, LineHit* out, const En
     return parts_.size();
 }
 
+MoveSweep::EndPoses MoveSweep::endPoses(const Line& line, std::size_t index) const {
+    const LocalLine q = toLocal(line);
+    EndTrace trace;
+    const Interval iv = intersectLocal<true>(parts_[index], q, &trace);
+    EndPoses out;
+    if (iv.isEmpty()) return out;
+    out.range = {iv.lo + q.vShift, iv.hi + q.vShift};
+    const auto at = [](const EndTrace::End& end) {
+        return end.pose >= 0 ? double(end.pose) : std::clamp(0.5 * (end.u0 + end.u1), 0.0, 1.0);
+    };
+    out.uLo = at(trace.lo);
+    out.uHi = at(trace.hi);
+    return out;
+}
+
 Interval MoveSweep::intersect(const Line& line) const {
     if (parts_.size() == 1) {
         const LocalLine q = toLocal(line);

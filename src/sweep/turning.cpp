@@ -842,30 +842,21 @@ std::vector<Interval> TurningSweep::intersectAll(const Line& line) const {
     return out;
 }
 
-// An end a linear node made takes the Hermite data of its sweep there (note h), unless it may lie
-// on a face where its band is cut from its part (note i): that face is inside the tool, so the
-// end lies on the envelope of the part's other faces, within epsilon of the band's rim there.
-// The band's height at the end point, measured from the node's tip, runs from za to zb as the
-// node's tip moves from its start to its end; where a cut lies within that range (grown by twice
-// epsilon), the end takes the part's Hermite data at the pose where the cut's plane meets it.
+// An end a linear node made lies on the surface of its band at a pose M(s) of the node's move
+// (MoveSweep::endPoses), which note h's rigid motion carries within epsilon of the tool at the
+// true pose u = ua + s (ub - ua). The node's own Hermite data would give the normal of its
+// fixed-axis move, whose velocity lacks the turn's: where a rim sweeps the envelope, its normal
+// is across the rim and the velocity, and off by as much as the two velocities' directions
+// differ. So the end takes the part's Hermite data at that true pose (endNormal). There a face
+// where a band is cut (note i) is no face at all: it lies inside the part, and an end it made lies
+// within epsilon of the part's lateral face at the band's rim.
 void TurningSweep::nodeEndNormal(const Line& line, double t, std::size_t band, std::uint32_t heap, bool upper,
                                  Vec3& normal, bool& sharp) const {
     std::optional<LinearNode> scratch;
     const LinearNode& node = linearNode(band, heap, scratch);
-    const LinearPart& m = models_[band];
-    const Vec3 x = line.at(t);
-    const double za = glm::dot(x - node.start, node.middle.axis), zb = glm::dot(x - node.end, node.middle.axis);
-    const double reach = 2.0 * epsilon_;
-    for (const double cut : {m.cutLo, m.cutHi}) {
-        if (cut < std::min(za, zb) - reach || cut > std::max(za, zb) + reach) continue;
-        const double s = za != zb ? std::clamp((za - cut) / (za - zb), 0.0, 1.0) : 0.5;
-        endNormal(line, t, node.middleU + (s - 0.5) * node.width, m.part, normal, sharp);
-        return;
-    }
-    LineHit hit;
-    node.sweep.intersectParts(line, &hit);
-    normal = upper ? hit.normalHi : hit.normalLo;
-    sharp = upper ? hit.sharpHi : hit.sharpLo;
+    const MoveSweep::EndPoses ends = node.sweep.endPoses(line);
+    const double s = upper ? ends.uHi : ends.uLo;
+    endNormal(line, t, node.middleU + (s - 0.5) * node.width, models_[band].part, normal, sharp);
 }
 
 // The faces of one convex part at an end point: the bottom face (normal -a), the top face (+a)

@@ -154,6 +154,16 @@ public:
     /// asks for, once it has seen the part's interval (world line parameters); the other ends keep
     /// a zero normal. A cutting loop asks only for the ends its subtraction will make.
     std::size_t intersectParts(const Line& line, LineHit* out, const EndFilter& wanted) const;
+    /// One part's interval with the move's feed parameter u in [0, 1] of a pose that makes each
+    /// end: 0 or 1 where the end lies on the static tool at the start or end, and on the envelope
+    /// the middle of the parameters that put a tool point on the crossing there.
+    struct EndPoses {
+        Interval range;
+        double uLo = 0.0, uHi = 0.0;
+    };
+    /// @brief Part `index`'s interval on `line` and where on the move its ends are made. A turning
+    /// sweep's linear node (turning.h) takes an end's Hermite data from the true pose there.
+    EndPoses endPoses(const Line& line, std::size_t index = 0) const;
     /// @brief The swept material along `line`: the parts' intervals united, sorted, non-empty.
     std::vector<Interval> intersectAll(const Line& line) const;
     /// @brief A cheap interval of `line` (unit direction) that holds every part's interval: the
