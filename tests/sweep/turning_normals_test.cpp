@@ -1,0 +1,286 @@
+// The Hermite data of a turning sweep (TurningSweep::intersect) against the oracle of
+// turning_oracle.h: for random tools, turns, moves and lines, the normal the solver gives at each
+// end of an output interval is compared with the tangent plane of the swept volume S there, found
+// by finite differences of the oracle's own boundary. Shares no code with the solver.
+//
+// The oracle's boundary. A point x lies in S when some pose holds it: G(x) = max over u of the
+// guide g(x, u) (turning_oracle.h, (f): the least of z - za, zb - z and R(z) - rho, over the
+// parts the greatest) is at least 0, as g(x, u) >= 0 exactly when x is inside T(u). G is taken on
+// a grid of kNormalPoseGrid poses, then by golden-section steps about each of the grid's kPeaks
+// highest local maxima: near S's boundary, g(x, u) peaks at the poses that sweep x's
+// neighbourhood and is smooth or has a kink there (a rim), so the steps find the peak's value to
+// rounding. S's boundary on a line is then bisected on the sign of G from a bracket about the
+// solver's end.
+//
+// The finite differences, as in sweep_normals_test.cpp: the line offset by kStep along two unit
+// vectors a, b across it, both ways, meets S's boundary at P(+-a), P(+-b); P(+a) - P(-a) and
+// P(+b) - P(-b) span the tangent plane (central differences, error of order kStep^2 times the
+// squared curvature). n(+) from P(+a) - P(0) and P(+b) - P(0) and n(-) from P(0) - P(-a) and
+// P(0) - P(-b) differ by the turn: about kStep times the curvature on a smooth surface, as large
+// as the crease's angle where an end lies within kStep of a crease (where two poses, two parts or
+// a rim's two faces meet). An end whose turn exceeds kCreaseTurn is on a crease as far as the
+// oracle can tell, and one whose line meets S at a sine below kGrazing has no good difference
+// normal: both are skipped and counted.
+//
+// What the solver promises. Its end lies within epsilon of S (check 1 of
+// turning_sweep_oracle_test.cpp) and takes the normal of the tool at a pose u near the one, u*,
+// that sweeps S there: on a face, that face's normal; near a rim that grazes, the rim's swept
+// normal. A tool point moves by at most V |u - u*| between the two poses. The static search puts
+// u within about 4 epsilon / V of u* (its nodes close where their reach is 2 epsilon, and the end
+// lies within two such nodes); a linear node's leaf moves every point within epsilon of its true
+// poses, and its end's pose is where the leaf's move grazes. So the normal turns by about the
+// turn's rate times |u - u*| plus the face's curvature times the distance its point travels:
+// 4 epsilon (1 / reach + 1 / r) <= 8 epsilon / r, r the smallest radius of curvature of the
+// cases' tools. kSmallestRadius is below every radius and corner radius they draw (0.2 mm and
+// up), not near the apex of a V-bit or a drill, which few lines meet. The test allows kAngle plus
+// kPerEpsilon epsilon / r plus the turn.
+//
+// An end marked sharp claims a crease of S within the solver's rim reach of it (4 epsilon):
+// the oracle then looks for one with a wide stencil, of step kSharpReach epsilon, whose turn must
+// exceed kCreaseTurn, unless one of its lines falls off an edge of S.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "turning_oracle.h"
+
+using namespace turning_oracle;
+
+namespace {
+
+constexpr double kStep = 1e-4;        ///< finite-difference offset (mm)
+constexpr double kAngle = 1e-3;       ///< tolerance on the angle to the difference normal (rad)
+constexpr double kPerEpsilon = 8.0;   ///< and per epsilon / r
+constexpr double kSmallestRadius = 0.1;  ///< below the smallest radius of curvature of the cases' tools (mm)
+constexpr double kSharpReach = 8.0;   ///< the wide stencil's step for ends marked sharp, in epsilons
+constexpr double kCreaseTurn = 0.05;  ///< a larger turn across the stencil: a crease (rad)
+constexpr double kGrazing = 0.05;     ///< a smaller sine between line and surface: grazing
+constexpr double kBracket = 0.05;     ///< how far past an end the bisections start outside (mm)
+constexpr int kBisect = 45;           ///< halvings of brackets under 0.1 mm: below 1e-13 mm
+constexpr int kNormalPoseGrid = 256;  ///< poses of G's grid
+constexpr int kPeaks = 3;             ///< the grid's local maxima refined
+constexpr int kNormalGoldenSteps = 60;  ///< golden-section steps per peak: 2 / grid times 0.618^60
+
+double angle(const Vec3& a, const Vec3& b) { return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b)); }
+
+/// G(x): the largest guide over the poses (>= 0 inside S).
+double depthG(const SweepOracle& o, const Vec3& x) {
+    std::vector<double> g(kNormalPoseGrid + 1);
+    for (int j = 0; j <= kNormalPoseGrid; ++j) g[std::size_t(j)] = o.guide(x, double(j) / kNormalPoseGrid);
+    std::vector<int> peaks;
+    for (int j = 0; j <= kNormalPoseGrid; ++j) {
+        const double left = j > 0 ? g[std::size_t(j - 1)] : -oracle::kInf;
+        const double right = j < kNormalPoseGrid ? g[std::size_t(j + 1)] : -oracle::kInf;
+        if (g[std::size_t(j)] >= left && g[std::size_t(j)] >= right) peaks.push_back(j);
+    }
+    std::sort(peaks.begin(), peaks.end(), [&](int a, int b) { return g[std::size_t(a)] > g[std::size_t(b)]; });
+    if (peaks.size() > std::size_t(kPeaks)) peaks.resize(kPeaks);
+    double best = *std::max_element(g.begin(), g.end());
+    const double ratio = 0.5 * (std::sqrt(5.0) - 1.0);
+    for (const int j : peaks) {
+        double a = double(std::max(j - 1, 0)) / kNormalPoseGrid, b = double(std::min(j + 1, kNormalPoseGrid)) / kNormalPoseGrid;
+        double x1 = b - ratio * (b - a), x2 = a + ratio * (b - a);
+        double g1 = o.guide(x, x1), g2 = o.guide(x, x2);
+        for (int i = 0; i < kNormalGoldenSteps; ++i) {
+            if (g1 >= g2) {
+                b = x2, x2 = x1, g2 = g1;
+                x1 = b - ratio * (b - a), g1 = o.guide(x, x1);
+            } else {
+                a = x1, x1 = x2, g1 = g2;
+                x2 = a + ratio * (b - a), g2 = o.guide(x, x2);
+            }
+        }
+        best = std::max({best, g1, g2});
+    }
+    return best;
+}
+
+/// S's boundary on `line` between a parameter inside S and one outside: bisection on the sign of
+/// G. Empty when the two are not on either side.
+std::optional<double> boundary(const SweepOracle& o, const Line& line, double inside, double outside) {
+    if (!(depthG(o, line.at(inside)) >= 0.0) || depthG(o, line.at(outside)) >= 0.0) return {};
+    for (int i = 0; i < kBisect; ++i) {
+        const double mid = 0.5 * (inside + outside);
+        (depthG(o, line.at(mid)) >= 0.0 ? inside : outside) = mid;
+    }
+    return 0.5 * (inside + outside);
+}
+
+/// The oracle's boundary points on `line` and on the lines offset by `step` along +-a and +-b
+/// (p[0], p[1 .. 2], p[3 .. 4]), bisected between parameters `inside` and `outside`; false when one
+/// is not bracketed.
+bool stencil(const SweepOracle& o, const Line& line, const Vec3& a, const Vec3& b, double step, double inside,
+             double outside, Vec3 p[5]) {
+    const Vec3 offsets[5] = {Vec3(0.0), a, -a, b, -b};
+    for (int j = 0; j < 5; ++j) {
+        const Line offset{line.origin + step * offsets[j], line.dir};
+        const std::optional<double> end = boundary(o, offset, inside, outside);
+        if (!end) return false;
+        p[j] = offset.at(*end);
+    }
+    return true;
+}
+
+/// The angle between the stencil's one-sided normals n(+) and n(-).
+double stencilTurn(const Vec3 p[5]) {
+    return angle(glm::cross(p[1] - p[0], p[3] - p[0]), glm::cross(p[0] - p[2], p[0] - p[4]));
+}
+
+struct NormalTally {
+    int cases = 0, ends = 0, checked = 0, creases = 0, grazing = 0, unbracketed = 0, failures = 0;
+    int sharp = 0, sharpOnCrease = 0;  ///< ends marked sharp; of them, on a crease as the oracle sees it
+    int sharpNearCrease = 0;           ///< ends marked sharp near a crease (the wide stencil's)
+    double worst = 0.0;                ///< the largest angle between a checked normal and the oracle's (rad)
+    double worstAllowed = 0.0;         ///< ... as a fraction of what it was allowed
+    std::string log;
+};
+
+void checkNormals(const Case& c, NormalTally& t) {
+    ++t.cases;
+    const TurningSweep sweep(c.model->tool, c.move, c.epsilon);
+    const SweepOracle o(c.model->parts, c.move);
+    const std::vector<LineHit> hits = sweep.intersect(c.line);
+    const Vec3& w = c.line.dir;
+    const Vec3 a = glm::normalize(glm::cross(w, std::abs(w.x) < 0.6 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)));
+    const Vec3 b = glm::cross(w, a);
+    for (const LineHit& hit : hits) {
+        for (const bool hi : {false, true}) {
+            ++t.ends;
+            const Vec3 normal = hi ? hit.normalHi : hit.normalLo;
+            const bool sharp = hi ? hit.sharpHi : hit.sharpLo;
+            t.sharp += sharp;
+            const double v = hi ? hit.range.hi : hit.range.lo;
+            const double sense = hi ? 1.0 : -1.0;  // outward along the line
+            const double inside = v - sense * std::min(0.5 * hit.range.length(), kBracket);
+            const double outside = v + sense * kBracket;
+            Vec3 p[5];
+            if (!stencil(o, c.line, a, b, kStep, inside, outside, p)) {
+                ++t.unbracketed;
+                continue;
+            }
+            Vec3 central = glm::normalize(glm::cross(p[1] - p[2], p[3] - p[4]));
+            if (glm::dot(central, w) * sense < 0.0) central = -central;
+            const double turn = stencilTurn(p);
+            if (turn > kCreaseTurn) {
+                ++t.creases;
+                t.sharpOnCrease += sharp;
+                continue;
+            }
+            if (sharp) {
+                // A crease within the solver's rim reach: the wide stencil bends, or one of its
+                // lines falls off an edge of S (its end leaves the bracket).
+                Vec3 wide[5];
+                const double step = kSharpReach * c.epsilon;
+                if (!stencil(o, c.line, a, b, step, inside, v + sense * (kBracket + 4.0 * step), wide) ||
+                    stencilTurn(wide) > kCreaseTurn) {
+                    ++t.sharpNearCrease;
+                    continue;
+                }
+                if (++t.failures > 5) continue;
+                std::ostringstream m;
+                m << "FAIL case #" << t.cases - 1 << (hi ? " hi" : " lo") << ": " << describe(c) << "\n   end "
+                  << cases::str(c.line.at(v)) << " marked sharp, but the oracle sees no crease within " << step
+                  << " mm\n";
+                t.log += m.str();
+                continue;
+            }
+            if (std::abs(glm::dot(central, w)) < kGrazing) {
+                ++t.grazing;
+                continue;
+            }
+            ++t.checked;
+            const double err = angle(normal, central);
+            const double allowed = kAngle + kPerEpsilon * c.epsilon / kSmallestRadius + turn;
+            t.worst = std::max(t.worst, err);
+            t.worstAllowed = std::max(t.worstAllowed, err / allowed);
+            const bool unit = std::abs(glm::length(normal) - 1.0) <= 1e-12;
+            if ((err <= allowed && unit) || ++t.failures > 5) continue;
+            std::ostringstream m;
+            m << "FAIL case #" << t.cases - 1 << (hi ? " hi" : " lo") << ": " << describe(c) << "\n   end "
+              << cases::str(c.line.at(v)) << (sharp ? " sharp" : "") << " normal " << cases::str(normal) << "\n   oracle "
+              << cases::str(central) << " at " << cases::str(p[0]) << " turn " << turn << ", angle " << err
+              << " allowed " << allowed << "\n";
+            t.log += m.str();
+        }
+    }
+}
+
+void report(const NormalTally& t) {
+    const int skipped = t.creases + t.grazing + t.unbracketed;
+    INFO(t.cases << " cases, " << t.ends << " interval ends: " << t.checked << " checked (worst angle " << t.worst
+                 << " rad, " << t.worstAllowed << " of the allowed), " << t.creases << " on an oracle crease, "
+                 << t.grazing << " grazing, " << t.unbracketed << " unbracketed; " << t.sharp << " marked sharp ("
+                 << t.sharpOnCrease << " on an oracle crease, " << t.sharpNearCrease << " near one); " << t.failures << " wrong\n"
+                 << t.log);
+    CHECK(t.failures == 0);
+    CHECK(t.ends >= t.cases / 2);
+    CHECK(t.checked >= 0.8 * t.ends);
+    CHECK(skipped <= 0.2 * t.ends);
+}
+
+}  // namespace
+
+TEST_CASE("turning sweep normals vs oracle: random tools, turns, moves and lines", "[sweep][turning]") {
+    std::mt19937_64 rng(20261129);
+    NormalTally t;
+    for (int i = 0, n = scaled(300); i < n; ++i) {
+        double turn = 0.0;
+        switch (rng() % 3) {
+        case 0: turn = std::pow(10.0, cases::uniform(rng, -5, -1)); break;
+        case 1: turn = degrees(cases::uniform(rng, 0, 10)); break;
+        default: turn = degrees(cases::uniform(rng, 10, 90)); break;
+        }
+        const double travel = rng() % 5 == 0 ? 0.0 : cases::uniform(rng, 0, 40);
+        checkNormals(randomCase(rng, randomMove(rng, turn, travel)), t);
+    }
+    report(t);
+}
+
+TEST_CASE("turning sweep normals vs oracle: long cutters searched in bands, and their cuts", "[sweep][turning]") {
+    // Cutters five to ten radii long on small turns: linear nodes cut into bands of heights
+    // (turning.cpp, note i), whose cut faces lie inside the tool and must never give a normal.
+    std::mt19937_64 rng(20261130);
+    NormalTally t;
+    int banded = 0;
+    for (int i = 0, n = scaled(150); i < n; ++i) {
+        const double d = cases::uniform(rng, 2.0, 12.0), r = d / 2, length = d * cases::uniform(rng, 2.5, 5.0);
+        const ToolLengths lengths{length, length};
+        Case c;
+        if (rng() % 2) {
+            c.kind = models::Kind::Flat;
+            c.model.emplace(models::Model{flatEndMill(d, lengths), {models::part(0, length, [r](double) { return r; }, r)}});
+        } else {
+            const double corner = cases::uniform(rng, 0.1, 0.5) * d, inner = r - corner;
+            c.kind = models::Kind::Bull;
+            c.model.emplace(models::Model{
+                bullNoseEndMill(d, corner, lengths),
+                {models::part(0, length, [=](double z) { return z < corner ? inner + models::capRadius(corner, z) : r; }, r)}});
+        }
+        c.move = randomMove(rng, degrees(cases::uniform(rng, 0.2, 10.0)), cases::uniform(rng, 0.0, 30.0));
+        c.line = randomLine(rng, *c.model, c.move, rng() % 2 == 0);
+        c.epsilon = kDefaultTurnTolerance;
+        const TurningSweep sweep(c.model->tool, c.move, c.epsilon);
+        banded += sweep.linearBands() > 1;
+        checkNormals(c, t);
+    }
+    report(t);
+    // Most of these moves are searched in bands.
+    CHECK(banded >= t.cases / 2);
+}
+
+TEST_CASE("turning sweep normals vs oracle: pure rotations and large turns", "[sweep][turning]") {
+    // Searched by static poses (turning.cpp, note c): the ends' poses are the search's own.
+    std::mt19937_64 rng(20261201);
+    NormalTally t;
+    for (int i = 0, n = scaled(150); i < n; ++i) {
+        const double travel = rng() % 2 ? 0.0 : cases::uniform(rng, 0.0, 20.0);
+        checkNormals(randomCase(rng, randomMove(rng, degrees(cases::uniform(rng, 30.0, 170.0)), travel)), t);
+    }
+    report(t);
+}
