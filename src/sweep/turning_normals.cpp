@@ -1,0 +1,159 @@
+// The Hermite data of a turning sweep's output ends (TurningSweep::intersect): the outward normal
+// of the swept volume at each end, from the tool at the pose that made it, and whether the end
+// lies on a crease.
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <vector>
+
+#include "dexelmill/geometry/tolerance.h"
+#include "dexelmill/sweep/turning.h"
+
+namespace dexelmill {
+
+namespace {
+
+/// An output end within this many tolerances of two faces of its pose's tool whose normals differ,
+/// or of the tangent plane of a grazing rim's swept surface, takes its Hermite data from that rim.
+constexpr double kRimReach = 4.0;
+
+/// Two faces at a rim whose normals differ by less than this angle (rad) meet smoothly: about the
+/// resolution of the normals the stock keeps (PackedNormal::kMaxAngleError).
+constexpr double kRimAngle = 1e-4;
+
+}  // namespace
+
+// An end a linear node made lies on the surface of its band at a pose M(s) of the node's move
+// (MoveSweep::endPoses), which note h's rigid motion carries within epsilon of the tool at the
+// true pose u = ua + s (ub - ua). The node's own Hermite data would give the normal of its
+// fixed-axis move, whose velocity lacks the turn's: where a rim sweeps the envelope, its normal
+// is across the rim and the velocity, and off by as much as the two velocities' directions
+// differ. So the end takes the part's Hermite data at that true pose (endNormal). There a face
+// where a band is cut (note i) is no face at all: it lies inside the part, and an end it made lies
+// within epsilon of the part's lateral face at the band's rim.
+void TurningSweep::nodeEndNormal(const Line& line, double t, std::size_t band, std::uint32_t heap, bool upper,
+                                 Vec3& normal, bool& sharp) const {
+    std::optional<LinearNode> scratch;
+    const LinearNode& node = linearNode(band, heap, scratch);
+    const MoveSweep::EndPoses ends = node.sweep.endPoses(line);
+    const double s = upper ? ends.uHi : ends.uLo;
+    endNormal(line, t, node.middleU + (s - 0.5) * node.width, models_[band].part, normal, sharp);
+}
+
+// The faces of one convex part at an end point: the bottom face (normal -a), the lateral pieces
+// (meridianNormal) and the top face (+a), in order up the meridian; faces k and k + 1 meet at a
+// rim. The nearest face gives the normal; a second one within kRimReach tolerances whose normal
+// differs puts the end on or near a rim of the pose's tool.
+//
+// The end's pose is within the search's reach of the pose that grazes there, so where the
+// envelope is swept by a rim, the end lies on a face of its pose near that rim. Near means within
+// the tolerance of the rim's swept surface, not of the rim: the face leaves that surface at the
+// angle gamma between the face's normal and the surface's, so an end on the face as deep as the
+// tolerance inside S may lie epsilon / sin(gamma) from the rim, where the face's normal is off by
+// gamma. So an end farther than kRimReach tolerances from every other face also takes a rim's
+// swept normal where that rim, one of the nearest face's, grazes at the end's azimuth and the end
+// lies within kRimReach tolerances of its swept surface's tangent plane there. A face that itself
+// sweeps S near the end meets the rim's swept surface tangentially where its grazing points reach
+// the rim, so there gamma is small and either normal serves.
+void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t part, Vec3& normal,
+                             bool& sharp) const {
+    const ToolPose ps = pose(u);
+    const Vec3 x = line.at(t);
+    if (part >= parts_.size()) {  // a ball: the sphere about its centre at that pose
+        const Vec3 d = x - (ps.tip + balls_[part - parts_.size()].zc * ps.axis);
+        const double l = glm::length(d);
+        normal = l > 0.0 ? d / l : -ps.axis;
+        sharp = false;
+        return;
+    }
+    const ConvexPart& cp = parts_[part];
+    const Vec3 d = x - ps.tip;
+    const double z = glm::dot(d, ps.axis);
+    Vec3 radial = d - z * ps.axis;
+    const double rho = glm::length(radial);
+    if (rho > 0.0) {
+        radial /= rho;
+    } else {  // on the axis: any direction across it
+        const Vec3 other = std::abs(ps.axis.x) < 0.9 ? Vec3(1.0, 0.0, 0.0) : Vec3(0.0, 1.0, 0.0);
+        radial = glm::normalize(glm::cross(ps.axis, other));
+    }
+    struct Face {
+        double gap;
+        Vec3 n;
+    };
+    std::vector<Face> faces;
+    faces.push_back({std::abs(z - cp.z0), -ps.axis});
+    const auto& pieces = tool_.pieces();
+    for (std::size_t i = cp.first; i < cp.last; ++i) {
+        const double z0 = pieceZ0(pieces[i]), z1 = pieceZ1(pieces[i]);
+        const double zc = std::clamp(z, z0, z1);
+        const double R = pieceRadius(pieces[i], zc);
+        double nr = 0.0, nz = 0.0;
+        meridianNormal(pieces[i], R, zc, nr, nz);
+        faces.push_back({std::hypot(rho - R, z - zc), nr * radial + nz * ps.axis});
+    }
+    faces.push_back({std::abs(z - cp.z1), ps.axis});
+    std::size_t nearest = 0;
+    for (std::size_t k = 1; k < faces.size(); ++k)
+        if (faces[k].gap < faces[nearest].gap) nearest = k;
+    normal = faces[nearest].n;
+    sharp = false;
+    const double nearRim = kRimReach * epsilon_;
+    const Vec3 tangent = glm::cross(ps.axis, radial);
+    // The normal of the surface a rim point sweeps, across the rim's tangent and the point's
+    // velocity (MotionLaw::velocity), where it lies within the rim's normal cone (the normals
+    // between its two faces', n1 and n2): there the moving rim grazes and the envelope is smooth.
+    const auto sweptRim = [&](const Vec3& n1, const Vec3& n2, const Vec3& at) -> std::optional<Vec3> {
+        const Vec3 velocity = law_.velocity(u, at);
+        Vec3 n = glm::cross(tangent, velocity);
+        const double len = glm::length(n);
+        if (len <= tol::kParallel * glm::length(velocity)) return std::nullopt;
+        n /= len;
+        if (glm::dot(n, n1 + n2) < 0.0) n = -n;
+        // n = alpha n1 + beta n2 in the meridian plane: inside the cone when both are non-negative.
+        const double c = glm::dot(n1, n2), p1 = glm::dot(n, n1), p2 = glm::dot(n, n2);
+        const double det = 1.0 - c * c;
+        const double alpha = (p1 - c * p2) / det, beta = (p2 - c * p1) / det;
+        if (alpha < 0.0 || beta < 0.0) return std::nullopt;
+        return n;
+    };
+    const Face* other = nullptr;
+    for (std::size_t k = 0; k < faces.size() && !other; ++k)
+        if (k != nearest && faces[k].gap <= nearRim && glm::dot(faces[k].n, normal) < std::cos(kRimAngle))
+            other = &faces[k];
+    if (other) {
+        // On a rim, a circle about the axis (on the axis, an apex: a point): the swept rim's
+        // normal where it grazes; elsewhere the end lies on a crease of the swept volume.
+        const Vec3 n1 = normal, n2 = other->n;
+        normal = glm::normalize(n1 + n2);
+        sharp = true;
+        if (rho <= 0.0) return;
+        if (const std::optional<Vec3> n = sweptRim(n1, n2, x)) normal = *n, sharp = false;
+        return;
+    }
+    // The nearest face's rims: below it (faces nearest - 1 and nearest) and above it.
+    for (const std::size_t below : {nearest - 1, nearest}) {
+        if (below >= faces.size() - 1) continue;  // above the top face, or below the bottom one
+        // The piece whose end the rim is: the first piece's bottom, else the top of the one below.
+        const ProfilePiece& end = pieces[cp.first + (below == 0 ? 0 : below - 1)];
+        const double zr = below == 0 ? cp.z0 : pieceZ1(end);
+        const double R = pieceRadius(end, zr);
+        if (!(R > 0.0)) continue;
+        double nr = 0.0, nz = 0.0;
+        const auto lateral = [&](const ProfilePiece& p) {
+            meridianNormal(p, R, zr, nr, nz);
+            return nr * radial + nz * ps.axis;
+        };
+        const Vec3 n1 = below == 0 ? -ps.axis : lateral(pieces[cp.first + below - 1]);
+        const Vec3 n2 = below + 2 == faces.size() ? ps.axis : lateral(pieces[cp.first + below]);
+        if (glm::dot(n1, n2) >= std::cos(kRimAngle)) continue;  // a smooth joint
+        const Vec3 rim = ps.tip + zr * ps.axis + R * radial;
+        const std::optional<Vec3> n = sweptRim(n1, n2, rim);
+        if (n && std::abs(glm::dot(x - rim, *n)) <= nearRim) {
+            normal = *n;
+            return;
+        }
+    }
+}
+
+}  // namespace dexelmill
