@@ -118,8 +118,9 @@ class TurningSweep {
     Interval bound(const Line& line) const;
 
     /// @brief The swept material along `line` (unit direction), sorted, disjoint, with the Hermite
-    /// data at each end: the outward normal of the tool pose whose interval made that end (marked
-    /// sharp on a rim of that tool).
+    /// data at each end, from the tool at the pose that made it (turning_normals.cpp): the normal
+    /// of the face the end lies on, or where a rim of that face grazes, the rim's swept normal;
+    /// marked sharp near a rim that does not graze, a crease of the swept volume.
     /// @param care where along the line the answer matters (sorted, disjoint line parameters, for
     /// example a dexel's material); empty means everywhere. Outside it, guarantee 2 is waived:
     /// only the stretches of O that meet `care` are complete.
@@ -128,7 +129,8 @@ class TurningSweep {
     std::vector<Interval> intersectAll(const Line& line) const;
 
   private:
-    /// The Hermite data of an output end at line parameter t, made by part `part` at pose u.
+    /// The Hermite data of an output end at line parameter t, made by part `part` at pose u
+    /// (turning_normals.cpp).
     void endNormal(const Line& line, double t, double u, std::size_t part, Vec3& normal, bool& sharp) const;
 
     /// A ball inside the tool whose sphere is the tool's lower face below its centre (a ball end
@@ -176,7 +178,7 @@ class TurningSweep {
     /// Node `heap` of the search of `band`, made.
     LinearNode makeNode(const LinearPart& band, std::uint32_t heap) const;
     /// The Hermite data of an output end at line parameter t that band `band`'s leaf `heap` made
-    /// (turning.cpp, note i).
+    /// (turning_normals.cpp).
     void nodeEndNormal(const Line& line, double t, std::size_t band, std::uint32_t heap, bool upper, Vec3& normal,
                        bool& sharp) const;
 
