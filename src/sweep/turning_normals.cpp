@@ -123,11 +123,13 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
             other = &faces[k];
     if (other) {
         // On a rim, a circle about the axis (on the axis, an apex: a point): the swept rim's
-        // normal where it grazes; elsewhere the end lies on a crease of the swept volume.
+        // normal where it grazes; elsewhere the end lies on a crease of the swept volume. So does
+        // a rim of the first or last pose, where the rim's swept surface starts or stops and meets
+        // that pose's own faces at an angle.
         const Vec3 n1 = normal, n2 = other->n;
         normal = glm::normalize(n1 + n2);
         sharp = true;
-        if (rho <= 0.0) return;
+        if (rho <= 0.0 || u <= 0.0 || u >= 1.0) return;
         if (const std::optional<Vec3> n = sweptRim(n1, n2, x)) normal = *n, sharp = false;
         return;
     }
