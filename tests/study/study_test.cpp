@@ -65,6 +65,32 @@ TEST_CASE("the oracle takes a move from as far as a program may reach", "[study]
     CHECK_FALSE(oracle.inside(Vec3(15, 2, 12)));
 }
 
+TEST_CASE("the oracle follows a move whose tool axis turns", "[study]") {
+    // A flat end D4 x 10 turning in place about its tip, from +z to +x: in the plane of the turn
+    // (y = 10), a point at angle phi from +z towards +x and distance rho from the tip lies on the
+    // axis of the pose at phi when phi is in [0, 90] degrees and rho < 10, and no pose reaches
+    // it when rho > hypot(10, 2). The end axis's own sweep would hold almost none of the first.
+    Program p;
+    p.path.files = {"turn"};
+    p.tools.emplace(1, flatEndMill(4, {10, 10}));
+    const Vec3 tip(15, 10, 0);
+    Move m{tip, tip, Vec3(1, 0, 0), 1, false, {0, 1}, {}, {}};
+    m.startAxis = Vec3(0, 0, 1);
+    p.path.moves.push_back(m);
+    const MachinedSolidOracle oracle(Box{Vec3(0, 0, -20), Vec3(40, 20, 20)}, p.path, p.tools, 0.25);
+    std::mt19937_64 rng(6);
+    std::uniform_real_distribution<double> angle(0.0, 3.14159265358979323846 / 2);
+    for (int i = 0; i < 2000; ++i) {
+        const double phi = angle(rng);
+        const Vec3 dir(std::sin(phi), 0, std::cos(phi));
+        const double inside = std::uniform_real_distribution<double>(0.1, 9.9)(rng);
+        const double outside = std::uniform_real_distribution<double>(10.3, 14.0)(rng);
+        INFO("phi " << phi << " inside " << inside << " outside " << outside);
+        REQUIRE(oracle.removed(tip + inside * dir));
+        REQUIRE_FALSE(oracle.removed(tip + outside * dir));
+    }
+}
+
 TEST_CASE("surface deviation converges as the spacing halves", "[study]") {
     StudyOptions o;
     o.job.program = groove();

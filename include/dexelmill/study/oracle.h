@@ -2,13 +2,16 @@
 /// @brief The exact machined solid by brute force (method.md section 6): a point is removed iff
 /// some move puts it inside the tool at some feed parameter u in [0, 1]. Shares no code with the
 /// sweep solver: it samples u densely and refines with a golden-section search, using only the
-/// tool's profile radius. Slow, simple and independent: the yardstick of accuracy studies.
+/// tool's profile radius and the move's pose at u (a turning move's from its MotionLaw, the
+/// move's definition). Slow, simple and independent: the yardstick of accuracy studies.
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "dexelmill/geometry/types.h"
+#include "dexelmill/path/motion.h"
 #include "dexelmill/path/toolpath.h"
 
 namespace dexelmill {
@@ -22,7 +25,7 @@ public:
     /// @param stock the stock box; the program's moves are taken from `path`, their tools from
     /// `tools` (every tool a move names must be there). Both are copied.
     /// @param resolution the finest length the oracle must resolve along a move (mm); the feed
-    /// parameter is sampled at least every resolution / 4.
+    /// parameter is sampled so that no tool point moves more than resolution / 4 between samples.
     /// @throw Error if a move names a tool that is not in the table.
     MachinedSolidOracle(const Box& stock, const ToolPath& path, const ToolTable& tools, double resolution);
     MachinedSolidOracle(const MachinedSolidOracle&) = delete;
@@ -39,6 +42,10 @@ private:
         Vec3 start, feed, axis;
         const Tool* tool;
         Box bounds;
+        /// A move whose tool axis turns: its motion law, and a bound on how fast a tool point
+        /// moves with u (mm per unit u). Null for a fixed axis.
+        std::shared_ptr<const MotionLaw> law;
+        double speed = 0.0;
     };
     bool inSweep(const MoveRef& m, const Vec3& p) const;
     std::size_t bucketOf(const Vec3& p) const;
