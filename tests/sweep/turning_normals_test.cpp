@@ -12,28 +12,25 @@
 // rounding. S's boundary on a line is then bisected on the sign of G from a bracket about the
 // solver's end.
 //
-// The finite differences, as in sweep_normals_test.cpp: the line offset by kStep along two unit
-// vectors a, b across it, both ways, meets S's boundary at P(+-a), P(+-b); P(+a) - P(-a) and
-// P(+b) - P(-b) span the tangent plane (central differences, error of order kStep^2 times the
-// squared curvature). n(+) from P(+a) - P(0) and P(+b) - P(0) and n(-) from P(0) - P(-a) and
-// P(0) - P(-b) differ by the turn: about kStep times the curvature on a smooth surface, as large
-// as the crease's angle where an end lies within kStep of a crease (where two poses, two parts or
-// a rim's two faces meet). An end whose turn exceeds kCreaseTurn is on a crease as far as the
-// oracle can tell, and one whose line meets S at a sine below kGrazing has no good difference
-// normal: both are skipped and counted.
+// The finite differences (normal_stencil.h): the line and four lines offset by kStep across it
+// meet S's boundary at five points, whose central difference spans the tangent plane and whose
+// one-sided normals differ by the turn, about kStep times the curvature on a smooth surface and
+// as large as a crease's angle within kStep of one. An end whose turn exceeds kCreaseTurn is on a
+// crease as far as the oracle can tell, and one whose line meets S at a sine below kGrazing has
+// no good difference normal: both are skipped and counted.
 //
 // What the solver promises. Its end lies within epsilon of S (check 1 of
-// turning_sweep_oracle_test.cpp) and takes the normal of the tool at a pose u near the one, u*,
-// that sweeps S there: on a face, that face's normal; near a rim that grazes, the rim's swept
-// normal. A tool point moves by at most V |u - u*| between the two poses. The static search puts
-// u within about 4 epsilon / V of u* (its nodes close where their reach is 2 epsilon, and the end
-// lies within two such nodes); a linear node's leaf moves every point within epsilon of its true
-// poses, and its end's pose is where the leaf's move grazes. So the normal turns by about the
-// turn's rate times |u - u*| plus the face's curvature times the distance its point travels:
-// 4 epsilon (1 / reach + 1 / r) <= 8 epsilon / r, r the smallest radius of curvature of the
-// cases' tools. kSmallestRadius is below every radius and corner radius they draw (0.2 mm and
-// up), not near the apex of a V-bit or a drill, which few lines meet. The test allows kAngle plus
-// kPerEpsilon epsilon / r plus the turn.
+// turning_sweep_oracle_test.cpp) on the surface of the tool at a pose u near the one, u*, that
+// sweeps S there, and takes that surface's normal (near a rim that grazes, the rim's swept
+// normal). The static search puts u within about 4 epsilon / V of u* (its nodes close where their
+// reach is 2 epsilon); a linear node's leaf, within the leaf's width, which the turn sets and not
+// the travel. Either way T(u) touches S along a curve near the end and parts from it to second
+// order, bending away at most as 1 / r, r the smallest radius of curvature of the tool: an end
+// within epsilon of S lies within sqrt(2 epsilon r) of that curve, where T(u)'s normal has turned
+// from S's by at most sqrt(2 epsilon / r). The test allows kAngle plus that plus the turn, with r
+// the case's radius where the family knows it, else kSmallestRadius, below every radius and
+// corner radius the random tools draw (0.2 mm and up) away from the apex of a V-bit or a drill,
+// which few lines meet.
 //
 // An end marked sharp claims a crease of S within the solver's rim reach of it (4 epsilon):
 // the oracle then looks for one with a wide stencil, of step kSharpReach epsilon, whose turn must
@@ -48,6 +45,7 @@
 #include <string>
 #include <vector>
 
+#include "normal_stencil.h"
 #include "turning_oracle.h"
 
 using namespace turning_oracle;
@@ -56,18 +54,14 @@ namespace {
 
 constexpr double kStep = 1e-4;        ///< finite-difference offset (mm)
 constexpr double kAngle = 1e-3;       ///< tolerance on the angle to the difference normal (rad)
-constexpr double kPerEpsilon = 8.0;   ///< and per epsilon / r
-constexpr double kSmallestRadius = 0.1;  ///< below the smallest radius of curvature of the cases' tools (mm)
+constexpr double kSmallestRadius = 0.1;  ///< below the smallest radius of curvature of the random tools (mm)
 constexpr double kSharpReach = 8.0;   ///< the wide stencil's step for ends marked sharp, in epsilons
 constexpr double kCreaseTurn = 0.05;  ///< a larger turn across the stencil: a crease (rad)
 constexpr double kGrazing = 0.05;     ///< a smaller sine between line and surface: grazing
 constexpr double kBracket = 0.05;     ///< how far past an end the bisections start outside (mm)
-constexpr int kBisect = 45;           ///< halvings of brackets under 0.1 mm: below 1e-13 mm
 constexpr int kNormalPoseGrid = 256;  ///< poses of G's grid
 constexpr int kPeaks = 3;             ///< the grid's local maxima refined
 constexpr int kNormalGoldenSteps = 60;  ///< golden-section steps per peak: 2 / grid times 0.618^60
-
-double angle(const Vec3& a, const Vec3& b) { return std::atan2(glm::length(glm::cross(a, b)), glm::dot(a, b)); }
 
 /// G(x): the largest guide over the poses (>= 0 inside S).
 double depthG(const SweepOracle& o, const Vec3& x) {
@@ -101,37 +95,6 @@ double depthG(const SweepOracle& o, const Vec3& x) {
     return best;
 }
 
-/// S's boundary on `line` between a parameter inside S and one outside: bisection on the sign of
-/// G. Empty when the two are not on either side.
-std::optional<double> boundary(const SweepOracle& o, const Line& line, double inside, double outside) {
-    if (!(depthG(o, line.at(inside)) >= 0.0) || depthG(o, line.at(outside)) >= 0.0) return {};
-    for (int i = 0; i < kBisect; ++i) {
-        const double mid = 0.5 * (inside + outside);
-        (depthG(o, line.at(mid)) >= 0.0 ? inside : outside) = mid;
-    }
-    return 0.5 * (inside + outside);
-}
-
-/// The oracle's boundary points on `line` and on the lines offset by `step` along +-a and +-b
-/// (p[0], p[1 .. 2], p[3 .. 4]), bisected between parameters `inside` and `outside`; false when one
-/// is not bracketed.
-bool stencil(const SweepOracle& o, const Line& line, const Vec3& a, const Vec3& b, double step, double inside,
-             double outside, Vec3 p[5]) {
-    const Vec3 offsets[5] = {Vec3(0.0), a, -a, b, -b};
-    for (int j = 0; j < 5; ++j) {
-        const Line offset{line.origin + step * offsets[j], line.dir};
-        const std::optional<double> end = boundary(o, offset, inside, outside);
-        if (!end) return false;
-        p[j] = offset.at(*end);
-    }
-    return true;
-}
-
-/// The angle between the stencil's one-sided normals n(+) and n(-).
-double stencilTurn(const Vec3 p[5]) {
-    return angle(glm::cross(p[1] - p[0], p[3] - p[0]), glm::cross(p[0] - p[2], p[0] - p[4]));
-}
-
 struct NormalTally {
     int cases = 0, ends = 0, checked = 0, creases = 0, grazing = 0, unbracketed = 0, failures = 0;
     int sharp = 0, sharpOnCrease = 0;  ///< ends marked sharp; of them, on a crease as the oracle sees it
@@ -141,14 +104,15 @@ struct NormalTally {
     std::string log;
 };
 
-void checkNormals(const Case& c, NormalTally& t) {
+/// Checks the normals at the ends of c.line's output; `radius` is the smallest radius of curvature
+/// of the case's tool, or less.
+void checkNormals(const Case& c, NormalTally& t, double radius = kSmallestRadius) {
     ++t.cases;
     const TurningSweep sweep(c.model->tool, c.move, c.epsilon);
     const SweepOracle o(c.model->parts, c.move);
     const std::vector<LineHit> hits = sweep.intersect(c.line);
     const Vec3& w = c.line.dir;
-    const Vec3 a = glm::normalize(glm::cross(w, std::abs(w.x) < 0.6 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)));
-    const Vec3 b = glm::cross(w, a);
+    const auto in = [&](const Vec3& x) { return depthG(o, x) >= 0.0; };
     for (const LineHit& hit : hits) {
         for (const bool hi : {false, true}) {
             ++t.ends;
@@ -160,13 +124,12 @@ void checkNormals(const Case& c, NormalTally& t) {
             const double inside = v - sense * std::min(0.5 * hit.range.length(), kBracket);
             const double outside = v + sense * kBracket;
             Vec3 p[5];
-            if (!stencil(o, c.line, a, b, kStep, inside, outside, p)) {
+            if (!stencil::points(in, c.line, kStep, inside, outside, p)) {
                 ++t.unbracketed;
                 continue;
             }
-            Vec3 central = glm::normalize(glm::cross(p[1] - p[2], p[3] - p[4]));
-            if (glm::dot(central, w) * sense < 0.0) central = -central;
-            const double turn = stencilTurn(p);
+            const Vec3 central = stencil::central(p, sense * w);
+            const double turn = stencil::turn(p);
             if (turn > kCreaseTurn) {
                 ++t.creases;
                 t.sharpOnCrease += sharp;
@@ -177,8 +140,8 @@ void checkNormals(const Case& c, NormalTally& t) {
                 // lines falls off an edge of S (its end leaves the bracket).
                 Vec3 wide[5];
                 const double step = kSharpReach * c.epsilon;
-                if (!stencil(o, c.line, a, b, step, inside, v + sense * (kBracket + 4.0 * step), wide) ||
-                    stencilTurn(wide) > kCreaseTurn) {
+                if (!stencil::points(in, c.line, step, inside, v + sense * (kBracket + 4.0 * step), wide) ||
+                    stencil::turn(wide) > kCreaseTurn) {
                     ++t.sharpNearCrease;
                     continue;
                 }
@@ -195,8 +158,8 @@ void checkNormals(const Case& c, NormalTally& t) {
                 continue;
             }
             ++t.checked;
-            const double err = angle(normal, central);
-            const double allowed = kAngle + kPerEpsilon * c.epsilon / kSmallestRadius + turn;
+            const double err = stencil::angle(normal, central);
+            const double allowed = kAngle + std::sqrt(2.0 * c.epsilon / radius) + turn;
             t.worst = std::max(t.worst, err);
             t.worstAllowed = std::max(t.worstAllowed, err / allowed);
             const bool unit = std::abs(glm::length(normal) - 1.0) <= 1e-12;
@@ -256,11 +219,13 @@ TEST_CASE("turning sweep normals vs oracle: long cutters searched in bands, and 
         const double d = cases::uniform(rng, 2.0, 12.0), r = d / 2, length = d * cases::uniform(rng, 2.5, 5.0);
         const ToolLengths lengths{length, length};
         Case c;
+        double smallest = r;  // the smallest radius of curvature: the side's, or the corner's
         if (rng() % 2) {
             c.kind = models::Kind::Flat;
             c.model.emplace(models::Model{flatEndMill(d, lengths), {models::part(0, length, [r](double) { return r; }, r)}});
         } else {
             const double corner = cases::uniform(rng, 0.1, 0.5) * d, inner = r - corner;
+            smallest = corner;
             c.kind = models::Kind::Bull;
             c.model.emplace(models::Model{
                 bullNoseEndMill(d, corner, lengths),
@@ -271,7 +236,7 @@ TEST_CASE("turning sweep normals vs oracle: long cutters searched in bands, and 
         c.epsilon = kDefaultTurnTolerance;
         const TurningSweep sweep(c.model->tool, c.move, c.epsilon);
         banded += sweep.linearBands() > 1;
-        checkNormals(c, t);
+        checkNormals(c, t, smallest);
     }
     report(t);
     // Most of these moves are searched in bands.
