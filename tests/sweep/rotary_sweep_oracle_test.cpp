@@ -7,6 +7,9 @@
 //    branch and bound over u proving the point farther than epsilon + margin from every pose.
 //  Check 2: every line point deeper than epsilon + margin inside a pose found by a dense search
 //    over u (refined by golden sections) is in the output.
+//  Normals: at each output end, the solver's normal lies within kNormalAngle + sqrt(2 epsilon / r)
+//    of the tangent plane of the oracle's own boundary (where the dense search's depth changes
+//    sign), found by finite differences (normal_stencil.h), as turning_normals_test.cpp argues.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -16,6 +19,7 @@
 #include "dexelmill/machine/kinematics.h"
 #include "dexelmill/sweep/turning.h"
 #include "dexelmill/tool/builders.h"
+#include "normal_stencil.h"
 
 using namespace dexelmill;
 
@@ -226,6 +230,57 @@ int checkCase(const Case& c, const Solid& s, std::mt19937& rng, int lines, bool*
     return checked;
 }
 
+/// Finite-difference offset and the tolerances of the normals' check (turning_normals_test.cpp):
+/// kNormalAngle + sqrt(2 epsilon / r), r the tool's radius (1 mm or more).
+constexpr double kNormalStep = 1e-4;
+constexpr double kNormalAngle = 1e-3;
+constexpr double kCreaseTurn = 0.05, kGrazing = 0.05, kBracket = 0.05;
+
+/// Checks the normals at the ends of `lines` random lines' output; counts the ends checked and
+/// those the oracle sees on a crease, grazing or cannot bracket.
+void checkNormals(const Case& c, const Solid& s, std::mt19937& rng, int lines, int& checked, int& skipped) {
+    const Tool tool = s.ball ? ballEndMill(2 * s.r, {s.l, s.l}) : flatEndMill(2 * s.r, {s.l, s.l});
+    const TurningSweep sweep(tool, machineMove(c), kEpsilon);
+    const RotaryOracle oracle(c, s);
+    const auto in = [&](const Vec3& x) { return oracle.depth(x) >= 0.0; };
+    std::uniform_real_distribution<double> uni(0.0, 1.0), sym(-1.0, 1.0);
+    for (int li = 0; li < lines; ++li) {
+        Vec3 tip, axis;
+        oracle.pose(uni(rng), tip, axis);
+        const Vec3 any = std::abs(axis.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+        const Vec3 p = glm::normalize(glm::cross(axis, any)), q = glm::cross(axis, p);
+        const double ang = 6.283185307179586 * uni(rng), rr = 1.2 * s.r * uni(rng);
+        const Vec3 through = tip + axis * (s.l * uni(rng)) + (p * std::cos(ang) + q * std::sin(ang)) * rr;
+        Vec3 dir(0.0);
+        if (li % 2 == 0) dir[li / 2 % 3] = 1.0;
+        else dir = glm::normalize(Vec3(sym(rng), sym(rng), sym(rng)));
+        const Line line{through - 40.0 * dir, dir};
+        for (const LineHit& hit : sweep.intersect(line)) {
+            for (const bool hi : {false, true}) {
+                const double v = hi ? hit.range.hi : hit.range.lo, sense = hi ? 1.0 : -1.0;
+                const double inside = v - sense * std::min(0.5 * hit.range.length(), kBracket);
+                Vec3 pts[5];
+                if (!stencil::points(in, line, kNormalStep, inside, v + sense * kBracket, pts)) {
+                    ++skipped;
+                    continue;
+                }
+                const Vec3 central = stencil::central(pts, sense * dir);
+                const double turn = stencil::turn(pts);
+                if (turn > kCreaseTurn || std::abs(glm::dot(central, dir)) < kGrazing) {
+                    ++skipped;
+                    continue;
+                }
+                ++checked;
+                const Vec3 normal = hi ? hit.normalHi : hit.normalLo;
+                const bool sharp = hi ? hit.sharpHi : hit.sharpLo;
+                INFO("line " << li << (hi ? " hi" : " lo") << " end " << line.at(v).x << " " << line.at(v).y << " "
+                             << line.at(v).z << (sharp ? " sharp" : "") << " turn " << turn);
+                CHECK(stencil::angle(normal, central) <= kNormalAngle + std::sqrt(2.0 * kEpsilon / s.r) + turn);
+            }
+        }
+    }
+}
+
 /// A random move: joints from a point near the table to up to `travel` away along each axis, A
 /// turning up to `turnA` degrees from [-100, -20] and C up to `turnC` from [-180, 180].
 Case randomMove(std::mt19937& rng, bool tcp, const Vec3& travel, double turnA, double turnC) {
@@ -339,4 +394,28 @@ TEST_CASE("rotary sweep vs oracle: a head that turns in identity kinematics", "[
         checked += checkCase(c, s, rng, 6);
     }
     CHECK(checked > 500);
+}
+
+TEST_CASE("rotary sweep normals vs oracle: TCP, identity kinematics and a turning head", "[sweep][turning][machine]") {
+    std::mt19937 rng(20261203);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    int checked = 0, skipped = 0;
+    for (int i = 0; i < 18; ++i) {
+        Case c = i % 3 == 2 ? Case{} : randomMove(rng, i % 3 == 0, i % 2 ? Vec3(30, 30, 5) : Vec3(8, 8, 3), 25, 60);
+        if (i % 3 == 2) {  // the head machine
+            c.head = true;
+            c.j0 = Vec3(15 * uni(rng), 15 * uni(rng), 5 * uni(rng));
+            c.j1 = c.j0 + Vec3(6 * uni(rng), 6 * uni(rng), 2 * uni(rng));
+            c.a0 = 30 * uni(rng);
+            c.a1 = c.a0 + 20 * uni(rng);
+            c.c0 = 90 * uni(rng);
+            c.c1 = c.c0 + 30 * uni(rng);
+        }
+        const Solid s = randomSolid(rng, i % 4 >= 2);
+        INFO("case " << i << (c.head ? " head" : c.tcp ? " TCP" : " identity"));
+        checkNormals(c, s, rng, 8, checked, skipped);
+    }
+    INFO(checked << " ends checked, " << skipped << " skipped");
+    CHECK(checked > 150);
+    CHECK(skipped <= checked / 5);
 }
