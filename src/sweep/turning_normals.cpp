@@ -133,7 +133,9 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
         if (const std::optional<Vec3> n = sweptRim(n1, n2, x)) normal = *n, sharp = false;
         return;
     }
-    // The nearest face's rims: below it (faces nearest - 1 and nearest) and above it.
+    // The nearest face's rims: below it (faces nearest - 1 and nearest) and above it. Not at the
+    // first or last pose, whose own faces bound the sweep where an end they make lies.
+    if (u <= 0.0 || u >= 1.0) return;
     for (const std::size_t below : {nearest - 1, nearest}) {
         if (below >= faces.size() - 1) continue;  // above the top face, or below the bottom one
         // The piece whose end the rim is: the first piece's bottom, else the top of the one below.
