@@ -181,6 +181,22 @@ Move machineMove(const Case& c) {
     return mv;
 }
 
+/// Line `li` of a case: through a random point of a random pose (up to 1.3 radii from its axis),
+/// along a lattice direction (even li) or a random one.
+Line randomLine(const RotaryOracle& oracle, const Solid& s, std::mt19937& rng, int li) {
+    std::uniform_real_distribution<double> uni(0.0, 1.0), sym(-1.0, 1.0);
+    Vec3 tip, axis;
+    oracle.pose(uni(rng), tip, axis);
+    const Vec3 any = std::abs(axis.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+    const Vec3 p = glm::normalize(glm::cross(axis, any)), q = glm::cross(axis, p);
+    const double ang = 6.283185307179586 * uni(rng), rr = 1.3 * s.r * uni(rng);
+    const Vec3 through = tip + axis * (s.l * uni(rng)) + (p * std::cos(ang) + q * std::sin(ang)) * rr;
+    Vec3 dir(0.0);
+    if (li % 2 == 0) dir[li / 2 % 3] = 1.0;
+    else dir = glm::normalize(Vec3(sym(rng), sym(rng), sym(rng)));
+    return Line{through, dir};
+}
+
 /// Checks `lines` random lines; returns how many points the depth check tested. `linear`, when
 /// given, is set to whether the sweep searched by linear nodes (turning.cpp, note h).
 int checkCase(const Case& c, const Solid& s, std::mt19937& rng, int lines, bool* linear = nullptr) {
@@ -189,20 +205,9 @@ int checkCase(const Case& c, const Solid& s, std::mt19937& rng, int lines, bool*
     const TurningSweep sweep(tool, mv, kEpsilon);
     if (linear) *linear = sweep.linearNodes();
     const RotaryOracle oracle(c, s);
-    std::uniform_real_distribution<double> uni(0.0, 1.0), sym(-1.0, 1.0);
     int checked = 0;
     for (int li = 0; li < lines; ++li) {
-        // A line through a random point of a random pose, along a lattice or a random direction.
-        Vec3 tip, axis;
-        oracle.pose(uni(rng), tip, axis);
-        const Vec3 any = std::abs(axis.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
-        const Vec3 p = glm::normalize(glm::cross(axis, any)), q = glm::cross(axis, p);
-        const double ang = 6.283185307179586 * uni(rng), rr = 1.3 * s.r * uni(rng);
-        const Vec3 through = tip + axis * (s.l * uni(rng)) + (p * std::cos(ang) + q * std::sin(ang)) * rr;
-        Vec3 dir;
-        if (li % 2 == 0) dir = Vec3(0.0), dir[li / 2 % 3] = 1.0;
-        else dir = glm::normalize(Vec3(sym(rng), sym(rng), sym(rng)));
-        Line line{through, dir};
+        const Line line = randomLine(oracle, s, rng, li);
         const std::vector<Interval> out = sweep.intersectAll(line);
         const Interval span = sweep.bound(line);
         if (span.isEmpty()) {  // the line passes outside the tool (up to 1.3 r from its axis) and the box
@@ -243,18 +248,9 @@ void checkNormals(const Case& c, const Solid& s, std::mt19937& rng, int lines, i
     const TurningSweep sweep(tool, machineMove(c), kEpsilon);
     const RotaryOracle oracle(c, s);
     const auto in = [&](const Vec3& x) { return oracle.depth(x) >= 0.0; };
-    std::uniform_real_distribution<double> uni(0.0, 1.0), sym(-1.0, 1.0);
     for (int li = 0; li < lines; ++li) {
-        Vec3 tip, axis;
-        oracle.pose(uni(rng), tip, axis);
-        const Vec3 any = std::abs(axis.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
-        const Vec3 p = glm::normalize(glm::cross(axis, any)), q = glm::cross(axis, p);
-        const double ang = 6.283185307179586 * uni(rng), rr = 1.2 * s.r * uni(rng);
-        const Vec3 through = tip + axis * (s.l * uni(rng)) + (p * std::cos(ang) + q * std::sin(ang)) * rr;
-        Vec3 dir(0.0);
-        if (li % 2 == 0) dir[li / 2 % 3] = 1.0;
-        else dir = glm::normalize(Vec3(sym(rng), sym(rng), sym(rng)));
-        const Line line{through - 40.0 * dir, dir};
+        const Line line = randomLine(oracle, s, rng, li);
+        const Vec3& dir = line.dir;
         for (const LineHit& hit : sweep.intersect(line)) {
             for (const bool hi : {false, true}) {
                 const double v = hi ? hit.range.hi : hit.range.lo, sense = hi ? 1.0 : -1.0;
