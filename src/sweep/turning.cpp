@@ -329,7 +329,7 @@ TurningSweep::LinearNode TurningSweep::makeNode(const LinearPart& m, std::uint32
     // The pivot runs on the chord from its place at ua to its place at ub, the axis held at the
     // middle's: the tip is the pivot less pivot height times that axis.
     const Vec3 start = a.tip + m.pivot * (a.axis - mid.axis), end = b.tip + m.pivot * (b.axis - mid.axis);
-    return LinearNode{MoveSweep(m.pieces[std::size_t(level)], start, end, mid.axis), mid, um, width, start, end};
+    return LinearNode{MoveSweep(m.pieces[std::size_t(level)], start, end, mid.axis), mid, um, width};
 }
 
 Box turningMoveBox(const Move& m, double length, double radius) {
@@ -428,8 +428,6 @@ std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, 
     const ConvexPart& part = parts_[p];
     LinearPart m;
     m.part = p;
-    m.cutLo = lo > part.z0 ? lo : -std::numeric_limits<double>::infinity();
-    m.cutHi = hi < part.z1 ? hi : std::numeric_limits<double>::infinity();
     std::vector<ProfilePiece> band = clipChain(tool_.pieces(), part.first, part.last, lo, hi);
     double radius = 0.0;
     for (const ProfilePiece& piece : band) radius = std::max(radius, pieceRadiusBound(piece));
@@ -635,9 +633,9 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      starting several searches per line is kept off lines far from the part by first testing
 //      the part's root whole ((h)'s node of level 0, wholeRoots_): when it settles, so does every
 //      band. A part is cut only where its bands' leaves lie kBandLevelsSaved levels above its
-//      own. An end that a band's leaf makes on a face where the band was cut (inside the tool,
-//      met only within epsilon of its rim on the envelope) takes the Hermite data of the part at
-//      the pose where that face's plane passes the end (nodeEndNormal).
+//      own. An end that a band's leaf makes takes the Hermite data of the whole part at the true
+//      pose where the leaf's move makes it (nodeEndNormal), so a face where the band was cut
+//      (inside the tool, met only within epsilon of its rim on the envelope) gives no normal.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     const Interval reach = bound(line);

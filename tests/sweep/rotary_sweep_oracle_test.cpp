@@ -292,6 +292,22 @@ Case randomMove(std::mt19937& rng, bool tcp, const Vec3& travel, double turnA, d
     return c;
 }
 
+/// A random move of the head machine in identity kinematics: joints from within 15 mm of the
+/// table's centre up to 6 mm away, B turning up to 20 degrees from [-30, 30], and C, if
+/// `tableTurns`, up to 30 degrees from [-90, 90].
+Case randomHeadMove(std::mt19937& rng, bool tableTurns) {
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    Case c;
+    c.head = true;
+    c.j0 = Vec3(15 * uni(rng), 15 * uni(rng), 5 * uni(rng));
+    c.j1 = c.j0 + Vec3(6 * uni(rng), 6 * uni(rng), 2 * uni(rng));
+    c.a0 = 30 * uni(rng);
+    c.a1 = c.a0 + 20 * uni(rng);
+    c.c0 = 90 * uni(rng);
+    c.c1 = c.c0 + (tableTurns ? 30 * uni(rng) : 0.0);
+    return c;
+}
+
 /// A ball or flat end of radius 1 to 3 mm and length 10 to 20 mm.
 Solid randomSolid(std::mt19937& rng, bool ball) {
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
@@ -371,14 +387,7 @@ TEST_CASE("rotary sweep vs oracle: a head that turns in identity kinematics", "[
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
     int checked = 0;
     for (int i = 0; i < 12; ++i) {
-        Case c;
-        c.head = true;
-        c.j0 = Vec3(15 * uni(rng), 15 * uni(rng), 5 * uni(rng));
-        c.j1 = c.j0 + Vec3(6 * uni(rng), 6 * uni(rng), 2 * uni(rng));
-        c.a0 = 30 * uni(rng);
-        c.a1 = c.a0 + 20 * uni(rng);
-        c.c0 = 90 * uni(rng);
-        c.c1 = c.c0 + (i % 3 == 0 ? 0.0 : 30 * uni(rng));  // a third with the head alone turning
+        const Case c = randomHeadMove(rng, i % 3 != 0);  // a third with the head alone turning
         Solid s;
         s.ball = i % 2 == 1;
         s.r = 2 + uni(rng);
@@ -394,19 +403,10 @@ TEST_CASE("rotary sweep vs oracle: a head that turns in identity kinematics", "[
 
 TEST_CASE("rotary sweep normals vs oracle: TCP, identity kinematics and a turning head", "[sweep][turning][machine]") {
     std::mt19937 rng(20261203);
-    std::uniform_real_distribution<double> uni(-1.0, 1.0);
     int checked = 0, skipped = 0;
     for (int i = 0; i < 18; ++i) {
-        Case c = i % 3 == 2 ? Case{} : randomMove(rng, i % 3 == 0, i % 2 ? Vec3(30, 30, 5) : Vec3(8, 8, 3), 25, 60);
-        if (i % 3 == 2) {  // the head machine
-            c.head = true;
-            c.j0 = Vec3(15 * uni(rng), 15 * uni(rng), 5 * uni(rng));
-            c.j1 = c.j0 + Vec3(6 * uni(rng), 6 * uni(rng), 2 * uni(rng));
-            c.a0 = 30 * uni(rng);
-            c.a1 = c.a0 + 20 * uni(rng);
-            c.c0 = 90 * uni(rng);
-            c.c1 = c.c0 + 30 * uni(rng);
-        }
+        const Case c = i % 3 == 2 ? randomHeadMove(rng, true)
+                                  : randomMove(rng, i % 3 == 0, i % 2 ? Vec3(30, 30, 5) : Vec3(8, 8, 3), 25, 60);
         const Solid s = randomSolid(rng, i % 4 >= 2);
         INFO("case " << i << (c.head ? " head" : c.tcp ? " TCP" : " identity"));
         checkNormals(c, s, rng, 8, checked, skipped);

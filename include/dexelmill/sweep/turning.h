@@ -150,20 +150,17 @@ class TurningSweep {
     struct LinearPart {
         std::size_t part = 0;  ///< the index in parts_ of the part the band is cut from
         double pivot = 0.0;
-        /// The heights where the band is cut from its part, or -+infinity where it ends with the part.
-        double cutLo = 0.0, cutHi = 0.0;
         std::vector<double> reach;
         std::vector<std::vector<ProfilePiece>> pieces;
         int leafLevel() const { return int(reach.size()) - 1; }
     };
     /// A node's linear move, made the first time a query needs it: the band of its level swept
-    /// along it, the pose at the node's middle, and the tips its move runs between (its axis is
-    /// the middle's).
+    /// along it (its axis the middle's), the pose at the node's middle, and where the node lies
+    /// in u.
     struct LinearNode {
         MoveSweep sweep;
         ToolPose middle;
         double middleU = 0.0, width = 0.0;
-        Vec3 start{0.0}, end{0.0};
     };
     class NodeCache;
     /// Sets models_ and nodes_ when the linear-node search applies and its leaves lie enough
