@@ -151,6 +151,59 @@ TEST_CASE("machine: the acceleration bound of a tool point on the axis holds wit
     }
 }
 
+TEST_CASE("machine: the axis turn bound holds and is tight, and sees a table spin under an upright tool",
+          "[machine]") {
+    // With A and C linear in u, the issue's axis (sin C sin A, cos C sin A, cos A) turns at
+    // |a'|^2 = A'^2 + sin^2 A C'^2 exactly. The bound must hold at every u (checked on a fine grid,
+    // whose spacing lets the largest rate fall short by at most |a''| / 4000) and exceed the
+    // largest rate by no more than its sampling slack, (A' + C')^2 / 64 (motion.cpp).
+    const Machine ac = loadMachine("xyzac-trt");
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    for (int i = 0; i < 60; ++i) {
+        RotaryAngles from, to;
+        // A third of the moves stay within 3 degrees of upright while C turns up to 90 degrees.
+        const bool upright = i % 3 == 0;
+        from['A'] = upright ? 3 * uni(rng) : 80 * uni(rng), from['C'] = 180 * uni(rng);
+        to['A'] = upright ? 3 * uni(rng) : from['A'] + 40 * uni(rng), to['C'] = from['C'] + 90 * uni(rng);
+        const double rateA = (to['A'] - from['A']) * kDeg, rateC = (to['C'] - from['C']) * kDeg;
+        const Vec3 j0(30 * uni(rng), 30 * uni(rng), 30 * uni(rng)), j1(30 * uni(rng), 30 * uni(rng), 30 * uni(rng));
+        for (const bool tcp : {true, false}) {
+            Move m;
+            m.start = j0, m.end = j1;
+            m.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, tcp, j0, j1));
+            const MotionLaw law(m);
+            const double bound = law.axisTurnBound();
+            double largest = 0.0;
+            for (int k = 0; k <= 4000; ++k) {
+                const double a = (from['A'] + k / 4000.0 * (to['A'] - from['A'])) * kDeg;
+                largest = std::max(largest, std::hypot(rateA, std::sin(a) * rateC));
+            }
+            const double rates = std::abs(rateA) + std::abs(rateC);
+            INFO("move " << i << (tcp ? " TCP" : " identity") << ": bound " << bound << ", largest rate " << largest);
+            CHECK(bound >= largest);
+            CHECK(bound <= largest + rates * rates / 64.0 + 1e-12);
+            CHECK(bound <= rates);
+            // Upright, C's turn barely counts: sin A <= sin 3 degrees.
+            if (upright) CHECK(bound <= std::abs(rateA) + 0.053 * std::abs(rateC) + rates * rates / 64.0);
+        }
+    }
+    // On a great circle the axis turns at its angle, uniformly.
+    Move apt;
+    apt.startAxis = glm::normalize(Vec3(0.2, -0.4, 1.0));
+    apt.axis = glm::normalize(Vec3(-0.5, 0.3, 0.8));
+    const double theta = std::acos(glm::dot(*apt.startAxis, apt.axis));
+    CHECK(MotionLaw(apt).axisTurnBound() == Approx(theta).epsilon(1e-12));
+    // A table spinning under an upright tool turns no axis: the bound is its sampling slack alone,
+    // a fortieth of the table's rate.
+    RotaryAngles from, to;
+    from['A'] = to['A'] = 0, from['C'] = 10, to['C'] = 100;
+    Move spin;
+    spin.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, true, Vec3(5, 0, 0), Vec3(5, 0, 0)));
+    const double rate = 90 * kDeg;
+    CHECK(MotionLaw(spin).axisTurnBound() <= rate * rate / 64.0 + 1e-12);
+}
+
 TEST_CASE("machine: a head that turns in identity kinematics swings the tool about its travelling pivot",
           "[machine]") {
     // A table C about z and a head B about y pivoting 150 above the tip: a tool point v (relative

@@ -73,6 +73,11 @@ class MotionLaw {
     /// @brief The part of speedBound that the turns make: how far, at most, a tool point strays
     /// from where the move's translation alone would take it.
     double turnBound(double reach) const;
+    /// @brief A bound on |a'(u)| over the move (rad per unit u), a(u) the unit tool axis: how fast
+    /// the axis's direction turns. The tool is a solid of revolution, so only this turn moves it:
+    /// a turn about the axis itself, such as a rotary table's under an upright tool, does not.
+    /// Never more than the sum of the turns' rates, which turnBound takes (motion.cpp).
+    double axisTurnBound() const;
     /// @brief A bound on |y''(u)| (mm per unit u squared) over the move for the tool point y at
     /// distance `reach` from the tip along the tool axis, when the tip runs on the straight line:
     /// y = p(u) + Q(u) v with p'' = 0 and Q = R_0 ... R_{n-1}, each R_i a turn about a fixed
