@@ -381,8 +381,10 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
         throw Error(text);
     }
     bounds_ = turningMoveBox(move, tool.totalLength(), tool.maxRadius()).padded(kBoxSlack);
-    // Every tool point lies within hypot(total length, max radius) of the tip.
-    speed_ = law_.speedBound(std::hypot(tool.totalLength(), tool.maxRadius()));
+    // Every tool point lies within hypot(total length, max radius) of the tip (note a).
+    axisTurn_ = law_.axisTurnBound();
+    const double reach = std::hypot(tool.totalLength(), tool.maxRadius());
+    speed_ = std::min(law_.speedBound(reach), law_.speedBound(0.0) + axisTurn_ * reach);
     // A ball end at the bottom (note g): chords enough that w^2 / 8 |c''| <= epsilon / 2 for
     // chords of width w = 1 / chords, i.e. chords^2 >= |c''| / (4 epsilon).
     parts_ = tool_.convexParts();
@@ -432,7 +434,7 @@ std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, 
     double radius = 0.0;
     for (const ProfilePiece& piece : band) radius = std::max(radius, pieceRadiusBound(piece));
     m.pivot = 0.5 * (lo + hi);
-    const double turn = law_.turnBound(std::hypot(0.5 * (hi - lo), radius));
+    const double turn = axisTurn_ * std::hypot(0.5 * (hi - lo), radius);
     const double bend = law_.axisPointAccelerationBound(m.pivot);
     for (int k = 0;; ++k) {
         const double width = std::ldexp(1.0, -k);
@@ -510,7 +512,13 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      k = a0 x a1 / |a0 x a1| (it carries a0 to a(u) along the great circle; the tool is a solid
 //      of revolution, so which rotation about a(u) is chosen does not change T(u)). So
 //      y'(u) = f + theta k x (y(u) - p(u)) and |y'| <= |f| + theta |y - p| <= V. A machine's
-//      rotary move is bounded the same way turn by turn (MotionLaw::speedBound). Hence T(u') lies
+//      rotary move is bounded the same way turn by turn (MotionLaw::speedBound), but its turns
+//      may also spin the tool about its own axis (a rotary table under an upright tool), which
+//      does not move the solid. So V is at most the tip's speed bound plus omega_a d, omega_a
+//      bounding how fast the axis's direction turns (MotionLaw::axisTurnBound, theta on a great
+//      circle) and d a tool point's largest distance from the tip: the rigid motion
+//      y -> p(u') + N (y - p(u)), N the least rotation carrying a(u) to a(u'), maps T(u) onto
+//      T(u') and moves y by at most |p(u') - p(u)| + angle(a(u), a(u')) d. Hence T(u') lies
 //      within V |u' - u| of T(u): T(u') is inside T(u) grown by that.
 //  (b) Depth. A point x deeper than epsilon inside T(u) has the ball B(x, epsilon) inside T(u);
 //      the rigid motion from u to u' carries it to B(x', epsilon) inside T(u'), with
@@ -584,13 +592,14 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      (the pivot, the middle of the part's heights) runs on the chord from c(ua) to c(ub), with
 //      c(u) = p(u) + zc a(u), and the axis is held at a(um), um the node's middle. Its pose M(u)
 //      is carried to T(u) by a rigid motion that moves a tool point at distance rho from the
-//      pivot by at most |c(u) - L(u)| + |Q(u) - Q(um)| rho <= K w^2 / 8 + omega (w / 2) rho =
-//      delta_k, for a node of width w = 2^-k: L is the chord (its error as in g, with
-//      K = MotionLaw::axisPointAccelerationBound(zc)), Q the turns' rotation, whose rate is at
-//      most omega (MotionLaw::turnBound), and rho at most hypot(half the part's height, its
-//      largest radius). As in (b), with M(u) in place of T(u'), a point deeper than epsilon inside
-//      T(u) lies inside M(u) grown by max(delta_k - epsilon, 0), and every point of M(u) lies
-//      within delta_k of T(u). The search runs part by part (band by band, note i); the static
+//      pivot by at most |c(u) - L(u)| + |N - I| rho <= K w^2 / 8 + omega (w / 2) rho = delta_k,
+//      for a node of width w = 2^-k: L is the chord (its error as in g, with
+//      K = MotionLaw::axisPointAccelerationBound(zc)), N the least rotation carrying a(um) to a(u)
+//      (the solid of revolution is the same whichever rotation about a(u) poses it), whose angle
+//      is at most omega (w / 2), omega = MotionLaw::axisTurnBound, and rho at most hypot(half the
+//      part's height, its largest radius). As in (b), with M(u) in place of T(u'), a point deeper
+//      than epsilon inside T(u) lies inside M(u) grown by max(delta_k - epsilon, 0), and every
+//      point of M(u) lies within delta_k of T(u). The search runs part by part (band by band, note i); the static
 //      poses at u = 0 and 1 go into O when the root does not settle without them. A node whose
 //      delta_k is at most epsilon is a leaf: the part's sweep along its move goes into O, within
 //      epsilon of S (1) and holding every point deeper than epsilon inside T(u) for u in the node

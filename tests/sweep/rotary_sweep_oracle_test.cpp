@@ -351,6 +351,27 @@ TEST_CASE("rotary sweep vs oracle: TCP moves turning a degree or two over long t
     CHECK(linear >= 4);
 }
 
+TEST_CASE("rotary sweep vs oracle: TCP moves spinning the table under a nearly upright tool",
+          "[sweep][turning][machine]") {
+    // A within 3 degrees of upright while C turns up to 40: the tool turns about its own axis
+    // far faster than its axis turns, which only the axis's turn bounds (MotionLaw::axisTurnBound,
+    // turning.cpp notes a and h). Short travel, as on real programs.
+    std::mt19937 rng(20261129);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    int checked = 0, linear = 0;
+    for (int i = 0; i < 12; ++i) {
+        Case c = randomMove(rng, true, Vec3(3, 3, 1), 0, 40);
+        c.a0 = 3 * uni(rng), c.a1 = 3 * uni(rng);
+        const Solid s = randomSolid(rng, i % 2 == 0);
+        INFO("case " << i);
+        bool byNodes = false;
+        checked += checkCase(c, s, rng, 8, &byNodes);
+        linear += byNodes;
+    }
+    CHECK(checked > 500);
+    CHECK(linear >= 6);
+}
+
 TEST_CASE("rotary sweep vs oracle: a rotary table alone turning under a still tool", "[sweep][turning][machine]") {
     // C turns 90 degrees at A = 0 in identity kinematics: the axis stays +z while the tip runs on
     // a quarter circle of radius |(10, 5)| about the C axis (turns() holds, the axes are equal).

@@ -87,8 +87,9 @@ class TurningSweep {
 
     /// @brief The tool pose at move parameter u in [0, 1].
     ToolPose pose(double u) const;
-    /// @brief A bound on how fast any point of the tool moves: |f| + theta * (the largest distance
-    /// of a tool point from the tip), in mm per unit of u.
+    /// @brief A bound on how fast the tool moves, in mm per unit of u: the tip's speed plus the
+    /// axis's turning rate (MotionLaw::axisTurnBound) times the largest distance of a tool point
+    /// from the tip, |f| + theta * that distance on a great circle (note a).
     double speed() const { return speed_; }
     double epsilon() const { return epsilon_; }
     /// @brief A box that holds every pose of the tool.
@@ -182,6 +183,7 @@ class TurningSweep {
     Tool tool_;
     MotionLaw law_;
     double speed_ = 0.0;
+    double axisTurn_ = 0.0;  ///< MotionLaw::axisTurnBound
     double epsilon_ = kDefaultTurnTolerance;
     Box bounds_;
     /// The convex solids the search solves: the tool's convex parts, the lowest cut at its
