@@ -7,6 +7,8 @@
 //  BM_SweepBuild/<tool>/<grown>: the cost of building one convex part's sweep (MoveSweep).
 //  BM_TurningQuery/<tool>/<turn in degrees>: the tilted move with its axis turning, against the
 //    same move with the axis held (turn 0), over the same lines: the cost of a 5-axis move per line.
+//  BM_TurningShortQuery/<tool>/<turn in tenths of a degree>: the same for a move as short as a
+//    real 5-axis program's, half a millimetre.
 //  BM_Raster/<threads>/<h in um>: a 10,000-move ball-end finishing raster over a wavy surface on a
 //    40 x 40 x 10 mm stock (400 x 400 lattice at h = 0.1): moves per second, visited/changed
 //    (exact intersections per dexel that lost material) and bounded/changed (cheap bounds taken).
@@ -127,18 +129,16 @@ void BM_SweepBuild(benchmark::State& state) {
 }
 BENCHMARK(BM_SweepBuild)->ArgsProduct({{0, 1, 2, 3}, {0, 1}})->Unit(benchmark::kNanosecond);
 
-/// BM_TurningQuery/<tool>/<turn in degrees>: the tilted move of BM_SweepQuery, (0, 0, 0) to
-/// (30, 10, -3), with its axis turning by the angle in the plane of the tilt, ending at the tilted
-/// axis, swept within the default tolerance with its Hermite data. A turn of 0 is the same move
-/// with the end axis held, swept by the fixed-axis solver: the 3+2 move the turning one is compared
-/// with. Both query the same lines, those through the turning sweep's box below z = 0 (a stock's
-/// top), so ns_per_query of two rows is the cost ratio per dexel line.
-void BM_TurningQuery(benchmark::State& state) {
+/// A tilted move from `start` to `end` with its axis turning by `turn` (rad) in the plane of the
+/// tilt, ending at the tilted axis, swept within the default tolerance with its Hermite data. A
+/// turn of 0 is the same move with the end axis held, swept by the fixed-axis solver: the 3+2 move
+/// the turning one is compared with. Both query the same lines, those through the turning sweep's
+/// box below z = 0 (a stock's top), so ns_per_query of two rows is the cost ratio per dexel line.
+void turningQuery(benchmark::State& state, const Vec3& start, const Vec3& end, double turn) {
     const Tool tool = benchTool(int(state.range(0)));
-    const double turn = double(state.range(1)) * 3.14159265358979323846 / 180.0;
     Move m;
-    m.start = Vec3(0.0);
-    m.end = Vec3(30, 10, -3);
+    m.start = start;
+    m.end = end;
     m.axis = glm::normalize(Vec3(0.3, -0.2, 1.0));
     // The start axis: the end axis turned back by `turn` about the axis across the tilt.
     const Vec3 across = glm::normalize(glm::cross(Vec3(0, 0, 1), m.axis));
@@ -159,7 +159,7 @@ void BM_TurningQuery(benchmark::State& state) {
     LineHit parts[MoveSweep::kMaxParts];
     for (auto _ : state) {
         for (std::size_t i = 0; i < lines.size(); ++i) {
-            if (state.range(1) == 0) {
+            if (turn == 0.0) {
                 const std::size_t n = fixed.intersectParts(lines[i], parts);
                 hits += n > 0 && !parts[0].isEmpty();
             } else {
@@ -175,7 +175,24 @@ void BM_TurningQuery(benchmark::State& state) {
                                                         benchmark::Counter::kIsIterationInvariantRate |
                                                             benchmark::Counter::kInvert);
 }
+
+/// BM_TurningQuery/<tool>/<turn in degrees>: the tilted move of BM_SweepQuery, (0, 0, 0) to
+/// (30, 10, -3), turning (turningQuery).
+void BM_TurningQuery(benchmark::State& state) {
+    const double turn = double(state.range(1)) * 3.14159265358979323846 / 180.0;
+    turningQuery(state, Vec3(0.0), Vec3(30, 10, -3), turn);
+}
 BENCHMARK(BM_TurningQuery)->ArgsProduct({{0, 1, 2}, {0, 1, 10, 30}})->Unit(benchmark::kMillisecond);
+
+/// BM_TurningShortQuery/<tool>/<turn in tenths of a degree>: a move as short as most of a 5-axis
+/// program's, 3 mm deep, (0, 0, -3) to (0.45, 0.15, -3.05), turning (turningQuery). On the
+/// LinuxCNC boat and impeller programs the median feed move travels 0.55 and 0.6 mm and turns its
+/// axis 0.59 and 0.17 degrees.
+void BM_TurningShortQuery(benchmark::State& state) {
+    const double turn = double(state.range(1)) * 0.1 * 3.14159265358979323846 / 180.0;
+    turningQuery(state, Vec3(0, 0, -3), Vec3(0.45, 0.15, -3.05), turn);
+}
+BENCHMARK(BM_TurningShortQuery)->ArgsProduct({{0, 1, 2}, {0, 2, 6}})->Unit(benchmark::kMillisecond);
 
 /// 100 passes along x at y steps of 0.4 mm, 100 moves of 0.4 mm each, following
 /// z = 6 + 2 sin(x / 5) cos(y / 7): 10,000 feed moves (and 99 link moves).
