@@ -591,24 +591,24 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      linear move, which MoveSweep sweeps in closed form: the tool's axis point at height zc
 //      (the pivot, the middle of the part's heights) runs on the chord from c(ua) to c(ub), with
 //      c(u) = p(u) + zc a(u), and the axis is held at a(um), um the node's middle. Its pose M(u)
-//      is carried to T(u) by a rigid motion that moves a tool point at distance rho from the
-//      pivot by at most |c(u) - L(u)| + |N - I| rho <= K w^2 / 8 + omega (w / 2) rho = delta_k,
-//      for a node of width w = 2^-k: L is the chord (its error as in g, with
-//      K = MotionLaw::axisPointAccelerationBound(zc)), N the least rotation carrying a(um) to a(u)
-//      (the solid of revolution is the same whichever rotation about a(u) poses it), whose angle
-//      is at most omega (w / 2), omega = MotionLaw::axisTurnBound, and rho at most hypot(half the
-//      part's height, its largest radius). As in (b), with M(u) in place of T(u'), a point deeper
-//      than epsilon inside T(u) lies inside M(u) grown by max(delta_k - epsilon, 0), and every
-//      point of M(u) lies within delta_k of T(u). The search runs part by part (band by band, note i); the static
-//      poses at u = 0 and 1 go into O when the root does not settle without them. A node whose
-//      delta_k is at most epsilon is a leaf: the part's sweep along its move goes into O, within
-//      epsilon of S (1) and holding every point deeper than epsilon inside T(u) for u in the node
-//      (2). Any other node is settled when the part grown by delta_k - epsilon (mitredOffsetPart,
-//      a superset) swept along its move holds no point of care outside O; otherwise the static
-//      pose at its middle goes into O and both halves are searched. Every u lies in a settled
-//      node or a leaf, so (2) holds; O holds static poses and leaves' sweeps, so (1) holds. The
-//      gaps of (d) are closed between poses' ends only: a leaf's sweep already holds every point
-//      deeper than epsilon inside its node's poses.
+//      is carried to T(u) by a rigid motion that moves a tool point at distance rho from the pivot
+//      by at most |c(u) - L(u)| + |N - I| rho <= K w^2 / 8 + omega (w / 2) rho = delta_k, for a
+//      node of width w = 2^-k: L is the chord (its error as in g, with K =
+//      MotionLaw::axisPointAccelerationBound(zc)), N the least rotation carrying a(um) to a(u) (the
+//      solid of revolution is the same whichever rotation about a(u) poses it), whose angle is at
+//      most omega (w / 2), omega = MotionLaw::axisTurnBound, and rho at most hypot(half the part's
+//      height, its largest radius). As in (b), with M(u) in place of T(u'), a point deeper than
+//      epsilon inside T(u) lies inside M(u) grown by max(delta_k - epsilon, 0), and every point of
+//      M(u) lies within delta_k of T(u). The search runs part by part (band by band, note i); the
+//      static poses at u = 0 and 1 go into O when the root does not settle without them. A node
+//      whose delta_k is at most epsilon is a leaf: the part's sweep along its move goes into O,
+//      within epsilon of S (1) and holding every point deeper than epsilon inside T(u) for u in the
+//      node (2). Any other node is settled when the part grown by delta_k - epsilon
+//      (mitredOffsetPart, a superset) swept along its move holds no point of care outside O;
+//      otherwise the static pose at its middle goes into O and both halves are searched. Every u
+//      lies in a settled node or a leaf, so (2) holds; O holds static poses and leaves' sweeps, so
+//      (1) holds. The gaps of (d) are closed between poses' ends only: a leaf's sweep already holds
+//      every point deeper than epsilon inside its node's poses.
 //      Cost: the reach falls as omega rho 2^-(k+1) instead of V 2^-(k+1), so the leaves lie
 //      about log2(V / (2 omega rho)) levels higher than the closing level of (c), and near a
 //      graze of the envelope the nodes a level are fewer by about the square root of that ratio.
