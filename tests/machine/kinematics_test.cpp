@@ -154,9 +154,10 @@ TEST_CASE("machine: the acceleration bound of a tool point on the axis holds wit
 TEST_CASE("machine: the axis turn bound holds and is tight, and sees a table spin under an upright tool",
           "[machine]") {
     // With A and C linear in u, the issue's axis (sin C sin A, cos C sin A, cos A) turns at
-    // |a'|^2 = A'^2 + sin^2 A C'^2 exactly. The bound must hold at every u (checked on a fine grid,
-    // whose spacing lets the largest rate fall short by at most |a''| / 4000) and exceed the
-    // largest rate by no more than its sampling slack, (A' + C')^2 / 64 (motion.cpp).
+    // |a'|^2 = A'^2 + sin^2 A C'^2 exactly. The bound must hold at every u (checked on a grid of
+    // spacing 1 / 4000) and exceed the largest rate by no more than its sampling slack,
+    // (A' + C')^2 / 64 (motion.cpp), plus what the grid may miss of the largest rate: every u lies
+    // within 1 / 8000 of a grid point, and |a''| <= (A' + C')^2.
     const Machine ac = loadMachine("xyzac-trt");
     std::mt19937 rng(29);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
@@ -182,7 +183,7 @@ TEST_CASE("machine: the axis turn bound holds and is tight, and sees a table spi
             const double rates = std::abs(rateA) + std::abs(rateC);
             INFO("move " << i << (tcp ? " TCP" : " identity") << ": bound " << bound << ", largest rate " << largest);
             CHECK(bound >= largest);
-            CHECK(bound <= largest + rates * rates / 64.0 + 1e-12);
+            CHECK(bound <= largest + rates * rates / 64.0 + rates * rates / 8000.0 + 1e-12);
             CHECK(bound <= rates);
             // Upright, C's turn barely counts: sin A <= sin 3 degrees.
             if (upright) CHECK(bound <= std::abs(rateA) + 0.053 * std::abs(rateC) + rates * rates / 64.0);
