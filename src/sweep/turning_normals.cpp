@@ -21,6 +21,52 @@ constexpr double kRimReach = 4.0;
 /// resolution of the normals the stock keeps (PackedNormal::kMaxAngleError).
 constexpr double kRimAngle = 1e-4;
 
+/// A face of a convex part at a pose (partFaces): its distance from a point and its outward normal
+/// at the point of it nearest that point's meridian.
+struct Face {
+    double gap;
+    Vec3 n;
+};
+
+/// The faces of convex part `cp` of `tool` at pose `ps`, with their gaps to x: the bottom face
+/// (normal -a), the lateral pieces (meridianNormal) and the top face (+a), in order up the
+/// meridian; faces k and k + 1 meet at a rim. Sets x's height z above the tip, its distance rho
+/// from the axis and its unit direction `radial` across the axis (any, on the axis).
+std::vector<Face> partFaces(const Tool& tool, const ConvexPart& cp, const ToolPose& ps, const Vec3& x, double& z,
+                            double& rho, Vec3& radial) {
+    const Vec3 d = x - ps.tip;
+    z = glm::dot(d, ps.axis);
+    radial = d - z * ps.axis;
+    rho = glm::length(radial);
+    if (rho > 0.0) {
+        radial /= rho;
+    } else {  // on the axis: any direction across it
+        const Vec3 other = std::abs(ps.axis.x) < 0.9 ? Vec3(1.0, 0.0, 0.0) : Vec3(0.0, 1.0, 0.0);
+        radial = glm::normalize(glm::cross(ps.axis, other));
+    }
+    std::vector<Face> faces;
+    faces.push_back({std::abs(z - cp.z0), -ps.axis});
+    const auto& pieces = tool.pieces();
+    for (std::size_t i = cp.first; i < cp.last; ++i) {
+        const double z0 = pieceZ0(pieces[i]), z1 = pieceZ1(pieces[i]);
+        const double zc = std::clamp(z, z0, z1);
+        const double R = pieceRadius(pieces[i], zc);
+        double nr = 0.0, nz = 0.0;
+        meridianNormal(pieces[i], R, zc, nr, nz);
+        faces.push_back({std::hypot(rho - R, z - zc), nr * radial + nz * ps.axis});
+    }
+    faces.push_back({std::abs(z - cp.z1), ps.axis});
+    return faces;
+}
+
+/// The index of the face nearest the point (the first of equals).
+std::size_t nearestFace(const std::vector<Face>& faces) {
+    std::size_t nearest = 0;
+    for (std::size_t k = 1; k < faces.size(); ++k)
+        if (faces[k].gap < faces[nearest].gap) nearest = k;
+    return nearest;
+}
+
 }  // namespace
 
 // An end a linear node made lies on the surface of its band at a pose M(s) of the node's move
@@ -40,9 +86,7 @@ void TurningSweep::nodeEndNormal(const Line& line, double t, std::size_t band, s
     endNormal(line, t, node.middleU + (s - 0.5) * node.width, models_[band].part, normal, sharp);
 }
 
-// The faces of one convex part at an end point: the bottom face (normal -a), the lateral pieces
-// (meridianNormal) and the top face (+a), in order up the meridian; faces k and k + 1 meet at a
-// rim. The nearest face gives the normal; a second one within kRimReach tolerances whose normal
+// The faces of one convex part at an end point (partFaces). The nearest face gives the normal; a second one within kRimReach tolerances whose normal
 // differs puts the end on or near a rim of the pose's tool.
 //
 // The end's pose is within the search's reach of the pose that grazes there, so where the
@@ -67,35 +111,11 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
         return;
     }
     const ConvexPart& cp = parts_[part];
-    const Vec3 d = x - ps.tip;
-    const double z = glm::dot(d, ps.axis);
-    Vec3 radial = d - z * ps.axis;
-    const double rho = glm::length(radial);
-    if (rho > 0.0) {
-        radial /= rho;
-    } else {  // on the axis: any direction across it
-        const Vec3 other = std::abs(ps.axis.x) < 0.9 ? Vec3(1.0, 0.0, 0.0) : Vec3(0.0, 1.0, 0.0);
-        radial = glm::normalize(glm::cross(ps.axis, other));
-    }
-    struct Face {
-        double gap;
-        Vec3 n;
-    };
-    std::vector<Face> faces;
-    faces.push_back({std::abs(z - cp.z0), -ps.axis});
+    double z = 0.0, rho = 0.0;
+    Vec3 radial(0.0);
+    const std::vector<Face> faces = partFaces(tool_, cp, ps, x, z, rho, radial);
+    const std::size_t nearest = nearestFace(faces);
     const auto& pieces = tool_.pieces();
-    for (std::size_t i = cp.first; i < cp.last; ++i) {
-        const double z0 = pieceZ0(pieces[i]), z1 = pieceZ1(pieces[i]);
-        const double zc = std::clamp(z, z0, z1);
-        const double R = pieceRadius(pieces[i], zc);
-        double nr = 0.0, nz = 0.0;
-        meridianNormal(pieces[i], R, zc, nr, nz);
-        faces.push_back({std::hypot(rho - R, z - zc), nr * radial + nz * ps.axis});
-    }
-    faces.push_back({std::abs(z - cp.z1), ps.axis});
-    std::size_t nearest = 0;
-    for (std::size_t k = 1; k < faces.size(); ++k)
-        if (faces[k].gap < faces[nearest].gap) nearest = k;
     normal = faces[nearest].n;
     sharp = false;
     const double nearRim = kRimReach * epsilon_;
