@@ -645,6 +645,41 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      own. An end that a band's leaf makes takes the Hermite data of the whole part at the true
 //      pose where the leaf's move makes it (nodeEndNormal), so a face where the band was cut
 //      (inside the tool, met only within epsilon of its rim on the envelope) gives no normal.
+//  (j) Anchored nodes. A node of (h) that does not settle may still be settled by the faces of
+//      its end poses a and b (in O: its ancestors' middles, or u = 0 and 1), with a bound of
+//      second order in its width w. Let y be where the line leaves (enters) the part at pose e,
+//      the end of that pose's interval, and n the part's outward normal there, so that the part
+//      lies in the half-space {z : n.(z - y) <= 0}. For u in the node, T(u) is the image of the
+//      part at e under g: z -> c(u) + N (z - c(e)), with c the axis point at y's height h and N
+//      the least rotation carrying a(e) to a(u) (any rotation onto a(u) poses the same solid).
+//      So a point z deeper than epsilon inside T(u) has n_u.(z - y_u) <= -epsilon, n_u = N n,
+//      y_u = g(y). With tau = |u - e| <= w, and z = y + s d beyond y (y - s d before it), s >= 0:
+//        s |n.d| = n.(z - y) = n_u.(z - y_u) + (n - n_u).(z - y_u) + n.(y_u - y)
+//                <= -epsilon + omega tau (s + V_y tau) + n.(y_u - y),
+//      as N turns by at most omega tau (omega = MotionLaw::axisTurnBound) and |y_u - y| <= V_y tau,
+//      V_y = |f| + omega (|h| + r) bounding the speed of c and of N about it, r = y's distance
+//      from the axis. And c(u) - c(e) strays from its tangent +-tau c'(e) by at most K tau^2 / 2
+//      (K = MotionLaw::axisPointAccelerationBound(h)); (N - I) x = m x x + (1 - cos phi) k x (k x x),
+//      with m = a(e) x a(u) = sin(phi) k, which strays from +-tau a(e) x a'(e) by at most
+//      |a''| tau^2 / 2 (|a''| <= axisPointAccelerationBound(1)), and 1 - cos phi <= omega^2
+//      tau^2 / 2. So n.(y_u - y) <= +-tau n.v + (K + (|a''| + omega^2) r) tau^2 / 2, where
+//      v = c'(e) + (a x a') x (y - c(e)) differs from the law's velocity at y (MotionLaw::velocity)
+//      by a spin about the axis, which moves y across the meridian plane n lies in: n.v is the
+//      same. In all, s |n.d| <= -epsilon + tau (+-n.v + omega s) + C tau^2 with
+//      C = omega V_y + (K + (|a''| + omega^2) r) / 2, the sign + for a (u after it) and - for b.
+//      The right side is convex in tau, so largest at tau = 0 (-epsilon, below s |n.d|) or w:
+//      where |n.d| >= omega w and +-w n.v + C w^2 < epsilon, no point of the line beyond y is
+//      deeper than epsilon inside any T(u) of the node. The node is settled when its grown sweep,
+//      cut at such crossings, holds no point of care outside O. The plane passes through the
+//      end the static solve found, with the normal of the face nearest it (faceNormal), so the
+//      cut is as exact as that solve.
+//      Cost: the bound is of second order where the face is still (n.v = 0 where a pose grazes
+//      the envelope) and holds at any width where the face retreats from the crossing. So near a
+//      graze the descent stops where C w^2 reaches epsilon rather than where (h)'s reach
+//      omega rho_b w / 2 does, and a face that leads the tool to the first or last pose (its front
+//      in uncut stock at u = 1) stops it at once, where (h) walked down to a leaf. A node's
+//      crossings are found only for the side of its grown sweep that O leaves open, and each
+//      pose's once.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     const Interval reach = bound(line);
@@ -687,6 +722,22 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         // neither); the static pose at a node's middle is its whole part's too.
         std::optional<LocalLine> atStart, atEnd;
         std::size_t endsAdded = parts.size();  // the part whose end poses are in O already
+        // A static pose of the part in O at u, its interval, and per end of it (lower, upper) what
+        // note j asks of the face the line crosses there, found when first needed. The first two
+        // are the part's at u = 0 and 1, then a band's nodes' middles.
+        struct Crossing {
+            bool found = false;
+            double across = 0.0;  ///< n.d: the face's outward normal n along the line
+            double speed = 0.0;   ///< n.v, v the velocity of the tool point there
+            double bend = 0.0;    ///< C: how far the face's supporting plane strays in second order
+        };
+        struct Solved {
+            double u = 0.0;
+            ToolPose pose;
+            Interval range;
+            Crossing ends[2];
+        };
+        std::vector<Solved> solved(2);
         const auto addEnds = [&](std::size_t p) {
             if (!atStart) atStart = LocalLine::make(startPose_, line), atEnd = LocalLine::make(endPose_, line);
             const Interval first = tool_.intersectPart(parts[p], *atStart);
@@ -694,6 +745,69 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             if (!first.isEmpty()) found.add(first, 0.0, p);
             if (!last.isEmpty()) found.add(last, 1.0, p);
             endsAdded = p;
+            solved[0] = {startPhase_.u, startPose_, first, {}};
+            solved[1] = {endPhase_.u, endPose_, last, {}};
+        };
+        const auto crossing = [&](Solved& pose, std::size_t p, int upper) -> const Crossing& {
+            Crossing& c = pose.ends[upper];
+            if (c.found) return c;
+            const Vec3 y = line.at(upper ? pose.range.hi : pose.range.lo);
+            const Vec3 n = faceNormal(pose.pose, p, y);
+            const double height = glm::dot(y - pose.pose.tip, pose.pose.axis);
+            const double off = glm::length(y - pose.pose.tip - height * pose.pose.axis);
+            const double turn = axisTurn_;
+            const double pivotSpeed = law_.speedBound(0.0) + turn * std::abs(height);
+            c.found = true;
+            c.across = glm::dot(n, line.dir);
+            c.speed = glm::dot(n, law_.velocity(pose.u, y));
+            c.bend = turn * (pivotSpeed + turn * off) +
+                     0.5 * (law_.axisPointAccelerationBound(std::abs(height)) +
+                            (law_.axisPointAccelerationBound(1.0) + turn * turn) * off);
+            return c;
+        };
+        // Whether a node of width w that is not settled as a linear node has the line's points
+        // beyond its end poses' intervals (a, b) bounded by those poses' faces (note j).
+        const auto anchoredSettled = [&](std::size_t p, double w, std::uint32_t a, std::uint32_t b,
+                                         const Interval& swept) {
+            Solved* const ends[2] = {&solved[a], &solved[b]};
+            const Interval hull = ends[0]->range.hull(ends[1]->range);
+            if (hull.isEmpty()) return false;
+            // Whether the crossing at end `upper` of pose e's interval bounds the node's points on
+            // the line beyond it: the model moves on from pose a (sign 1) and back from pose b.
+            const auto bounds = [&](int e, int upper) {
+                if (ends[e]->range.isEmpty()) return false;
+                const Crossing& c = crossing(*ends[e], p, upper);
+                const double out = upper ? c.across : -c.across;
+                const double sign = e == 0 ? 1.0 : -1.0;
+                return out > 0.0 && out >= axisTurn_ * w && sign * w * c.speed + w * w * c.bend < epsilon_;
+            };
+            // Only a side whose stretch beyond both poses' intervals O leaves open needs a bound,
+            // which the nearer pose's gives best; where only the stretch between them is open,
+            // either may close it.
+            const bool loOpen = !held({swept.lo, std::min(hull.lo, swept.hi)});
+            const bool hiOpen = !held({std::max(hull.hi, swept.lo), swept.hi});
+            const bool between = !loOpen && !hiOpen;
+            Interval cut = swept;
+            bool bounded = false;
+            for (const int upper : {1, 0}) {
+                if (!(upper ? hiOpen : loOpen) && !between) continue;
+                const int nearer = upper ? (ends[0]->range.hi <= ends[1]->range.hi ? 0 : 1)
+                                         : (ends[0]->range.lo >= ends[1]->range.lo ? 0 : 1);
+                bool side = false;
+                for (const int e : {nearer, 1 - nearer}) {
+                    if (side || !bounds(e, upper)) continue;
+                    if (upper) {
+                        cut.hi = std::min(cut.hi, ends[e]->range.hi);
+                    } else {
+                        cut.lo = std::max(cut.lo, ends[e]->range.lo);
+                    }
+                    side = true;
+                }
+                if (!side && !between) return false;
+                bounded = bounded || side;
+            }
+            if (!bounded) return false;
+            return held(cut);
         };
         for (std::size_t b = 0; b < models_.size(); ++b) {
             const std::size_t p = models_[b].part;
@@ -707,29 +821,36 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                 }
             }
             const int leaf = models_[b].leafLevel();
+            solved.resize(2);
             // A node pops itself and pushes its two halves: at most one node a level and two of
-            // the deepest.
-            std::array<std::uint32_t, kMaxLinearLevel + 2> stack;
+            // the deepest. Each carries its end poses' indices into `solved`.
+            struct Node {
+                std::uint32_t heap, a, b;
+            };
+            std::array<Node, kMaxLinearLevel + 2> stack;
             std::size_t top = 0;
             std::optional<LinearNode> scratch;
-            stack[top++] = 1;
+            stack[top++] = {1, 0, 1};
             while (top > 0) {
-                const std::uint32_t heap = stack[--top];
-                const LinearNode& node = linearNode(b, heap, scratch);
+                const Node n = stack[--top];
+                const LinearNode& node = linearNode(b, n.heap, scratch);
                 const Interval swept = node.sweep.intersect(line);
-                if (heapLevel(heap) == leaf) {  // closed: the band's own sweep along the node's move
-                    if (!swept.isEmpty()) found.add(swept, node.middleU, node.middleU, b, heap);
+                if (heapLevel(n.heap) == leaf) {  // closed: the band's own sweep along the node's move
+                    if (!swept.isEmpty()) found.add(swept, node.middleU, node.middleU, b, n.heap);
                     continue;
                 }
                 if (held(swept)) continue;  // settled: the grown band's sweep is held
-                if (heap == 1 && endsAdded != p) {
+                if (n.heap == 1 && endsAdded != p) {
                     addEnds(p);
                     if (held(swept)) continue;
                 }
+                if (anchoredSettled(p, node.width, n.a, n.b, swept)) continue;
                 const Interval middle = tool_.intersectPart(parts[p], LocalLine::make(node.middle, line));
                 if (!middle.isEmpty()) found.add(middle, node.middleU, p);
-                stack[top++] = 2 * heap + 1;
-                stack[top++] = 2 * heap;
+                const std::uint32_t m = std::uint32_t(solved.size());
+                solved.push_back({node.middleU, node.middle, middle, {}});
+                stack[top++] = {2 * n.heap + 1, m, n.b};
+                stack[top++] = {2 * n.heap, n.a, m};
             }
         }
     } else {

@@ -69,6 +69,13 @@ std::size_t nearestFace(const std::vector<Face>& faces) {
 
 }  // namespace
 
+Vec3 TurningSweep::faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x) const {
+    double z = 0.0, rho = 0.0;
+    Vec3 radial(0.0);
+    const std::vector<Face> faces = partFaces(tool_, parts_[part], pose, x, z, rho, radial);
+    return faces[nearestFace(faces)].n;
+}
+
 // An end a linear node made lies on the surface of its band at a pose M(s) of the node's move
 // (MoveSweep::endPoses), which note h's rigid motion carries within epsilon of the tool at the
 // true pose u = ua + s (ub - ua). The node's own Hermite data would give the normal of its

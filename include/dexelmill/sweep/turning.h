@@ -175,6 +175,9 @@ class TurningSweep {
     const LinearNode& linearNode(std::size_t band, std::uint32_t heap, std::optional<LinearNode>& scratch) const;
     /// Node `heap` of the search of `band`, made.
     LinearNode makeNode(const LinearPart& band, std::uint32_t heap) const;
+    /// The outward normal of the face of part `part` at pose `pose` nearest the point x
+    /// (turning_normals.cpp).
+    Vec3 faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x) const;
     /// The Hermite data of an output end at line parameter t that band `band`'s leaf `heap` made
     /// (turning_normals.cpp).
     void nodeEndNormal(const Line& line, double t, std::size_t band, std::uint32_t heap, bool upper, Vec3& normal,
