@@ -216,16 +216,14 @@ constexpr int kMaxKeptLevel = 16;
 
 /// How many levels above the static search's closing level (note c) the linear nodes' leaves
 /// must lie for a move to take them. A node costs a one-part MoveSweep, about 1 us to make and
-/// 2 kB to keep, against a static pose's solve; on the short moves of real programs, whose few
-/// lines share few nodes, that pays only where the nodes are far fewer. A tool whose ball end is
-/// swept as capsules (note g) asks for one level more: both searches then run on the part above
-/// the ball alone, whose grown intervals the capsules mostly hold, so the static search settles
-/// early and costs less. Measured move by move, each move's queries timed with either search, one
-/// thread, h = 0.5 mm: on boat-xyzac (flat end) the moves 2 levels short took 5.6 s with linear
-/// nodes against 14.5 s with static poses; on the impeller (ball end) 5.0 s against 4.8 s, and
-/// the moves 3 levels short 1.2 s against 1.8 s (README, Performance, row h).
-constexpr int kLinearLevelsSaved = 2;
-constexpr int kLinearLevelsSavedBallEnd = 3;
+/// 2 kB to keep, against a static pose's solve. Before note j's anchored nodes the linear search
+/// walked down to its leaves near every graze, and paid only 2 levels up (3 with a ball end swept
+/// as capsules, README, Performance, row h). With them it stops about where C w^2 reaches
+/// epsilon, and pays wherever its leaves lie no deeper than the closing level. Cut time at
+/// h = 0.5 mm, one thread, this rule against 2 and 3 levels: boat-xyzac 1.57 s against 2.6 s,
+/// boat-xyzbc 3.0 s against 4.6 s, the impeller (ball end) 16.1 s against 16.3 s; taking linear
+/// nodes also where their leaves lie 3 or 8 levels deeper gained nothing more.
+constexpr int kLinearLevelsSaved = 0;
 
 /// The linear-node search cuts each part into bands of heights (note i) no taller than this many
 /// times the part's largest radius, and into at most kMaxBands.
@@ -452,8 +450,7 @@ std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, 
 void TurningSweep::chooseLinearNodes() {
     // Only a tip on the straight line bounds the pivot's bend (note h).
     if (!std::isfinite(law_.axisPointAccelerationBound(0.0))) return;
-    const int saved = balls_.empty() ? kLinearLevelsSaved : kLinearLevelsSavedBallEnd;
-    const int deepest = std::min(kMaxLinearLevel, closingLevel_ - saved);
+    const int deepest = std::min(kMaxLinearLevel, closingLevel_ - kLinearLevelsSaved);
     const auto& pieces = tool_.pieces();
     std::vector<LinearPart> models;
     std::vector<std::optional<LinearNode>> wholeRoots(parts_.size());
@@ -616,9 +613,8 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      (NodeCache, within the budget of every sweep alive) down to kMaxKeptLevel; deeper nodes,
 //      which few lines share, are made by each query and dropped. Making one costs far more than
 //      solving a pose, so a move takes linear nodes only when its leaves lie at least
-//      kLinearLevelsSaved levels above the closing level of (c) (kLinearLevelsSavedBallEnd with a
-//      ball end swept as capsules), and no deeper than kMaxLinearLevel; it keeps the search of
-//      (c) otherwise.
+//      kLinearLevelsSaved levels above the closing level of (c), and no deeper than
+//      kMaxLinearLevel; it keeps the search of (c) otherwise.
 //  (i) Bands. A line that meets the tool near its tip needs (h)'s bound only for the tool points
 //      near it, but rho bounds every point of the part from its one pivot: half the length of a
 //      long cutter. So each part is cut into bands of heights, each searched as (h) searches a

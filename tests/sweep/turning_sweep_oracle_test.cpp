@@ -310,9 +310,10 @@ TEST_CASE("turning sweep vs oracle: turns from 0.001 to 90 degrees", "[sweep][tu
         for (int i = 0, n = scaled(30); i < n; ++i)
             checkCase(randomCase(rng, randomMove(rng, degrees(angle), cases::uniform(rng, 0, 30))), tally, rng);
     report(tally);
-    // Both searches are tried: linear nodes on small turns, static poses on large ones.
+    // Linear nodes search these moves, large turns too (turning.cpp, kLinearLevelsSaved); the
+    // search of static poses is left to moves whose tip the machine carries, which
+    // rotary_sweep_oracle_test.cpp checks.
     CHECK(tally.linear >= tally.cases / 4);
-    CHECK(tally.cases - tally.linear >= tally.cases / 10);
 }
 
 TEST_CASE("turning sweep vs oracle: a pure rotation about the tip", "[sweep][turning]") {
