@@ -746,7 +746,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             Interval range;
             Crossing ends[2];
         };
-        std::vector<Solved> solved(2);
+        std::vector<Solved> solved;  // made by the first addEnds: most lines settle at a root
         const auto addEnds = [&](std::size_t p) {
             if (!atStart) atStart = LocalLine::make(startPose_, line), atEnd = LocalLine::make(endPose_, line);
             const Interval first = tool_.intersectPart(parts[p], *atStart);
@@ -754,8 +754,9 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             if (!first.isEmpty()) found.add(first, 0.0, p);
             if (!last.isEmpty()) found.add(last, 1.0, p);
             endsAdded = p;
-            solved[0] = {startPhase_.u, startPose_, first, {}};
-            solved[1] = {endPhase_.u, endPose_, last, {}};
+            solved.clear();
+            solved.push_back({startPhase_.u, startPose_, first, {}});
+            solved.push_back({endPhase_.u, endPose_, last, {}});
         };
         const auto crossing = [&](Solved& pose, std::size_t p, int upper) -> const Crossing& {
             Crossing& c = pose.ends[upper];
@@ -830,7 +831,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                 }
             }
             const int leaf = models_[b].leafLevel();
-            solved.resize(2);
+            if (solved.size() > 2) solved.resize(2);
             // A node pops itself and pushes its two halves: at most one node a level and two of
             // the deepest. Each carries its end poses' indices into `solved`.
             struct Node {

@@ -3,6 +3,7 @@
 // lies on a crease.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -21,21 +22,22 @@ constexpr double kRimReach = 4.0;
 /// resolution of the normals the stock keeps (PackedNormal::kMaxAngleError).
 constexpr double kRimAngle = 1e-4;
 
-/// A face of a convex part at a pose (partFaces): its distance from a point and its outward normal
-/// at the point of it nearest that point's meridian.
+/// A face of a convex part at a pose (forEachFace): its distance from a point and its outward
+/// normal at the point of it nearest that point's meridian.
 struct Face {
     double gap;
     Vec3 n;
 };
 
-/// The faces of convex part `cp` of `tool` at pose `ps`, with their gaps to x: the bottom face
-/// (normal -a), the lateral pieces (meridianNormal) and the top face (+a), in order up the
-/// meridian; faces k and k + 1 meet at a rim. Sets x's height z above the tip, its distance rho
-/// from the axis and its unit direction `radial` across the axis (any, on the axis).
-std::vector<Face> partFaces(const Tool& tool, const ConvexPart& cp, const ToolPose& ps, const Vec3& x, double& z,
-                            double& rho, Vec3& radial) {
+/// Visits the faces of convex part `cp` of `tool` at pose `ps`, with their gaps to x: the bottom
+/// face (normal -a), the lateral pieces (meridianNormal) and the top face (+a), in order up the
+/// meridian; faces k and k + 1 meet at a rim. Sets x's distance rho from the axis and its unit
+/// direction `radial` across the axis (any, on the axis).
+template <class Visit>
+void forEachFace(const Tool& tool, const ConvexPart& cp, const ToolPose& ps, const Vec3& x, double& rho, Vec3& radial,
+                 Visit&& visit) {
     const Vec3 d = x - ps.tip;
-    z = glm::dot(d, ps.axis);
+    const double z = glm::dot(d, ps.axis);
     radial = d - z * ps.axis;
     rho = glm::length(radial);
     if (rho > 0.0) {
@@ -44,8 +46,7 @@ std::vector<Face> partFaces(const Tool& tool, const ConvexPart& cp, const ToolPo
         const Vec3 other = std::abs(ps.axis.x) < 0.9 ? Vec3(1.0, 0.0, 0.0) : Vec3(0.0, 1.0, 0.0);
         radial = glm::normalize(glm::cross(ps.axis, other));
     }
-    std::vector<Face> faces;
-    faces.push_back({std::abs(z - cp.z0), -ps.axis});
+    visit(Face{std::abs(z - cp.z0), -ps.axis});
     const auto& pieces = tool.pieces();
     for (std::size_t i = cp.first; i < cp.last; ++i) {
         const double z0 = pieceZ0(pieces[i]), z1 = pieceZ1(pieces[i]);
@@ -53,27 +54,22 @@ std::vector<Face> partFaces(const Tool& tool, const ConvexPart& cp, const ToolPo
         const double R = pieceRadius(pieces[i], zc);
         double nr = 0.0, nz = 0.0;
         meridianNormal(pieces[i], R, zc, nr, nz);
-        faces.push_back({std::hypot(rho - R, z - zc), nr * radial + nz * ps.axis});
+        const double dr = rho - R, dz = z - zc;
+        visit(Face{std::sqrt(dr * dr + dz * dz), nr * radial + nz * ps.axis});
     }
-    faces.push_back({std::abs(z - cp.z1), ps.axis});
-    return faces;
-}
-
-/// The index of the face nearest the point (the first of equals).
-std::size_t nearestFace(const std::vector<Face>& faces) {
-    std::size_t nearest = 0;
-    for (std::size_t k = 1; k < faces.size(); ++k)
-        if (faces[k].gap < faces[nearest].gap) nearest = k;
-    return nearest;
+    visit(Face{std::abs(z - cp.z1), ps.axis});
 }
 
 }  // namespace
 
 Vec3 TurningSweep::faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x) const {
-    double z = 0.0, rho = 0.0;
+    double rho = 0.0;
     Vec3 radial(0.0);
-    const std::vector<Face> faces = partFaces(tool_, parts_[part], pose, x, z, rho, radial);
-    return faces[nearestFace(faces)].n;
+    Face nearest{std::numeric_limits<double>::infinity(), Vec3(0.0)};
+    forEachFace(tool_, parts_[part], pose, x, rho, radial, [&](const Face& f) {
+        if (f.gap < nearest.gap) nearest = f;
+    });
+    return nearest.n;
 }
 
 // An end a linear node made lies on the surface of its band at a pose M(s) of the node's move
@@ -93,7 +89,7 @@ void TurningSweep::nodeEndNormal(const Line& line, double t, std::size_t band, s
     endNormal(line, t, node.middleU + (s - 0.5) * node.width, models_[band].part, normal, sharp);
 }
 
-// The faces of one convex part at an end point (partFaces). The nearest face gives the normal; a second one within kRimReach tolerances whose normal
+// The faces of one convex part at an end point (forEachFace). The nearest face gives the normal; a second one within kRimReach tolerances whose normal
 // differs puts the end on or near a rim of the pose's tool.
 //
 // The end's pose is within the search's reach of the pose that grazes there, so where the
@@ -118,10 +114,13 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
         return;
     }
     const ConvexPart& cp = parts_[part];
-    double z = 0.0, rho = 0.0;
+    double rho = 0.0;
     Vec3 radial(0.0);
-    const std::vector<Face> faces = partFaces(tool_, cp, ps, x, z, rho, radial);
-    const std::size_t nearest = nearestFace(faces);
+    std::vector<Face> faces;
+    forEachFace(tool_, cp, ps, x, rho, radial, [&](const Face& f) { faces.push_back(f); });
+    std::size_t nearest = 0;
+    for (std::size_t k = 1; k < faces.size(); ++k)
+        if (faces[k].gap < faces[nearest].gap) nearest = k;
     const auto& pieces = tool_.pieces();
     normal = faces[nearest].n;
     sharp = false;
