@@ -288,13 +288,13 @@ class TurningSweep::NodeCache {
     /// The node, kept; or, when it lies deeper than kMaxKeptLevel or the sweeps alive keep their
     /// budget already, made in `scratch`.
     template <class Make>
-    const LinearNode& get(std::size_t part, std::uint32_t heap, std::optional<LinearNode>& scratch, Make&& make) {
-        if (heap >= sizes_[part]) return scratch.emplace(make());
+    const LinearNode& get(std::size_t part, std::uint32_t heap, std::unique_ptr<LinearNode>& scratch, Make&& make) {
+        if (heap >= sizes_[part]) return *(scratch = std::make_unique<LinearNode>(make()));
         std::atomic<const LinearNode*>& slot = slots_[part][heap];
         if (const LinearNode* n = slot.load(std::memory_order_acquire)) return *n;
         if (keptNodes.fetch_add(1, std::memory_order_relaxed) >= nodeBudget.load(std::memory_order_relaxed)) {
             keptNodes.fetch_sub(1, std::memory_order_relaxed);
-            return scratch.emplace(make());
+            return *(scratch = std::make_unique<LinearNode>(make()));
         }
         kept_.fetch_add(1, std::memory_order_relaxed);
         auto made = std::make_unique<const LinearNode>(make());
@@ -325,7 +325,7 @@ std::size_t TurningSweep::linearNodeBound() const {
 }
 
 const TurningSweep::LinearNode& TurningSweep::linearNode(std::size_t band, std::uint32_t heap,
-                                                          std::optional<LinearNode>& scratch) const {
+                                                          std::unique_ptr<LinearNode>& scratch) const {
     return nodes_->get(band, heap, scratch, [&] { return makeNode(models_[band], heap); });
 }
 
@@ -839,7 +839,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             };
             std::array<Node, kMaxLinearLevel + 2> stack;
             std::size_t top = 0;
-            std::optional<LinearNode> scratch;
+            std::unique_ptr<LinearNode> scratch;  // a node made for this query alone
             stack[top++] = {1, 0, 1};
             while (top > 0) {
                 const Node n = stack[--top];

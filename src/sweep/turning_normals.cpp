@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -82,7 +83,7 @@ Vec3 TurningSweep::faceNormal(const ToolPose& pose, std::size_t part, const Vec3
 // within epsilon of the part's lateral face at the band's rim.
 void TurningSweep::nodeEndNormal(const Line& line, double t, std::size_t band, std::uint32_t heap, bool upper,
                                  Vec3& normal, bool& sharp) const {
-    std::optional<LinearNode> scratch;
+    std::unique_ptr<LinearNode> scratch;  // a node made for this query alone
     const LinearNode& node = linearNode(band, heap, scratch);
     const MoveSweep::EndPoses ends = node.sweep.endPoses(line);
     const double s = upper ? ends.uHi : ends.uLo;

@@ -172,7 +172,7 @@ class TurningSweep {
     std::optional<LinearPart> linearBand(std::size_t p, double lo, double hi, int deepest) const;
     /// Node `heap` of band `band`'s search, kept or, past the nodes the sweeps may keep, made in
     /// `scratch`.
-    const LinearNode& linearNode(std::size_t band, std::uint32_t heap, std::optional<LinearNode>& scratch) const;
+    const LinearNode& linearNode(std::size_t band, std::uint32_t heap, std::unique_ptr<LinearNode>& scratch) const;
     /// Node `heap` of the search of `band`, made.
     LinearNode makeNode(const LinearPart& band, std::uint32_t heap) const;
     /// The outward normal of the face of part `part` at pose `pose` nearest the point x
