@@ -235,10 +235,10 @@ constexpr double kBandJointGap = 1e-3;
 /// A part is cut into bands only where their leaves lie at least this many levels above the whole
 /// part's.
 constexpr int kBandLevelsSaved = 2;
-/// And only where note j's anchored nodes start to settle this many levels down or deeper: below
-/// the level k where 4^-k omega |f| (the least C) reaches epsilon they settle the nodes near a
-/// graze, whatever a band's first-order reach; above it the bands' smaller reach settles nodes
-/// sooner, at the cost of a search per band. Moves as short as real programs' reach that level at
+/// And only where note j's anchored nodes settle nodes from this level down or deeper. From the
+/// level k where 4^-k omega |f| (the least C) reaches epsilon they settle the nodes near a graze,
+/// whatever a band's first-order reach; above it the bands' smaller reach settles nodes sooner, at
+/// the cost of a search per band. Moves as short as real programs' reach that level at
 /// about 3; BM_TurningQuery's 32 mm moves at 7 (1 degree) and 8 (10 degrees). Measured, ns per
 /// line, bands always against bands from this level: BM_TurningShortQuery at 0.6 degrees flat
 /// 722 against 614 and bull nose 1,575 against 1,076; BM_TurningQuery at 1 degree flat 2,618
@@ -495,7 +495,8 @@ void TurningSweep::chooseLinearNodes() {
         }
         // The whole part; with bands, made down to its own leaves if need be, as its root settles
         // every band of a line far from the part.
-        const bool banded = bands.size() + 1 == bounds.size() && bands.size() > 1 && anchorLevel >= kBandAnchorLevel;
+        const bool banded =
+            bands.size() + 1 == bounds.size() && bands.size() > 1 && anchorLevel >= kBandAnchorLevel;
         std::optional<LinearPart> whole = linearBand(p, part.z0, part.z1, banded ? kMaxLevel : deepest);
         const bool wholeFits = whole && whole->leafLevel() <= deepest;
         if (banded && (!wholeFits || whole->leafLevel() >= bandLeaf + kBandLevelsSaved)) {
@@ -651,9 +652,10 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      starting several searches per line is kept off lines far from the part by first testing
 //      the part's root whole ((h)'s node of level 0, wholeRoots_): when it settles, so does every
 //      band. A part is cut only where its bands' leaves lie kBandLevelsSaved levels above its
-//      own, and where note j's anchored nodes settle only from kBandAnchorLevel down. An end that a band's leaf makes takes the Hermite data of the whole part at the true
-//      pose where the leaf's move makes it (nodeEndNormal), so a face where the band was cut
-//      (inside the tool, met only within epsilon of its rim on the envelope) gives no normal.
+//      own, and where note j's anchored nodes settle nodes only from kBandAnchorLevel down. An
+//      end that a band's leaf makes takes the Hermite data of the whole part at the true pose
+//      where the leaf's move makes it (nodeEndNormal), so a face where the band was cut (inside
+//      the tool, met only within epsilon of its rim on the envelope) gives no normal.
 //  (j) Anchored nodes. A node of (h) that does not settle may still be settled by the faces of
 //      its end poses a and b (in O: its ancestors' middles, or u = 0 and 1), with a bound of
 //      second order in its width w. Let y be where the line leaves (enters) the part at pose e,
@@ -668,13 +670,13 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      as N turns by at most omega tau (omega = MotionLaw::axisTurnBound) and |y_u - y| <= V_y tau,
 //      V_y = |f| + omega (|h| + r) bounding the speed of c and of N about it, r = y's distance
 //      from the axis. And c(u) - c(e) strays from its tangent +-tau c'(e) by at most K tau^2 / 2
-//      (K = MotionLaw::axisPointAccelerationBound(h)); (N - I) x = m x x + (1 - cos phi) k x (k x x),
-//      with m = a(e) x a(u) = sin(phi) k, which strays from +-tau a(e) x a'(e) by at most
-//      |a''| tau^2 / 2 (|a''| <= axisPointAccelerationBound(1)), and 1 - cos phi <= omega^2
-//      tau^2 / 2. So n.(y_u - y) <= +-tau n.v + (K + (|a''| + omega^2) r) tau^2 / 2, where
-//      v = c'(e) + (a x a') x (y - c(e)) differs from the law's velocity at y (MotionLaw::velocity)
-//      by a spin about the axis, which moves y across the meridian plane n lies in: n.v is the
-//      same. In all, s |n.d| <= -epsilon + tau (+-n.v + omega s) + C tau^2 with
+//      (K = MotionLaw::axisPointAccelerationBound(|h|)); with q = y - c(e) (|q| = r),
+//      (N - I) q = m x q + (1 - cos phi) k x (k x q), where m = a(e) x a(u) = sin(phi) k strays
+//      from +-tau a(e) x a'(e) by at most |a''| tau^2 / 2 (|a''| <= axisPointAccelerationBound(1))
+//      and 1 - cos phi <= omega^2 tau^2 / 2. So n.(y_u - y) <= +-tau n.v + (K + (|a''| + omega^2)
+//      r) tau^2 / 2, where v = c'(e) + (a x a') x q differs from the law's velocity at y
+//      (MotionLaw::velocity) by a spin about the axis, which moves y across the meridian plane n
+//      lies in: n.v is the same. In all, s |n.d| <= -epsilon + tau (+-n.v + omega s) + C tau^2 with
 //      C = omega V_y + (K + (|a''| + omega^2) r) / 2, the sign + for a (u after it) and - for b.
 //      The right side is convex in tau, so largest at tau = 0 (-epsilon, below s |n.d|) or w:
 //      where |n.d| >= omega w and +-w n.v + C w^2 < epsilon, no point of the line beyond y is

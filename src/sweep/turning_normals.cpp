@@ -90,8 +90,9 @@ void TurningSweep::nodeEndNormal(const Line& line, double t, std::size_t band, s
     endNormal(line, t, node.middleU + (s - 0.5) * node.width, models_[band].part, normal, sharp);
 }
 
-// The faces of one convex part at an end point (forEachFace). The nearest face gives the normal; a second one within kRimReach tolerances whose normal
-// differs puts the end on or near a rim of the pose's tool.
+// The faces of one convex part at an end point (forEachFace). The nearest face gives the normal;
+// a second one within kRimReach tolerances whose normal differs puts the end on or near a rim of
+// the pose's tool.
 //
 // The end's pose is within the search's reach of the pose that grazes there, so where the
 // envelope is swept by a rim, the end lies on a face of its pose near that rim. Near means within
