@@ -338,6 +338,21 @@ TEST_CASE("turning sweep vs oracle: short moves turning a little, as real progra
     CHECK(tally.linear >= tally.cases / 2);
 }
 
+TEST_CASE("turning sweep vs oracle: tolerances of 1e-5 and 1e-6 mm", "[sweep][turning]") {
+    // At a fine tolerance the linear nodes' leaves lie deep (level 23 for a flat D10 turning 30
+    // degrees at 1e-6 mm), but the search near a graze stops where note j's bound meets the
+    // tolerance (turning.cpp), about half as deep.
+    std::mt19937_64 rng(20261202);
+    Tally tally;
+    for (int i = 0, n = scaled(150); i < n; ++i) {
+        Case c = randomCase(rng, randomMove(rng, degrees(cases::uniform(rng, 0.1, 30)), cases::uniform(rng, 0, 40)));
+        c.epsilon = rng() % 2 ? 1e-5 : kMinTurnTolerance;
+        checkCase(c, tally, rng);
+    }
+    report(tally);
+    CHECK(tally.linear >= tally.cases / 2);
+}
+
 TEST_CASE("turning sweep vs oracle: the axis turning through a lattice direction", "[sweep][turning]") {
     std::mt19937_64 rng(20261127);
     Tally tally;

@@ -32,8 +32,9 @@ constexpr double kDefaultTurnTolerance = 1e-4;
 
 /// @brief The finest tolerance (mm) a turning move's sweep is asked for. The stock keeps its
 /// dexel ends as floats (stock/dexel.h), 8e-6 mm apart at 100 mm from the lattice origin, so a
-/// finer answer could not be kept; and the search's cost grows about as epsilon^-1/2 (a one-move
-/// job: 6 s at 1e-4 mm, 53 s at 1e-6, hours at 1e-9).
+/// finer answer could not be kept. Where the search takes linear nodes (turning.cpp, notes h and
+/// j) a finer tolerance costs a few more levels of it (a one-move job: 0.8 s at 1e-4 mm, 1.3 s at
+/// 1e-6); the search of static poses grows about as epsilon^-1/2 (43 s at 1e-6).
 constexpr double kMinTurnTolerance = 1e-6;
 
 /// @brief How many linear nodes (turning.cpp, note h) the turning sweeps alive at once keep, by
