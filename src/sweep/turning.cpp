@@ -688,6 +688,11 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      cut at such crossings, holds no point of care outside O. The plane passes through the
 //      end the static solve found, with the normal of the face nearest it (faceNormal), so the
 //      cut is as exact as that solve.
+//      The bound is on depth inside the one part. That is what guarantee 2 asks of a tool of one
+//      convex part, and of the part above a ball end's ball (g); a tool of several parts may hold
+//      a point deeper than epsilon near a joint that is as deep in none of them ((b) and (h) give
+//      such a point to a part it lies near), so the anchored test is taken only where the
+//      search has one part.
 //      Cost: the bound is of second order where the face is still (n.v = 0 where a pose grazes
 //      the envelope) and holds at any width where the face retreats from the crossing. So near a
 //      graze the descent stops where C w^2 reaches epsilon rather than where (h)'s reach
@@ -860,7 +865,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                     addEnds(p);
                     if (held(swept)) continue;
                 }
-                if (anchoredSettled(p, node.width, n.a, n.b, swept)) continue;
+                if (parts.size() == 1 && anchoredSettled(p, node.width, n.a, n.b, swept)) continue;
                 const Interval middle = tool_.intersectPart(parts[p], LocalLine::make(node.middle, line));
                 if (!middle.isEmpty()) found.add(middle, node.middleU, p);
                 const std::uint32_t m = std::uint32_t(solved.size());

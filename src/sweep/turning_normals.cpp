@@ -23,8 +23,9 @@ constexpr double kRimReach = 4.0;
 /// resolution of the normals the stock keeps (PackedNormal::kMaxAngleError).
 constexpr double kRimAngle = 1e-4;
 
-/// A face of a convex part at a pose (forEachFace): its distance from a point and its outward
-/// normal at the point of it nearest that point's meridian.
+/// A face of a convex part at a pose (forEachFace): its distance from a point (to the end faces,
+/// the disks; to a lateral piece, to its point at the same height, or its nearer end) and its
+/// outward normal there.
 struct Face {
     double gap;
     Vec3 n;
@@ -47,8 +48,13 @@ void forEachFace(const Tool& tool, const ConvexPart& cp, const ToolPose& ps, con
         const Vec3 other = std::abs(ps.axis.x) < 0.9 ? Vec3(1.0, 0.0, 0.0) : Vec3(0.0, 1.0, 0.0);
         radial = glm::normalize(glm::cross(ps.axis, other));
     }
-    visit(Face{std::abs(z - cp.z0), -ps.axis});
     const auto& pieces = tool.pieces();
+    // The distance to the end face at height ze, a disk of radius re.
+    const auto disk = [&](double ze, double re) {
+        const double dr = std::max(rho - re, 0.0), dz = z - ze;
+        return std::sqrt(dr * dr + dz * dz);
+    };
+    visit(Face{disk(cp.z0, pieceRadius(pieces[cp.first], cp.z0)), -ps.axis});
     for (std::size_t i = cp.first; i < cp.last; ++i) {
         const double z0 = pieceZ0(pieces[i]), z1 = pieceZ1(pieces[i]);
         const double zc = std::clamp(z, z0, z1);
@@ -58,7 +64,7 @@ void forEachFace(const Tool& tool, const ConvexPart& cp, const ToolPose& ps, con
         const double dr = rho - R, dz = z - zc;
         visit(Face{std::sqrt(dr * dr + dz * dz), nr * radial + nz * ps.axis});
     }
-    visit(Face{std::abs(z - cp.z1), ps.axis});
+    visit(Face{disk(cp.z1, pieceRadius(pieces[cp.last - 1], cp.z1)), ps.axis});
 }
 
 }  // namespace
