@@ -769,6 +769,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             solved.push_back({startPhase_.u, startPose_, first, {}});
             solved.push_back({endPhase_.u, endPose_, last, {}});
         };
+        const double tipSpeed = law_.speedBound(0.0), axisBend = law_.axisPointAccelerationBound(1.0);
         const auto crossing = [&](Solved& pose, std::size_t p, int upper) -> const Crossing& {
             Crossing& c = pose.ends[upper];
             if (c.found) return c;
@@ -777,13 +778,12 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             const double height = glm::dot(y - pose.pose.tip, pose.pose.axis);
             const double off = glm::length(y - pose.pose.tip - height * pose.pose.axis);
             const double turn = axisTurn_;
-            const double pivotSpeed = law_.speedBound(0.0) + turn * std::abs(height);
+            const double pivotSpeed = tipSpeed + turn * std::abs(height);
             c.found = true;
             c.across = glm::dot(n, line.dir);
             c.speed = glm::dot(n, law_.velocity(pose.u, y));
             c.bend = turn * (pivotSpeed + turn * off) +
-                     0.5 * (law_.axisPointAccelerationBound(std::abs(height)) +
-                            (law_.axisPointAccelerationBound(1.0) + turn * turn) * off);
+                     0.5 * (law_.axisPointAccelerationBound(std::abs(height)) + (axisBend + turn * turn) * off);
             return c;
         };
         // Whether a node of width w that is not settled as a linear node has the line's points
