@@ -9,6 +9,8 @@
 #include <memory>
 #include <optional>
 
+#include <boost/container/small_vector.hpp>
+
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
 #include "dexelmill/tool/offset.h"
@@ -91,6 +93,11 @@ struct Piece {
     std::uint32_t nodeLo = 0, nodeHi = 0;
 };
 
+/// A query's short lists, kept in place: most lines meet a tool in a few intervals and settle
+/// with a few poses, and a heap allocation per list cost a tenth of a short move's query.
+template <class T, std::size_t N = 8>
+using ShortList = boost::container::small_vector<T, N>;
+
 /// The union of static-pose intervals found so far: sorted, disjoint.
 class Union {
   public:
@@ -118,10 +125,10 @@ class Union {
                                    [](const Piece& q, double v) { return q.range.hi < v; });
         return it != pieces_.end() && it->range.lo <= lo && hi <= it->range.hi;
     }
-    const std::vector<Piece>& pieces() const { return pieces_; }
+    const ShortList<Piece>& pieces() const { return pieces_; }
 
   private:
-    std::vector<Piece> pieces_;
+    ShortList<Piece> pieces_;
 };
 
 }  // namespace
@@ -395,6 +402,8 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     bounds_ = turningMoveBox(move, tool.totalLength(), tool.maxRadius()).padded(kBoxSlack);
     // Every tool point lies within hypot(total length, max radius) of the tip (note a).
     axisTurn_ = law_.axisTurnBound();
+    tipSpeed_ = law_.speedBound(0.0);
+    axisBend_ = law_.axisPointAccelerationBound(1.0);
     const double reach = std::hypot(tool.totalLength(), tool.maxRadius());
     speed_ = std::min(law_.speedBound(reach), law_.speedBound(0.0) + axisTurn_ * reach);
     // A ball end at the bottom (note g): chords enough that w^2 / 8 |c''| <= epsilon / 2 for
@@ -757,7 +766,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             Interval range;
             Crossing ends[2];
         };
-        std::vector<Solved> solved;  // made by the first addEnds: most lines settle at a root
+        ShortList<Solved, 16> solved;  // made by the first addEnds: most lines settle at a root
         const auto addEnds = [&](std::size_t p) {
             if (!atStart) atStart = LocalLine::make(startPose_, line), atEnd = LocalLine::make(endPose_, line);
             const Interval first = tool_.intersectPart(parts[p], *atStart);
@@ -769,7 +778,6 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             solved.push_back({startPhase_.u, startPose_, first, {}});
             solved.push_back({endPhase_.u, endPose_, last, {}});
         };
-        const double tipSpeed = law_.speedBound(0.0), axisBend = law_.axisPointAccelerationBound(1.0);
         const auto crossing = [&](Solved& pose, std::size_t p, int upper) -> const Crossing& {
             Crossing& c = pose.ends[upper];
             if (c.found) return c;
@@ -778,12 +786,12 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             const double height = glm::dot(y - pose.pose.tip, pose.pose.axis);
             const double off = glm::length(y - pose.pose.tip - height * pose.pose.axis);
             const double turn = axisTurn_;
-            const double pivotSpeed = tipSpeed + turn * std::abs(height);
+            const double pivotSpeed = tipSpeed_ + turn * std::abs(height);
             c.found = true;
             c.across = glm::dot(n, line.dir);
             c.speed = glm::dot(n, law_.velocity(pose.u, y));
             c.bend = turn * (pivotSpeed + turn * off) +
-                     0.5 * (law_.axisPointAccelerationBound(std::abs(height)) + (axisBend + turn * turn) * off);
+                     0.5 * (law_.axisPointAccelerationBound(std::abs(height)) + (axisBend_ + turn * turn) * off);
             return c;
         };
         // Whether a node of width w that is not settled as a linear node has the line's points
@@ -946,7 +954,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
     // Close the gaps that lie within epsilon of the poses on both sides (d): where the line runs
     // nearly tangent to the envelope, consecutive poses' intervals leave slivers of 1e-7 mm that
     // the continuous motion sweeps, and that a stock must not keep.
-    std::vector<Piece> pieces;
+    ShortList<Piece> pieces;
     for (const Piece& p : found.pieces()) {
         if (!pieces.empty() && pieces.back().nodeHi == 0 && p.nodeLo == 0) {
             Piece& last = pieces.back();

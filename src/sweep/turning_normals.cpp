@@ -8,6 +8,8 @@
 #include <optional>
 #include <vector>
 
+#include <boost/container/small_vector.hpp>
+
 #include "dexelmill/geometry/tolerance.h"
 #include "dexelmill/sweep/turning.h"
 
@@ -112,7 +114,8 @@ void TurningSweep::nodeEndNormal(const Line& line, double t, std::size_t band, s
 // the rim, so there gamma is small and either normal serves.
 void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t part, Vec3& normal,
                              bool& sharp) const {
-    const ToolPose ps = pose(u);
+    // The first and last poses are kept: most ends are theirs on a short move.
+    const ToolPose ps = u == startPhase_.u ? startPose_ : u == endPhase_.u ? endPose_ : pose(u);
     const Vec3 x = line.at(t);
     if (part >= parts_.size()) {  // a ball: the sphere about its centre at that pose
         const Vec3 d = x - (ps.tip + balls_[part - parts_.size()].zc * ps.axis);
@@ -124,7 +127,7 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     const ConvexPart& cp = parts_[part];
     double rho = 0.0;
     Vec3 radial(0.0);
-    std::vector<Face> faces;
+    boost::container::small_vector<Face, 8> faces;
     forEachFace(tool_, cp, ps, x, rho, radial, [&](const Face& f) { faces.push_back(f); });
     std::size_t nearest = 0;
     for (std::size_t k = 1; k < faces.size(); ++k)

@@ -188,6 +188,8 @@ class TurningSweep {
     MotionLaw law_;
     double speed_ = 0.0;
     double axisTurn_ = 0.0;  ///< MotionLaw::axisTurnBound
+    double tipSpeed_ = 0.0;  ///< MotionLaw::speedBound(0): the tip's
+    double axisBend_ = 0.0;  ///< MotionLaw::axisPointAccelerationBound(1): |a''|
     double epsilon_ = kDefaultTurnTolerance;
     Box bounds_;
     /// The convex solids the search solves: the tool's convex parts, the lowest cut at its
