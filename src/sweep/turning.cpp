@@ -257,6 +257,11 @@ constexpr int kBandLevelsSaved = 2;
 /// against 15.0 s.
 constexpr int kBandAnchorLevel = 5;
 
+/// Most regula falsi steps note k takes towards the pose where a line passes through a rim, and
+/// how near the rim's radius (mm) the line's crossing of its plane must come to stop sooner.
+constexpr int kCornerSteps = 12;
+constexpr double kCornerGap = 1e-9;
+
 /// The linear nodes kept by every sweep alive, and how many they may keep.
 std::atomic<std::size_t> keptNodes{0};
 std::atomic<std::size_t> nodeBudget{kDefaultLinearNodeBudget};
@@ -709,6 +714,28 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      in uncut stock at u = 1) stops it at once, where (h) walked down to a leaf. A node's
 //      crossings are found only for the side of its grown sweep that O leaves open, and each
 //      pose's once.
+//  (k) Corners. Where the line's end on one side is made by a rim of the part (two faces meeting
+//      at an angle, such as a flat end's bottom edge), the end stops growing at the pose where
+//      the line passes through the rim, with a kink: (j) settles the nodes around that pose only
+//      where an anchor lies within epsilon / |n.v| of it, about log2(|n.v| / epsilon) levels
+//      down. So where (j) bounds neither side and the crossings at the node's two ends lie on
+//      two faces that meet at a rim (faceNormal's indices k and k + 1, Rim), that pose is found:
+//      g(u), how far outside the rim's radius the line crosses the rim's plane at pose u, has
+//      opposite signs at the ends, and regula falsi (Illinois) brings it within kCornerGap in at
+//      most kCornerSteps steps. The pose u_c there is solved and goes into O. Let y be its end
+//      on that side and r the rim's point nearest y, gap = |y - r|. Each face's plane through r,
+//      normal n_f, holds the part, so (j)'s argument holds with r in place of y: for z = y + s d
+//      beyond y, s |n.d| <= n.(z - r) + gap and |z - r| <= s + gap, so
+//        s (|n.d| - omega tau) <= -epsilon + gap (1 + omega tau) +- tau n_f.v + C tau^2,
+//      with v the velocity of the tool point at r and C (j)'s bound at r's height and radius.
+//      The right side is convex in tau: where it is negative at tau = 0 (gap < epsilon) and at
+//      tau = w, and |n_f.d| >= omega w, no point beyond y is deeper than epsilon in any T(u)
+//      with |u - u_c| <= w on that side of u_c. The node is settled on that side when one face
+//      does so back to its start (the sign -) and one, the same or the other, on to its end
+//      (+), and its grown sweep cut at y is held.
+//      Cost: past the kink each face's normal speed keeps its sign, so each bounds a wide node
+//      at first order; a z-line meeting a flat end's bottom rim settles at the node whose end
+//      poses straddle the kink, a few regula falsi steps of a pose and a few dot products each.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     const Interval reach = bound(line);
@@ -759,6 +786,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             double across = 0.0;  ///< n.d: the face's outward normal n along the line
             double speed = 0.0;   ///< n.v, v the velocity of the tool point there
             double bend = 0.0;    ///< C: how far the face's supporting plane strays in second order
+            int face = 0;         ///< the face's index up the meridian (faceNormal)
         };
         struct Solved {
             double u = 0.0;
@@ -778,21 +806,87 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             solved.push_back({startPhase_.u, startPose_, first, {}});
             solved.push_back({endPhase_.u, endPose_, last, {}});
         };
+        // Note j's C for a tool point at `height` above the tip and `off` from the axis.
+        const auto bendAt = [&](double height, double off) {
+            const double turn = axisTurn_;
+            const double pivotSpeed = tipSpeed_ + turn * std::abs(height);
+            return turn * (pivotSpeed + turn * off) +
+                   0.5 * (law_.axisPointAccelerationBound(std::abs(height)) + (axisBend_ + turn * turn) * off);
+        };
         const auto crossing = [&](Solved& pose, std::size_t p, int upper) -> const Crossing& {
             Crossing& c = pose.ends[upper];
             if (c.found) return c;
             const Vec3 y = line.at(upper ? pose.range.hi : pose.range.lo);
-            const Vec3 n = faceNormal(pose.pose, p, y);
+            const Vec3 n = faceNormal(pose.pose, p, y, &c.face);
             const double height = glm::dot(y - pose.pose.tip, pose.pose.axis);
             const double off = glm::length(y - pose.pose.tip - height * pose.pose.axis);
-            const double turn = axisTurn_;
-            const double pivotSpeed = tipSpeed_ + turn * std::abs(height);
             c.found = true;
             c.across = glm::dot(n, line.dir);
             c.speed = glm::dot(n, law_.velocity(pose.u, y));
-            c.bend = turn * (pivotSpeed + turn * off) +
-                     0.5 * (law_.axisPointAccelerationBound(std::abs(height)) + (axisBend_ + turn * turn) * off);
+            c.bend = bendAt(height, off);
             return c;
+        };
+        // Whether, where the line's crossings at poses a and b lie on two faces that meet at a
+        // rim, the pose between them where the line passes through that rim bounds the points
+        // beyond its interval over the whole node (note k); the pose goes into O.
+        const auto corner = [&](std::size_t p, int upper, Solved& a, Solved& b, double& end) {
+            if (a.range.isEmpty() || b.range.isEmpty()) return false;
+            const int fa = crossing(a, p, upper).face, fb = crossing(b, p, upper).face;
+            if (std::abs(fa - fb) != 1) return false;
+            const std::optional<Rim> r = rim(p, std::min(fa, fb));
+            if (!r) return false;
+            // g(u): how far outside the rim's radius the line crosses the rim's plane at pose u.
+            const auto g = [&](double u) {
+                const ToolPose ps = law_.pose(u);
+                const double along = glm::dot(ps.axis, line.dir);
+                const double t = (r->z - glm::dot(ps.axis, line.origin - ps.tip)) / along;
+                return glm::length(line.at(t) - ps.tip - r->z * ps.axis) - r->radius;
+            };
+            double ua = a.u, ub = b.u, ga = g(ua), gb = g(ub);
+            if (!std::isfinite(ga) || !std::isfinite(gb) || (ga > 0.0) == (gb > 0.0)) return false;
+            double u = ua;
+            int kept = 0;  // which end the last step kept (Illinois: its value is halved)
+            for (int step = 0; step < kCornerSteps; ++step) {
+                u = ua + (ub - ua) * ga / (ga - gb);
+                const double gu = g(u);
+                if (!std::isfinite(gu) || std::abs(gu) <= kCornerGap) break;
+                if ((gu > 0.0) == (ga > 0.0)) {
+                    ua = u, ga = gu;
+                    if (kept == 1) gb *= 0.5;
+                    kept = 1;
+                } else {
+                    ub = u, gb = gu;
+                    if (kept == -1) ga *= 0.5;
+                    kept = -1;
+                }
+            }
+            const ToolPose ps = law_.pose(u);
+            const Interval range = tool_.intersectPart(parts[p], LocalLine::make(ps, line));
+            if (range.isEmpty()) return false;
+            found.add(range, u, p);
+            // The end, and the rim's point nearest it: both faces' planes through that point hold
+            // the part, and the end lies `gap` from it.
+            const Vec3 y = line.at(upper ? range.hi : range.lo);
+            const Vec3 offAxis = y - ps.tip - glm::dot(y - ps.tip, ps.axis) * ps.axis;
+            const double rho = glm::length(offAxis);
+            if (!(rho > 0.0)) return false;
+            const Vec3 radial = offAxis / rho, point = ps.tip + r->z * ps.axis + r->radius * radial;
+            const double gap = glm::length(y - point), bend = bendAt(r->z, r->radius);
+            const Vec3 velocity = law_.velocity(u, point);
+            // Back over [a.u, u] (sign -1) and on over [u, b.u] (sign 1), each by either face.
+            for (const double sign : {-1.0, 1.0}) {
+                const double w = sign < 0.0 ? u - a.u : b.u - u;
+                bool held = false;
+                for (int f = 0; f < 2 && !held; ++f) {
+                    const Vec3 n = r->across[f] * radial + r->along[f] * ps.axis;
+                    const double out = upper ? glm::dot(n, line.dir) : -glm::dot(n, line.dir);
+                    held = out > 0.0 && out >= axisTurn_ * w && gap < epsilon_ &&
+                           sign * w * glm::dot(n, velocity) + w * w * bend + gap * (1.0 + axisTurn_ * w) < epsilon_;
+                }
+                if (!held) return false;
+            }
+            end = upper ? range.hi : range.lo;
+            return true;
         };
         // Whether a node of width w that is not settled as a linear node has the line's points
         // beyond its end poses' intervals (a, b) bounded by those poses' faces (note j).
@@ -829,6 +923,15 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                         cut.hi = std::min(cut.hi, ends[e]->range.hi);
                     } else {
                         cut.lo = std::max(cut.lo, ends[e]->range.lo);
+                    }
+                    side = true;
+                }
+                double end = 0.0;
+                if (!side && !between && corner(p, upper, *ends[0], *ends[1], end)) {
+                    if (upper) {
+                        cut.hi = std::min(cut.hi, end);
+                    } else {
+                        cut.lo = std::max(cut.lo, end);
                     }
                     side = true;
                 }

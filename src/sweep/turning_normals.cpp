@@ -71,14 +71,43 @@ void forEachFace(const Tool& tool, const ConvexPart& cp, const ToolPose& ps, con
 
 }  // namespace
 
-Vec3 TurningSweep::faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x) const {
+Vec3 TurningSweep::faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x, int* face) const {
     double rho = 0.0;
     Vec3 radial(0.0);
     Face nearest{std::numeric_limits<double>::infinity(), Vec3(0.0)};
+    int k = 0;
     forEachFace(tool_, parts_[part], pose, x, rho, radial, [&](const Face& f) {
-        if (f.gap < nearest.gap) nearest = f;
+        if (f.gap < nearest.gap) {
+            nearest = f;
+            if (face) *face = k;
+        }
+        ++k;
     });
     return nearest.n;
+}
+
+std::optional<TurningSweep::Rim> TurningSweep::rim(std::size_t part, int k) const {
+    const ConvexPart& cp = parts_[part];
+    const auto& pieces = tool_.pieces();
+    const int lateral = int(cp.last - cp.first);
+    if (k < 0 || k > lateral) return std::nullopt;
+    // The piece whose end the rim is: the first piece's bottom, else the top of the one below.
+    const ProfilePiece& end = pieces[cp.first + std::size_t(k == 0 ? 0 : k - 1)];
+    Rim r;
+    r.z = k == 0 ? cp.z0 : pieceZ1(end);
+    r.radius = pieceRadius(end, r.z);
+    if (!(r.radius > 0.0)) return std::nullopt;
+    for (const int side : {0, 1}) {
+        const int f = k + side;  // the face below the rim, then the one above
+        if (f == 0 || f == lateral + 1) {
+            r.across[side] = 0.0;
+            r.along[side] = f == 0 ? -1.0 : 1.0;
+        } else {
+            meridianNormal(pieces[cp.first + std::size_t(f - 1)], r.radius, r.z, r.across[side], r.along[side]);
+        }
+    }
+    if (r.across[0] * r.across[1] + r.along[0] * r.along[1] >= std::cos(kRimAngle)) return std::nullopt;
+    return r;
 }
 
 // An end a linear node made lies on the surface of its band at a pose M(s) of the node's move

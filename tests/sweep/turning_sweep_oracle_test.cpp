@@ -353,6 +353,31 @@ TEST_CASE("turning sweep vs oracle: tolerances of 1e-5 and 1e-6 mm", "[sweep][tu
     CHECK(tally.linear >= tally.cases / 2);
 }
 
+TEST_CASE("turning sweep vs oracle: dexel lines through a rim, where the line's end may stop at a kink",
+          "[sweep][turning]") {
+    // A lattice line through a point on a part's bottom or top rim at some pose, or within
+    // 1e-6 to 0.1 mm of it, meets the envelope near where that rim sweeps it: where the rim makes
+    // the line's end, the search looks for the pose at which the line passes through the rim
+    // (turning.cpp, note k).
+    std::mt19937_64 rng(20261203);
+    Tally tally;
+    for (int i = 0, n = scaled(300); i < n; ++i) {
+        const double angle = degrees(std::pow(10.0, cases::uniform(rng, -1.5, 1.5)));
+        Case c = randomCase(rng, randomMove(rng, angle, cases::uniform(rng, 0.05, 40.0)), true);
+        const SweepOracle o(c.model->parts, c.move);
+        Vec3 tip, axis;
+        o.pose(cases::uniform(rng, 0, 1), tip, axis);
+        const oracle::Part& part = c.model->parts[rng() % c.model->parts.size()];
+        const double z = rng() % 2 ? part.za : part.zb;
+        const double near = (rng() % 2 ? 1.0 : -1.0) * std::pow(10.0, cases::uniform(rng, -6, -1));
+        const Vec3 point = tip + z * axis + (part.radius(z) + near) * cases::randomPerpendicular(rng, axis);
+        c.line = Line{point - cases::uniform(rng, -30, 30) * c.line.dir, c.line.dir};
+        checkCase(c, tally, rng);
+    }
+    report(tally);
+    CHECK(tally.linear >= tally.cases / 2);
+}
+
 TEST_CASE("turning sweep vs oracle: the axis turning through a lattice direction", "[sweep][turning]") {
     std::mt19937_64 rng(20261127);
     Tally tally;

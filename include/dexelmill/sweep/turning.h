@@ -177,8 +177,18 @@ class TurningSweep {
     /// Node `heap` of the search of `band`, made.
     LinearNode makeNode(const LinearPart& band, std::uint32_t heap) const;
     /// The outward normal of the face of part `part` at pose `pose` nearest the point x
-    /// (turning_normals.cpp).
-    Vec3 faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x) const;
+    /// (turning_normals.cpp); `face`, when given, gets that face's index up the meridian (0 the
+    /// bottom face, then the lateral pieces, then the top face).
+    Vec3 faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x, int* face = nullptr) const;
+    /// Where faces k and k + 1 of a part meet at an angle: the rim's height and radius, and each
+    /// face's outward normal there in the meridian plane, (across the axis, along it).
+    struct Rim {
+        double z = 0.0, radius = 0.0;
+        double across[2] = {0.0, 0.0}, along[2] = {0.0, 0.0};
+    };
+    /// The rim between faces k and k + 1 of part `part` (faceNormal's order); none where they
+    /// meet smoothly, or on the axis (turning_normals.cpp).
+    std::optional<Rim> rim(std::size_t part, int k) const;
     /// The Hermite data of an output end at line parameter t that band `band`'s leaf `heap` made
     /// (turning_normals.cpp).
     void nodeEndNormal(const Line& line, double t, std::size_t band, std::uint32_t heap, bool upper, Vec3& normal,
