@@ -262,6 +262,9 @@ constexpr int kBandAnchorLevel = 5;
 constexpr int kCornerSteps = 12;
 constexpr double kCornerGap = 1e-9;
 
+/// Most regula falsi steps note l takes towards the pose where a line's end stops growing.
+constexpr int kGrazeSteps = 4;
+
 /// The linear nodes kept by every sweep alive, and how many they may keep.
 std::atomic<std::size_t> keptNodes{0};
 std::atomic<std::size_t> nodeBudget{kDefaultLinearNodeBudget};
@@ -736,6 +739,19 @@ Interval TurningSweep::bound(const Line& line) const { return lineInBox(line, bo
 //      Cost: past the kink each face's normal speed keeps its sign, so each bounds a wide node
 //      at first order; a z-line meeting a flat end's bottom rim settles at the node whose end
 //      poses straddle the kink, a few regula falsi steps of a pose and a few dot products each.
+//  (l) Grazes. Where the end on one side grows at pose a (n.v > 0 at its crossing, in (j)'s
+//      sense) and shrinks at b (n.v < 0), it stops growing at a pose between them. On a curved
+//      face the end's curvature in u is large (about |f|^2 / rho on a torus of radius rho), so
+//      (j) settles the nodes around that pose only where an anchor lies within about
+//      sqrt(epsilon / curvature) of it: level 10 for a bull nose on BM_TurningQuery's 32 mm move.
+//      So where (j) bounds neither side, and the node is narrow enough that (j)'s bound from a
+//      pose in its middle could hold (C w^2 < 4 epsilon, C the larger of the two crossings'),
+//      regula falsi (Illinois) on n.v, each step a solved pose that goes into O, looks for that
+//      pose in at most kGrazeSteps steps. A pose u_g whose crossing meets (j)'s condition back
+//      to a (width u_g - a, sign -) and on to b (width b - u_g, sign +), with |n.d| at least
+//      omega times the larger width, bounds the points beyond its end over the whole node by
+//      (j)'s argument, and the node is settled on that side. On BM_TurningQuery's bull nose the
+//      first level narrow enough settles so, with two steps.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     const Interval reach = bound(line);
@@ -829,6 +845,45 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         // Whether, where the line's crossings at poses a and b lie on two faces that meet at a
         // rim, the pose between them where the line passes through that rim bounds the points
         // beyond its interval over the whole node (note k); the pose goes into O.
+        // Whether, where the line's end on that side grows at pose a and shrinks at pose b, the
+        // pose between them where it stops growing bounds the points beyond its interval over
+        // the whole node (note l); the poses tried go into O.
+        const auto graze = [&](std::size_t p, int upper, Solved& a, Solved& b, double& end) {
+            if (a.range.isEmpty() || b.range.isEmpty()) return false;
+            const Crossing& ca = crossing(a, p, upper);
+            const Crossing& cb = crossing(b, p, upper);
+            if (!(ca.speed > 0.0 && cb.speed < 0.0)) return false;
+            // Only where (j)'s bound from a pose in the node's middle, C (w / 2)^2, would hold.
+            const double width = b.u - a.u;
+            if (!(std::max(ca.bend, cb.bend) * width * width < 4.0 * epsilon_)) return false;
+            double ua = a.u, ub = b.u, fa = ca.speed, fb = cb.speed;
+            int kept = 0;  // which end the last step kept (Illinois: the other's value is halved)
+            for (int step = 0; step < kGrazeSteps; ++step) {
+                const double u = ua + (ub - ua) * fa / (fa - fb);
+                Solved g{u, law_.pose(u), Interval::empty(), {}};
+                g.range = tool_.intersectPart(parts[p], LocalLine::make(g.pose, line));
+                if (g.range.isEmpty()) return false;
+                found.add(g.range, u, p);
+                const Crossing& c = crossing(g, p, upper);
+                const double out = upper ? c.across : -c.across;
+                const double back = u - a.u, on = b.u - u;
+                if (out > 0.0 && out >= axisTurn_ * std::max(back, on) &&
+                    -back * c.speed + back * back * c.bend < epsilon_ && on * c.speed + on * on * c.bend < epsilon_) {
+                    end = upper ? g.range.hi : g.range.lo;
+                    return true;
+                }
+                if (c.speed > 0.0) {
+                    ua = u, fa = c.speed;
+                    if (kept == 1) fb *= 0.5;
+                    kept = 1;
+                } else {
+                    ub = u, fb = c.speed;
+                    if (kept == -1) fa *= 0.5;
+                    kept = -1;
+                }
+            }
+            return false;
+        };
         const auto corner = [&](std::size_t p, int upper, Solved& a, Solved& b, double& end) {
             if (a.range.isEmpty() || b.range.isEmpty()) return false;
             const int fa = crossing(a, p, upper).face, fb = crossing(b, p, upper).face;
@@ -927,7 +982,8 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                     side = true;
                 }
                 double end = 0.0;
-                if (!side && !between && corner(p, upper, *ends[0], *ends[1], end)) {
+                if (!side && !between &&
+                    (corner(p, upper, *ends[0], *ends[1], end) || graze(p, upper, *ends[0], *ends[1], end))) {
                     if (upper) {
                         cut.hi = std::min(cut.hi, end);
                     } else {
