@@ -265,6 +265,29 @@ constexpr double kCornerGap = 1e-9;
 /// Most regula falsi steps note l takes towards the pose where a line's end stops growing.
 constexpr int kGrazeSteps = 4;
 
+/// Regula falsi with the Illinois step on [ua, ub], where fa and fb have opposite signs: `at(u)`
+/// is called at each new point, at most `steps` times, and returns the function's value there, or
+/// none to stop. Where the same end moves twice in a row, the other end's value is halved, so
+/// that a convex function's root is not approached from one side only.
+template <class At>
+void regulaFalsi(double ua, double ub, double fa, double fb, int steps, At&& at) {
+    int moved = 0;  // which end the last step moved: 1 the lower, -1 the upper
+    for (int step = 0; step < steps; ++step) {
+        const double u = ua + (ub - ua) * fa / (fa - fb);
+        const std::optional<double> fu = at(u);
+        if (!fu) return;
+        if ((*fu > 0.0) == (fa > 0.0)) {
+            ua = u, fa = *fu;
+            if (moved == 1) fb *= 0.5;
+            moved = 1;
+        } else {
+            ub = u, fb = *fu;
+            if (moved == -1) fa *= 0.5;
+            moved = -1;
+        }
+    }
+}
+
 /// The linear nodes kept by every sweep alive, and how many they may keep.
 std::atomic<std::size_t> keptNodes{0};
 std::atomic<std::size_t> nodeBudget{kDefaultLinearNodeBudget};
@@ -810,7 +833,10 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             Interval range;
             Crossing ends[2];
         };
-        ShortList<Solved, 16> solved;  // made by the first addEnds: most lines settle at a root
+        // Made by the first addEnds (most lines settle at a root), kept per thread so that a query
+        // allocates nothing once its thread has seen one as deep.
+        static thread_local std::vector<Solved> solved;
+        solved.clear();
         const auto addEnds = [&](std::size_t p) {
             if (!atStart) atStart = LocalLine::make(startPose_, line), atEnd = LocalLine::make(endPose_, line);
             const Interval first = tool_.intersectPart(parts[p], *atStart);
@@ -842,9 +868,6 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             c.bend = bendAt(height, off);
             return c;
         };
-        // Whether, where the line's crossings at poses a and b lie on two faces that meet at a
-        // rim, the pose between them where the line passes through that rim bounds the points
-        // beyond its interval over the whole node (note k); the pose goes into O.
         // Whether, where the line's end on that side grows at pose a and shrinks at pose b, the
         // pose between them where it stops growing bounds the points beyond its interval over
         // the whole node (note l); the poses tried go into O.
@@ -856,34 +879,28 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             // Only where (j)'s bound from a pose in the node's middle, C (w / 2)^2, would hold.
             const double width = b.u - a.u;
             if (!(std::max(ca.bend, cb.bend) * width * width < 4.0 * epsilon_)) return false;
-            double ua = a.u, ub = b.u, fa = ca.speed, fb = cb.speed;
-            int kept = 0;  // which end the last step kept (Illinois: the other's value is halved)
-            for (int step = 0; step < kGrazeSteps; ++step) {
-                const double u = ua + (ub - ua) * fa / (fa - fb);
+            bool settled = false;
+            regulaFalsi(a.u, b.u, ca.speed, cb.speed, kGrazeSteps, [&](double u) -> std::optional<double> {
                 Solved g{u, law_.pose(u), Interval::empty(), {}};
                 g.range = tool_.intersectPart(parts[p], LocalLine::make(g.pose, line));
-                if (g.range.isEmpty()) return false;
+                if (g.range.isEmpty()) return std::nullopt;
                 found.add(g.range, u, p);
                 const Crossing& c = crossing(g, p, upper);
                 const double out = upper ? c.across : -c.across;
                 const double back = u - a.u, on = b.u - u;
-                if (out > 0.0 && out >= axisTurn_ * std::max(back, on) &&
-                    -back * c.speed + back * back * c.bend < epsilon_ && on * c.speed + on * on * c.bend < epsilon_) {
+                settled = out > 0.0 && out >= axisTurn_ * std::max(back, on) &&
+                          -back * c.speed + back * back * c.bend < epsilon_ && on * c.speed + on * on * c.bend < epsilon_;
+                if (settled) {
                     end = upper ? g.range.hi : g.range.lo;
-                    return true;
+                    return std::nullopt;
                 }
-                if (c.speed > 0.0) {
-                    ua = u, fa = c.speed;
-                    if (kept == 1) fb *= 0.5;
-                    kept = 1;
-                } else {
-                    ub = u, fb = c.speed;
-                    if (kept == -1) fa *= 0.5;
-                    kept = -1;
-                }
-            }
-            return false;
+                return c.speed;
+            });
+            return settled;
         };
+        // Whether, where the line's crossings at poses a and b lie on two faces that meet at a
+        // rim, the pose between them where the line passes through that rim bounds the points
+        // beyond its interval over the whole node (note k); the pose goes into O.
         const auto corner = [&](std::size_t p, int upper, Solved& a, Solved& b, double& end) {
             if (a.range.isEmpty() || b.range.isEmpty()) return false;
             const int fa = crossing(a, p, upper).face, fb = crossing(b, p, upper).face;
@@ -897,24 +914,15 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                 const double t = (r->z - glm::dot(ps.axis, line.origin - ps.tip)) / along;
                 return glm::length(line.at(t) - ps.tip - r->z * ps.axis) - r->radius;
             };
-            double ua = a.u, ub = b.u, ga = g(ua), gb = g(ub);
+            const double ga = g(a.u), gb = g(b.u);
             if (!std::isfinite(ga) || !std::isfinite(gb) || (ga > 0.0) == (gb > 0.0)) return false;
-            double u = ua;
-            int kept = 0;  // which end the last step kept (Illinois: its value is halved)
-            for (int step = 0; step < kCornerSteps; ++step) {
-                u = ua + (ub - ua) * ga / (ga - gb);
+            double u = a.u;
+            regulaFalsi(a.u, b.u, ga, gb, kCornerSteps, [&](double next) -> std::optional<double> {
+                u = next;
                 const double gu = g(u);
-                if (!std::isfinite(gu) || std::abs(gu) <= kCornerGap) break;
-                if ((gu > 0.0) == (ga > 0.0)) {
-                    ua = u, ga = gu;
-                    if (kept == 1) gb *= 0.5;
-                    kept = 1;
-                } else {
-                    ub = u, gb = gu;
-                    if (kept == -1) ga *= 0.5;
-                    kept = -1;
-                }
-            }
+                if (!std::isfinite(gu) || std::abs(gu) <= kCornerGap) return std::nullopt;
+                return gu;
+            });
             const ToolPose ps = law_.pose(u);
             const Interval range = tool_.intersectPart(parts[p], LocalLine::make(ps, line));
             if (range.isEmpty()) return false;
