@@ -1,0 +1,230 @@
+// The linear nodes of a turning sweep's search (turning.cpp, notes h and i): which moves take
+// them and how each part is cut into bands, the fixed-axis sweep of each node, and the cache that
+// keeps the nodes every query shares.
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "dexelmill/sweep/turning.h"
+#include "dexelmill/tool/offset.h"
+#include "turning_levels.h"
+
+namespace dexelmill {
+
+using turning::heapLevel;
+using turning::kMaxLevel;
+using turning::kMaxLinearLevel;
+
+namespace {
+
+/// The deepest level whose linear nodes are kept (NodeCache): a part keeps at most
+/// 2^(kMaxKeptLevel + 1) nodes, in a table of that many slots (1 MiB) made with the sweep. Deeper
+/// nodes are made by each query that needs them and dropped, as few lines share a node that deep
+/// (on boat-xyzac at h = 0.5 mm, about 2 queries a node at level 13 and 1 at level 14). On the
+/// 10 degree rows of BM_TurningQuery, whose leaves lie at level 16, keeping levels down to 14
+/// only was 1.3 times slower.
+constexpr int kMaxKeptLevel = 16;
+
+/// How many levels above the static search's closing level (note c) the linear nodes' leaves
+/// must lie for a move to take them. A node costs a one-part MoveSweep, about 1 us to make and
+/// 2 kB to keep, against a static pose's solve. Before note j's anchored nodes the linear search
+/// walked down to its leaves near every graze, and paid only 2 levels up (3 with a ball end swept
+/// as capsules, README, Performance, row h). With them it stops about where C w^2 reaches
+/// epsilon, and pays wherever its leaves lie no deeper than the closing level. Cut time at
+/// h = 0.5 mm, one thread, this rule against 2 and 3 levels: boat-xyzac 1.57 s against 2.6 s,
+/// boat-xyzbc 3.0 s against 4.6 s, the impeller (ball end) 16.1 s against 16.3 s; taking linear
+/// nodes also where their leaves lie 3 or 8 levels deeper gained nothing more.
+constexpr int kLinearLevelsSaved = 0;
+
+/// The linear-node search cuts each part into bands of heights (note i) no taller than this many
+/// times the part's largest radius, and into at most kMaxBands.
+constexpr double kBandHeight = 1.0;
+constexpr int kMaxBands = 8;
+/// How far (mm) a band's bounds, grown by epsilon, keep off the joints of its part's pieces, so
+/// that no piece is cut to a sliver.
+constexpr double kBandJointGap = 1e-3;
+/// A part is cut into bands only where their leaves lie at least this many levels above the whole
+/// part's.
+constexpr int kBandLevelsSaved = 2;
+/// And only where note j's anchored nodes settle nodes from this level down or deeper. From the
+/// level k where 4^-k omega |f| (the least C) reaches epsilon they settle the nodes near a graze,
+/// whatever a band's first-order reach; above it the bands' smaller reach settles nodes sooner, at
+/// the cost of a search per band. Moves as short as real programs' reach that level at
+/// about 3; BM_TurningQuery's 32 mm moves at 7 (1 degree) and 8 (10 degrees). Measured, ns per
+/// line, bands always against bands from this level: BM_TurningShortQuery at 0.6 degrees flat
+/// 722 against 614 and bull nose 1,575 against 1,076; BM_TurningQuery at 1 degree flat 2,618
+/// against 2,426 (never cut: 2,986); cut time of the impeller at h = 0.5 mm, one thread, 18.1 s
+/// against 15.0 s.
+constexpr int kBandAnchorLevel = 5;
+
+/// The linear nodes kept by every sweep alive, and how many they may keep.
+std::atomic<std::size_t> keptNodes{0};
+std::atomic<std::size_t> nodeBudget{kDefaultLinearNodeBudget};
+
+/// The largest radius a profile piece reaches, or more.
+double pieceRadiusBound(const ProfilePiece& piece) {
+    if (const auto* c = std::get_if<ConePiece>(&piece)) return std::max(c->r0, c->r1);
+    const ArcPiece& a = std::get<ArcPiece>(piece);
+    return a.rc + a.rho;
+}
+
+
+}  // namespace
+
+/// The linear nodes made so far, per part by heap index: each made at most once, by whichever
+/// query needs it first (one that loses the race to publish its node drops it), and read by
+/// every query after.
+class TurningSweep::NodeCache {
+  public:
+    explicit NodeCache(const std::vector<LinearPart>& parts) {
+        for (const LinearPart& p : parts) {
+            sizes_.push_back(std::size_t(2) << std::min(p.leafLevel(), kMaxKeptLevel));
+            slots_.emplace_back(new std::atomic<const LinearNode*>[sizes_.back()]());
+        }
+    }
+    ~NodeCache() {
+        for (std::size_t p = 0; p < slots_.size(); ++p)
+            for (std::size_t i = 0; i < sizes_[p]; ++i) delete slots_[p][i].load(std::memory_order_relaxed);
+        keptNodes.fetch_sub(kept_.load(std::memory_order_relaxed), std::memory_order_relaxed);
+    }
+    NodeCache(const NodeCache&) = delete;
+    NodeCache& operator=(const NodeCache&) = delete;
+
+    /// The node, kept; or, when it lies deeper than kMaxKeptLevel or the sweeps alive keep their
+    /// budget already, made in `scratch`.
+    template <class Make>
+    const LinearNode& get(std::size_t part, std::uint32_t heap, std::unique_ptr<LinearNode>& scratch, Make&& make) {
+        if (heap >= sizes_[part]) return *(scratch = std::make_unique<LinearNode>(make()));
+        std::atomic<const LinearNode*>& slot = slots_[part][heap];
+        if (const LinearNode* n = slot.load(std::memory_order_acquire)) return *n;
+        if (keptNodes.fetch_add(1, std::memory_order_relaxed) >= nodeBudget.load(std::memory_order_relaxed)) {
+            keptNodes.fetch_sub(1, std::memory_order_relaxed);
+            return *(scratch = std::make_unique<LinearNode>(make()));
+        }
+        kept_.fetch_add(1, std::memory_order_relaxed);
+        auto made = std::make_unique<const LinearNode>(make());
+        const LinearNode* seen = nullptr;
+        if (slot.compare_exchange_strong(seen, made.get(), std::memory_order_acq_rel, std::memory_order_acquire))
+            return *made.release();
+        kept_.fetch_sub(1, std::memory_order_relaxed);
+        keptNodes.fetch_sub(1, std::memory_order_relaxed);
+        return *seen;
+    }
+
+  private:
+    std::vector<std::unique_ptr<std::atomic<const LinearNode*>[]>> slots_;
+    std::vector<std::size_t> sizes_;
+    std::atomic<std::size_t> kept_{0};
+};
+
+std::size_t TurningSweep::keptLinearNodes() { return keptNodes.load(std::memory_order_relaxed); }
+
+void TurningSweep::setLinearNodeBudget(std::size_t nodes) { nodeBudget.store(nodes, std::memory_order_relaxed); }
+
+std::size_t TurningSweep::linearNodeBudget() { return nodeBudget.load(std::memory_order_relaxed); }
+
+std::size_t TurningSweep::linearNodeBound() const {
+    std::size_t nodes = 0;
+    for (const LinearPart& m : models_) nodes += (std::size_t(2) << std::min(m.leafLevel(), kMaxKeptLevel)) - 1;
+    return nodes;
+}
+
+const TurningSweep::LinearNode& TurningSweep::linearNode(std::size_t band, std::uint32_t heap,
+                                                          std::unique_ptr<LinearNode>& scratch) const {
+    return nodes_->get(band, heap, scratch, [&] { return makeNode(models_[band], heap); });
+}
+
+TurningSweep::LinearNode TurningSweep::makeNode(const LinearPart& m, std::uint32_t heap) const {
+    const int level = heapLevel(heap);
+    const double width = std::ldexp(1.0, -level);
+    const double ua = double(heap - (std::uint32_t(1) << level)) * width, ub = ua + width, um = ua + 0.5 * width;
+    const ToolPose a = law_.pose(ua), b = law_.pose(ub), mid = law_.pose(um);
+    // The pivot runs on the chord from its place at ua to its place at ub, the axis held at the
+    // middle's: the tip is the pivot less pivot height times that axis.
+    const Vec3 start = a.tip + m.pivot * (a.axis - mid.axis), end = b.tip + m.pivot * (b.axis - mid.axis);
+    return LinearNode{MoveSweep(m.pieces[std::size_t(level)], start, end, mid.axis), mid, um, width};
+}
+
+std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, double lo, double hi, int deepest) const {
+    const ConvexPart& part = parts_[p];
+    LinearPart m;
+    m.part = p;
+    std::vector<ProfilePiece> band = clipChain(tool_.pieces(), part.first, part.last, lo, hi);
+    double radius = 0.0;
+    for (const ProfilePiece& piece : band) radius = std::max(radius, pieceRadiusBound(piece));
+    m.pivot = 0.5 * (lo + hi);
+    const double turn = axisTurn_ * std::hypot(0.5 * (hi - lo), radius);
+    const double bend = law_.axisPointAccelerationBound(m.pivot);
+    for (int k = 0;; ++k) {
+        const double width = std::ldexp(1.0, -k);
+        m.reach.push_back(0.5 * turn * width + 0.125 * bend * width * width);
+        if (m.reach.back() <= epsilon_) break;
+        if (k >= deepest) return std::nullopt;
+    }
+    // Above the leaves, grown by the reach less epsilon (more than 0 there); the leaves sweep the
+    // band itself.
+    for (int k = 0; k < m.leafLevel(); ++k) m.pieces.push_back(mitredOffsetChain(band, m.reach[std::size_t(k)] - epsilon_));
+    m.pieces.push_back(std::move(band));
+    return m;
+}
+
+void TurningSweep::chooseLinearNodes() {
+    // Only a tip on the straight line bounds the pivot's bend (note h).
+    if (!std::isfinite(law_.axisPointAccelerationBound(0.0))) return;
+    const int deepest = std::min(kMaxLinearLevel, closingLevel_ - kLinearLevelsSaved);
+    int anchorLevel = 0;
+    const double leastBend = axisTurn_ * law_.speedBound(0.0);
+    while (anchorLevel < kMaxLevel && std::ldexp(leastBend, -2 * anchorLevel) > epsilon_) ++anchorLevel;
+    const auto& pieces = tool_.pieces();
+    std::vector<LinearPart> models;
+    std::vector<std::optional<LinearNode>> wholeRoots(parts_.size());
+    for (std::size_t p = 0; p < parts_.size(); ++p) {
+        const ConvexPart& part = parts_[p];
+        double radius = 0.0;
+        for (std::size_t i = part.first; i < part.last; ++i) radius = std::max(radius, pieceRadiusBound(pieces[i]));
+        // Bands of equal height (note i), their bounds grown by epsilon kept off the part's
+        // joints.
+        const double height = part.z1 - part.z0, apart = 2.0 * (epsilon_ + kBandJointGap);
+        const int count = int(std::clamp(std::ceil(height / (kBandHeight * radius)), 1.0, double(kMaxBands)));
+        std::vector<double> bounds{part.z0};
+        for (int b = 1; b < count; ++b) {
+            double z = part.z0 + height * b / count;
+            for (std::size_t i = part.first + 1; i < part.last; ++i)
+                if (std::abs(z - pieceZ0(pieces[i])) < 0.5 * apart) z = pieceZ0(pieces[i]) + apart;
+            if (z - bounds.back() > apart && part.z1 - z > apart) bounds.push_back(z);
+        }
+        bounds.push_back(part.z1);
+        std::vector<LinearPart> bands;
+        int bandLeaf = 0;
+        for (std::size_t b = 0; b + 1 < bounds.size(); ++b) {
+            const double lo = b == 0 ? part.z0 : bounds[b] - epsilon_;
+            const double hi = b + 2 == bounds.size() ? part.z1 : bounds[b + 1] + epsilon_;
+            std::optional<LinearPart> band = linearBand(p, lo, hi, deepest);
+            if (!band) break;
+            bandLeaf = std::max(bandLeaf, band->leafLevel());
+            bands.push_back(std::move(*band));
+        }
+        // The whole part; with bands, made down to its own leaves if need be, as its root settles
+        // every band of a line far from the part.
+        const bool banded =
+            bands.size() + 1 == bounds.size() && bands.size() > 1 && anchorLevel >= kBandAnchorLevel;
+        std::optional<LinearPart> whole = linearBand(p, part.z0, part.z1, banded ? kMaxLevel : deepest);
+        const bool wholeFits = whole && whole->leafLevel() <= deepest;
+        if (banded && (!wholeFits || whole->leafLevel() >= bandLeaf + kBandLevelsSaved)) {
+            if (whole && whole->leafLevel() > 0) wholeRoots[p].emplace(makeNode(*whole, 1));
+            for (LinearPart& band : bands) models.push_back(std::move(band));
+        } else if (wholeFits) {
+            models.push_back(std::move(*whole));
+        } else {
+            return;
+        }
+    }
+    models_ = std::move(models);
+    wholeRoots_ = std::move(wholeRoots);
+    nodes_ = std::make_shared<NodeCache>(models_);
+}
+
+}  // namespace dexelmill
