@@ -161,7 +161,6 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     std::size_t nearest = 0;
     for (std::size_t k = 1; k < faces.size(); ++k)
         if (faces[k].gap < faces[nearest].gap) nearest = k;
-    const auto& pieces = tool_.pieces();
     normal = faces[nearest].n;
     sharp = false;
     const double nearRim = kRimReach * epsilon_;
@@ -204,22 +203,13 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     if (u <= 0.0 || u >= 1.0) return;
     for (const std::size_t below : {nearest - 1, nearest}) {
         if (below >= faces.size() - 1) continue;  // above the top face, or below the bottom one
-        // The piece whose end the rim is: the first piece's bottom, else the top of the one below.
-        const ProfilePiece& end = pieces[cp.first + (below == 0 ? 0 : below - 1)];
-        const double zr = below == 0 ? cp.z0 : pieceZ1(end);
-        const double R = pieceRadius(end, zr);
-        if (!(R > 0.0)) continue;
-        double nr = 0.0, nz = 0.0;
-        const auto lateral = [&](const ProfilePiece& p) {
-            meridianNormal(p, R, zr, nr, nz);
-            return nr * radial + nz * ps.axis;
-        };
-        const Vec3 n1 = below == 0 ? -ps.axis : lateral(pieces[cp.first + below - 1]);
-        const Vec3 n2 = below + 2 == faces.size() ? ps.axis : lateral(pieces[cp.first + below]);
-        if (glm::dot(n1, n2) >= std::cos(kRimAngle)) continue;  // a smooth joint
-        const Vec3 rim = ps.tip + zr * ps.axis + R * radial;
-        const std::optional<Vec3> n = sweptRim(n1, n2, rim);
-        if (n && std::abs(glm::dot(x - rim, *n)) <= nearRim) {
+        const std::optional<Rim> r = rim(part, int(below));
+        if (!r) continue;  // a smooth joint, or an apex
+        const Vec3 n1 = r->across[0] * radial + r->along[0] * ps.axis;
+        const Vec3 n2 = r->across[1] * radial + r->along[1] * ps.axis;
+        const Vec3 at = ps.tip + r->z * ps.axis + r->radius * radial;
+        const std::optional<Vec3> n = sweptRim(n1, n2, at);
+        if (n && std::abs(glm::dot(x - at, *n)) <= nearRim) {
             normal = *n;
             return;
         }
