@@ -720,14 +720,14 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             // Back over [a.u, u] (sign -1) and on over [u, b.u] (sign 1), each by either face.
             for (const double sign : {-1.0, 1.0}) {
                 const double w = sign < 0.0 ? u - a.u : b.u - u;
-                bool held = false;
-                for (int f = 0; f < 2 && !held; ++f) {
+                bool bounded = false;
+                for (int f = 0; f < 2 && !bounded; ++f) {
                     const Vec3 n = r->across[f] * radial + r->along[f] * ps.axis;
                     const double out = upper ? glm::dot(n, line.dir) : -glm::dot(n, line.dir);
-                    held = out > 0.0 && out >= axisTurn_ * w && gap < epsilon_ &&
-                           sign * w * glm::dot(n, velocity) + w * w * bend + gap * (1.0 + axisTurn_ * w) < epsilon_;
+                    bounded = out > 0.0 && out >= axisTurn_ * w && gap < epsilon_ &&
+                              sign * w * glm::dot(n, velocity) + w * w * bend + gap * (1.0 + axisTurn_ * w) < epsilon_;
                 }
-                if (!held) return false;
+                if (!bounded) return false;
             }
             end = upper ? range.hi : range.lo;
             return true;
