@@ -225,6 +225,22 @@ void TurningSweep::chooseLinearNodes() {
     models_ = std::move(models);
     wholeRoots_ = std::move(wholeRoots);
     nodes_ = std::make_shared<NodeCache>(models_);
+    // Every output interval lies within epsilon of a pose (note e), and every pose of a part
+    // within the root's reach delta_0 of the root's linear move (note h): so inside the part
+    // grown by delta_0 + epsilon swept along that move, whose box in its frame bound() takes.
+    // The tool's own parts, as a ball end's ball is inside the lowest.
+    const ToolPose start = law_.pose(0.0), end = law_.pose(1.0), middle = law_.pose(0.5);
+    for (const ConvexPart& part : tool_.convexParts()) {
+        double radius = 0.0;
+        for (std::size_t i = part.first; i < part.last; ++i) radius = std::max(radius, pieceRadiusBound(pieces[i]));
+        const double pivot = 0.5 * (part.z0 + part.z1);
+        const double reach = 0.5 * axisTurn_ * std::hypot(0.5 * (part.z1 - part.z0), radius) +
+                             0.125 * law_.axisPointAccelerationBound(pivot);
+        const std::vector<ProfilePiece> chain(pieces.begin() + std::ptrdiff_t(part.first),
+                                              pieces.begin() + std::ptrdiff_t(part.last));
+        outer_.emplace_back(mitredOffsetChain(chain, reach + epsilon_), start.tip + pivot * (start.axis - middle.axis),
+                            end.tip + pivot * (end.axis - middle.axis), middle.axis);
+    }
 }
 
 }  // namespace dexelmill

@@ -115,8 +115,10 @@ class TurningSweep {
     std::size_t capsuleBalls() const { return balls_.size(); }
     int chords() const { return chords_; }
     /// @brief A cheap interval of `line` that holds every output interval: the line inside
-    /// bounds() grown by epsilon (an output interval may be a pose's grown by up to epsilon).
-    /// Empty when the line misses that box.
+    /// bounds() grown by epsilon (an output interval may be a pose's grown by up to epsilon), and
+    /// with linear nodes inside the boxes, in their own frames, of the tool's parts grown by their
+    /// root node's reach plus epsilon and swept along its move (turning.cpp, note h).
+    /// Empty when the line misses them.
     Interval bound(const Line& line) const;
 
     /// @brief The swept material along `line` (unit direction), sorted, disjoint, with the Hermite
@@ -229,6 +231,9 @@ class TurningSweep {
     /// Per part cut into more than one band, the root node of its search taken whole (note i).
     /// A line it leaves held needs none of the part's bands.
     std::vector<std::optional<LinearNode>> wholeRoots_;
+    /// With linear nodes, per convex part of the tool (a ball end whole), the part grown by its
+    /// root node's reach plus epsilon, swept along the root's move: bound() takes their boxes.
+    std::vector<MoveSweep> outer_;
     /// Each part of parts_, then each ball, grown by epsilon: the reach that closes a gap between
     /// two intervals. An output piece's part index counts the same way.
     std::vector<std::vector<ProfilePiece>> grownEpsilon_;
