@@ -184,6 +184,7 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
     line.dir = axisVector(a);
     line.origin[ia] = originA;
     LineHit parts[MoveSweep::kMaxParts];
+    std::vector<Interval> material;  // a dexel's segments, for a turning sweep's care
 
     for (std::uint32_t m : moves) {
         if (slot.lo > slot.hi) break;  // no material left in the tile
@@ -258,7 +259,7 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                             if (!parts[k].isEmpty()) apply(parts[k]);
                         return;
                     }
-                    std::vector<Interval> material;
+                    material.clear();
                     for (const Segment& sg : tile.segments(local)) material.push_back({double(sg.lo), double(sg.hi)});
                     for (const LineHit& hit : sweep.turning->intersect(line, material)) apply(hit);
                 };
