@@ -199,7 +199,9 @@ void TurningSweep::chooseLinearNodes() {
         bounds.push_back(part.z1);
         std::vector<LinearPart> bands;
         int bandLeaf = 0;
-        for (std::size_t b = 0; b + 1 < bounds.size(); ++b) {
+        // Bands only where the anchored nodes leave them levels to save (they are made for
+        // nothing otherwise: five a flat D10 x 25, each with its offsets at every level).
+        for (std::size_t b = 0; anchorLevel >= kBandAnchorLevel && b + 1 < bounds.size(); ++b) {
             const double lo = b == 0 ? part.z0 : bounds[b] - epsilon_;
             const double hi = b + 2 == bounds.size() ? part.z1 : bounds[b + 1] + epsilon_;
             std::optional<LinearPart> band = linearBand(p, lo, hi, deepest);
