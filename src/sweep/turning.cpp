@@ -578,6 +578,15 @@ Interval TurningSweep::bound(const Line& line) const {
 //      w |n.v|, and the pair bounds nodes about twice as wide as either alone; where it dips
 //      between them (n.v < 0 at a and > 0 at b), each bounds about |n.v| / C. On boat-xyzac at
 //      h = 0.5 mm it took the middle poses solved from 531,000 to 369,000.
+//  (n) Nodes without their sweep. (j) and (m) ask of a node's grown sweep only that it hold every
+//      point of the node deeper than epsilon: beyond a bounded side it is cut away, and between
+//      the sides what is left must be in O. bound(line) holds every such point too (it holds
+//      S), so a node below the root whose end poses bound each side that O leaves open within
+//      bound(line), and whose stretch between them O holds, is settled before its sweep is made
+//      or intersected. Only (j) and (m) are tried there; where they fail, the node takes its
+//      sweep and the test of (j) to (l) as before. The root keeps its sweep first: most lines
+//      miss it, and its two end poses are solved only where they do not. On BM_TurningQuery's
+//      bull nose at 1 degree: 23,300 -> 19,300 instructions a line; boat-xyzac's cut 7 % less.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     const Interval reach = bound(line);
@@ -755,9 +764,11 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             return true;
         };
         // Whether a node of width w that is not settled as a linear node has the line's points
-        // beyond its end poses' intervals (a, b) bounded by those poses' faces (note j).
+        // beyond its end poses' intervals (a, b) bounded by those poses' faces (note j), `swept`
+        // holding every point of the node deeper than epsilon; `aim` lets notes k and l solve
+        // poses to that end.
         const auto anchoredSettled = [&](std::size_t p, double w, std::uint32_t a, std::uint32_t b,
-                                         const Interval& swept) {
+                                         const Interval& swept, bool aim) {
             Solved* const ends[2] = {&solved[a], &solved[b]};
             const Interval hull = ends[0]->range.hull(ends[1]->range);
             if (hull.isEmpty()) return false;
@@ -822,7 +833,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                     }
                 }
                 double end = 0.0;
-                if (!side && !between &&
+                if (!side && !between && aim &&
                     (corner(p, upper, *ends[0], *ends[1], end) || graze(p, upper, *ends[0], *ends[1], end))) {
                     if (upper) {
                         cut.hi = std::min(cut.hi, end);
@@ -861,6 +872,11 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             stack[top++] = {1, 0, 1};
             while (top > 0) {
                 const Node n = stack[--top];
+                // Below the root, where the end poses' faces settle the node within the line's
+                // bound, its sweep is not needed (note n).
+                if (n.heap > 1 && parts.size() == 1 &&
+                    anchoredSettled(p, std::ldexp(1.0, -heapLevel(n.heap)), n.a, n.b, reach, false))
+                    continue;
                 const LinearNode& node = linearNode(b, n.heap, scratch);
                 const Interval swept = node.sweep.intersect(line);
                 if (heapLevel(n.heap) == leaf) {  // closed: the band's own sweep along the node's move
@@ -872,7 +888,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                     addEnds(p);
                     if (held(swept)) continue;
                 }
-                if (parts.size() == 1 && anchoredSettled(p, node.width, n.a, n.b, swept)) continue;
+                if (parts.size() == 1 && anchoredSettled(p, node.width, n.a, n.b, swept, true)) continue;
                 const Interval middle = tool_.intersectPart(parts[p], LocalLine::make(node.middle, line));
                 if (!middle.isEmpty()) found.add(middle, node.middleU, p);
                 const std::uint32_t m = std::uint32_t(solved.size());
