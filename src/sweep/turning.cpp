@@ -341,11 +341,10 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
 ToolPose TurningSweep::pose(double u) const { return law_.pose(u); }
 
 Interval TurningSweep::bound(const Line& line) const {
-    const Interval box = lineInBox(line, bounds_.padded(epsilon_));
-    if (outer_.empty() || box.isEmpty()) return box;
+    if (outer_.empty()) return lineInBox(line, bounds_.padded(epsilon_));
     Interval hull;
     for (const MoveSweep& part : outer_) hull = hull.hull(part.bound(line));
-    return hull.intersect(box);
+    return hull;
 }
 
 // Method. Write T(u) for the tool at pose(u) and V = speed().

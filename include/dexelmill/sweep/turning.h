@@ -115,9 +115,9 @@ class TurningSweep {
     std::size_t capsuleBalls() const { return balls_.size(); }
     int chords() const { return chords_; }
     /// @brief A cheap interval of `line` that holds every output interval: the line inside
-    /// bounds() grown by epsilon (an output interval may be a pose's grown by up to epsilon), and
-    /// with linear nodes inside the boxes, in their own frames, of the tool's parts grown by their
-    /// root node's reach plus epsilon and swept along its move (turning.cpp, note h).
+    /// bounds() grown by epsilon (an output interval may be a pose's grown by up to epsilon), or
+    /// with linear nodes, inside the boxes, in their own frames, of the tool's parts grown by
+    /// their root node's reach plus epsilon and swept along its move (turning.cpp, note h).
     /// Empty when the line misses them.
     Interval bound(const Line& line) const;
 
