@@ -227,9 +227,9 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                 const auto boundOf = [&](const RegionSweep& sweep, const MoveSweep::LocalLine& frameLine) {
                     return sweep.fixed ? sweep.fixed->bound(frameLine) : sweep.turning->bound(line);
                 };
-                Interval reach = cuts ? boundOf(g.cutting, cutLine) : Interval::empty();
-                if (shank) reach = reach.hull(boundOf(g.shank, shankLine));
-                if (!reachesMaterial(segs, reach)) continue;
+                const Interval cutReach = cuts ? boundOf(g.cutting, cutLine) : Interval::empty();
+                const Interval shankReach = shank ? boundOf(g.shank, shankLine) : Interval::empty();
+                if (!reachesMaterial(segs, cutReach.hull(shankReach))) continue;
                 ++st.visited;
                 double removed = 0.0;
                 // The Hermite data only for the interval ends that will become segment ends: those
@@ -251,8 +251,10 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                                                toFloat(hit.range.hi), at, stretches);
                 };
                 // Applies `apply` to the swept intervals of one region: a fixed-axis sweep's parts,
-                // or a turning sweep's intervals, solved to its tolerance where the dexel has material.
-                auto forEachHit = [&](const RegionSweep& sweep, const MoveSweep::LocalLine& frameLine, auto&& apply) {
+                // or a turning sweep's intervals, solved to its tolerance where the dexel has
+                // material within the sweep's bound `reach`.
+                auto forEachHit = [&](const RegionSweep& sweep, const MoveSweep::LocalLine& frameLine,
+                                      const Interval& reach, auto&& apply) {
                     if (sweep.fixed) {
                         const std::size_t n = sweep.fixed->intersectParts(frameLine, parts, makesEnds);
                         for (std::size_t k = 0; k < n; ++k)
@@ -260,17 +262,21 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                         return;
                     }
                     material.clear();
-                    for (const Segment& sg : tile.segments(local)) material.push_back({double(sg.lo), double(sg.hi)});
+                    for (const Segment& sg : tile.segments(local)) {
+                        const Interval met = Interval{double(sg.lo), double(sg.hi)}.intersect(reach);
+                        if (!met.isEmpty()) material.push_back(met);
+                    }
+                    if (material.empty()) return;
                     for (const LineHit& hit : sweep.turning->intersect(line, material)) apply(hit);
                 };
                 if (cuts) {
-                    forEachHit(g.cutting, cutLine, [&](const LineHit& hit) {
+                    forEachHit(g.cutting, cutLine, cutReach, [&](const LineHit& hit) {
                         watch(hit);
                         removed += subtractHit(tile, local, hit);
                     });
                 }
                 if (shank) {
-                    forEachHit(g.shank, shankLine, [&](const LineHit& hit) {
+                    forEachHit(g.shank, shankLine, shankReach, [&](const LineHit& hit) {
                         if (removeShank) {
                             watch(hit);
                             const double met = subtractHit(tile, local, hit);
