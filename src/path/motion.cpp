@@ -17,14 +17,11 @@ namespace {
 /// rates^2 / 64, 1.6 % of the rates' sum for a move turning its axes by a radian in all.
 constexpr int kAxisTurnSamples = 32;
 
-/// Turn t at u, applied to a vector.
-Vec3 turnVector(const RotaryTurn& t, double u, const Vec3& v) {
-    return rotateAbout(v, t.direction, t.from + u * (t.to - t.from));
-}
-
-/// The first `count` turns of a chain at u, applied to a vector: R_0 ... R_{count-1} v.
-Vec3 turnVector(const std::vector<RotaryTurn>& chain, std::size_t count, double u, Vec3 v) {
-    for (std::size_t i = count; i-- > 0;) v = turnVector(chain[i], u, v);
+/// The first `count` turns of a chain at a phase, applied to a vector: R_0 ... R_{count-1} v, the
+/// chain's first turn's cosine and sine at index `first` of the phase's.
+Vec3 turnVector(const std::vector<RotaryTurn>& chain, const TurnPhase& phase, std::size_t first, std::size_t count,
+                Vec3 v) {
+    for (std::size_t i = count; i-- > 0;) v = rotateAbout(v, chain[i].direction, phase.c[first + i], phase.s[first + i]);
     return v;
 }
 
@@ -43,12 +40,13 @@ void turnTrig(const std::vector<RotaryTurn>& heads, const std::vector<RotaryTurn
 
 /// Adds to `sum` a chain's part of a point's velocity (see velocity), the point given as y_0 in
 /// the frame the chain's first turn acts in; leaves y at y_n, in the frame inside its last turn.
-void addChainVelocity(const std::vector<RotaryTurn>& chain, double u, Vec3& y, Vec3& sum) {
+void addChainVelocity(const std::vector<RotaryTurn>& chain, const TurnPhase& phase, std::size_t first, Vec3& y,
+                      Vec3& sum) {
     for (std::size_t i = 0; i < chain.size(); ++i) {
         const RotaryTurn& t = chain[i];
-        sum += turnVector(chain, i, u, (t.to - t.from) * glm::cross(t.direction, y - t.pivot));
+        sum += turnVector(chain, phase, first, i, (t.to - t.from) * glm::cross(t.direction, y - t.pivot));
         // y_{i+1} = c_i + R_i^T (y_i - c_i): the rotation by minus the angle.
-        y = t.pivot + rotateAbout(y - t.pivot, t.direction, -(t.from + u * (t.to - t.from)));
+        y = t.pivot + rotateAbout(y - t.pivot, t.direction, phase.c[first + i], -phase.s[first + i]);
     }
 }
 
@@ -151,22 +149,26 @@ ToolPose MotionLaw::pose(const TurnPhase& phase) const {
 //   y' = sum_i Q_{<i} (rate_i d_i x (y_i - c_i)) + Q (x' + sum_j Q_h<j (rate_j d_j x (z_j - c_j)))
 //                                                                       (carried)
 //   y' = f + w x (y - p),  w = sum_i rate_i Q_{<i} d_i                  (on the line)
-Vec3 MotionLaw::velocity(double u, const Vec3& point) const {
+Vec3 MotionLaw::velocity(double u, const Vec3& point) const { return velocity(phase(u), point); }
+
+Vec3 MotionLaw::velocity(const TurnPhase& phase, const Vec3& point) const {
+    const std::size_t h = heads_.size();
+    const double u = phase.u;
     Vec3 v(0.0);
     if (!carried_) {
         const Vec3 tip = start_ + u * feed_;
         for (std::size_t i = 0; i < turns_.size(); ++i) {
-            const Vec3 w = turnVector(turns_, i, u, turns_[i].direction * (turns_[i].to - turns_[i].from));
+            const Vec3 w = turnVector(turns_, phase, h, i, turns_[i].direction * (turns_[i].to - turns_[i].from));
             v += glm::cross(w, point - tip);
         }
         return feed_ + v;
     }
     Vec3 y = point;
-    addChainVelocity(turns_, u, y, v);
+    addChainVelocity(turns_, phase, h, y, v);
     Vec3 drift = machineFeed_;
     Vec3 z = y - (machineStart_ + u * machineFeed_);
-    addChainVelocity(heads_, u, z, drift);
-    drift = turnVector(turns_, turns_.size(), u, drift);
+    addChainVelocity(heads_, phase, 0, z, drift);
+    drift = turnVector(turns_, phase, h, turns_.size(), drift);
     return v + drift;
 }
 

@@ -645,6 +645,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             ToolPose pose;
             Interval range;
             Crossing ends[2];
+            TurnPhase phase;  ///< u's, which the velocities take
         };
         // Made by the first addEnds (most lines settle at a root), kept per thread so that a query
         // allocates nothing once its thread has seen one as deep.
@@ -658,8 +659,8 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             if (!last.isEmpty()) found.add(last, 1.0, p);
             endsAdded = p;
             solved.clear();
-            solved.push_back({startPhase_.u, startPose_, first, {}});
-            solved.push_back({endPhase_.u, endPose_, last, {}});
+            solved.push_back({startPhase_.u, startPose_, first, {}, startPhase_});
+            solved.push_back({endPhase_.u, endPose_, last, {}, endPhase_});
         };
         // Note j's C for a tool point at `height` above the tip and `off` from the axis.
         const auto bendAt = [&](double height, double off) {
@@ -677,7 +678,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             const double off = glm::length(y - pose.pose.tip - height * pose.pose.axis);
             c.found = true;
             c.across = glm::dot(n, line.dir);
-            c.speed = glm::dot(n, law_.velocity(pose.u, y));
+            c.speed = glm::dot(n, law_.velocity(pose.phase, y));
             c.bend = bendAt(height, off);
             return c;
         };
@@ -694,7 +695,8 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             if (!(std::max(ca.bend, cb.bend) * width * width < 4.0 * epsilon_)) return false;
             bool settled = false;
             regulaFalsi(a.u, b.u, ca.speed, cb.speed, kGrazeSteps, [&](double u) -> std::optional<double> {
-                Solved g{u, law_.pose(u), Interval::empty(), {}};
+                const TurnPhase phase = law_.phase(u);
+                Solved g{u, law_.pose(phase), Interval::empty(), {}, phase};
                 g.range = tool_.intersectPart(parts[p], LocalLine::make(g.pose, line));
                 if (g.range.isEmpty()) return std::nullopt;
                 found.add(g.range, u, p);
@@ -736,7 +738,8 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                 if (!std::isfinite(gu) || std::abs(gu) <= kCornerGap) return std::nullopt;
                 return gu;
             });
-            const ToolPose ps = law_.pose(u);
+            const TurnPhase phase = law_.phase(u);
+            const ToolPose ps = law_.pose(phase);
             const Interval range = tool_.intersectPart(parts[p], LocalLine::make(ps, line));
             if (range.isEmpty()) return false;
             found.add(range, u, p);
@@ -748,7 +751,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             if (!(rho > 0.0)) return false;
             const Vec3 radial = offAxis / rho, point = ps.tip + r->z * ps.axis + r->radius * radial;
             const double gap = glm::length(y - point), bend = bendAt(r->z, r->radius);
-            const Vec3 velocity = law_.velocity(u, point);
+            const Vec3 velocity = law_.velocity(phase, point);
             // Back over [a.u, u] (sign -1) and on over [u, b.u] (sign 1), each by either face.
             for (const double sign : {-1.0, 1.0}) {
                 const double w = sign < 0.0 ? u - a.u : b.u - u;
@@ -893,7 +896,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                 const Interval middle = tool_.intersectPart(parts[p], LocalLine::make(node.middle, line));
                 if (!middle.isEmpty()) found.add(middle, node.middleU, p);
                 const std::uint32_t m = std::uint32_t(solved.size());
-                solved.push_back({node.middleU, node.middle, middle, {}});
+                solved.push_back({node.middleU, node.middle, middle, {}, node.phase});
                 stack[top++] = {2 * n.heap + 1, m, n.b};
                 stack[top++] = {2 * n.heap, n.a, m};
             }

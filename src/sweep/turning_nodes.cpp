@@ -141,11 +141,12 @@ TurningSweep::LinearNode TurningSweep::makeNode(const LinearPart& m, std::uint32
     const int level = heapLevel(heap);
     const double width = std::ldexp(1.0, -level);
     const double ua = double(heap - (std::uint32_t(1) << level)) * width, ub = ua + width, um = ua + 0.5 * width;
-    const ToolPose a = law_.pose(ua), b = law_.pose(ub), mid = law_.pose(um);
+    const TurnPhase middle = law_.phase(um);
+    const ToolPose a = law_.pose(ua), b = law_.pose(ub), mid = law_.pose(middle);
     // The pivot runs on the chord from its place at ua to its place at ub, the axis held at the
     // middle's: the tip is the pivot less pivot height times that axis.
     const Vec3 start = a.tip + m.pivot * (a.axis - mid.axis), end = b.tip + m.pivot * (b.axis - mid.axis);
-    return LinearNode{MoveSweep(m.pieces[std::size_t(level)], start, end, mid.axis), mid, um, width};
+    return LinearNode{MoveSweep(m.pieces[std::size_t(level)], start, end, mid.axis), mid, um, width, middle};
 }
 
 std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, double lo, double hi, int deepest) const {

@@ -64,6 +64,8 @@ class MotionLaw {
     TurnPhase advance(const TurnPhase& phase, const TurnStep& step) const;
     /// @brief The velocity (mm per unit u) at u of the tool point that is at `point` then.
     Vec3 velocity(double u, const Vec3& point) const;
+    /// @brief As velocity(u, point), at a phase's u with its cosines and sines.
+    Vec3 velocity(const TurnPhase& phase, const Vec3& point) const;
     /// @brief A bound on |velocity| over the move for every tool point within `reach` of the tip:
     ///  - tip on the line: |f| + sum_i |to_i - from_i| reach, since a tool point moves as
     ///    y' = f + w x (y - p) with |w| <= sum_i |angle rate_i|;

@@ -160,12 +160,13 @@ class TurningSweep {
         int leafLevel() const { return int(reach.size()) - 1; }
     };
     /// A node's linear move, made the first time a query needs it: the band of its level swept
-    /// along it (its axis the middle's), the pose at the node's middle, and where the node lies
-    /// in u.
+    /// along it (its axis the middle's), the pose at the node's middle, where the node lies in u,
+    /// and the middle's phase.
     struct LinearNode {
         MoveSweep sweep;
         ToolPose middle;
         double middleU = 0.0, width = 0.0;
+        TurnPhase phase;  ///< the middle's
     };
     class NodeCache;
     /// Sets models_ and nodes_ when the linear-node search applies and its leaves lie enough
