@@ -133,7 +133,9 @@ BENCHMARK(BM_SweepBuild)->ArgsProduct({{0, 1, 2, 3}, {0, 1}})->Unit(benchmark::k
 /// tilt, ending at the tilted axis, swept within the default tolerance with its Hermite data. A
 /// turn of 0 is the same move with the end axis held, swept by the fixed-axis solver: the 3+2 move
 /// the turning one is compared with. Both query the same lines, those through the turning sweep's
-/// box below z = 0 (a stock's top), so ns_per_query of two rows is the cost ratio per dexel line.
+/// box below z = 0 (a stock's top), as the cutting loop does (bound first, then the sweep where
+/// the bound meets the line's material), so ns_per_query of two rows is the cost ratio per dexel
+/// line.
 void turningQuery(benchmark::State& state, const Vec3& start, const Vec3& end, double turn) {
     const Tool tool = benchTool(int(state.range(0)));
     Move m;
@@ -157,13 +159,23 @@ void turningQuery(benchmark::State& state, const Vec3& start, const Vec3& end, d
     const MoveSweep fixed(tool, m.start, m.end, m.axis);
     std::size_t hits = 0;
     LineHit parts[MoveSweep::kMaxParts];
+    const MoveSweep::EndFilter allEnds = [](std::size_t, const Interval&) {
+        return MoveSweep::kEndLo | MoveSweep::kEndHi;
+    };
+    std::vector<Interval> met;
+    // Per line, what the cutting loop does: the sweep's bound first, and only where it meets the
+    // care, the query (a turning sweep's with its care clipped to the bound).
     for (auto _ : state) {
         for (std::size_t i = 0; i < lines.size(); ++i) {
             if (turn == 0.0) {
-                const std::size_t n = fixed.intersectParts(lines[i], parts);
+                const MoveSweep::LocalLine q = fixed.toLocal(lines[i]);
+                if (fixed.bound(q).intersect(care[i].front()).isEmpty()) continue;
+                const std::size_t n = fixed.intersectParts(q, parts, allEnds);
                 hits += n > 0 && !parts[0].isEmpty();
             } else {
-                const std::vector<LineHit> h = sweep.intersect(lines[i], care[i]);
+                met.assign(1, sweep.bound(lines[i]).intersect(care[i].front()));
+                if (met.front().isEmpty()) continue;
+                const std::vector<LineHit> h = sweep.intersect(lines[i], met);
                 hits += !h.empty();
             }
         }
