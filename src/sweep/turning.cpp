@@ -583,10 +583,11 @@ Interval TurningSweep::bound(const Line& line) const {
 //      below the root whose end poses bound each side where care reaches beyond their intervals
 //      outside O, and whose stretch between them O holds, is settled before its sweep is made
 //      or intersected (a caller that clips care to bound(line), as the cutting loop does, leaves
-//      no care where the sweep cannot be). Only (j) and (m) are tried there; where they fail, the node takes its
-//      sweep and the test of (j) to (l) as before. The root keeps its sweep first: most lines
-//      miss it, and its two end poses are solved only where they do not. On BM_TurningQuery's
-//      bull nose at 1 degree: 23,300 -> 19,300 instructions a line; boat-xyzac's cut 7 % less.
+//      no care where the sweep cannot be). Only (j) and (m) are tried there; where they fail,
+//      the node takes its sweep and the test of (j) to (l) as before. The root keeps its sweep
+//      first: most lines miss it, and its two end poses are solved only where they do not. On
+//      BM_TurningQuery's bull nose at 1 degree: 23,300 -> 19,300 instructions a line;
+//      boat-xyzac's cut 7 % less.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     // Without a care, the answer matters wherever the sweep may be: within the line's bound.
