@@ -777,19 +777,11 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             Solved* const ends[2] = {&solved[a], &solved[b]};
             const Interval hull = ends[0]->range.hull(ends[1]->range);
             if (hull.isEmpty()) return false;
-            // Whether the crossing at end `upper` of pose e's interval bounds the node's points on
-            // the line beyond it: the model moves on from pose a (sign 1) and back from pose b.
-            const auto bounds = [&](int e, int upper) {
-                if (ends[e]->range.isEmpty()) return false;
-                const Crossing& c = crossing(*ends[e], p, upper);
-                const double out = upper ? c.across : -c.across;
-                const double sign = e == 0 ? 1.0 : -1.0;
-                return out > 0.0 && out >= axisTurn_ * w && sign * w * c.speed + w * w * c.bend < epsilon_;
-            };
-            // How far into the node, from end e, the crossing there bounds the points on the line
-            // beyond `cut` (note m): tau_e, below which (j)'s bound, with the distance D from the
-            // crossing to `cut` as slack, holds.
-            const auto reachFrom = [&](int e, int upper, double cut) {
+            // How far into the node, from end e, the crossing at end `upper` of that pose's
+            // interval bounds the points on the line beyond `cut`: the stretch tau_e below which
+            // (j)'s bound holds, with the distance D from the crossing to `cut` as slack (note m).
+            // The model moves on from pose a (sign 1) and back from pose b.
+            const auto stretch = [&](int e, int upper, double cut) {
                 if (ends[e]->range.isEmpty()) return 0.0;
                 const Crossing& c = crossing(*ends[e], p, upper);
                 const double out = upper ? c.across : -c.across;
@@ -816,39 +808,30 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                 if (!(upper ? hiOpen : loOpen) && !between) continue;
                 const int nearer = upper ? (ends[0]->range.hi <= ends[1]->range.hi ? 0 : 1)
                                          : (ends[0]->range.lo >= ends[1]->range.lo ? 0 : 1);
-                bool side = false;
-                for (const int e : {nearer, 1 - nearer}) {
-                    if (side || !bounds(e, upper)) continue;
-                    if (upper) {
-                        cut.hi = std::min(cut.hi, ends[e]->range.hi);
-                    } else {
-                        cut.lo = std::max(cut.lo, ends[e]->range.lo);
-                    }
-                    side = true;
+                // Where the line's points beyond some parameter are bounded: beyond a pose's own
+                // end where its crossing bounds the whole node (j: D = 0, tau_e > w), beyond the
+                // farther end where the two poses share it (m), or beyond the end of a pose solved
+                // at a rim or a graze between them (k, l).
+                const auto endOf = [&](int e) { return upper ? ends[e]->range.hi : ends[e]->range.lo; };
+                std::optional<double> end;
+                for (const int e : {nearer, 1 - nearer})
+                    if (!end && stretch(e, upper, endOf(e)) > w) end = endOf(e);
+                const double beyond = upper ? hull.hi : hull.lo;
+                if (!end && stretch(0, upper, beyond) + stretch(1, upper, beyond) > w) end = beyond;
+                double aimed = 0.0;
+                if (!end && !between && aim &&
+                    (corner(p, upper, *ends[0], *ends[1], aimed) || graze(p, upper, *ends[0], *ends[1], aimed)))
+                    end = aimed;
+                if (!end) {
+                    if (!between) return false;
+                    continue;
                 }
-                if (!side) {  // the two poses sharing the node (note m)
-                    const double beyond = upper ? hull.hi : hull.lo;
-                    if (reachFrom(0, upper, beyond) + reachFrom(1, upper, beyond) > w) {
-                        if (upper) {
-                            cut.hi = std::min(cut.hi, beyond);
-                        } else {
-                            cut.lo = std::max(cut.lo, beyond);
-                        }
-                        side = true;
-                    }
+                if (upper) {
+                    cut.hi = std::min(cut.hi, *end);
+                } else {
+                    cut.lo = std::max(cut.lo, *end);
                 }
-                double end = 0.0;
-                if (!side && !between && aim &&
-                    (corner(p, upper, *ends[0], *ends[1], end) || graze(p, upper, *ends[0], *ends[1], end))) {
-                    if (upper) {
-                        cut.hi = std::min(cut.hi, end);
-                    } else {
-                        cut.lo = std::max(cut.lo, end);
-                    }
-                    side = true;
-                }
-                if (!side && !between) return false;
-                bounded = bounded || side;
+                bounded = true;
             }
             if (!bounded) return false;
             return held(cut);
