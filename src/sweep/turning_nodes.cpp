@@ -72,6 +72,28 @@ double pieceRadiusBound(const ProfilePiece& piece) {
 }
 
 
+/// The largest radius the pieces [first, last) reach, or more.
+template <class It>
+double radiusBound(It first, It last) {
+    double radius = 0.0;
+    for (It i = first; i != last; ++i) radius = std::max(radius, pieceRadiusBound(*i));
+    return radius;
+}
+
+/// Note h's reach delta of a node of width w, for a band of half-height `half` and largest radius
+/// `radius` about its pivot: omega (w / 2) hypot(half, radius) + K w^2 / 8, K the pivot's bend.
+double nodeReach(double omega, double bend, double half, double radius, double w) {
+    return 0.5 * omega * std::hypot(half, radius) * w + 0.125 * bend * w * w;
+}
+
+/// The fixed-axis move of a node (note h): the pivot, `pivot` up the axis, on the chord between
+/// its places at the node's end poses a and b, the axis held at the middle pose's.
+MoveSweep chordSweep(const std::vector<ProfilePiece>& pieces, double pivot, const ToolPose& a, const ToolPose& b,
+                     const ToolPose& middle) {
+    return MoveSweep(pieces, a.tip + pivot * (a.axis - middle.axis), b.tip + pivot * (b.axis - middle.axis),
+                     middle.axis);
+}
+
 }  // namespace
 
 /// The linear nodes made so far, per part by heap index: each made at most once, by whichever
@@ -143,10 +165,7 @@ TurningSweep::LinearNode TurningSweep::makeNode(const LinearPart& m, std::uint32
     const double ua = double(heap - (std::uint32_t(1) << level)) * width, ub = ua + width, um = ua + 0.5 * width;
     const TurnPhase middle = law_.phase(um);
     const ToolPose a = law_.pose(ua), b = law_.pose(ub), mid = law_.pose(middle);
-    // The pivot runs on the chord from its place at ua to its place at ub, the axis held at the
-    // middle's: the tip is the pivot less pivot height times that axis.
-    const Vec3 start = a.tip + m.pivot * (a.axis - mid.axis), end = b.tip + m.pivot * (b.axis - mid.axis);
-    return LinearNode{MoveSweep(m.pieces[std::size_t(level)], start, end, mid.axis), mid, um, width, middle};
+    return LinearNode{chordSweep(m.pieces[std::size_t(level)], m.pivot, a, b, mid), mid, um, width, middle};
 }
 
 std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, double lo, double hi, int deepest) const {
@@ -154,14 +173,11 @@ std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, 
     LinearPart m;
     m.part = p;
     std::vector<ProfilePiece> band = clipChain(tool_.pieces(), part.first, part.last, lo, hi);
-    double radius = 0.0;
-    for (const ProfilePiece& piece : band) radius = std::max(radius, pieceRadiusBound(piece));
+    const double radius = radiusBound(band.begin(), band.end());
     m.pivot = 0.5 * (lo + hi);
-    const double turn = axisTurn_ * std::hypot(0.5 * (hi - lo), radius);
     const double bend = law_.axisPointAccelerationBound(m.pivot);
     for (int k = 0;; ++k) {
-        const double width = std::ldexp(1.0, -k);
-        m.reach.push_back(0.5 * turn * width + 0.125 * bend * width * width);
+        m.reach.push_back(nodeReach(axisTurn_, bend, 0.5 * (hi - lo), radius, std::ldexp(1.0, -k)));
         if (m.reach.back() <= epsilon_) break;
         if (k >= deepest) return std::nullopt;
     }
@@ -184,8 +200,8 @@ void TurningSweep::chooseLinearNodes() {
     std::vector<std::optional<LinearNode>> wholeRoots(parts_.size());
     for (std::size_t p = 0; p < parts_.size(); ++p) {
         const ConvexPart& part = parts_[p];
-        double radius = 0.0;
-        for (std::size_t i = part.first; i < part.last; ++i) radius = std::max(radius, pieceRadiusBound(pieces[i]));
+        const double radius = radiusBound(pieces.begin() + std::ptrdiff_t(part.first),
+                                          pieces.begin() + std::ptrdiff_t(part.last));
         // Bands of equal height (note i), their bounds grown by epsilon kept off the part's
         // joints.
         const double height = part.z1 - part.z0, apart = 2.0 * (epsilon_ + kBandJointGap);
@@ -234,15 +250,12 @@ void TurningSweep::chooseLinearNodes() {
     // The tool's own parts, as a ball end's ball is inside the lowest.
     const ToolPose start = law_.pose(0.0), end = law_.pose(1.0), middle = law_.pose(0.5);
     for (const ConvexPart& part : tool_.convexParts()) {
-        double radius = 0.0;
-        for (std::size_t i = part.first; i < part.last; ++i) radius = std::max(radius, pieceRadiusBound(pieces[i]));
-        const double pivot = 0.5 * (part.z0 + part.z1);
-        const double reach = 0.5 * axisTurn_ * std::hypot(0.5 * (part.z1 - part.z0), radius) +
-                             0.125 * law_.axisPointAccelerationBound(pivot);
         const std::vector<ProfilePiece> chain(pieces.begin() + std::ptrdiff_t(part.first),
                                               pieces.begin() + std::ptrdiff_t(part.last));
-        outer_.emplace_back(mitredOffsetChain(chain, reach + epsilon_), start.tip + pivot * (start.axis - middle.axis),
-                            end.tip + pivot * (end.axis - middle.axis), middle.axis);
+        const double pivot = 0.5 * (part.z0 + part.z1);
+        const double reach = nodeReach(axisTurn_, law_.axisPointAccelerationBound(pivot), 0.5 * (part.z1 - part.z0),
+                                       radiusBound(chain.begin(), chain.end()), 1.0);
+        outer_.push_back(chordSweep(mitredOffsetChain(chain, reach + epsilon_), pivot, start, end, middle));
     }
 }
 
