@@ -378,6 +378,52 @@ TEST_CASE("turning sweep vs oracle: dexel lines through a rim, where the line's 
     CHECK(tally.linear >= tally.cases / 2);
 }
 
+TEST_CASE("turning sweep vs oracle: lines nearly along a face of a pose, while the axis turns fast",
+          "[sweep][turning]") {
+    // A line through a point on a part's side, bottom or top at the first, last or some middle
+    // pose, within 1e-6 to 0.1 rad of that face's tangent plane. There the face's normal is
+    // nearly across the line, so as the axis turns the face soon tilts to take in points of the
+    // line far from its crossing: the stretch by which a crossing bounds the line (turning.cpp,
+    // notes j and m) must stop where the turn can tilt the face past the line, |n.d| / omega.
+    std::mt19937_64 rng(20261129);
+    Tally tally;
+    for (int i = 0, n = scaled(300); i < n; ++i) {
+        const double angle = degrees(std::pow(10.0, cases::uniform(rng, -0.5, 2.0)));
+        Case c = randomCase(rng, randomMove(rng, angle, rng() % 3 == 0 ? 0.0 : cases::uniform(rng, 0.05, 40.0)));
+        const SweepOracle o(c.model->parts, c.move);
+        const double poses[] = {0.0, 1.0, cases::uniform(rng, 0, 1)};
+        Vec3 tip, axis;
+        o.pose(poses[rng() % 3], tip, axis);
+        const oracle::Part& part = c.model->parts[rng() % c.model->parts.size()];
+        const Vec3 radial = cases::randomPerpendicular(rng, axis);
+        Vec3 point, normal;
+        switch (rng() % 3) {
+        case 0: {  // the side, its normal from the radius's slope (a central difference)
+            constexpr double kStep = 1e-6;
+            const double z = cases::uniform(rng, part.za + 2 * kStep, part.zb - 2 * kStep);
+            const double slope = (part.radius(z + kStep) - part.radius(z - kStep)) / (2 * kStep);
+            point = tip + z * axis + part.radius(z) * radial;
+            normal = glm::normalize(radial - slope * axis);
+            break;
+        }
+        case 1:  // the bottom
+            point = tip + part.za * axis + cases::uniform(rng, 0, 1) * part.radius(part.za) * radial;
+            normal = -axis;
+            break;
+        default:  // the top
+            point = tip + part.zb * axis + cases::uniform(rng, 0, 1) * part.radius(part.zb) * radial;
+            normal = axis;
+            break;
+        }
+        const double tilt = (rng() % 2 ? 1.0 : -1.0) * std::pow(10.0, cases::uniform(rng, -6, -1));
+        const Vec3 dir = glm::normalize(cases::randomPerpendicular(rng, normal) + tilt * normal);
+        c.line = Line{point - cases::uniform(rng, -30, 30) * dir, dir};
+        checkCase(c, tally, rng);
+    }
+    report(tally);
+    CHECK(tally.linear >= tally.cases / 2);
+}
+
 TEST_CASE("turning sweep vs oracle: the axis turning through a lattice direction", "[sweep][turning]") {
     std::mt19937_64 rng(20261127);
     Tally tally;
