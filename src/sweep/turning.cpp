@@ -316,7 +316,10 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
             const ToolPose p = law_.pose(double(j) / chords_);
             ball.centres.push_back(p.tip + ball.zc * p.axis);
         }
-    for (const ConvexPart& part : parts_) grownEpsilon_.push_back(offsetPart(tool_, part, epsilon_));
+    for (const ConvexPart& part : parts_) {
+        grownEpsilon_.push_back(offsetPart(tool_, part, epsilon_));
+        faces_.push_back(meridianFaces(tool_.pieces(), part));
+    }
     for (const Ball& ball : balls_) {
         const double r = ball.rho + epsilon_;
         grownEpsilon_.push_back({ArcPiece{ball.zc - r, ball.zc + r, 0.0, ball.zc, r}});

@@ -27,19 +27,20 @@ constexpr double kRimAngle = 1e-4;
 
 /// A face of a convex part at a pose (forEachFace): its distance from a point (to the end faces,
 /// the disks; to a lateral piece, to its point at the same height, or its nearer end) and its
-/// outward normal there.
+/// outward normal there in the meridian plane, (across the axis, along it).
 struct Face {
     double gap;
-    Vec3 n;
+    double nr, nz;
+    /// The normal in space, at a point whose direction across the axis is `radial`.
+    Vec3 normal(const Vec3& radial, const Vec3& axis) const { return nr * radial + nz * axis; }
 };
 
-/// Visits the faces of convex part `cp` of `tool` at pose `ps`, with their gaps to x: the bottom
-/// face (normal -a), the lateral pieces (meridianNormal) and the top face (+a), in order up the
-/// meridian; faces k and k + 1 meet at a rim. Sets x's distance rho from the axis and its unit
-/// direction `radial` across the axis (any, on the axis).
-template <class Visit>
-void forEachFace(const Tool& tool, const ConvexPart& cp, const ToolPose& ps, const Vec3& x, double& rho, Vec3& radial,
-                 Visit&& visit) {
+/// Visits the faces of a convex part (TurningSweep::meridianFaces) at pose `ps`, with their gaps
+/// to x, in order up the meridian; faces k and k + 1 meet at a rim. Sets x's distance rho from the
+/// axis and its unit direction `radial` across the axis (any, on the axis).
+template <class Faces, class Visit>
+void forEachFace(const Faces& faces, const ToolPose& ps, const Vec3& x, double& rho, Vec3& radial, Visit&& visit) {
+    using Kind = decltype(faces.front().kind);
     const Vec3 d = x - ps.tip;
     const double z = glm::dot(d, ps.axis);
     radial = d - z * ps.axis;
@@ -50,40 +51,78 @@ void forEachFace(const Tool& tool, const ConvexPart& cp, const ToolPose& ps, con
         const Vec3 other = std::abs(ps.axis.x) < 0.9 ? Vec3(1.0, 0.0, 0.0) : Vec3(0.0, 1.0, 0.0);
         radial = glm::normalize(glm::cross(ps.axis, other));
     }
-    const auto& pieces = tool.pieces();
-    // The distance to the end face at height ze, a disk of radius re.
-    const auto disk = [&](double ze, double re) {
-        const double dr = std::max(rho - re, 0.0), dz = z - ze;
-        return std::sqrt(dr * dr + dz * dz);
-    };
-    visit(Face{disk(cp.z0, pieceRadius(pieces[cp.first], cp.z0)), -ps.axis});
-    for (std::size_t i = cp.first; i < cp.last; ++i) {
-        const double z0 = pieceZ0(pieces[i]), z1 = pieceZ1(pieces[i]);
-        const double zc = std::clamp(z, z0, z1);
-        const double R = pieceRadius(pieces[i], zc);
-        double nr = 0.0, nz = 0.0;
-        meridianNormal(pieces[i], R, zc, nr, nz);
+    for (const auto& f : faces) {
+        if (f.kind == Kind::Disk) {  // the distance to a disk of radius r0 at height z0
+            const double dr = std::max(rho - f.r0, 0.0), dz = z - f.z0;
+            visit(Face{std::sqrt(dr * dr + dz * dz), f.nr, f.nz});
+            continue;
+        }
+        // The lateral point at x's height, clamped to the piece (pieceRadius, meridianNormal).
+        const double zc = std::clamp(z, f.z0, f.z1);
+        double R = 0.0, nr = f.nr, nz = f.nz;
+        if (f.kind == Kind::Cone) {
+            R = f.r0 + std::clamp((zc - f.z0) / (f.z1 - f.z0), 0.0, 1.0) * (f.r1 - f.r0);
+        } else {
+            const double dz = zc - f.zc;
+            R = f.rc + std::sqrt(std::max(0.0, f.rho * f.rho - dz * dz));
+            const double mr = std::max(0.0, R - f.rc), len = std::sqrt(mr * mr + dz * dz);
+            nr = len == 0.0 ? 1.0 : mr / len;  // the circle's centre: the equator's normal
+            nz = len == 0.0 ? 0.0 : dz / len;
+        }
         const double dr = rho - R, dz = z - zc;
-        visit(Face{std::sqrt(dr * dr + dz * dz), nr * radial + nz * ps.axis});
+        visit(Face{std::sqrt(dr * dr + dz * dz), nr, nz});
     }
-    visit(Face{disk(cp.z1, pieceRadius(pieces[cp.last - 1], cp.z1)), ps.axis});
 }
 
 }  // namespace
 
+std::vector<TurningSweep::MeridianFace> TurningSweep::meridianFaces(const std::vector<ProfilePiece>& pieces,
+                                                                    const ConvexPart& part) {
+    std::vector<MeridianFace> faces;
+    MeridianFace bottom;
+    bottom.z0 = bottom.z1 = part.z0;
+    bottom.r0 = pieceRadius(pieces[part.first], part.z0);
+    bottom.nz = -1.0;
+    faces.push_back(bottom);
+    for (std::size_t i = part.first; i < part.last; ++i) {
+        MeridianFace f;
+        f.z0 = pieceZ0(pieces[i]);
+        f.z1 = pieceZ1(pieces[i]);
+        if (const auto* c = std::get_if<ConePiece>(&pieces[i])) {
+            f.kind = MeridianFace::Kind::Cone;
+            f.r0 = c->r0;
+            f.r1 = c->r1;
+            meridianNormal(pieces[i], c->r0, c->z0, f.nr, f.nz);
+        } else {
+            const ArcPiece& a = std::get<ArcPiece>(pieces[i]);
+            f.kind = MeridianFace::Kind::Arc;
+            f.rc = a.rc;
+            f.zc = a.zc;
+            f.rho = a.rho;
+        }
+        faces.push_back(f);
+    }
+    MeridianFace top;
+    top.z0 = top.z1 = part.z1;
+    top.r0 = pieceRadius(pieces[part.last - 1], part.z1);
+    top.nz = 1.0;
+    faces.push_back(top);
+    return faces;
+}
+
 Vec3 TurningSweep::faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x, int* face) const {
     double rho = 0.0;
     Vec3 radial(0.0);
-    Face nearest{std::numeric_limits<double>::infinity(), Vec3(0.0)};
+    Face nearest{std::numeric_limits<double>::infinity(), 0.0, 0.0};
     int k = 0;
-    forEachFace(tool_, parts_[part], pose, x, rho, radial, [&](const Face& f) {
+    forEachFace(faces_[part], pose, x, rho, radial, [&](const Face& f) {
         if (f.gap < nearest.gap) {
             nearest = f;
             if (face) *face = k;
         }
         ++k;
     });
-    return nearest.n;
+    return nearest.normal(radial, pose.axis);
 }
 
 std::optional<TurningSweep::Rim> TurningSweep::rim(std::size_t part, int k) const {
@@ -153,15 +192,14 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
         sharp = false;
         return;
     }
-    const ConvexPart& cp = parts_[part];
     double rho = 0.0;
     Vec3 radial(0.0);
     boost::container::small_vector<Face, 8> faces;
-    forEachFace(tool_, cp, ps, x, rho, radial, [&](const Face& f) { faces.push_back(f); });
+    forEachFace(faces_[part], ps, x, rho, radial, [&](const Face& f) { faces.push_back(f); });
     std::size_t nearest = 0;
     for (std::size_t k = 1; k < faces.size(); ++k)
         if (faces[k].gap < faces[nearest].gap) nearest = k;
-    normal = faces[nearest].n;
+    normal = faces[nearest].normal(radial, ps.axis);
     sharp = false;
     const double nearRim = kRimReach * epsilon_;
     const Vec3 tangent = glm::cross(ps.axis, radial);
@@ -184,14 +222,15 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     };
     const Face* other = nullptr;
     for (std::size_t k = 0; k < faces.size() && !other; ++k)
-        if (k != nearest && faces[k].gap <= nearRim && glm::dot(faces[k].n, normal) < std::cos(kRimAngle))
+        if (k != nearest && faces[k].gap <= nearRim &&
+            glm::dot(faces[k].normal(radial, ps.axis), normal) < std::cos(kRimAngle))
             other = &faces[k];
     if (other) {
         // On a rim, a circle about the axis (on the axis, an apex: a point): the swept rim's
         // normal where it grazes; elsewhere the end lies on a crease of the swept volume. So does
         // a rim of the first or last pose, where the rim's swept surface starts or stops and meets
         // that pose's own faces at an angle.
-        const Vec3 n1 = normal, n2 = other->n;
+        const Vec3 n1 = normal, n2 = other->normal(radial, ps.axis);
         normal = glm::normalize(n1 + n2);
         sharp = true;
         if (rho <= 0.0 || u <= 0.0 || u >= 1.0) return;

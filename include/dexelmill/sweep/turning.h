@@ -180,6 +180,20 @@ class TurningSweep {
     const LinearNode& linearNode(std::size_t band, std::uint32_t heap, std::unique_ptr<LinearNode>& scratch) const;
     /// Node `heap` of the search of `band`, made.
     LinearNode makeNode(const LinearPart& band, std::uint32_t heap) const;
+    /// A face of a convex part in its meridian half-plane, as the searches for the faces near a
+    /// point take it (turning_normals.cpp): a disk at height z0 (= z1), or a lateral cone or arc
+    /// on [z0, z1]. A disk's and a cone's outward normal, (nr across the axis, nz along it), is
+    /// the same all over the face and kept; an arc's is found at its point.
+    struct MeridianFace {
+        enum class Kind { Disk, Cone, Arc } kind = Kind::Disk;
+        double z0 = 0.0, z1 = 0.0;
+        double r0 = 0.0, r1 = 0.0;           ///< a disk's radius (r0), a cone's at z0 and z1
+        double nr = 0.0, nz = 0.0;           ///< a disk's or a cone's normal
+        double rc = 0.0, zc = 0.0, rho = 0.0;  ///< an arc's circle (ArcPiece)
+    };
+    /// The faces of convex part `part` in order up the meridian: the bottom disk, the lateral
+    /// pieces, the top disk (faceNormal's indices).
+    static std::vector<MeridianFace> meridianFaces(const std::vector<ProfilePiece>& pieces, const ConvexPart& part);
     /// The outward normal of the face of part `part` at pose `pose` nearest the point x
     /// (turning_normals.cpp); `face`, when given, gets that face's index up the meridian (0 the
     /// bottom face, then the lateral pieces, then the top face).
@@ -236,6 +250,8 @@ class TurningSweep {
     /// With linear nodes, per convex part of the tool (a ball end whole), the part grown by its
     /// root node's reach plus epsilon, swept along the root's move: bound() takes their boxes.
     std::vector<MoveSweep> outer_;
+    /// Per part of parts_, its faces (meridianFaces).
+    std::vector<std::vector<MeridianFace>> faces_;
     /// Each part of parts_, then each ball, grown by epsilon: the reach that closes a gap between
     /// two intervals. An output piece's part index counts the same way.
     std::vector<std::vector<ProfilePiece>> grownEpsilon_;
