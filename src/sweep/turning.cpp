@@ -805,9 +805,8 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
                                                    : std::numeric_limits<double>::infinity();
                 return axisTurn_ > 0.0 ? std::min(root, out / axisTurn_) : root;
             };
-            // Only a side whose stretch beyond both poses' intervals O leaves open needs a bound,
-            // which the nearer pose's gives best; where only the stretch between them is open,
-            // either may close it.
+            // Only a side whose stretch beyond both poses' intervals O leaves open needs a bound;
+            // where only the stretch between them is open, either pose may close it.
             const bool loOpen = !held({swept.lo, std::min(hull.lo, swept.hi)});
             const bool hiOpen = !held({std::max(hull.hi, swept.lo), swept.hi});
             const bool between = !loOpen && !hiOpen;
@@ -815,15 +814,20 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
             bool bounded = false;
             for (const int upper : {1, 0}) {
                 if (!(upper ? hiOpen : loOpen) && !between) continue;
-                const int nearer = upper ? (ends[0]->range.hi <= ends[1]->range.hi ? 0 : 1)
-                                         : (ends[0]->range.lo >= ends[1]->range.lo ? 0 : 1);
+                // The pose whose end is the farther is tried first: where the end moves outward
+                // from one pose to the other, the face at the nearer advances towards the farther's
+                // end, and only the farther's crossing can bound the node alone (on
+                // BM_TurningShortQuery's flat end, the nearer did so on 56 sides in 45,682, the
+                // farther on 38,148), so the nearer's crossing is found only where that fails.
+                const int farther = upper ? (ends[0]->range.hi > ends[1]->range.hi ? 0 : 1)
+                                          : (ends[0]->range.lo < ends[1]->range.lo ? 0 : 1);
                 // Where the line's points beyond some parameter are bounded: beyond a pose's own
                 // end where its crossing bounds the whole node (j: D = 0, tau_e > w), beyond the
                 // farther end where the two poses share it (m), or beyond the end of a pose solved
                 // at a rim or a graze between them (k, l).
                 const auto endOf = [&](int e) { return upper ? ends[e]->range.hi : ends[e]->range.lo; };
                 std::optional<double> end;
-                for (const int e : {nearer, 1 - nearer})
+                for (const int e : {farther, 1 - farther})
                     if (!end && stretch(e, upper, endOf(e)) > w) end = endOf(e);
                 const double beyond = upper ? hull.hi : hull.lo;
                 if (!end && stretch(0, upper, beyond) + stretch(1, upper, beyond) > w) end = beyond;
