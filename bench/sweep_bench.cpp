@@ -159,18 +159,22 @@ void turningQuery(benchmark::State& state, const Vec3& start, const Vec3& end, d
     const MoveSweep fixed(tool, m.start, m.end, m.axis);
     std::size_t hits = 0;
     LineHit parts[MoveSweep::kMaxParts];
-    const MoveSweep::EndFilter allEnds = [](std::size_t, const Interval&) {
-        return MoveSweep::kEndLo | MoveSweep::kEndHi;
+    // The Hermite data only for the ends within the line's care, where material takes them.
+    const Interval* within = nullptr;  // the care of the line being queried
+    const MoveSweep::EndFilter inCare = [&within](std::size_t, const Interval& range) {
+        return (within->contains(range.lo) ? MoveSweep::kEndLo : 0u) | (within->contains(range.hi) ? MoveSweep::kEndHi : 0u);
     };
     std::vector<Interval> met;
     // Per line, what the cutting loop does: the sweep's bound first, and only where it meets the
-    // care, the query (a turning sweep's with its care clipped to the bound).
+    // care, the query (a turning sweep's with its care clipped to the bound), with the Hermite
+    // data of the ends within the care.
     for (auto _ : state) {
         for (std::size_t i = 0; i < lines.size(); ++i) {
             if (turn == 0.0) {
                 const MoveSweep::LocalLine q = fixed.toLocal(lines[i]);
                 if (fixed.bound(q).intersect(care[i].front()).isEmpty()) continue;
-                const std::size_t n = fixed.intersectParts(q, parts, allEnds);
+                within = &care[i].front();
+                const std::size_t n = fixed.intersectParts(q, parts, inCare);
                 hits += n > 0 && !parts[0].isEmpty();
             } else {
                 met.assign(1, sweep.bound(lines[i]).intersect(care[i].front()));

@@ -992,19 +992,26 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         }
         pieces.push_back(p);
     }
+    // The Hermite data only for the ends within care: an end outside it meets no material, so no
+    // segment end takes its normal (as MoveSweep::EndFilter spares the cutting loop's fixed-axis
+    // sweeps). An end a leaf made takes its node's; any other, its pose's.
+    const auto hermite = [&](double t, double u, std::size_t part, std::uint32_t node, bool upper, Vec3& normal,
+                             bool& sharp) {
+        if (!care.empty() &&
+            std::none_of(care.begin(), care.end(), [t](const Interval& c) { return c.lo <= t && t <= c.hi; }))
+            return;
+        if (node != 0) {
+            nodeEndNormal(line, t, part, node, upper, normal, sharp);
+        } else {
+            endNormal(line, t, u, part, normal, sharp);
+        }
+    };
+    out.reserve(pieces.size());
     for (const Piece& p : pieces) {
         LineHit hit;
         hit.range = p.range;
-        if (p.nodeLo != 0) {
-            nodeEndNormal(line, p.range.lo, p.partLo, p.nodeLo, false, hit.normalLo, hit.sharpLo);
-        } else {
-            endNormal(line, p.range.lo, p.uLo, p.partLo, hit.normalLo, hit.sharpLo);
-        }
-        if (p.nodeHi != 0) {
-            nodeEndNormal(line, p.range.hi, p.partHi, p.nodeHi, true, hit.normalHi, hit.sharpHi);
-        } else {
-            endNormal(line, p.range.hi, p.uHi, p.partHi, hit.normalHi, hit.sharpHi);
-        }
+        hermite(p.range.lo, p.uLo, p.partLo, p.nodeLo, false, hit.normalLo, hit.sharpLo);
+        hermite(p.range.hi, p.uHi, p.partHi, p.nodeHi, true, hit.normalHi, hit.sharpHi);
         out.push_back(hit);
     }
     return out;

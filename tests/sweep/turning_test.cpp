@@ -269,3 +269,49 @@ TEST_CASE("turning sweep: a long cutter is searched in bands, and their ends tak
     const NoNodeBudget none;
     CHECK(sameHits(TurningSweep(tool, m), lines, kept) > 2000);
 }
+
+TEST_CASE("turning sweep: Hermite data only for the ends within the care", "[sweep][turning]") {
+    // The cutting loop passes a dexel's material as the care: an end outside it meets no
+    // material, and its Hermite data are left zero. A care that holds the whole bound changes
+    // nothing, to the bit; one that stops inside the first interval leaves that interval's upper
+    // end (and every end past it) without them, and gives the others theirs.
+    const Tool tool = flatEndMill(10.0, {50.0, 50.0});
+    const TurningSweep sweep(tool, tiltedTurn(1.0));
+    std::mt19937_64 rng(20261130);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    std::normal_distribution<double> gauss;
+    int inside = 0, outside = 0;
+    for (int i = 0; i < 500; ++i) {
+        const ToolPose p = sweep.pose(uniform(rng));
+        const Vec3 dir = glm::normalize(Vec3(gauss(rng), gauss(rng), gauss(rng)));
+        const Line line{p.tip + 50.0 * uniform(rng) * p.axis + 4.0 * glm::normalize(glm::cross(p.axis, dir)) - 40.0 * dir,
+                        dir};
+        const std::vector<LineHit> all = sweep.intersect(line);
+        if (all.empty()) continue;
+        const Interval reach = sweep.bound(line);
+        const std::vector<LineHit> whole = sweep.intersect(line, {reach});
+        REQUIRE(whole.size() == all.size());
+        for (std::size_t k = 0; k < all.size(); ++k) {
+            CHECK(whole[k].range.lo == all[k].range.lo);
+            CHECK(whole[k].range.hi == all[k].range.hi);
+            CHECK(whole[k].normalLo == all[k].normalLo);
+            CHECK(whole[k].normalHi == all[k].normalHi);
+        }
+        const Interval care{reach.lo, 0.5 * (all[0].range.lo + all[0].range.hi)};
+        for (const LineHit& h : sweep.intersect(line, {care}))
+            for (const auto& [t, n, sharp] :
+                 {std::tuple(h.range.lo, h.normalLo, h.sharpLo), std::tuple(h.range.hi, h.normalHi, h.sharpHi)}) {
+                INFO("line " << i << " end t = " << t << ", care [" << care.lo << ", " << care.hi << "]");
+                if (care.contains(t)) {
+                    CHECK(std::abs(glm::length(n) - 1.0) <= 1e-9);
+                    ++inside;
+                } else {
+                    CHECK(n == Vec3(0.0));
+                    CHECK_FALSE(sharp);
+                    ++outside;
+                }
+            }
+    }
+    CHECK(inside > 200);
+    CHECK(outside > 200);
+}

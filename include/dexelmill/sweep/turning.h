@@ -127,8 +127,9 @@ class TurningSweep {
     /// marked sharp near a rim that does not graze, a crease of the swept volume.
     /// @param care where along the line the answer matters (sorted, disjoint line parameters, for
     /// example a dexel's material); empty means everywhere. Outside it, guarantee 2 is waived:
-    /// only the stretches of O that meet `care` are complete. A care clipped to bound(line)
-    /// saves the search the stretches where the sweep cannot be (note n).
+    /// only the stretches of O that meet `care` are complete, and only the ends within `care` have
+    /// their Hermite data (the others' are zero and not sharp: no material takes them). A care
+    /// clipped to bound(line) saves the search the stretches where the sweep cannot be (note n).
     std::vector<LineHit> intersect(const Line& line, const std::vector<Interval>& care = {}) const;
     /// @brief As intersect, without the Hermite data.
     std::vector<Interval> intersectAll(const Line& line) const;
