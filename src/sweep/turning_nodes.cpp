@@ -2,6 +2,7 @@
 // them and how each part is cut into bands, the fixed-axis sweep of each node, and the cache that
 // keeps the nodes every query shares.
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <memory>
@@ -21,11 +22,11 @@ using turning::kMaxLinearLevel;
 namespace {
 
 /// The deepest level whose linear nodes are kept (NodeCache): a part keeps at most
-/// 2^(kMaxKeptLevel + 1) nodes, in a table of that many slots (1 MiB) made with the sweep. Deeper
-/// nodes are made by each query that needs them and dropped, as few lines share a node that deep
-/// (on boat-xyzac at h = 0.5 mm, about 2 queries a node at level 13 and 1 at level 14). On the
-/// 10 degree rows of BM_TurningQuery, whose leaves lie at level 16, keeping levels down to 14
-/// only was 1.3 times slower.
+/// 2^(kMaxKeptLevel + 1) nodes, in a table per level (2^k slots at level k, 512 kB at level 16)
+/// made when a query first needs a node of it. Deeper nodes are made by each query that needs
+/// them and dropped, as few lines share a node that deep (on boat-xyzac at h = 0.5 mm, about 2
+/// queries a node at level 13 and 1 at level 14). On the 10 degree rows of BM_TurningQuery,
+/// whose leaves lie at level 16, keeping levels down to 14 only was 1.3 times slower.
 constexpr int kMaxKeptLevel = 16;
 
 /// How many levels above the static search's closing level (note c) the linear nodes' leaves
@@ -98,18 +99,25 @@ MoveSweep chordSweep(const std::vector<ProfilePiece>& pieces, double pivot, cons
 
 /// The linear nodes made so far, per part by heap index: each made at most once, by whichever
 /// query needs it first (one that loses the race to publish its node drops it), and read by
-/// every query after.
+/// every query after. A level's table of slots is made the same way, by the first query that
+/// needs one of its nodes: most moves touch a few nodes of a few levels, and a table made whole
+/// with the sweep (up to 1 MiB a band, zeroed, then scanned to free it) cost boat-xyzac 2.5 % of
+/// its instructions.
 class TurningSweep::NodeCache {
   public:
-    explicit NodeCache(const std::vector<LinearPart>& parts) {
-        for (const LinearPart& p : parts) {
-            sizes_.push_back(std::size_t(2) << std::min(p.leafLevel(), kMaxKeptLevel));
-            slots_.emplace_back(new std::atomic<const LinearNode*>[sizes_.back()]());
-        }
+    explicit NodeCache(const std::vector<LinearPart>& parts) : levels_(parts.size()) {
+        for (const LinearPart& p : parts) keptLevels_.push_back(std::min(p.leafLevel(), kMaxKeptLevel));
+        for (auto& part : levels_)
+            for (auto& table : part) table.store(nullptr, std::memory_order_relaxed);
     }
     ~NodeCache() {
-        for (std::size_t p = 0; p < slots_.size(); ++p)
-            for (std::size_t i = 0; i < sizes_[p]; ++i) delete slots_[p][i].load(std::memory_order_relaxed);
+        for (auto& part : levels_)
+            for (int k = 0; k <= kMaxKeptLevel; ++k) {
+                std::atomic<const LinearNode*>* table = part[std::size_t(k)].load(std::memory_order_relaxed);
+                if (!table) continue;
+                for (std::size_t i = 0; i < (std::size_t(1) << k); ++i) delete table[i].load(std::memory_order_relaxed);
+                delete[] table;
+            }
         keptNodes.fetch_sub(kept_.load(std::memory_order_relaxed), std::memory_order_relaxed);
     }
     NodeCache(const NodeCache&) = delete;
@@ -119,8 +127,9 @@ class TurningSweep::NodeCache {
     /// budget already, made in `scratch`.
     template <class Make>
     const LinearNode& get(std::size_t part, std::uint32_t heap, std::unique_ptr<LinearNode>& scratch, Make&& make) {
-        if (heap >= sizes_[part]) return *(scratch = std::make_unique<LinearNode>(make()));
-        std::atomic<const LinearNode*>& slot = slots_[part][heap];
+        const int level = heapLevel(heap);
+        if (level > keptLevels_[part]) return *(scratch = std::make_unique<LinearNode>(make()));
+        std::atomic<const LinearNode*>& slot = table(part, level)[heap - (std::uint32_t(1) << level)];
         if (const LinearNode* n = slot.load(std::memory_order_acquire)) return *n;
         if (keptNodes.fetch_add(1, std::memory_order_relaxed) >= nodeBudget.load(std::memory_order_relaxed)) {
             keptNodes.fetch_sub(1, std::memory_order_relaxed);
@@ -137,8 +146,19 @@ class TurningSweep::NodeCache {
     }
 
   private:
-    std::vector<std::unique_ptr<std::atomic<const LinearNode*>[]>> slots_;
-    std::vector<std::size_t> sizes_;
+    /// Level k's slots of part `part`, made (zeroed) and published by the first query to need them.
+    std::atomic<const LinearNode*>* table(std::size_t part, int k) {
+        std::atomic<std::atomic<const LinearNode*>*>& entry = levels_[part][std::size_t(k)];
+        if (auto* t = entry.load(std::memory_order_acquire)) return t;
+        std::unique_ptr<std::atomic<const LinearNode*>[]> made(new std::atomic<const LinearNode*>[std::size_t(1) << k]());
+        std::atomic<const LinearNode*>* seen = nullptr;
+        if (entry.compare_exchange_strong(seen, made.get(), std::memory_order_acq_rel, std::memory_order_acquire))
+            return made.release();
+        return seen;
+    }
+
+    std::vector<std::array<std::atomic<std::atomic<const LinearNode*>*>, kMaxKeptLevel + 1>> levels_;
+    std::vector<int> keptLevels_;  ///< per part, the deepest level it keeps
     std::atomic<std::size_t> kept_{0};
 };
 
