@@ -338,6 +338,8 @@ MoveSweep::MoveSweep(const PartPieces& partList, const Vec3& start, const Vec3& 
         boxAxes_ = {Vec3(0.0, 1.0, 0.0), Vec3(-fnl / flen, 0.0, fd / flen), feedLocal_ / flen};
     else
         boxAxes_ = {Vec3(0.0, 1.0, 0.0), Vec3(1.0, 0.0, 0.0), Vec3(0.0, 0.0, 1.0)};
+    for (int i = 0; i < 3; ++i)
+        worldBoxAxes_[i] = boxAxes_[i].x * frame_.d + boxAxes_[i].y * frame_.e + boxAxes_[i].z * frame_.n;
     for (Part& part : parts_) {
         for (int i = 0; i < 3; ++i) {
             const Vec3& a = boxAxes_[i];
@@ -596,7 +598,34 @@ Interval MoveSweep::intersectLocal(const Part& part, const LocalLine& q, [[maybe
     return out;
 }
 
-Interval MoveSweep::bound(const Line& line) const { return bound(toLocal(line)); }
+// The slabs of boxLocal in world coordinates: with a = rel + vShift w (toLocal), q.o . b_i =
+// a . W_i and q.w . b_i = w . W_i, W_i the box axis b_i in the world, so each slab's range in the
+// line's own parameter is the local one shifted by vShift. So a line is tested without its frame,
+// which only a line that meets a box needs (most of a move's window misses it). A line along the
+// tool axis takes bound(LocalLine)'s narrower range.
+Interval MoveSweep::bound(const Line& line) const {
+    const Vec3& w = line.dir;
+    if (kind_ != SweepKind::Static && glm::dot(w, frame_.d) == 0.0 && glm::dot(w, frame_.e) == 0.0)
+        return bound(toLocal(line));
+    const Vec3 rel = line.origin - start_;
+    double oa[3], wa[3];
+    for (int i = 0; i < 3; ++i) oa[i] = glm::dot(rel, worldBoxAxes_[i]), wa[i] = glm::dot(w, worldBoxAxes_[i]);
+    Interval hull;
+    for (const Part& part : parts_) {
+        Interval range = Interval::all();
+        for (int i = 0; i < 3 && !range.isEmpty(); ++i) {
+            const double lo = part.box[i].lo - sweep_tol::kBoxSlack - oa[i], hi = part.box[i].hi + sweep_tol::kBoxSlack - oa[i];
+            if (wa[i] == 0.0) {
+                if (lo > 0.0 || hi < 0.0) range = Interval::empty();
+                continue;
+            }
+            const double v0 = lo / wa[i], v1 = hi / wa[i];
+            range = range.intersect(wa[i] > 0.0 ? Interval{v0, v1} : Interval{v1, v0});
+        }
+        hull = hull.hull(range);
+    }
+    return hull;
+}
 
 Interval MoveSweep::bound(const LocalLine& q) const {
     Interval hull;

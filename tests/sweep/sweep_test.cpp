@@ -291,9 +291,17 @@ TEST_CASE("sweep: the cheap bound holds every line's interval", "[sweep]") {
                 const Vec3 origin(uniform(-8, 16), uniform(-6, 12), uniform(-6, 12));
                 const Line line{origin - 50.0 * dir, dir};
                 const Interval exact = s.intersect(line), cheap = s.bound(line);
+                // The world-frame boxes (bound(Line)) and the move frame's (bound(LocalLine)) are
+                // the same slabs, up to rounding.
+                const Interval framed = s.bound(s.toLocal(line));
+                INFO(tool.description() << " line " << i);
+                REQUIRE(cheap.isEmpty() == framed.isEmpty());
+                if (!cheap.isEmpty()) {
+                    CHECK(std::abs(cheap.lo - framed.lo) <= 1e-10);
+                    CHECK(std::abs(cheap.hi - framed.hi) <= 1e-10);
+                }
                 if (exact.isEmpty()) continue;
                 ++hits;
-                INFO(tool.description() << " line " << i);
                 REQUIRE(!cheap.isEmpty());
                 CHECK(cheap.lo <= exact.lo);
                 CHECK(cheap.hi >= exact.hi);

@@ -223,6 +223,9 @@ private:
     /// Axes of the parts' oriented boxes in the frame: e, and two spanning the d-n plane (across
     /// and along the feed for a moving tool).
     std::array<Vec3, 3> boxAxes_{};
+    /// boxAxes_ in world coordinates, with which bound(Line) tests a line against the boxes
+    /// without putting it in the frame.
+    std::array<Vec3, 3> worldBoxAxes_{};
     double feedLength_ = 0.0;
     double creaseU_ = 0.0;  ///< kCrease / |f|: the feed parameters that close to 0 or 1 reach a static tool
     // Per-move constants of a General sweep's queries.
