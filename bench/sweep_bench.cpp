@@ -171,10 +171,9 @@ void turningQuery(benchmark::State& state, const Vec3& start, const Vec3& end, d
     for (auto _ : state) {
         for (std::size_t i = 0; i < lines.size(); ++i) {
             if (turn == 0.0) {
-                const MoveSweep::LocalLine q = fixed.toLocal(lines[i]);
-                if (fixed.bound(q).intersect(care[i].front()).isEmpty()) continue;
+                if (fixed.bound(lines[i]).intersect(care[i].front()).isEmpty()) continue;
                 within = &care[i].front();
-                const std::size_t n = fixed.intersectParts(q, parts, inCare);
+                const std::size_t n = fixed.intersectParts(fixed.toLocal(lines[i]), parts, inCare);
                 hits += n > 0 && !parts[0].isEmpty();
             } else {
                 met.assign(1, sweep.bound(lines[i]).intersect(care[i].front()));

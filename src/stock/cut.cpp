@@ -219,17 +219,18 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                 // (most dexels under a finishing pass were cut down by the moves before).
                 const bool cuts = g.cutting && cutWin.meets(ib, ic, segs);
                 const bool shank = g.shank && shankWin.meets(ib, ic, segs);
-                // A fixed-axis sweep's line in its frame, made once for the bound and the hits.
+                const auto boundOf = [&](const RegionSweep& sweep) {
+                    return sweep.fixed ? sweep.fixed->bound(line) : sweep.turning->bound(line);
+                };
+                const Interval cutReach = cuts ? boundOf(g.cutting) : Interval::empty();
+                const Interval shankReach = shank ? boundOf(g.shank) : Interval::empty();
+                if (!reachesMaterial(segs, cutReach.hull(shankReach))) continue;
+                // A fixed-axis sweep's line in its frame, for its hits: made only here, as the
+                // bounds take the boxes in world coordinates and reject most lines of the window.
                 const MoveSweep::LocalLine cutLine =
                     cuts && g.cutting.fixed ? g.cutting.fixed->toLocal(line) : MoveSweep::LocalLine{};
                 const MoveSweep::LocalLine shankLine =
                     shank && g.shank.fixed ? g.shank.fixed->toLocal(line) : MoveSweep::LocalLine{};
-                const auto boundOf = [&](const RegionSweep& sweep, const MoveSweep::LocalLine& frameLine) {
-                    return sweep.fixed ? sweep.fixed->bound(frameLine) : sweep.turning->bound(line);
-                };
-                const Interval cutReach = cuts ? boundOf(g.cutting, cutLine) : Interval::empty();
-                const Interval shankReach = shank ? boundOf(g.shank, shankLine) : Interval::empty();
-                if (!reachesMaterial(segs, cutReach.hull(shankReach))) continue;
                 ++st.visited;
                 double removed = 0.0;
                 // The Hermite data only for the interval ends that will become segment ends: those
