@@ -162,7 +162,8 @@ void turningQuery(benchmark::State& state, const Vec3& start, const Vec3& end, d
     // The Hermite data only for the ends within the line's care, where material takes them.
     const Interval* within = nullptr;  // the care of the line being queried
     const MoveSweep::EndFilter inCare = [&within](std::size_t, const Interval& range) {
-        return (within->contains(range.lo) ? MoveSweep::kEndLo : 0u) | (within->contains(range.hi) ? MoveSweep::kEndHi : 0u);
+        return (within->contains(range.lo) ? MoveSweep::kEndLo : 0u) |
+               (within->contains(range.hi) ? MoveSweep::kEndHi : 0u);
     };
     std::vector<Interval> met;
     // Per line, what the cutting loop does: the sweep's bound first, and only where it meets the

@@ -614,7 +614,8 @@ Interval MoveSweep::bound(const Line& line) const {
     for (const Part& part : parts_) {
         Interval range = Interval::all();
         for (int i = 0; i < 3 && !range.isEmpty(); ++i) {
-            const double lo = part.box[i].lo - sweep_tol::kBoxSlack - oa[i], hi = part.box[i].hi + sweep_tol::kBoxSlack - oa[i];
+            const double lo = part.box[i].lo - sweep_tol::kBoxSlack - oa[i];
+            const double hi = part.box[i].hi + sweep_tol::kBoxSlack - oa[i];
             if (wa[i] == 0.0) {
                 if (lo > 0.0 || hi < 0.0) range = Interval::empty();
                 continue;

@@ -104,6 +104,8 @@ MoveSweep chordSweep(const std::vector<ProfilePiece>& pieces, double pivot, cons
 /// with the sweep (up to 1 MiB a band, zeroed, then scanned to free it) cost boat-xyzac 2.5 % of
 /// its instructions.
 class TurningSweep::NodeCache {
+    using Slot = std::atomic<const LinearNode*>;
+
   public:
     explicit NodeCache(const std::vector<LinearPart>& parts) : levels_(parts.size()) {
         for (const LinearPart& p : parts) keptLevels_.push_back(std::min(p.leafLevel(), kMaxKeptLevel));
@@ -113,7 +115,7 @@ class TurningSweep::NodeCache {
     ~NodeCache() {
         for (auto& part : levels_)
             for (int k = 0; k <= kMaxKeptLevel; ++k) {
-                std::atomic<const LinearNode*>* table = part[std::size_t(k)].load(std::memory_order_relaxed);
+                Slot* table = part[std::size_t(k)].load(std::memory_order_relaxed);
                 if (!table) continue;
                 for (std::size_t i = 0; i < (std::size_t(1) << k); ++i) delete table[i].load(std::memory_order_relaxed);
                 delete[] table;
@@ -129,7 +131,7 @@ class TurningSweep::NodeCache {
     const LinearNode& get(std::size_t part, std::uint32_t heap, std::unique_ptr<LinearNode>& scratch, Make&& make) {
         const int level = heapLevel(heap);
         if (level > keptLevels_[part]) return *(scratch = std::make_unique<LinearNode>(make()));
-        std::atomic<const LinearNode*>& slot = table(part, level)[heap - (std::uint32_t(1) << level)];
+        Slot& slot = table(part, level)[heap - (std::uint32_t(1) << level)];
         if (const LinearNode* n = slot.load(std::memory_order_acquire)) return *n;
         if (keptNodes.fetch_add(1, std::memory_order_relaxed) >= nodeBudget.load(std::memory_order_relaxed)) {
             keptNodes.fetch_sub(1, std::memory_order_relaxed);
@@ -147,17 +149,17 @@ class TurningSweep::NodeCache {
 
   private:
     /// Level k's slots of part `part`, made (zeroed) and published by the first query to need them.
-    std::atomic<const LinearNode*>* table(std::size_t part, int k) {
-        std::atomic<std::atomic<const LinearNode*>*>& entry = levels_[part][std::size_t(k)];
-        if (auto* t = entry.load(std::memory_order_acquire)) return t;
-        std::unique_ptr<std::atomic<const LinearNode*>[]> made(new std::atomic<const LinearNode*>[std::size_t(1) << k]());
-        std::atomic<const LinearNode*>* seen = nullptr;
+    Slot* table(std::size_t part, int k) {
+        std::atomic<Slot*>& entry = levels_[part][std::size_t(k)];
+        if (Slot* t = entry.load(std::memory_order_acquire)) return t;
+        std::unique_ptr<Slot[]> made(new Slot[std::size_t(1) << k]());
+        Slot* seen = nullptr;
         if (entry.compare_exchange_strong(seen, made.get(), std::memory_order_acq_rel, std::memory_order_acquire))
             return made.release();
         return seen;
     }
 
-    std::vector<std::array<std::atomic<std::atomic<const LinearNode*>*>, kMaxKeptLevel + 1>> levels_;
+    std::vector<std::array<std::atomic<Slot*>, kMaxKeptLevel + 1>> levels_;
     std::vector<int> keptLevels_;  ///< per part, the deepest level it keeps
     std::atomic<std::size_t> kept_{0};
 };

@@ -284,8 +284,8 @@ TEST_CASE("turning sweep: Hermite data only for the ends within the care", "[swe
     for (int i = 0; i < 500; ++i) {
         const ToolPose p = sweep.pose(uniform(rng));
         const Vec3 dir = glm::normalize(Vec3(gauss(rng), gauss(rng), gauss(rng)));
-        const Line line{p.tip + 50.0 * uniform(rng) * p.axis + 4.0 * glm::normalize(glm::cross(p.axis, dir)) - 40.0 * dir,
-                        dir};
+        const Vec3 side = glm::normalize(glm::cross(p.axis, dir));
+        const Line line{p.tip + 50.0 * uniform(rng) * p.axis + 4.0 * side - 40.0 * dir, dir};
         const std::vector<LineHit> all = sweep.intersect(line);
         if (all.empty()) continue;
         const Interval reach = sweep.bound(line);
