@@ -194,9 +194,9 @@ double MotionLaw::axisTurnBound() const {
     if (rates == 0.0) return 0.0;
     double largest = 0.0;
     for (int k = 0; k < kAxisTurnSamples; ++k) {
-        const double u = (k + 0.5) / kAxisTurnSamples;
-        const ToolPose p = pose(u);
-        largest = std::max(largest, glm::length(velocity(u, p.tip + p.axis) - velocity(u, p.tip)));
+        const TurnPhase at = phase((k + 0.5) / kAxisTurnSamples);
+        const ToolPose p = pose(at);
+        largest = std::max(largest, glm::length(velocity(at, p.tip + p.axis) - velocity(at, p.tip)));
     }
     return std::min(rates, largest + rates * rates / (2.0 * kAxisTurnSamples));
 }
