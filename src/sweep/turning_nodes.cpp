@@ -187,7 +187,11 @@ TurningSweep::LinearNode TurningSweep::makeNode(const LinearPart& m, std::uint32
     const double ua = double(heap - (std::uint32_t(1) << level)) * width, ub = ua + width, um = ua + 0.5 * width;
     const TurnPhase middle = law_.phase(um);
     const ToolPose a = law_.pose(ua), b = law_.pose(ub), mid = law_.pose(middle);
-    return LinearNode{chordSweep(m.pieces[std::size_t(level)], m.pivot, a, b, mid), mid, um, width, middle};
+    // Above the leaves, the band grown by the reach less epsilon (more than 0 there); a leaf
+    // sweeps the band itself.
+    if (level == m.leafLevel()) return LinearNode{chordSweep(m.band, m.pivot, a, b, mid), mid, um, width, middle};
+    const std::vector<ProfilePiece> grown = mitredOffsetChain(m.band, m.reach[std::size_t(level)] - epsilon_);
+    return LinearNode{chordSweep(grown, m.pivot, a, b, mid), mid, um, width, middle};
 }
 
 std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, double lo, double hi, int deepest) const {
@@ -203,10 +207,7 @@ std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, 
         if (m.reach.back() <= epsilon_) break;
         if (k >= deepest) return std::nullopt;
     }
-    // Above the leaves, grown by the reach less epsilon (more than 0 there); the leaves sweep the
-    // band itself.
-    for (int k = 0; k < m.leafLevel(); ++k) m.pieces.push_back(mitredOffsetChain(band, m.reach[std::size_t(k)] - epsilon_));
-    m.pieces.push_back(std::move(band));
+    m.band = std::move(band);
     return m;
 }
 
@@ -239,7 +240,7 @@ void TurningSweep::chooseLinearNodes() {
         std::vector<LinearPart> bands;
         int bandLeaf = 0;
         // Bands only where the anchored nodes leave them levels to save (they are made for
-        // nothing otherwise: five a flat D10 x 25, each with its offsets at every level).
+        // nothing otherwise: five a flat D10 x 25).
         for (std::size_t b = 0; anchorLevel >= kBandAnchorLevel && b + 1 < bounds.size(); ++b) {
             const double lo = b == 0 ? part.z0 : bounds[b] - epsilon_;
             const double hi = b + 2 == bounds.size() ? part.z1 : bounds[b + 1] + epsilon_;

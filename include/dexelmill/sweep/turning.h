@@ -151,13 +151,14 @@ class TurningSweep {
     /// one band of heights of one part of parts_ (note i): the point of the axis the node's move
     /// carries exactly (the pivot, a height above the tip), and per level k the reach delta_k of a
     /// node of width 2^-k; the level whose reach is first at most epsilon is the last (a leaf).
-    /// Per level above it, the band grown by delta_k - epsilon with square corners
-    /// (mitredOffsetChain); at the leaf level, the band itself.
+    /// A node above it sweeps the band grown by delta_k - epsilon with square corners
+    /// (mitredOffsetChain, made with the node: most moves make a few nodes of a few levels); a
+    /// leaf, the band itself.
     struct LinearPart {
         std::size_t part = 0;  ///< the index in parts_ of the part the band is cut from
         double pivot = 0.0;
         std::vector<double> reach;
-        std::vector<std::vector<ProfilePiece>> pieces;
+        std::vector<ProfilePiece> band;  ///< the band's pieces (clipChain)
         int leafLevel() const { return int(reach.size()) - 1; }
     };
     /// A node's linear move, made the first time a query needs it: the band of its level swept
