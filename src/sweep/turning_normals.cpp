@@ -57,24 +57,38 @@ void forEachFace(const Faces& faces, const ToolPose& ps, const Vec3& x, double& 
             visit(Face{std::sqrt(dr * dr + dz * dz), f.nr, f.nz});
             continue;
         }
-        // The lateral point at x's height, clamped to the piece (pieceRadius, meridianNormal).
+        // The lateral point at x's height, clamped to the piece.
         const double zc = std::clamp(z, f.z0, f.z1);
-        double R = 0.0, nr = f.nr, nz = f.nz;
-        if (f.kind == Kind::Cone) {
-            R = f.r0 + std::clamp((zc - f.z0) / (f.z1 - f.z0), 0.0, 1.0) * (f.r1 - f.r0);
-        } else {
-            const double dz = zc - f.zc;
-            R = f.rc + std::sqrt(std::max(0.0, f.rho * f.rho - dz * dz));
-            const double mr = std::max(0.0, R - f.rc), len = std::sqrt(mr * mr + dz * dz);
-            nr = len == 0.0 ? 1.0 : mr / len;  // the circle's centre: the equator's normal
-            nz = len == 0.0 ? 0.0 : dz / len;
-        }
+        const double R = f.radius(zc);
+        double nr = 0.0, nz = 0.0;
+        f.normal(R, zc, nr, nz);
         const double dr = rho - R, dz = z - zc;
         visit(Face{std::sqrt(dr * dr + dz * dz), nr, nz});
     }
 }
 
 }  // namespace
+
+double TurningSweep::MeridianFace::radius(double z) const {
+    switch (kind) {
+    case Kind::Disk: return r0;
+    case Kind::Cone: return r0 + std::clamp((z - z0) / (z1 - z0), 0.0, 1.0) * (r1 - r0);
+    default: {
+        const double dz = std::clamp(z, z0, z1) - zc;
+        return rc + std::sqrt(std::max(0.0, rho * rho - dz * dz));
+    }
+    }
+}
+
+void TurningSweep::MeridianFace::normal(double R, double z, double& nrOut, double& nzOut) const {
+    if (kind != Kind::Arc) {
+        nrOut = nr, nzOut = nz;
+        return;
+    }
+    const double mr = std::max(0.0, R - rc), mz = z - zc, len = std::sqrt(mr * mr + mz * mz);
+    nrOut = len == 0.0 ? 1.0 : mr / len;  // the circle's centre: the equator's normal
+    nzOut = len == 0.0 ? 0.0 : mz / len;
+}
 
 std::vector<TurningSweep::MeridianFace> TurningSweep::meridianFaces(const std::vector<ProfilePiece>& pieces,
                                                                     const ConvexPart& part) {
@@ -126,25 +140,15 @@ Vec3 TurningSweep::faceNormal(const ToolPose& pose, std::size_t part, const Vec3
 }
 
 std::optional<TurningSweep::Rim> TurningSweep::rim(std::size_t part, int k) const {
-    const ConvexPart& cp = parts_[part];
-    const auto& pieces = tool_.pieces();
-    const int lateral = int(cp.last - cp.first);
-    if (k < 0 || k > lateral) return std::nullopt;
-    // The piece whose end the rim is: the first piece's bottom, else the top of the one below.
-    const ProfilePiece& end = pieces[cp.first + std::size_t(k == 0 ? 0 : k - 1)];
+    const std::vector<MeridianFace>& faces = faces_[part];
+    if (k < 0 || std::size_t(k) + 1 >= faces.size()) return std::nullopt;
+    // The top of the face below the rim (the bottom disk's height, or its piece's top).
     Rim r;
-    r.z = k == 0 ? cp.z0 : pieceZ1(end);
-    r.radius = pieceRadius(end, r.z);
+    r.z = faces[std::size_t(k)].z1;
+    r.radius = faces[std::size_t(k)].radius(r.z);
     if (!(r.radius > 0.0)) return std::nullopt;
-    for (const int side : {0, 1}) {
-        const int f = k + side;  // the face below the rim, then the one above
-        if (f == 0 || f == lateral + 1) {
-            r.across[side] = 0.0;
-            r.along[side] = f == 0 ? -1.0 : 1.0;
-        } else {
-            meridianNormal(pieces[cp.first + std::size_t(f - 1)], r.radius, r.z, r.across[side], r.along[side]);
-        }
-    }
+    for (const int side : {0, 1})  // the face below the rim, then the one above
+        faces[std::size_t(k + side)].normal(r.radius, r.z, r.across[side], r.along[side]);
     if (r.across[0] * r.across[1] + r.along[0] * r.along[1] >= std::cos(kRimAngle)) return std::nullopt;
     return r;
 }

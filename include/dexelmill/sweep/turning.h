@@ -192,6 +192,11 @@ class TurningSweep {
         double r0 = 0.0, r1 = 0.0;           ///< a disk's radius (r0), a cone's at z0 and z1
         double nr = 0.0, nz = 0.0;           ///< a disk's or a cone's normal
         double rc = 0.0, zc = 0.0, rho = 0.0;  ///< an arc's circle (ArcPiece)
+        /// R(z), z clamped to the face's heights, as pieceRadius; a disk's radius.
+        double radius(double z) const;
+        /// The outward normal (nr across the axis, nz along it) at the face's point of radius R at
+        /// height z, as meridianNormal.
+        void normal(double R, double z, double& nr, double& nz) const;
     };
     /// The faces of convex part `part` in order up the meridian: the bottom disk, the lateral
     /// pieces, the top disk (faceNormal's indices).
