@@ -100,6 +100,35 @@ double partSupport(const InlineList<ProfilePiece, 4>& pieces, double xn, double 
     return h;
 }
 
+/// Whether the plane segments [(x0, y0), (x1, y1)] and [(0, 0), (fd, 0)] come within sqrt(r2) of
+/// each other. Two segments that do not cross are nearest at an end of one of them, so the
+/// distance is the least of the four ends' distances to the other segment. Divisions are what
+/// such a test costs most (a cutting loop asks it for every line a box meets), so there is one.
+bool segmentsNear(double x0, double y0, double x1, double y1, double fd, double r2) {
+    const double lo = std::min(0.0, fd), hi = std::max(0.0, fd);
+    const auto toSecond = [&](double x, double y) {
+        const double dx = x < lo ? lo - x : x > hi ? x - hi : 0.0;
+        return dx * dx + y * y;
+    };
+    if (toSecond(x0, y0) <= r2 || toSecond(x1, y1) <= r2) return true;
+    const double ux = x1 - x0, uy = y1 - y0;
+    if ((y0 < 0.0) != (y1 < 0.0)) {
+        // The first segment crosses the x-axis at x = x0 + ux y0 / (y0 - y1); with D = y0 - y1
+        // (not 0, as the signs differ), x D = x0 D + ux y0, compared with lo D and hi D.
+        const double D = y0 - y1, xD = x0 * D + ux * y0;
+        if (D > 0.0 ? (xD >= lo * D && xD <= hi * D) : (xD <= lo * D && xD >= hi * D)) return true;
+    }
+    const double uu = ux * ux + uy * uy;
+    if (!(uu > 0.0)) return false;
+    const double inv = 1.0 / uu;
+    const auto toFirst = [&](double x) {
+        const double t = std::clamp(((x - x0) * ux - y0 * uy) * inv, 0.0, 1.0);
+        const double dx = x0 + t * ux - x, dy = y0 + t * uy;
+        return dx * dx + dy * dy;
+    };
+    return toFirst(0.0) <= r2 || toFirst(fd) <= r2;
+}
+
 }  // namespace
 
 MoveSweep::MoveSweep(const Tool& tool, const Move& move) : MoveSweep(tool, move.start, move.end, move.axis) {}
@@ -598,18 +627,47 @@ Interval MoveSweep::intersectLocal(const Part& part, const LocalLine& q, [[maybe
     return out;
 }
 
+// The box holds the sweep loosely where it is round: a line may pass a corner of the box beside
+// the tool (a fifth of the box's cross-section about a cylinder). At feed parameter s the part
+// lies within rMax of its axis through the tip at s (fd, 0, fn), at heights z with z - s fn in
+// [z0, z1]. So the sweep lies where z is in [z0 + min(0, fn), z1 + max(0, fn)] and (d, e) within
+// rMax of the segment from (0, 0) to (fd, 0): the line's stretch at those heights must come
+// that near the segment.
+Interval MoveSweep::roundBound(const Part& part, Interval range, const Vec3& o, const Vec3& w, double invWz) const {
+    const double zLo = part.z0 + std::min(0.0, feedLocal_.z) - sweep_tol::kBoxSlack - o.z;
+    const double zHi = part.z1 + std::max(0.0, feedLocal_.z) + sweep_tol::kBoxSlack - o.z;
+    if (w.z == 0.0) {
+        if (zLo > 0.0 || zHi < 0.0) return Interval::empty();
+    } else {
+        const double v0 = zLo * invWz, v1 = zHi * invWz;
+        range = range.intersect(w.z > 0.0 ? Interval{v0, v1} : Interval{v1, v0});
+        if (range.isEmpty()) return range;
+    }
+    const double reach = part.rMax + sweep_tol::kBoxSlack;
+    if (!segmentsNear(o.x + range.lo * w.x, o.y + range.lo * w.y, o.x + range.hi * w.x, o.y + range.hi * w.y,
+                      feedLocal_.x, reach * reach))
+        return Interval::empty();
+    return range;
+}
+
 // The slabs of boxLocal in world coordinates: with a = rel + vShift w (toLocal), q.o . b_i =
 // a . W_i and q.w . b_i = w . W_i, W_i the box axis b_i in the world, so each slab's range in the
 // line's own parameter is the local one shifted by vShift. So a line is tested without its frame,
 // which only a line that meets a box needs (most of a move's window misses it). A line along the
 // tool axis takes bound(LocalLine)'s narrower range.
-Interval MoveSweep::bound(const Line& line) const {
+template <bool kRound>
+Interval MoveSweep::boxBound(const Line& line) const {
     const Vec3& w = line.dir;
     if (kind_ != SweepKind::Static && glm::dot(w, frame_.d) == 0.0 && glm::dot(w, frame_.e) == 0.0)
         return bound(toLocal(line));
     const Vec3 rel = line.origin - start_;
     double oa[3], wa[3];
     for (int i = 0; i < 3; ++i) oa[i] = glm::dot(rel, worldBoxAxes_[i]), wa[i] = glm::dot(w, worldBoxAxes_[i]);
+    // The line in the frame (d, e, n), e being the first box axis, for roundBound: made once a
+    // box meets it.
+    Vec3 o(0.0), wl(0.0);
+    double invWz = 0.0;
+    bool framed = false;
     Interval hull;
     for (const Part& part : parts_) {
         Interval range = Interval::all();
@@ -623,9 +681,27 @@ Interval MoveSweep::bound(const Line& line) const {
             const double v0 = lo / wa[i], v1 = hi / wa[i];
             range = range.intersect(wa[i] > 0.0 ? Interval{v0, v1} : Interval{v1, v0});
         }
+        if constexpr (kRound) {
+            if (range.isEmpty()) continue;
+            if (!framed) {
+                o = Vec3(glm::dot(rel, frame_.d), oa[0], glm::dot(rel, frame_.n));
+                wl = Vec3(glm::dot(w, frame_.d), wa[0], glm::dot(w, frame_.n));
+                invWz = wl.z == 0.0 ? 0.0 : 1.0 / wl.z;
+                framed = true;
+            }
+            range = roundBound(part, range, o, wl, invWz);
+        }
         hull = hull.hull(range);
     }
     return hull;
+}
+
+Interval MoveSweep::bound(const Line& line) const {
+    return boxBound<false>(line);
+}
+
+Interval MoveSweep::narrowBound(const Line& line) const {
+    return boxBound<true>(line);
 }
 
 Interval MoveSweep::bound(const LocalLine& q) const {

@@ -283,7 +283,7 @@ TEST_CASE("sweep: the cheap bound holds every line's interval", "[sweep]") {
     for (const Tool& tool : tools) {
         for (const auto& mv : moves) {
             const MoveSweep s(tool, Vec3(1, 2, 3), Vec3(1, 2, 3) + mv.end, mv.axis);
-            int hits = 0;
+            int hits = 0, cornered = 0;
             for (int i = 0; i < 3000; ++i) {
                 Vec3 dir(0.0);
                 if (i % 4 == 3) dir = glm::normalize(Vec3(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1)));
@@ -300,13 +300,27 @@ TEST_CASE("sweep: the cheap bound holds every line's interval", "[sweep]") {
                     CHECK(std::abs(cheap.lo - framed.lo) <= 1e-10);
                     CHECK(std::abs(cheap.hi - framed.hi) <= 1e-10);
                 }
+                // The narrowed bound lies within the boxes' and still holds the interval.
+                const Interval narrow = s.narrowBound(line);
+                if (!narrow.isEmpty()) {
+                    REQUIRE(!cheap.isEmpty());
+                    CHECK(narrow.lo >= cheap.lo);
+                    CHECK(narrow.hi <= cheap.hi);
+                } else if (!cheap.isEmpty() && exact.isEmpty()) {
+                    ++cornered;
+                }
                 if (exact.isEmpty()) continue;
                 ++hits;
                 REQUIRE(!cheap.isEmpty());
                 CHECK(cheap.lo <= exact.lo);
                 CHECK(cheap.hi >= exact.hi);
+                REQUIRE(!narrow.isEmpty());
+                CHECK(narrow.lo <= exact.lo);
+                CHECK(narrow.hi >= exact.hi);
             }
             CHECK(hits > 200);
+            // Lines that pass a box beside the tool: the narrowed bound turns some of them away.
+            CHECK(cornered > 20);
         }
     }
     // Along the axis the bound is the profile's own height over the swept axis's nearest point: a
@@ -315,6 +329,43 @@ TEST_CASE("sweep: the cheap bound holds every line's interval", "[sweep]") {
     const MoveSweep ball(ballEndMill(6.0, {15.0, 25.0}), Vec3(0, 0, 0), Vec3(10, 0, 0), kZ);
     const Interval cheap = ball.bound(Line{Vec3(5, 2, -10), kZ});
     CHECK(cheap.lo == Approx(10 + 3 - std::sqrt(5.0)).margin(1e-8));
+}
+
+TEST_CASE("sweep: the narrowed bound turns away lines beside the tool in its box", "[sweep]") {
+    // A flat D10 x 20 with its tip at the origin, on each kind of move: lines through a corner of
+    // the box across the axis miss the tool, which the box's bound cannot tell.
+    const Tool tool = flatEndMill(10.0, {20.0, 20.0});
+    const struct {
+        const char* name;
+        Vec3 end;
+    } moves[] = {{"static", Vec3(0.0)}, {"plunge", Vec3(0, 0, -2)}, {"horizontal", Vec3(0, 0.5, 0)},
+                 {"ramp", Vec3(0, 0.5, -0.2)}};
+    for (const auto& mv : moves) {
+        INFO(mv.name);
+        const MoveSweep s(tool, Vec3(0.0), mv.end, kZ);
+        // Along z tilted a little at (4.4, -4.5): inside the box's square about the disk of
+        // radius 5, 6.3 from the axis. (A line along the axis itself has a narrower bound already.)
+        const Line steep{Vec3(4.4, -4.5, -10.0), glm::normalize(Vec3(0.001, 0.0, 1.0))};
+        CHECK_FALSE(s.bound(steep).isEmpty());
+        CHECK(s.narrowBound(steep).isEmpty());
+        // Along x 5.2 mm beside the tip's path, at the tool's heights; at 4.9 mm, through it.
+        const Line beside{Vec3(-20.0, -5.2, 3.0), Vec3(1, 0, 0)};
+        CHECK(s.narrowBound(beside).isEmpty());
+        const Line through{Vec3(-20.0, 4.9, 3.0), Vec3(1, 0, 0)};
+        const Interval exact = s.intersect(through), narrow = s.narrowBound(through);
+        REQUIRE(!exact.isEmpty());
+        CHECK(narrow.lo <= exact.lo);
+        CHECK(narrow.hi >= exact.hi);
+        // A horizontal line below the tip's lowest height meets nothing.
+        const Line below{Vec3(-20.0, 0.0, std::min(0.0, mv.end.z) - 0.01), Vec3(1, 0, 0)};
+        CHECK(s.narrowBound(below).isEmpty());
+        // Oblique through the tool: the bound holds its interval.
+        const Line oblique{Vec3(-22.0, 1.0, -20.0), glm::normalize(Vec3(1, 0, 1))};
+        const Interval oe = s.intersect(oblique), on = s.narrowBound(oblique);
+        REQUIRE(!oe.isEmpty());
+        CHECK(on.lo <= oe.lo);
+        CHECK(on.hi >= oe.hi);
+    }
 }
 
 // Hermite data: the swept volume's outward unit normal at both ends of a line's interval. Each

@@ -171,6 +171,11 @@ public:
     /// axis the heights where the profile is at least as wide as the line's distance from the
     /// swept axis. Empty when the line surely misses; a few dot products, no root finding.
     Interval bound(const Line& line) const;
+    /// @brief bound(line) cut to the heights the parts' sweeps reach, and empty where the line
+    /// passes beside them in a corner of their boxes (farther than a part's largest radius from
+    /// the tip's path). About twice bound's cost: for a caller whose miss costs far more than a
+    /// fixed-axis sweep's (a turning sweep's search, turning.cpp).
+    Interval narrowBound(const Line& line) const;
 
     /// @brief A line in the move's frame, re-anchored at its point nearest the start tip. A caller
     /// that bounds a line and then intersects it makes it once (toLocal) and passes it to both:
@@ -215,6 +220,13 @@ private:
     void hermite(std::size_t index, const LocalLine& q, Interval local, const EndTrace& trace, unsigned ends,
                  LineHit& hit) const;
     Interval boxLocal(const Part& part, const LocalLine& q) const;
+    /// `range` (parameters of the line o + v w, in the move frame from the start tip) cut to the
+    /// heights of the part's sweep, and empty where that stretch passes farther than the part's
+    /// largest radius from the tip's path (narrowBound); invWz is 1 / w.z (0 where w.z is).
+    Interval roundBound(const Part& part, Interval range, const Vec3& o, const Vec3& w, double invWz) const;
+    /// bound(Line), narrowed by roundBound with kRound.
+    template <bool kRound>
+    Interval boxBound(const Line& line) const;
 
     SweepKind kind_ = SweepKind::Static;
     ToolFrame frame_;
