@@ -166,6 +166,7 @@ void turningQuery(benchmark::State& state, const Vec3& start, const Vec3& end, d
                (within->contains(range.hi) ? MoveSweep::kEndHi : 0u);
     };
     std::vector<Interval> met;
+    std::vector<LineHit> turned;
     // Per line, what the cutting loop does: the sweep's bound first, and only where it meets the
     // care, the query (a turning sweep's with its care clipped to the bound), with the Hermite
     // data of the ends within the care.
@@ -179,8 +180,8 @@ void turningQuery(benchmark::State& state, const Vec3& start, const Vec3& end, d
             } else {
                 met.assign(1, sweep.bound(lines[i]).intersect(care[i].front()));
                 if (met.front().isEmpty()) continue;
-                const std::vector<LineHit> h = sweep.intersect(lines[i], met);
-                hits += !h.empty();
+                sweep.intersect(lines[i], met, turned);
+                hits += !turned.empty();
             }
         }
     }

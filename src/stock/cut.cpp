@@ -185,6 +185,7 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
     line.origin[ia] = originA;
     LineHit parts[MoveSweep::kMaxParts];
     std::vector<Interval> material;  // a dexel's segments, for a turning sweep's care
+    std::vector<LineHit> turned;     // a turning sweep's intervals along a dexel
 
     for (std::uint32_t m : moves) {
         if (slot.lo > slot.hi) break;  // no material left in the tile
@@ -268,7 +269,8 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeo
                         if (!met.isEmpty()) material.push_back(met);
                     }
                     if (material.empty()) return;
-                    for (const LineHit& hit : sweep.turning->intersect(line, material)) apply(hit);
+                    sweep.turning->intersect(line, material, turned);
+                    for (const LineHit& hit : turned) apply(hit);
                 };
                 if (cuts) {
                     forEachHit(g.cutting, cutLine, cutReach, [&](const LineHit& hit) {

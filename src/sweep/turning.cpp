@@ -599,11 +599,17 @@ Interval TurningSweep::bound(const Line& line) const {
 //      ball's short rows 1.5 times slower).
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
+    intersect(line, care, out);
+    return out;
+}
+
+void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care, std::vector<LineHit>& out) const {
+    out.clear();
     // Without a care, the answer matters wherever the sweep may be: within the line's bound.
     Interval all[1] = {Interval::all()};
     if (care.empty()) {
         all[0] = bound(line);
-        if (all[0].isEmpty()) return out;
+        if (all[0].isEmpty()) return;
     }
     const Interval* careBegin = care.empty() ? all : care.data();
     const Interval* careEnd = care.empty() ? all + 1 : care.data() + care.size();
@@ -617,7 +623,7 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         Interval near;
         for (const MoveSweep& part : outer_) near = near.hull(part.narrowBound(line));
         if (std::none_of(careBegin, careEnd, [&](const Interval& c) { return !c.intersect(near).isEmpty(); }))
-            return out;
+            return;
     }
 
     const auto& parts = parts_;
@@ -1026,7 +1032,6 @@ std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector
         hermite(p.range.hi, p.uHi, p.partHi, p.nodeHi, true, hit.normalHi, hit.sharpHi);
         out.push_back(hit);
     }
-    return out;
 }
 
 std::vector<Interval> TurningSweep::intersectAll(const Line& line) const {

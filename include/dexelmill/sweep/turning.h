@@ -131,6 +131,9 @@ class TurningSweep {
     /// their Hermite data (the others' are zero and not sharp: no material takes them). A care
     /// clipped to bound(line) saves the search the stretches where the sweep cannot be (note n).
     std::vector<LineHit> intersect(const Line& line, const std::vector<Interval>& care = {}) const;
+    /// @brief As intersect, into `out` (cleared first): a caller that queries many lines keeps one
+    /// vector and allocates nothing once it has grown.
+    void intersect(const Line& line, const std::vector<Interval>& care, std::vector<LineHit>& out) const;
     /// @brief As intersect, without the Hermite data.
     std::vector<Interval> intersectAll(const Line& line) const;
 
