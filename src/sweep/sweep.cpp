@@ -704,6 +704,18 @@ Interval MoveSweep::narrowBound(const Line& line) const {
     return boxBound<true>(line);
 }
 
+Interval MoveSweep::narrowBound(const Line& line, const Interval& within) const {
+    if (!std::isfinite(within.lo) || !std::isfinite(within.hi)) return narrowBound(line).intersect(within);
+    const Vec3 rel = line.origin - start_;
+    const Vec3& w = line.dir;
+    const Vec3 o(glm::dot(rel, frame_.d), glm::dot(rel, frame_.e), glm::dot(rel, frame_.n));
+    const Vec3 wl(glm::dot(w, frame_.d), glm::dot(w, frame_.e), glm::dot(w, frame_.n));
+    const double invWz = wl.z == 0.0 ? 0.0 : 1.0 / wl.z;
+    Interval hull;
+    for (const Part& part : parts_) hull = hull.hull(roundBound(part, within, o, wl, invWz));
+    return hull;
+}
+
 Interval MoveSweep::bound(const LocalLine& q) const {
     Interval hull;
     for (const Part& part : parts_) {

@@ -620,8 +620,9 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
     // (bull nose 294 -> 260 ns a line, flat end 116 -> 112). A ball's capsules (g) turn such
     // lines away for about what the test costs, so a ball end skips it.
     if (!outer_.empty() && balls_.empty()) {
+        const Interval within = careBegin->hull(careEnd[-1]);  // care is sorted
         Interval near;
-        for (const MoveSweep& part : outer_) near = near.hull(part.narrowBound(line));
+        for (const MoveSweep& part : outer_) near = near.hull(part.narrowBound(line, within));
         if (std::none_of(careBegin, careEnd, [&](const Interval& c) { return !c.intersect(near).isEmpty(); }))
             return;
     }

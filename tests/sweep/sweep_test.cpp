@@ -309,14 +309,23 @@ TEST_CASE("sweep: the cheap bound holds every line's interval", "[sweep]") {
                 } else if (!cheap.isEmpty() && exact.isEmpty()) {
                     ++cornered;
                 }
+                // Given the boxes' range, or the whole line, it narrows that without the boxes.
+                const Interval given = cheap.isEmpty() ? cheap : s.narrowBound(line, cheap);
+                const Interval whole = s.narrowBound(line, Interval::all());
+                if (!given.isEmpty()) {
+                    CHECK(given.lo >= cheap.lo);
+                    CHECK(given.hi <= cheap.hi);
+                }
                 if (exact.isEmpty()) continue;
                 ++hits;
                 REQUIRE(!cheap.isEmpty());
                 CHECK(cheap.lo <= exact.lo);
                 CHECK(cheap.hi >= exact.hi);
-                REQUIRE(!narrow.isEmpty());
-                CHECK(narrow.lo <= exact.lo);
-                CHECK(narrow.hi >= exact.hi);
+                for (const Interval& n : {narrow, given, whole}) {
+                    REQUIRE(!n.isEmpty());
+                    CHECK(n.lo <= exact.lo);
+                    CHECK(n.hi >= exact.hi);
+                }
             }
             CHECK(hits > 200);
             // Lines that pass a box beside the tool: the narrowed bound turns some of them away.

@@ -176,6 +176,10 @@ public:
     /// the tip's path). About twice bound's cost: for a caller whose miss costs far more than a
     /// fixed-axis sweep's (a turning sweep's search, turning.cpp).
     Interval narrowBound(const Line& line) const;
+    /// @brief As narrowBound, for a caller that knows a range `within` that holds every part's
+    /// interval it needs (bound(line), or the part of it where it has material): `within` cut and
+    /// tested as narrowBound cuts and tests the boxes' range, without the boxes.
+    Interval narrowBound(const Line& line, const Interval& within) const;
 
     /// @brief A line in the move's frame, re-anchored at its point nearest the start tip. A caller
     /// that bounds a line and then intersects it makes it once (toLocal) and passes it to both:
