@@ -172,6 +172,28 @@ Vec3 MotionLaw::velocity(const TurnPhase& phase, const Vec3& point) const {
     return v + drift;
 }
 
+// A rigid motion's velocity field is v(y) = v(o) + W x (y - o), W its angular velocity. With the
+// tip on the line, v(y) = f + sum_i w_i x (y - p): o = p, W = sum_i w_i. A carried tip's chains
+// give W by differences: v(o + e_x) - v(o) = W x e_x = (0, W_z, -W_y) and v(o + e_y) - v(o) =
+// (-W_z, 0, W_x).
+Twist MotionLaw::twist(const TurnPhase& phase) const {
+    Twist t;
+    if (!carried_) {
+        const std::size_t h = heads_.size();
+        t.origin = start_ + phase.u * feed_;
+        t.linear = feed_;
+        for (std::size_t i = 0; i < turns_.size(); ++i)
+            t.angular += turnVector(turns_, phase, h, i, turns_[i].direction * (turns_[i].to - turns_[i].from));
+        return t;
+    }
+    t.origin = pose(phase).tip;
+    t.linear = velocity(phase, t.origin);
+    const Vec3 dx = velocity(phase, t.origin + Vec3(1.0, 0.0, 0.0)) - t.linear;
+    const Vec3 dy = velocity(phase, t.origin + Vec3(0.0, 1.0, 0.0)) - t.linear;
+    t.angular = Vec3(dy.z, -dx.z, dx.y);
+    return t;
+}
+
 // Carried: |y_i - c_i| = |y_{i+1} - c_i| <= |y_{i+1} - c_{i+1}| + |c_{i+1} - c_i| (T_{i+1} keeps
 // distances to c_{i+1}), and the innermost y_n = x + H v lies within headBounds' reach of the
 // machine-frame point x, whose distance to c_{n-1} is convex along its segment, so largest at an

@@ -328,6 +328,8 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     endPhase_ = law_.phase(1.0);
     startPose_ = law_.pose(startPhase_);
     endPose_ = law_.pose(endPhase_);
+    startTwist_ = law_.twist(startPhase_);
+    endTwist_ = law_.twist(endPhase_);
     // The static search closes its nodes from the first level whose growth is at most epsilon.
     while (closingLevel_ < kMaxLevel && std::ldexp(speed_, -(closingLevel_ + 1)) > 2.0 * epsilon_) ++closingLevel_;
     chooseLinearNodes();
@@ -707,7 +709,10 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
             const double off = glm::length(y - pose.pose.tip - height * pose.pose.axis);
             c.found = true;
             c.across = glm::dot(n, line.dir);
-            c.speed = glm::dot(n, law_.velocity(pose.phase, y));
+            const Vec3 velocity = pose.u == startPhase_.u ? startTwist_.at(y)
+                                  : pose.u == endPhase_.u ? endTwist_.at(y)
+                                                          : law_.velocity(pose.phase, y);
+            c.speed = glm::dot(n, velocity);
             c.bend = bendAt(height, off);
             return c;
         };

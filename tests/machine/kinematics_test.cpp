@@ -96,7 +96,12 @@ TEST_CASE("machine: the law of a move reproduces the kinematics at every u", "[m
             if (k > 0 && k < 10) {
                 const Vec3 fd = (point(u + h) - point(u - h)) / (2 * h);
                 CHECK(distance(law.velocity(u, point(u)), fd) < 1e-6 * (1 + glm::length(fd)));
+                CHECK(distance(law.twist(law.phase(u)).at(point(u)), fd) < 1e-6 * (1 + glm::length(fd)));
                 CHECK(glm::length(fd) <= law.speedBound(7.0));
+                // The velocity field is affine: the twist gives every point's, off the axis too.
+                const Twist twist = law.twist(law.phase(u));
+                for (const Vec3& y : {Vec3(40, -3, 8), Vec3(-5, 60, -20), p.tip})
+                    CHECK(distance(twist.at(y), law.velocity(u, y)) < 1e-12 * (1 + glm::length(law.velocity(u, y))));
             }
         }
     }
@@ -251,6 +256,7 @@ TEST_CASE("machine: a head that turns in identity kinematics swings the tool abo
                 const Vec3 fd = (at(u + h) - at(u - h)) / (2 * h);
                 INFO("u " << u << ", v (" << v.x << ", " << v.y << ", " << v.z << ")");
                 CHECK(distance(law.velocity(u, at(u)), fd) < 1e-6 * (1 + glm::length(fd)));
+                CHECK(distance(law.twist(law.phase(u)).at(at(u)), fd) < 1e-6 * (1 + glm::length(fd)));
                 CHECK(glm::length(fd) <= law.speedBound(glm::length(v)));
             }
         }

@@ -44,6 +44,13 @@ struct TurnStep {
 /// for a 60-level search, 3 turns and d = 1 m, 1.6e-10 mm.
 constexpr double kPhaseStepError = 4.0 * std::numeric_limits<double>::epsilon();
 
+/// @brief The velocity field of a rigid motion at one instant: the tool point at y moves at
+/// linear + angular x (y - origin) (mm per unit u).
+struct Twist {
+    Vec3 origin{0.0}, linear{0.0}, angular{0.0};
+    Vec3 at(const Vec3& y) const { return linear + glm::cross(angular, y - origin); }
+};
+
 /// @brief The pose of the tool over a move, and how fast its points move. Every move is a rigid
 /// motion of the tool: a fixed-axis move translates it; an APT move whose axis turns rotates it
 /// about the fixed axis a0 x a1 by the angle between its axes, uniformly in u (one RotaryTurn);
@@ -66,6 +73,10 @@ class MotionLaw {
     Vec3 velocity(double u, const Vec3& point) const;
     /// @brief As velocity(u, point), at a phase's u with its cosines and sines.
     Vec3 velocity(const TurnPhase& phase, const Vec3& point) const;
+    /// @brief The velocity field at a phase, for a caller that asks for many points' velocities
+    /// at one phase: twist(phase).at(y) is velocity(phase, y) up to rounding (a rigid motion's
+    /// velocities are affine in the point), for a few products instead of a walk of the turns.
+    Twist twist(const TurnPhase& phase) const;
     /// @brief A bound on |velocity| over the move for every tool point within `reach` of the tip:
     ///  - tip on the line: |f| + sum_i |to_i - from_i| reach, since a tool point moves as
     ///    y' = f + w x (y - p) with |w| <= sum_i |angle rate_i|;

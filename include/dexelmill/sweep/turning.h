@@ -244,6 +244,8 @@ class TurningSweep {
     /// The phases and poses at u = 0 and 1, where every line's search starts.
     TurnPhase startPhase_, endPhase_;
     ToolPose startPose_, endPose_;
+    /// The velocity fields there: most crossings a search takes are the end poses' (note n).
+    Twist startTwist_, endTwist_;
     /// Per level k of grown_, the turns' change over half a node's width, 2^-(k + 1): the
     /// search steps to a node's middle pose from its start's phase (MotionLaw::advance).
     std::vector<TurnStep> halfSteps_;
