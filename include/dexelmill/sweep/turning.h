@@ -246,6 +246,10 @@ class TurningSweep {
     ToolPose startPose_, endPose_;
     /// The velocity fields there: most crossings a search takes are the end poses' (note n).
     Twist startTwist_, endTwist_;
+    /// The phase and pose at u = 1/2: the root's middle, where a search splits the root without
+    /// its linear node (note n).
+    TurnPhase midPhase_;
+    ToolPose midPose_;
     /// Per level k of grown_, the turns' change over half a node's width, 2^-(k + 1): the
     /// search steps to a node's middle pose from its start's phase (MotionLaw::advance).
     std::vector<TurnStep> halfSteps_;
