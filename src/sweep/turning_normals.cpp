@@ -25,19 +25,20 @@ constexpr double kRimReach = 4.0;
 /// resolution of the normals the stock keeps (PackedNormal::kMaxAngleError).
 constexpr double kRimAngle = 1e-4;
 
-/// A face of a convex part at a pose (forEachFace): its distance from a point (to the end faces,
-/// the disks; to a lateral piece, to its point at the same height, or its nearer end) and its
-/// outward normal there in the meridian plane, (across the axis, along it).
+/// A face of a convex part at a pose (forEachFace): its squared distance from a point (to the end
+/// faces, the disks; to a lateral piece, to its point at the same height, or its nearer end),
+/// which orders the faces as the distance does without a square root each, and its outward normal
+/// there in the meridian plane, (across the axis, along it).
 struct Face {
-    double gap;
+    double gap2;
     double nr, nz;
     /// The normal in space, at a point whose direction across the axis is `radial`.
     Vec3 normal(const Vec3& radial, const Vec3& axis) const { return nr * radial + nz * axis; }
 };
 
-/// Visits the faces of a convex part (TurningSweep::meridianFaces) at pose `ps`, with their gaps
-/// to x, in order up the meridian; faces k and k + 1 meet at a rim. Sets x's distance rho from the
-/// axis and its unit direction `radial` across the axis (any, on the axis).
+/// Visits the faces of a convex part (TurningSweep::meridianFaces) at pose `ps`, with their
+/// squared gaps to x, in order up the meridian; faces k and k + 1 meet at a rim. Sets x's distance
+/// rho from the axis and its unit direction `radial` across the axis (any, on the axis).
 template <class Faces, class Visit>
 void forEachFace(const Faces& faces, const ToolPose& ps, const Vec3& x, double& rho, Vec3& radial, Visit&& visit) {
     using Kind = decltype(faces.front().kind);
@@ -54,7 +55,7 @@ void forEachFace(const Faces& faces, const ToolPose& ps, const Vec3& x, double& 
     for (const auto& f : faces) {
         if (f.kind == Kind::Disk) {  // the distance to a disk of radius r0 at height z0
             const double dr = std::max(rho - f.r0, 0.0), dz = z - f.z0;
-            visit(Face{std::sqrt(dr * dr + dz * dz), f.nr, f.nz});
+            visit(Face{dr * dr + dz * dz, f.nr, f.nz});
             continue;
         }
         // The lateral point at x's height, clamped to the piece.
@@ -63,7 +64,7 @@ void forEachFace(const Faces& faces, const ToolPose& ps, const Vec3& x, double& 
         double nr = 0.0, nz = 0.0;
         f.normal(R, zc, nr, nz);
         const double dr = rho - R, dz = z - zc;
-        visit(Face{std::sqrt(dr * dr + dz * dz), nr, nz});
+        visit(Face{dr * dr + dz * dz, nr, nz});
     }
 }
 
@@ -130,7 +131,7 @@ Vec3 TurningSweep::faceNormal(const ToolPose& pose, std::size_t part, const Vec3
     Face nearest{std::numeric_limits<double>::infinity(), 0.0, 0.0};
     int k = 0;
     forEachFace(faces_[part], pose, x, rho, radial, [&](const Face& f) {
-        if (f.gap < nearest.gap) {
+        if (f.gap2 < nearest.gap2) {
             nearest = f;
             if (face) *face = k;
         }
@@ -202,7 +203,7 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     forEachFace(faces_[part], ps, x, rho, radial, [&](const Face& f) { faces.push_back(f); });
     std::size_t nearest = 0;
     for (std::size_t k = 1; k < faces.size(); ++k)
-        if (faces[k].gap < faces[nearest].gap) nearest = k;
+        if (faces[k].gap2 < faces[nearest].gap2) nearest = k;
     normal = faces[nearest].normal(radial, ps.axis);
     sharp = false;
     const double nearRim = kRimReach * epsilon_;
@@ -226,7 +227,7 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     };
     const Face* other = nullptr;
     for (std::size_t k = 0; k < faces.size() && !other; ++k)
-        if (k != nearest && faces[k].gap <= nearRim &&
+        if (k != nearest && faces[k].gap2 <= nearRim * nearRim &&
             glm::dot(faces[k].normal(radial, ps.axis), normal) < std::cos(kRimAngle))
             other = &faces[k];
     if (other) {
