@@ -103,7 +103,8 @@ double partSupport(const InlineList<ProfilePiece, 4>& pieces, double xn, double 
 /// Whether the plane segments [(x0, y0), (x1, y1)] and [(0, 0), (fd, 0)] come within sqrt(r2) of
 /// each other. Two segments that do not cross are nearest at an end of one of them, so the
 /// distance is the least of the four ends' distances to the other segment. Divisions are what
-/// such a test costs most (a cutting loop asks it for every line a box meets), so there is one.
+/// such a test costs most (a turning sweep asks it for every line it is queried on), so it takes
+/// one, and only where no end is near and the segments do not cross.
 bool segmentsNear(double x0, double y0, double x1, double y1, double fd, double r2) {
     const double lo = std::min(0.0, fd), hi = std::max(0.0, fd);
     const auto toSecond = [&](double x, double y) {
