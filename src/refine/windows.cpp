@@ -229,7 +229,7 @@ SweptCells::SweptCells(const Box& stock, const ToolPath& path, const ToolTable& 
         // whose axis turns, a box that holds the axis at every pose (turningMoveBox with no radius).
         Box box;
         if (mv.turns()) {
-            box = turningMoveBox(mv, tool.totalLength(), 0.0);
+            box = turningMoveBox(mv, tool.bottom(), tool.totalLength(), 0.0);
         } else {
             const Vec3 n = glm::normalize(mv.axis);
             for (const Vec3& tip : {mv.start, mv.end})

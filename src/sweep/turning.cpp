@@ -37,13 +37,15 @@ constexpr double kBoxSlack = 1e-9;
 /// two, and one (a square corner) far slower.
 constexpr double kSettleSlack = 0.1;
 
-/// The largest g(c) = length max(c, 0) + radius sqrt(1 - c^2) over c in [lo, hi] (turning.h).
-double reachAlong(double lo, double hi, double length, double radius) {
-    const double peak = length / std::hypot(length, radius);
+/// The largest g(c) = max(bottom c, length c) + radius sqrt(1 - c^2) over c in [lo, hi]
+/// (turning.h): the larger of the two concave functions' largest, each at its peak clamped to
+/// the range (a function with s = radius = 0 is 0 everywhere).
+double reachAlong(double lo, double hi, double bottom, double length, double radius) {
     double best = -std::numeric_limits<double>::infinity();
-    for (const double c : {lo, hi, 0.0, peak}) {
-        if (c < lo || c > hi) continue;
-        best = std::max(best, length * std::max(c, 0.0) + radius * std::sqrt(std::max(0.0, 1.0 - c * c)));
+    for (const double s : {bottom, length}) {
+        const double size = std::hypot(s, radius);
+        const double c = std::clamp(size > 0.0 ? s / size : 0.0, lo, hi);
+        best = std::max(best, s * c + radius * std::sqrt(std::max(0.0, 1.0 - c * c)));
     }
     return best;
 }
@@ -140,13 +142,14 @@ double turnAngle(const Move& m) {
 
 namespace {
 
-/// The box of the tool (within `radius` of its axis, heights [0, length] above the tip) at one pose.
-Box poseBox(const ToolPose& p, double length, double radius) {
+/// The box of the tool (within `radius` of its axis, heights [bottom, length] above the tip) at
+/// one pose.
+Box poseBox(const ToolPose& p, double bottom, double length, double radius) {
     Box box;
     box.expand(p.tip);
     for (int i = 0; i < 3; ++i) {
-        box.lo[i] -= reachAlong(-p.axis[i], -p.axis[i], length, radius);
-        box.hi[i] += reachAlong(p.axis[i], p.axis[i], length, radius);
+        box.lo[i] -= reachAlong(-p.axis[i], -p.axis[i], bottom, length, radius);
+        box.hi[i] += reachAlong(p.axis[i], p.axis[i], bottom, length, radius);
     }
     return box;
 }
@@ -242,19 +245,19 @@ void regulaFalsi(double ua, double ub, double fa, double fb, int steps, At&& at)
 
 }  // namespace
 
-Box turningMoveBox(const Move& m, double length, double radius) {
+Box turningMoveBox(const Move& m, double bottom, double length, double radius) {
     if (m.rotary) {
         // Samples at u_k = (k + 1/2) / N: every u lies within 1 / (2N) of one, so every pose lies
         // within V / (2N) of a sampled pose (V the law's speed bound), and the union of the sampled
         // poses' boxes padded by that holds them all. N makes the padding at most a tenth of the
         // radius (or a hundredth of a millimetre), up to kMaxBoxSamples.
         const MotionLaw law(m);
-        const double speed = law.speedBound(std::hypot(length, radius));
+        const double speed = law.speedBound(std::hypot(std::max(std::abs(bottom), length), radius));
         const double target = std::max(0.1 * radius, 0.01);
         const int n = int(std::clamp(std::ceil(speed / (2.0 * target)), 1.0, double(kMaxBoxSamples)));
         Box box;
         for (int k = 0; k < n; ++k) {
-            const Box b = poseBox(law.pose((k + 0.5) / n), length, radius);
+            const Box b = poseBox(law.pose((k + 0.5) / n), bottom, length, radius);
             box.expand(b.lo);
             box.expand(b.hi);
         }
@@ -276,8 +279,8 @@ Box turningMoveBox(const Move& m, double length, double radius) {
             lo = std::min(lo, rho * std::cos(t - phi));
             hi = std::max(hi, rho * std::cos(t - phi));
         }
-        box.lo[i] -= reachAlong(-hi, -lo, length, radius);
-        box.hi[i] += reachAlong(lo, hi, length, radius);
+        box.lo[i] -= reachAlong(-hi, -lo, bottom, length, radius);
+        box.hi[i] += reachAlong(lo, hi, bottom, length, radius);
     }
     return box;
 }
@@ -290,7 +293,7 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
                       kMinTurnTolerance, epsilon);
         throw Error(text);
     }
-    bounds_ = turningMoveBox(move, tool.totalLength(), tool.maxRadius()).padded(kBoxSlack);
+    bounds_ = turningMoveBox(move, tool.bottom(), tool.totalLength(), tool.maxRadius()).padded(kBoxSlack);
     // Every tool point lies within hypot(total length, max radius) of the tip (note a).
     axisTurn_ = law_.axisTurnBound();
     tipSpeed_ = law_.speedBound(0.0);

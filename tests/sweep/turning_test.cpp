@@ -1,6 +1,7 @@
 // The box of a move whose tool axis turns, against poses sampled along the turn: every sampled
-// point of the tool's cylinder lies inside the box, and the box is the tip's segment box plus the
-// sampled box of the same turn made in place, to within the sampling's shortfall. And the linear
+// point of the tool's cylinder (or of a band of it above the tip, as a shank's) lies inside the
+// box, and the box is the tip's segment box plus the sampled box of the same turn made in place,
+// to within the sampling's shortfall; a machine's rotary move's box holds its sampled poses. And the linear
 // nodes a turning sweep keeps (turning.cpp, note h): counted, given back, and past the budget
 // made per query with the same answers; and a long cutter's bands (note i) with the Hermite data
 // of the ends they make.
@@ -11,6 +12,7 @@
 #include <tuple>
 
 #include "dexelmill/error.h"
+#include "dexelmill/machine/kinematics.h"
 #include "dexelmill/sweep/turning.h"
 #include "dexelmill/tool/builders.h"
 
@@ -26,10 +28,10 @@ Vec3 rotated(const Vec3& from, const Vec3& about, double angle) {
            about * glm::dot(about, from) * (1.0 - std::cos(angle));
 }
 
-/// The box of a cylinder of radius r and length l (tip at its bottom centre), sampled at
-/// `poses` poses of the move and `around` points on each of its two rims (the farthest points of
-/// a cylinder along any direction lie on a rim).
-Box sampledBox(const Move& m, double l, double r, int poses, int around) {
+/// The box of a cylinder of radius r at heights [z0, l] above the tip, sampled at `poses` poses
+/// of the move and `around` points on each of its two rims (the farthest points of a cylinder
+/// along any direction lie on a rim).
+Box sampledBox(const Move& m, double z0, double l, double r, int poses, int around) {
     const Vec3 a0 = m.startAxis ? *m.startAxis : m.axis;
     const Vec3 cross = glm::cross(a0, m.axis);
     const double angle = std::atan2(glm::length(cross), glm::dot(a0, m.axis));
@@ -44,7 +46,7 @@ Box sampledBox(const Move& m, double l, double r, int poses, int around) {
         for (int j = 0; j < around; ++j) {
             const double phi = 2 * kPi * j / around;
             const Vec3 rim = r * (std::cos(phi) * p + std::sin(phi) * q);
-            box.expand(tip + rim);
+            box.expand(tip + z0 * a + rim);
             box.expand(tip + l * a + rim);
         }
     }
@@ -75,12 +77,14 @@ TEST_CASE("turning move box: holds and touches every pose of the cylinder, on ra
         if (trial % 11 == 2) a0 = glm::normalize(m.axis + Vec3(1e-7, 0, 0));
         m.startAxis = a0;
         const double l = size(rng), r = 0.1 * size(rng);
-        INFO("trial " << trial);
-        const Box box = turningMoveBox(m, l, r);
-        const Box sampled = sampledBox(m, l, r, 2000, 720);
+        // Every third cylinder starts above the tip, as a shank does.
+        const double z0 = trial % 3 == 0 ? 0.0 : l * (trial % 3) / 4.0;
+        INFO("trial " << trial << ", heights " << z0 << " to " << l);
+        const Box box = turningMoveBox(m, z0, l, r);
+        const Box sampled = sampledBox(m, z0, l, r, 2000, 720);
         Move inPlace = m;
         inPlace.start = inPlace.end = Vec3(0.0);
-        const Box turn = sampledBox(inPlace, l, r, 2000, 720);
+        const Box turn = sampledBox(inPlace, z0, l, r, 2000, 720);
         // Sampling falls short of the extremes by at most (l + r) (pi / 2000)^2 / 2 along the
         // turn and r (2 pi / 720)^2 / 2 around the rim: below 1e-4 (l + r).
         const double slack = 1e-4 * (l + r);
@@ -99,7 +103,7 @@ TEST_CASE("turning move box: fixed axes, a turn through +z and opposite axes", "
     Move m;
     m.start = Vec3(0.0);
     m.end = Vec3(10, 0, 0);
-    const Box fixed = turningMoveBox(m, 50, 5);
+    const Box fixed = turningMoveBox(m, 0, 50, 5);
     CHECK(fixed.lo == Vec3(-5, -5, 0));
     CHECK(fixed.hi == Vec3(15, 5, 50));
     CHECK(turnAngle(m) == 0.0);
@@ -109,15 +113,63 @@ TEST_CASE("turning move box: fixed axes, a turn through +z and opposite axes", "
     m.startAxis = Vec3(-0.5, 0, std::sqrt(0.75));
     m.axis = Vec3(0.5, 0, std::sqrt(0.75));
     CHECK(turnAngle(m) == Approx(kPi / 3));
-    const Box turning = turningMoveBox(m, 50, 5);
+    const Box turning = turningMoveBox(m, 0, 50, 5);
     CHECK(turning.hi.z == Approx(std::sqrt(2525.0)));
     CHECK(turning.lo.z == Approx(-2.5));
     CHECK(turning.hi.x == Approx(10 + 25 + 5 * std::sqrt(0.75)));
     CHECK(turning.lo.y == Approx(-5));
+    // A band of heights [20, 50], as a shank above a 20 mm flute: its bottom rim's lowest point
+    // is 20 cos 30 - 5 sin 30 above the tip, at either end; its top is the cylinder's.
+    const Box band = turningMoveBox(m, 20, 50, 5);
+    CHECK(band.lo.z == Approx(20 * std::sqrt(0.75) - 2.5));
+    CHECK(band.hi.z == Approx(std::sqrt(2525.0)));
+    CHECK(band.hi.x == Approx(turning.hi.x));
     // Opposite axes: no great circle.
     m.startAxis = Vec3(0, 0, -1);
     m.axis = Vec3(0, 0, 1);
-    CHECK_THROWS_WITH(turningMoveBox(m, 50, 5), Catch::Matchers::Contains("opposite"));
+    CHECK_THROWS_WITH(turningMoveBox(m, 0, 50, 5), Catch::Matchers::Contains("opposite"));
+}
+
+TEST_CASE("turning move box: a machine's rotary moves, whole tools and bands above the tip", "[sweep][turning]") {
+    // The box of sampled poses padded by the law's speed bound holds every pose: checked against
+    // denser samples of the cylinder's rims, at heights from the tip and from above it.
+    const Machine ac = loadMachine("xyzac-trt");
+    std::mt19937 rng(20261130);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    for (int trial = 0; trial < 24; ++trial) {
+        RotaryAngles from, to;
+        from['A'] = 60 * uni(rng), from['C'] = 180 * uni(rng);
+        to['A'] = from['A'] + 20 * uni(rng), to['C'] = from['C'] + 40 * uni(rng);
+        const Vec3 j0(40 * uni(rng), 40 * uni(rng), 20 * uni(rng)), j1(40 * uni(rng), 40 * uni(rng), 20 * uni(rng));
+        const bool tcp = trial % 2 == 0;
+        Move m;
+        m.start = tcp ? j0 : ac.partFromJoints(j0, from);
+        m.end = tcp ? j1 : ac.partFromJoints(j1, to);
+        m.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, tcp, j0, j1));
+        const double z0 = trial % 3 == 0 ? 0.0 : 25.0;
+        INFO("trial " << trial << ", heights " << z0 << " to 40");
+        const Box box = turningMoveBox(m, z0, 40.0, 5.0);
+        const MotionLaw law(m);
+        Box seen;
+        for (int k = 0; k <= 1000; ++k) {
+            const ToolPose pose = law.pose(k / 1000.0);
+            const Vec3 any = std::abs(pose.axis.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+            const Vec3 p = glm::normalize(glm::cross(pose.axis, any)), q = glm::cross(pose.axis, p);
+            for (int j = 0; j < 90; ++j) {
+                const double phi = 2 * kPi * j / 90;
+                const Vec3 rim = 5.0 * (std::cos(phi) * p + std::sin(phi) * q);
+                for (const double z : {z0, 40.0}) seen.expand(pose.tip + z * pose.axis + rim);
+            }
+        }
+        for (int i = 0; i < 3; ++i) {
+            CHECK(box.lo[i] <= seen.lo[i]);
+            CHECK(box.hi[i] >= seen.hi[i]);
+            // Padded by at most a tenth of the radius beyond the poses' own boxes, which the rims'
+            // 90 points each miss by at most 5 (1 - cos 2 degrees), 3e-3.
+            CHECK(box.lo[i] >= seen.lo[i] - 0.5 - 0.01);
+            CHECK(box.hi[i] <= seen.hi[i] + 0.5 + 0.01);
+        }
+    }
 }
 
 namespace {

@@ -47,23 +47,27 @@ constexpr std::size_t kDefaultLinearNodeBudget = std::size_t(1) << 16;
 /// @brief The angle (radians, in [0, pi]) the axis of a move turns through; 0 for a fixed axis.
 double turnAngle(const Move& move);
 
-/// @brief A box that holds the tool (within `radius` of its axis, heights [0, length] above the
-/// tip) at every pose of a turning move; for a fixed-axis move, at its one axis.
+/// @brief A box that holds the tool (within `radius` of its axis, heights [bottom, length] above
+/// the tip) at every pose of a turning move; for a fixed-axis move, at its one axis. A tool
+/// region above the tip, such as a shank (Tool::bottom), gives its own bottom: the box of a shank
+/// 25 mm above the tip of a flat D10 x 40 was three times as large, in the faces the dexels cross,
+/// with the heights from the tip.
 ///
-/// The box is the tip's segment box plus the box of the turning cylinder (that radius and length)
-/// with its tip held at the origin. The second is exact: each of its faces touches some pose. The
-/// sum is exact for a turn in place and larger than needed when the tip's extreme and the axis's
-/// lie at different points of the move (at most by the tip's travel along each coordinate).
-/// Along the arc a(t) = a0 cos t + b sin t (b the unit tangent at a0, t in [0, theta]) each
-/// coordinate a_i is rho cos(t - phi), whose extremes are at the ends and where t - phi is 0 or
-/// pi. A tool point is tip + s a + r n with s in [0, length], |r| <= radius and n a unit vector
-/// normal to a; along a unit direction e with c = a.e it reaches
-/// g(c) = length max(c, 0) + radius sqrt(1 - c^2), concave on [-1, 0] and on [0, 1] with peaks
-/// at 0 and length / hypot(length, radius), so the ends of c's range and those peaks bound it.
+/// The box is the tip's segment box plus the box of the turning cylinder (that radius and those
+/// heights) with its tip held at the origin. The second is exact: each of its faces touches some
+/// pose. The sum is exact for a turn in place and larger than needed when the tip's extreme and
+/// the axis's lie at different points of the move (at most by the tip's travel along each
+/// coordinate). Along the arc a(t) = a0 cos t + b sin t (b the unit tangent at a0, t in
+/// [0, theta]) each coordinate a_i is rho cos(t - phi), whose extremes are at the ends and where
+/// t - phi is 0 or pi. A tool point is tip + s a + r n with s in [bottom, length], |r| <= radius
+/// and n a unit vector normal to a; along a unit direction e with c = a.e it reaches
+/// g(c) = max(bottom c, length c) + radius sqrt(1 - c^2), the larger of two concave functions
+/// s c + radius sqrt(1 - c^2) (s = bottom, length), each largest over c's range at its peak
+/// s / hypot(s, radius) clamped to the range.
 /// A machine's rotary move (Move::rotary) gets a box of sampled poses padded by the law's speed
 /// bound (turning.cpp), which holds every pose.
 /// @throw Error if the axes are opposite (no one great circle joins them).
-Box turningMoveBox(const Move& move, double length, double radius);
+Box turningMoveBox(const Move& move, double bottom, double length, double radius);
 
 /// @brief The swept volume of a tool (or tool region) on one move whose axis turns, along lines.
 ///
