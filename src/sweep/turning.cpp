@@ -18,6 +18,7 @@
 namespace dexelmill {
 
 using turning::heapLevel;
+using turning::heapWidth;
 using turning::kMaxLevel;
 using turning::kMaxLinearLevel;
 
@@ -927,7 +928,7 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
                 // Below the root, where the end poses' faces settle the node within the line's
                 // bound, its sweep is not needed (note n).
                 if (n.heap > 1 && parts.size() == 1 &&
-                    anchoredSettled(p, std::ldexp(1.0, -heapLevel(n.heap)), n.a, n.b, Interval::all(), false))
+                    anchoredSettled(p, heapWidth(n.heap), n.a, n.b, Interval::all(), false))
                     continue;
                 // A part searched whole (one band) whose end poses' faces left its root open: the
                 // root's grown sweep settles few of those lines (on BM_TurningShortQuery's flat end

@@ -19,11 +19,12 @@ constexpr int kMaxLevel = 60;
 /// node's heap index keeps a level of 30 within 32 bits.
 constexpr int kMaxLinearLevel = 30;
 
-/// The level of the node with heap index `heap` (the root 1, node i's halves 2i and 2i + 1).
-inline int heapLevel(std::uint32_t heap) {
-    int level = 0;
-    while (heap >> (level + 1)) ++level;
-    return level;
-}
+/// The level of the node with heap index `heap` (the root 1, node i's halves 2i and 2i + 1): the
+/// place of its highest set bit.
+inline int heapLevel(std::uint32_t heap) { return 31 - __builtin_clz(heap); }
+
+/// The width in u of the node with heap index `heap`, 2^-level, exactly: a division, where the
+/// search's call of std::ldexp cost 0.8 % of boat-xyzac's cut.
+inline double heapWidth(std::uint32_t heap) { return 1.0 / double(std::uint32_t(1) << heapLevel(heap)); }
 
 }  // namespace dexelmill::turning

@@ -183,7 +183,7 @@ const TurningSweep::LinearNode& TurningSweep::linearNode(std::size_t band, std::
 
 TurningSweep::LinearNode TurningSweep::makeNode(const LinearPart& m, std::uint32_t heap) const {
     const int level = heapLevel(heap);
-    const double width = std::ldexp(1.0, -level);
+    const double width = turning::heapWidth(heap);
     const double ua = double(heap - (std::uint32_t(1) << level)) * width, ub = ua + width, um = ua + 0.5 * width;
     const TurnPhase middle = law_.phase(um);
     const ToolPose a = law_.pose(ua), b = law_.pose(ub), mid = law_.pose(middle);

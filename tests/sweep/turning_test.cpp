@@ -15,6 +15,7 @@
 #include "dexelmill/machine/kinematics.h"
 #include "dexelmill/sweep/turning.h"
 #include "dexelmill/tool/builders.h"
+#include "sweep/turning_levels.h"
 
 using namespace dexelmill;
 
@@ -169,6 +170,19 @@ TEST_CASE("turning move box: a machine's rotary moves, whole tools and bands abo
             CHECK(box.lo[i] >= seen.lo[i] - 0.5 - 0.01);
             CHECK(box.hi[i] <= seen.hi[i] + 0.5 + 0.01);
         }
+    }
+}
+
+TEST_CASE("turning sweep: a node's level and width from its heap index", "[sweep][turning]") {
+    // Node i's halves are 2i and 2i + 1 from the root 1: level k holds heaps [2^k, 2^(k+1)), each
+    // 2^-k wide. Counted by halving, and the width by std::ldexp.
+    for (const std::uint32_t heap :
+         {1u, 2u, 3u, 4u, 5u, 7u, 8u, 1000u, 1023u, 1024u, (1u << 30) - 1u, 1u << 30, (1u << 31) + 5u, ~0u}) {
+        int level = 0;
+        for (std::uint32_t h = heap; h > 1; h /= 2) ++level;
+        INFO("heap " << heap);
+        CHECK(turning::heapLevel(heap) == level);
+        CHECK(turning::heapWidth(heap) == std::ldexp(1.0, -level));
     }
 }
 
