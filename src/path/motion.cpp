@@ -230,6 +230,13 @@ double MotionLaw::axisPointAccelerationBound(double reach) const {
     return rate * rate * reach;
 }
 
+double MotionLaw::axisJerkBound() const {
+    if (carried_ || !heads_.empty()) return std::numeric_limits<double>::infinity();
+    double rate = 0.0;
+    for (const RotaryTurn& t : turns_) rate += std::abs(t.to - t.from);
+    return rate * rate * rate;
+}
+
 double MotionLaw::turnBound(double reach) const {
     double v = 0.0;
     if (!carried_) {

@@ -12,6 +12,7 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/tool/offset.h"
+#include "interpolation.h"
 #include "turning_levels.h"
 
 namespace dexelmill {
@@ -20,6 +21,9 @@ using turning::heapLevel;
 using turning::heapWidth;
 using turning::kMaxLevel;
 using turning::kMaxLinearLevel;
+using turning::nodePolynomialMax;
+using turning::ParabolaLow;
+using turning::parabolaLow;
 
 namespace {
 
@@ -200,6 +204,7 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     axisTurn_ = law_.axisTurnBound();
     tipSpeed_ = law_.speedBound(0.0);
     axisBend_ = law_.axisPointAccelerationBound(1.0);
+    axisJerk_ = law_.axisJerkBound();
     const double reach = std::hypot(tool.totalLength(), tool.maxRadius());
     speed_ = std::min(law_.speedBound(reach), law_.speedBound(0.0) + axisTurn_ * reach);
     // A ball end at the bottom (note g): chords enough that w^2 / 8 |c''| <= epsilon / 2 for
@@ -509,6 +514,35 @@ Interval TurningSweep::bound(const Line& line) const {
 //      whole open, it is split without its sweep (a node's test is optional: one not tried is
 //      split, as one that fails): BM_TurningShortQuery's flat end 104 -> 102 ns a line at 0.2
 //      degrees, 125 -> 120 at 0.6.
+//  (o) Disks. Where a line's end on one side lies on a disk face (a flat end's bottom, a part's
+//      top) at both end poses of a node and the end moves outward from one of them and back before
+//      the other (a dip in u), (j) to (m) bound that side only from poses within
+//      sqrt(epsilon / C) of the dip's deepest pose: on boat-xyzac, four lines in five of those the
+//      root left open, each then taking three to five middle poses and their nodes' sweeps. But
+//      a disk's plane is known at every pose, and a convex part lies behind it: with n(u) = s a(u)
+//      (s = -1 for the bottom disk, 1 for the top) and c(u) = p(u) + h a(u) its centre at height
+//      h, a point z is deeper than epsilon inside T(u) only if H_z(u) = n(u).(z - c(u)) <= -epsilon.
+//      H_z(u) = s (a(u).(z - p(u)) - h) is a smooth function of u alone, and where the tip runs on
+//      a straight line (p'' = 0, as note j asks) H''' = s (a'''.(z - p) - 3 a''.f), so
+//      |H'''| <= M = J |z - p|max + 3 K1 |f|, with J >= |a'''| (MotionLaw::axisJerkBound), K1 >= |a''|
+//      (axisPointAccelerationBound(1)) and |z - p(u)| largest at an end of the tip's segment. The
+//      parabola P through H_z at three poses u_0 < u_1 < u_2 (the node's ends and a pose between)
+//      strays from H_z on [u_0, u_2] by at most M |(u - u_0)(u - u_1)(u - u_2)| / 6, the
+//      interpolation remainder, whose largest is at a root of its derivative. So where P's least
+//      on the node, less that remainder, exceeds -epsilon, no T(u) of the node holds z deeper than
+//      epsilon. Beyond z along the line, H grows at the rate n(u).d, which stays positive where
+//      the end poses' |n.d| exceed omega w / 2 (each u lies within w / 2 of one). Taking z at the
+//      farthest end of the three poses' intervals on that side, which O holds, the node is settled
+//      on that side as in (j). The search takes z at the end poses' farther end and the node's
+//      middle pose (its H only, no interval solved) first: where the end does not dip past z that
+//      settles; otherwise the pose at the vertex of that parabola, the dip's deepest to within the
+//      remainder, is solved and goes into O, and the test is made again with it in the middle.
+//      The remainder is of third order in w and small where the axis turns little, so most such
+//      lines settle at the root: H at three poses and one pose solved, where (j) descended three
+//      to five levels. A rotary table turning under a tilted tool swings the disk's plane round,
+//      so its ends dip often: boat-xyzac's cut (one thread, h = 0.5 mm) 0.320 -> 0.206 s,
+//      boat-xyzbc's 0.540 -> 0.436 s. A great circle tilts the disk one way, and BM_TurningQuery's
+//      and BM_TurningShortQuery's lines seldom dip: their rows did not change.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     intersect(line, care, out);
@@ -711,6 +745,55 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
             end = upper ? range.hi : range.lo;
             return true;
         };
+        // Whether, where the line's end on that side lies on the same disk face at poses a and b,
+        // that disk's plane bounds the points beyond the farthest end of a, b and (where the end
+        // dips past theirs) a pose solved between them, over the whole node (note o); that pose
+        // goes into O.
+        const auto disk = [&](std::size_t p, int upper, Solved& a, Solved& b, double& end) {
+            if (!std::isfinite(axisJerk_) || a.range.isEmpty() || b.range.isEmpty()) return false;
+            const Crossing& ca = crossing(a, p, upper);
+            const Crossing& cb = crossing(b, p, upper);
+            // The first and last faces up the meridian are the bottom and top disks (meridianFaces).
+            const std::vector<MeridianFace>& faces = faces_[p];
+            const int top = int(faces.size()) - 1;
+            if (ca.face != cb.face || (ca.face != 0 && ca.face != top)) return false;
+            const double w = b.u - a.u;
+            const double out = upper ? std::min(ca.across, cb.across) : -std::max(ca.across, cb.across);
+            if (!(out > 0.5 * axisTurn_ * w)) return false;
+            const double side = ca.face == 0 ? -1.0 : 1.0, height = faces[std::size_t(ca.face)].z0;
+            // H_z at a pose: the signed distance of z beyond the disk's plane.
+            const auto H = [&](const ToolPose& pose, const Vec3& z) {
+                return side * (glm::dot(pose.axis, z - pose.tip) - height);
+            };
+            const auto endOf = [&](const Interval& range) { return upper ? range.hi : range.lo; };
+            const auto farther = [&](double s, double t) { return upper ? std::max(s, t) : std::min(s, t); };
+            // Whether P through H_z at a, the pose `mid` at u and b, less the remainder, stays
+            // above -epsilon; `low` gets where P is least.
+            const auto holds = [&](double t, double u, const ToolPose& mid, double& low) {
+                const Vec3 z = line.at(t);
+                const double reach = std::max(glm::length(z - a.pose.tip), glm::length(z - b.pose.tip));
+                const double bound = axisJerk_ * reach + 3.0 * axisBend_ * tipSpeed_;
+                const ParabolaLow p2 = parabolaLow(a.u, H(a.pose, z), u, H(mid, z), b.u, H(b.pose, z));
+                low = p2.u;
+                return p2.value - bound * nodePolynomialMax(a.u, u, b.u) / 6.0 > -epsilon_;
+            };
+            double t = farther(endOf(a.range), endOf(b.range)), deepest = 0.0;
+            const double um = 0.5 * (a.u + b.u);
+            if (holds(t, um, law_.pose(um), deepest)) {
+                end = t;
+                return true;
+            }
+            if (!(deepest > a.u && deepest < b.u)) return false;
+            const ToolPose pose = law_.pose(deepest);
+            const Interval range = tool_.intersectPart(parts[p], LocalLine::make(pose, line));
+            if (range.isEmpty()) return false;
+            found.add(range, deepest, p);
+            t = farther(t, endOf(range));
+            double unused = 0.0;
+            if (!holds(t, deepest, pose, unused)) return false;
+            end = t;
+            return true;
+        };
         // Whether a node of width w that is not settled as a linear node has the line's points
         // beyond its end poses' intervals (a, b) bounded by those poses' faces (note j), `swept`
         // holding every point of the node deeper than epsilon; `aim` lets notes k and l solve
@@ -766,6 +849,7 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
                 const double beyond = upper ? hull.hi : hull.lo;
                 if (!end && stretch(0, upper, beyond) + stretch(1, upper, beyond) > w) end = beyond;
                 double aimed = 0.0;
+                if (!end && !between && disk(p, upper, *ends[0], *ends[1], aimed)) end = aimed;
                 if (!end && !between && aim &&
                     (corner(p, upper, *ends[0], *ends[1], aimed) || graze(p, upper, *ends[0], *ends[1], aimed)))
                     end = aimed;

@@ -156,6 +156,58 @@ TEST_CASE("machine: the acceleration bound of a tool point on the axis holds wit
     }
 }
 
+TEST_CASE("machine: the axis's third-derivative bound holds with TCP and in APT, not in identity", "[machine]") {
+    // A central third difference of the unit axis, (a(u + 2h) - 2 a(u + h) + 2 a(u - h) - a(u - 2h))
+    // / 2h^3 with h = 1e-2: its truncation error is h^2 |a^(5)| / 4 <= 2.5e-5 w^5 and its rounding
+    // error about 1e-16 / h^3 = 1e-10. For a great circle |a'''| = theta^3 exactly.
+    constexpr double kH = 1e-2;
+    const auto third = [&](auto&& axis, double u) {
+        return (axis(u + 2 * kH) - 2.0 * axis(u + kH) + 2.0 * axis(u - kH) - axis(u - 2 * kH)) / (2 * kH * kH * kH);
+    };
+    const Machine ac = loadMachine("xyzac-trt");
+    std::mt19937 rng(12);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    for (int i = 0; i < 40; ++i) {
+        RotaryAngles from, to;
+        from['A'] = 80 * uni(rng), from['C'] = 180 * uni(rng);
+        to['A'] = from['A'] + 40 * uni(rng), to['C'] = from['C'] + 120 * uni(rng);
+        const Vec3 j0(50 * uni(rng), 50 * uni(rng), 50 * uni(rng)), j1(50 * uni(rng), 50 * uni(rng), 50 * uni(rng));
+        Move tcp;
+        tcp.start = j0, tcp.end = j1;
+        tcp.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, true, j0, j1));
+        // The issue's formula for the axis, angles linear in u.
+        const auto axis = [&](double u) {
+            const double a = (from['A'] + u * (to['A'] - from['A'])) * kDeg;
+            const double c = (from['C'] + u * (to['C'] - from['C'])) * kDeg;
+            return Vec3(std::sin(c) * std::sin(a), std::cos(c) * std::sin(a), std::cos(a));
+        };
+        const double rate = (std::abs(to['A'] - from['A']) + std::abs(to['C'] - from['C'])) * kDeg;
+        const double bound = MotionLaw(tcp).axisJerkBound();
+        CHECK(bound == Approx(rate * rate * rate).epsilon(1e-12));
+        Move apt;
+        apt.start = j0, apt.end = j1;
+        apt.startAxis = glm::normalize(Vec3(uni(rng), uni(rng), uni(rng)));
+        apt.axis = glm::normalize(*apt.startAxis + 1.5 * Vec3(uni(rng), uni(rng), uni(rng)));
+        const MotionLaw slerp(apt);
+        const double theta = std::acos(std::clamp(glm::dot(*apt.startAxis, apt.axis), -1.0, 1.0));
+        CHECK(slerp.axisJerkBound() == Approx(theta * theta * theta).epsilon(1e-12));
+        const auto aptAxis = [&](double u) { return slerp.pose(u).axis; };
+        double largest = 0.0;
+        for (int k = 1; k < 20; ++k) {
+            const double u = k / 20.0;
+            const double d3 = glm::length(third(axis, u));
+            CHECK(d3 <= bound + 2.5e-5 * std::pow(rate, 5) + 1e-8);
+            largest = std::max(largest, d3);
+            CHECK(glm::length(third(aptAxis, u)) == Approx(theta * theta * theta).margin(2.5e-5 * std::pow(theta, 5) + 1e-8));
+        }
+        // The bound is no more than the turns' rates allow: some pose comes within a factor 8.
+        CHECK(largest >= bound / 8.0);
+        Move identity = tcp;
+        identity.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, false, j0, j1));
+        CHECK(std::isinf(MotionLaw(identity).axisJerkBound()));
+    }
+}
+
 TEST_CASE("machine: the axis turn bound holds and is tight, and sees a table spin under an upright tool",
           "[machine]") {
     // With A and C linear in u, the issue's axis (sin C sin A, cos C sin A, cos A) turns at

@@ -424,6 +424,48 @@ TEST_CASE("turning sweep vs oracle: lines nearly along a face of a pose, while t
     CHECK(tally.linear >= tally.cases / 2);
 }
 
+TEST_CASE("turning sweep vs oracle: lines through a disk face, whose end may dip past both end poses'",
+          "[sweep][turning]") {
+    // A line through a point of a part's bottom or top disk at a middle pose u*, crossing it at
+    // 10 to 80 degrees from the disk's plane, with a tolerance of 1e-2 to 1e-4 mm. As the tool moves and turns, the disk's plane crosses
+    // the line farther out at poses between a node's ends than at either: the plane bounds those
+    // points by its values at three poses and a third-order remainder (turning.cpp, note o). Most
+    // points are taken where the plane stops moving along its normal at u*, a'.(z - p) = a.f (a' by
+    // a central difference of the oracle's poses), so that the line's end dips deepest near u*.
+    std::mt19937_64 rng(20261130);
+    Tally tally;
+    for (int i = 0, n = scaled(300); i < n; ++i) {
+        const double angle = degrees(std::pow(10.0, cases::uniform(rng, 0.0, 1.95)));
+        Case c = randomCase(rng, randomMove(rng, angle, rng() % 4 == 0 ? 0.0 : cases::uniform(rng, 0.05, 40.0)));
+        const SweepOracle o(c.model->parts, c.move);
+        const double at = cases::uniform(rng, 0.1, 0.9);
+        constexpr double kStep = 1e-6;
+        Vec3 tip, axis, before, after, unused;
+        o.pose(at, tip, axis);
+        o.pose(at - kStep, unused, before);
+        o.pose(at + kStep, unused, after);
+        const Vec3 turn = (after - before) / (2 * kStep);
+        const oracle::Part& part = c.model->parts[rng() % c.model->parts.size()];
+        const bool bottom = rng() % 2 == 0;
+        const double z = bottom ? part.za : part.zb;
+        const Vec3 normal = bottom ? -axis : axis;
+        const double still = glm::dot(axis, c.move.end - c.move.start) / glm::length(turn);
+        const Vec3 point = rng() % 4 != 0 && std::abs(still) < 0.95 * part.radius(z)
+                               ? tip + z * axis + still * glm::normalize(turn)
+                               : tip + z * axis + cases::uniform(rng, 0, 0.95) * part.radius(z) *
+                                                      cases::randomPerpendicular(rng, axis);
+        const double elevation = degrees(cases::uniform(rng, 10, 80));
+        const Vec3 dir = glm::normalize(std::cos(elevation) * cases::randomPerpendicular(rng, normal) +
+                                        std::sin(elevation) * normal);
+        c.line = Line{point - cases::uniform(rng, -30, 30) * dir, dir};
+        // A coarse tolerance lets the plane settle wide nodes, where the remainder is largest.
+        c.epsilon = std::pow(10.0, -double(2 + rng() % 3));
+        checkCase(c, tally, rng);
+    }
+    report(tally);
+    CHECK(tally.linear >= tally.cases / 2);
+}
+
 TEST_CASE("turning sweep vs oracle: the axis turning through a lattice direction", "[sweep][turning]") {
     std::mt19937_64 rng(20261127);
     Tally tally;

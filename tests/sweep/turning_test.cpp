@@ -7,14 +7,20 @@
 // of the ends they make.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <tuple>
+#include <vector>
 
 #include "dexelmill/error.h"
 #include "dexelmill/machine/kinematics.h"
+#include "dexelmill/path/motion.h"
 #include "dexelmill/sweep/turning.h"
 #include "dexelmill/tool/builders.h"
+#include "sweep/interpolation.h"
 #include "sweep/turning_levels.h"
 
 using namespace dexelmill;
@@ -171,6 +177,108 @@ TEST_CASE("turning move box: a machine's rotary moves, whole tools and bands abo
             CHECK(box.hi[i] <= seen.hi[i] + 0.5 + 0.01);
         }
     }
+}
+
+TEST_CASE("turning sweep: the least of a parabola through three samples, and the node polynomial's largest",
+          "[sweep][turning]") {
+    // Against dense sampling of the Lagrange form, which shares no code with Newton's: the least
+    // lies at the place given, no sample falls below it, and the node polynomial's largest is
+    // reached and never passed. Degenerate cases: a straight line, a sample on the vertex, three
+    // equal values and a middle sample next to an end.
+    std::mt19937 rng(20261130);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    const auto lagrange = [](double u0, double h0, double u1, double h1, double u2, double h2, double u) {
+        return h0 * (u - u1) * (u - u2) / ((u0 - u1) * (u0 - u2)) + h1 * (u - u0) * (u - u2) / ((u1 - u0) * (u1 - u2)) +
+               h2 * (u - u0) * (u - u1) / ((u2 - u0) * (u2 - u1));
+    };
+    std::vector<std::array<double, 6>> cases = {
+        {0.0, 1.0, 0.5, 0.5, 1.0, 0.0},       // a straight line: least at the lower end
+        {0.0, 1.0, 0.5, 0.0, 1.0, 1.0},       // the vertex on the middle sample
+        {0.25, 2.0, 0.375, 2.0, 0.5, 2.0},    // three equal values
+        {0.0, 0.0, 1e-6, -1e-3, 1.0, 0.5},    // the middle next to an end
+        {0.0, -1.0, 0.5, 1.0, 1.0, -2.0},     // opening downwards: least at an end
+    };
+    for (int i = 0; i < 200; ++i) {
+        double u[3] = {uni(rng), uni(rng), uni(rng)};
+        std::sort(u, u + 3);
+        if (!(u[0] < u[1] && u[1] < u[2])) continue;
+        cases.push_back({u[0], uni(rng), u[1], uni(rng), u[2], uni(rng)});
+    }
+    for (const auto& c : cases) {
+        const auto [u0, h0, u1, h1, u2, h2] = c;
+        INFO("samples (" << u0 << ", " << h0 << "), (" << u1 << ", " << h1 << "), (" << u2 << ", " << h2 << ")");
+        const turning::ParabolaLow low = turning::parabolaLow(u0, h0, u1, h1, u2, h2);
+        const double span = u2 - u0, scale = 1.0 + std::abs(h0) + std::abs(h1) + std::abs(h2);
+        CHECK(low.u >= u0);
+        CHECK(low.u <= u2);
+        CHECK(low.value == Approx(lagrange(u0, h0, u1, h1, u2, h2, low.u)).margin(1e-9 * scale));
+        double sampledLow = std::numeric_limits<double>::infinity(), sampledLargest = 0.0;
+        for (int k = 0; k <= 4000; ++k) {
+            const double x = u0 + span * k / 4000.0;
+            sampledLow = std::min(sampledLow, lagrange(u0, h0, u1, h1, u2, h2, x));
+            sampledLargest = std::max(sampledLargest, std::abs((x - u0) * (x - u1) * (x - u2)));
+        }
+        CHECK(sampledLow >= low.value - 1e-9 * scale);
+        const double largest = turning::nodePolynomialMax(u0, u1, u2);
+        CHECK(largest >= sampledLargest * (1.0 - 1e-12));
+        // The sampling falls short of the largest by at most its slope times half a step.
+        CHECK(largest <= sampledLargest + 3.0 * span * span * span / 8000.0 + 1e-15);
+    }
+}
+
+TEST_CASE("turning sweep: a disk's plane strays from its parabola through three poses by at most note o's remainder",
+          "[sweep][turning]") {
+    // H_z(u) = a(u).(z - p(u)) - h, the distance of a point z beyond a disk's plane at height h
+    // (turning.cpp, note o), from dense poses of MULTAX and TCP moves, against the parabola through
+    // three of them: never farther than M |(u - u0)(u - u1)(u - u2)| / 6, with
+    // M = |a'''| max |z - p| + 3 |a''| |f| from the law's bounds, and within a factor 50 of it
+    // somewhere on most moves.
+    const Machine ac = loadMachine("xyzac-trt");
+    std::mt19937 rng(20261201);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    int tight = 0, moves = 0;
+    for (int trial = 0; trial < 60; ++trial) {
+        Move m;
+        m.start = Vec3(20 * uni(rng), 20 * uni(rng), 20 * uni(rng));
+        m.end = m.start + 10.0 * (1.0 + uni(rng)) * Vec3(uni(rng), uni(rng), uni(rng));
+        if (trial % 2 == 0) {
+            m.axis = glm::normalize(Vec3(uni(rng), uni(rng), 2.0));
+            m.startAxis = glm::normalize(m.axis + 0.8 * Vec3(uni(rng), uni(rng), uni(rng)));
+        } else {
+            RotaryAngles from, to;
+            from['A'] = 40 * uni(rng), from['C'] = 90 * uni(rng);
+            to['A'] = from['A'] + 30 * uni(rng), to['C'] = from['C'] + 60 * uni(rng);
+            m.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, true, m.start, m.end));
+        }
+        const MotionLaw law(m);
+        const Vec3 z = m.start + Vec3(30 * uni(rng), 30 * uni(rng), 30 * uni(rng));
+        const double h = 20.0 * (1.0 + uni(rng));
+        const auto H = [&](double u) {
+            const ToolPose p = law.pose(u);
+            return glm::dot(p.axis, z - p.tip) - h;
+        };
+        const double reach = std::max(glm::length(z - m.start), glm::length(z - m.end));
+        const double M = law.axisJerkBound() * reach + 3.0 * law.axisPointAccelerationBound(1.0) * law.speedBound(0.0);
+        double u[3] = {0.5 * (1.0 + uni(rng)), 0.5 * (1.0 + uni(rng)), 0.5 * (1.0 + uni(rng))};
+        std::sort(u, u + 3);
+        if (!(u[0] < u[1] && u[1] < u[2])) continue;
+        const double h0 = H(u[0]), h1 = H(u[1]), h2 = H(u[2]);
+        double ratio = 0.0, excess = -1.0;
+        for (int k = 0; k <= 400; ++k) {
+            const double x = u[0] + (u[2] - u[0]) * k / 400.0;
+            const double p2 = h0 * (x - u[1]) * (x - u[2]) / ((u[0] - u[1]) * (u[0] - u[2])) +
+                              h1 * (x - u[0]) * (x - u[2]) / ((u[1] - u[0]) * (u[1] - u[2])) +
+                              h2 * (x - u[0]) * (x - u[1]) / ((u[2] - u[0]) * (u[2] - u[1]));
+            const double remainder = M * std::abs((x - u[0]) * (x - u[1]) * (x - u[2])) / 6.0;
+            excess = std::max(excess, std::abs(H(x) - p2) - remainder);
+            if (remainder > 1e-6) ratio = std::max(ratio, std::abs(H(x) - p2) / remainder);
+        }
+        INFO("trial " << trial);
+        CHECK(excess <= 1e-9);
+        ++moves;
+        if (ratio >= 1.0 / 50.0) ++tight;
+    }
+    CHECK(tight >= moves / 2);
 }
 
 TEST_CASE("turning sweep: a node's level and width from its heap index", "[sweep][turning]") {

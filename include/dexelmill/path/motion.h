@@ -98,6 +98,10 @@ class MotionLaw {
     /// rule |Q''| <= (sum_i |w_i|)^2. Infinite when the machine carries the tip (identity
     /// kinematics), whose curved path this does not bound.
     double axisPointAccelerationBound(double reach) const;
+    /// @brief A bound on |a'''(u)| over the move, a(u) = Q(u) a_0 the unit tool axis with Q as in
+    /// axisPointAccelerationBound: each R_i has |R_i'''| = |w_i|^3, so by the product rule
+    /// |Q'''| <= (sum_i |w_i|)^3. Infinite where axisPointAccelerationBound is.
+    double axisJerkBound() const;
     /// @brief Whether the axis or the path is anything but a translation along the straight line.
     bool rotates() const { return !turns_.empty(); }
 

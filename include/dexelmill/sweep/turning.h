@@ -232,6 +232,7 @@ class TurningSweep {
     double axisTurn_ = 0.0;  ///< MotionLaw::axisTurnBound
     double tipSpeed_ = 0.0;  ///< MotionLaw::speedBound(0): the tip's
     double axisBend_ = 0.0;  ///< MotionLaw::axisPointAccelerationBound(1): |a''|
+    double axisJerk_ = 0.0;  ///< MotionLaw::axisJerkBound: |a'''|
     double epsilon_ = kDefaultTurnTolerance;
     Box bounds_;
     /// The convex solids the search solves: the tool's convex parts, the lowest cut at its
