@@ -514,10 +514,10 @@ Interval TurningSweep::bound(const Line& line) const {
 //      whole open, it is split without its sweep (a node's test is optional: one not tried is
 //      split, as one that fails): BM_TurningShortQuery's flat end 104 -> 102 ns a line at 0.2
 //      degrees, 125 -> 120 at 0.6.
-//  (o) Disks. Where a line's end on one side lies on a disk face (a flat end's bottom, a part's
-//      top) at both end poses of a node and the end moves outward from one of them and back before
-//      the other (a dip in u), (j) to (m) bound that side only from poses within
-//      sqrt(epsilon / C) of the dip's deepest pose: on boat-xyzac, four lines in five of those the
+//  (o) Disks and cylinders. Where a line's end on one side lies on a disk face (a flat end's
+//      bottom, a part's top) at both end poses of a node and the end moves outward from one of
+//      them and back before the other (a dip in u), (j) to (m) bound that side only from poses
+//      within sqrt(epsilon / C) of the dip's deepest pose: on boat-xyzac, four lines in five of those the
 //      root left open, each then taking three to five middle poses and their nodes' sweeps. But
 //      a disk's plane is known at every pose, and a convex part lies behind it: with n(u) = s a(u)
 //      (s = -1 for the bottom disk, 1 for the top) and c(u) = p(u) + h a(u) its centre at height
@@ -542,7 +542,19 @@ Interval TurningSweep::bound(const Line& line) const {
 //      to five levels. A rotary table turning under a tilted tool swings the disk's plane round,
 //      so its ends dip often: boat-xyzac's cut (one thread, h = 0.5 mm) 0.320 -> 0.206 s,
 //      boat-xyzbc's 0.540 -> 0.436 s. A great circle tilts the disk one way, and BM_TurningQuery's
-//      and BM_TurningShortQuery's lines seldom dip: their rows did not change.
+//      and BM_TurningShortQuery's lines seldom dip there.
+//      Cylinders. A convex part whose side is a cylinder of radius R lies within R of its axis
+//      (its radius, concave in z, is largest where it is constant), so z is deeper than epsilon
+//      inside T(u) only if G_z(u) = |z - p|^2 - (a.(z - p))^2 - R^2 <= (R - epsilon)^2 - R^2.
+//      With q = a.(z - p): G''' = -(q^2)''' = -(2 q q''' + 6 q' q''), where |q| <= r = max |z - p|,
+//      |q'| <= omega r + |f|, |q''| <= K1 r + 2 omega |f| and |q'''| <= J r + 3 K1 |f|; so the same
+//      test holds with M = 2 r (J r + 3 K1 |f|) + 6 (omega r + |f|)(K1 r + 2 omega |f|). Beyond z,
+//      G_{z + s e}(u) is convex in s with slope 2 g(u) at s = 0, g(u) = (z - p).e - q (a.e) (e the
+//      direction beyond), and |g'| <= 2 (|f| + omega r): where g at a and b exceeds
+//      (|f| + omega r) w, g stays positive over the node and G only grows beyond z. On
+//      boat-xyzbc, where the sides' ends dip most (three in five of the lines the root left open),
+//      its cut 0.436 -> 0.376 s; BM_TurningShortQuery's flat end 102 -> 96 ns a line at 0.2
+//      degrees, 118 -> 107 at 0.6.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     intersect(line, care, out);
@@ -745,37 +757,57 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
             end = upper ? range.hi : range.lo;
             return true;
         };
-        // Whether, where the line's end on that side lies on the same disk face at poses a and b,
-        // that disk's plane bounds the points beyond the farthest end of a, b and (where the end
-        // dips past theirs) a pose solved between them, over the whole node (note o); that pose
-        // goes into O.
-        const auto disk = [&](std::size_t p, int upper, Solved& a, Solved& b, double& end) {
+        // Whether, where the line's end on that side lies on the same disk or cylinder face at
+        // poses a and b, that face bounds the points beyond the farthest end of a, b and (where
+        // the end dips past theirs) a pose solved between them, over the whole node (note o); that
+        // pose goes into O.
+        const auto faceDip = [&](std::size_t p, int upper, Solved& a, Solved& b, double& end) {
             if (!std::isfinite(axisJerk_) || a.range.isEmpty() || b.range.isEmpty()) return false;
             const Crossing& ca = crossing(a, p, upper);
             const Crossing& cb = crossing(b, p, upper);
+            if (ca.face != cb.face) return false;
             // The first and last faces up the meridian are the bottom and top disks (meridianFaces).
             const std::vector<MeridianFace>& faces = faces_[p];
-            const int top = int(faces.size()) - 1;
-            if (ca.face != cb.face || (ca.face != 0 && ca.face != top)) return false;
-            const double w = b.u - a.u;
+            const MeridianFace& face = faces[std::size_t(ca.face)];
+            const bool disk = ca.face == 0 || ca.face == int(faces.size()) - 1;
+            if (!disk && !(face.kind == MeridianFace::Kind::Cone && face.r0 == face.r1)) return false;
+            const double w = b.u - a.u, turn = axisTurn_, bend = axisBend_, feed = tipSpeed_;
             const double out = upper ? std::min(ca.across, cb.across) : -std::max(ca.across, cb.across);
-            if (!(out > 0.5 * axisTurn_ * w)) return false;
-            const double side = ca.face == 0 ? -1.0 : 1.0, height = faces[std::size_t(ca.face)].z0;
-            // H_z at a pose: the signed distance of z beyond the disk's plane.
-            const auto H = [&](const ToolPose& pose, const Vec3& z) {
-                return side * (glm::dot(pose.axis, z - pose.tip) - height);
+            if (disk && !(out > 0.5 * turn * w)) return false;
+            const double side = ca.face == 0 ? -1.0 : 1.0, radius = face.r0;
+            const Vec3 beyond = upper ? line.dir : -line.dir;
+            // F_z at a pose: a disk's H_z, or a cylinder's G_z; positive outside.
+            const auto F = [&](const ToolPose& pose, const Vec3& z) {
+                const Vec3 q = z - pose.tip;
+                const double along = glm::dot(pose.axis, q);
+                return disk ? side * (along - face.z0) : glm::dot(q, q) - along * along - radius * radius;
             };
+            // How far below 0 F_z may fall at a point no deeper than epsilon.
+            const double depth = disk ? epsilon_ : epsilon_ * (2.0 * radius - epsilon_);
             const auto endOf = [&](const Interval& range) { return upper ? range.hi : range.lo; };
             const auto farther = [&](double s, double t) { return upper ? std::max(s, t) : std::min(s, t); };
-            // Whether P through H_z at a, the pose `mid` at u and b, less the remainder, stays
-            // above -epsilon; `low` gets where P is least.
+            // Whether the points beyond line.at(t) lie outside every T(u) of the node but for
+            // epsilon, by P through F_z at a, the pose `mid` at u and b, less the remainder;
+            // `low` gets where P is least.
             const auto holds = [&](double t, double u, const ToolPose& mid, double& low) {
                 const Vec3 z = line.at(t);
                 const double reach = std::max(glm::length(z - a.pose.tip), glm::length(z - b.pose.tip));
-                const double bound = axisJerk_ * reach + 3.0 * axisBend_ * tipSpeed_;
-                const ParabolaLow p2 = parabolaLow(a.u, H(a.pose, z), u, H(mid, z), b.u, H(b.pose, z));
+                if (!disk) {
+                    // Beyond z a cylinder's G grows where the line runs away from the axis,
+                    // g(u) = (z - p).e - (a.(z - p))(a.e) >= 0 (e the direction beyond), and
+                    // |g'| <= 2 (|f| + omega |z - p|): each u lies within w / 2 of a or b.
+                    const auto g = [&](const ToolPose& pose) {
+                        const Vec3 q = z - pose.tip;
+                        return glm::dot(q, beyond) - glm::dot(pose.axis, q) * glm::dot(pose.axis, beyond);
+                    };
+                    if (!(std::min(g(a.pose), g(b.pose)) > (feed + turn * reach) * w)) return false;
+                }
+                const double jerk = axisJerk_ * reach + 3.0 * bend * feed;
+                const double bound = disk ? jerk
+                                          : 2.0 * reach * jerk + 6.0 * (turn * reach + feed) * (bend * reach + 2.0 * turn * feed);
+                const ParabolaLow p2 = parabolaLow(a.u, F(a.pose, z), u, F(mid, z), b.u, F(b.pose, z));
                 low = p2.u;
-                return p2.value - bound * nodePolynomialMax(a.u, u, b.u) / 6.0 > -epsilon_;
+                return p2.value - bound * nodePolynomialMax(a.u, u, b.u) / 6.0 > -depth;
             };
             double t = farther(endOf(a.range), endOf(b.range)), deepest = 0.0;
             const double um = 0.5 * (a.u + b.u);
@@ -849,7 +881,7 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
                 const double beyond = upper ? hull.hi : hull.lo;
                 if (!end && stretch(0, upper, beyond) + stretch(1, upper, beyond) > w) end = beyond;
                 double aimed = 0.0;
-                if (!end && !between && disk(p, upper, *ends[0], *ends[1], aimed)) end = aimed;
+                if (!end && !between && faceDip(p, upper, *ends[0], *ends[1], aimed)) end = aimed;
                 if (!end && !between && aim &&
                     (corner(p, upper, *ends[0], *ends[1], aimed) || graze(p, upper, *ends[0], *ends[1], aimed)))
                     end = aimed;

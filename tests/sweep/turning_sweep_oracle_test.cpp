@@ -427,11 +427,12 @@ TEST_CASE("turning sweep vs oracle: lines nearly along a face of a pose, while t
 TEST_CASE("turning sweep vs oracle: lines through a disk face, whose end may dip past both end poses'",
           "[sweep][turning]") {
     // A line through a point of a part's bottom or top disk at a middle pose u*, crossing it at
-    // 10 to 80 degrees from the disk's plane, with a tolerance of 1e-2 to 1e-4 mm. As the tool moves and turns, the disk's plane crosses
-    // the line farther out at poses between a node's ends than at either: the plane bounds those
-    // points by its values at three poses and a third-order remainder (turning.cpp, note o). Most
-    // points are taken where the plane stops moving along its normal at u*, a'.(z - p) = a.f (a' by
-    // a central difference of the oracle's poses), so that the line's end dips deepest near u*.
+    // 10 to 80 degrees from the disk's plane, with a tolerance of 1e-2 to 1e-4 mm. As the tool
+    // moves and turns, the disk's plane crosses the line farther out at poses between a node's
+    // ends than at either: the plane bounds those points by its values at three poses and a
+    // third-order remainder (turning.cpp, note o). Most points are taken where the plane stops
+    // moving along its normal at u*, a'.(z - p) = a.f (a' by a central difference of the oracle's
+    // poses), so that the line's end dips deepest near u*.
     std::mt19937_64 rng(20261130);
     Tally tally;
     for (int i = 0, n = scaled(300); i < n; ++i) {
@@ -459,6 +460,38 @@ TEST_CASE("turning sweep vs oracle: lines through a disk face, whose end may dip
                                         std::sin(elevation) * normal);
         c.line = Line{point - cases::uniform(rng, -30, 30) * dir, dir};
         // A coarse tolerance lets the plane settle wide nodes, where the remainder is largest.
+        c.epsilon = std::pow(10.0, -double(2 + rng() % 3));
+        checkCase(c, tally, rng);
+    }
+    report(tally);
+    CHECK(tally.linear >= tally.cases / 2);
+}
+
+TEST_CASE("turning sweep vs oracle: lines across a part's side, whose end may dip past both end poses'",
+          "[sweep][turning]") {
+    // A line through a point of a part's side at a middle pose, crossing it at 10 to 80 degrees
+    // from its tangent plane, with a tolerance of 1e-2 to 1e-4 mm. Where the side is a cylinder,
+    // the distance from its axis bounds the line's points beyond by three poses and a third-order
+    // remainder (turning.cpp, note o), while the line runs away from the axis.
+    std::mt19937_64 rng(20261131);
+    Tally tally;
+    for (int i = 0, n = scaled(300); i < n; ++i) {
+        const double angle = degrees(std::pow(10.0, cases::uniform(rng, -1.0, 1.95)));
+        Case c = randomCase(rng, randomMove(rng, angle, rng() % 4 == 0 ? 0.0 : cases::uniform(rng, 0.05, 40.0)));
+        const SweepOracle o(c.model->parts, c.move);
+        Vec3 tip, axis;
+        o.pose(cases::uniform(rng, 0.1, 0.9), tip, axis);
+        const oracle::Part& part = c.model->parts[rng() % c.model->parts.size()];
+        constexpr double kStep = 1e-6;
+        const double z = cases::uniform(rng, part.za + 2 * kStep, part.zb - 2 * kStep);
+        const double slope = (part.radius(z + kStep) - part.radius(z - kStep)) / (2 * kStep);
+        const Vec3 radial = cases::randomPerpendicular(rng, axis);
+        const Vec3 point = tip + z * axis + part.radius(z) * radial;
+        const Vec3 normal = glm::normalize(radial - slope * axis);
+        const double elevation = degrees(cases::uniform(rng, 10, 80));
+        const Vec3 dir = glm::normalize(std::cos(elevation) * cases::randomPerpendicular(rng, normal) +
+                                        std::sin(elevation) * normal);
+        c.line = Line{point - cases::uniform(rng, -30, 30) * dir, dir};
         c.epsilon = std::pow(10.0, -double(2 + rng() % 3));
         checkCase(c, tally, rng);
     }

@@ -226,17 +226,20 @@ TEST_CASE("turning sweep: the least of a parabola through three samples, and the
     }
 }
 
-TEST_CASE("turning sweep: a disk's plane strays from its parabola through three poses by at most note o's remainder",
+TEST_CASE("turning sweep: a disk's plane and a cylinder stray from their parabolas through three poses by at most "
+          "note o's remainders",
           "[sweep][turning]") {
-    // H_z(u) = a(u).(z - p(u)) - h, the distance of a point z beyond a disk's plane at height h
-    // (turning.cpp, note o), from dense poses of MULTAX and TCP moves, against the parabola through
-    // three of them: never farther than M |(u - u0)(u - u1)(u - u2)| / 6, with
-    // M = |a'''| max |z - p| + 3 |a''| |f| from the law's bounds, and within a factor 50 of it
-    // somewhere on most moves.
+    // From dense poses of MULTAX and TCP moves (turning.cpp, note o): H_z(u) = a(u).(z - p(u)) - h,
+    // the distance of a point z beyond a disk's plane at height h, and G_z(u) = |z - p|^2 -
+    // (a.(z - p))^2 - R^2, how far outside a cylinder about the axis. Against the parabola through
+    // three poses, each strays by at most M |(u - u0)(u - u1)(u - u2)| / 6, with M from the law's
+    // bounds (J >= |a'''|, K1 >= |a''|, omega >= |a'|, |f| the tip's speed, r = max |z - p|):
+    // J r + 3 K1 |f| for H, 2 r (J r + 3 K1 |f|) + 6 (omega r + |f|)(K1 r + 2 omega |f|) for G. On
+    // most moves each comes within a factor 50 of its remainder somewhere.
     const Machine ac = loadMachine("xyzac-trt");
     std::mt19937 rng(20261201);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
-    int tight = 0, moves = 0;
+    int tight[2] = {0, 0}, moves = 0;
     for (int trial = 0; trial < 60; ++trial) {
         Move m;
         m.start = Vec3(20 * uni(rng), 20 * uni(rng), 20 * uni(rng));
@@ -252,33 +255,45 @@ TEST_CASE("turning sweep: a disk's plane strays from its parabola through three 
         }
         const MotionLaw law(m);
         const Vec3 z = m.start + Vec3(30 * uni(rng), 30 * uni(rng), 30 * uni(rng));
-        const double h = 20.0 * (1.0 + uni(rng));
+        const double h = 20.0 * (1.0 + uni(rng)), radius = 5.0 * (1.0 + uni(rng));
         const auto H = [&](double u) {
             const ToolPose p = law.pose(u);
             return glm::dot(p.axis, z - p.tip) - h;
         };
-        const double reach = std::max(glm::length(z - m.start), glm::length(z - m.end));
-        const double M = law.axisJerkBound() * reach + 3.0 * law.axisPointAccelerationBound(1.0) * law.speedBound(0.0);
+        const auto G = [&](double u) {
+            const ToolPose p = law.pose(u);
+            const double along = glm::dot(p.axis, z - p.tip);
+            return glm::dot(z - p.tip, z - p.tip) - along * along - radius * radius;
+        };
+        const double r = std::max(glm::length(z - m.start), glm::length(z - m.end));
+        const double J = law.axisJerkBound(), K1 = law.axisPointAccelerationBound(1.0), omega = law.axisTurnBound();
+        const double f = law.speedBound(0.0);
+        const double bounds[2] = {J * r + 3.0 * K1 * f,
+                                  2.0 * r * (J * r + 3.0 * K1 * f) + 6.0 * (omega * r + f) * (K1 * r + 2.0 * omega * f)};
         double u[3] = {0.5 * (1.0 + uni(rng)), 0.5 * (1.0 + uni(rng)), 0.5 * (1.0 + uni(rng))};
         std::sort(u, u + 3);
         if (!(u[0] < u[1] && u[1] < u[2])) continue;
-        const double h0 = H(u[0]), h1 = H(u[1]), h2 = H(u[2]);
-        double ratio = 0.0, excess = -1.0;
-        for (int k = 0; k <= 400; ++k) {
-            const double x = u[0] + (u[2] - u[0]) * k / 400.0;
-            const double p2 = h0 * (x - u[1]) * (x - u[2]) / ((u[0] - u[1]) * (u[0] - u[2])) +
-                              h1 * (x - u[0]) * (x - u[2]) / ((u[1] - u[0]) * (u[1] - u[2])) +
-                              h2 * (x - u[0]) * (x - u[1]) / ((u[2] - u[0]) * (u[2] - u[1]));
-            const double remainder = M * std::abs((x - u[0]) * (x - u[1]) * (x - u[2])) / 6.0;
-            excess = std::max(excess, std::abs(H(x) - p2) - remainder);
-            if (remainder > 1e-6) ratio = std::max(ratio, std::abs(H(x) - p2) / remainder);
-        }
-        INFO("trial " << trial);
-        CHECK(excess <= 1e-9);
         ++moves;
-        if (ratio >= 1.0 / 50.0) ++tight;
+        for (int which = 0; which < 2; ++which) {
+            const auto F = [&](double x) { return which == 0 ? H(x) : G(x); };
+            const double h0 = F(u[0]), h1 = F(u[1]), h2 = F(u[2]);
+            double ratio = 0.0, excess = -1.0;
+            for (int k = 0; k <= 400; ++k) {
+                const double x = u[0] + (u[2] - u[0]) * k / 400.0;
+                const double p2 = h0 * (x - u[1]) * (x - u[2]) / ((u[0] - u[1]) * (u[0] - u[2])) +
+                                  h1 * (x - u[0]) * (x - u[2]) / ((u[1] - u[0]) * (u[1] - u[2])) +
+                                  h2 * (x - u[0]) * (x - u[1]) / ((u[2] - u[0]) * (u[2] - u[1]));
+                const double remainder = bounds[which] * std::abs((x - u[0]) * (x - u[1]) * (x - u[2])) / 6.0;
+                excess = std::max(excess, std::abs(F(x) - p2) - remainder);
+                if (remainder > 1e-6) ratio = std::max(ratio, std::abs(F(x) - p2) / remainder);
+            }
+            INFO("trial " << trial << (which == 0 ? ", the disk" : ", the cylinder"));
+            CHECK(excess <= 1e-8);
+            if (ratio >= 1.0 / 50.0) ++tight[which];
+        }
     }
-    CHECK(tight >= moves / 2);
+    CHECK(tight[0] >= moves / 2);
+    CHECK(tight[1] >= moves / 2);
 }
 
 TEST_CASE("turning sweep: a node's level and width from its heap index", "[sweep][turning]") {
