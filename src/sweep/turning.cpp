@@ -810,8 +810,9 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
                 return p2.value - bound * nodePolynomialMax(a.u, u, b.u) / 6.0 > -depth;
             };
             double t = farther(endOf(a.range), endOf(b.range)), deepest = 0.0;
+            // The root's middle pose is kept (midPose_): most lines that reach here are the root's.
             const double um = 0.5 * (a.u + b.u);
-            if (holds(t, um, law_.pose(um), deepest)) {
+            if (holds(t, um, um == midPhase_.u ? midPose_ : law_.pose(um), deepest)) {
                 end = t;
                 return true;
             }

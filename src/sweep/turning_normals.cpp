@@ -187,8 +187,10 @@ void TurningSweep::nodeEndNormal(const Line& line, double t, std::size_t band, s
 // the rim, so there gamma is small and either normal serves.
 void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t part, Vec3& normal,
                              bool& sharp) const {
-    // The first and last poses are kept: most ends are theirs on a short move.
-    const ToolPose ps = u == startPhase_.u ? startPose_ : u == endPhase_.u ? endPose_ : pose(u);
+    // The first and last poses are kept: most ends are theirs on a short move. Another pose's
+    // phase serves its rims' velocities too.
+    const TurnPhase phase = u == startPhase_.u ? startPhase_ : u == endPhase_.u ? endPhase_ : law_.phase(u);
+    const ToolPose ps = u == startPhase_.u ? startPose_ : u == endPhase_.u ? endPose_ : law_.pose(phase);
     const Vec3 x = line.at(t);
     if (part >= parts_.size()) {  // a ball: the sphere about its centre at that pose
         const Vec3 d = x - (ps.tip + balls_[part - parts_.size()].zc * ps.axis);
@@ -212,7 +214,7 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     // velocity (MotionLaw::velocity), where it lies within the rim's normal cone (the normals
     // between its two faces', n1 and n2): there the moving rim grazes and the envelope is smooth.
     const auto sweptRim = [&](const Vec3& n1, const Vec3& n2, const Vec3& at) -> std::optional<Vec3> {
-        const Vec3 velocity = law_.velocity(u, at);
+        const Vec3 velocity = law_.velocity(phase, at);
         Vec3 n = glm::cross(tangent, velocity);
         const double len = glm::length(n);
         if (len <= tol::kParallel * glm::length(velocity)) return std::nullopt;
