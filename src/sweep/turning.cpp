@@ -515,46 +515,46 @@ Interval TurningSweep::bound(const Line& line) const {
 //      split, as one that fails): BM_TurningShortQuery's flat end 104 -> 102 ns a line at 0.2
 //      degrees, 125 -> 120 at 0.6.
 //  (o) Disks and cylinders. Where a line's end on one side lies on a disk face (a flat end's
-//      bottom, a part's top) at both end poses of a node and the end moves outward from one of
-//      them and back before the other (a dip in u), (j) to (m) bound that side only from poses
-//      within sqrt(epsilon / C) of the dip's deepest pose: on boat-xyzac, four lines in five of those the
-//      root left open, each then taking three to five middle poses and their nodes' sweeps. But
-//      a disk's plane is known at every pose, and a convex part lies behind it: with n(u) = s a(u)
-//      (s = -1 for the bottom disk, 1 for the top) and c(u) = p(u) + h a(u) its centre at height
-//      h, a point z is deeper than epsilon inside T(u) only if H_z(u) = n(u).(z - c(u)) <= -epsilon.
+//      bottom, a part's top) at both end poses of a node and the end moves outward from one of them
+//      and back before the other (a dip in u), (j) to (m) bound that side only from poses within
+//      sqrt(epsilon / C) of the dip's deepest pose: on boat-xyzac, four lines in five of those the
+//      root left open, each then taking three to five middle poses and their nodes' sweeps. But a
+//      disk's plane is known at every pose, and a convex part lies behind it: with n(u) = s a(u)
+//      (s = -1 for the bottom disk, 1 for the top) and c(u) = p(u) + h a(u) its centre at height h,
+//      a point z is deeper than epsilon inside T(u) only if H_z(u) = n(u).(z - c(u)) <= -epsilon.
 //      H_z(u) = s (a(u).(z - p(u)) - h) is a smooth function of u alone, and where the tip runs on
 //      a straight line (p'' = 0, as note j asks) H''' = s (a'''.(z - p) - 3 a''.f), so
-//      |H'''| <= M = J |z - p|max + 3 K1 |f|, with J >= |a'''| (MotionLaw::axisJerkBound), K1 >= |a''|
-//      (axisPointAccelerationBound(1)) and |z - p(u)| largest at an end of the tip's segment. The
-//      parabola P through H_z at three poses u_0 < u_1 < u_2 (the node's ends and a pose between)
-//      strays from H_z on [u_0, u_2] by at most M |(u - u_0)(u - u_1)(u - u_2)| / 6, the
-//      interpolation remainder, whose largest is at a root of its derivative. So where P's least
-//      on the node, less that remainder, exceeds -epsilon, no T(u) of the node holds z deeper than
-//      epsilon. Beyond z along the line, H grows at the rate n(u).d, which stays positive where
-//      the end poses' |n.d| exceed omega w / 2 (each u lies within w / 2 of one). Taking z at the
+//      |H'''| <= M = J |z - p|max + 3 K1 |f|, with J >= |a'''| (MotionLaw::axisJerkBound), K1 >=
+//      |a''| (axisPointAccelerationBound(1)) and |z - p(u)| largest at an end of the tip's segment.
+//      The parabola P through H_z at three poses u_0 < u_1 < u_2 (the node's ends and a pose
+//      between) strays from H_z on [u_0, u_2] by at most M |(u - u_0)(u - u_1)(u - u_2)| / 6, the
+//      interpolation remainder, whose largest is at a root of its derivative. So where P's least on
+//      the node, less that remainder, exceeds -epsilon, no T(u) of the node holds z deeper than
+//      epsilon. Beyond z along the line, H grows at the rate n(u).d, which stays positive where the
+//      end poses' |n.d| exceed omega w / 2 (each u lies within w / 2 of one). Taking z at the
 //      farthest end of the three poses' intervals on that side, which O holds, the node is settled
 //      on that side as in (j). The search takes z at the end poses' farther end and the node's
 //      middle pose (its H only, no interval solved) first: where the end does not dip past z that
 //      settles; otherwise the pose at the vertex of that parabola, the dip's deepest to within the
-//      remainder, is solved and goes into O, and the test is made again with it in the middle.
-//      The remainder is of third order in w and small where the axis turns little, so most such
-//      lines settle at the root: H at three poses and one pose solved, where (j) descended three
-//      to five levels. A rotary table turning under a tilted tool swings the disk's plane round,
-//      so its ends dip often: boat-xyzac's cut (one thread, h = 0.5 mm) 0.320 -> 0.206 s,
-//      boat-xyzbc's 0.540 -> 0.436 s. A great circle tilts the disk one way, and BM_TurningQuery's
-//      and BM_TurningShortQuery's lines seldom dip there.
-//      Cylinders. A convex part whose side is a cylinder of radius R lies within R of its axis
-//      (its radius, concave in z, is largest where it is constant), so z is deeper than epsilon
-//      inside T(u) only if G_z(u) = |z - p|^2 - (a.(z - p))^2 - R^2 <= (R - epsilon)^2 - R^2.
-//      With q = a.(z - p): G''' = -(q^2)''' = -(2 q q''' + 6 q' q''), where |q| <= r = max |z - p|,
+//      remainder, is solved and goes into O, and the test is made again with it in the middle. The
+//      remainder is of third order in w and small where the axis turns little, so most such lines
+//      settle at the root: H at three poses and one pose solved, where (j) descended three to five
+//      levels. A rotary table turning under a tilted tool swings the disk's plane round, so its
+//      ends dip often: boat-xyzac's cut (one thread, h = 0.5 mm) 0.320 -> 0.206 s, boat-xyzbc's
+//      0.540 -> 0.436 s. A great circle tilts the disk one way, and BM_TurningQuery's and
+//      BM_TurningShortQuery's lines seldom dip there.
+//      Cylinders. A convex part whose side is a cylinder of radius R lies within R of its axis (its
+//      radius, concave in z, is largest where it is constant), so z is deeper than epsilon inside
+//      T(u) only if G_z(u) = |z - p|^2 - (a.(z - p))^2 - R^2 <= (R - epsilon)^2 - R^2. With
+//      q = a.(z - p): G''' = -(q^2)''' = -(2 q q''' + 6 q' q''), where |q| <= r = max |z - p|,
 //      |q'| <= omega r + |f|, |q''| <= K1 r + 2 omega |f| and |q'''| <= J r + 3 K1 |f|; so the same
 //      test holds with M = 2 r (J r + 3 K1 |f|) + 6 (omega r + |f|)(K1 r + 2 omega |f|). Beyond z,
 //      G_{z + s e}(u) is convex in s with slope 2 g(u) at s = 0, g(u) = (z - p).e - q (a.e) (e the
 //      direction beyond), and |g'| <= 2 (|f| + omega r): where g at a and b exceeds
-//      (|f| + omega r) w, g stays positive over the node and G only grows beyond z. On
-//      boat-xyzbc, where the sides' ends dip most (three in five of the lines the root left open),
-//      its cut 0.436 -> 0.376 s; BM_TurningShortQuery's flat end 102 -> 96 ns a line at 0.2
-//      degrees, 118 -> 107 at 0.6.
+//      (|f| + omega r) w, g stays positive over the node and G only grows beyond z. On boat-xyzbc,
+//      where the sides' ends dip most (three in five of the lines the root left open), its cut
+//      0.436 -> 0.376 s; BM_TurningShortQuery's flat end 102 -> 96 ns a line at 0.2 degrees, 118 ->
+//      107 at 0.6.
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     intersect(line, care, out);
