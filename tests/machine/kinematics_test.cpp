@@ -41,6 +41,23 @@ Vec3 xyzbcForward(const Vec3& j, double bDeg, double cDeg) {
 
 double distance(const Vec3& a, const Vec3& b) { return glm::length(a - b); }
 
+
+/// A move of xyzac-trt as the bound tests draw it: A within 80 degrees and C within 180 of zero,
+/// turning by up to 40 and 120 degrees, the joints within 50 mm of the origin.
+struct AcMove {
+    RotaryAngles from, to;
+    Vec3 j0, j1;
+};
+AcMove randomAcMove(std::mt19937& rng) {
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    AcMove m;
+    m.from['A'] = 80 * uni(rng), m.from['C'] = 180 * uni(rng);
+    m.to['A'] = m.from['A'] + 40 * uni(rng), m.to['C'] = m.from['C'] + 120 * uni(rng);
+    m.j0 = Vec3(50 * uni(rng), 50 * uni(rng), 50 * uni(rng));
+    m.j1 = Vec3(50 * uni(rng), 50 * uni(rng), 50 * uni(rng));
+    return m;
+}
+
 }  // namespace
 
 TEST_CASE("machine: xyzac-trt and xyzbc-trt match LinuxCNC's trt kinematics", "[machine]") {
@@ -117,10 +134,9 @@ TEST_CASE("machine: the acceleration bound of a tool point on the axis holds wit
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
     for (int i = 0; i < 40; ++i) {
-        RotaryAngles from, to;
-        from['A'] = 80 * uni(rng), from['C'] = 180 * uni(rng);
-        to['A'] = from['A'] + 40 * uni(rng), to['C'] = from['C'] + 120 * uni(rng);
-        const Vec3 j0(50 * uni(rng), 50 * uni(rng), 50 * uni(rng)), j1(50 * uni(rng), 50 * uni(rng), 50 * uni(rng));
+        const AcMove drawn = randomAcMove(rng);
+        const RotaryAngles &from = drawn.from, &to = drawn.to;
+        const Vec3 &j0 = drawn.j0, &j1 = drawn.j1;
         const double r = 1 + 20 * (uni(rng) + 1);
         Move tcp;
         tcp.start = j0, tcp.end = j1;
@@ -168,10 +184,9 @@ TEST_CASE("machine: the axis's third-derivative bound holds with TCP and in APT,
     std::mt19937 rng(12);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
     for (int i = 0; i < 40; ++i) {
-        RotaryAngles from, to;
-        from['A'] = 80 * uni(rng), from['C'] = 180 * uni(rng);
-        to['A'] = from['A'] + 40 * uni(rng), to['C'] = from['C'] + 120 * uni(rng);
-        const Vec3 j0(50 * uni(rng), 50 * uni(rng), 50 * uni(rng)), j1(50 * uni(rng), 50 * uni(rng), 50 * uni(rng));
+        const AcMove drawn = randomAcMove(rng);
+        const RotaryAngles &from = drawn.from, &to = drawn.to;
+        const Vec3 &j0 = drawn.j0, &j1 = drawn.j1;
         Move tcp;
         tcp.start = j0, tcp.end = j1;
         tcp.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, true, j0, j1));

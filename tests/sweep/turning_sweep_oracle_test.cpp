@@ -122,6 +122,29 @@ void report(const Tally& t, bool requireHits = true) {
     // The cases must exercise the solver: a good share of the lines meet the sweep.
     if (requireHits) CHECK(t.hits >= t.cases / 4);
 }
+
+/// A point of `part`'s side at a height drawn within it, along `radial` from the axis at pose
+/// (tip, axis), and the side's outward normal there from the radius's slope (a central difference).
+void sidePoint(std::mt19937_64& rng, const oracle::Part& part, const Vec3& tip, const Vec3& axis, const Vec3& radial,
+               Vec3& point, Vec3& normal) {
+    constexpr double kStep = 1e-6;
+    const double z = cases::uniform(rng, part.za + 2 * kStep, part.zb - 2 * kStep);
+    const double slope = (part.radius(z + kStep) - part.radius(z - kStep)) / (2 * kStep);
+    point = tip + z * axis + part.radius(z) * radial;
+    normal = glm::normalize(radial - slope * axis);
+}
+
+/// Checks case `c` along a line through `point` that crosses the face with outward normal
+/// `normal` there at 10 to 80 degrees from its tangent plane, with a tolerance of 1e-2 to 1e-4 mm:
+/// a coarse tolerance lets note o (turning.cpp) settle wide nodes, where its remainder is largest.
+void checkAcross(Case c, const Vec3& point, const Vec3& normal, Tally& tally, std::mt19937_64& rng) {
+    const double elevation = degrees(cases::uniform(rng, 10, 80));
+    const Vec3 dir = glm::normalize(std::cos(elevation) * cases::randomPerpendicular(rng, normal) +
+                                    std::sin(elevation) * normal);
+    c.line = Line{point - cases::uniform(rng, -30, 30) * dir, dir};
+    c.epsilon = std::pow(10.0, -double(2 + rng() % 3));
+    checkCase(c, tally, rng);
+}
 }  // namespace
 
 // ---- The oracle against closed forms, without the solver --------------------------------------
@@ -398,14 +421,9 @@ TEST_CASE("turning sweep vs oracle: lines nearly along a face of a pose, while t
         const Vec3 radial = cases::randomPerpendicular(rng, axis);
         Vec3 point, normal;
         switch (rng() % 3) {
-        case 0: {  // the side, its normal from the radius's slope (a central difference)
-            constexpr double kStep = 1e-6;
-            const double z = cases::uniform(rng, part.za + 2 * kStep, part.zb - 2 * kStep);
-            const double slope = (part.radius(z + kStep) - part.radius(z - kStep)) / (2 * kStep);
-            point = tip + z * axis + part.radius(z) * radial;
-            normal = glm::normalize(radial - slope * axis);
+        case 0:  // the side
+            sidePoint(rng, part, tip, axis, radial, point, normal);
             break;
-        }
         case 1:  // the bottom
             point = tip + part.za * axis + cases::uniform(rng, 0, 1) * part.radius(part.za) * radial;
             normal = -axis;
@@ -455,13 +473,7 @@ TEST_CASE("turning sweep vs oracle: lines through a disk face, whose end may dip
                                ? tip + z * axis + still * glm::normalize(turn)
                                : tip + z * axis + cases::uniform(rng, 0, 0.95) * part.radius(z) *
                                                       cases::randomPerpendicular(rng, axis);
-        const double elevation = degrees(cases::uniform(rng, 10, 80));
-        const Vec3 dir = glm::normalize(std::cos(elevation) * cases::randomPerpendicular(rng, normal) +
-                                        std::sin(elevation) * normal);
-        c.line = Line{point - cases::uniform(rng, -30, 30) * dir, dir};
-        // A coarse tolerance lets the plane settle wide nodes, where the remainder is largest.
-        c.epsilon = std::pow(10.0, -double(2 + rng() % 3));
-        checkCase(c, tally, rng);
+        checkAcross(c, point, normal, tally, rng);
     }
     report(tally);
     CHECK(tally.linear >= tally.cases / 2);
@@ -482,18 +494,9 @@ TEST_CASE("turning sweep vs oracle: lines across a part's side, whose end may di
         Vec3 tip, axis;
         o.pose(cases::uniform(rng, 0.1, 0.9), tip, axis);
         const oracle::Part& part = c.model->parts[rng() % c.model->parts.size()];
-        constexpr double kStep = 1e-6;
-        const double z = cases::uniform(rng, part.za + 2 * kStep, part.zb - 2 * kStep);
-        const double slope = (part.radius(z + kStep) - part.radius(z - kStep)) / (2 * kStep);
-        const Vec3 radial = cases::randomPerpendicular(rng, axis);
-        const Vec3 point = tip + z * axis + part.radius(z) * radial;
-        const Vec3 normal = glm::normalize(radial - slope * axis);
-        const double elevation = degrees(cases::uniform(rng, 10, 80));
-        const Vec3 dir = glm::normalize(std::cos(elevation) * cases::randomPerpendicular(rng, normal) +
-                                        std::sin(elevation) * normal);
-        c.line = Line{point - cases::uniform(rng, -30, 30) * dir, dir};
-        c.epsilon = std::pow(10.0, -double(2 + rng() % 3));
-        checkCase(c, tally, rng);
+        Vec3 point, normal;
+        sidePoint(rng, part, tip, axis, cases::randomPerpendicular(rng, axis), point, normal);
+        checkAcross(c, point, normal, tally, rng);
     }
     report(tally);
     CHECK(tally.linear >= tally.cases / 2);
