@@ -1,6 +1,6 @@
-// Three-point interpolation for the turning sweep's disk test (turning.cpp, note o): the least of
-// the parabola through three samples over their span, and the largest of the node polynomial
-// that scales the interpolation remainder.
+// Three-point interpolation for the turning sweep's disk and cylinder tests
+// (turning_linear_search.cpp, note o): the least of the parabola through three samples over their
+// span, and the largest of the node polynomial that scales the interpolation remainder.
 #pragma once
 
 #include <algorithm>

@@ -134,9 +134,10 @@ void sidePoint(std::mt19937_64& rng, const oracle::Part& part, const Vec3& tip, 
     normal = glm::normalize(radial - slope * axis);
 }
 
-/// Checks case `c` along a line through `point` that crosses the face with outward normal
-/// `normal` there at 10 to 80 degrees from its tangent plane, with a tolerance of 1e-2 to 1e-4 mm:
-/// a coarse tolerance lets note o (turning.cpp) settle wide nodes, where its remainder is largest.
+/// Checks case `c` along a line through `point` that crosses the face with outward normal `normal`
+/// there at 10 to 80 degrees from its tangent plane, with a tolerance of 1e-2 to 1e-4 mm: a coarse
+/// tolerance lets note o (turning_linear_search.cpp) settle wide nodes, where its remainder is
+/// largest.
 void checkAcross(Case c, const Vec3& point, const Vec3& normal, Tally& tally, std::mt19937_64& rng) {
     const double elevation = degrees(cases::uniform(rng, 10, 80));
     const Vec3 dir = glm::normalize(std::cos(elevation) * cases::randomPerpendicular(rng, normal) +
@@ -350,7 +351,7 @@ TEST_CASE("turning sweep vs oracle: a pure rotation about the tip", "[sweep][tur
 TEST_CASE("turning sweep vs oracle: short moves turning a little, as real programs' are", "[sweep][turning]") {
     // The median feed move of the LinuxCNC boat and impeller programs travels about 0.6 mm and
     // turns 0.2 to 0.6 degrees: there the search settles most nodes by their end poses' faces
-    // (turning.cpp, note j), whose bound is of second order in the node's width.
+    // (turning_linear_search.cpp, note j), whose bound is of second order in the node's width.
     std::mt19937_64 rng(20261201);
     Tally tally;
     for (int i = 0, n = scaled(300); i < n; ++i) {
@@ -381,7 +382,7 @@ TEST_CASE("turning sweep vs oracle: dexel lines through a rim, where the line's 
     // A lattice line through a point on a part's bottom or top rim at some pose, or within
     // 1e-6 to 0.1 mm of it, meets the envelope near where that rim sweeps it: where the rim makes
     // the line's end, the search looks for the pose at which the line passes through the rim
-    // (turning.cpp, note k).
+    // (turning_linear_search.cpp, note k).
     std::mt19937_64 rng(20261203);
     Tally tally;
     for (int i = 0, n = scaled(300); i < n; ++i) {
@@ -404,10 +405,11 @@ TEST_CASE("turning sweep vs oracle: dexel lines through a rim, where the line's 
 TEST_CASE("turning sweep vs oracle: lines nearly along a face of a pose, while the axis turns fast",
           "[sweep][turning]") {
     // A line through a point on a part's side, bottom or top at the first, last or some middle
-    // pose, within 1e-6 to 0.1 rad of that face's tangent plane. There the face's normal is
-    // nearly across the line, so as the axis turns the face soon tilts to take in points of the
-    // line far from its crossing: the stretch by which a crossing bounds the line (turning.cpp,
-    // notes j and m) must stop where the turn can tilt the face past the line, |n.d| / omega.
+    // pose, within 1e-6 to 0.1 rad of that face's tangent plane. There the face's normal is nearly
+    // across the line, so as the axis turns the face soon tilts to take in points of the line far
+    // from its crossing: the stretch by which a crossing bounds the line
+    // (turning_linear_search.cpp, notes j and m) must stop where the turn can tilt the face past
+    // the line, |n.d| / omega.
     std::mt19937_64 rng(20261129);
     Tally tally;
     for (int i = 0, n = scaled(300); i < n; ++i) {
@@ -444,11 +446,11 @@ TEST_CASE("turning sweep vs oracle: lines nearly along a face of a pose, while t
 
 TEST_CASE("turning sweep vs oracle: lines through a disk face, whose end may dip past both end poses'",
           "[sweep][turning]") {
-    // A line through a point of a part's bottom or top disk at a middle pose u*, crossing it at
-    // 10 to 80 degrees from the disk's plane, with a tolerance of 1e-2 to 1e-4 mm. As the tool
-    // moves and turns, the disk's plane crosses the line farther out at poses between a node's
-    // ends than at either: the plane bounds those points by its values at three poses and a
-    // third-order remainder (turning.cpp, note o). Most points are taken where the plane stops
+    // A line through a point of a part's bottom or top disk at a middle pose u*, crossing it at 10
+    // to 80 degrees from the disk's plane, with a tolerance of 1e-2 to 1e-4 mm. As the tool moves
+    // and turns, the disk's plane crosses the line farther out at poses between a node's ends than
+    // at either: the plane bounds those points by its values at three poses and a third-order
+    // remainder (turning_linear_search.cpp, note o). Most points are taken where the plane stops
     // moving along its normal at u*, a'.(z - p) = a.f (a' by a central difference of the oracle's
     // poses), so that the line's end dips deepest near u*.
     std::mt19937_64 rng(20261130);
@@ -484,7 +486,7 @@ TEST_CASE("turning sweep vs oracle: lines across a part's side, whose end may di
     // A line through a point of a part's side at a middle pose, crossing it at 10 to 80 degrees
     // from its tangent plane, with a tolerance of 1e-2 to 1e-4 mm. Where the side is a cylinder,
     // the distance from its axis bounds the line's points beyond by three poses and a third-order
-    // remainder (turning.cpp, note o), while the line runs away from the axis.
+    // remainder (turning_linear_search.cpp, note o), while the line runs away from the axis.
     std::mt19937_64 rng(20261131);
     Tally tally;
     for (int i = 0, n = scaled(300); i < n; ++i) {

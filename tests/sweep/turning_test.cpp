@@ -229,9 +229,10 @@ TEST_CASE("turning sweep: the least of a parabola through three samples, and the
 TEST_CASE("turning sweep: a disk's plane and a cylinder stray from their parabolas through three poses by at most "
           "note o's remainders",
           "[sweep][turning]") {
-    // From dense poses of MULTAX and TCP moves (turning.cpp, note o): H_z(u) = a(u).(z - p(u)) - h,
-    // the distance of a point z beyond a disk's plane at height h, and G_z(u) = |z - p|^2 -
-    // (a.(z - p))^2 - R^2, how far outside a cylinder about the axis. Against the parabola through
+    // From dense poses of MULTAX and TCP moves (turning_linear_search.cpp, note o): H_z(u) =
+    // a(u).(z - p(u)) - h, the distance of a point z beyond a disk's plane at height h, and G_z(u)
+    // = |z - p|^2 - (a.(z - p))^2 - R^2, how far outside a cylinder about the axis. Against the
+    // parabola through
     // three poses, each strays by at most M |(u - u0)(u - u1)(u - u2)| / 6, with M from the law's
     // bounds (J >= |a'''|, K1 >= |a''|, omega >= |a'|, |f| the tip's speed, r = max |z - p|):
     // J r + 3 K1 |f| for H, 2 r (J r + 3 K1 |f|) + 6 (omega r + |f|)(K1 r + 2 omega |f|) for G. On

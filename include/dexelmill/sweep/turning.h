@@ -178,6 +178,9 @@ class TurningSweep {
         TurnPhase phase;  ///< the middle's
     };
     class NodeCache;
+    /// One line's search over the linear nodes, with the tests of notes j to o
+    /// (turning_linear_search.cpp).
+    class LinearSearch;
     /// Sets models_ and nodes_ when the linear-node search applies and its leaves lie enough
     /// levels above the static search's closing level (turning.cpp, note h).
     void chooseLinearNodes();

@@ -1,0 +1,583 @@
+// One line's search over a turning sweep's linear nodes (notes h and i of turning.cpp), and the
+// tests that settle a node by the faces of its end poses (notes j to o below).
+#include "turning_linear_search.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "interpolation.h"
+#include "turning_levels.h"
+
+namespace dexelmill {
+
+using turning::heapLevel;
+using turning::heapWidth;
+using turning::kMaxLinearLevel;
+using turning::nodePolynomialMax;
+using turning::ParabolaLow;
+using turning::parabolaLow;
+
+namespace {
+
+/// Most regula falsi steps note k takes towards the pose where a line passes through a rim, and
+/// how near the rim's radius (mm) the line's crossing of its plane must come to stop sooner.
+constexpr int kCornerSteps = 12;
+constexpr double kCornerGap = 1e-9;
+
+/// Most regula falsi steps note l takes towards the pose where a line's end stops growing.
+constexpr int kGrazeSteps = 4;
+
+/// Regula falsi with the Illinois step on [ua, ub], where fa and fb have opposite signs: `at(u)`
+/// is called at each new point, at most `steps` times, and returns the function's value there, or
+/// none to stop. Where the same end moves twice in a row, the other end's value is halved, so
+/// that a convex function's root is not approached from one side only.
+template <class At>
+void regulaFalsi(double ua, double ub, double fa, double fb, int steps, At&& at) {
+    int moved = 0;  // which end the last step moved: 1 the lower, -1 the upper
+    for (int step = 0; step < steps; ++step) {
+        const double u = ua + (ub - ua) * fa / (fa - fb);
+        const std::optional<double> fu = at(u);
+        if (!fu) return;
+        if ((*fu > 0.0) == (fa > 0.0)) {
+            ua = u, fa = *fu;
+            if (moved == 1) fb *= 0.5;
+            moved = 1;
+        } else {
+            ub = u, fb = *fu;
+            if (moved == -1) fa *= 0.5;
+            moved = -1;
+        }
+    }
+}
+
+}  // namespace
+
+// Method, continued from TurningSweep::intersect (turning.cpp, notes a to i).
+//  (j) Anchored nodes. A node of (h) that does not settle may still be settled by the faces of
+//      its end poses a and b (in O: its ancestors' middles, or u = 0 and 1), with a bound of
+//      second order in its width w. Let y be where the line leaves (enters) the part at pose e,
+//      the end of that pose's interval, and n the part's outward normal there, so that the part
+//      lies in the half-space {z : n.(z - y) <= 0}. For u in the node, T(u) is the image of the
+//      part at e under g: z -> c(u) + N (z - c(e)), with c the axis point at y's height h and N
+//      the least rotation carrying a(e) to a(u) (any rotation onto a(u) poses the same solid).
+//      So a point z deeper than epsilon inside T(u) has n_u.(z - y_u) <= -epsilon, n_u = N n,
+//      y_u = g(y). With tau = |u - e| <= w, and z = y + s d beyond y (y - s d before it), s >= 0:
+//        s |n.d| = n.(z - y) = n_u.(z - y_u) + (n - n_u).(z - y_u) + n.(y_u - y)
+//                <= -epsilon + omega tau (s + V_y tau) + n.(y_u - y),
+//      as N turns by at most omega tau (omega = MotionLaw::axisTurnBound) and |y_u - y| <= V_y tau,
+//      V_y = |f| + omega (|h| + r) bounding the speed of c and of N about it, r = y's distance
+//      from the axis. And c(u) - c(e) strays from its tangent +-tau c'(e) by at most K tau^2 / 2
+//      (K = MotionLaw::axisPointAccelerationBound(|h|)); with q = y - c(e) (|q| = r),
+//      (N - I) q = m x q + (1 - cos phi) k x (k x q), where m = a(e) x a(u) = sin(phi) k strays
+//      from +-tau a(e) x a'(e) by at most |a''| tau^2 / 2 (|a''| <= axisPointAccelerationBound(1))
+//      and 1 - cos phi <= omega^2 tau^2 / 2. So n.(y_u - y) <= +-tau n.v + (K + (|a''| + omega^2)
+//      r) tau^2 / 2, where v = c'(e) + (a x a') x q differs from the law's velocity at y
+//      (MotionLaw::velocity) by a spin about the axis, which moves y across the meridian plane n
+//      lies in: n.v is the same. In all, s |n.d| <= -epsilon + tau (+-n.v + omega s) + C tau^2 with
+//      C = omega V_y + (K + (|a''| + omega^2) r) / 2, the sign + for a (u after it) and - for b.
+//      The right side is convex in tau, so largest at tau = 0 (-epsilon, below s |n.d|) or w:
+//      where |n.d| >= omega w and +-w n.v + C w^2 < epsilon, no point of the line beyond y is
+//      deeper than epsilon inside any T(u) of the node. The node is settled when its grown sweep,
+//      cut at such crossings, holds no point of care outside O. The plane passes through the
+//      end the static solve found, with the normal of the face nearest it (faceNormal), so the
+//      cut is as exact as that solve.
+//      The bound is on depth inside the one part. That is what guarantee 2 asks of a tool of one
+//      convex part, and of the part above a ball end's ball (g); a tool of several parts may hold
+//      a point deeper than epsilon near a joint that is as deep in none of them ((b) and (h) give
+//      such a point to a part it lies near), so the anchored test is taken only where the
+//      search has one part.
+//      Cost: the bound is of second order where the face is still (n.v = 0 where a pose grazes
+//      the envelope) and holds at any width where the face retreats from the crossing. So near a
+//      graze the descent stops where C w^2 reaches epsilon rather than where (h)'s reach
+//      omega rho_b w / 2 does, and a face that leads the tool to the first or last pose (its front
+//      in uncut stock at u = 1) stops it at once, where (h) walked down to a leaf. A node's
+//      crossings are found only for the side of its grown sweep that O leaves open, and each
+//      pose's once.
+//  (k) Corners. Where the line's end on one side is made by a rim of the part (two faces meeting
+//      at an angle, such as a flat end's bottom edge), the end stops growing at the pose where
+//      the line passes through the rim, with a kink: (j) settles the nodes around that pose only
+//      where an anchor lies within epsilon / |n.v| of it, about log2(|n.v| / epsilon) levels
+//      down. So where (j) bounds neither side and the crossings at the node's two ends lie on
+//      two faces that meet at a rim (faceNormal's indices k and k + 1, Rim), that pose is found:
+//      g(u), how far outside the rim's radius the line crosses the rim's plane at pose u, has
+//      opposite signs at the ends, and regula falsi (Illinois) brings it within kCornerGap in at
+//      most kCornerSteps steps. The pose u_c there is solved and goes into O. Let y be its end
+//      on that side and r the rim's point nearest y, gap = |y - r|. Each face's plane through r,
+//      normal n_f, holds the part, so (j)'s argument holds with r in place of y: for z = y + s d
+//      beyond y, s |n.d| <= n.(z - r) + gap and |z - r| <= s + gap, so
+//        s (|n.d| - omega tau) <= -epsilon + gap (1 + omega tau) +- tau n_f.v + C tau^2,
+//      with v the velocity of the tool point at r and C (j)'s bound at r's height and radius.
+//      The right side is convex in tau: where it is negative at tau = 0 (gap < epsilon) and at
+//      tau = w, and |n_f.d| >= omega w, no point beyond y is deeper than epsilon in any T(u)
+//      with |u - u_c| <= w on that side of u_c. The node is settled on that side when one face
+//      does so back to its start (the sign -) and one, the same or the other, on to its end
+//      (+), and its grown sweep cut at y is held.
+//      Cost: past the kink each face's normal speed keeps its sign, so each bounds a wide node
+//      at first order; a z-line meeting a flat end's bottom rim settles at the node whose end
+//      poses straddle the kink, a few regula falsi steps of a pose and a few dot products each.
+//  (l) Grazes. Where the end on one side grows at pose a (n.v > 0 at its crossing, in (j)'s
+//      sense) and shrinks at b (n.v < 0), it stops growing at a pose between them. On a curved
+//      face the end's curvature in u is large (about |f|^2 / rho on a torus of radius rho), so
+//      (j) settles the nodes around that pose only where an anchor lies within about
+//      sqrt(epsilon / curvature) of it: level 10 for a bull nose on BM_TurningQuery's 32 mm move.
+//      So where (j) bounds neither side, and the node is narrow enough that (j)'s bound from a
+//      pose in its middle could hold (C w^2 < 4 epsilon, C the larger of the two crossings'),
+//      regula falsi (Illinois) on n.v, each step a solved pose that goes into O, looks for that
+//      pose in at most kGrazeSteps steps. A pose u_g whose crossing meets (j)'s condition back
+//      to a (width u_g - a, sign -) and on to b (width b - u_g, sign +), with |n.d| at least
+//      omega times the larger width, bounds the points beyond its end over the whole node by
+//      (j)'s argument, and the node is settled on that side. On BM_TurningQuery's bull nose the
+//      first level narrow enough settles so, with two steps.
+//  (m) Both ends. Where neither end pose bounds a side of the node over its whole width, the two
+//      may share it: (j)'s argument from pose e, for the points beyond H, the end of the hull of
+//      both poses' intervals on that side, rather than beyond e's own end y. A point z = y + s d
+//      beyond H has s >= D, D >= 0 the distance from y to H along the line, so where
+//      |n.d| >= omega tau, (j)'s inequality s (|n.d| - omega tau) <= -epsilon +- tau n.v + C tau^2
+//      fails for every such s when
+//        G(tau) = epsilon + D |n.d| - tau (D omega +- n.v) - C tau^2 > 0.
+//      G is concave and G(0) > 0, so it holds on [0, tau_e) up to its positive root, which with
+//      |n.d| / omega bounds the stretch of the node next to e that e's crossing bounds. Where
+//      tau_a + tau_b > w, every u of the node lies in one of the two stretches, and no point of
+//      the line beyond H is deeper than epsilon inside any T(u): the node is settled on that
+//      side when its grown sweep cut at H is held. (j) is the case D = 0 with tau_e >= w.
+//      Cost: where the end moves the same way at both poses, the nearer pose's slack D is about
+//      w |n.v|, and the pair bounds nodes about twice as wide as either alone; where it dips
+//      between them (n.v < 0 at a and > 0 at b), each bounds about |n.v| / C. On boat-xyzac at
+//      h = 0.5 mm it took the middle poses solved from 531,000 to 369,000.
+//  (n) Nodes without their sweep. (j) and (m) ask of a node's grown sweep only that it hold every
+//      point of care deeper than epsilon inside the node's poses: beyond a bounded side it is cut
+//      away, and between the sides what is left must be in O. The whole line does too, so a node
+//      below the root whose end poses bound each side where care reaches beyond their intervals
+//      outside O, and whose stretch between them O holds, is settled before its sweep is made
+//      or intersected (a caller that clips care to bound(line), as the cutting loop does, leaves
+//      no care where the sweep cannot be). Only (j) and (m) are tried there; where they fail,
+//      the node takes its sweep and the test of (j) to (l) as before. On BM_TurningQuery's bull
+//      nose at 1 degree: 23,300 -> 19,300 instructions a line; boat-xyzac's cut 7 % less.
+//      The root, the whole move (w = 1, its end poses u = 0 and 1), is tried so too, before its
+//      sweep, unless a ball's capsules (g) come first: the cutting loop queries a line only
+//      where bound(line) meets its material, so most lines queried meet the tool, and two
+//      static solves cost less than the root's grown sweep, which a line settled so never
+//      needs (BM_TurningShortQuery: bull nose 446 -> 329 ns a line, flat end 161 -> 149).
+//      Below a ball end, whose capsules hold most lines that reach the part above, the root's
+//      sweep comes first: held there, it needs no pose solved (solving the ends first made the
+//      ball's short rows 1.5 times slower). Where the end poses leave the root of a part searched
+//      whole open, it is split without its sweep (a node's test is optional: one not tried is
+//      split, as one that fails): BM_TurningShortQuery's flat end 104 -> 102 ns a line at 0.2
+//      degrees, 125 -> 120 at 0.6.
+//  (o) Disks and cylinders. Where a line's end on one side lies on a disk face (a flat end's
+//      bottom, a part's top) at both end poses of a node and the end moves outward from one of them
+//      and back before the other (a dip in u), (j) to (m) bound that side only from poses within
+//      sqrt(epsilon / C) of the dip's deepest pose: on boat-xyzac, four lines in five of those the
+//      root left open, each then taking three to five middle poses and their nodes' sweeps. But a
+//      disk's plane is known at every pose, and a convex part lies behind it: with n(u) = s a(u)
+//      (s = -1 for the bottom disk, 1 for the top) and c(u) = p(u) + h a(u) its centre at height h,
+//      a point z is deeper than epsilon inside T(u) only if H_z(u) = n(u).(z - c(u)) <= -epsilon.
+//      H_z(u) = s (a(u).(z - p(u)) - h) is a smooth function of u alone, and where the tip runs on
+//      a straight line (p'' = 0, as note j asks) H''' = s (a'''.(z - p) - 3 a''.f), so
+//      |H'''| <= M = J |z - p|max + 3 K1 |f|, with J >= |a'''| (MotionLaw::axisJerkBound), K1 >=
+//      |a''| (axisPointAccelerationBound(1)) and |z - p(u)| largest at an end of the tip's segment.
+//      The parabola P through H_z at three poses u_0 < u_1 < u_2 (the node's ends and a pose
+//      between) strays from H_z on [u_0, u_2] by at most M |(u - u_0)(u - u_1)(u - u_2)| / 6, the
+//      interpolation remainder, whose largest is at a root of its derivative. So where P's least on
+//      the node, less that remainder, exceeds -epsilon, no T(u) of the node holds z deeper than
+//      epsilon. Beyond z along the line, H grows at the rate n(u).d, which stays positive where the
+//      end poses' |n.d| exceed omega w / 2 (each u lies within w / 2 of one). Taking z at the
+//      farthest end of the three poses' intervals on that side, which O holds, the node is settled
+//      on that side as in (j). The search takes z at the end poses' farther end and the node's
+//      middle pose (its H only, no interval solved) first: where the end does not dip past z that
+//      settles; otherwise the pose at the vertex of that parabola, the dip's deepest to within the
+//      remainder, is solved and goes into O, and the test is made again with it in the middle. The
+//      remainder is of third order in w and small where the axis turns little, so most such lines
+//      settle at the root: H at three poses and one pose solved, where (j) descended three to five
+//      levels. A rotary table turning under a tilted tool swings the disk's plane round, so its
+//      ends dip often: boat-xyzac's cut (one thread, h = 0.5 mm) 0.320 -> 0.206 s, boat-xyzbc's
+//      0.540 -> 0.436 s. A great circle tilts the disk one way, and BM_TurningQuery's and
+//      BM_TurningShortQuery's lines seldom dip there.
+//      Cylinders. A convex part whose side is a cylinder of radius R lies within R of its axis (its
+//      radius, concave in z, is largest where it is constant), so z is deeper than epsilon inside
+//      T(u) only if G_z(u) = |z - p|^2 - (a.(z - p))^2 - R^2 <= (R - epsilon)^2 - R^2. With
+//      q = a.(z - p): G''' = -(q^2)''' = -(2 q q''' + 6 q' q''), where |q| <= r = max |z - p|,
+//      |q'| <= omega r + |f|, |q''| <= K1 r + 2 omega |f| and |q'''| <= J r + 3 K1 |f|; so the same
+//      test holds with M = 2 r (J r + 3 K1 |f|) + 6 (omega r + |f|)(K1 r + 2 omega |f|). Beyond z,
+//      G_{z + s e}(u) is convex in s with slope 2 g(u) at s = 0, g(u) = (z - p).e - q (a.e) (e the
+//      direction beyond), and |g'| <= 2 (|f| + omega r): where g at a and b exceeds
+//      (|f| + omega r) w, g stays positive over the node and G only grows beyond z. On boat-xyzbc,
+//      where the sides' ends dip most (three in five of the lines the root left open), its cut
+//      0.436 -> 0.376 s; BM_TurningShortQuery's flat end 102 -> 96 ns a line at 0.2 degrees, 118 ->
+//      107 at 0.6.
+
+TurningSweep::LinearSearch::LinearSearch(const TurningSweep& sweep, const Line& line, const turning::Care& care,
+                                         turning::Union& found)
+    : s_(sweep), line_(line), care_(care), found_(found), solved_(threadSolved()), endsAdded_(sweep.parts_.size()) {
+    solved_.clear();
+}
+
+void TurningSweep::LinearSearch::addEnds(std::size_t p) {
+    if (!atStart_) atStart_ = LocalLine::make(s_.startPose_, line_), atEnd_ = LocalLine::make(s_.endPose_, line_);
+    const Interval first = s_.tool_.intersectPart(s_.parts_[p], *atStart_);
+    const Interval last = s_.tool_.intersectPart(s_.parts_[p], *atEnd_);
+    if (!first.isEmpty()) found_.add(first, 0.0, p);
+    if (!last.isEmpty()) found_.add(last, 1.0, p);
+    endsAdded_ = p;
+    solved_.clear();
+    solved_.push_back({s_.startPhase_.u, s_.startPose_, first, {}, s_.startPhase_});
+    solved_.push_back({s_.endPhase_.u, s_.endPose_, last, {}, s_.endPhase_});
+}
+
+double TurningSweep::LinearSearch::bendAt(double height, double off) const {
+    const double turn = s_.axisTurn_;
+    const double pivotSpeed = s_.tipSpeed_ + turn * std::abs(height);
+    return turn * (pivotSpeed + turn * off) +
+           0.5 * (s_.law_.axisPointAccelerationBound(std::abs(height)) + (s_.axisBend_ + turn * turn) * off);
+}
+
+const TurningSweep::LinearSearch::Crossing& TurningSweep::LinearSearch::crossing(Solved& pose, std::size_t p,
+                                                                                  int upper) {
+    Crossing& c = pose.ends[upper];
+    if (c.found) return c;
+    const Vec3 y = line_.at(upper ? pose.range.hi : pose.range.lo);
+    const Vec3 n = s_.faceNormal(pose.pose, p, y, &c.face);
+    const double height = glm::dot(y - pose.pose.tip, pose.pose.axis);
+    const double off = glm::length(y - pose.pose.tip - height * pose.pose.axis);
+    c.found = true;
+    c.across = glm::dot(n, line_.dir);
+    const Vec3 velocity = pose.u == s_.startPhase_.u ? s_.startTwist_.at(y)
+                          : pose.u == s_.endPhase_.u   ? s_.endTwist_.at(y)
+                                                       : s_.law_.velocity(pose.phase, y);
+    c.speed = glm::dot(n, velocity);
+    c.bend = bendAt(height, off);
+    return c;
+}
+
+// Whether, where the line's end on that side grows at pose a and shrinks at pose b, the
+// pose between them where it stops growing bounds the points beyond its interval over
+// the whole node (note l); the poses tried go into O.
+bool TurningSweep::LinearSearch::graze(std::size_t p, int upper, Solved& a, Solved& b, double& end) {
+    if (a.range.isEmpty() || b.range.isEmpty()) return false;
+    const Crossing& ca = crossing(a, p, upper);
+    const Crossing& cb = crossing(b, p, upper);
+    if (!(ca.speed > 0.0 && cb.speed < 0.0)) return false;
+    // Only where (j)'s bound from a pose in the node's middle, C (w / 2)^2, would hold.
+    const double width = b.u - a.u;
+    if (!(std::max(ca.bend, cb.bend) * width * width < 4.0 * s_.epsilon_)) return false;
+    bool settled = false;
+    regulaFalsi(a.u, b.u, ca.speed, cb.speed, kGrazeSteps, [&](double u) -> std::optional<double> {
+        const TurnPhase phase = s_.law_.phase(u);
+        Solved g{u, s_.law_.pose(phase), Interval::empty(), {}, phase};
+        g.range = s_.tool_.intersectPart(s_.parts_[p], LocalLine::make(g.pose, line_));
+        if (g.range.isEmpty()) return std::nullopt;
+        found_.add(g.range, u, p);
+        const Crossing& c = crossing(g, p, upper);
+        const double out = upper ? c.across : -c.across;
+        const double back = u - a.u, on = b.u - u;
+        settled = out > 0.0 && out >= s_.axisTurn_ * std::max(back, on) &&
+                  -back * c.speed + back * back * c.bend < s_.epsilon_ && on * c.speed + on * on * c.bend < s_.epsilon_;
+        if (settled) {
+            end = upper ? g.range.hi : g.range.lo;
+            return std::nullopt;
+        }
+        return c.speed;
+    });
+    return settled;
+}
+
+// Whether, where the line's crossings at poses a and b lie on two faces that meet at a
+// rim, the pose between them where the line passes through that rim bounds the points
+// beyond its interval over the whole node (note k); the pose goes into O.
+bool TurningSweep::LinearSearch::corner(std::size_t p, int upper, Solved& a, Solved& b, double& end) {
+    if (a.range.isEmpty() || b.range.isEmpty()) return false;
+    const int fa = crossing(a, p, upper).face, fb = crossing(b, p, upper).face;
+    if (std::abs(fa - fb) != 1) return false;
+    const std::optional<Rim> r = s_.rim(p, std::min(fa, fb));
+    if (!r) return false;
+    // g(u): how far outside the rim's radius the line crosses the rim's plane at pose u.
+    const auto g = [&](double u) {
+        const ToolPose ps = s_.law_.pose(u);
+        const double along = glm::dot(ps.axis, line_.dir);
+        const double t = (r->z - glm::dot(ps.axis, line_.origin - ps.tip)) / along;
+        return glm::length(line_.at(t) - ps.tip - r->z * ps.axis) - r->radius;
+    };
+    const double ga = g(a.u), gb = g(b.u);
+    if (!std::isfinite(ga) || !std::isfinite(gb) || (ga > 0.0) == (gb > 0.0)) return false;
+    double u = a.u;
+    regulaFalsi(a.u, b.u, ga, gb, kCornerSteps, [&](double next) -> std::optional<double> {
+        u = next;
+        const double gu = g(u);
+        if (!std::isfinite(gu) || std::abs(gu) <= kCornerGap) return std::nullopt;
+        return gu;
+    });
+    const TurnPhase phase = s_.law_.phase(u);
+    const ToolPose ps = s_.law_.pose(phase);
+    const Interval range = s_.tool_.intersectPart(s_.parts_[p], LocalLine::make(ps, line_));
+    if (range.isEmpty()) return false;
+    found_.add(range, u, p);
+    // The end, and the rim's point nearest it: both faces' planes through that point hold
+    // the part, and the end lies `gap` from it.
+    const Vec3 y = line_.at(upper ? range.hi : range.lo);
+    const Vec3 offAxis = y - ps.tip - glm::dot(y - ps.tip, ps.axis) * ps.axis;
+    const double rho = glm::length(offAxis);
+    if (!(rho > 0.0)) return false;
+    const Vec3 radial = offAxis / rho, point = ps.tip + r->z * ps.axis + r->radius * radial;
+    const double gap = glm::length(y - point), bend = bendAt(r->z, r->radius);
+    const Vec3 velocity = s_.law_.velocity(phase, point);
+    // Back over [a.u, u] (sign -1) and on over [u, b.u] (sign 1), each by either face.
+    for (const double sign : {-1.0, 1.0}) {
+        const double w = sign < 0.0 ? u - a.u : b.u - u;
+        bool bounded = false;
+        for (int f = 0; f < 2 && !bounded; ++f) {
+            const Vec3 n = r->across[f] * radial + r->along[f] * ps.axis;
+            const double out = upper ? glm::dot(n, line_.dir) : -glm::dot(n, line_.dir);
+            bounded = out > 0.0 && out >= s_.axisTurn_ * w && gap < s_.epsilon_ &&
+                      sign * w * glm::dot(n, velocity) + w * w * bend + gap * (1.0 + s_.axisTurn_ * w) < s_.epsilon_;
+        }
+        if (!bounded) return false;
+    }
+    end = upper ? range.hi : range.lo;
+    return true;
+}
+
+// Whether, where the line's end on that side lies on the same disk or cylinder face at
+// poses a and b, that face bounds the points beyond the farthest end of a, b and (where
+// the end dips past theirs) a pose solved between them, over the whole node (note o); that
+// pose goes into O.
+bool TurningSweep::LinearSearch::faceDip(std::size_t p, int upper, Solved& a, Solved& b, double& end) {
+    if (!std::isfinite(s_.axisJerk_) || a.range.isEmpty() || b.range.isEmpty()) return false;
+    const Crossing& ca = crossing(a, p, upper);
+    const Crossing& cb = crossing(b, p, upper);
+    if (ca.face != cb.face) return false;
+    // The first and last faces up the meridian are the bottom and top disks (meridianFaces).
+    const std::vector<MeridianFace>& faces = s_.faces_[p];
+    const MeridianFace& face = faces[std::size_t(ca.face)];
+    const bool disk = ca.face == 0 || ca.face == int(faces.size()) - 1;
+    if (!disk && !(face.kind == MeridianFace::Kind::Cone && face.r0 == face.r1)) return false;
+    const double w = b.u - a.u, turn = s_.axisTurn_, bend = s_.axisBend_, feed = s_.tipSpeed_;
+    const double out = upper ? std::min(ca.across, cb.across) : -std::max(ca.across, cb.across);
+    if (disk && !(out > 0.5 * turn * w)) return false;
+    const double side = ca.face == 0 ? -1.0 : 1.0, radius = face.r0;
+    const Vec3 beyond = upper ? line_.dir : -line_.dir;
+    // F_z at a pose: a disk's H_z, or a cylinder's G_z; positive outside.
+    const auto F = [&](const ToolPose& pose, const Vec3& z) {
+        const Vec3 q = z - pose.tip;
+        const double along = glm::dot(pose.axis, q);
+        return disk ? side * (along - face.z0) : glm::dot(q, q) - along * along - radius * radius;
+    };
+    // How far below 0 F_z may fall at a point no deeper than epsilon.
+    const double depth = disk ? s_.epsilon_ : s_.epsilon_ * (2.0 * radius - s_.epsilon_);
+    const auto endOf = [&](const Interval& range) { return upper ? range.hi : range.lo; };
+    const auto farther = [&](double s, double t) { return upper ? std::max(s, t) : std::min(s, t); };
+    // Whether the points beyond line.at(t) lie outside every T(u) of the node but for
+    // epsilon, by P through F_z at a, the pose `mid` at u and b, less the remainder;
+    // `low` gets where P is least.
+    const auto holds = [&](double t, double u, const ToolPose& mid, double& low) {
+        const Vec3 z = line_.at(t);
+        const double reach = std::max(glm::length(z - a.pose.tip), glm::length(z - b.pose.tip));
+        if (!disk) {
+            // Beyond z a cylinder's G grows where the line runs away from the axis,
+            // g(u) = (z - p).e - (a.(z - p))(a.e) >= 0 (e the direction beyond), and
+            // |g'| <= 2 (|f| + omega |z - p|): each u lies within w / 2 of a or b.
+            const auto g = [&](const ToolPose& pose) {
+                const Vec3 q = z - pose.tip;
+                return glm::dot(q, beyond) - glm::dot(pose.axis, q) * glm::dot(pose.axis, beyond);
+            };
+            if (!(std::min(g(a.pose), g(b.pose)) > (feed + turn * reach) * w)) return false;
+        }
+        const double jerk = s_.axisJerk_ * reach + 3.0 * bend * feed;
+        const double bound = disk ? jerk
+                                  : 2.0 * reach * jerk + 6.0 * (turn * reach + feed) * (bend * reach + 2.0 * turn * feed);
+        const ParabolaLow p2 = parabolaLow(a.u, F(a.pose, z), u, F(mid, z), b.u, F(b.pose, z));
+        low = p2.u;
+        return p2.value - bound * nodePolynomialMax(a.u, u, b.u) / 6.0 > -depth;
+    };
+    double t = farther(endOf(a.range), endOf(b.range)), deepest = 0.0;
+    // The root's middle pose is kept (midPose_): most lines that reach here are the root's.
+    const double um = 0.5 * (a.u + b.u);
+    if (holds(t, um, um == s_.midPhase_.u ? s_.midPose_ : s_.law_.pose(um), deepest)) {
+        end = t;
+        return true;
+    }
+    if (!(deepest > a.u && deepest < b.u)) return false;
+    const ToolPose pose = s_.law_.pose(deepest);
+    const Interval range = s_.tool_.intersectPart(s_.parts_[p], LocalLine::make(pose, line_));
+    if (range.isEmpty()) return false;
+    found_.add(range, deepest, p);
+    t = farther(t, endOf(range));
+    double unused = 0.0;
+    if (!holds(t, deepest, pose, unused)) return false;
+    end = t;
+    return true;
+}
+
+// Whether a node of width w that is not settled as a linear node has the line's points
+// beyond its end poses' intervals (a, b) bounded by those poses' faces (note j), `swept`
+// holding every point of the node deeper than epsilon; `aim` lets notes k and l solve
+// poses to that end.
+bool TurningSweep::LinearSearch::anchoredSettled(std::size_t p, double w, std::uint32_t a, std::uint32_t b, const Interval& swept,
+                                             bool aim) {
+    Solved* const ends[2] = {&solved_[a], &solved_[b]};
+    const Interval hull = ends[0]->range.hull(ends[1]->range);
+    if (hull.isEmpty()) return false;
+    // How far into the node, from end e, the crossing at end `upper` of that pose's
+    // interval bounds the points on the line beyond `cut`: the stretch tau_e below which
+    // (j)'s bound holds, with the distance D from the crossing to `cut` as slack (note m).
+    // The model moves on from pose a (sign 1) and back from pose b.
+    const auto stretch = [&](int e, int upper, double cut) {
+        if (ends[e]->range.isEmpty()) return 0.0;
+        const Crossing& c = crossing(*ends[e], p, upper);
+        const double out = upper ? c.across : -c.across;
+        if (!(out > 0.0)) return 0.0;
+        const double slack = upper ? cut - ends[e]->range.hi : ends[e]->range.lo - cut;
+        const double sign = e == 0 ? 1.0 : -1.0;
+        const double A = s_.epsilon_ + slack * out, B = slack * s_.axisTurn_ + sign * c.speed;
+        // The positive root of A - B tau - C tau^2, in the form without cancellation.
+        const double disc = std::sqrt(B * B + 4.0 * c.bend * A);
+        const double root = B >= 0.0 ? 2.0 * A / (B + disc)
+                            : c.bend > 0.0 ? (disc - B) / (2.0 * c.bend)
+                                           : std::numeric_limits<double>::infinity();
+        return s_.axisTurn_ > 0.0 ? std::min(root, out / s_.axisTurn_) : root;
+    };
+    // Only a side whose stretch beyond both poses' intervals O leaves open needs a bound;
+    // where only the stretch between them is open, either pose may close it.
+    const bool loOpen = !held({swept.lo, std::min(hull.lo, swept.hi)});
+    const bool hiOpen = !held({std::max(hull.hi, swept.lo), swept.hi});
+    const bool between = !loOpen && !hiOpen;
+    Interval cut = swept;
+    bool bounded = false;
+    for (const int upper : {1, 0}) {
+        if (!(upper ? hiOpen : loOpen) && !between) continue;
+        // The pose whose end is the farther is tried first: where the end moves outward
+        // from one pose to the other, the face at the nearer advances towards the farther's
+        // end, and only the farther's crossing can bound the node alone (on
+        // BM_TurningShortQuery's flat end, the nearer did so on 56 sides in 45,682, the
+        // farther on 38,148), so the nearer's crossing is found only where that fails.
+        const int farther = upper ? (ends[0]->range.hi > ends[1]->range.hi ? 0 : 1)
+                                  : (ends[0]->range.lo < ends[1]->range.lo ? 0 : 1);
+        // Where the line's points beyond some parameter are bounded: beyond a pose's own
+        // end where its crossing bounds the whole node (j: D = 0, tau_e > w), beyond the
+        // farther end where the two poses share it (m), or beyond the end of a pose solved
+        // at a rim or a graze between them (k, l).
+        const auto endOf = [&](int e) { return upper ? ends[e]->range.hi : ends[e]->range.lo; };
+        std::optional<double> end;
+        for (const int e : {farther, 1 - farther})
+            if (!end && stretch(e, upper, endOf(e)) > w) end = endOf(e);
+        const double beyond = upper ? hull.hi : hull.lo;
+        if (!end && stretch(0, upper, beyond) + stretch(1, upper, beyond) > w) end = beyond;
+        double aimed = 0.0;
+        if (!end && !between && faceDip(p, upper, *ends[0], *ends[1], aimed)) end = aimed;
+        if (!end && !between && aim &&
+            (corner(p, upper, *ends[0], *ends[1], aimed) || graze(p, upper, *ends[0], *ends[1], aimed)))
+            end = aimed;
+        if (!end) {
+            if (!between) return false;
+            continue;
+        }
+        if (upper) {
+            cut.hi = std::min(cut.hi, *end);
+        } else {
+            cut.lo = std::max(cut.lo, *end);
+        }
+        bounded = true;
+    }
+    if (!bounded) return false;
+    return held(cut);
+}
+
+// A node's grown band swept along its move, along the line: empty where it misses the
+// care. Four in ten of the nodes' sweeps miss the line (BM_TurningQuery, BM_TurningShortQuery),
+// most of them beside the band or above or below it, which the narrowed bound tells for a
+// fifth of the sweep's cost (the ball end's short rows 53 -> 37 ns a line).
+Interval TurningSweep::LinearSearch::sweptWithin(const MoveSweep& sweep) const {
+    return sweep.narrowBound(line_, care_.within()).isEmpty() ? Interval::empty() : sweep.intersect(line_);
+}
+
+// Linear nodes (notes h and i), band by band from the root down. The static poses of a band's
+// part at both ends go into O where the root's sweep is not held without them (a line the grown
+// band's sweep misses, or that a ball's capsules already hold, needs neither); the static pose
+// at a node's middle is its whole part's too.
+void TurningSweep::LinearSearch::run() {
+    // Whether the end poses' faces left the part's root open (note n).
+    bool rootOpen = false;
+    for (std::size_t b = 0; b < s_.models_.size(); ++b) {
+        const std::size_t p = s_.models_[b].part;
+        if (b == 0 || s_.models_[b - 1].part != p) {
+            // The part's root, taken whole, settles all its bands at once: by its end poses'
+            // faces (note n) where no ball's capsules come first, else by its sweep.
+            bool settled = false;
+            if (s_.parts_.size() == 1 && s_.balls_.empty()) {
+                addEnds(p);
+                settled = anchoredSettled(p, 1.0, 0, 1, Interval::all(), false);
+                rootOpen = !settled;
+            }
+            if (!settled && s_.wholeRoots_[p]) {
+                const Interval swept = sweptWithin(s_.wholeRoots_[p]->sweep);
+                if (!held(swept) && endsAdded_ != p) addEnds(p);
+                settled = held(swept);
+            }
+            if (settled) {
+                while (b + 1 < s_.models_.size() && s_.models_[b + 1].part == p) ++b;
+                continue;
+            }
+        }
+        searchBand(b, rootOpen);
+    }
+}
+
+void TurningSweep::LinearSearch::searchBand(std::size_t b, bool rootOpen) {
+    const std::size_t p = s_.models_[b].part;
+    const int leaf = s_.models_[b].leafLevel();
+    if (solved_.size() > 2) solved_.resize(2);
+    // A node pops itself and pushes its two halves: at most one node a level and two of
+    // the deepest. Each carries its end poses' indices into `solved`.
+    struct Node {
+        std::uint32_t heap, a, b;
+    };
+    std::array<Node, kMaxLinearLevel + 2> stack;
+    std::size_t top = 0;
+    std::unique_ptr<LinearNode> scratch;  // a node made for this query alone
+    stack[top++] = {1, 0, 1};
+    while (top > 0) {
+        const Node n = stack[--top];
+        // Below the root, where the end poses' faces settle the node within the line's
+        // bound, its sweep is not needed (note n).
+        if (n.heap > 1 && s_.parts_.size() == 1 &&
+            anchoredSettled(p, heapWidth(n.heap), n.a, n.b, Interval::all(), false))
+            continue;
+        // A part searched whole (one band) whose end poses' faces left its root open: the
+        // root's grown sweep settles few of those lines (on BM_TurningShortQuery's flat end
+        // at 0.2 degrees, one in eighteen, and its aimed test of notes k and l one in four),
+        // so the root is split at once, its halves tried by note n before their sweeps.
+        const bool splitRoot = n.heap == 1 && rootOpen && !s_.wholeRoots_[p] && leaf > 0;
+        const LinearNode* node = nullptr;
+        if (!splitRoot) {
+            node = &s_.linearNode(b, n.heap, scratch);
+            const Interval swept = sweptWithin(node->sweep);
+            if (heapLevel(n.heap) == leaf) {  // closed: the band's own sweep along the node's move
+                if (!swept.isEmpty()) found_.add(swept, node->middleU, node->middleU, b, n.heap);
+                continue;
+            }
+            if (held(swept)) continue;  // settled: the grown band's sweep is held
+            if (n.heap == 1 && endsAdded_ != p) {
+                addEnds(p);
+                if (held(swept)) continue;
+            }
+            if (s_.parts_.size() == 1 && anchoredSettled(p, node->width, n.a, n.b, swept, true)) continue;
+        }
+        const double middleU = node ? node->middleU : s_.midPhase_.u;
+        const ToolPose& middlePose = node ? node->middle : s_.midPose_;
+        const Interval middle = s_.tool_.intersectPart(s_.parts_[p], LocalLine::make(middlePose, line_));
+        if (!middle.isEmpty()) found_.add(middle, middleU, p);
+        const std::uint32_t m = std::uint32_t(solved_.size());
+        solved_.push_back({middleU, middlePose, middle, {}, node ? node->phase : s_.midPhase_});
+        stack[top++] = {2 * n.heap + 1, m, n.b};
+        stack[top++] = {2 * n.heap, n.a, m};
+    }
+}
+
+std::vector<TurningSweep::LinearSearch::Solved>& TurningSweep::LinearSearch::threadSolved() {
+    static thread_local std::vector<Solved> solved;
+    return solved;
+}
+
+}  // namespace dexelmill

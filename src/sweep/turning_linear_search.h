@@ -1,0 +1,66 @@
+// One line's search over a turning sweep's linear nodes (notes h and i of turning.cpp), with
+// the tests that settle a node by its end poses' faces (notes j to o, turning_linear_search.cpp).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "dexelmill/sweep/turning.h"
+#include "turning_union.h"
+
+namespace dexelmill {
+
+class TurningSweep::LinearSearch {
+  public:
+    /// Searches `line` band by band (models_), adding to `found` what `care` needs.
+    LinearSearch(const TurningSweep& sweep, const Line& line, const turning::Care& care, turning::Union& found);
+    void run();
+
+  private:
+    /// Per end of a solved pose's interval (lower, upper), what note j asks of the face the line
+    /// crosses there, found when first needed.
+    struct Crossing {
+        bool found = false;
+        double across = 0.0;  ///< n.d: the face's outward normal n along the line
+        double speed = 0.0;   ///< n.v, v the velocity of the tool point there
+        double bend = 0.0;    ///< C: how far the face's supporting plane strays in second order
+        int face = 0;         ///< the face's index up the meridian (faceNormal)
+    };
+    /// A static pose of the part in O at u, and its interval.
+    struct Solved {
+        double u = 0.0;
+        ToolPose pose;
+        Interval range;
+        Crossing ends[2];
+        TurnPhase phase;  ///< u's, which the velocities take
+    };
+
+    bool held(const Interval& g) const { return care_.held(g); }
+    /// The part's static poses at u = 0 and 1: into O, and the first two of `solved_`.
+    void addEnds(std::size_t p);
+    /// Note j's C for a tool point at `height` above the tip and `off` from the axis.
+    double bendAt(double height, double off) const;
+    const Crossing& crossing(Solved& pose, std::size_t p, int upper);
+    bool graze(std::size_t p, int upper, Solved& a, Solved& b, double& end);
+    bool corner(std::size_t p, int upper, Solved& a, Solved& b, double& end);
+    bool faceDip(std::size_t p, int upper, Solved& a, Solved& b, double& end);
+    bool anchoredSettled(std::size_t p, double w, std::uint32_t a, std::uint32_t b, const Interval& swept, bool aim);
+    /// A node's grown band swept along its move, along the line: empty where it misses the care.
+    Interval sweptWithin(const MoveSweep& sweep) const;
+    /// Searches band b's nodes from its root down.
+    void searchBand(std::size_t b, bool rootOpen);
+    static std::vector<Solved>& threadSolved();
+
+    const TurningSweep& s_;
+    const Line& line_;
+    const turning::Care& care_;
+    turning::Union& found_;
+    /// The poses solved, nodes referring to them by index: kept per thread, so that a query
+    /// allocates nothing once its thread has seen one as deep.
+    std::vector<Solved>& solved_;
+    std::optional<LocalLine> atStart_, atEnd_;
+    std::size_t endsAdded_;  ///< the part whose end poses are in O already
+};
+
+}  // namespace dexelmill
