@@ -47,6 +47,21 @@ double distance(const Vec3& a, const Vec3& b) { return glm::length(a - b); }
 struct AcMove {
     RotaryAngles from, to;
     Vec3 j0, j1;
+
+    /// The move on `ac`, under TCP or with identity kinematics.
+    Move move(const Machine& ac, bool tcp) const {
+        Move m;
+        m.start = j0, m.end = j1;
+        m.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, tcp, j0, j1));
+        return m;
+    }
+    /// The issue's formula for the tool axis, (sin C sin A, cos C sin A, cos A), the angles
+    /// linear in u.
+    Vec3 axis(double u) const {
+        const double a = (from['A'] + u * (to['A'] - from['A'])) * kDeg;
+        const double c = (from['C'] + u * (to['C'] - from['C'])) * kDeg;
+        return Vec3(std::sin(c) * std::sin(a), std::cos(c) * std::sin(a), std::cos(a));
+    }
 };
 AcMove randomAcMove(std::mt19937& rng) {
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
@@ -56,6 +71,17 @@ AcMove randomAcMove(std::mt19937& rng) {
     m.j0 = Vec3(50 * uni(rng), 50 * uni(rng), 50 * uni(rng));
     m.j1 = Vec3(50 * uni(rng), 50 * uni(rng), 50 * uni(rng));
     return m;
+}
+
+/// An APT move between a drawn move's joints whose axis turns on a great circle between two
+/// random axes.
+Move randomAptMove(std::mt19937& rng, const AcMove& drawn) {
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    Move apt;
+    apt.start = drawn.j0, apt.end = drawn.j1;
+    apt.startAxis = glm::normalize(Vec3(uni(rng), uni(rng), uni(rng)));
+    apt.axis = glm::normalize(*apt.startAxis + 1.5 * Vec3(uni(rng), uni(rng), uni(rng)));
+    return apt;
 }
 
 }  // namespace
@@ -135,23 +161,11 @@ TEST_CASE("machine: the acceleration bound of a tool point on the axis holds wit
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
     for (int i = 0; i < 40; ++i) {
         const AcMove drawn = randomAcMove(rng);
-        const RotaryAngles &from = drawn.from, &to = drawn.to;
-        const Vec3 &j0 = drawn.j0, &j1 = drawn.j1;
         const double r = 1 + 20 * (uni(rng) + 1);
-        Move tcp;
-        tcp.start = j0, tcp.end = j1;
-        tcp.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, true, j0, j1));
-        // The same move's axis point from the issue's formula, angles linear in u.
-        auto point = [&](double u) {
-            const double a = (from['A'] + u * (to['A'] - from['A'])) * kDeg;
-            const double c = (from['C'] + u * (to['C'] - from['C'])) * kDeg;
-            return j0 + u * (j1 - j0) + r * Vec3(std::sin(c) * std::sin(a), std::cos(c) * std::sin(a), std::cos(a));
-        };
-        const double bound = MotionLaw(tcp).axisPointAccelerationBound(r);
-        Move apt;
-        apt.start = j0, apt.end = j1;
-        apt.startAxis = glm::normalize(Vec3(uni(rng), uni(rng), uni(rng)));
-        apt.axis = glm::normalize(*apt.startAxis + 1.5 * Vec3(uni(rng), uni(rng), uni(rng)));
+        // The same move's axis point from the issue's formula.
+        const auto point = [&](double u) { return drawn.j0 + u * (drawn.j1 - drawn.j0) + r * drawn.axis(u); };
+        const double bound = MotionLaw(drawn.move(ac, true)).axisPointAccelerationBound(r);
+        const Move apt = randomAptMove(rng, drawn);
         const MotionLaw slerp(apt);
         const double theta = std::acos(std::clamp(glm::dot(*apt.startAxis, apt.axis), -1.0, 1.0));
         CHECK(slerp.axisPointAccelerationBound(r) == Approx(r * theta * theta).epsilon(1e-12));
@@ -166,9 +180,7 @@ TEST_CASE("machine: the acceleration bound of a tool point on the axis holds wit
             const Vec3 e2 = (aptPoint(u + kH) - 2.0 * aptPoint(u) + aptPoint(u - kH)) / (kH * kH);
             CHECK(glm::length(e2) <= r * theta * theta + kRounding);
         }
-        Move identity = tcp;
-        identity.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, false, j0, j1));
-        CHECK(std::isinf(MotionLaw(identity).axisPointAccelerationBound(r)));
+        CHECK(std::isinf(MotionLaw(drawn.move(ac, false)).axisPointAccelerationBound(r)));
     }
 }
 
@@ -182,27 +194,14 @@ TEST_CASE("machine: the axis's third-derivative bound holds with TCP and in APT,
     };
     const Machine ac = loadMachine("xyzac-trt");
     std::mt19937 rng(12);
-    std::uniform_real_distribution<double> uni(-1.0, 1.0);
     for (int i = 0; i < 40; ++i) {
         const AcMove drawn = randomAcMove(rng);
-        const RotaryAngles &from = drawn.from, &to = drawn.to;
-        const Vec3 &j0 = drawn.j0, &j1 = drawn.j1;
-        Move tcp;
-        tcp.start = j0, tcp.end = j1;
-        tcp.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, true, j0, j1));
-        // The issue's formula for the axis, angles linear in u.
-        const auto axis = [&](double u) {
-            const double a = (from['A'] + u * (to['A'] - from['A'])) * kDeg;
-            const double c = (from['C'] + u * (to['C'] - from['C'])) * kDeg;
-            return Vec3(std::sin(c) * std::sin(a), std::cos(c) * std::sin(a), std::cos(a));
-        };
-        const double rate = (std::abs(to['A'] - from['A']) + std::abs(to['C'] - from['C'])) * kDeg;
-        const double bound = MotionLaw(tcp).axisJerkBound();
+        const auto axis = [&](double u) { return drawn.axis(u); };
+        const double rate =
+            (std::abs(drawn.to['A'] - drawn.from['A']) + std::abs(drawn.to['C'] - drawn.from['C'])) * kDeg;
+        const double bound = MotionLaw(drawn.move(ac, true)).axisJerkBound();
         CHECK(bound == Approx(rate * rate * rate).epsilon(1e-12));
-        Move apt;
-        apt.start = j0, apt.end = j1;
-        apt.startAxis = glm::normalize(Vec3(uni(rng), uni(rng), uni(rng)));
-        apt.axis = glm::normalize(*apt.startAxis + 1.5 * Vec3(uni(rng), uni(rng), uni(rng)));
+        const Move apt = randomAptMove(rng, drawn);
         const MotionLaw slerp(apt);
         const double theta = std::acos(std::clamp(glm::dot(*apt.startAxis, apt.axis), -1.0, 1.0));
         CHECK(slerp.axisJerkBound() == Approx(theta * theta * theta).epsilon(1e-12));
@@ -217,9 +216,7 @@ TEST_CASE("machine: the axis's third-derivative bound holds with TCP and in APT,
         }
         // The bound is no more than the turns' rates allow: some pose comes within a factor 8.
         CHECK(largest >= bound / 8.0);
-        Move identity = tcp;
-        identity.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, false, j0, j1));
-        CHECK(std::isinf(MotionLaw(identity).axisJerkBound()));
+        CHECK(std::isinf(MotionLaw(drawn.move(ac, false)).axisJerkBound()));
     }
 }
 

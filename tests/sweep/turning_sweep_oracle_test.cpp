@@ -134,6 +134,13 @@ void sidePoint(std::mt19937_64& rng, const oracle::Part& part, const Vec3& tip, 
     normal = glm::normalize(radial - slope * axis);
 }
 
+/// A random case whose move turns 10^U(lowest, highest) degrees and travels 0.05 to 40 mm, or
+/// not at all one time in `still`.
+Case randomTurningCase(std::mt19937_64& rng, double lowest, double highest, unsigned still) {
+    const double angle = degrees(std::pow(10.0, cases::uniform(rng, lowest, highest)));
+    return randomCase(rng, randomMove(rng, angle, rng() % still == 0 ? 0.0 : cases::uniform(rng, 0.05, 40.0)));
+}
+
 /// Checks case `c` along a line through `point` that crosses the face with outward normal `normal`
 /// there at 10 to 80 degrees from its tangent plane, with a tolerance of 1e-2 to 1e-4 mm: a coarse
 /// tolerance lets note o (turning_linear_search.cpp) settle wide nodes, where its remainder is
@@ -413,8 +420,7 @@ TEST_CASE("turning sweep vs oracle: lines nearly along a face of a pose, while t
     std::mt19937_64 rng(20261129);
     Tally tally;
     for (int i = 0, n = scaled(300); i < n; ++i) {
-        const double angle = degrees(std::pow(10.0, cases::uniform(rng, -0.5, 2.0)));
-        Case c = randomCase(rng, randomMove(rng, angle, rng() % 3 == 0 ? 0.0 : cases::uniform(rng, 0.05, 40.0)));
+        Case c = randomTurningCase(rng, -0.5, 2.0, 3);
         const SweepOracle o(c.model->parts, c.move);
         const double poses[] = {0.0, 1.0, cases::uniform(rng, 0, 1)};
         Vec3 tip, axis;
@@ -456,8 +462,7 @@ TEST_CASE("turning sweep vs oracle: lines through a disk face, whose end may dip
     std::mt19937_64 rng(20261130);
     Tally tally;
     for (int i = 0, n = scaled(300); i < n; ++i) {
-        const double angle = degrees(std::pow(10.0, cases::uniform(rng, 0.0, 1.95)));
-        Case c = randomCase(rng, randomMove(rng, angle, rng() % 4 == 0 ? 0.0 : cases::uniform(rng, 0.05, 40.0)));
+        Case c = randomTurningCase(rng, 0.0, 1.95, 4);
         const SweepOracle o(c.model->parts, c.move);
         const double at = cases::uniform(rng, 0.1, 0.9);
         constexpr double kStep = 1e-6;
@@ -490,8 +495,7 @@ TEST_CASE("turning sweep vs oracle: lines across a part's side, whose end may di
     std::mt19937_64 rng(20261131);
     Tally tally;
     for (int i = 0, n = scaled(300); i < n; ++i) {
-        const double angle = degrees(std::pow(10.0, cases::uniform(rng, -1.0, 1.95)));
-        Case c = randomCase(rng, randomMove(rng, angle, rng() % 4 == 0 ? 0.0 : cases::uniform(rng, 0.05, 40.0)));
+        Case c = randomTurningCase(rng, -1.0, 1.95, 4);
         const SweepOracle o(c.model->parts, c.move);
         Vec3 tip, axis;
         o.pose(cases::uniform(rng, 0.1, 0.9), tip, axis);
