@@ -21,6 +21,7 @@
 #include "dexelmill/sweep/turning.h"
 #include "dexelmill/tool/builders.h"
 #include "sweep/interpolation.h"
+#include "support/trt_kinematics.h"
 #include "sweep/turning_levels.h"
 
 using namespace dexelmill;
@@ -156,16 +157,19 @@ TEST_CASE("turning move box: a machine's rotary moves, whole tools and bands abo
         const double z0 = trial % 3 == 0 ? 0.0 : 25.0;
         INFO("trial " << trial << ", heights " << z0 << " to 40");
         const Box box = turningMoveBox(m, z0, 40.0, 5.0);
-        const MotionLaw law(m);
         Box seen;
         for (int k = 0; k <= 1000; ++k) {
-            const ToolPose pose = law.pose(k / 1000.0);
-            const Vec3 any = std::abs(pose.axis.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
-            const Vec3 p = glm::normalize(glm::cross(pose.axis, any)), q = glm::cross(pose.axis, p);
+            // The pose from LinuxCNC's formulas, the joints and angles linear in u.
+            const double u = k / 1000.0;
+            const double a = from['A'] + u * (to['A'] - from['A']), c = from['C'] + u * (to['C'] - from['C']);
+            const Vec3 joints = j0 + u * (j1 - j0);
+            const Vec3 tip = tcp ? joints : testing::xyzacForward(joints, a, c), axis = testing::xyzacAxis(a, c);
+            const Vec3 any = std::abs(axis.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+            const Vec3 p = glm::normalize(glm::cross(axis, any)), q = glm::cross(axis, p);
             for (int j = 0; j < 90; ++j) {
                 const double phi = 2 * kPi * j / 90;
                 const Vec3 rim = 5.0 * (std::cos(phi) * p + std::sin(phi) * q);
-                for (const double z : {z0, 40.0}) seen.expand(pose.tip + z * pose.axis + rim);
+                for (const double z : {z0, 40.0}) seen.expand(tip + z * axis + rim);
             }
         }
         for (int i = 0; i < 3; ++i) {
