@@ -7,6 +7,7 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/rotation.h"
+#include "dexelmill/geometry/tolerance.h"
 #include "dexelmill/path/toolpath.h"
 
 namespace dexelmill {
@@ -82,7 +83,9 @@ MotionLaw::MotionLaw(const Move& move) : start_(move.start), feed_(move.feed()),
     const Vec3 k = glm::cross(a0, move.axis);
     const double s = glm::length(k);
     toolAxis_ = a0;
-    if (s == 0.0) return;  // parallel (opposite axes are refused by the sweep)
+    if (s <= tol::kParallel && glm::dot(a0, move.axis) < 0.0)
+        throw Error("the axes are opposite: no one great circle joins them");
+    if (s == 0.0) return;  // the same axis: no turn
     RotaryTurn turn;
     turn.direction = k / s;
     turn.pivot = move.start;

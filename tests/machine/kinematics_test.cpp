@@ -8,6 +8,7 @@
 #include <random>
 
 #include "dexelmill/error.h"
+#include "dexelmill/geometry/tolerance.h"
 #include "dexelmill/machine/kinematics.h"
 #include "dexelmill/path/gcode.h"
 #include "dexelmill/path/motion.h"
@@ -397,6 +398,31 @@ TEST_CASE("motion: a law refuses more turns than A, B and C make", "[machine]") 
     r.turns.pop_back();
     m.rotary = std::make_shared<const RotaryMotion>(r);
     CHECK_NOTHROW(MotionLaw(m));
+}
+
+TEST_CASE("motion: a law refuses opposite axes, and turns on axes short of opposite", "[machine]") {
+    // Within kParallel of opposite no one great circle joins the axes: refused. A turn of 1e-7 rad short of opposite is a half turn like any other.
+    const Vec3 axis = glm::normalize(Vec3(0.3, -0.4, 0.8));
+    const Vec3 across = glm::normalize(glm::cross(axis, Vec3(1, 0, 0)));
+    Move m;
+    m.start = Vec3(1, 2, 3), m.end = Vec3(4, 5, 6), m.axis = axis;
+    for (const double shortOf : {0.0, 1e-13, 1e-7}) {
+        INFO("the start axis " << shortOf << " rad short of opposite");
+        m.startAxis = glm::normalize(-std::cos(shortOf) * axis + std::sin(shortOf) * across);
+        if (shortOf < tol::kParallel) {
+            CHECK_THROWS_WITH(MotionLaw(m), Contains("opposite"));
+            continue;
+        }
+        const MotionLaw law(m);
+        // The turn's axis a0 x a1 is known to about machine epsilon over its length, sin(shortOf):
+        // the end pose's axis strays by as much.
+        CHECK(distance(law.pose(1.0).axis, axis) < 1e-15 / shortOf);
+        CHECK(distance(law.pose(0.0).axis, *m.startAxis) < 1e-15);
+        // Half way, the axis stands a quarter turn from both ends.
+        const Vec3 half = law.pose(0.5).axis;
+        CHECK(std::abs(glm::dot(half, axis)) < 1e-7);
+        CHECK(std::abs(glm::dot(half, *m.startAxis)) < 1e-7);
+    }
 }
 
 TEST_CASE("machine: description files and their errors", "[machine]") {

@@ -132,10 +132,14 @@ TEST_CASE("turning move box: fixed axes, a turn through +z and opposite axes", "
     CHECK(band.lo.z == Approx(20 * std::sqrt(0.75) - 2.5));
     CHECK(band.hi.z == Approx(std::sqrt(2525.0)));
     CHECK(band.hi.x == Approx(turning.hi.x));
-    // Opposite axes: no great circle.
+    // Opposite axes, or within kParallel of opposite: no one great circle.
     m.startAxis = Vec3(0, 0, -1);
     m.axis = Vec3(0, 0, 1);
     CHECK_THROWS_WITH(turningMoveBox(m, 0, 50, 5), Catch::Matchers::Contains("opposite"));
+    m.startAxis = glm::normalize(Vec3(1e-13, 0, -1));
+    CHECK_THROWS_WITH(turningMoveBox(m, 0, 50, 5), Catch::Matchers::Contains("opposite"));
+    m.startAxis = glm::normalize(Vec3(1e-7, 0, -1));
+    CHECK_NOTHROW(turningMoveBox(m, 0, 50, 5));
 }
 
 TEST_CASE("turning move box: a machine's rotary moves, whole tools and bands above the tip", "[sweep][turning]") {

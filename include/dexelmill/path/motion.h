@@ -57,7 +57,8 @@ struct Twist {
 /// a machine move follows its RotaryMotion.
 class MotionLaw {
   public:
-    /// @throw Error if the move turns about more than kMaxTurns axes.
+    /// @throw Error if the move turns about more than kMaxTurns axes, or its axes are opposite
+    /// (no one great circle joins them).
     explicit MotionLaw(const Move& move);
 
     ToolPose pose(double u) const { return pose(phase(u)); }
