@@ -106,6 +106,30 @@ TEST_CASE("apt: a GOTO with a new i,j,k turns the axis during its move; non-unit
         CHECK(d.message.find("length 2") != std::string::npos);
     }
     CHECK(nonUnit == 1);
+    // FROM's axis and CIRCLE's are read alike: normalised, with a warning at the vector.
+    const struct {
+        const char* text;
+        int line, column;
+        const char* message;
+    } others[] = {
+        {"MULTAX\nCUTTER/10\nFROM/5,0,0,0,0,2\nGOTO/0,5,0\nFINI\n", 3, 12, "tool axis i,j,k of length 2"},
+        {"MULTAX\nCUTTER/10\nFROM/5,0,0\nCIRCLE/0,0,0,0,0,3,5\nGOTO/0,5,0\nFINI\n", 4, 14, "CIRCLE axis i,j,k of length 3"},
+    };
+    for (const auto& o : others) {
+        INFO(o.text);
+        const Program q = parseApt(o.text, "q.apt");
+        REQUIRE_FALSE(q.path.moves.empty());
+        CHECK(glm::length(q.path.moves.back().axis - Vec3(0, 0, 1)) < 1e-15);
+        int warned = 0;
+        for (const Diagnostic& d : q.diagnostics) {
+            if (d.message.find("not 1") == std::string::npos) continue;
+            ++warned;
+            CHECK(d.where.line == o.line);
+            CHECK(d.where.column == o.column);
+            CHECK(d.message.find(o.message) != std::string::npos);
+        }
+        CHECK(warned == 1);
+    }
 }
 
 TEST_CASE("apt: malformed programs give a parse error with file:line:col and the text",
@@ -136,6 +160,9 @@ TEST_CASE("apt: malformed programs give a parse error with file:line:col and the
         {"UNITS/FURLONGS\n", 1, "unknown units", "FURLONGS"},
         {"CUTTER/6,0,3,0,0,0,-5\nLOAD/TOOL,1\n", 1, "height must not be negative", "-5"},
         {"CUTTER/6,2,5,2,0,0,10\nLOAD/TOOL,1\n", 1, "no real tool", ""},
+        {"MULTAX\nCUTTER/6\nGOTO/1,2,3,0,0,1\nGOTO/4,5,6,0,0,0\n", 4, "tool axis i,j,k of zero length", "GOTO"},
+        {"CUTTER/6\nFROM/0,0,5,0,0,0\n", 2, "tool axis i,j,k of zero length", "FROM"},
+        {"CUTTER/6\nFROM/5,0,0\nCIRCLE/0,0,0,0,0,0,5\nGOTO/0,5,0\n", 3, "CIRCLE axis i,j,k of zero length", "CIRCLE"},
     };
     for (const Case& c : cases) {
         INFO(c.text);
