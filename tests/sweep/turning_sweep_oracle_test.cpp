@@ -348,10 +348,16 @@ TEST_CASE("turning sweep vs oracle: turns from 0.001 to 90 degrees", "[sweep][tu
 }
 
 TEST_CASE("turning sweep vs oracle: a pure rotation about the tip", "[sweep][turning]") {
+    // The rotation alone: a zero-length move that turns. Every other case keeps a travel of
+    // 1e-13 to 1e-5 mm, either side of the length below which a node's fixed-axis sweep takes
+    // its move as a static pose (tol::kZeroMove).
     std::mt19937_64 rng(20261126);
     Tally tally;
-    for (int i = 0, n = scaled(150); i < n; ++i)
-        checkCase(randomCase(rng, randomMove(rng, degrees(cases::uniform(rng, 0.5, 150)), 0.0)), tally, rng);
+    for (int i = 0, n = scaled(150); i < n; ++i) {
+        const double angle = degrees(cases::uniform(rng, 0.5, 150));
+        const double travel = i % 2 ? std::pow(10.0, cases::uniform(rng, -13.0, -5.0)) : 0.0;
+        checkCase(randomCase(rng, randomMove(rng, angle, travel)), tally, rng);
+    }
     report(tally);
 }
 
