@@ -153,7 +153,18 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     endTwist_ = law_.twist(endPhase_);
     midPhase_ = law_.phase(0.5);
     midPose_ = law_.pose(midPhase_);
-    // The static search closes its nodes from the first level whose growth is at most epsilon.
+    // The static search closes its nodes from the first level whose growth is at most epsilon,
+    // which must come by kMaxLevel. Readers keep positions within 1e9 mm and a move's turns
+    // within ten, so that a tool point travels at most about 6e10 mm: level 50 at the default
+    // tolerance.
+    if (!(std::ldexp(speed_, -(kMaxLevel + 1)) <= 2.0 * epsilon_)) {
+        char text[200];
+        std::snprintf(text, sizeof text,
+                      "a turning move whose tool points travel up to %g mm is beyond what its sweep resolves to "
+                      "%g mm",
+                      speed_, epsilon_);
+        throw Error(text);
+    }
     while (closingLevel_ < kMaxLevel && std::ldexp(speed_, -(closingLevel_ + 1)) > 2.0 * epsilon_) ++closingLevel_;
     chooseLinearNodes();
     if (!models_.empty()) return;

@@ -459,6 +459,21 @@ TEST_CASE("G-code: rotary words need a machine, and M428 / M429 switch the kinem
 
     o.machine = loadMachine("xyzac-trt");
     CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG1 B10\n", "r.ngc", o), Contains("no B axis"));
+    // An angle beyond 1e6 degrees, or a move turning more than ten turns, is refused where it is
+    // written; ten turns in one move, and 1e6 degrees reached move by move, are not.
+    CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG1 X1 A[10**200]\n", "r.ngc", o),
+                      Contains("r.ngc:2:7") && Contains("beyond the 1e6 degrees"));
+    CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG1 X1 C-1000001\n", "r.ngc", o), Contains("beyond the 1e6 degrees"));
+    CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0 C10\nG1 X1 C3610.5\n", "r.ngc", o),
+                      Contains("r.ngc:2:7") && Contains("turns 3600.5 degrees in one move"));
+    CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG91 G1 X1 C1800\nC-3601\n", "r.ngc", o),
+                      Contains("r.ngc:3:1") && Contains("turns -3601 degrees"));
+    CHECK_NOTHROW(parseGcode("G0 X0 Y0 Z0 C10\nG1 X1 C3610\n", "r.ngc", o));
+    {
+        std::string steps = "G0 X0 Y0 Z0\n";
+        for (int k = 1; k <= 277; ++k) steps += "G1 C" + std::to_string(k * 3600) + "\n";
+        CHECK_NOTHROW(parseGcode(steps + "G1 C1000000\n", "r.ngc", o));
+    }
     CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG2 X2 I1 C10\n", "r.ngc", o), Contains("r.ngc:2:") && Contains("G0/G1"));
     // Identity kinematics (the sim config's start): the joints are carried by the tables.
     const Program p = parseGcode("G0 X0 Y0 Z0 A0 C0\nG0 X10 C90\nG1 Z2\nM428\nG1 Z0\nG1 A-30 X12\nM429\nG1 Z5\n",

@@ -187,6 +187,19 @@ TEST_CASE("turning move box: a machine's rotary moves, whole tools and bands abo
     }
 }
 
+TEST_CASE("turning sweep: a move its search cannot resolve to epsilon is refused", "[sweep][turning]") {
+    // A tool point travelling 2^61 epsilon (4.6e14 mm at 1e-4) needs more than kMaxLevel levels;
+    // one travelling 1e10 mm needs 47.
+    const Tool tool = flatEndMill(6.0, {20.0, 30.0});
+    Move m;
+    m.axis = Vec3(0, 0, 1);
+    m.startAxis = glm::normalize(Vec3(0.1, 0, 1));
+    m.end = Vec3(5e14, 0, 0);
+    CHECK_THROWS_WITH(TurningSweep(tool, m), Catch::Matchers::Contains("beyond what its sweep resolves"));
+    m.end = Vec3(1e10, 0, 0);
+    CHECK_NOTHROW(TurningSweep(tool, m));
+}
+
 TEST_CASE("turning sweep: the least of a parabola through three samples, and the node polynomial's largest",
           "[sweep][turning]") {
     // Against dense sampling of the Lagrange form, which shares no code with Newton's: the least

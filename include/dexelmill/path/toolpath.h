@@ -25,6 +25,17 @@ namespace dexelmill {
 /// rounding of the move's coordinates (1e-7 mm at 1e9 mm) below the sweep's accuracy.
 constexpr double kMaxCoordinateMm = 1e9;
 
+/// @brief The largest rotary angle (degrees) a program may turn an axis to; readers reject one
+/// beyond it with a located error. 2,777 turns either way: its rounding (1e-10 degrees) moves a
+/// tool point 1 m from the axis by 2e-9 mm.
+constexpr double kMaxRotaryDegrees = 1e6;
+
+/// @brief The most (degrees) one move may turn a rotary axis; readers reject more with a located
+/// error. A turning sweep's work grows with the path its tool points travel: one move of 360
+/// degrees under a flat D4 at 0.5 mm takes seconds, so ten turns in one block (minutes) is as
+/// far as a program is served, and an absurd angle cannot run the job out of time and memory.
+constexpr double kMaxMoveTurnDegrees = 3600.0;
+
 /// @brief Whether every coordinate of p is finite and within kMaxCoordinateMm.
 inline bool withinReach(const Vec3& p) {
     return std::abs(p.x) <= kMaxCoordinateMm && std::abs(p.y) <= kMaxCoordinateMm && std::abs(p.z) <= kMaxCoordinateMm;

@@ -87,7 +87,8 @@ class TurningSweep {
   public:
     /// @brief Sweeps `tool` along `move`, whose axis turns from `*move.startAxis` to `move.axis`
     /// (a move with no start axis is swept with its one axis).
-    /// @throw Error if the axes are opposite or epsilon is below kMinTurnTolerance or not finite.
+    /// @throw Error if the axes are opposite, epsilon is below kMinTurnTolerance or not finite, or
+    /// the tool travels too far for the search to resolve to epsilon (kMaxLevel).
     TurningSweep(const Tool& tool, const Move& move, double epsilon = kDefaultTurnTolerance);
 
     /// @brief The tool pose at move parameter u in [0, 1].

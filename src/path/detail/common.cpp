@@ -137,6 +137,12 @@ std::string tooManyMoves(std::size_t limit, const std::string& reason) {
     return m;
 }
 
+std::string formatNumber(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    return buf;
+}
+
 std::string formatPoint(const Vec3& p) {
     char buf[96];
     std::snprintf(buf, sizeof buf, "(%.6g, %.6g, %.6g)", p.x, p.y, p.z);

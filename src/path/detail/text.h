@@ -44,6 +44,9 @@ std::string joinPath(const std::string& dir, const std::string& name);
 /// the limit (empty: the reader's own).
 std::string tooManyMoves(std::size_t limit, const std::string& reason);
 
+/// @brief A number to six significant digits.
+std::string formatNumber(double v);
+
 /// @brief A point as "(x, y, z)", six significant digits each.
 std::string formatPoint(const Vec3& p);
 

@@ -115,6 +115,16 @@ RotaryAngles Interpreter::rotaryTarget(Block& b, bool incremental) {
         const double v = b.get(c);  // degrees, whatever the length units
         const double target = incremental ? angles_.deg[a] + v : v + rotaryOffset_[std::size_t(a)];
         if (!std::isfinite(target)) fail(b.col[a], "rotary axis " + std::string(1, c) + " to a non-finite angle", tokenAt(b.col[a]));
+        if (std::abs(target) > kMaxRotaryDegrees)
+            fail(b.col[a],
+                 "rotary axis " + std::string(1, c) + " to " + detail::formatNumber(target) +
+                     " degrees, beyond the 1e6 degrees a program may turn an axis to",
+                 tokenAt(b.col[a]));
+        if (std::abs(target - angles_.deg[a]) > kMaxMoveTurnDegrees)
+            fail(b.col[a],
+                 "rotary axis " + std::string(1, c) + " turns " + detail::formatNumber(target - angles_.deg[a]) +
+                     " degrees in one move; at most 3600 (ten turns) are supported: split the move",
+                 tokenAt(b.col[a]));
         if (target == angles_.deg[a]) continue;
         if (!opt_.machine) {
             std::string names;
