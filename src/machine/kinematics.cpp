@@ -1,8 +1,11 @@
 #include "dexelmill/machine/kinematics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <initializer_list>
 #include <sstream>
+#include <string>
 
 #include <nlohmann/json.hpp>
 
@@ -84,6 +87,26 @@ Vec3 readVector(const nlohmann::json& j, const std::string& what, const SourceLo
     return v;
 }
 
+/// A string field of object j, `fallback` where it is absent.
+std::string readString(const nlohmann::json& j, const char* key, const std::string& fallback, const std::string& what,
+                       const SourceLocation& at) {
+    if (!j.contains(key)) return fallback;
+    if (!j[key].is_string()) throw ParseError(at, what + "\"" + key + "\" must be a string", j[key].dump());
+    return j[key].get<std::string>();
+}
+
+/// Refuses a key of object j outside `known`: a misspelt "pivot" would leave the pivot at the
+/// origin unnoticed.
+void onlyKnownKeys(const nlohmann::json& j, std::initializer_list<const char*> known, const std::string& what,
+                   const SourceLocation& at) {
+    for (auto it = j.begin(); it != j.end(); ++it)
+        if (std::none_of(known.begin(), known.end(), [&](const char* k) { return it.key() == k; })) {
+            std::string names;
+            for (const char* k : known) names += std::string(names.empty() ? "" : ", ") + "\"" + k + "\"";
+            throw ParseError(at, what + "unknown key \"" + it.key() + "\" (known: " + names + ")", it.key());
+        }
+}
+
 }  // namespace
 
 bool Machine::has(char letter) const {
@@ -152,11 +175,15 @@ Machine parseMachine(const std::string& text, const std::string& fileName) {
             else ++at.column;
         }
         throw ParseError(at, "not valid JSON for a machine description");
+    } catch (const nlohmann::json::exception&) {  // a number beyond double's range, as 1e999
+        throw ParseError(SourceLocation{fileName, 0, 0}, "not valid JSON for a machine description: a number "
+                                                          "beyond the range of a double");
     }
     const SourceLocation at{fileName, 0, 0};
     if (!j.is_object()) throw ParseError(at, "a machine description must be a JSON object");
+    onlyKnownKeys(j, {"name", "tcp_at_start", "axes"}, "", at);
     Machine m;
-    m.name = j.value("name", fileName);
+    m.name = readString(j, "name", fileName, "", at);
     if (j.contains("tcp_at_start")) {
         if (!j["tcp_at_start"].is_boolean()) throw ParseError(at, "\"tcp_at_start\" must be true or false");
         m.tcpAtStart = j["tcp_at_start"].get<bool>();
@@ -165,19 +192,26 @@ Machine parseMachine(const std::string& text, const std::string& fileName) {
         throw ParseError(at, "a machine description needs \"axes\": a non-empty array of rotary axes");
     for (const auto& a : j["axes"]) {
         RotaryAxisSpec s;
-        const std::string letter = a.is_object() ? a.value("letter", std::string()) : std::string();
+        if (!a.is_object()) throw ParseError(at, "each axis must be a JSON object", a.dump());
+        const std::string letter = readString(a, "letter", std::string(), "an axis's ", at);
         if (letter != "A" && letter != "B" && letter != "C")
             throw ParseError(at, "each axis needs \"letter\": \"A\", \"B\" or \"C\"", a.dump());
         s.letter = letter[0];
         if (m.has(s.letter)) throw ParseError(at, "rotary axis " + letter + " is described twice");
-        const std::string on = a.value("on", std::string("table"));
+        onlyKnownKeys(a, {"letter", "on", "direction", "pivot"}, "axis " + letter + ": ", at);
+        const std::string on = readString(a, "on", "table", "axis " + letter + ": ", at);
         if (on != "table" && on != "head") throw ParseError(at, "axis " + letter + ": \"on\" must be \"table\" or \"head\"", on);
         s.onTable = on == "table";
         if (!a.contains("direction")) throw ParseError(at, "axis " + letter + " needs a \"direction\"");
         const Vec3 d = readVector(a["direction"], "axis " + letter + "'s direction", at);
         if (glm::length(d) <= tol::kLength) throw ParseError(at, "axis " + letter + "'s direction is zero");
-        s.direction = glm::normalize(d);
+        // Scaled by its largest component first: the length of (1e300, 0, 0) overflows.
+        s.direction = glm::normalize(d / std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}));
         if (a.contains("pivot")) s.pivot = readVector(a["pivot"], "axis " + letter + "'s pivot", at);
+        // A pivot far out rounds away the positions it turns (1e300 - x is 1e300).
+        if (std::max({std::abs(s.pivot.x), std::abs(s.pivot.y), std::abs(s.pivot.z)}) > kMaxPivotMm)
+            throw ParseError(at, "axis " + letter + "'s pivot lies beyond the 1e9 mm a machine may reach",
+                             a["pivot"].dump());
         m.axes.push_back(s);
     }
     return m;

@@ -448,6 +448,33 @@ TEST_CASE("machine: description files and their errors", "[machine]") {
     CHECK_THROWS_WITH(parseMachine(R"({"axes": [{"letter": "D", "direction": [1, 0, 0]}]})", "d.json"), Contains("letter"));
     CHECK_THROWS_WITH(parseMachine(R"({"axes": [{"letter": "A", "direction": [0, 0, 0]}]})", "d.json"), Contains("zero"));
     CHECK_THROWS_WITH(loadMachine("no-such-machine"), Contains("xyzac-trt") && Contains("no-such-machine"));
+    // Wrong types, unknown keys and numbers beyond a double's range: each a located error of this
+    // reader's own, never the JSON library's.
+    const struct {
+        const char* text;
+        const char* message;
+    } bad[] = {
+        {R"({"name": 5, "axes": [{"letter": "A", "direction": [1, 0, 0]}]})", "\"name\" must be a string"},
+        {R"({"axes": [{"letter": 5, "direction": [1, 0, 0]}]})", "\"letter\" must be a string"},
+        {R"({"axes": [{"letter": "A", "on": 5, "direction": [1, 0, 0]}]})", "axis A: \"on\" must be a string"},
+        {R"({"axes": [5]})", "each axis must be a JSON object"},
+        {R"({"axes": [{"letter": "A", "direction": [1, 0, 0], "pivto": [0, 0, 5]}]})", "axis A: unknown key \"pivto\""},
+        {R"({"axis": [{"letter": "A", "direction": [1, 0, 0]}], "axes": [{"letter": "A", "direction": [1, 0, 0]}]})",
+         "unknown key \"axis\""},
+        {R"({"axes": [{"letter": "A", "direction": [1e999, 0, 0]}]})", "beyond the range of a double"},
+        {R"({"axes": [{"letter": "A", "direction": [1, 0, 0], "pivot": [1e300, 0, 0]}]})", "pivot lies beyond"},
+    };
+    for (const auto& b : bad) {
+        INFO(b.text);
+        CHECK_THROWS_WITH(parseMachine(b.text, "m.json"), Contains("m.json: error") && Contains(b.message));
+    }
+    // A direction so long that its length overflows is still a direction.
+    const Machine h = parseMachine(R"({"axes": [{"letter": "A", "direction": [1e300, 0, 0]},
+                                                {"letter": "C", "direction": [0, -1e300, -1e300]}]})",
+                                   "h.json");
+    REQUIRE(h.axes.size() == 2);
+    CHECK(h.axes[0].direction == Vec3(1, 0, 0));
+    CHECK(distance(h.axes[1].direction, -Vec3(0, 1, 1) / std::sqrt(2.0)) < 1e-15);
 }
 
 TEST_CASE("G-code: rotary words need a machine, and M428 / M429 switch the kinematics", "[machine][gcode]") {

@@ -26,6 +26,11 @@
 
 namespace dexelmill {
 
+/// @brief The farthest (mm, per coordinate) a machine description may put a pivot: as far as a
+/// program's positions may reach (kMaxCoordinateMm), where rounding still keeps what the axis
+/// turns (a pivot at 1e300 mm would round every position it turns to itself).
+constexpr double kMaxPivotMm = 1e9;
+
 /// @brief One rotary axis of a machine.
 struct RotaryAxisSpec {
     char letter = 'A';              ///< 'A', 'B' or 'C'
