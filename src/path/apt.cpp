@@ -4,6 +4,7 @@
 /// statement on the next line, `$$` starts a comment.
 #include "dexelmill/path/apt.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -340,10 +341,14 @@ private:
     /// of unit length is normalised with a warning (`what` names it).
     Vec3 axisOf(const Statement& s, const std::vector<double>& v, std::size_t first, const char* what) {
         Vec3 a(v[first], v[first + 1], v[first + 2]);
-        const double given = glm::length(a);
+        // Lengths taken over the largest component, so that (1e300, 0, 0) does not overflow.
+        const double big = std::max({std::abs(a.x), std::abs(a.y), std::abs(a.z)});
+        if (!(big > 0.0)) fail(s, std::string(what) + " i,j,k of zero length");
+        a /= big;
+        const double given = big * glm::length(a);
         if (!world_ && haveCsys_) a = rot_[0] * a.x + rot_[1] * a.y + rot_[2] * a.z;
         const double len = glm::length(a);
-        if (!(len > 1e-9)) fail(s, std::string(what) + " i,j,k of zero length");
+        if (!(big * len > 1e-9)) fail(s, std::string(what) + " i,j,k of zero length");
         if (std::abs(given - 1.0) > kUnitVectorRounding) {
             std::ostringstream msg;
             msg << what << " i,j,k of length " << given << ", not 1: taken as the unit vector along it";

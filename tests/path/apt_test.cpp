@@ -114,6 +114,8 @@ TEST_CASE("apt: a GOTO with a new i,j,k turns the axis during its move; non-unit
     } others[] = {
         {"MULTAX\nCUTTER/10\nFROM/5,0,0,0,0,2\nGOTO/0,5,0\nFINI\n", 3, 12, "tool axis i,j,k of length 2"},
         {"MULTAX\nCUTTER/10\nFROM/5,0,0\nCIRCLE/0,0,0,0,0,3,5\nGOTO/0,5,0\nFINI\n", 4, 14, "CIRCLE axis i,j,k of length 3"},
+        // A vector whose length overflows a double is still a direction.
+        {"MULTAX\nCUTTER/10\nFROM/5,0,0\nGOTO/6,0,0,0,0,1e300\nFINI\n", 4, 12, "tool axis i,j,k of length 1e+300"},
     };
     for (const auto& o : others) {
         INFO(o.text);
