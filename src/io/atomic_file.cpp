@@ -51,6 +51,14 @@ void syncFile(const std::string& path) {
 
 }  // namespace
 
+void checkWritable(const std::string& target) {
+    if (target.empty()) throw Error("cannot write a file with an empty name");
+    std::error_code ec;
+    if (std::filesystem::is_directory(target, ec)) throw Error("cannot write '" + target + "': it is a folder");
+    const std::string temp = createTemporary(std::filesystem::path(target));
+    std::filesystem::remove(temp, ec);
+}
+
 void writeFileAtomically(const std::string& target,
                          const std::function<void(const std::string& tempPath)>& write) {
     if (target.empty()) throw Error("cannot write a file with an empty name");

@@ -68,6 +68,9 @@ void checkOutputs(const SimulateOptions& o) {
         throw Error("output '" + o.gougeCsvPath + "': the gouges are written as .csv");
     if (!(o.gougeTolerance >= 0.0) || !std::isfinite(o.gougeTolerance))
         throw Error("the gouge tolerance must be a finite distance of 0 mm or more");
+    // A folder that is missing or not writable is found now, not after the cut.
+    for (const std::string* path : {&o.meshPath, &o.vdbPath, &o.pngPath, &o.gougeCsvPath, &o.deviationPlyPath, &o.reportPath})
+        if (!path->empty()) checkWritable(*path);
     if (!(o.excessTolerance >= 0.0) || !std::isfinite(o.excessTolerance))
         throw Error("the excess tolerance must be a finite distance of 0 mm or more");
 }

@@ -183,6 +183,18 @@ TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
     CHECK_THAT(r.err, Contains("nowhere.ngc"));
     r = cli("info nowhere.apt");
     CHECK(r.code == 1);
+    // An output in a folder that is not there fails before the cut, naming it; the other outputs
+    // are not written.
+    cli.file("ok.ngc", "G21\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X5\n");
+    r = cli("simulate ok.ngc --tool flat:d=3 --stock box:0,0,-5,10,10,0 -o part.stl --report missing/r.json");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("missing/r.json") && Contains("No such file or directory"));
+    CHECK_FALSE(fs::exists(cli.dir() / "part.stl"));
+    fs::create_directories(cli.dir() / "sub");
+    r = cli("simulate ok.ngc --tool flat:d=3 --stock box:0,0,-5,10,10,0 -o part.stl --report sub");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("'sub': it is a folder"));
+    CHECK_FALSE(fs::exists(cli.dir() / "part.stl"));
 }
 
 TEST_CASE("every stage honours --threads N: the job starts at most N - 1 workers", "[cli][threads]") {

@@ -18,6 +18,11 @@ namespace dexelmill {
 void writeFileAtomically(const std::string& target,
                          const std::function<void(const std::string& tempPath)>& write);
 
+/// @brief Fails now, rather than after a long run, where writeFileAtomically(target) could not
+/// start: it creates and removes a temporary file beside `target`, which must not be a folder.
+/// @throw Error naming `target` and the reason.
+void checkWritable(const std::string& target);
+
 /// @brief writeFileAtomically with a binary std::ostream on the temporary file.
 /// @throw Error if the stream fails at any point.
 void writeStreamAtomically(const std::string& target,
