@@ -526,4 +526,23 @@ TEST_CASE("G-code: rotary words need a machine, and M428 / M429 switch the kinem
     CHECK(distance(mv[4].end, xyzacForward(Vec3(joints.x, joints.y, 5), -30, 90)) < 1e-9);
     CHECK(p.rotaryRanges[0].lo == -30);
     CHECK(p.rotaryRanges[2].hi == 90);
+
+    // Work offsets of the rotary axes: G10 L2 sets G54's C offset to 30, so C0 turns the table to
+    // 30; L20 makes the current 30 read as 5 (offset 25), so C10 goes to 35; G92 then makes 35
+    // read as 0 (its own offset 10), so C5 goes to 40. A reset to zero offsets is no move at all.
+    const Program w = parseGcode("G0 X0 Y0 Z0 A0 C0\nG10 L2 P1 X0 Y0 Z0 A0 C0\nG10 L2 P1 C30\nG1 X1 C0\n"
+                                 "G10 L20 P1 C5\nG1 X2 C10\nG92 C0\nG1 X3 C5\n",
+                                 "w.ngc", o);
+    REQUIRE(w.path.moves.size() == 3);
+    const double ends[3] = {30, 35, 40};
+    for (int k = 0; k < 3; ++k) {
+        INFO("move " << k);
+        REQUIRE(w.path.moves[std::size_t(k)].rotary);
+        RotaryAngles end;
+        end['C'] = ends[k];
+        CHECK(distance(w.path.moves[std::size_t(k)].axis, o.machine->toolAxis(end)) < 1e-15);
+        CHECK(distance(w.path.moves[std::size_t(k)].end, xyzacForward(Vec3(k + 1.0, 0, 0), 0, ends[k])) < 1e-12);
+    }
+    CHECK(w.rotaryRanges[2].hi == 40);
+    CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG10 L2 P1 B5\n", "w.ngc", o), Contains("w.ngc:2:") && Contains("no B axis"));
 }

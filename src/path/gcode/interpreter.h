@@ -353,6 +353,8 @@ private:
     int retract_ = 980;
     int coordSys_ = 0;
     std::array<Vec3, 9> g5x_{};
+    /// G54..G59.3's offsets of the rotary axes A, B, C (degrees, set by G10 L2 / L20).
+    std::array<std::array<double, 3>, 9> g5xRotary_{};
     Vec3 g92_{0.0};
     Vec3 mpos_{0.0};
     /// Which coordinates of the position the program has set, and whether all three are.
@@ -363,7 +365,8 @@ private:
     /// Tool centre point control: positions are the tip in the part frame, not joints.
     bool tcp_ = false;
     bool tcpByG434_ = false;
-    /// G92 / G52 offsets of the rotary axes (degrees): machine angle = programmed + offset.
+    /// G92 / G52 offsets of the rotary axes (degrees): machine angle = programmed + this offset +
+    /// the coordinate system's (g5xRotary_).
     std::array<double, 3> rotaryOffset_{0.0, 0.0, 0.0};  ///< TCP came from G43.4, so G49 ends it
     Vec3 baseAxis_{0, 0, 1};
     Vec3 axis_{0, 0, 1};

@@ -113,7 +113,8 @@ RotaryAngles Interpreter::rotaryTarget(Block& b, bool incremental) {
         const char c = char('A' + a);
         if (!b.has(c)) continue;
         const double v = b.get(c);  // degrees, whatever the length units
-        const double target = incremental ? angles_.deg[a] + v : v + rotaryOffset_[std::size_t(a)];
+        const double target =
+            incremental ? angles_.deg[a] + v : v + rotaryOffset_[std::size_t(a)] + g5xRotary_[std::size_t(coordSys_)][std::size_t(a)];
         if (!std::isfinite(target)) fail(b.col[a], "rotary axis " + std::string(1, c) + " to a non-finite angle", tokenAt(b.col[a]));
         if (std::abs(target) > kMaxRotaryDegrees)
             fail(b.col[a],
@@ -188,7 +189,21 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         const int cs = p == 0 ? coordSys_ : p - 1;
         if (b.has('R') && b.get('R') != 0.0)
             fail(b.col['R' - 'A'], "G10 R (XY rotation of a coordinate system) is not supported", tokenAt(b.col['R' - 'A']));
-        checkRotary(b, false);
+        // A rotary axis's offset in that system: L2 sets it, L20 makes the current angle read as
+        // the value given there (LinuxCNC's parameters 5224 to 5226, A to C, for G54).
+        for (int a = 0; a < 3; ++a) {
+            const char c = char('A' + a);
+            if (!b.has(c)) continue;
+            if (opt_.machine && !opt_.machine->has(c))
+                fail(b.col[a], "the machine '" + opt_.machine->name + "' has no " + std::string(1, c) + " axis", tokenAt(b.col[a]));
+            const double v = b.get(c);
+            double& offset = g5xRotary_[std::size_t(cs)][std::size_t(a)];
+            offset = l == 2 ? v : angles_.deg[a] - rotaryOffset_[std::size_t(a)] - v;
+            if (!std::isfinite(offset)) fail(b.col[a], "G10: a non-finite rotary offset", tokenAt(b.col[a]));
+            store(params_[std::size_t(5224 + 20 * cs + a)], offset);
+        }
+        for (char c : {'U', 'V', 'W'})
+            if (b.has(c)) fail(b.col[c - 'A'], "U/V/W axes are not supported", tokenAt(b.col[c - 'A']));
         static const char letters[3] = {'X', 'Y', 'Z'};
         if (l == 20 && twp_) fail(0, "G10 L20 with an active G68.2 is not supported", "G10");
         for (int a = 0; a < 3; ++a) {
@@ -237,7 +252,8 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
                 if (!opt_.machine->has(c))
                     fail(b.col[a], "the machine '" + opt_.machine->name + "' has no " + std::string(1, c) + " axis", tokenAt(b.col[a]));
                 const double v = b.get(c);
-                rotaryOffset_[std::size_t(a)] = code == 920 ? angles_.deg[a] - v : v;
+                rotaryOffset_[std::size_t(a)] =
+                    code == 920 ? angles_.deg[a] - g5xRotary_[std::size_t(coordSys_)][std::size_t(a)] - v : v;
             }
         } else {
             checkRotary(b, false);
