@@ -62,8 +62,11 @@ void printProgram(const Program& p) {
     printBox("cutting", cutting);
     for (const auto& [n, t] : p.tools) std::printf("%-14s T%d: %s\n", "tool", n, t.description().c_str());
     std::printf("%-14s %zu\n", "warnings", p.diagnostics.size());
-    for (std::size_t i = 0; i < p.diagnostics.size() && i < 10; ++i)
+    constexpr std::size_t kShown = 10;
+    for (std::size_t i = 0; i < p.diagnostics.size() && i < kShown; ++i)
         std::printf("  %s: %s\n", p.diagnostics[i].where.str().c_str(), p.diagnostics[i].message.c_str());
+    if (p.diagnostics.size() > kShown)
+        std::printf("  ... and %zu more ('simulate' prints them all)\n", p.diagnostics.size() - kShown);
 }
 
 }  // namespace

@@ -296,8 +296,18 @@ Program readProgram(const std::string& path, const GcodeOptions& gcode, const Ap
         const Project project = parseCamoticsProject(text, path, detail::directoryOf(path));
         return runProject(project, gcode);
     }
-    case ProgramKind::Apt:
-        return parseApt(text, path, apt);
+    case ProgramKind::Apt: {
+        Program p = parseApt(text, path, apt);
+        // An APT CL file gives the tool axis in the part frame itself: a machine has nothing to do.
+        if (gcode.machine) {
+            Diagnostic d;
+            d.where = SourceLocation{path, 0, 0};
+            d.message = "--machine " + gcode.machine->name +
+                        " is not used: an APT CL file gives the tool axis in the part frame (GOTO's i,j,k)";
+            p.diagnostics.insert(p.diagnostics.begin(), d);
+        }
+        return p;
+    }
     case ProgramKind::Gcode:
     default: {
         Program p = parseGcode(text, path, gcode);

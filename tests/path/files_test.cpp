@@ -12,6 +12,7 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/path/camotics.h"
+#include "dexelmill/machine/kinematics.h"
 #include "dexelmill/path/gcode.h"
 #include "support/scratch.h"
 
@@ -84,6 +85,13 @@ TEST_CASE("files: a byte-order mark and CR, LF or CRLF line ends read alike", "[
     const Program a = readProgram(dir.write("part.apt", bom + apt));
     REQUIRE(a.path.moves.size() == 2);
     CHECK(a.path.moves.back().source.line == 5);
+    // A machine has nothing to do with APT, whose GOTOs give the axis in the part frame: said so.
+    GcodeOptions withMachine;
+    withMachine.machine = loadMachine("xyzac-trt");
+    const Program am = readProgram(dir.write("machine.apt", apt), withMachine);
+    REQUIRE_FALSE(am.diagnostics.empty());
+    CHECK_THAT(am.diagnostics.front().message, Catch::Matchers::Contains("--machine xyzac-trt is not used"));
+    CHECK(movesOf(am) == movesOf(a));
     dir.write("p.ngc", join("\r\n"));
     const Program project =
         readProgram(dir.write("p.camotics", bom + "{\r\"units\": \"metric\",\r\"files\": [\"p.ngc\"]\r}\r"));
