@@ -226,11 +226,30 @@ double MotionLaw::axisTurnBound() const {
     return std::min(rates, largest + rates * rates / (2.0 * kAxisTurnSamples));
 }
 
+// Identity kinematics with tables only: the point v (machine frame, |v| <= reach) sits at
+// y = z_0, z_i = c_i + R_i(u) (z_{i+1} - c_i), z_n = x(u) + v with x linear (x' = F, x'' = 0). So
+//   z_i' = R_i' (z_{i+1} - c_i) + R_i z_{i+1}',
+//   z_i'' = R_i'' (z_{i+1} - c_i) + 2 R_i' z_{i+1}' + R_i z_{i+1}'',
+// and with |R_i' q| <= w_i |q|, |R_i'' q| <= w_i^2 |q| and rho_i >= |z_{i+1} - c_i| as in
+// chainBound: |z_i'| <= w_i rho_i + |z_{i+1}'|, |z_i''| <= w_i^2 rho_i + 2 w_i |z_{i+1}'| + |z_{i+1}''|,
+// from |z_n'| = |F| and |z_n''| = 0. With every rho_i >= reach this is at least (sum_i w_i)^2
+// reach, so at reach 1 it also bounds |a''|.
 double MotionLaw::axisPointAccelerationBound(double reach) const {
-    if (carried_ || !heads_.empty()) return std::numeric_limits<double>::infinity();
+    if (!heads_.empty()) return std::numeric_limits<double>::infinity();
     double rate = 0.0;
     for (const RotaryTurn& t : turns_) rate += std::abs(t.to - t.from);
-    return rate * rate * reach;
+    if (!carried_) return rate * rate * reach;
+    if (turns_.empty()) return 0.0;
+    const Vec3& last = turns_.back().pivot;
+    double rho = std::max(glm::length(machineStart_ - last), glm::length(machineStart_ + machineFeed_ - last)) + reach;
+    double speed = glm::length(machineFeed_), accel = 0.0;
+    for (std::size_t i = turns_.size(); i-- > 0;) {
+        if (i + 1 < turns_.size()) rho += glm::length(turns_[i + 1].pivot - turns_[i].pivot);
+        const double w = std::abs(turns_[i].to - turns_[i].from);
+        accel += w * w * rho + 2.0 * w * speed;
+        speed += w * rho;
+    }
+    return accel;
 }
 
 double MotionLaw::axisJerkBound() const {

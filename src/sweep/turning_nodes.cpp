@@ -212,7 +212,7 @@ std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, 
 }
 
 void TurningSweep::chooseLinearNodes() {
-    // Only a tip on the straight line bounds the pivot's bend (note h).
+    // Only where the law bounds the pivot's acceleration (note h): not where a head turns.
     if (!std::isfinite(law_.axisPointAccelerationBound(0.0))) return;
     const int deepest = std::min(kMaxLinearLevel, closingLevel_ - kLinearLevelsSaved);
     int anchorLevel = 0;

@@ -93,15 +93,17 @@ class MotionLaw {
     /// Never more than the sum of the turns' rates, which turnBound takes (motion.cpp).
     double axisTurnBound() const;
     /// @brief A bound on |y''(u)| (mm per unit u squared) over the move for the tool point y at
-    /// distance `reach` from the tip along the tool axis, when the tip runs on the straight line:
-    /// y = p(u) + Q(u) v with p'' = 0 and Q = R_0 ... R_{n-1}, each R_i a turn about a fixed
-    /// direction at the constant rate w_i, so |R_i'| = |w_i|, |R_i''| = w_i^2 and by the product
-    /// rule |Q''| <= (sum_i |w_i|)^2. Infinite when the machine carries the tip (identity
-    /// kinematics), whose curved path this does not bound.
+    /// distance `reach` from the tip along the tool axis, and at reach 1 a bound on |a''(u)|.
+    /// When the tip runs on the straight line, y = p(u) + Q(u) v with p'' = 0 and
+    /// Q = R_0 ... R_{n-1}, each R_i a turn about a fixed direction at the constant rate w_i, so
+    /// |R_i'| = |w_i|, |R_i''| = w_i^2 and by the product rule |Q''| <= (sum_i |w_i|)^2. When the
+    /// machine's tables carry the tip (identity kinematics), the tables' turns applied to the
+    /// joints' straight line, turn by turn (motion.cpp). Infinite when a head turns.
     double axisPointAccelerationBound(double reach) const;
     /// @brief A bound on |a'''(u)| over the move, a(u) = Q(u) a_0 the unit tool axis with Q as in
     /// axisPointAccelerationBound: each R_i has |R_i'''| = |w_i|^3, so by the product rule
-    /// |Q'''| <= (sum_i |w_i|)^3. Infinite where axisPointAccelerationBound is.
+    /// |Q'''| <= (sum_i |w_i|)^3. Infinite unless the tip runs on a straight line: the tests that
+    /// take it (turning_linear_search.cpp, note o) need that too.
     double axisJerkBound() const;
     /// @brief Whether the axis or the path is anything but a translation along the straight line.
     bool rotates() const { return !turns_.empty(); }
