@@ -157,6 +157,14 @@ SimulateOptions toOptions(const SimulateArgs& a) {
                       a.turnTolerance, kMinTurnTolerance);
         throw UsageError(text);
     }
+    if (a.turnTolerance > kMaxTurnTolerance) {
+        char text[300];
+        std::snprintf(text, sizeof text,
+                      "--turn-tolerance: %g mm would let a turning move be swept with one axis that far off; give "
+                      "%g mm or less",
+                      a.turnTolerance, kMaxTurnTolerance);
+        throw UsageError(text);
+    }
     o.turnTolerance = a.turnTolerance;
     o.machine = a.machine;
     if (!a.start.empty()) {
@@ -263,7 +271,7 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
     c->add_option("--turn-tolerance", a.turnTolerance,
                   "Tolerance of the sweep of a move whose tool axis turns (simultaneous 5-axis), in mm:\n"
                   "material deeper than this inside some pose of the tool is removed, and nothing the tool\n"
-                  "never reaches is removed. At least 1e-6; the time grows about as its inverse square root")
+                  "never reaches is removed. From 1e-6 to 0.1; the time grows about as its inverse square root")
         ->check(numberCheck(false))
         ->capture_default_str();
     c->add_option("--machine", a.machine,

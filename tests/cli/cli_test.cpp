@@ -309,6 +309,10 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     const Run tooFine = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 1e-9 --quiet");
     CHECK(tooFine.code == 2);
     CHECK_THAT(tooFine.err, Contains("--turn-tolerance: 1e-09 mm is finer than the stock keeps") && Contains("1e-06 mm or more"));
+    // So coarse that a turning move would be swept with one axis: refused too.
+    const Run tooCoarse = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 1e300 --quiet");
+    CHECK(tooCoarse.code == 2);
+    CHECK_THAT(tooCoarse.err, Contains("--turn-tolerance: 1e+300 mm") && Contains("0.1 mm or less"));
 }
 
 TEST_CASE("a study writes its table, CSV, plot and deviation meshes", "[cli][study]") {

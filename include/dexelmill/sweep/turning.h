@@ -37,6 +37,12 @@ constexpr double kDefaultTurnTolerance = 1e-4;
 /// 1e-6); the search of static poses grows about as epsilon^-1/2 (43 s at 1e-6).
 constexpr double kMinTurnTolerance = 1e-6;
 
+/// @brief The coarsest tolerance (mm) a job may ask of a turning move's sweep. A move whose turn
+/// moves no tool point by more than the tolerance is swept with its end axis (sweepsTurning): at
+/// 1e300 mm a table's 360-degree turn became a straight cut. 0.1 mm is coarser than any finishing
+/// tolerance of CAM.
+constexpr double kMaxTurnTolerance = 0.1;
+
 /// @brief How many linear nodes (turning.cpp, note h) the turning sweeps alive at once keep, by
 /// default: about 2 kB each, so 128 MiB. The cutting loop builds the sweeps of a batch of moves
 /// together, and ends a batch before its sweeps' trees of nodes could pass the budget
