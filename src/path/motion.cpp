@@ -252,6 +252,13 @@ double MotionLaw::axisPointAccelerationBound(double reach) const {
     return accel;
 }
 
+double MotionLaw::axisBendBound() const {
+    double rate = 0.0;
+    for (const std::vector<RotaryTurn>* chain : {&turns_, &heads_})
+        for (const RotaryTurn& t : *chain) rate += std::abs(t.to - t.from);
+    return rate * rate;
+}
+
 double MotionLaw::axisJerkBound() const {
     if (carried_ || !heads_.empty()) return std::numeric_limits<double>::infinity();
     double rate = 0.0;

@@ -114,7 +114,8 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
     // Every tool point lies within hypot(total length, max radius) of the tip (note a).
     axisTurn_ = law_.axisTurnBound();
     tipSpeed_ = law_.speedBound(0.0);
-    axisBend_ = law_.axisPointAccelerationBound(1.0);
+    axisBend_ = law_.axisBendBound();
+    pivotBend_ = law_.axisPointAccelerationBound(0.0);
     axisJerk_ = law_.axisJerkBound();
     const double reach = std::hypot(tool.totalLength(), tool.maxRadius());
     speed_ = std::min(law_.speedBound(reach), law_.speedBound(0.0) + axisTurn_ * reach);

@@ -72,7 +72,7 @@ void regulaFalsi(double ua, double ub, double fa, double fb, int steps, At&& at)
 //      from the axis. And c(u) - c(e) strays from its tangent +-tau c'(e) by at most K tau^2 / 2
 //      (K = MotionLaw::axisPointAccelerationBound(|h|)); with q = y - c(e) (|q| = r),
 //      (N - I) q = m x q + (1 - cos phi) k x (k x q), where m = a(e) x a(u) = sin(phi) k strays
-//      from +-tau a(e) x a'(e) by at most |a''| tau^2 / 2 (|a''| <= axisPointAccelerationBound(1))
+//      from +-tau a(e) x a'(e) by at most |a''| tau^2 / 2 (|a''| <= MotionLaw::axisBendBound)
 //      and 1 - cos phi <= omega^2 tau^2 / 2. So n.(y_u - y) <= +-tau n.v + (K + (|a''| + omega^2)
 //      r) tau^2 / 2, where v = c'(e) + (a x a') x q differs from the law's velocity at y
 //      (MotionLaw::velocity) by a spin about the axis, which moves y across the meridian plane n
@@ -178,7 +178,7 @@ void regulaFalsi(double ua, double ub, double fa, double fb, int steps, At&& at)
 //      H_z(u) = s (a(u).(z - p(u)) - h) is a smooth function of u alone, and where the tip runs on
 //      a straight line (p'' = 0, as note j asks) H''' = s (a'''.(z - p) - 3 a''.f), so
 //      |H'''| <= M = J |z - p|max + 3 K1 |f|, with J >= |a'''| (MotionLaw::axisJerkBound), K1 >=
-//      |a''| (axisPointAccelerationBound(1)) and |z - p(u)| largest at an end of the tip's segment.
+//      |a''| (MotionLaw::axisBendBound) and |z - p(u)| largest at an end of the tip's segment.
 //      The parabola P through H_z at three poses u_0 < u_1 < u_2 (the node's ends and a pose
 //      between) strays from H_z on [u_0, u_2] by at most M |(u - u_0)(u - u_1)(u - u_2)| / 6, the
 //      interpolation remainder, whose largest is at a root of its derivative. So where P's least on
@@ -231,7 +231,7 @@ double TurningSweep::LinearSearch::bendAt(double height, double off) const {
     const double turn = s_.axisTurn_;
     const double pivotSpeed = s_.tipSpeed_ + turn * std::abs(height);
     return turn * (pivotSpeed + turn * off) +
-           0.5 * (s_.law_.axisPointAccelerationBound(std::abs(height)) + (s_.axisBend_ + turn * turn) * off);
+           0.5 * (s_.pivotBend_ + s_.axisBend_ * std::abs(height) + (s_.axisBend_ + turn * turn) * off);
 }
 
 const TurningSweep::LinearSearch::Crossing& TurningSweep::LinearSearch::crossing(Solved& pose, std::size_t p,

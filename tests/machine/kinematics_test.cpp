@@ -198,6 +198,11 @@ TEST_CASE("machine: the acceleration bound of a tool point on the axis holds wit
             CHECK(glm::length(d2) <= carriedBound + kRounding);
             largest = std::max(largest, glm::length(d2));
         }
+        // It grows with the height up the axis at |a''|'s bound, as the sweep takes it
+        // (TurningSweep's pivot bend plus axisBendBound times the height).
+        for (const MotionLaw& law : {MotionLaw(drawn.move(ac, false)), MotionLaw(drawn.move(ac, true)), slerp})
+            CHECK(law.axisPointAccelerationBound(r) ==
+                  Approx(law.axisPointAccelerationBound(0.0) + law.axisBendBound() * r).epsilon(1e-12));
         // Not so loose that linear nodes would gain nothing: it takes each term at its largest over
         // the move, which these moves' differences reach to within a factor of 8 or less.
         CHECK(carriedBound <= 10.0 * largest);

@@ -100,6 +100,11 @@ class MotionLaw {
     /// machine's tables carry the tip (identity kinematics), the tables' turns applied to the
     /// joints' straight line, turn by turn (motion.cpp). Infinite when a head turns.
     double axisPointAccelerationBound(double reach) const;
+    /// @brief A bound on |a''(u)|, a(u) = Q(u) a_0 the unit tool axis (heads' turns included):
+    /// (sum_i |w_i|)^2, as for axisPointAccelerationBound. Where that is finite it grows with
+    /// reach at exactly this rate: axisPointAccelerationBound(r) = axisPointAccelerationBound(0) +
+    /// axisBendBound() r.
+    double axisBendBound() const;
     /// @brief A bound on |a'''(u)| over the move, a(u) = Q(u) a_0 the unit tool axis with Q as in
     /// axisPointAccelerationBound: each R_i has |R_i'''| = |w_i|^3, so by the product rule
     /// |Q'''| <= (sum_i |w_i|)^3. Infinite unless the tip runs on a straight line: the tests that

@@ -241,7 +241,9 @@ class TurningSweep {
     double speed_ = 0.0;
     double axisTurn_ = 0.0;  ///< MotionLaw::axisTurnBound
     double tipSpeed_ = 0.0;  ///< MotionLaw::speedBound(0): the tip's
-    double axisBend_ = 0.0;  ///< MotionLaw::axisPointAccelerationBound(1): |a''|
+    double axisBend_ = 0.0;  ///< MotionLaw::axisBendBound: |a''|
+    /// MotionLaw::axisPointAccelerationBound(0), the tip's: a point h up the axis adds axisBend_ h.
+    double pivotBend_ = 0.0;
     double axisJerk_ = 0.0;  ///< MotionLaw::axisJerkBound: |a'''|
     double epsilon_ = kDefaultTurnTolerance;
     Box bounds_;
