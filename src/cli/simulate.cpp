@@ -93,8 +93,9 @@ Affine parseTransform(const std::string& text) {
     return a;
 }
 
-
 std::optional<double> parseNumber(const std::string& text) {
+    // Decimal only: std::stod also reads "0x10" as 16.
+    if (text.find_first_not_of("0123456789+-.eE ") != std::string::npos) return std::nullopt;
     std::size_t used = 0;
     double v = 0.0;
     try {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <initializer_list>
 #include <sstream>
@@ -220,6 +221,9 @@ Machine parseMachine(const std::string& text, const std::string& fileName) {
 Machine loadMachine(const std::string& nameOrFile) {
     Machine m = builtin(nameOrFile);
     if (!m.name.empty()) return m;
+    std::error_code ec;
+    if (std::filesystem::is_directory(nameOrFile, ec))
+        throw Error("--machine '" + nameOrFile + "': a folder, not a machine description file");
     std::ifstream in(nameOrFile, std::ios::binary);
     if (!in) {
         std::string names;

@@ -120,13 +120,17 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
                                      {"--design-transform 1,2,3", "--design-transform needs --design"},
                                      {"--design d.stl --design-transform 1,2", "TX,TY,TZ or the 3 rows"},
                                      {"--design d.stl --design-transform 1,2,z", "'z' is not a number"},
-                                     {"--gouge-tolerance -1", "--gouge-tolerance"}}) {
+                                     {"--gouge-tolerance -1", "--gouge-tolerance"},
+                                     {"--stock box:0x10,0,0,20,20,5", "--stock box: '0x10' is not a number"}}) {
         INFO(args);
         r = cli(std::string("simulate ok.ngc --tool flat:d=3 ") + args);
         CHECK(r.code == 2);
         CHECK_THAT(r.err, Contains(says));
         CHECK_THAT(r.err, !Contains("Options::"));
     }
+    r = cli("simulate ok.ngc --tool flat:d=3 --machine .");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("--machine '.': a folder"));
 }
 
 namespace {
