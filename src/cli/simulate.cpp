@@ -150,20 +150,13 @@ SimulateOptions toOptions(const SimulateArgs& a) {
         throw UsageError(std::string("--families: ") + e.what());
     }
     o.chordTolerance = a.chordTolerance;
-    if (a.turnTolerance < kMinTurnTolerance) {
+    const bool tooFine = a.turnTolerance < kMinTurnTolerance;
+    if (tooFine || a.turnTolerance > kMaxTurnTolerance) {
         char text[300];
-        std::snprintf(text, sizeof text,
-                      "--turn-tolerance: %g mm is finer than the stock keeps (its dexel ends are floats, 8e-6 mm "
-                      "apart at 100 mm); give %g mm or more",
-                      a.turnTolerance, kMinTurnTolerance);
-        throw UsageError(text);
-    }
-    if (a.turnTolerance > kMaxTurnTolerance) {
-        char text[300];
-        std::snprintf(text, sizeof text,
-                      "--turn-tolerance: %g mm would let a turning move be swept with one axis that far off; give "
-                      "%g mm or less",
-                      a.turnTolerance, kMaxTurnTolerance);
+        std::snprintf(text, sizeof text, "--turn-tolerance: %g mm %s; give %g mm or %s", a.turnTolerance,
+                      tooFine ? "is finer than the stock keeps (its dexel ends are floats, 8e-6 mm apart at 100 mm)"
+                              : "would let a turning move be swept with one axis that far off",
+                      tooFine ? kMinTurnTolerance : kMaxTurnTolerance, tooFine ? "more" : "less");
         throw UsageError(text);
     }
     o.turnTolerance = a.turnTolerance;
