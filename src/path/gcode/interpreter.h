@@ -299,6 +299,8 @@ private:
     /// For blocks whose motion cannot turn a rotary axis (arcs, cycles, G28, offsets): fails if
     /// an A, B or C word would turn one.
     void checkRotary(Block& b, bool incremental);
+    /// Fails if the block has a U, V or W word.
+    void refuseUvw(Block& b);
     /// Switches tool centre point control (M428 / G43.4 on, M429 / G49 off), keeping the tool where
     /// it is: the position changes from joints to part-frame tip or back.
     void setTcp(bool on, int col, const char* code);

@@ -139,9 +139,13 @@ RotaryAngles Interpreter::rotaryTarget(Block& b, bool incremental) {
             fail(b.col[a], "the machine '" + opt_.machine->name + "' has no " + std::string(1, c) + " axis", tokenAt(b.col[a]));
         next.deg[a] = target;
     }
+    refuseUvw(b);
+    return next;
+}
+
+void Interpreter::refuseUvw(Block& b) {
     for (char c : {'U', 'V', 'W'})
         if (b.has(c)) fail(b.col[c - 'A'], "U/V/W axes are not supported", tokenAt(b.col[c - 'A']));
-    return next;
 }
 
 void Interpreter::checkRotary(Block& b, bool incremental) {
@@ -202,8 +206,7 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
             if (!std::isfinite(offset)) fail(b.col[a], "G10: a non-finite rotary offset", tokenAt(b.col[a]));
             store(params_[std::size_t(5224 + 20 * cs + a)], offset);
         }
-        for (char c : {'U', 'V', 'W'})
-            if (b.has(c)) fail(b.col[c - 'A'], "U/V/W axes are not supported", tokenAt(b.col[c - 'A']));
+        refuseUvw(b);
         static const char letters[3] = {'X', 'Y', 'Z'};
         if (l == 20 && twp_) fail(0, "G10 L20 with an active G68.2 is not supported", "G10");
         for (int a = 0; a < 3; ++a) {
