@@ -157,6 +157,11 @@ void checkNormals(const Case& c, NormalTally& t, double radius = kSmallestRadius
     const std::vector<LineHit> hits = sweep.intersect(c.line);
     const Vec3& w = c.line.dir;
     const auto in = [&](const Vec3& x) { return depthG(o, x).g >= 0.0; };
+    // localRadius's window, sqrt(2 epsilon rBound): it holds the points within sqrt(2 epsilon r)
+    // of the curve where T(u) touches S.
+    double rBound = 0.0;
+    for (const oracle::Part& part : c.model->parts) rBound = std::max(rBound, part.rBound);
+    const double window = std::sqrt(2.0 * c.epsilon * rBound) + kStep;
     for (const LineHit& hit : hits) {
         for (const bool hi : {false, true}) {
             ++t.ends;
@@ -203,13 +208,9 @@ void checkNormals(const Case& c, NormalTally& t, double radius = kSmallestRadius
             }
             ++t.checked;
             const double err = stencil::angle(normal, central);
-            // The radius near the end: the least within sqrt(2 epsilon rBound) of its height,
-            // which holds the points within sqrt(2 epsilon r) of the curve where T(u) touches S.
-            double rBound = 0.0;
-            for (const oracle::Part& part : c.model->parts) rBound = std::max(rBound, part.rBound);
+            // The radius near the end: the least within `window` of its height.
             const Vec3 end = c.line.at(v);
-            const double local =
-                localRadius(c, o, end, depthG(o, end).u, std::sqrt(2.0 * c.epsilon * rBound) + kStep);
+            const double local = localRadius(c, o, end, depthG(o, end).u, window);
             const double kappa = 1.0 / std::max(radius, local) + turn / kStep;
             const double allowed = kAngle + std::sqrt(4.0 * c.epsilon * kappa) + turn;
             t.worst = std::max(t.worst, err);
