@@ -226,29 +226,43 @@ double MotionLaw::axisTurnBound() const {
     return std::min(rates, largest + rates * rates / (2.0 * kAxisTurnSamples));
 }
 
-// Identity kinematics with tables only: the point v (machine frame, |v| <= reach) sits at
-// y = z_0, z_i = c_i + R_i(u) (z_{i+1} - c_i), z_n = x(u) + v with x linear (x' = F, x'' = 0). So
+// Identity kinematics: the tool point v (relative to the tip at every angle zero, |v| <= reach)
+// sits at y = z_0, z_i = c_i + R_i(u) (z_{i+1} - c_i) down the tables' chain, z_n = x(u) + h(u)
+// with x the joints' point, linear (x' = F, x'' = 0), and h = e_0 the heads' chain's image of v:
+// e_j = p_j + S_j(u) (e_{j+1} - p_j), e_m = v, still (e_m' = e_m'' = 0). Down either chain
 //   z_i' = R_i' (z_{i+1} - c_i) + R_i z_{i+1}',
 //   z_i'' = R_i'' (z_{i+1} - c_i) + 2 R_i' z_{i+1}' + R_i z_{i+1}'',
 // and with |R_i' q| <= w_i |q|, |R_i'' q| <= w_i^2 |q| and rho_i >= |z_{i+1} - c_i| as in
-// chainBound: |z_i'| <= w_i rho_i + |z_{i+1}'|, |z_i''| <= w_i^2 rho_i + 2 w_i |z_{i+1}'| + |z_{i+1}''|,
-// from |z_n'| = |F| and |z_n''| = 0. With every rho_i >= reach this is at least (sum_i w_i)^2
-// reach, so at reach 1 it also bounds |a''|.
+// chainBound: |z_i'| <= w_i rho_i + |z_{i+1}'|, |z_i''| <= w_i^2 rho_i + 2 w_i |z_{i+1}'| + |z_{i+1}''|.
+// The heads' chain starts from 0 and 0 with sigma_{m-1} = reach + |p_{m-1}| >= |v - p_{m-1}|; the
+// tables' from |z_n'| <= |F| + |h'| and |z_n''| <= |h''|, with |z_n - c_{n-1}| at most the joints'
+// point's distance (largest at an end of its segment) plus |h| <= sigma_0 + |p_0| (turnBound's
+// headReach). Every rho_i and sigma_j is a constant plus reach, so by induction the bound is a
+// constant plus (sum of every turn's rate)^2 reach: axisBendBound's rate, as the header says.
 double MotionLaw::axisPointAccelerationBound(double reach) const {
-    if (!heads_.empty()) return std::numeric_limits<double>::infinity();
     double rate = 0.0;
-    for (const RotaryTurn& t : turns_) rate += std::abs(t.to - t.from);
+    for (const std::vector<RotaryTurn>* chain : {&turns_, &heads_})
+        for (const RotaryTurn& t : *chain) rate += std::abs(t.to - t.from);
     if (!carried_) return rate * rate * reach;
-    if (turns_.empty()) return 0.0;
+    // Down a chain from its innermost point, rho bounding that point's distance from the
+    // chain's last pivot: speed and accel, the bounds on |z'| and |z''|, grow turn by turn.
+    double speed = 0.0, accel = 0.0;
+    const auto down = [&](const std::vector<RotaryTurn>& chain, double rho) {
+        for (std::size_t i = chain.size(); i-- > 0;) {
+            if (i + 1 < chain.size()) rho += glm::length(chain[i + 1].pivot - chain[i].pivot);
+            const double w = std::abs(chain[i].to - chain[i].from);
+            accel += w * w * rho + 2.0 * w * speed;
+            speed += w * rho;
+        }
+        return rho;
+    };
+    const double headReach =
+        heads_.empty() ? reach : down(heads_, reach + glm::length(heads_.back().pivot)) + glm::length(heads_.front().pivot);
+    if (turns_.empty()) return accel;
+    speed += glm::length(machineFeed_);
     const Vec3& last = turns_.back().pivot;
-    double rho = std::max(glm::length(machineStart_ - last), glm::length(machineStart_ + machineFeed_ - last)) + reach;
-    double speed = glm::length(machineFeed_), accel = 0.0;
-    for (std::size_t i = turns_.size(); i-- > 0;) {
-        if (i + 1 < turns_.size()) rho += glm::length(turns_[i + 1].pivot - turns_[i].pivot);
-        const double w = std::abs(turns_[i].to - turns_[i].from);
-        accel += w * w * rho + 2.0 * w * speed;
-        speed += w * rho;
-    }
+    down(turns_,
+         std::max(glm::length(machineStart_ - last), glm::length(machineStart_ + machineFeed_ - last)) + headReach);
     return accel;
 }
 

@@ -361,6 +361,73 @@ TEST_CASE("machine: a head that turns in identity kinematics swings the tool abo
     CHECK(distance(g.end, forward(Vec3(10, 0, 0), Vec3(0.0), 30, 0)) < 1e-11);
 }
 
+TEST_CASE("machine: the acceleration bound holds where heads turn in identity kinematics", "[machine]") {
+    // Second central differences (h = 1e-3, as above) of tool points on and off the axis, from
+    // formulas written out here, never exceed the bound, which comes within a factor of 12 of
+    // them (10.5 at worst here: it takes each lever at its longest, the head's pivot's included,
+    // at every turn). Two machines: a table C under a head B pivoting 150 above the tip, whose tool point v
+    // of joints j sits at Rz(-C) (j + P + Ry(B) (v - P)), P = (0, 0, 150); and a head C about z
+    // pivoting 200 above the tip, carrying a head B about y pivoting 150 above it, at
+    // j + Q + Rz(C) (P + Ry(B) (v - P) - Q), Q = (0, 0, 200).
+    constexpr double kH = 1e-3, kRounding = 1e-6;
+    const Machine ht = parseMachine(
+        R"({"name": "ht", "axes": [{"letter": "C", "on": "table", "direction": [0, 0, 1]},
+            {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 150]}]})",
+        "ht.json");
+    const Machine hh = parseMachine(
+        R"({"name": "hh", "axes": [{"letter": "C", "on": "head", "direction": [0, 0, 1], "pivot": [0, 0, 200]},
+            {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 150]}]})",
+        "hh.json");
+    const auto ry = [](double deg, const Vec3& w) {
+        const double b = deg * kDeg;
+        return Vec3(std::cos(b) * w.x + std::sin(b) * w.z, w.y, -std::sin(b) * w.x + std::cos(b) * w.z);
+    };
+    const auto rz = [](double deg, const Vec3& w) {
+        const double c = deg * kDeg;
+        return Vec3(std::cos(c) * w.x - std::sin(c) * w.y, std::sin(c) * w.x + std::cos(c) * w.y, w.z);
+    };
+    const Vec3 P(0, 0, 150), Q(0, 0, 200);
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    for (int i = 0; i < 40; ++i) {
+        const bool tableAndHead = i % 2 == 0;
+        RotaryAngles from, to;
+        from['B'] = 60 * uni(rng), from['C'] = 180 * uni(rng);
+        to['B'] = from['B'] + 40 * uni(rng), to['C'] = from['C'] + (i % 4 < 2 ? 120 : 5) * uni(rng);
+        const Vec3 j0(50 * uni(rng), 50 * uni(rng), 50 * uni(rng)), j1(50 * uni(rng), 50 * uni(rng), 50 * uni(rng));
+        const Vec3 v(3 * uni(rng), 3 * uni(rng), 30 * (uni(rng) + 1));
+        const auto point = [&](double u, const Vec3& w) {
+            const double b = from['B'] + u * (to['B'] - from['B']), c = from['C'] + u * (to['C'] - from['C']);
+            const Vec3 j = j0 + u * (j1 - j0);
+            return tableAndHead ? rz(-c, j + P + ry(b, w - P)) : j + Q + rz(c, P + ry(b, w - P) - Q);
+        };
+        Move mv;
+        const Machine& m = tableAndHead ? ht : hh;
+        mv.start = m.partFromJoints(j0, from), mv.end = m.partFromJoints(j1, to);
+        mv.rotary = std::make_shared<const RotaryMotion>(m.motion(from, to, false, j0, j1));
+        REQUIRE(mv.rotary->tipCarried);
+        REQUIRE_FALSE(mv.rotary->headTurns.empty());
+        const MotionLaw law(mv);
+        const double bound = law.axisPointAccelerationBound(glm::length(v));
+        INFO("move " << i << (tableAndHead ? " (table and head)" : " (two heads)") << ", bound " << bound);
+        double largest = 0.0;
+        for (int k = 1; k < 40; ++k) {
+            const double u = k / 40.0;
+            // The formulas are the law's: its tip and axis.
+            const ToolPose p = law.pose(u);
+            CHECK(distance(p.tip, point(u, Vec3(0.0))) < 1e-10);
+            CHECK(distance(p.axis, point(u, Vec3(0, 0, 1)) - point(u, Vec3(0.0))) < 1e-12);
+            const Vec3 d2 = (point(u + kH, v) - 2.0 * point(u, v) + point(u - kH, v)) / (kH * kH);
+            CHECK(glm::length(d2) <= bound + kRounding);
+            largest = std::max(largest, glm::length(d2));
+        }
+        CHECK(bound <= 12.0 * largest);
+        // It grows with the reach at |a''|'s bound, as the sweep takes it (note j).
+        CHECK(law.axisPointAccelerationBound(7.0) ==
+              Approx(law.axisPointAccelerationBound(0.0) + law.axisBendBound() * 7.0).epsilon(1e-12));
+    }
+}
+
 TEST_CASE("motion: poses stepped by the angle sum stay within kPhaseStepError of the exact ones", "[machine]") {
     // Random bisection paths to the search's deepest level (60): each middle phase is stepped
     // from its node's start, as TurningSweep does, and its pose is compared with the pose made

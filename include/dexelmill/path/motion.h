@@ -96,9 +96,10 @@ class MotionLaw {
     /// distance `reach` from the tip along the tool axis, and at reach 1 a bound on |a''(u)|.
     /// When the tip runs on the straight line, y = p(u) + Q(u) v with p'' = 0 and
     /// Q = R_0 ... R_{n-1}, each R_i a turn about a fixed direction at the constant rate w_i, so
-    /// |R_i'| = |w_i|, |R_i''| = w_i^2 and by the product rule |Q''| <= (sum_i |w_i|)^2. When the
-    /// machine's tables carry the tip (identity kinematics), the tables' turns applied to the
-    /// joints' straight line, turn by turn (motion.cpp). Infinite when a head turns.
+    /// |R_i'| = |w_i|, |R_i''| = w_i^2 and by the product rule |Q''| <= (sum_i |w_i|)^2. In
+    /// identity kinematics, where the machine carries the tip on a curve, turn by turn down its
+    /// chains: the heads' turns swinging the tool about their pivots, then the tables' carrying
+    /// that to the part frame (motion.cpp).
     double axisPointAccelerationBound(double reach) const;
     /// @brief A bound on |a''(u)|, a(u) = Q(u) a_0 the unit tool axis (heads' turns included):
     /// (sum_i |w_i|)^2, as for axisPointAccelerationBound. Where that is finite it grows with
