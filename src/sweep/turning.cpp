@@ -264,13 +264,13 @@ Interval TurningSweep::bound(const Line& line) const {
 //      in B is more than epsilon / 2 whenever R > 7 epsilon / 4 (ballEnd asks for R > 2 epsilon).
 //      The search settles P's nodes against O with the capsules already in it: near the ball's
 //      surface P's grown intervals are empty or held, so the search descends only where P
-//      itself comes near the line. A move whose law has no bound K (a tip the machine carries)
-//      or would need more than kMaxChords chords is searched whole.
-//  (h) Linear nodes. Where the law bounds how fast the pivot's velocity turns (an APT MULTAX move
-//      or a machine's move under tool centre point control, whose tip runs on a straight line; in
-//      identity kinematics, a move of the tables, whose path of the tip they curve; not a head's
-//      turn), the tip's travel |f| is most of V on a typical move, and
-//      the search above pays for it at every level. A node can instead be taken as a fixed-axis
+//      itself comes near the line. A move that would need more than kMaxChords chords is searched
+//      whole.
+//  (h) Linear nodes. The law bounds how fast the pivot's velocity turns: by the axis's turn
+//      alone where the tip runs on a straight line (an APT MULTAX move, or a machine's move under
+//      tool centre point control), and turn by turn down the heads' and the tables' chains in
+//      identity kinematics, where the machine carries the tip on a curve. The tip's travel |f| is
+//      most of V on a typical move, and the search above pays for it at every level. A node can instead be taken as a fixed-axis
 //      linear move, which MoveSweep sweeps in closed form: the tool's axis point at height zc
 //      (the pivot, the middle of the part's heights) runs on the chord from c(ua) to c(ub), with
 //      c(u) = p(u) + zc a(u), and the axis is held at a(um), um the node's middle. Its pose M(u)

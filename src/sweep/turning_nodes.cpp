@@ -212,8 +212,6 @@ std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, 
 }
 
 void TurningSweep::chooseLinearNodes() {
-    // Only where the law bounds the pivot's acceleration (note h): not where a head turns.
-    if (!std::isfinite(law_.axisPointAccelerationBound(0.0))) return;
     const int deepest = std::min(kMaxLinearLevel, closingLevel_ - kLinearLevelsSaved);
     int anchorLevel = 0;
     const double leastBend = axisTurn_ * law_.speedBound(0.0);
