@@ -111,8 +111,6 @@ class MotionLaw {
     /// |Q'''| <= (sum_i |w_i|)^3. Infinite unless the tip runs on a straight line: the tests that
     /// take it (turning_linear_search.cpp, note o) need that too.
     double axisJerkBound() const;
-    /// @brief Whether the axis or the path is anything but a translation along the straight line.
-    bool rotates() const { return !turns_.empty(); }
 
   private:
     Vec3 start_{0.0}, feed_{0.0};
