@@ -574,7 +574,21 @@ TEST_CASE("G-code: rotary words need a machine, and M428 / M429 switch the kinem
     CHECK_NOTHROW(parseGcode("G0 X0 Y0 Z0 A0 C0\nG1 X1 A0\n", "r.ngc", o));
 
     o.machine = loadMachine("xyzac-trt");
-    CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG1 B10\n", "r.ngc", o), Contains("no B axis"));
+    CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG1 B10\n", "r.ngc", o), Contains("r.ngc:2:4") && Contains("no B axis"));
+    {
+        // A word that leaves the missing axis at zero is ignored, with a warning at the word,
+        // counted once however often it comes.
+        const Program p0 = parseGcode("G0 X0 Y0 Z0\nG1 X1 B0\nG1 X2 B0\n", "r.ngc", o);
+        CHECK(p0.path.moves.size() == 2);
+        int warned = 0;
+        for (const Diagnostic& d : p0.diagnostics)
+            if (d.message.find("no B axis: 'B0' leaves it at zero and is ignored (2 occurrences") != std::string::npos) {
+                ++warned;
+                CHECK(d.where.line == 2);
+                CHECK(d.where.column == 7);
+            }
+        CHECK(warned == 1);
+    }
     // An angle beyond 1e6 degrees, or a move turning more than ten turns, is refused where it is
     // written; ten turns in one move, and 1e6 degrees reached move by move, are not.
     CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG1 X1 A[10**200]\n", "r.ngc", o),

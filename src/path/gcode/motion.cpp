@@ -126,6 +126,14 @@ RotaryAngles Interpreter::rotaryTarget(Block& b, bool incremental) {
                  "rotary axis " + std::string(1, c) + " turns " + detail::formatNumber(target - angles_.deg[a]) +
                      " degrees in one move; at most 3600 (ten turns) are supported: split the move",
                  tokenAt(b.col[a]));
+        // An axis the machine lacks stays at zero: a word that leaves it there is ignored, with
+        // a warning, and one that would turn it is refused.
+        if (opt_.machine && !opt_.machine->has(c)) {
+            const std::string lacks = "the machine '" + opt_.machine->name + "' has no " + std::string(1, c) + " axis";
+            if (target != angles_.deg[a]) fail(b.col[a], lacks, tokenAt(b.col[a]));
+            warn(lacks + ": '" + tokenAt(b.col[a]) + "' leaves it at zero and is ignored", lacks, b.col[a]);
+            continue;
+        }
         if (target == angles_.deg[a]) continue;
         if (!opt_.machine) {
             std::string names;
@@ -135,8 +143,6 @@ RotaryAngles Interpreter::rotaryTarget(Block& b, bool incremental) {
                  "--machine NAME|FILE.json (built-in: " + names + ")",
                  tokenAt(b.col[a]));
         }
-        if (!opt_.machine->has(c))
-            fail(b.col[a], "the machine '" + opt_.machine->name + "' has no " + std::string(1, c) + " axis", tokenAt(b.col[a]));
         next.deg[a] = target;
     }
     refuseUvw(b);
