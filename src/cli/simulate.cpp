@@ -165,6 +165,13 @@ SimulateOptions toOptions(const SimulateArgs& a) {
         const std::vector<double> v = parseNumbers(a.start, "--start");
         if (v.size() != 3) throw UsageError("--start takes X,Y,Z (mm)");
         o.startPosition = Vec3(v[0], v[1], v[2]);
+        // A program's own positions stop there too (a move from 1e300 mm cut 85 of its 612.5 mm^3).
+        for (const double x : v)
+            if (!(std::abs(x) <= kMaxCoordinateMm)) {
+                char text[160];
+                std::snprintf(text, sizeof text, "--start: %g mm is beyond the 1e9 mm a program may reach", x);
+                throw UsageError(text);
+            }
     }
     if (!(a.adaptivity >= 0.0 && a.adaptivity <= 1.0)) throw UsageError("--adaptivity must lie in [0, 1]");
     o.adaptivity = a.adaptivity;

@@ -121,7 +121,8 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
                                      {"--design d.stl --design-transform 1,2", "TX,TY,TZ or the 3 rows"},
                                      {"--design d.stl --design-transform 1,2,z", "'z' is not a number"},
                                      {"--gouge-tolerance -1", "--gouge-tolerance"},
-                                     {"--stock box:0x10,0,0,20,20,5", "--stock box: '0x10' is not a number"}}) {
+                                     {"--stock box:0x10,0,0,20,20,5", "--stock box: '0x10' is not a number"},
+                                     {"--start 1e300,0,-5", "--start: 1e+300 mm is beyond the 1e9 mm a program may reach"}}) {
         INFO(args);
         r = cli(std::string("simulate ok.ngc --tool flat:d=3 ") + args);
         CHECK(r.code == 2);
