@@ -1,5 +1,6 @@
 // One line's search over a turning sweep's linear nodes (notes h and i of turning.cpp), and the
-// tests that settle a node by the faces of its end poses (notes j to o below).
+// tests that settle a node by the faces of its end poses (notes j to o below), and the bands a
+// line cannot reach (note p, at reaches).
 #include "turning_linear_search.h"
 
 #include <algorithm>
@@ -520,8 +521,45 @@ void TurningSweep::LinearSearch::run() {
                 continue;
             }
         }
-        searchBand(b, rootOpen);
+        // A band of a part cut into several is searched only where the care reaches its heights.
+        if (!s_.wholeRoots_[p] || reaches(s_.models_[b])) searchBand(b, rootOpen);
     }
+}
+
+// Note p: the heights a point x of the care takes above the tip, h(x, u) = a(u).(x - p(u)).
+// Its rate is h' = a'.(x - p) - a.p', with |a'| <= omega and g(u) = a(u).p'(u) changing at
+// |g'| = |a'.p' + a.p''| <= omega |p'| + K = L (K bounding |p''|, MotionLaw's acceleration bound
+// at the tip: 0 on a straight line), so |g(u)| <= min(|g(0)| + L u, |g(1)| + L (1 - u)) <=
+// (|g(0)| + |g(1)| + L) / 2, and likewise |x - p(u)| <= (|x - p(0)| + |x - p(1)| + |p'|max) / 2.
+// With D bounding |h'| so, h(x, u) >= max(h(x, 0) - D u, h(x, 1) - D (1 - u)) >= (h(x, 0) +
+// h(x, 1) - D) / 2, and at most that sum plus D over 2; the mean of h at the end poses is linear
+// along the line, and D convex (distances), so the care's ends bound both. A point deeper than
+// epsilon inside T(u) is band b's to find only at band b's heights (note i), so a band whose
+// heights the care never takes has nothing to find: its search is skipped, on a long cutter most
+// of its bands (BM_TurningQuery's flat D10 x 50 in eight bands, a line crossing its tip).
+bool TurningSweep::LinearSearch::reaches(const LinearPart& band) {
+    if (!heights_) {
+        const Interval& within = care_.within();
+        heights_ = Interval::all();
+        if (std::isfinite(within.lo) && std::isfinite(within.hi)) {
+            const ToolPose& a = s_.startPose_;
+            const ToolPose& b = s_.endPose_;
+            const double g0 = std::abs(glm::dot(a.axis, s_.startTwist_.at(a.tip)));
+            const double g1 = std::abs(glm::dot(b.axis, s_.endTwist_.at(b.tip)));
+            const double rate = 0.5 * (g0 + g1 + s_.axisTurn_ * s_.tipSpeed_ + s_.pivotBend_);
+            Interval mean;
+            double spread = 0.0;
+            for (const double t : {within.lo, within.hi}) {
+                const Vec3 x = line_.at(t);
+                const double h = 0.5 * (glm::dot(a.axis, x - a.tip) + glm::dot(b.axis, x - b.tip));
+                mean = mean.hull(Interval{h, h});
+                const double far = 0.5 * (glm::length(x - a.tip) + glm::length(x - b.tip) + s_.tipSpeed_);
+                spread = std::max(spread, 0.5 * (rate + s_.axisTurn_ * far));
+            }
+            heights_ = Interval{mean.lo - spread, mean.hi + spread};
+        }
+    }
+    return !heights_->intersect({band.lo, band.hi}).isEmpty();
 }
 
 void TurningSweep::LinearSearch::searchBand(std::size_t b, bool rootOpen) {

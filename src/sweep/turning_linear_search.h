@@ -1,5 +1,6 @@
 // One line's search over a turning sweep's linear nodes (notes h and i of turning.cpp), with
-// the tests that settle a node by its end poses' faces (notes j to o, turning_linear_search.cpp).
+// the tests that settle a node by its end poses' faces (notes j to o, turning_linear_search.cpp)
+// and the bands it cannot reach (note p).
 #pragma once
 
 #include <cstdint>
@@ -50,6 +51,9 @@ class TurningSweep::LinearSearch {
     Interval sweptWithin(const MoveSweep& sweep) const;
     /// Searches band b's nodes from its root down.
     void searchBand(std::size_t b, bool rootOpen);
+    /// Whether a point of the care may lie at the band's heights above the tip at some pose
+    /// (note p).
+    bool reaches(const LinearPart& band);
     static std::vector<Solved>& threadSolved();
 
     const TurningSweep& s_;
@@ -60,6 +64,7 @@ class TurningSweep::LinearSearch {
     /// allocates nothing once its thread has seen one as deep.
     std::vector<Solved>& solved_;
     std::optional<LocalLine> atStart_, atEnd_;
+    std::optional<Interval> heights_;  ///< the heights the care may take (reaches)
     std::size_t endsAdded_;  ///< the part whose end poses are in O already
 };
 

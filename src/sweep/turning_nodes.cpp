@@ -201,6 +201,8 @@ std::optional<TurningSweep::LinearPart> TurningSweep::linearBand(std::size_t p, 
     std::vector<ProfilePiece> band = clipChain(tool_.pieces(), part.first, part.last, lo, hi);
     const double radius = radiusBound(band.begin(), band.end());
     m.pivot = 0.5 * (lo + hi);
+    m.lo = lo;
+    m.hi = hi;
     const double bend = law_.axisPointAccelerationBound(m.pivot);
     for (int k = 0;; ++k) {
         m.reach.push_back(nodeReach(axisTurn_, bend, 0.5 * (hi - lo), radius, std::ldexp(1.0, -k)));

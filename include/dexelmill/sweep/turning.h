@@ -171,6 +171,7 @@ class TurningSweep {
     struct LinearPart {
         std::size_t part = 0;  ///< the index in parts_ of the part the band is cut from
         double pivot = 0.0;
+        double lo = 0.0, hi = 0.0;  ///< the band's heights above the tip, its pieces'
         std::vector<double> reach;
         std::vector<ProfilePiece> band;  ///< the band's pieces (clipChain)
         int leafLevel() const { return int(reach.size()) - 1; }
@@ -185,7 +186,7 @@ class TurningSweep {
         TurnPhase phase;  ///< the middle's
     };
     class NodeCache;
-    /// One line's search over the linear nodes, with the tests of notes j to o
+    /// One line's search over the linear nodes, with the tests of notes j to p
     /// (turning_linear_search.cpp).
     class LinearSearch;
     /// Sets models_ and nodes_ when the linear-node search applies and its leaves lie enough
