@@ -105,20 +105,34 @@ void regulaFalsi(double ua, double ub, double fa, double fb, int steps, At&& at)
 //      two faces that meet at a rim (faceNormal's indices k and k + 1, Rim), that pose is found:
 //      g(u), how far outside the rim's radius the line crosses the rim's plane at pose u, has
 //      opposite signs at the ends, and regula falsi (Illinois) brings it within kCornerGap in at
-//      most kCornerSteps steps. The pose u_c there is solved and goes into O. Let y be its end
-//      on that side and r the rim's point nearest y, gap = |y - r|. Each face's plane through r,
-//      normal n_f, holds the part, so (j)'s argument holds with r in place of y: for z = y + s d
-//      beyond y, s |n.d| <= n.(z - r) + gap and |z - r| <= s + gap, so
-//        s (|n.d| - omega tau) <= -epsilon + gap (1 + omega tau) +- tau n_f.v + C tau^2,
-//      with v the velocity of the tool point at r and C (j)'s bound at r's height and radius.
-//      The right side is convex in tau: where it is negative at tau = 0 (gap < epsilon) and at
-//      tau = w, and |n_f.d| >= omega w, no point beyond y is deeper than epsilon in any T(u)
-//      with |u - u_c| <= w on that side of u_c. The node is settled on that side when one face
-//      does so back to its start (the sign -) and one, the same or the other, on to its end
-//      (+), and its grown sweep cut at y is held.
+//      most kCornerSteps steps. The pose u_c there is solved and goes into O; it serves every
+//      node of the line's search that holds it, as what follows asks only that it be such a pose.
+//      Where one end pose's part misses the line and the other's end grows towards it, the line
+//      may first (or last) meet the part at a rim: g > 0 at the pose that misses (a line crossing
+//      the rim's plane inside the rim would meet the part), and the rims tried are those of the
+//      face the other pose's crossing lies on. Let y be u_c's end on that side and r the rim's
+//      point nearest y, gap = |y - r|. Every plane through r whose normal n lies in the rim's
+//      normal cone (n = alpha n_k + beta n_k+1, alpha, beta >= 0, the faces' normals there) holds
+//      the part: each face's, and where the line crosses one face's plane inward and the other's
+//      outward, the one along the line (n.d = 0). So (j)'s argument holds with r in place of y:
+//      for z = y + s d beyond y, with out = n.d taken towards the beyond, s out <= n.(z - r) + gap
+//      and |z - r| <= s + gap, so
+//        s (out - omega tau) <= -epsilon + gap (1 + omega tau) +- tau n.v + C tau^2,
+//      with v the velocity of the tool point at r and C (j)'s bound at r's height and radius. The
+//      points beyond y that matter lie within S of it (the care's hull, and the node's grown sweep
+//      where it is made), so the left side is at least min(0, S (out - omega tau)), concave in
+//      tau, and the right side is convex: where it is below that at tau = 0 (gap < epsilon when
+//      out >= 0) and at tau = w, no point beyond y is deeper than epsilon in any T(u) with
+//      |u - u_c| <= w on that side of u_c. (Taking S infinite asks out >= omega w, as (j) does.)
+//      The node is settled on that side when one plane does so back to its start (the sign -)
+//      and one, the same or another, on to its end (+), and its grown sweep cut at y is held.
 //      Cost: past the kink each face's normal speed keeps its sign, so each bounds a wide node
 //      at first order; a z-line meeting a flat end's bottom rim settles at the node whose end
 //      poses straddle the kink, a few regula falsi steps of a pose and a few dot products each.
+//      A line the bottom rim first meets at its corner, entering the bottom face and leaving the
+//      side at once, is bounded back to where the part misses it by the plane along the line,
+//      which recedes there: on BM_TurningQuery's flat end at 1 degree such first contacts made a
+//      quarter of its z lines descend to the leaves.
 //  (l) Grazes. Where the end on one side grows at pose a (n.v > 0 at its crossing, in (j)'s
 //      sense) and shrinks at b (n.v < 0), it stops growing at a pose between them. On a curved
 //      face the end's curvature in u is large (about |f|^2 / rho on a torus of radius rho), so
@@ -209,7 +223,6 @@ void regulaFalsi(double ua, double ub, double fa, double fb, int steps, At&& at)
 //      where the sides' ends dip most (three in five of the lines the root left open), its cut
 //      0.436 -> 0.376 s; BM_TurningShortQuery's flat end 102 -> 96 ns a line at 0.2 degrees, 118 ->
 //      107 at 0.6.
-
 TurningSweep::LinearSearch::LinearSearch(const TurningSweep& sweep, const Line& line, const turning::Care& care,
                                          turning::Union& found)
     : s_(sweep), line_(line), care_(care), found_(found), solved_(threadSolved()), endsAdded_(sweep.parts_.size()) {
@@ -288,33 +301,67 @@ bool TurningSweep::LinearSearch::graze(std::size_t p, int upper, Solved& a, Solv
 // Whether, where the line's crossings at poses a and b lie on two faces that meet at a
 // rim, the pose between them where the line passes through that rim bounds the points
 // beyond its interval over the whole node (note k); the pose goes into O.
-bool TurningSweep::LinearSearch::corner(std::size_t p, int upper, Solved& a, Solved& b, double& end) {
-    if (a.range.isEmpty() || b.range.isEmpty()) return false;
-    const int fa = crossing(a, p, upper).face, fb = crossing(b, p, upper).face;
-    if (std::abs(fa - fb) != 1) return false;
-    const std::optional<Rim> r = s_.rim(p, std::min(fa, fb));
-    if (!r) return false;
-    // g(u): how far outside the rim's radius the line crosses the rim's plane at pose u.
-    const auto g = [&](double u) {
-        const ToolPose ps = s_.law_.pose(u);
+bool TurningSweep::LinearSearch::corner(std::size_t p, int upper, Solved& a, Solved& b, const Interval& swept,
+                                        double& end) {
+    if (a.range.isEmpty() && b.range.isEmpty()) return false;
+    // The rim between the faces the line crosses at a and b; where one pose's part misses the
+    // line, a rim of the other's face.
+    int lowest = 0, highest = 0;  // the rims tried, faces k and k + 1 for k in [lowest, highest]
+    if (a.range.isEmpty() || b.range.isEmpty()) {
+        // Only where the end at the other pose grows towards the one that misses: else the end
+        // is extreme at that pose, not at a rim the line passes through on the way.
+        const Crossing& c = crossing(a.range.isEmpty() ? b : a, p, upper);
+        if (a.range.isEmpty() ? c.speed >= 0.0 : c.speed <= 0.0) return false;
+        const int f = c.face;
+        lowest = f - 1, highest = f;
+    } else {
+        const int fa = crossing(a, p, upper).face, fb = crossing(b, p, upper).face;
+        if (std::abs(fa - fb) != 1) return false;
+        lowest = highest = std::min(fa, fb);
+    }
+    // g at a pose: how far outside the rim's radius the line crosses the rim's plane.
+    const auto gAt = [&](const Rim& rim, const ToolPose& ps) {
         const double along = glm::dot(ps.axis, line_.dir);
-        const double t = (r->z - glm::dot(ps.axis, line_.origin - ps.tip)) / along;
-        return glm::length(line_.at(t) - ps.tip - r->z * ps.axis) - r->radius;
+        const double t = (rim.z - glm::dot(ps.axis, line_.origin - ps.tip)) / along;
+        return glm::length(line_.at(t) - ps.tip - rim.z * ps.axis) - rim.radius;
     };
-    const double ga = g(a.u), gb = g(b.u);
-    if (!std::isfinite(ga) || !std::isfinite(gb) || (ga > 0.0) == (gb > 0.0)) return false;
-    double u = a.u;
-    regulaFalsi(a.u, b.u, ga, gb, kCornerSteps, [&](double next) -> std::optional<double> {
-        u = next;
-        const double gu = g(u);
-        if (!std::isfinite(gu) || std::abs(gu) <= kCornerGap) return std::nullopt;
-        return gu;
-    });
-    const TurnPhase phase = s_.law_.phase(u);
-    const ToolPose ps = s_.law_.pose(phase);
-    const Interval range = s_.tool_.intersectPart(s_.parts_[p], LocalLine::make(ps, line_));
+    std::optional<Rim> r;
+    int k = lowest - 1;
+    double ga = 0.0, gb = 0.0;
+    while (!r && ++k <= highest) {
+        r = s_.rim(p, k);
+        if (!r) continue;
+        ga = gAt(*r, a.pose), gb = gAt(*r, b.pose);
+        if (!std::isfinite(ga) || !std::isfinite(gb) || (ga > 0.0) == (gb > 0.0)) r.reset();
+    }
+    if (!r) return false;
+    // The pose where the line passes through the rim: one found for a wider node serves
+    // every node that holds it (the bound below asks only that it be such a pose), so a
+    // search that descends towards it finds it once.
+    const RimPose* at = nullptr;
+    for (const RimPose& q : rimPoses_)
+        if (q.part == p && q.rim == k && q.u > a.u && q.u < b.u) at = &q;
+    if (!at) {
+        const auto g = [&](double u) { return gAt(*r, s_.law_.pose(u)); };
+        double u = a.u;
+        regulaFalsi(a.u, b.u, ga, gb, kCornerSteps, [&](double next) -> std::optional<double> {
+            u = next;
+            const double gu = g(u);
+            if (!std::isfinite(gu) || std::abs(gu) <= kCornerGap) return std::nullopt;
+            return gu;
+        });
+        RimPose q{p, k, u, s_.law_.phase(u), {}, {}};
+        q.pose = s_.law_.pose(q.phase);
+        q.range = s_.tool_.intersectPart(s_.parts_[p], LocalLine::make(q.pose, line_));
+        if (!q.range.isEmpty()) found_.add(q.range, u, p);
+        rimPoses_.push_back(q);
+        at = &rimPoses_.back();
+    }
+    const double u = at->u;
+    const TurnPhase& phase = at->phase;
+    const ToolPose& ps = at->pose;
+    const Interval range = at->range;
     if (range.isEmpty()) return false;
-    found_.add(range, u, p);
     // The end, and the rim's point nearest it: both faces' planes through that point hold
     // the part, and the end lies `gap` from it.
     const Vec3 y = line_.at(upper ? range.hi : range.lo);
@@ -324,15 +371,32 @@ bool TurningSweep::LinearSearch::corner(std::size_t p, int upper, Solved& a, Sol
     const Vec3 radial = offAxis / rho, point = ps.tip + r->z * ps.axis + r->radius * radial;
     const double gap = glm::length(y - point), bend = bendAt(r->z, r->radius);
     const Vec3 velocity = s_.law_.velocity(phase, point);
-    // Back over [a.u, u] (sign -1) and on over [u, b.u] (sign 1), each by either face.
+    // How far the line's points that matter reach beyond the end: within the care and the
+    // node's sweep.
+    const Interval reach = swept.intersect(care_.within());
+    const double yt = upper ? range.hi : range.lo;
+    const double beyond = std::max(0.0, upper ? reach.hi - yt : yt - reach.lo);
+    // The planes tried: each face's, and where the line crosses one face's plane inward and
+    // the other's outward, the plane of the rim's normal cone that holds the line.
+    Vec3 normals[3];
+    int planes = 0;
+    for (int f = 0; f < 2; ++f) normals[planes++] = r->across[f] * radial + r->along[f] * ps.axis;
+    const double d0 = glm::dot(normals[0], line_.dir), d1 = glm::dot(normals[1], line_.dir);
+    if ((d0 > 0.0) != (d1 > 0.0)) normals[planes++] = glm::normalize(std::abs(d1) * normals[0] + std::abs(d0) * normals[1]);
+    // Back over [a.u, u] (sign -1) and on over [u, b.u] (sign 1), each by one of the planes.
     for (const double sign : {-1.0, 1.0}) {
         const double w = sign < 0.0 ? u - a.u : b.u - u;
         bool bounded = false;
-        for (int f = 0; f < 2 && !bounded; ++f) {
-            const Vec3 n = r->across[f] * radial + r->along[f] * ps.axis;
+        for (int f = 0; f < planes && !bounded; ++f) {
+            const Vec3& n = normals[f];
             const double out = upper ? glm::dot(n, line_.dir) : -glm::dot(n, line_.dir);
-            bounded = out > 0.0 && out >= s_.axisTurn_ * w && gap < s_.epsilon_ &&
-                      sign * w * glm::dot(n, velocity) + w * w * bend + gap * (1.0 + s_.axisTurn_ * w) < s_.epsilon_;
+            // The least of s (out - omega tau) over the points beyond, s in [0, beyond], at
+            // tau = 0 and w: concave in tau, against a convex right side.
+            const double turn = s_.axisTurn_ * w;
+            const double least0 = out >= 0.0 ? 0.0 : beyond * out;
+            const double leastW = out >= turn ? 0.0 : beyond * (out - turn);
+            bounded = gap - s_.epsilon_ < least0 &&
+                      sign * w * glm::dot(n, velocity) + w * w * bend + gap * (1.0 + turn) - s_.epsilon_ < leastW;
         }
         if (!bounded) return false;
     }
@@ -468,7 +532,7 @@ bool TurningSweep::LinearSearch::anchoredSettled(std::size_t p, double w, std::u
         double aimed = 0.0;
         if (!end && !between && faceDip(p, upper, *ends[0], *ends[1], aimed)) end = aimed;
         if (!end && !between && aim &&
-            (corner(p, upper, *ends[0], *ends[1], aimed) || graze(p, upper, *ends[0], *ends[1], aimed)))
+            (corner(p, upper, *ends[0], *ends[1], swept, aimed) || graze(p, upper, *ends[0], *ends[1], aimed)))
             end = aimed;
         if (!end) {
             if (!between) return false;

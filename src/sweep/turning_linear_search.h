@@ -37,6 +37,17 @@ class TurningSweep::LinearSearch {
         TurnPhase phase;  ///< u's, which the velocities take
     };
 
+    /// A pose where the line passes through rim `rim` of the part searched (note k), and the
+    /// part's interval there.
+    struct RimPose {
+        std::size_t part = 0;
+        int rim = 0;
+        double u = 0.0;
+        TurnPhase phase;
+        ToolPose pose;
+        Interval range;
+    };
+
     bool held(const Interval& g) const { return care_.held(g); }
     /// The part's static poses at u = 0 and 1: into O, and the first two of `solved_`.
     void addEnds(std::size_t p);
@@ -44,7 +55,7 @@ class TurningSweep::LinearSearch {
     double bendAt(double height, double off) const;
     const Crossing& crossing(Solved& pose, std::size_t p, int upper);
     bool graze(std::size_t p, int upper, Solved& a, Solved& b, double& end);
-    bool corner(std::size_t p, int upper, Solved& a, Solved& b, double& end);
+    bool corner(std::size_t p, int upper, Solved& a, Solved& b, const Interval& swept, double& end);
     bool faceDip(std::size_t p, int upper, Solved& a, Solved& b, double& end);
     bool anchoredSettled(std::size_t p, double w, std::uint32_t a, std::uint32_t b, const Interval& swept, bool aim);
     /// A node's grown band swept along its move, along the line: empty where it misses the care.
@@ -65,6 +76,7 @@ class TurningSweep::LinearSearch {
     std::vector<Solved>& solved_;
     std::optional<LocalLine> atStart_, atEnd_;
     std::optional<Interval> heights_;  ///< the heights the care may take (reaches)
+    turning::ShortList<RimPose, 4> rimPoses_;  ///< the rim poses found (corner)
     std::size_t endsAdded_;  ///< the part whose end poses are in O already
 };
 

@@ -451,6 +451,39 @@ TEST_CASE("turning sweep vs oracle: a long cutter's bands, where a line's care r
     CHECK(banded >= tally.cases / 2);
 }
 
+TEST_CASE("turning sweep vs oracle: lines a part first or last meets at a rim, clipping its corner",
+          "[sweep][turning]") {
+    // A line through a point of a part's bottom or top rim at some pose, entering one face
+    // there and leaving the other at once, so that the pose only touches it: the line is first
+    // or last met at the rim, near where one end pose's part misses it (turning_linear_search.cpp,
+    // note k), and its interval at that pose is next to nothing. Asked, half the time, about a
+    // stretch of 0.5 to 6 mm about the point, as the cutting loop asks about a dexel's material.
+    std::mt19937_64 rng(20261201);
+    Tally tally;
+    for (int i = 0, n = scaled(400); i < n; ++i) {
+        const double angle = degrees(std::pow(10.0, cases::uniform(rng, -1.0, 1.5)));
+        Case c = randomCase(rng, randomMove(rng, angle, cases::uniform(rng, 0.5, 40.0)));
+        const SweepOracle o(c.model->parts, c.move);
+        Vec3 tip, axis;
+        o.pose(cases::uniform(rng, 0, 1), tip, axis);
+        const oracle::Part& part = c.model->parts[rng() % c.model->parts.size()];
+        const bool bottom = rng() % 2;
+        const double z = bottom ? part.za : part.zb;
+        const Vec3 radial = cases::randomPerpendicular(rng, axis);
+        const Vec3 point = tip + z * axis + part.radius(z) * radial;
+        // Into the disk face and out of the side: along the axis towards the part and out along
+        // the radial, with a random share across both.
+        const Vec3 across = glm::cross(axis, radial);
+        const Vec3 dir = glm::normalize(cases::uniform(rng, 0.1, 1.0) * (bottom ? axis : -axis) +
+                                        cases::uniform(rng, 0.1, 1.0) * radial + cases::uniform(rng, -1.0, 1.0) * across);
+        const double back = cases::uniform(rng, -30, 30), half = cases::uniform(rng, 0.25, 3.0);
+        c.line = Line{point - back * dir, dir};
+        checkCase(c, tally, rng, rng() % 2 ? std::vector<Interval>{} : std::vector<Interval>{{back - half, back + half}});
+    }
+    report(tally);
+    CHECK(tally.linear >= tally.cases / 2);
+}
+
 TEST_CASE("turning sweep vs oracle: lines nearly along a face of a pose, while the axis turns fast",
           "[sweep][turning]") {
     // A line through a point on a part's side, bottom or top at the first, last or some middle
