@@ -328,9 +328,9 @@ Interval TurningSweep::bound(const Line& line) const {
 //      end that a band's leaf makes takes the Hermite data of the whole part at the true pose
 //      where the leaf's move makes it (nodeEndNormal), so a face where the band was cut (inside
 //      the tool, met only within epsilon of its rim on the envelope) gives no normal.
-//  (j)-(o) The tests that settle a linear node by the faces of its end poses, and (p) the bands a
-//      line cannot reach: in turning_linear_search.cpp, with the search over linear nodes
-//      (TurningSweep::LinearSearch).
+//  (j)-(q) The tests that settle a linear node by the faces of its end poses, the bands a line
+//      cannot reach and the gaps between a node's poses: in turning_linear_search.cpp, with the
+//      search over linear nodes (TurningSweep::LinearSearch).
 std::vector<LineHit> TurningSweep::intersect(const Line& line, const std::vector<Interval>& care) const {
     std::vector<LineHit> out;
     intersect(line, care, out);

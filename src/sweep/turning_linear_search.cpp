@@ -1,6 +1,6 @@
 // One line's search over a turning sweep's linear nodes (notes h and i of turning.cpp), and the
-// tests that settle a node by the faces of its end poses (notes j to o below), and the bands a
-// line cannot reach (note p, at reaches).
+// tests that settle a node by the faces of its end poses (notes j to o below), the bands a line
+// cannot reach (note p, at reaches) and the gaps between a node's poses (note q).
 #include "turning_linear_search.h"
 
 #include <algorithm>
@@ -30,6 +30,9 @@ constexpr double kCornerGap = 1e-9;
 
 /// Most regula falsi steps note l takes towards the pose where a line's end stops growing.
 constexpr int kGrazeSteps = 4;
+
+/// Most poses a node's gaps are bridged with (TurningSweep::LinearSearch::bridge).
+constexpr int kBridgeSteps = 4;
 
 /// Regula falsi with the Illinois step on [ua, ub], where fa and fb have opposite signs: `at(u)`
 /// is called at each new point, at most `steps` times, and returns the function's value there, or
@@ -125,14 +128,17 @@ void regulaFalsi(double ua, double ub, double fa, double fb, int steps, At&& at)
 //      out >= 0) and at tau = w, no point beyond y is deeper than epsilon in any T(u) with
 //      |u - u_c| <= w on that side of u_c. (Taking S infinite asks out >= omega w, as (j) does.)
 //      The node is settled on that side when one plane does so back to its start (the sign -)
-//      and one, the same or another, on to its end (+), and its grown sweep cut at y is held.
+//      and one, the same or another, on to its end (+), and its grown sweep cut at y is held, its
+//      gaps bridged as (q) says.
 //      Cost: past the kink each face's normal speed keeps its sign, so each bounds a wide node
 //      at first order; a z-line meeting a flat end's bottom rim settles at the node whose end
 //      poses straddle the kink, a few regula falsi steps of a pose and a few dot products each.
 //      A line the bottom rim first meets at its corner, entering the bottom face and leaving the
 //      side at once, is bounded back to where the part misses it by the plane along the line,
 //      which recedes there: on BM_TurningQuery's flat end at 1 degree such first contacts made a
-//      quarter of its z lines descend to the leaves.
+//      quarter of its z lines descend to the leaves, and with (q) they settle at the node where
+//      the rim is first found (the flat end's long rows 0.68-0.81 of before, its short rows
+//      0.86-0.92).
 //  (l) Grazes. Where the end on one side grows at pose a (n.v > 0 at its crossing, in (j)'s
 //      sense) and shrinks at b (n.v < 0), it stops growing at a pose between them. On a curved
 //      face the end's curvature in u is large (about |f|^2 / rho on a torus of radius rho), so
@@ -223,6 +229,19 @@ void regulaFalsi(double ua, double ub, double fa, double fb, int steps, At&& at)
 //      where the sides' ends dip most (three in five of the lines the root left open), its cut
 //      0.436 -> 0.376 s; BM_TurningShortQuery's flat end 102 -> 96 ns a line at 0.2 degrees, 118 ->
 //      107 at 0.6.
+//  (p) Bands a line cannot reach: at TurningSweep::LinearSearch::reaches.
+//  (q) Gaps. Where (j) to (o) bound both sides of a node but O leaves a gap in the cut between two
+//      of its intervals, whose ends poses u_L and u_R inside the node made, poses between them are
+//      solved (bridge): were the intervals to move linearly from u_L's to u_R's, the one whose
+//      interval grown by epsilon still reaches the left one, or where some reach both, the middle
+//      of those. Its interval goes into O, and its part grown by epsilon, within the gap: within
+//      epsilon of S (1), and between intervals of O, so that no end of O moves. At most
+//      kBridgeSteps poses; where they close every gap the node is settled as if O had held the
+//      cut, and where not it is split as before, its poses kept. A rim's pose (k) where the line
+//      only clips the rim has an interval of near zero length, and the other pose's lies a little
+//      beyond it: the dyadic middles took seven levels to close that gap, the grown intervals one
+//      or two poses.
+
 TurningSweep::LinearSearch::LinearSearch(const TurningSweep& sweep, const Line& line, const turning::Care& care,
                                          turning::Union& found)
     : s_(sweep), line_(line), care_(care), found_(found), solved_(threadSolved()), endsAdded_(sweep.parts_.size()) {
@@ -546,6 +565,39 @@ bool TurningSweep::LinearSearch::anchoredSettled(std::size_t p, double w, std::u
         bounded = true;
     }
     if (!bounded) return false;
+    return held(cut) || bridge(p, cut, ends[0]->u, ends[1]->u);
+}
+
+bool TurningSweep::LinearSearch::bridge(std::size_t p, const Interval& cut, double ua, double ub) {
+    for (int step = 0; step < kBridgeSteps; ++step) {
+        const Interval gap = care_.firstGap(cut);
+        if (gap.isEmpty()) return true;
+        const turning::Piece* left = nullptr;
+        const turning::Piece* right = nullptr;
+        for (const turning::Piece& q : found_.pieces()) {
+            if (q.range.hi == gap.lo) left = &q;
+            if (q.range.lo == gap.hi) right = &q;
+        }
+        if (!left || !right || left->nodeHi != 0 || right->nodeLo != 0) return false;
+        const double uL = left->uHi, uR = right->uLo;
+        if (uL == uR || std::min(uL, uR) < ua || std::max(uL, uR) > ub) return false;
+        // The poses' intervals taken as moving linearly from uL's, [left.lo, gap.lo], to uR's,
+        // [gap.hi, right.hi]: the pose whose interval grown by epsilon still reaches the left
+        // piece, or where one pose reaches both, the middle of those that do.
+        const double lL = left->range.lo, hR = right->range.hi;
+        const double reachesLeft = std::clamp((gap.lo + s_.epsilon_ - lL) / (gap.hi - lL), 0.0, 1.0);
+        const double reachesRight = std::clamp((gap.hi - s_.epsilon_ - gap.lo) / (hR - gap.lo), 0.0, 1.0);
+        const double s = reachesRight <= reachesLeft ? 0.5 * (reachesLeft + reachesRight) : reachesLeft;
+        const double u = uL + s * (uR - uL);
+        if (!(u != uL && u != uR)) return false;
+        const ToolPose pose = s_.law_.pose(u);
+        const LocalLine local = LocalLine::make(pose, line_);
+        const Interval range = s_.tool_.intersectPart(s_.parts_[p], local);
+        if (range.isEmpty()) return false;
+        found_.add(range, u, p);
+        const Interval within = intersectPieces(s_.grownEpsilon_[p], local).intersect(gap);
+        if (!within.isEmpty()) found_.add(within, u, p);
+    }
     return held(cut);
 }
 

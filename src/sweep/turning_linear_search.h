@@ -1,6 +1,6 @@
 // One line's search over a turning sweep's linear nodes (notes h and i of turning.cpp), with
-// the tests that settle a node by its end poses' faces (notes j to o, turning_linear_search.cpp)
-// and the bands it cannot reach (note p).
+// the tests that settle a node by its end poses' faces (notes j to o, turning_linear_search.cpp),
+// the bands it cannot reach (note p) and the gaps between a node's poses (note q).
 #pragma once
 
 #include <cstdint>
@@ -58,6 +58,9 @@ class TurningSweep::LinearSearch {
     bool corner(std::size_t p, int upper, Solved& a, Solved& b, const Interval& swept, double& end);
     bool faceDip(std::size_t p, int upper, Solved& a, Solved& b, double& end);
     bool anchoredSettled(std::size_t p, double w, std::uint32_t a, std::uint32_t b, const Interval& swept, bool aim);
+    /// Whether poses solved between those that made the ends of the gaps O leaves in `cut`,
+    /// within the node [ua, ub], close them (note q); the poses go into O.
+    bool bridge(std::size_t p, const Interval& cut, double ua, double ub);
     /// A node's grown band swept along its move, along the line: empty where it misses the care.
     Interval sweptWithin(const MoveSweep& sweep) const;
     /// Searches band b's nodes from its root down.

@@ -75,6 +75,23 @@ class Care {
         }
         return true;
     }
+    /// The first stretch of `g` within the care that O leaves out: from its start to the next
+    /// piece of O or the end of that stretch of care; empty when O holds all of it.
+    Interval firstGap(const Interval& g) const {
+        for (const Interval* c = begin_; c != end_ && !g.isEmpty(); ++c) {
+            const Interval part = g.intersect(*c);
+            if (part.isEmpty()) continue;
+            double from = part.lo;
+            for (const Piece& p : found_.pieces()) {
+                if (p.range.hi < from) continue;
+                if (p.range.lo > from) return {from, std::min(p.range.lo, part.hi)};
+                from = p.range.hi;
+                if (from >= part.hi) break;
+            }
+            if (from < part.hi) return {from, part.hi};
+        }
+        return Interval::empty();
+    }
     /// Whether some of the care lies in `g`.
     bool meets(const Interval& g) const {
         return std::any_of(begin_, end_, [&](const Interval& c) { return !c.intersect(g).isEmpty(); });

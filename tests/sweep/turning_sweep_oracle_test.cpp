@@ -456,8 +456,9 @@ TEST_CASE("turning sweep vs oracle: lines a part first or last meets at a rim, c
     // A line through a point of a part's bottom or top rim at some pose, entering one face
     // there and leaving the other at once, so that the pose only touches it: the line is first
     // or last met at the rim, near where one end pose's part misses it (turning_linear_search.cpp,
-    // note k), and its interval at that pose is next to nothing. Asked, half the time, about a
-    // stretch of 0.5 to 6 mm about the point, as the cutting loop asks about a dexel's material.
+    // note k), and its interval at that pose is next to nothing, so the poses between it and the
+    // next are bridged (note q). Asked, half the time, about a stretch of 0.5 to 6 mm about the
+    // point, as the cutting loop asks about a dexel's material.
     std::mt19937_64 rng(20261201);
     Tally tally;
     for (int i = 0, n = scaled(400); i < n; ++i) {

@@ -186,7 +186,7 @@ class TurningSweep {
         TurnPhase phase;  ///< the middle's
     };
     class NodeCache;
-    /// One line's search over the linear nodes, with the tests of notes j to p
+    /// One line's search over the linear nodes, with the tests of notes j to q
     /// (turning_linear_search.cpp).
     class LinearSearch;
     /// Sets models_ and nodes_ when the linear-node search applies and its leaves lie enough
