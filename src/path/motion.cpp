@@ -274,9 +274,10 @@ double MotionLaw::axisBendBound() const {
 }
 
 double MotionLaw::axisJerkBound() const {
-    if (carried_ || !heads_.empty()) return std::numeric_limits<double>::infinity();
+    if (carried_) return std::numeric_limits<double>::infinity();
     double rate = 0.0;
-    for (const RotaryTurn& t : turns_) rate += std::abs(t.to - t.from);
+    for (const std::vector<RotaryTurn>* chain : {&turns_, &heads_})
+        for (const RotaryTurn& t : *chain) rate += std::abs(t.to - t.from);
     return rate * rate * rate;
 }
 

@@ -102,14 +102,13 @@ class MotionLaw {
     /// that to the part frame (motion.cpp).
     double axisPointAccelerationBound(double reach) const;
     /// @brief A bound on |a''(u)|, a(u) = Q(u) a_0 the unit tool axis (heads' turns included):
-    /// (sum_i |w_i|)^2, as for axisPointAccelerationBound. Where that is finite it grows with
-    /// reach at exactly this rate: axisPointAccelerationBound(r) = axisPointAccelerationBound(0) +
-    /// axisBendBound() r.
+    /// (sum_i |w_i|)^2, as for axisPointAccelerationBound, which grows with reach at exactly this
+    /// rate: axisPointAccelerationBound(r) = axisPointAccelerationBound(0) + axisBendBound() r.
     double axisBendBound() const;
     /// @brief A bound on |a'''(u)| over the move, a(u) = Q(u) a_0 the unit tool axis with Q as in
     /// axisPointAccelerationBound: each R_i has |R_i'''| = |w_i|^3, so by the product rule
-    /// |Q'''| <= (sum_i |w_i|)^3. Infinite unless the tip runs on a straight line: the tests that
-    /// take it (turning_linear_search.cpp, note o) need that too.
+    /// |Q'''| <= (sum_i |w_i|)^3, heads' turns included. Infinite unless the tip runs on a
+    /// straight line: the tests that take it (turning_linear_search.cpp, note o) need that too.
     double axisJerkBound() const;
 
   private:
