@@ -234,8 +234,9 @@ void regulaFalsi(double ua, double ub, double fa, double fb, int steps, At&& at)
 //      of its intervals, whose ends poses u_L and u_R inside the node made, poses between them are
 //      solved (bridge): were the intervals to move linearly from u_L's to u_R's, the one whose
 //      interval grown by epsilon still reaches the left one, or where some reach both, the middle
-//      of those. Its interval goes into O, and its part grown by epsilon, within the gap: within
-//      epsilon of S (1), and between intervals of O, so that no end of O moves. At most
+//      of those. Its interval goes into O (a static pose's, as every middle pose's does), and its
+//      part grown by epsilon within the gap: within epsilon of S (1), and between intervals of O,
+//      so that this part moves no end of O. At most
 //      kBridgeSteps poses; where they close every gap the node is settled as if O had held the
 //      cut, and where not it is split as before, its poses kept. A rim's pose (k) where the line
 //      only clips the rim has an interval of near zero length, and the other pose's lies a little
@@ -360,27 +361,35 @@ bool TurningSweep::LinearSearch::corner(std::size_t p, int upper, Solved& a, Sol
     const RimPose* at = nullptr;
     for (const RimPose& q : rimPoses_)
         if (q.part == p && q.rim == k && q.u > a.u && q.u < b.u) at = &q;
+    RimPose fresh;
     if (!at) {
         const auto g = [&](double u) { return gAt(*r, s_.law_.pose(u)); };
         double u = a.u;
+        bool close = false;
         regulaFalsi(a.u, b.u, ga, gb, kCornerSteps, [&](double next) -> std::optional<double> {
             u = next;
             const double gu = g(u);
-            if (!std::isfinite(gu) || std::abs(gu) <= kCornerGap) return std::nullopt;
+            close = std::abs(gu) <= kCornerGap;
+            if (!std::isfinite(gu) || close) return std::nullopt;
             return gu;
         });
-        RimPose q{p, k, u, s_.law_.phase(u), {}, {}};
-        q.pose = s_.law_.pose(q.phase);
-        q.range = s_.tool_.intersectPart(s_.parts_[p], LocalLine::make(q.pose, line_));
-        if (!q.range.isEmpty()) found_.add(q.range, u, p);
-        rimPoses_.push_back(q);
-        at = &rimPoses_.back();
+        fresh = RimPose{p, k, u, s_.law_.phase(u), {}, {}};
+        fresh.pose = s_.law_.pose(fresh.phase);
+        fresh.range = s_.tool_.intersectPart(s_.parts_[p], LocalLine::make(fresh.pose, line_));
+        if (fresh.range.isEmpty()) return false;
+        found_.add(fresh.range, u, p);
+        // Kept only where the steps reached the rim: a narrower node's own steps may do better.
+        if (close) {
+            rimPoses_.push_back(fresh);
+            at = &rimPoses_.back();
+        } else {
+            at = &fresh;
+        }
     }
     const double u = at->u;
     const TurnPhase& phase = at->phase;
     const ToolPose& ps = at->pose;
     const Interval range = at->range;
-    if (range.isEmpty()) return false;
     // The end, and the rim's point nearest it: both faces' planes through that point hold
     // the part, and the end lies `gap` from it.
     const Vec3 y = line_.at(upper ? range.hi : range.lo);

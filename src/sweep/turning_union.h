@@ -88,7 +88,8 @@ class Care {
                 from = p.range.hi;
                 if (from >= part.hi) break;
             }
-            if (from < part.hi) return {from, part.hi};
+            // A stretch of a single point that no piece reached is a gap too, as held says.
+            if (from < part.hi || !found_.holds(from, from)) return {from, part.hi};
         }
         return Interval::empty();
     }
