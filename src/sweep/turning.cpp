@@ -48,6 +48,9 @@ Interval lineInBox(const Line& line, const Box& box) {
 /// Most chords a ball's centre path is cut into; a move that needs more is searched whole.
 constexpr double kMaxChords = 256.0;
 
+/// Chords a ball's group holds: a line is tested against a group's ball before its capsules.
+constexpr int kChordGroup = 8;
+
 /// The parameters of `line` (unit direction) within r of the segment [a, b]: one interval, since
 /// the capsule is convex, the hull of the line's intervals in the two end balls and in the
 /// cylinder between them (the points whose projection onto the segment falls inside it).
@@ -133,11 +136,25 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
             balls_.push_back(std::move(ball));
         }
     }
-    for (Ball& ball : balls_)
+    for (Ball& ball : balls_) {
         for (int j = 0; j <= chords_; ++j) {
             const ToolPose p = law_.pose(double(j) / chords_);
             ball.centres.push_back(p.tip + ball.zc * p.axis);
         }
+        // A capsule's points lie within rho of its chord, whose points lie within the farthest
+        // of its two ends from any centre (a ball is convex).
+        for (int first = 0; first < chords_; first += kChordGroup) {
+            const int last = std::min(chords_, first + kChordGroup);
+            Box box;
+            for (int j = first; j <= last; ++j) box.expand(ball.centres[std::size_t(j)]);
+            Ball::Group g;
+            g.centre = 0.5 * (box.lo + box.hi);
+            for (int j = first; j <= last; ++j)
+                g.radius = std::max(g.radius, glm::length(ball.centres[std::size_t(j)] - g.centre));
+            g.radius += ball.rho + kBoxSlack;
+            ball.groups.push_back(g);
+        }
+    }
     for (const ConvexPart& part : parts_) {
         grownEpsilon_.push_back(offsetPart(tool_, part, epsilon_));
         faces_.push_back(meridianFaces(tool_.pieces(), part));
@@ -363,9 +380,20 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
 
     const auto& parts = parts_;
     // The balls' capsules (g); each end's pose is where its chord comes nearest it.
+    // A group's chords are tested only where its ball meets the line within the care's hull.
     for (std::size_t b = 0; b < balls_.size(); ++b) {
         const std::vector<Vec3>& c = balls_[b].centres;
         for (int j = 0; j < chords_; ++j) {
+            if (j % kChordGroup == 0) {
+                const Ball::Group& g = balls_[b].groups[std::size_t(j / kChordGroup)];
+                const Vec3 oc = g.centre - line.origin;
+                const double t = glm::dot(oc, line.dir);
+                if (glm::dot(oc, oc) - t * t > g.radius * g.radius ||
+                    !matters.meets({t - g.radius, t + g.radius})) {
+                    j += kChordGroup - 1;
+                    continue;
+                }
+            }
             const Interval iv = lineCapsule(line, c[std::size_t(j)], c[std::size_t(j) + 1], balls_[b].rho);
             if (iv.isEmpty()) continue;
             const Vec3 m = c[std::size_t(j) + 1] - c[std::size_t(j)];

@@ -159,6 +159,13 @@ class TurningSweep {
     struct Ball {
         double zc = 0.0, rho = 0.0;  ///< the centre's height above the tip, and the radius
         std::vector<Vec3> centres;   ///< the centre at u = j / chords, j = 0 .. chords
+        /// Per run of consecutive chords (turning.cpp, kChordGroup), a ball that holds their
+        /// capsules: a line that misses it meets none of them.
+        struct Group {
+            Vec3 centre{0.0};
+            double radius = 0.0;
+        };
+        std::vector<Group> groups;
     };
 
     /// The search that takes each node as a fixed-axis linear move (turning.cpp, note h), for
