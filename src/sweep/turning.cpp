@@ -282,7 +282,9 @@ Interval TurningSweep::bound(const Line& line) const {
 //      The search settles P's nodes against O with the capsules already in it: near the ball's
 //      surface P's grown intervals are empty or held, so the search descends only where P
 //      itself comes near the line. A move that would need more than kMaxChords chords is searched
-//      whole.
+//      whole. A line is tested against runs of kChordGroup capsules behind a ball that holds them
+//      (their chords' ends lie within its radius less R of its centre), and one that misses the
+//      ball, or meets it only outside the care, skips them.
 //  (h) Linear nodes. The law bounds how fast the pivot's velocity turns: by the axis's turn
 //      alone where the tip runs on a straight line (an APT MULTAX move, or a machine's move under
 //      tool centre point control), and turn by turn down the heads' and the tables' chains in
