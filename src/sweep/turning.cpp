@@ -154,6 +154,10 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
             g.radius += ball.rho + kBoxSlack;
             ball.groups.push_back(g);
         }
+        for (int j = 0; j < chords_; ++j)
+            ball.capsuleReach = std::max(ball.capsuleReach, 0.5 * glm::length(ball.centres[std::size_t(j) + 1] -
+                                                                             ball.centres[std::size_t(j)]));
+        ball.capsuleReach += ball.rho + kBoxSlack;
     }
     for (const ConvexPart& part : parts_) {
         grownEpsilon_.push_back(offsetPart(tool_, part, epsilon_));
@@ -396,6 +400,10 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
                     continue;
                 }
             }
+            // And each capsule behind the ball about its chord's middle.
+            const Vec3 om = 0.5 * (c[std::size_t(j)] + c[std::size_t(j) + 1]) - line.origin;
+            const double tm = glm::dot(om, line.dir), reach = balls_[b].capsuleReach;
+            if (glm::dot(om, om) - tm * tm > reach * reach) continue;
             const Interval iv = lineCapsule(line, c[std::size_t(j)], c[std::size_t(j) + 1], balls_[b].rho);
             if (iv.isEmpty()) continue;
             const Vec3 m = c[std::size_t(j) + 1] - c[std::size_t(j)];

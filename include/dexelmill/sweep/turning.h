@@ -166,6 +166,9 @@ class TurningSweep {
             double radius = 0.0;
         };
         std::vector<Group> groups;
+        /// Half the longest chord plus the radius: each capsule lies within it of its chord's
+        /// middle.
+        double capsuleReach = 0.0;
     };
 
     /// The search that takes each node as a fixed-axis linear move (turning.cpp, note h), for
