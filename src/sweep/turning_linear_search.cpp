@@ -188,6 +188,12 @@ void regulaFalsi(double ua, double ub, double fa, double fb, int steps, At&& at)
 //      whole open, it is split without its sweep (a node's test is optional: one not tried is
 //      split, as one that fails): BM_TurningShortQuery's flat end 104 -> 102 ns a line at 0.2
 //      degrees, 125 -> 120 at 0.6.
+//      A node below the root whose two end poses both meet the line takes the tests of (j) to
+//      (q) before its sweep, and where they fail is split without it (above the leaves, whose
+//      sweep is their answer): such a node's grown sweep reaches past both poses' intervals,
+//      and on BM_TurningQuery O held it for about one in a thousand (bull nose) to three in a
+//      thousand (flat end). The bull nose's long rows 0.73-0.75 of before, its short rows 0.92,
+//      the flat end's long rows 0.93-0.95.
 //  (o) Disks and cylinders. Where a line's end on one side lies on a disk face (a flat end's
 //      bottom, a part's top) at both end poses of a node and the end moves outward from one of them
 //      and back before the other (a dip in u), (j) to (m) bound that side only from poses within
@@ -704,8 +710,11 @@ void TurningSweep::LinearSearch::searchBand(std::size_t b, bool rootOpen) {
         const Node n = stack[--top];
         // Below the root, where the end poses' faces settle the node within the line's
         // bound, its sweep is not needed (note n).
+        // Below the root, whose end poses are solved by now; above the leaves (note n).
+        const bool withoutSweep = n.heap > 1 && heapLevel(n.heap) < leaf && s_.parts_.size() == 1 &&
+                                  !solved_[n.a].range.isEmpty() && !solved_[n.b].range.isEmpty();
         if (n.heap > 1 && s_.parts_.size() == 1 &&
-            anchoredSettled(p, heapWidth(n.heap), n.a, n.b, Interval::all(), false))
+            anchoredSettled(p, heapWidth(n.heap), n.a, n.b, Interval::all(), withoutSweep))
             continue;
         // A part searched whole (one band) whose end poses' faces left its root open: the
         // root's grown sweep settles few of those lines (on BM_TurningShortQuery's flat end
@@ -713,7 +722,7 @@ void TurningSweep::LinearSearch::searchBand(std::size_t b, bool rootOpen) {
         // so the root is split at once, its halves tried by note n before their sweeps.
         const bool splitRoot = n.heap == 1 && rootOpen && !s_.wholeRoots_[p] && leaf > 0;
         const LinearNode* node = nullptr;
-        if (!splitRoot) {
+        if (!splitRoot && !withoutSweep) {
             node = &s_.linearNode(b, n.heap, scratch);
             const Interval swept = sweptWithin(node->sweep);
             if (heapLevel(n.heap) == leaf) {  // closed: the band's own sweep along the node's move
@@ -727,12 +736,13 @@ void TurningSweep::LinearSearch::searchBand(std::size_t b, bool rootOpen) {
             }
             if (s_.parts_.size() == 1 && anchoredSettled(p, node->width, n.a, n.b, swept, true)) continue;
         }
-        const double middleU = node ? node->middleU : s_.midPhase_.u;
-        const ToolPose& middlePose = node ? node->middle : s_.midPose_;
+        const double middleU = node ? node->middleU : splitRoot ? s_.midPhase_.u : 0.5 * (solved_[n.a].u + solved_[n.b].u);
+        const TurnPhase middlePhase = node ? node->phase : splitRoot ? s_.midPhase_ : s_.law_.phase(middleU);
+        const ToolPose middlePose = node ? node->middle : splitRoot ? s_.midPose_ : s_.law_.pose(middlePhase);
         const Interval middle = s_.tool_.intersectPart(s_.parts_[p], LocalLine::make(middlePose, line_));
         if (!middle.isEmpty()) found_.add(middle, middleU, p);
         const std::uint32_t m = std::uint32_t(solved_.size());
-        solved_.push_back({middleU, middlePose, middle, {}, node ? node->phase : s_.midPhase_});
+        solved_.push_back({middleU, middlePose, middle, {}, middlePhase});
         stack[top++] = {2 * n.heap + 1, m, n.b};
         stack[top++] = {2 * n.heap, n.a, m};
     }
