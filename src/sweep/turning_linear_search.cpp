@@ -108,8 +108,9 @@ void regulaFalsi(double ua, double ub, double fa, double fb, int steps, At&& at)
 //      two faces that meet at a rim (faceNormal's indices k and k + 1, Rim), that pose is found:
 //      g(u), how far outside the rim's radius the line crosses the rim's plane at pose u, has
 //      opposite signs at the ends, and regula falsi (Illinois) brings it within kCornerGap in at
-//      most kCornerSteps steps. The pose u_c there is solved and goes into O; it serves every
-//      node of the line's search that holds it, as what follows asks only that it be such a pose.
+//      most kCornerSteps steps. The pose u_c there is solved and goes into O; where the steps
+//      reached the rim it serves every node of the line's search that holds it, as what follows
+//      asks only that it be such a pose.
 //      Where one end pose's part misses the line and the other's end grows towards it, the line
 //      may first (or last) meet the part at a rim: g > 0 at the pose that misses (a line crossing
 //      the rim's plane inside the rim would meet the part), and the rims tried are those of the
