@@ -145,6 +145,24 @@ Case randomTurningCase(std::mt19937_64& rng, double lowest, double highest, unsi
     return randomCase(rng, randomMove(rng, angle, rng() % still == 0 ? 0.0 : cases::uniform(rng, 0.05, 40.0)));
 }
 
+/// A random pose of case `c`'s move, one of its tool's parts, and that part's bottom or top rim:
+/// the rim's height z above the tip.
+struct RimPoint {
+    Vec3 tip{0.0}, axis{0.0};
+    const oracle::Part* part = nullptr;
+    bool bottom = false;
+    double z = 0.0;
+};
+RimPoint rimPoint(const Case& c, std::mt19937_64& rng) {
+    const SweepOracle o(c.model->parts, c.move);
+    RimPoint r;
+    o.pose(cases::uniform(rng, 0, 1), r.tip, r.axis);
+    r.part = &c.model->parts[rng() % c.model->parts.size()];
+    r.bottom = rng() % 2;
+    r.z = r.bottom ? r.part->za : r.part->zb;
+    return r;
+}
+
 /// Checks case `c` along a line through `point` that crosses the face with outward normal `normal`
 /// there at 10 to 80 degrees from its tangent plane, with a tolerance of 1e-2 to 1e-4 mm: a coarse
 /// tolerance lets note o (turning_linear_search.cpp) settle wide nodes, where its remainder is
@@ -405,13 +423,9 @@ TEST_CASE("turning sweep vs oracle: dexel lines through a rim, where the line's 
     for (int i = 0, n = scaled(300); i < n; ++i) {
         const double angle = degrees(std::pow(10.0, cases::uniform(rng, -1.5, 1.5)));
         Case c = randomCase(rng, randomMove(rng, angle, cases::uniform(rng, 0.05, 40.0)), true);
-        const SweepOracle o(c.model->parts, c.move);
-        Vec3 tip, axis;
-        o.pose(cases::uniform(rng, 0, 1), tip, axis);
-        const oracle::Part& part = c.model->parts[rng() % c.model->parts.size()];
-        const double z = rng() % 2 ? part.za : part.zb;
+        const RimPoint r = rimPoint(c, rng);
         const double near = (rng() % 2 ? 1.0 : -1.0) * std::pow(10.0, cases::uniform(rng, -6, -1));
-        const Vec3 point = tip + z * axis + (part.radius(z) + near) * cases::randomPerpendicular(rng, axis);
+        const Vec3 point = r.tip + r.z * r.axis + (r.part->radius(r.z) + near) * cases::randomPerpendicular(rng, r.axis);
         c.line = Line{point - cases::uniform(rng, -30, 30) * c.line.dir, c.line.dir};
         checkCase(c, tally, rng);
     }
@@ -464,18 +478,13 @@ TEST_CASE("turning sweep vs oracle: lines a part first or last meets at a rim, c
     for (int i = 0, n = scaled(400); i < n; ++i) {
         const double angle = degrees(std::pow(10.0, cases::uniform(rng, -1.0, 1.5)));
         Case c = randomCase(rng, randomMove(rng, angle, cases::uniform(rng, 0.5, 40.0)));
-        const SweepOracle o(c.model->parts, c.move);
-        Vec3 tip, axis;
-        o.pose(cases::uniform(rng, 0, 1), tip, axis);
-        const oracle::Part& part = c.model->parts[rng() % c.model->parts.size()];
-        const bool bottom = rng() % 2;
-        const double z = bottom ? part.za : part.zb;
-        const Vec3 radial = cases::randomPerpendicular(rng, axis);
-        const Vec3 point = tip + z * axis + part.radius(z) * radial;
+        const RimPoint r = rimPoint(c, rng);
+        const Vec3 radial = cases::randomPerpendicular(rng, r.axis);
+        const Vec3 point = r.tip + r.z * r.axis + r.part->radius(r.z) * radial;
         // Into the disk face and out of the side: along the axis towards the part and out along
         // the radial, with a random share across both.
-        const Vec3 across = glm::cross(axis, radial);
-        const Vec3 dir = glm::normalize(cases::uniform(rng, 0.1, 1.0) * (bottom ? axis : -axis) +
+        const Vec3 across = glm::cross(r.axis, radial);
+        const Vec3 dir = glm::normalize(cases::uniform(rng, 0.1, 1.0) * (r.bottom ? r.axis : -r.axis) +
                                         cases::uniform(rng, 0.1, 1.0) * radial + cases::uniform(rng, -1.0, 1.0) * across);
         const double back = cases::uniform(rng, -30, 30), half = cases::uniform(rng, 0.25, 3.0);
         c.line = Line{point - back * dir, dir};
