@@ -84,7 +84,8 @@ std::vector<ProfilePiece> mitredOffsetPart(const Tool& tool, const ConvexPart& p
                              r);
 }
 
-std::vector<ProfilePiece> mitredOffsetChain(const std::vector<ProfilePiece>& pieces, double r) {
+std::vector<ProfilePiece> mitredOffsetChain(const std::vector<ProfilePiece>& pieces, double r, double slack,
+                                            int maxCones) {
     std::vector<ProfilePiece> out;
     const double level = kLevelStep * r;
     // Where the chain stands; it starts at the bottom face's rim, moved down by r.
@@ -131,8 +132,27 @@ std::vector<ProfilePiece> mitredOffsetChain(const std::vector<ProfilePiece>& pie
         } else {
             const ArcPiece& a = std::get<ArcPiece>(p);
             const ArcPiece grown = grownArc(a, r);
-            out.push_back(grown);
-            rAt = pieceRadius(grown, grown.z1), zAt = grown.z1;
+            // A torus as its tangents at n steps d of the normal angle: they meet rho / cos(d / 2)
+            // from the arc's centre, at most rho (1 / cos(d / 2) - 1) outside it, and the chain
+            // from the arc's start to its end through those points holds the arc's solid (the
+            // arc bulges outwards, its normal angle in [-pi / 2, pi / 2] rising with z).
+            const double psiA = normalAngle(p, z0), psiB = normalAngle(p, z1);
+            int n = 0;
+            if (grown.rc != 0.0 && slack > 0.0 && psiB > psiA) {
+                const double steps = std::ceil((psiB - psiA) / (2.0 * std::acos(1.0 / (1.0 + slack / grown.rho))));
+                if (steps <= maxCones) n = std::max(1, int(steps));
+            }
+            if (n == 0) {
+                out.push_back(grown);
+                rAt = pieceRadius(grown, grown.z1), zAt = grown.z1;
+            } else {
+                const double d = (psiB - psiA) / n, far = grown.rho / std::cos(0.5 * d);
+                for (int i = 0; i < n; ++i) {
+                    const double psiI = psiA + (i + 0.5) * d;
+                    lineTo(grown.rc + far * std::cos(psiI), grown.zc + far * std::sin(psiI));
+                }
+                lineTo(grown.rc + grown.rho * std::cos(psiB), grown.zc + grown.rho * std::sin(psiB));
+            }
         }
         psi = normalAngle(p, z1);
     }

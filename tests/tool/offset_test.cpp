@@ -376,7 +376,8 @@ TEST_CASE("mitredOffsetPart: holds the grown part and lies within r sqrt 2 of th
 TEST_CASE("clipChain and mitredOffsetChain: a band of heights cut from a part, and grown", "[tool][offset]") {
     // The band of a part between two random heights (the turning sweep's bands, turning.cpp note
     // i), against the oracle's part cut to the same heights: the chain spans exactly those
-    // heights, its radius is the oracle's, and grown it ends between r and r sqrt 2 of the band.
+    // heights, its radius is the oracle's, and grown it ends between r and r sqrt 2 of the band;
+    // with its tori as chains of cones within a slack of 4 r, between r and 5 r.
     std::mt19937_64 rng(20261130);
     int checked = 0;
     for (int k = 0; k < int(models::Kind::Count); ++k) {
@@ -401,26 +402,73 @@ TEST_CASE("clipChain and mitredOffsetChain: a band of heights cut from a part, a
                 const Polygon poly = polygonOf(cut);
                 const double r = std::exp(models::uniform(rng, std::log(1e-6), std::log(5.0)));
                 const std::vector<ProfilePiece> grown = mitredOffsetChain(band, r);
+                const std::vector<ProfilePiece> coned = mitredOffsetChain(band, r, 4.0 * r, 12);
                 for (int l = 0; l < 20; ++l) {
                     Line line;
                     if (!randomLineNear(cut, r, l, rng, line)) continue;
-                    const Interval iv = intersectPieces(grown, LocalLine::make(ToolPose{}, line));
                     auto distance = [&](double t) {
                         const Vec3 q = line.at(t);
-                        return polygonDistance(poly, rhoOf(q), q.z, 2.0 * r + kGap);
+                        return polygonDistance(poly, rhoOf(q), q.z, 5.0 * r + kGap);
                     };
-                    if (iv.isEmpty()) {
-                        checkNothingWithin(cut, r, distance);
-                        continue;
+                    for (const bool cones : {false, true}) {
+                        INFO((cones ? "tori as cones" : "tori kept"));
+                        const Interval iv = intersectPieces(cones ? coned : grown, LocalLine::make(ToolPose{}, line));
+                        if (iv.isEmpty()) {
+                            checkNothingWithin(cut, r, distance);
+                            continue;
+                        }
+                        checkEnds(iv, r, (cones ? 5.0 : std::sqrt(2.0)) * r, distance);
+                        for (const double t : {iv.lo - kLineStep, iv.hi + kLineStep}) CHECK(distance(t) >= r - kRound);
+                        ++checked;
                     }
-                    checkEnds(iv, r, std::sqrt(2.0) * r, distance);
-                    for (const double t : {iv.lo - kLineStep, iv.hi + kLineStep}) CHECK(distance(t) >= r - kRound);
-                    ++checked;
                 }
             }
         }
     }
-    CHECK(checked > 1000);
+    CHECK(checked > 2000);
+}
+
+TEST_CASE("mitredOffsetChain: a bull nose's torus as a chain of cones, where few enough keep to the slack",
+          "[tool][offset]") {
+    // A bull nose D10 r2: its corner, a quarter turn of radius 2 about (3, 2), grown by 1 to
+    // radius 3. Steps d with 3 (1 / cos(d / 2) - 1) <= slack: 0.3 allows a quarter turn in two
+    // (3 / cos(22.5 deg) - 3 = 0.247), 0.1 needs four (0.0445; three steps stray 0.106).
+    const Tool bull = bullNoseEndMill(10.0, 2.0, {20.0, 20.0});
+    const ConvexPart& part = bull.convexParts().front();
+    const std::vector<ProfilePiece> chain(bull.pieces().begin() + std::ptrdiff_t(part.first),
+                                          bull.pieces().begin() + std::ptrdiff_t(part.last));
+    const auto tori = [](const std::vector<ProfilePiece>& pieces) {
+        int n = 0;
+        for (const ProfilePiece& p : pieces) n += std::holds_alternative<ArcPiece>(p);
+        return n;
+    };
+    const auto kept = mitredOffsetChain(chain, 1.0);
+    CHECK(tori(kept) == 1);
+    const auto two = mitredOffsetChain(chain, 1.0, 0.3, 2);
+    CHECK(tori(two) == 0);
+    CHECK(tori(mitredOffsetChain(chain, 1.0, 0.3, 1)) == 1);  // two steps needed, one allowed
+    CHECK(tori(mitredOffsetChain(chain, 1.0, 0.1, 3)) == 1);  // four needed, three allowed
+    const auto four = mitredOffsetChain(chain, 1.0, 0.1, 4);
+    CHECK(tori(four) == 0);
+    // Out from the corner's centre through a chain's first vertex, at the normal angle
+    // -90 degrees + d / 2, the chain reaches 3 / cos(d / 2), beyond the torus by at most the slack.
+    const double pi = std::acos(-1.0);
+    for (const auto* coned : {&two, &four}) {
+        const double d = 0.5 * pi / (coned == &two ? 2 : 4), slack = coned == &two ? 0.3 : 0.1;
+        const Vec3 out(std::cos(0.5 * d - 0.5 * pi), 0.0, std::sin(0.5 * d - 0.5 * pi));
+        const Line ray{Vec3(3.0, 0.0, 2.0) - 50.0 * out, out};
+        const double torus = intersectPieces(kept, LocalLine::make(ToolPose{}, ray)).hi;
+        const double hi = intersectPieces(*coned, LocalLine::make(ToolPose{}, ray)).hi;
+        CHECK(torus == Approx(53.0));
+        CHECK(hi == Approx(50.0 + 3.0 / std::cos(0.5 * d)));
+        CHECK(hi - torus <= slack);
+    }
+    // A sphere (an arc on the axis) stays an arc: its sweep is a capsule's, in closed form.
+    const Tool ball = ballEndMill(6.0, {20.0, 20.0});
+    const ConvexPart& bp = ball.convexParts().front();
+    const std::vector<ProfilePiece> ballChain(ball.pieces().begin() + std::ptrdiff_t(bp.first),
+                                              ball.pieces().begin() + std::ptrdiff_t(bp.last));
+    CHECK(tori(mitredOffsetChain(ballChain, 1.0, 4.0, 12)) == 1);
 }
 
 TEST_CASE("mitredOffsetPart: a flat end mill grows into a cylinder with square corners", "[tool][offset]") {

@@ -38,8 +38,13 @@ std::vector<ProfilePiece> offsetPart(const Tool& tool, const ConvexPart& part, d
 /// so it stays exact to rounding for r of any size against the part's.
 std::vector<ProfilePiece> mitredOffsetPart(const Tool& tool, const ConvexPart& part, double r);
 /// @brief As mitredOffsetPart, for a convex chain of pieces given on its own (bottom to top; its
-/// solid closed by flat faces at its lowest and highest heights).
-std::vector<ProfilePiece> mitredOffsetChain(const std::vector<ProfilePiece>& chain, double r);
+/// solid closed by flat faces at its lowest and highest heights). Where slack > 0, each of the
+/// chain's tori (an arc off the axis), grown, is also replaced by the chain of cones tangent to it
+/// at evenly spaced normal angles (as OuterPart's), where at most maxCones keep that chain within
+/// `slack` of the grown arc: a superset still, whose sweep along a move is in closed form where a
+/// torus's needs its grazing curve solved per line (MoveSweep).
+std::vector<ProfilePiece> mitredOffsetChain(const std::vector<ProfilePiece>& chain, double r, double slack = 0.0,
+                                            int maxCones = 0);
 
 /// @brief A part grown by r, for tests that need only a superset of a line's interval in it:
 /// offsetPart's pieces, with each torus piece (an arc off the axis) also as the chain of cones
