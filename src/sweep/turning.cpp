@@ -310,7 +310,8 @@ Interval TurningSweep::bound(const Line& line) const {
 //      whose delta_k is at most epsilon is a leaf: the part's sweep along its move goes into O,
 //      within epsilon of S (1) and holding every point deeper than epsilon inside T(u) for u in the
 //      node (2). Any other node is settled when the part grown by delta_k - epsilon
-//      (mitredOffsetPart, a superset) swept along its move holds no point of care outside O;
+//      (mitredOffsetPart, a superset; its tori as chains of cones, kChainSlack) swept along its
+//      move holds no point of care outside O;
 //      otherwise the static pose at its middle goes into O and both halves are searched. Every u
 //      lies in a settled node or a leaf, so (2) holds; O holds static poses and leaves' sweeps, so
 //      (1) holds. The gaps of (d) are closed between poses' ends only: a leaf's sweep already holds

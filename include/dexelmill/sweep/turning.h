@@ -44,10 +44,10 @@ constexpr double kMinTurnTolerance = 1e-6;
 constexpr double kMaxTurnTolerance = 0.1;
 
 /// @brief How many linear nodes (turning.cpp, note h) the turning sweeps alive at once keep, by
-/// default: about 2 kB each, so 128 MiB. The cutting loop builds the sweeps of a batch of moves
-/// together, and ends a batch before its sweeps' trees of nodes could pass the budget
-/// (TurningSweep::linearNodeBound); past the budget a query makes the nodes it needs and drops
-/// them, slower but no larger.
+/// default: 2 to 4 kB each (a bull nose's the most, its tori swept as cones: turning_nodes.cpp), so
+/// 128 to 256 MiB. The cutting loop builds the sweeps of a batch of moves together, and ends a
+/// batch before its sweeps' trees of nodes could pass the budget (TurningSweep::linearNodeBound);
+/// past the budget a query makes the nodes it needs and drops them, slower but no larger.
 constexpr std::size_t kDefaultLinearNodeBudget = std::size_t(1) << 16;
 
 /// @brief The angle (radians, in [0, pi]) the axis of a move turns through; 0 for a fixed axis.
@@ -175,9 +175,9 @@ class TurningSweep {
     /// one band of heights of one part of parts_ (note i): the point of the axis the node's move
     /// carries exactly (the pivot, a height above the tip), and per level k the reach delta_k of a
     /// node of width 2^-k; the level whose reach is first at most epsilon is the last (a leaf).
-    /// A node above it sweeps the band grown by delta_k - epsilon with square corners
-    /// (mitredOffsetChain, made with the node: most moves make a few nodes of a few levels); a
-    /// leaf, the band itself.
+    /// A node above it sweeps the band grown by delta_k - epsilon with square corners and its tori
+    /// as chains of cones (mitredOffsetChain, made with the node: most moves make a few nodes of
+    /// a few levels); a leaf, the band itself.
     struct LinearPart {
         std::size_t part = 0;  ///< the index in parts_ of the part the band is cut from
         double pivot = 0.0;
