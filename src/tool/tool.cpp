@@ -5,7 +5,6 @@
 #include <limits>
 #include <sstream>
 
-#include <boost/math/tools/minima.hpp>
 #include <boost/math/tools/roots.hpp>
 
 #include "dexelmill/error.h"
@@ -99,7 +98,8 @@ namespace {
 constexpr int kNewtonSteps = 200;
 
 /// A bracket [lo, hi], at most `tol` wide, of the root of f between x0 and x1, where f has
-/// opposite signs (f0, f1). `f(x, value, slope)` gives f and its derivative. Newton's steps from
+/// opposite signs (f0, f1). `f(x, value, slope)` gives f and its derivative, and returns false to
+/// stop the search at x, which is then returned as the bracket [x, x]. Newton's steps from
 /// the secant's root, each kept only where it lands inside the bracket and is less than half the
 /// step before it, else the bracket is bisected (the rule of Numerical Recipes' rtsafe); a step
 /// shorter than tol / 2 is lengthened to tol / 2, so that it crosses the root and closes the
@@ -112,7 +112,7 @@ std::pair<double, double> newtonBracket(F&& f, double x0, double x1, double f0, 
     double step = std::abs(pos - neg), lastStep = step;
     for (int k = 0; k < kNewtonSteps && std::abs(pos - neg) > tol; ++k) {
         double fx = 0.0, dfx = 0.0;
-        f(x, fx, dfx);
+        if (!f(x, fx, dfx)) return {x, x};
         if (fx < 0.0) {
             neg = x;
         } else if (fx > 0.0) {
@@ -139,17 +139,21 @@ std::pair<double, double> newtonBracket(F&& f, double x0, double x1, double f0, 
 // Torus slab: g(t) = rho(t) - R(z(t)) is convex on the slab (a norm of an affine map minus a
 // concave function of an affine map), so { g <= 0 } is one interval. Any point t with g(t) <= 0
 // splits it: its lower end lies in [range.lo, t] and its upper in [t, range.hi], each the one
-// root of g there, which Newton's method (on q below) or TOMS 748 finds. (A point with g = 0 splits it only if it is the minimum:
-// the probes below need g < 0.) Two points come first, where g tends to be least: where
-// the line comes nearest the axis (rho least) and where it crosses the profile circle's height
-// (R greatest). Where neither lies inside, Brent's method finds the minimum, and a positive one
-// means the line misses. The ends do not depend on which inner point splits them, beyond the
-// root finder's tolerance.
+// root of g there, which Newton's method (on q below) or TOMS 748 finds. (A point with g = 0
+// splits it only if it is the minimum: the probes below need g < 0.) Two points come first, where
+// g tends to be least: where the line comes nearest the axis (rho least) and where it crosses the
+// profile circle's height (R greatest). Where neither lies inside, the least of q (below), which
+// has g's sign on the slab, is found, and a positive one means the line misses: q is strictly
+// convex there (q'' >= 2 zv^2, and zv = 0 is decided in closed form), so its least is where its
+// increasing slope q' changes sign, which newtonBracket finds with q'', stopping at the first
+// point where q < 0. (Boost's Brent minimisation of g took 12.7 evaluations, this 4.5, on
+// BM_TurningQuery's bull-nose x lines, 4.3 times a line: the bull nose's rows 0.93-0.98.) The
+// ends do not depend on which inner point splits them, beyond the root finder's tolerance.
 //
 // Each end is found to within `tolerance` along the line, and taken as the midpoint of the final
 // bracket, or with `outer` as its end outside the interval: then the result holds the exact
-// interval. (Where Brent's minimum is positive by less than its rounding, about 1e-16 of the
-// slab's size, the line grazes the torus and an empty interval is returned either way.)
+// interval. (Where q's least is positive by less than its rounding, about 1e-16 of the slab's
+// size squared, the line grazes the torus and an empty interval is returned either way.)
 //
 // `near`, where not empty, is an interval whose ends are likely about `reach` inside the torus's
 // ends (the ungrown tool's, for a torus grown by reach): each end of near that lies inside splits
@@ -182,19 +186,27 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
     } else if (const double gCircle = g(atCircle); gCircle < 0.0) {
         tMin = atCircle, gMin = gCircle;
     } else {
-        boost::uintmax_t iters = 200;
-        const auto m = boost::math::tools::brent_find_minima(
-            g, range.lo, range.hi, std::numeric_limits<double>::digits / 2, iters);
-        tMin = m.first;
-        gMin = m.second;
-        if (gLo < gMin) {
+        // q' and q'' at t; the search stops at the first point where q < 0 (an inner point).
+        const auto slopes = [&](double t, double& slope, double& curve) {
+            const double r2 = std::max(0.0, (l.A * t + 2.0 * l.B) * t + l.C), r = std::sqrt(r2);
+            const double dz = l.z0 + l.zv * t - a.zc, out = std::max(r - a.rc, 0.0);
+            const double radial = r > 0.0 ? (l.A * t + l.B) / r : 0.0;
+            slope = 2.0 * (out * radial + dz * l.zv);
+            curve = 2.0 * (l.zv * l.zv + (out > 0.0 ? radial * radial + out * (l.A * l.C - l.B * l.B) / (r2 * r) : 0.0));
+            return out * out + dz * dz >= a.rho * a.rho;
+        };
+        double sLo = 0.0, sHi = 0.0, curve = 0.0;
+        slopes(range.lo, sLo, curve);
+        slopes(range.hi, sHi, curve);
+        if (sLo >= 0.0) {
             tMin = range.lo;
-            gMin = gLo;
-        }
-        if (gHi < gMin) {
+        } else if (sHi <= 0.0) {
             tMin = range.hi;
-            gMin = gHi;
+        } else {
+            const auto least = newtonBracket(slopes, range.lo, range.hi, sLo, sHi, tolerance);
+            tMin = 0.5 * (least.first + least.second);
         }
+        gMin = g(tMin);
     }
     if (gMin > 0.0) return Interval::empty();
     // The root finding works on q(t) = max(rho - rc, 0)^2 + dz^2 - rho_a^2, which inside the slab
@@ -242,6 +254,7 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
                 const double dz = l.z0 + l.zv * t - a.zc, out = std::max(r - a.rc, 0.0);
                 value = out * out + dz * dz - a.rho * a.rho;
                 slope = 2.0 * ((r > 0.0 ? out * (l.A * t + l.B) / r : 0.0) + dz * l.zv);
+                return true;
             };
             return newtonBracket(qSlope, x0, x1, qOut, qMin, tolerance);
         }

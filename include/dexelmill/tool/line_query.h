@@ -164,7 +164,7 @@ inline void meridianNormal(const ProfilePiece& piece, double rho, double z, doub
 
 /// @brief The interval of the line inside one piece's slab solid { z in [z0, z1], rho <= R(z) }.
 /// Cones, cylinders and spheres in closed form; the torus by bracketed root finding on the convex
-/// function rho(t) - R(z(t)) (Boost.Math Brent minimisation, then Newton's method or TOMS 748).
+/// function rho(t) - R(z(t)) (Newton's method on a smooth function of its sign, or TOMS 748).
 inline Interval intersectPiece(const ProfilePiece& piece, const LocalLine& line) {
     if (const auto* c = std::get_if<ConePiece>(&piece)) return detail::intersectCone(*c, line);
     const ArcPiece& a = std::get<ArcPiece>(piece);
