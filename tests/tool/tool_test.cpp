@@ -434,6 +434,68 @@ TEST_CASE("a torus piece's ends lie within the root tolerance of the torus, by b
     CHECK(loose > 50);
 }
 
+TEST_CASE("an outer torus interval holds the torus's, for lines that only graze it", "[tool][oracle]") {
+    // A bull nose D10 r2's fillet grown by 1 (rc = 3, zc = 2, rho = 3, heights [-1, 2]), as the
+    // static search's settling test takes it, against lines that enter it less than 1 um deep
+    // (chords up to 0.15 mm): through a point of the torus moved in along its normal, in a random
+    // direction of the tangent plane there. With slacks of 0.01 and 0.1 mm and no hint,
+    // the outer interval must hold the oracle's run (long-double bisection of the slab solid)
+    // and end within the slack of it. The search for q's least, stopped at a bracket as wide as the
+    // slack, once called such lines misses (70bc9fa).
+    const ArcPiece torus{-1.0, 2.0, 3.0, 2.0, 3.0};
+    using L = long double;
+    const auto inside = [&](const Line& line, L t) {
+        const L x = L(line.origin.x) + t * L(line.dir.x), y = L(line.origin.y) + t * L(line.dir.y);
+        const L z = L(line.origin.z) + t * L(line.dir.z);
+        if (z < -1 || z > 2) return false;
+        const L dz = z - 2;
+        return std::sqrt(x * x + y * y) <= 3 + std::sqrt(std::max(L(0), 9 - dz * dz));
+    };
+    std::mt19937_64 rng(20261130);
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    int checked = 0;
+    for (int i = 0; i < 3000; ++i) {
+        // A point of the torus at normal angle psi (its lower quarter and a little of the upper)
+        // and azimuth phi, its outward normal, and a tangent direction.
+        const double psi = -0.5 * kPi + u01(rng) * 0.5 * kPi * 0.98, phi = 2.0 * kPi * u01(rng);
+        const Vec3 radial(std::cos(phi), std::sin(phi), 0.0);
+        const Vec3 normal = std::cos(psi) * radial + Vec3(0.0, 0.0, std::sin(psi));
+        const Vec3 surface = 3.0 * radial + Vec3(0.0, 0.0, 2.0) + 3.0 * normal;
+        const Vec3 side = glm::normalize(glm::cross(normal, Vec3(-radial.y, radial.x, 0.0)));
+        const Vec3 around(-radial.y, radial.x, 0.0);
+        const double turn = 2.0 * kPi * u01(rng);
+        const Vec3 dir = std::cos(turn) * around + std::sin(turn) * side;
+        const Vec3 through = surface - 1e-3 * u01(rng) * normal;
+        const Line line{through - 10.0 * dir, dir};
+        // The oracle's run about t = 10, where the line passes `through`, inside.
+        if (!inside(line, 10)) continue;
+        L lo = 10, hi = 10;
+        for (const int side2 : {-1, 1}) {
+            L in = 10, out = 10 + side2 * L(1e-3);
+            while (inside(line, out)) in = out, out = 10 + 2 * (out - 10);
+            while (std::abs(out - in) > L(1e-15)) {
+                const L m = 0.5L * (in + out);
+                (inside(line, m) ? in : out) = m;
+            }
+            (side2 < 0 ? lo : hi) = in;
+        }
+        const LocalLine local = LocalLine::make(ToolPose{}, line);
+        const Interval slab = detail::slabRange(local, torus.z0, torus.z1);
+        for (const double slack : {0.01, 0.1}) {
+            INFO("line " << i << ", slack " << slack << ", oracle [" << double(lo) << ", " << double(hi) << "]");
+            Interval outer = detail::outerTorusInterval(torus, local, slab, slack);
+            REQUIRE(!outer.isEmpty());
+            outer = {outer.lo + local.vShift, outer.hi + local.vShift};
+            CHECK(outer.lo <= double(lo) + 1e-9);
+            CHECK(outer.hi >= double(hi) - 1e-9);
+            CHECK(outer.lo >= double(lo) - slack - 1e-9);
+            CHECK(outer.hi <= double(hi) + slack + 1e-9);
+            ++checked;
+        }
+    }
+    CHECK(checked > 4000);
+}
+
 TEST_CASE("profile radius and membership follow the builders' shapes", "[tool]") {
     for (const Reference& ref : referenceTools()) {
         INFO(ref.name);
