@@ -91,22 +91,26 @@ std::vector<ProfilePiece> mitredOffsetChain(const std::vector<ProfilePiece>& pie
     // Where the chain stands; it starts at the bottom face's rim, moved down by r.
     const ProfilePiece& bottom = pieces.front();
     double rAt = pieceRadius(bottom, pieceZ0(bottom)), zAt = pieceZ0(bottom) - r;
-    // A straight step to (rv, zv). A step level to within `level` makes no cone: before any piece
-    // it widens the bottom face, after a cone it raises and widens that cone's top (both only
-    // enlarge the solid, by at most the step's height). After an arc (a corner's tangent leaving
-    // it nearly level) the step is dropped, a gap in radius of at most the step's height over its
-    // slope.
+    // A straight step to (rv, zv). A step level to within `level` makes no cone, and only enlarges
+    // the solid, by at most the step's height: after a cone, that cone runs on along its own line
+    // up to zv (so that a widening cone keeps its surface) and its top widens to rv; before any
+    // piece, or after an arc, the next cone starts as wide as rv at the height where the chain
+    // stands (before any piece, a wider bottom face; after an arc, a step out at its top).
     const auto lineTo = [&](double rv, double zv) {
         if (zv - zAt > level) {
             out.push_back(ConePiece{zAt, zv, rAt, rv});
             rAt = rv, zAt = zv;
         } else if (!out.empty() && std::holds_alternative<ConePiece>(out.back())) {
             ConePiece& last = std::get<ConePiece>(out.back());
-            last.z1 = std::max(last.z1, zv);
+            if (zv > last.z1) {
+                const double along = last.r0 + (last.r1 - last.r0) * (zv - last.z0) / (last.z1 - last.z0);
+                last.r1 = std::max(last.r1, along);
+                last.z1 = zv;
+            }
             last.r1 = std::max(last.r1, rv);
             rAt = last.r1, zAt = last.z1;
         } else {
-            rAt = std::max(rAt, rv), zAt = std::max(zAt, zv);
+            rAt = std::max(rAt, rv);
         }
     };
     // The corner (rc, zc) turning the normal from psiA to psiB: tangents to the circle of radius

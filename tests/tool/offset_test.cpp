@@ -471,6 +471,28 @@ TEST_CASE("mitredOffsetChain: a bull nose's torus as a chain of cones, where few
     CHECK(tori(mitredOffsetChain(ballChain, 1.0, 4.0, 12)) == 1);
 }
 
+TEST_CASE("mitredOffsetChain: a step level to rounding after a widening cone keeps that cone's surface",
+          "[tool][offset]") {
+    // An arc of radius 2 about (3, 2) from normal angle -0.3 nearly to the top (pi / 2 - 1e-7),
+    // grown by 1 and taken as one pair of tangents (a slack of 10 allows it): the tangent at -0.3
+    // rises outwards to where it meets the one at the top, which then runs inwards rising 1e-7 mm
+    // per mm, about 4e-7 mm in all: less than the chain's level step (1e-6 r), so no cone of its
+    // own. The first cone must still reach the meeting point: raising its top to the arc's end
+    // without widening it once left that point 5e-7 mm outside.
+    const double a = -0.3, b = 0.5 * std::acos(-1.0) - 1e-7;
+    const std::vector<ProfilePiece> chain{ArcPiece{2.0 + 2.0 * std::sin(a), 2.0 + 2.0 * std::sin(b), 3.0, 2.0, 2.0}};
+    const auto coned = mitredOffsetChain(chain, 1.0, 10.0, 1);
+    for (const ProfilePiece& p : coned) CHECK(std::holds_alternative<ConePiece>(p));
+    const double far = 3.0 / std::cos(0.5 * (b - a)), mid = 0.5 * (a + b);
+    const double rMeet = 3.0 + far * std::cos(mid), zMeet = 2.0 + far * std::sin(mid);
+    double radius = -1.0;
+    for (const ProfilePiece& p : coned)
+        if (zMeet >= pieceZ0(p) && zMeet <= pieceZ1(p)) radius = std::max(radius, pieceRadius(p, zMeet));
+    CHECK(radius >= rMeet - 1e-12);
+    // And the chain ends at the grown arc's top, 1e-7 from the axis side of it.
+    CHECK(pieceZ1(coned.back()) >= 2.0 + 3.0 * std::sin(b) - 1e-12);
+}
+
 TEST_CASE("mitredOffsetPart: a flat end mill grows into a cylinder with square corners", "[tool][offset]") {
     const Tool flat = flatEndMill(10.0, {20.0, 20.0});
     const ConvexPart& part = flat.convexParts().front();
