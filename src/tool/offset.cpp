@@ -24,6 +24,15 @@ double normalAngle(const ProfilePiece& piece, double z) {
     return std::atan2(nz, nr);
 }
 
+/// How many tangents, at even steps d of the normal angle, a chain round a torus arc of radius
+/// rho turning its normal by `turn` needs to stay within `slack` of it: the tangents meet
+/// rho / cos(d / 2) from the arc's centre, rho (1 / cos(d / 2) - 1) outside it. At least 1; 0
+/// where more than `most` would be needed.
+int tangentSteps(double turn, double rho, double slack, int most) {
+    const double steps = std::ceil(turn / (2.0 * std::acos(1.0 / (1.0 + slack / rho))));
+    return steps <= most ? std::max(1, int(steps)) : 0;
+}
+
 /// An arc piece grown by r: the same centre, radius rho + r, its ends moved out along their normals.
 ArcPiece grownArc(const ArcPiece& a, double r) {
     const double grow = (a.rho + r) / a.rho;
@@ -141,11 +150,9 @@ std::vector<ProfilePiece> mitredOffsetChain(const std::vector<ProfilePiece>& pie
             // from the arc's start to its end through those points holds the arc's solid (the
             // arc bulges outwards, its normal angle in [-pi / 2, pi / 2] rising with z).
             const double psiA = normalAngle(p, z0), psiB = normalAngle(p, z1);
-            int n = 0;
-            if (grown.rc != 0.0 && slack > 0.0 && psiB > psiA) {
-                const double steps = std::ceil((psiB - psiA) / (2.0 * std::acos(1.0 / (1.0 + slack / grown.rho))));
-                if (steps <= maxCones) n = std::max(1, int(steps));
-            }
+            const int n = grown.rc != 0.0 && slack > 0.0 && psiB > psiA
+                              ? tangentSteps(psiB - psiA, grown.rho, slack, maxCones)
+                              : 0;
             if (n == 0) {
                 out.push_back(grown);
                 rAt = pieceRadius(grown, grown.z1), zAt = grown.z1;
@@ -178,11 +185,8 @@ OuterPart outerOffsetPart(const Tool& tool, const ConvexPart& part, double r, do
         std::vector<ConePiece>& out = outer.chains[k];
         // Normal angles of the arc's ends; the outer half's heights rise with the angle.
         const double psiA = angles[k][0], psiB = angles[k][1];
-        // Steps d with a (1 / cos(d / 2) - 1) <= slack.
-        const double maxStep = 2.0 * std::acos(1.0 / (1.0 + slack / a->rho));
-        const double steps = std::ceil((psiB - psiA) / maxStep);
-        if (!(steps <= kMaxTangentCones)) continue;
-        const int n = std::max(1, int(steps));
+        const int n = tangentSteps(psiB - psiA, a->rho, slack, kMaxTangentCones);
+        if (n == 0) continue;
         const double d = (psiB - psiA) / n, corner = a->rho / std::cos(0.5 * d);
         // The chain's vertices: the arc's start, the tangents' meeting points, the arc's end.
         // Where a step is level to rounding (at a bottom or top face's rim), no cone is made of
