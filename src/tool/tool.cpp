@@ -41,6 +41,27 @@ double torusGap(const ArcPiece& a, const LocalLine& l, double t) {
     return std::sqrt(r2) - a.rc - std::sqrt(std::max(0.0, a.rho * a.rho - dz * dz));
 }
 
+/// q(t) = max(rho - rc, 0)^2 + dz^2 - rho_a^2 along the line, its slope and its curvature, for
+/// torusInterval (which says why): q' = 2 ((rho - rc)+ (A t + B) / rho + dz zv), and
+/// q'' = 2 (zv^2 + (A t + B)^2 / rho^2 + (rho - rc) (A C - B^2) / rho^3) where rho > rc, else 2 zv^2,
+/// only with kCurve (the root finding needs none).
+struct TorusQ {
+    double value = 0.0, slope = 0.0, curve = 0.0;
+};
+template <bool kCurve>
+TorusQ torusQ(const ArcPiece& a, const LocalLine& l, double t) {
+    const double r2 = std::max(0.0, (l.A * t + 2.0 * l.B) * t + l.C), r = std::sqrt(r2);
+    const double dz = l.z0 + l.zv * t - a.zc, out = std::max(r - a.rc, 0.0);
+    const double radial = r > 0.0 ? (l.A * t + l.B) / r : 0.0;
+    TorusQ q;
+    q.value = out * out + dz * dz - a.rho * a.rho;
+    q.slope = 2.0 * (out * radial + dz * l.zv);
+    if constexpr (kCurve) {
+        q.curve = 2.0 * (l.zv * l.zv + (out > 0.0 ? radial * radial + out * (l.A * l.C - l.B * l.B) / (r2 * r) : 0.0));
+    }
+    return q;
+}
+
 /// detail::torusClosedForm; where it returns false, `range` (the slab within the outer cylinder) and
 /// the gaps at its ends are left for the root finding.
 bool torusClosedFormOrStart(const ArcPiece& a, const LocalLine& l, const Interval& slab, Interval& out,
@@ -193,12 +214,9 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
     } else {
         // q' and q'' at t; the search stops at the first point where q < 0 (an inner point).
         const auto slopes = [&](double t, double& slope, double& curve) {
-            const double r2 = std::max(0.0, (l.A * t + 2.0 * l.B) * t + l.C), r = std::sqrt(r2);
-            const double dz = l.z0 + l.zv * t - a.zc, out = std::max(r - a.rc, 0.0);
-            const double radial = r > 0.0 ? (l.A * t + l.B) / r : 0.0;
-            slope = 2.0 * (out * radial + dz * l.zv);
-            curve = 2.0 * (l.zv * l.zv + (out > 0.0 ? radial * radial + out * (l.A * l.C - l.B * l.B) / (r2 * r) : 0.0));
-            return out * out + dz * dz >= a.rho * a.rho;
+            const TorusQ at = torusQ<true>(a, l, t);
+            slope = at.slope, curve = at.curve;
+            return at.value >= 0.0;
         };
         double sLo = 0.0, sHi = 0.0, curve = 0.0;
         slopes(range.lo, sLo, curve);
@@ -227,11 +245,7 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
     // 0.84-0.87 of the time. A bracket whose end q does not sign as g does (rounding, or an end
     // on a face where q = 0) keeps g and TOMS 748, and so does a call with a hint (its brackets are
     // narrow, and q's one evaluation more would not pay).
-    const auto q = [&](double t) {
-        const double r2 = std::max(0.0, (l.A * t + 2.0 * l.B) * t + l.C);
-        const double dz = l.z0 + l.zv * t - a.zc, out = std::max(std::sqrt(r2) - a.rc, 0.0);
-        return out * out + dz * dz - a.rho * a.rho;
-    };
+    const auto q = [&](double t) { return torusQ<false>(a, l, t).value; };
     const double qMin = near.isEmpty() ? q(tMin) : kUntried;
     const auto stop = [tolerance](double x, double y) { return std::abs(y - x) <= tolerance; };
     // The root between x0 (outside, g > 0) and x1 (inside, g < 0), either way round; `in`, where
@@ -257,10 +271,8 @@ Interval torusInterval(const ArcPiece& a, const LocalLine& l, const Interval& sl
         const auto [lo, hi] = std::minmax(x0, x1);
         if (smooth) {
             const auto qSlope = [&](double t, double& value, double& slope) {
-                const double r2 = std::max(0.0, (l.A * t + 2.0 * l.B) * t + l.C), r = std::sqrt(r2);
-                const double dz = l.z0 + l.zv * t - a.zc, out = std::max(r - a.rc, 0.0);
-                value = out * out + dz * dz - a.rho * a.rho;
-                slope = 2.0 * ((r > 0.0 ? out * (l.A * t + l.B) / r : 0.0) + dz * l.zv);
+                const TorusQ at = torusQ<false>(a, l, t);
+                value = at.value, slope = at.slope;
                 return true;
             };
             return newtonBracket(qSlope, x0, x1, qOut, qMin, tolerance);
