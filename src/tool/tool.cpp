@@ -8,6 +8,7 @@
 #include <boost/math/tools/roots.hpp>
 
 #include "dexelmill/error.h"
+#include "dexelmill/geometry/roots.h"
 #include "dexelmill/geometry/tolerance.h"
 
 namespace dexelmill {
@@ -113,55 +114,6 @@ bool detail::torusClosedForm(const ArcPiece& a, const LocalLine& l, const Interv
 
 namespace {
 
-/// Most steps newtonBracket takes. Its steps shrink at least geometrically or bisect; a local
-/// line's parameter is measured from where it passes nearest the tip, so its ranges are
-/// tool-sized and a bracket of 100 mm closes to 1e-12 mm in about 47 bisections at worst, a few
-/// Newton steps where the root is simple. (Where |t| passes about 4,500 mm the doubles are
-/// spaced wider than 1e-12 mm, and the steps run out: the bracket returned is still valid.)
-constexpr int kNewtonSteps = 200;
-
-/// A bracket [lo, hi], at most `tol` wide, of the root of f between x0 and x1, where f has
-/// opposite signs (f0, f1). `f(x, value, slope)` gives f and its derivative, and returns false to
-/// stop the search at x, which is then returned as the bracket [x, x]. Newton's steps from
-/// the secant's root, each kept only where it lands inside the bracket and is less than half the
-/// step before it, else the bracket is bisected (the rule of Numerical Recipes' rtsafe); a step
-/// shorter than tol / 2 is lengthened to tol / 2, so that it crosses the root and closes the
-/// bracket. Each step's point narrows the bracket by its sign.
-template <class F>
-std::pair<double, double> newtonBracket(F&& f, double x0, double x1, double f0, double f1, double tol) {
-    // neg: an end where f < 0; pos: one where f > 0 (either may be the larger).
-    double neg = f0 < 0.0 ? x0 : x1, pos = f0 < 0.0 ? x1 : x0;
-    double x = neg - (f0 < 0.0 ? f0 : f1) * (pos - neg) / (f1 < 0.0 ? f0 - f1 : f1 - f0);
-    double step = std::abs(pos - neg), lastStep = step;
-    for (int k = 0; k < kNewtonSteps && std::abs(pos - neg) > tol; ++k) {
-        double fx = 0.0, dfx = 0.0;
-        if (!f(x, fx, dfx)) return {x, x};
-        if (fx < 0.0) {
-            neg = x;
-        } else if (fx > 0.0) {
-            pos = x;
-        } else if (fx == 0.0) {
-            return {x, x};
-        } else {  // NaN: no sign, so no narrower bracket; bisect it
-            x = 0.5 * (neg + pos);
-            continue;
-        }
-        if (std::abs(pos - neg) <= tol) break;
-        const double lo = std::min(neg, pos), hi = std::max(neg, pos);
-        double next = x - fx / dfx;
-        lastStep = step;
-        if (!(next > lo && next < hi) || std::abs(2.0 * fx) > std::abs(lastStep * dfx)) {
-            next = 0.5 * (lo + hi);
-        } else if (std::abs(next - x) < 0.5 * tol) {
-            next = x + (next > x ? 0.5 * tol : -0.5 * tol);
-            if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-        }
-        step = std::abs(next - x);
-        x = next;
-    }
-    return std::minmax(neg, pos);
-}
-
 // Torus slab: g(t) = rho(t) - R(z(t)) is convex on the slab (a norm of an affine map minus a
 // concave function of an affine map), so { g <= 0 } is one interval. Any point t with g(t) <= 0
 // splits it: its lower end lies in [range.lo, t] and its upper in [t, range.hi], each the one
@@ -174,7 +126,9 @@ std::pair<double, double> newtonBracket(F&& f, double x0, double x1, double f0, 
 // increasing slope q' changes sign, which newtonBracket finds with q'', stopping at the first
 // point where q < 0. (Boost's Brent minimisation of g took 12.7 evaluations, this 4.5, on
 // BM_TurningQuery's bull-nose x lines, 4.3 times a line: the bull nose's rows 0.93-0.98.) The
-// ends do not depend on which inner point splits them, beyond the root finder's tolerance.
+// ends do not depend on which inner point splits them, beyond the root finder's tolerance. A
+// local line's parameter is measured from where it passes nearest the tip, so the brackets are
+// tool-sized and close well within newtonBracket's steps.
 //
 // Each end is found to within `tolerance` along the line, and taken as the midpoint of the final
 // bracket, or with `outer` as its end outside the interval: then the result holds the exact

@@ -1,0 +1,100 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "dexelmill/geometry/roots.h"
+
+using namespace dexelmill;
+
+// Each function below changes sign exactly at a known root r: x - r is computed with its exact sign,
+// and the factor it is multiplied by is positive, so the brackets can be checked against r itself.
+
+TEST_CASE("newtonBracket: a bracket at most tol wide around the root, in few steps", "[geometry][roots]") {
+    std::mt19937 rng(41);
+    std::uniform_real_distribution<double> root(-50.0, 50.0), side(0.01, 20.0), curve(0.0, 3.0);
+    for (int i = 0; i < 2000; ++i) {
+        const double r = root(rng), lo = r - side(rng), hi = r + side(rng), c = curve(rng);
+        const double sign = i % 2 ? 1.0 : -1.0;  // increasing and decreasing
+        const auto value = [&](double x) { return sign * (x - r) * (1.0 + c * (x - r) * (x - r)); };
+        int evals = 0;
+        const auto f = [&](double x, double& fx, double& dfx) {
+            ++evals;
+            fx = value(x);
+            dfx = sign * (1.0 + 3.0 * c * (x - r) * (x - r));
+            return true;
+        };
+        const double tol = 1e-12;
+        const auto [a, b] = newtonBracket(f, lo, hi, value(lo), value(hi), tol);
+        INFO("root " << r << " bracket " << lo << " " << hi << " curve " << c);
+        CHECK(a <= r);
+        CHECK(r <= b);
+        CHECK(b - a <= tol);
+        // Bisection alone takes 34 to 45 steps on these brackets; these take at most 14.
+        CHECK(evals <= 16);
+    }
+}
+
+TEST_CASE("newtonBracket: Newton steps that leave the bracket are replaced by bisection",
+          "[geometry][roots]") {
+    // atan is flat far from its root: Newton's step from there overshoots the bracket.
+    std::mt19937 rng(42);
+    std::uniform_real_distribution<double> root(-5.0, 5.0), side(1.0, 1000.0);
+    for (int i = 0; i < 500; ++i) {
+        const double r = root(rng), lo = r - side(rng), hi = r + side(rng);
+        const auto f = [&](double x, double& fx, double& dfx) {
+            fx = std::atan(x - r);
+            dfx = 1.0 / (1.0 + (x - r) * (x - r));
+            return true;
+        };
+        const auto [a, b] = newtonBracket(f, lo, hi, std::atan(lo - r), std::atan(hi - r), 1e-10);
+        CHECK(a <= r);
+        CHECK(r <= b);
+        CHECK(b - a <= 1e-10);
+    }
+}
+
+TEST_CASE("newtonBracket: stopping, a value without a sign, and tol 0", "[geometry][roots]") {
+    const double r = 0.3;
+    SECTION("f stops the search at the point it is called with") {
+        double last = 0.0;
+        int calls = 0;
+        const auto f = [&](double x, double& fx, double& dfx) {
+            last = x;
+            fx = std::expm1(x - r), dfx = std::exp(x - r);
+            return ++calls < 2;
+        };
+        const auto [a, b] = newtonBracket(f, 0.0, 1.0, std::expm1(-r), std::expm1(1.0 - r), 1e-12);
+        CHECK(calls == 2);
+        CHECK(a == last);
+        CHECK(b == last);
+    }
+    SECTION("a NaN value bisects") {
+        int nans = 0;
+        const auto f = [&](double x, double& fx, double& dfx) {
+            fx = x < 0.9 && x > 0.1 && nans < 3 ? (++nans, std::numeric_limits<double>::quiet_NaN())
+                                                 : std::expm1(x - r);
+            dfx = std::exp(x - r);
+            return true;
+        };
+        const auto [a, b] = newtonBracket(f, 0.0, 1.0, std::expm1(-r), std::expm1(1.0 - r), 1e-12);
+        CHECK(nans == 3);
+        CHECK(a <= r);
+        CHECK(r <= b);
+        CHECK(b - a <= 1e-12);
+    }
+    SECTION("tol 0: the search runs until f stops it") {
+        int calls = 0;
+        double last = 0.0;
+        const auto f = [&](double x, double& fx, double& dfx) {
+            ++calls;
+            last = x;
+            fx = std::expm1(x - r), dfx = std::exp(x - r);
+            return std::abs(fx) > 1e-14;
+        };
+        newtonBracket(f, -2.0, 3.0, std::expm1(-2.0 - r), std::expm1(3.0 - r), 0.0);
+        CHECK(std::abs(last - r) <= 1e-14);
+        CHECK(calls <= 12);
+    }
+}
