@@ -295,6 +295,21 @@ const TurningSweep::LinearSearch::Crossing& TurningSweep::LinearSearch::crossing
     return c;
 }
 
+double TurningSweep::LinearSearch::stretch(Solved& pose, std::size_t p, int upper, double cut, double sign) {
+    if (pose.range.isEmpty()) return 0.0;
+    const Crossing& c = crossing(pose, p, upper);
+    const double out = upper ? c.across : -c.across;
+    if (!(out > 0.0)) return 0.0;
+    const double slack = upper ? cut - pose.range.hi : pose.range.lo - cut;
+    const double A = s_.epsilon_ + slack * out, B = slack * s_.axisTurn_ + sign * c.speed;
+    // The positive root of A - B tau - C tau^2, in the form without cancellation.
+    const double disc = std::sqrt(B * B + 4.0 * c.bend * A);
+    const double root = B >= 0.0 ? 2.0 * A / (B + disc)
+                        : c.bend > 0.0 ? (disc - B) / (2.0 * c.bend)
+                                       : std::numeric_limits<double>::infinity();
+    return s_.axisTurn_ > 0.0 ? std::min(root, out / s_.axisTurn_) : root;
+}
+
 // Whether, where the line's end on that side grows at pose a and shrinks at pose b, the
 // pose between them where it stops growing bounds the points beyond its interval over
 // the whole node (note l); the poses tried go into O.
@@ -538,24 +553,9 @@ bool TurningSweep::LinearSearch::anchoredSettled(std::size_t p, double w, std::u
     Solved* const ends[2] = {&solved_[a], &solved_[b]};
     const Interval hull = ends[0]->range.hull(ends[1]->range);
     if (hull.isEmpty()) return false;
-    // How far into the node, from end e, the crossing at end `upper` of that pose's
-    // interval bounds the points on the line beyond `cut`: the stretch tau_e below which
-    // (j)'s bound holds, with the distance D from the crossing to `cut` as slack (note m).
     // The model moves on from pose a (sign 1) and back from pose b.
     const auto stretch = [&](int e, int upper, double cut) {
-        if (ends[e]->range.isEmpty()) return 0.0;
-        const Crossing& c = crossing(*ends[e], p, upper);
-        const double out = upper ? c.across : -c.across;
-        if (!(out > 0.0)) return 0.0;
-        const double slack = upper ? cut - ends[e]->range.hi : ends[e]->range.lo - cut;
-        const double sign = e == 0 ? 1.0 : -1.0;
-        const double A = s_.epsilon_ + slack * out, B = slack * s_.axisTurn_ + sign * c.speed;
-        // The positive root of A - B tau - C tau^2, in the form without cancellation.
-        const double disc = std::sqrt(B * B + 4.0 * c.bend * A);
-        const double root = B >= 0.0 ? 2.0 * A / (B + disc)
-                            : c.bend > 0.0 ? (disc - B) / (2.0 * c.bend)
-                                           : std::numeric_limits<double>::infinity();
-        return s_.axisTurn_ > 0.0 ? std::min(root, out / s_.axisTurn_) : root;
+        return this->stretch(*ends[e], p, upper, cut, e == 0 ? 1.0 : -1.0);
     };
     // Only a side whose stretch beyond both poses' intervals O leaves open needs a bound;
     // where only the stretch between them is open, either pose may close it.

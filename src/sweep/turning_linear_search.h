@@ -54,6 +54,10 @@ class TurningSweep::LinearSearch {
     /// Note j's C for a tool point at `height` above the tip and `off` from the axis.
     double bendAt(double height, double off) const;
     const Crossing& crossing(Solved& pose, std::size_t p, int upper);
+    /// How far from `pose`, on (sign 1) or back (sign -1) in u, the crossing at end `upper` of
+    /// its interval bounds the points on the line beyond `cut`: the stretch tau below which
+    /// note j's bound holds, with the distance D from the crossing to `cut` as slack (note m).
+    double stretch(Solved& pose, std::size_t p, int upper, double cut, double sign);
     bool graze(std::size_t p, int upper, Solved& a, Solved& b, double& end);
     bool corner(std::size_t p, int upper, Solved& a, Solved& b, const Interval& swept, double& end);
     bool faceDip(std::size_t p, int upper, Solved& a, Solved& b, double& end);
