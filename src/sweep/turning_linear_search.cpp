@@ -443,12 +443,14 @@ bool TurningSweep::LinearSearch::corner(std::size_t p, int upper, Solved& a, Sol
         // degree, these 4.5: its long rows 0.91-0.95.)
         const double aim = (ga + 0.5 * kCornerGap > 0.0) != (gb + 0.5 * kCornerGap > 0.0) ? 0.5 * kCornerGap : 0.0;
         int poses = 0;
-        double u = a.u;
         bool close = false;
+        fresh = RimPose{p, k, a.u, a.phase, a.pose, {}};  // the last pose tried
         const auto g = [&](double next, double& gu, double& slope) {
-            u = next;
-            const TurnPhase phase = s_.law_.phase(u);
-            const ToolPose ps = s_.law_.pose(phase);
+            fresh.u = next;
+            fresh.phase = s_.law_.phase(next);
+            fresh.pose = s_.law_.pose(fresh.phase);
+            const TurnPhase& phase = fresh.phase;
+            const ToolPose& ps = fresh.pose;
             const double along = glm::dot(ps.axis, line_.dir);
             const Vec3 x = line_.at((r->z - glm::dot(ps.axis, line_.origin - ps.tip)) / along);
             const Vec3 radial = x - ps.tip - r->z * ps.axis;
@@ -460,11 +462,9 @@ bool TurningSweep::LinearSearch::corner(std::size_t p, int upper, Solved& a, Sol
             return ++poses < kCornerSteps && std::isfinite(gu) && !close;
         };
         newtonBracket(g, a.u, b.u, ga + aim, gb + aim, 0.0);
-        fresh = RimPose{p, k, u, s_.law_.phase(u), {}, {}};
-        fresh.pose = s_.law_.pose(fresh.phase);
         fresh.range = s_.tool_.intersectPart(s_.parts_[p], LocalLine::make(fresh.pose, line_));
         if (fresh.range.isEmpty()) return false;
-        found_.add(fresh.range, u, p);
+        found_.add(fresh.range, fresh.u, p);
         // Kept only where the steps reached the rim: a narrower node's own steps may do better.
         if (close) {
             rimPoses_.push_back(fresh);
