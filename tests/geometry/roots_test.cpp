@@ -84,6 +84,40 @@ TEST_CASE("newtonBracket: stopping, a value without a sign, and tol 0", "[geomet
         CHECK(r <= b);
         CHECK(b - a <= 1e-12);
     }
+    SECTION("a zero at an end is the root, and f is called there last") {
+        for (const bool atLower : {true, false}) {
+            double last = -1.0;
+            int calls = 0;
+            const auto f = [&](double x, double& fx, double& dfx) {
+                ++calls;
+                last = x;
+                fx = std::expm1(x - r), dfx = std::exp(x - r);
+                return true;
+            };
+            // f = expm1(x - r) is 0 at r exactly: an end there, the other on either side.
+            const double other = atLower ? 1.0 : -1.0;
+            const double x0 = atLower ? r : other, x1 = atLower ? other : r;
+            const auto [a, b] = newtonBracket(f, x0, x1, std::expm1(x0 - r), std::expm1(x1 - r), 0.0);
+            CHECK(a == r);
+            CHECK(b == r);
+            CHECK(last == r);
+            CHECK(calls == 1);
+        }
+    }
+    SECTION("a root between two doubles: the bracket closes round it") {
+        // x^2 - 2 is 0 at no double, so no step ends the search on an exact zero.
+        int calls = 0;
+        const auto f = [&](double x, double& fx, double& dfx) {
+            ++calls;
+            fx = x * x - 2.0, dfx = 2.0 * x;
+            return true;
+        };
+        const auto [a, b] = newtonBracket(f, 0.0, 2.0, -2.0, 2.0, 1e-12);
+        CHECK(static_cast<long double>(a) * a <= 2.0L);
+        CHECK(static_cast<long double>(b) * b >= 2.0L);
+        CHECK(b - a <= 1e-12);
+        CHECK(calls <= 12);
+    }
     SECTION("tol 0: the search runs until f stops it") {
         int calls = 0;
         double last = 0.0;

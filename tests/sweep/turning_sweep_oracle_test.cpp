@@ -433,6 +433,37 @@ TEST_CASE("turning sweep vs oracle: dexel lines through a rim, where the line's 
     CHECK(tally.linear >= tally.cases / 2);
 }
 
+TEST_CASE("turning sweep vs oracle: lines through a rim exactly at the move's first or last pose",
+          "[sweep][turning]") {
+    // With the tip at the origin and the axis along z at the first (or last) pose, a line through
+    // a point of the bottom rim there meets it exactly at a node's end: the rim's pose search
+    // (turning_linear_search.cpp, note k) starts from a bracket with a zero at one end, and its
+    // pose must stay inside the node (a review found one 0.015 mm past the end of the move).
+    std::mt19937_64 rng(20261130);
+    Tally tally;
+    const double d = 10.0, r = d / 2;
+    const ToolLengths lengths{25.0, 40.0};
+    const Vec3 rims[] = {{r, 0, 0}, {0, r, 0}, {-r, 0, 0}, {0, -r, 0}};
+    const Vec3 travels[] = {{30, 0, 5}, {0, 30, -5}, {20, 10, 3}, {-15, 5, 0}};
+    for (int i = 0; i < scaled(96); ++i) {
+        Case c;
+        c.kind = models::Kind::Flat;
+        c.model.emplace(models::Model{flatEndMill(d, lengths), {models::part(0, lengths.total, [r](double) { return r; }, r)}});
+        const Vec3 tilted = glm::normalize(Vec3(cases::uniform(rng, -0.2, 0.2), cases::uniform(rng, -0.2, 0.2), 1.0));
+        const Vec3 travel = travels[i % 4];
+        if (i % 8 < 4) {  // the rim at the first pose
+            c.move.start = Vec3(0.0), c.move.end = travel, c.move.startAxis = Vec3(0, 0, 1), c.move.axis = tilted;
+        } else {  // at the last
+            c.move.start = -travel, c.move.end = Vec3(0.0), c.move.startAxis = tilted, c.move.axis = Vec3(0, 0, 1);
+        }
+        // Through the rim point itself, so that it lies on the line to the last bit.
+        const Vec3 dir = i % 3 == 0 ? glm::normalize(Vec3(0.6, 0.0, 0.8)) : cases::randomUnit(rng);
+        c.line = Line{rims[(i / 8) % 4], dir};
+        checkCase(c, tally, rng);
+    }
+    report(tally);
+}
+
 TEST_CASE("turning sweep vs oracle: a long cutter's bands, where a line's care reaches few of them",
           "[sweep][turning]") {
     // A flat end 50 mm long, searched in eight bands (turning.cpp, note i), on moves of 10 to 40 mm

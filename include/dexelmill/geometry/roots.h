@@ -16,8 +16,10 @@ namespace dexelmill {
 constexpr int kNewtonBracketSteps = 200;
 
 /// A bracket [lo, hi], at most `tol` wide, of the root of f between x0 and x1, where f has
-/// opposite signs (f0, f1). `f(x, value, slope)` gives f and its derivative, and returns false to
-/// stop the search at x, which is then returned as the bracket [x, x]. Newton's steps from
+/// opposite signs (f0, f1) or is 0 at one of them. `f(x, value, slope)` gives f and its
+/// derivative, and returns false to stop the search at x, which is then returned as the bracket
+/// [x, x]. An end where f is 0 is the root: f is called there, so that a caller sees the point it
+/// returns as the last it evaluated, and [x, x] is returned. Newton's steps from
 /// the secant's root, each kept only where it lands inside the bracket and is less than half the
 /// step before it, else the bracket is bisected (the rule of Numerical Recipes' rtsafe); a step
 /// shorter than tol / 2 is lengthened to tol / 2, so that it crosses the root and closes the
@@ -25,6 +27,13 @@ constexpr int kNewtonBracketSteps = 200;
 /// stops it or the steps run out.
 template <class F>
 std::pair<double, double> newtonBracket(F&& f, double x0, double x1, double f0, double f1, double tol) {
+    if (f0 == 0.0 || f1 == 0.0) {
+        // Else the secant below would start outside the bracket, and the steps leave it.
+        const double x = f0 == 0.0 ? x0 : x1;
+        double fx = 0.0, dfx = 0.0;
+        f(x, fx, dfx);
+        return {x, x};
+    }
     // neg: an end where f < 0; pos: one where f > 0 (either may be the larger).
     double neg = f0 < 0.0 ? x0 : x1, pos = f0 < 0.0 ? x1 : x0;
     double x = neg - (f0 < 0.0 ? f0 : f1) * (pos - neg) / (f1 < 0.0 ? f0 - f1 : f1 - f0);
