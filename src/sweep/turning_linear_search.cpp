@@ -312,7 +312,8 @@ double TurningSweep::LinearSearch::stretch(Solved& pose, std::size_t p, int uppe
     if (pose.range.isEmpty()) return 0.0;
     const Crossing& c = crossing(pose, p, upper);
     const double out = upper ? c.across : -c.across;
-    if (!(out > 0.0)) return 0.0;
+    // (A speed without a value would make B NaN, and the root below infinite where C = 0.)
+    if (!(out > 0.0) || std::isnan(c.speed)) return 0.0;
     const double slack = upper ? cut - pose.range.hi : pose.range.lo - cut;
     const double A = s_.epsilon_ + slack * out, B = slack * s_.axisTurn_ + sign * c.speed;
     // The positive root of A - B tau - C tau^2, in the form without cancellation.
