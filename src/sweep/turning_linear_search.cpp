@@ -410,11 +410,16 @@ bool TurningSweep::LinearSearch::corner(std::size_t p, int upper, Solved& a, Sol
         if (std::abs(fa - fb) != 1) return false;
         lowest = highest = std::min(fa, fb);
     }
+    // Where the line crosses a rim's plane at a pose, and that point's offset from the axis.
+    const auto rimCrossing = [&](const Rim& rim, const ToolPose& ps, Vec3& x, Vec3& radial) {
+        x = line_.at((rim.z - glm::dot(ps.axis, line_.origin - ps.tip)) / glm::dot(ps.axis, line_.dir));
+        radial = x - ps.tip - rim.z * ps.axis;
+    };
     // g at a pose: how far outside the rim's radius the line crosses the rim's plane.
     const auto gAt = [&](const Rim& rim, const ToolPose& ps) {
-        const double along = glm::dot(ps.axis, line_.dir);
-        const double t = (rim.z - glm::dot(ps.axis, line_.origin - ps.tip)) / along;
-        return glm::length(line_.at(t) - ps.tip - rim.z * ps.axis) - rim.radius;
+        Vec3 x, radial;
+        rimCrossing(rim, ps, x, radial);
+        return glm::length(radial) - rim.radius;
     };
     std::optional<Rim> r;
     int k = lowest - 1;
@@ -450,15 +455,13 @@ bool TurningSweep::LinearSearch::corner(std::size_t p, int upper, Solved& a, Sol
             fresh.u = next;
             fresh.phase = s_.law_.phase(next);
             fresh.pose = s_.law_.pose(fresh.phase);
-            const TurnPhase& phase = fresh.phase;
-            const ToolPose& ps = fresh.pose;
-            const double along = glm::dot(ps.axis, line_.dir);
-            const Vec3 x = line_.at((r->z - glm::dot(ps.axis, line_.origin - ps.tip)) / along);
-            const Vec3 radial = x - ps.tip - r->z * ps.axis;
+            Vec3 x, radial;
+            rimCrossing(*r, fresh.pose, x, radial);
             const double rho = glm::length(radial);
-            const Vec3 v = s_.law_.velocity(phase, x);
+            const Vec3 v = s_.law_.velocity(fresh.phase, x);
+            const Vec3& axis = fresh.pose.axis;
             gu = rho - r->radius + aim;
-            slope = glm::dot(radial, line_.dir * (glm::dot(ps.axis, v) / along) - v) / rho;
+            slope = glm::dot(radial, line_.dir * (glm::dot(axis, v) / glm::dot(axis, line_.dir)) - v) / rho;
             close = std::abs(gu) <= kCornerGap - aim;
             return ++poses < kCornerSteps && std::isfinite(gu) && !close;
         };

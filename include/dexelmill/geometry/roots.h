@@ -23,8 +23,9 @@ constexpr int kNewtonBracketSteps = 200;
 /// the secant's root, each kept only where it lands inside the bracket and is less than half the
 /// step before it, else the bracket is bisected (the rule of Numerical Recipes' rtsafe); a step
 /// shorter than tol / 2 is lengthened to tol / 2, so that it crosses the root and closes the
-/// bracket. Each step's point narrows the bracket by its sign. With tol 0 the search runs until f
-/// stops it or the steps run out.
+/// bracket. Each step's point narrows the bracket by its sign; a value without one (NaN) leaves the
+/// bracket as it is and bisects it, so where f stays NaN the steps run out with a bracket wider
+/// than tol. With tol 0 the search runs until f stops it or the steps run out.
 template <class F>
 std::pair<double, double> newtonBracket(F&& f, double x0, double x1, double f0, double f1, double tol) {
     if (f0 == 0.0 || f1 == 0.0) {
