@@ -383,10 +383,12 @@ bool TurningSweep::LinearSearch::graze(std::size_t p, int upper, Solved& a, Solv
     });
     if (settled) return true;
     if (poses.empty()) return false;
-    for (int step = 0;; ++step) {
+    // The last step's cover test set `next`, and no pose has been added since.
+    for (int step = 0; step < kCoverSteps; ++step) {
+        if (!solve(next)) return false;
         if (covered()) return true;
-        if (step == kCoverSteps || !solve(next)) return false;
     }
+    return false;
 }
 
 // Whether, where the line's crossings at poses a and b lie on two faces that meet at a
