@@ -10,6 +10,7 @@
 #include <functional>
 #include <random>
 #include <sstream>
+#include <vector>
 
 #include "dexelmill/error.h"
 #include "dexelmill/tool/builders.h"
@@ -494,6 +495,77 @@ TEST_CASE("an outer torus interval holds the torus's, for lines that only graze 
         }
     }
     CHECK(checked > 4000);
+}
+
+TEST_CASE("an outer torus interval does not depend on its hint", "[tool][oracle]") {
+    // The grown fillet of the test above, against lines through a point inside it at depths from
+    // 1 um to 2 mm in random directions, each asked with hints good and bad: the interval's own
+    // ends moved in or out by up to three times the reach, one end only inside, both outside, a
+    // hint beyond the interval, and one that is empty. Each answer must hold the oracle's run
+    // (long-double bisection of the slab solid) and end within the slack of it, as without a hint.
+    const ArcPiece torus{-1.0, 2.0, 3.0, 2.0, 3.0};
+    using L = long double;
+    const auto inside = [&](const Line& line, L t) {
+        const L x = L(line.origin.x) + t * L(line.dir.x), y = L(line.origin.y) + t * L(line.dir.y);
+        const L z = L(line.origin.z) + t * L(line.dir.z);
+        if (z < -1 || z > 2) return false;
+        const L dz = z - 2;
+        return std::sqrt(x * x + y * y) <= 3 + std::sqrt(std::max(L(0), 9 - dz * dz));
+    };
+    std::mt19937_64 rng(20261201);
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    int checked = 0, hinted = 0;
+    for (int i = 0; i < 1500; ++i) {
+        const double psi = -0.5 * kPi + u01(rng) * 0.5 * kPi * 0.98, phi = 2.0 * kPi * u01(rng);
+        const Vec3 radial(std::cos(phi), std::sin(phi), 0.0);
+        const Vec3 normal = std::cos(psi) * radial + Vec3(0.0, 0.0, std::sin(psi));
+        const Vec3 surface = 3.0 * radial + Vec3(0.0, 0.0, 2.0) + 3.0 * normal;
+        const double depth = std::pow(10.0, -3.0 + 3.3 * u01(rng));
+        const double cz = 2.0 * u01(rng) - 1.0, az = 2.0 * kPi * u01(rng), sz = std::sqrt(1.0 - cz * cz);
+        const Vec3 dir(sz * std::cos(az), sz * std::sin(az), cz);
+        const Line line{surface - depth * normal - 10.0 * dir, dir};
+        if (!inside(line, 10)) continue;
+        L lo = 10, hi = 10;
+        for (const int side : {-1, 1}) {
+            L in = 10, out = 10 + side * L(1e-3);
+            while (inside(line, out)) in = out, out = 10 + 2 * (out - 10);
+            while (std::abs(out - in) > L(1e-15)) {
+                const L m = 0.5L * (in + out);
+                (inside(line, m) ? in : out) = m;
+            }
+            (side < 0 ? lo : hi) = in;
+        }
+        const LocalLine local = LocalLine::make(ToolPose{}, line);
+        const Interval slab = detail::slabRange(local, torus.z0, torus.z1);
+        // The oracle's run in the local line's parameters.
+        const double lLo = double(lo) - local.vShift, lHi = double(hi) - local.vShift;
+        for (const double reach : {1e-6, 0.01, 1.0}) {
+            std::vector<Interval> hints{{lLo - 4.0 * reach, lHi + 4.0 * reach},
+                                        {lHi + 1.0, lHi + 2.0},
+                                        {lLo + reach, lLo + reach},
+                                        {lHi, lLo - 1.0},
+                                        {lLo + reach, lHi + 4.0 * reach}};
+            for (int k = 0; k < 3; ++k)
+                hints.push_back({lLo + reach * (6.0 * u01(rng) - 3.0), lHi - reach * (6.0 * u01(rng) - 3.0)});
+            for (const Interval& near : hints) {
+                for (const double slack : {0.01, 0.1}) {
+                    INFO("line " << i << ", depth " << depth << ", reach " << reach << ", slack " << slack
+                                 << ", hint [" << near.lo << ", " << near.hi << "], oracle [" << lLo << ", " << lHi
+                                 << "] (local)");
+                    const Interval outer = detail::outerTorusInterval(torus, local, slab, slack, near, reach);
+                    REQUIRE(!outer.isEmpty());
+                    CHECK(outer.lo <= lLo + 1e-9);
+                    CHECK(outer.hi >= lHi - 1e-9);
+                    CHECK(outer.lo >= lLo - slack - 1e-9);
+                    CHECK(outer.hi <= lHi + slack + 1e-9);
+                    ++checked;
+                    hinted += !near.isEmpty() && near.lo > lLo && near.lo < lHi;
+                }
+            }
+        }
+    }
+    CHECK(checked > 30000);
+    CHECK(hinted > 10000);
 }
 
 TEST_CASE("profile radius and membership follow the builders' shapes", "[tool]") {
