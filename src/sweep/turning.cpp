@@ -431,8 +431,10 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
         }
         flush();
     }
+    // The search also keeps what it found of the end poses' faces for the Hermite data below.
+    LinearSearch search(*this, line, matters, found);
     if (!models_.empty()) {
-        LinearSearch(*this, line, matters, found).run();
+        search.run();
     } else {
         const auto held = [&](const Interval& g) { return matters.held(g); };
         // The poses solved, each with its line in the tool's frame and its phase; nodes refer to
@@ -529,7 +531,7 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
             return;
         if (node != 0) {
             nodeEndNormal(line, t, part, node, upper, normal, sharp);
-        } else {
+        } else if (!search.knownEndNormal(t, u, part, normal, sharp)) {
             endNormal(line, t, u, part, normal, sharp);
         }
     };

@@ -278,6 +278,7 @@ void TurningSweep::LinearSearch::addEnds(std::size_t p) {
     if (!first.isEmpty()) found_.add(first, 0.0, p);
     if (!last.isEmpty()) found_.add(last, 1.0, p);
     endsAdded_ = p;
+    endFaces_[0][0] = endFaces_[0][1] = endFaces_[1][0] = endFaces_[1][1] = EndFace{};
     solved_.clear();
     solved_.push_back({s_.startPhase_.u, s_.startPose_, first, {}, s_.startPhase_});
     solved_.push_back({s_.endPhase_.u, s_.endPose_, last, {}, s_.endPhase_});
@@ -295,7 +296,12 @@ const TurningSweep::LinearSearch::Crossing& TurningSweep::LinearSearch::crossing
     Crossing& c = pose.ends[upper];
     if (c.found) return c;
     const Vec3 y = line_.at(upper ? pose.range.hi : pose.range.lo);
-    const Vec3 n = s_.faceNormal(pose.pose, p, y, &c.face);
+    // At the first and last poses, which make most output ends on a short move, the same look at
+    // the faces gives the Hermite data there, where no other face is near (knownEndNormal).
+    const std::ptrdiff_t e = &pose - solved_.data();
+    EndFace* end = e == 0 || e == 1 ? &endFaces_[e][upper] : nullptr;
+    const Vec3 n = s_.faceNormal(pose.pose, p, y, &c.face, end ? &end->alone : nullptr);
+    if (end) end->normal = n;
     const double height = glm::dot(y - pose.pose.tip, pose.pose.axis);
     const double off = glm::length(y - pose.pose.tip - height * pose.pose.axis);
     c.found = true;

@@ -17,6 +17,25 @@ class TurningSweep::LinearSearch {
     /// Searches `line` band by band (models_), adding to `found` what `care` needs.
     LinearSearch(const TurningSweep& sweep, const Line& line, const turning::Care& care, turning::Union& found);
     void run();
+    /// The Hermite data of an output end at line parameter t that part `part` made at the first or
+    /// last pose (u), where that end's crossing found it (endFaces_): true, with normal and sharp
+    /// as TurningSweep::endNormal gives them; false where not.
+    bool knownEndNormal(double t, double u, std::size_t part, Vec3& normal, bool& sharp) const {
+        // The first two poses solved are the part's end poses (addEnds), where it is endsAdded_.
+        if (endsAdded_ != part) return false;
+        for (std::size_t e = 0; e < 2; ++e) {
+            const Solved& pose = solved_[e];
+            if (pose.u != u) continue;
+            for (const int upper : {0, 1}) {
+                const EndFace& f = endFaces_[e][upper];
+                if (f.alone && t == (upper ? pose.range.hi : pose.range.lo)) {
+                    normal = f.normal, sharp = false;
+                    return true;
+                }
+            }
+        }
+        return false;
+    }
 
   private:
     /// Per end of a solved pose's interval (lower, upper), what note j asks of the face the line
@@ -27,6 +46,13 @@ class TurningSweep::LinearSearch {
         double speed = 0.0;   ///< n.v, v the velocity of the tool point there
         double bend = 0.0;    ///< C: how far the face's supporting plane strays in second order
         int face = 0;         ///< the face's index up the meridian (faceNormal)
+    };
+    /// Per end of the end poses' intervals (solved_[0] and [1]), whether its crossing found no
+    /// other face near (faceNormal's `alone`), and that face's normal: then the Hermite data of
+    /// an output end there.
+    struct EndFace {
+        bool alone;
+        Vec3 normal;
     };
     /// A static pose of the part in O at u, and its interval.
     struct Solved {
@@ -85,6 +111,7 @@ class TurningSweep::LinearSearch {
     std::optional<Interval> heights_;  ///< the heights the care may take (reaches)
     turning::ShortList<RimPose, 4> rimPoses_;  ///< the rim poses found (corner)
     std::size_t endsAdded_;  ///< the part whose end poses are in O already
+    EndFace endFaces_[2][2];  ///< per end pose and end, for endsAdded_'s part (set by addEnds)
 };
 
 }  // namespace dexelmill

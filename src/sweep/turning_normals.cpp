@@ -125,18 +125,26 @@ std::vector<TurningSweep::MeridianFace> TurningSweep::meridianFaces(const std::v
     return faces;
 }
 
-Vec3 TurningSweep::faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x, int* face) const {
+Vec3 TurningSweep::faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x, int* face, bool* alone) const {
     double rho = 0.0;
     Vec3 radial(0.0);
     Face nearest{std::numeric_limits<double>::infinity(), 0.0, 0.0};
+    double second = std::numeric_limits<double>::infinity();  // the next face's squared gap
     int k = 0;
     forEachFace(faces_[part], pose, x, rho, radial, [&](const Face& f) {
         if (f.gap2 < nearest.gap2) {
+            second = nearest.gap2;
             nearest = f;
             if (face) *face = k;
+        } else {
+            second = std::min(second, f.gap2);
         }
         ++k;
     });
+    // endNormal's test for a rim takes only faces within kRimReach tolerances. (Where no face's
+    // gap is a number, neither is x: endNormal decides.)
+    const double reach = kRimReach * epsilon_;
+    if (alone) *alone = nearest.gap2 < std::numeric_limits<double>::infinity() && second > reach * reach;
     return nearest.normal(radial, pose.axis);
 }
 

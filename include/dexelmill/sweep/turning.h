@@ -231,8 +231,11 @@ class TurningSweep {
     static std::vector<MeridianFace> meridianFaces(const std::vector<ProfilePiece>& pieces, const ConvexPart& part);
     /// The outward normal of the face of part `part` at pose `pose` nearest the point x
     /// (turning_normals.cpp); `face`, when given, gets that face's index up the meridian (0 the
-    /// bottom face, then the lateral pieces, then the top face).
-    Vec3 faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x, int* face = nullptr) const;
+    /// bottom face, then the lateral pieces, then the top face), and `alone` whether every other
+    /// face lies farther from x than endNormal looks for a rim: then an output end at x that the
+    /// first or last pose made takes this normal as its Hermite data, and is not sharp.
+    Vec3 faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x, int* face = nullptr,
+                    bool* alone = nullptr) const;
     /// Where faces k and k + 1 of a part meet at an angle: the rim's height and radius, and each
     /// face's outward normal there in the meridian plane, (across the axis, along it).
     struct Rim {
