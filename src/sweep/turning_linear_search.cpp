@@ -298,8 +298,9 @@ const TurningSweep::LinearSearch::Crossing& TurningSweep::LinearSearch::crossing
     const Vec3 y = line_.at(upper ? pose.range.hi : pose.range.lo);
     // At the first and last poses, which make most output ends on a short move, the same look at
     // the faces gives the Hermite data there, where no other face is near (knownEndNormal).
-    const std::ptrdiff_t e = &pose - solved_.data();
-    EndFace* end = e == 0 || e == 1 ? &endFaces_[e][upper] : nullptr;
+    EndFace* end = nullptr;
+    for (std::size_t e = 0; e < 2 && e < solved_.size(); ++e)
+        if (&pose == &solved_[e]) end = &endFaces_[e][upper];
     const Vec3 n = s_.faceNormal(pose.pose, p, y, &c.face, end ? &end->alone : nullptr);
     if (end) end->normal = n;
     const double height = glm::dot(y - pose.pose.tip, pose.pose.axis);

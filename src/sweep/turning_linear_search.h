@@ -21,8 +21,9 @@ class TurningSweep::LinearSearch {
     /// last pose (u), where that end's crossing found it (endFaces_): true, with normal and sharp
     /// as TurningSweep::endNormal gives them; false where not.
     bool knownEndNormal(double t, double u, std::size_t part, Vec3& normal, bool& sharp) const {
-        // The first two poses solved are the part's end poses (addEnds), where it is endsAdded_.
-        if (endsAdded_ != part) return false;
+        // The first two poses solved are the part's end poses (addEnds), where it is endsAdded_:
+        // not a ball's (whose index follows the parts', as endsAdded_'s does before addEnds).
+        if (part >= s_.parts_.size() || endsAdded_ != part) return false;
         for (std::size_t e = 0; e < 2; ++e) {
             const Solved& pose = solved_[e];
             if (pose.u != u) continue;

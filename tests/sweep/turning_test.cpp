@@ -12,6 +12,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -481,6 +482,41 @@ TEST_CASE("turning sweep: a long cutter is searched in bands, and their ends tak
     CHECK(lateral > 2000);
     const NoNodeBudget none;
     CHECK(sameHits(TurningSweep(tool, m), lines, kept) > 2000);
+}
+
+TEST_CASE("turning sweep: a ball end's lines asked first on a fresh thread", "[sweep][turning]") {
+    // The search keeps the poses it solves per thread, and the Hermite data of an end that the
+    // first or last pose made comes from what it found there; an end a ball's capsules made is
+    // not among those. Each line is asked on a thread of its own, where it is the first query,
+    // and on this thread after the others: the same answers, to the bit. (Taking a capsule's end
+    // for an end pose's once read the poses of a thread that had solved none, and crashed.)
+    const Tool tool = ballEndMill(6.0, {30.0, 30.0});
+    const TurningSweep sweep(tool, tiltedTurn(10.0));
+    std::mt19937_64 rng(20261130);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    std::normal_distribution<double> gauss;
+    int ends = 0;
+    for (int i = 0; i < 40; ++i) {
+        const ToolPose p = sweep.pose(uniform(rng));
+        const Vec3 dir = glm::normalize(Vec3(gauss(rng), gauss(rng), gauss(rng)));
+        const Vec3 side = glm::normalize(glm::cross(p.axis, dir));
+        const Line line{p.tip + 3.0 * uniform(rng) * p.axis + 2.0 * uniform(rng) * side - 40.0 * dir, dir};
+        std::vector<LineHit> first;
+        std::thread([&] { first = sweep.intersect(line); }).join();
+        const std::vector<LineHit> later = sweep.intersect(line);
+        INFO("line " << i);
+        REQUIRE(first.size() == later.size());
+        for (std::size_t k = 0; k < later.size(); ++k) {
+            CHECK(first[k].range.lo == later[k].range.lo);
+            CHECK(first[k].range.hi == later[k].range.hi);
+            CHECK(first[k].normalLo == later[k].normalLo);
+            CHECK(first[k].normalHi == later[k].normalHi);
+            CHECK(first[k].sharpLo == later[k].sharpLo);
+            CHECK(first[k].sharpHi == later[k].sharpHi);
+            ends += 2;
+        }
+    }
+    CHECK(ends >= 40);
 }
 
 TEST_CASE("turning sweep: Hermite data only for the ends within the care", "[sweep][turning]") {
