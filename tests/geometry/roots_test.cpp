@@ -132,3 +132,33 @@ TEST_CASE("newtonBracket: stopping, a value without a sign, and tol 0", "[geomet
         CHECK(calls <= 12);
     }
 }
+
+TEST_CASE("newtonBracket: steps that near the root from one side are lengthened across it",
+          "[geometry][roots]") {
+    // x^2 - a is convex and increasing on [1, a]: after the first Newton step, every step lands on
+    // the root's right and approaches it from there, so the bracket's left end stays where the
+    // secant put it. A step shorter than tol / 2 is lengthened to tol / 2 and crosses the root,
+    // which closes the bracket at once: at most 8 evaluations on these brackets at tols of 1e-3
+    // and 1e-6. Unlengthened, the steps go on until rounding stops them, up to 21 and 31. The
+    // value is exactly rounded (fma), so its sign is exact and the bracket can be checked against
+    // the root's rounding.
+    std::mt19937 rng(45);
+    std::uniform_real_distribution<double> square(1.5, 100.0);
+    for (const double tol : {1e-3, 1e-6}) {
+        for (int i = 0; i < 1000; ++i) {
+            const double a = square(rng);
+            int evals = 0;
+            const auto f = [&](double x, double& fx, double& dfx) {
+                ++evals;
+                fx = std::fma(x, x, -a), dfx = 2.0 * x;
+                return true;
+            };
+            const auto [lo, hi] = newtonBracket(f, 1.0, a, 1.0 - a, std::fma(a, a, -a), tol);
+            INFO("a = " << a << ", tol " << tol << ", bracket [" << lo << ", " << hi << "]");
+            CHECK(lo <= std::sqrt(a));
+            CHECK(std::sqrt(a) <= hi);
+            CHECK(hi - lo <= tol);
+            CHECK(evals <= 8);
+        }
+    }
+}
