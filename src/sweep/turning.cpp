@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 
@@ -50,6 +51,9 @@ constexpr double kMaxChords = 256.0;
 
 /// Chords a ball's group holds: a line is tested against a group's ball before its capsules.
 constexpr int kChordGroup = 8;
+
+/// TurningSweep::setEndNormalsFromSearch's setting.
+std::atomic<bool> endNormalsFromSearch{true};
 
 /// The parameters of `line` (unit direction) within r of the segment [a, b]: one interval, since
 /// the capsule is convex, the hull of the line's intervals in the two end balls and in the
@@ -431,7 +435,8 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
         }
         flush();
     }
-    // The search also keeps what it found of the end poses' faces for the Hermite data below.
+    // The search also keeps what it found of the end poses' faces for the Hermite data below
+    // (setEndNormalsFromSearch).
     LinearSearch search(*this, line, matters, found);
     if (!models_.empty()) {
         search.run();
@@ -531,7 +536,8 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
             return;
         if (node != 0) {
             nodeEndNormal(line, t, part, node, upper, normal, sharp);
-        } else if (!search.knownEndNormal(t, u, part, normal, sharp)) {
+        } else if (!endNormalsFromSearch.load(std::memory_order_relaxed) ||
+                   !search.knownEndNormal(t, u, part, normal, sharp)) {
             endNormal(line, t, u, part, normal, sharp);
         }
     };
@@ -543,6 +549,10 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
         hermite(p.range.hi, p.uHi, p.partHi, p.nodeHi, true, hit.normalHi, hit.sharpHi);
         out.push_back(hit);
     }
+}
+
+void TurningSweep::setEndNormalsFromSearch(bool fromSearch) {
+    endNormalsFromSearch.store(fromSearch, std::memory_order_relaxed);
 }
 
 std::vector<Interval> TurningSweep::intersectAll(const Line& line) const {

@@ -112,7 +112,8 @@ class TurningSweep::LinearSearch {
     std::optional<Interval> heights_;  ///< the heights the care may take (reaches)
     turning::ShortList<RimPose, 4> rimPoses_;  ///< the rim poses found (corner)
     std::size_t endsAdded_;  ///< the part whose end poses are in O already
-    EndFace endFaces_[2][2];  ///< per end pose and end, for endsAdded_'s part (set by addEnds)
+    /// Per end pose and end, for endsAdded_'s part: cleared by addEnds, set by crossing.
+    EndFace endFaces_[2][2];
 };
 
 }  // namespace dexelmill

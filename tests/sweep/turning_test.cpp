@@ -519,6 +519,96 @@ TEST_CASE("turning sweep: a ball end's lines asked first on a fresh thread", "[s
     CHECK(ends >= 40);
 }
 
+namespace {
+
+/// While alive, the Hermite data of the first and last poses' ends are found afresh
+/// (TurningSweep::setEndNormalsFromSearch); the default comes back however the scope ends.
+struct EndNormalsAfresh {
+    EndNormalsAfresh() { TurningSweep::setEndNormalsFromSearch(false); }
+    ~EndNormalsAfresh() { TurningSweep::setEndNormalsFromSearch(true); }
+    EndNormalsAfresh(const EndNormalsAfresh&) = delete;
+    EndNormalsAfresh& operator=(const EndNormalsAfresh&) = delete;
+};
+
+}  // namespace
+
+TEST_CASE("turning sweep: the end poses' Hermite data from the search are those found afresh",
+          "[sweep][turning]") {
+    // An output end that the first or last pose made takes the normal of the face the search's
+    // crossing found there, where no other face lies within the rim reach (4 tolerances); the
+    // Hermite data found afresh at that pose are the same. Lines through points of the end
+    // poses' surfaces, on their rims, 4 tolerances off them and elsewhere, along the lattice and
+    // in random directions, for tools with rims of several kinds and turns from 0.05 to 30
+    // degrees: the same intervals and sharp flags, and normals within rounding (a compiler that
+    // fuses multiply-adds may round the two ways differently).
+    const std::vector<Tool> tools{flatEndMill(6.0, {20.0, 30.0}),
+                                  bullNoseEndMill(10.0, 2.0, {25.0, 30.0}),
+                                  taperEndMill(4.0, 0.1, {20.0, 30.0}),
+                                  chamferMill(1.0, 0.6, 10.0, {20.0, 30.0}),
+                                  drill(6.0, 118.0 * kPi / 180.0, {30.0, 40.0}),
+                                  flatEndMill(10.0, {50.0, 50.0})};
+    std::mt19937_64 rng(20261130);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    std::normal_distribution<double> gauss;
+    const auto direction = [&] { return glm::normalize(Vec3(gauss(rng), gauss(rng), gauss(rng))); };
+    const double eps = kDefaultTurnTolerance;
+    int ends = 0, onRims = 0;
+    for (const Tool& tool : tools) {
+        for (const double degrees : {0.05, 0.6, 5.0, 30.0}) {
+            for (const double travel : {0.0, 0.5, 30.0}) {
+                Move m;
+                m.start = Vec3(gauss(rng), gauss(rng), gauss(rng));
+                m.end = m.start + travel * direction();
+                m.axis = glm::normalize(Vec3(0.3 * gauss(rng), 0.3 * gauss(rng), 1.0));
+                m.startAxis = rotated(m.axis, glm::normalize(glm::cross(m.axis, direction())), degrees * kPi / 180.0);
+                const TurningSweep sweep(tool, m);
+                const double length = tool.totalLength(), far = 2.0 * (length + tool.maxRadius());
+                for (int i = 0; i < 60; ++i) {
+                    const ToolPose p = sweep.pose(i % 5 == 4 ? uniform(rng) : double(i % 2));
+                    const Vec3 any = std::abs(p.axis.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+                    const Vec3 e1 = glm::normalize(glm::cross(p.axis, any)), e2 = glm::cross(p.axis, e1);
+                    const double phi = 2.0 * kPi * uniform(rng);
+                    const Vec3 radial = std::cos(phi) * e1 + std::sin(phi) * e2;
+                    // A height on the tool, or its bottom face's (a rim there), or 4 tolerances
+                    // above or below it; a radius on the surface there, or 4 tolerances off it,
+                    // or the axis (the tip, about which a move without travel turns the tool: a
+                    // line through it ends there at every pose, and a middle pose may make an
+                    // end exactly where an end pose's lies).
+                    double z = i % 3 == 0 ? 0.0 : length * uniform(rng);
+                    if (i % 7 == 0) z += (i % 2 ? 4.0 : -4.0) * eps;
+                    double r = std::max(0.0, tool.radiusAt(std::max(z, 0.0)));
+                    if (i % 3 == 1) r += (i % 2 ? 4.0 : -4.0) * eps * (1.0 + 0.1 * gauss(rng));
+                    if (i % 11 == 0) r = 0.0;
+                    onRims += i % 3 == 0;
+                    const Vec3 point = p.tip + z * p.axis + r * radial;
+                    const Vec3 dir = i % 4 < 3 ? Vec3(i % 4 == 0, i % 4 == 1, i % 4 == 2) : direction();
+                    const Line line{point - far * dir, dir};
+                    const std::vector<LineHit> fromSearch = sweep.intersect(line);
+                    std::vector<LineHit> afresh;
+                    {
+                        const EndNormalsAfresh scope;
+                        afresh = sweep.intersect(line);
+                    }
+                    INFO("tool " << tool.description() << ", turn " << degrees << " degrees, travel " << travel
+                                 << ", line " << i);
+                    REQUIRE(fromSearch.size() == afresh.size());
+                    for (std::size_t k = 0; k < afresh.size(); ++k) {
+                        CHECK(fromSearch[k].range.lo == afresh[k].range.lo);
+                        CHECK(fromSearch[k].range.hi == afresh[k].range.hi);
+                        CHECK(glm::length(fromSearch[k].normalLo - afresh[k].normalLo) <= 1e-12);
+                        CHECK(glm::length(fromSearch[k].normalHi - afresh[k].normalHi) <= 1e-12);
+                        CHECK(fromSearch[k].sharpLo == afresh[k].sharpLo);
+                        CHECK(fromSearch[k].sharpHi == afresh[k].sharpHi);
+                        ends += 2;
+                    }
+                }
+            }
+        }
+    }
+    CHECK(ends > 4000);
+    CHECK(onRims > 1000);
+}
+
 TEST_CASE("turning sweep: Hermite data only for the ends within the care", "[sweep][turning]") {
     // The cutting loop passes a dexel's material as the care: an end outside it meets no
     // material, and its Hermite data are left zero. A care that holds the whole bound changes

@@ -117,6 +117,10 @@ class TurningSweep {
     static std::size_t keptLinearNodes();
     static std::size_t linearNodeBudget();
     static void setLinearNodeBudget(std::size_t nodes);
+    /// @brief Whether the Hermite data of an output end that the first or last pose made come
+    /// from the search's own look at the faces there, where it found no rim near (the default),
+    /// or are found afresh as at any other pose: the same data, which a test checks.
+    static void setEndNormalsFromSearch(bool fromSearch);
     /// @brief The most linear nodes this sweep can keep: every node of its bands' trees down to
     /// the deepest level kept (0 without linear nodes). The cutting loop keeps the sweeps it
     /// builds together within the budget by this bound.
