@@ -497,7 +497,7 @@ TEST_CASE("an outer torus interval holds the torus's, for lines that only graze 
     CHECK(checked > 4000);
 }
 
-TEST_CASE("an outer torus interval does not depend on its hint", "[tool][oracle]") {
+TEST_CASE("an outer torus interval holds the torus's within the slack, whatever its hint", "[tool][oracle]") {
     // The grown fillet of the test above, against lines through a point inside it at depths from
     // 1 um to 2 mm in random directions, each asked with hints good and bad: the interval's own
     // ends moved in or out by up to three times the reach, one end only inside, both outside, a
