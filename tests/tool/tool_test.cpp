@@ -10,6 +10,7 @@
 #include <functional>
 #include <random>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "dexelmill/error.h"
@@ -435,6 +436,40 @@ TEST_CASE("a torus piece's ends lie within the root tolerance of the torus, by b
     CHECK(loose > 50);
 }
 
+namespace {
+
+/// A bull nose D10 r2's fillet grown by 1: rc = 3, zc = 2, rho = 3, heights [-1, 2].
+const ArcPiece kGrownFillet{-1.0, 2.0, 3.0, 2.0, 3.0};
+
+/// Whether the point at t on `line` lies in kGrownFillet's slab solid, in long double.
+bool inGrownFillet(const Line& line, long double t) {
+    using L = long double;
+    const L x = L(line.origin.x) + t * L(line.dir.x), y = L(line.origin.y) + t * L(line.dir.y);
+    const L z = L(line.origin.z) + t * L(line.dir.z);
+    if (z < -1 || z > 2) return false;
+    const L dz = z - 2;
+    return std::sqrt(x * x + y * y) <= 3 + std::sqrt(std::max(L(0), 9 - dz * dz));
+}
+
+/// The oracle's run of `line` in kGrownFillet's slab solid about t = 10, a point inside: each end
+/// stepped out to a point outside, then bisected in long double to 1e-15.
+std::pair<long double, long double> grownFilletRun(const Line& line) {
+    using L = long double;
+    L lo = 10, hi = 10;
+    for (const int side : {-1, 1}) {
+        L in = 10, out = 10 + side * L(1e-3);
+        while (inGrownFillet(line, out)) in = out, out = 10 + 2 * (out - 10);
+        while (std::abs(out - in) > L(1e-15)) {
+            const L m = 0.5L * (in + out);
+            (inGrownFillet(line, m) ? in : out) = m;
+        }
+        (side < 0 ? lo : hi) = in;
+    }
+    return {lo, hi};
+}
+
+}  // namespace
+
 TEST_CASE("an outer torus interval holds the torus's, for lines that only graze it", "[tool][oracle]") {
     // A bull nose D10 r2's fillet grown by 1 (rc = 3, zc = 2, rho = 3, heights [-1, 2]), as the
     // static search's settling test takes it, against lines that enter it less than 1 um deep
@@ -443,15 +478,7 @@ TEST_CASE("an outer torus interval holds the torus's, for lines that only graze 
     // the outer interval must hold the oracle's run (long-double bisection of the slab solid)
     // and end within the slack of it. The search for q's least, stopped at a bracket as wide as the
     // slack, once called such lines misses (70bc9fa).
-    const ArcPiece torus{-1.0, 2.0, 3.0, 2.0, 3.0};
-    using L = long double;
-    const auto inside = [&](const Line& line, L t) {
-        const L x = L(line.origin.x) + t * L(line.dir.x), y = L(line.origin.y) + t * L(line.dir.y);
-        const L z = L(line.origin.z) + t * L(line.dir.z);
-        if (z < -1 || z > 2) return false;
-        const L dz = z - 2;
-        return std::sqrt(x * x + y * y) <= 3 + std::sqrt(std::max(L(0), 9 - dz * dz));
-    };
+    const ArcPiece& torus = kGrownFillet;
     std::mt19937_64 rng(20261130);
     std::uniform_real_distribution<double> u01(0.0, 1.0);
     int checked = 0;
@@ -469,17 +496,8 @@ TEST_CASE("an outer torus interval holds the torus's, for lines that only graze 
         const Vec3 through = surface - 1e-3 * u01(rng) * normal;
         const Line line{through - 10.0 * dir, dir};
         // The oracle's run about t = 10, where the line passes `through`, inside.
-        if (!inside(line, 10)) continue;
-        L lo = 10, hi = 10;
-        for (const int side2 : {-1, 1}) {
-            L in = 10, out = 10 + side2 * L(1e-3);
-            while (inside(line, out)) in = out, out = 10 + 2 * (out - 10);
-            while (std::abs(out - in) > L(1e-15)) {
-                const L m = 0.5L * (in + out);
-                (inside(line, m) ? in : out) = m;
-            }
-            (side2 < 0 ? lo : hi) = in;
-        }
+        if (!inGrownFillet(line, 10)) continue;
+        const auto [lo, hi] = grownFilletRun(line);
         const LocalLine local = LocalLine::make(ToolPose{}, line);
         const Interval slab = detail::slabRange(local, torus.z0, torus.z1);
         for (const double slack : {0.01, 0.1}) {
@@ -503,15 +521,7 @@ TEST_CASE("an outer torus interval holds the torus's within the slack, whatever 
     // ends moved in or out by up to three times the reach, one end only inside, both outside, a
     // hint beyond the interval, and one that is empty. Each answer must hold the oracle's run
     // (long-double bisection of the slab solid) and end within the slack of it, as without a hint.
-    const ArcPiece torus{-1.0, 2.0, 3.0, 2.0, 3.0};
-    using L = long double;
-    const auto inside = [&](const Line& line, L t) {
-        const L x = L(line.origin.x) + t * L(line.dir.x), y = L(line.origin.y) + t * L(line.dir.y);
-        const L z = L(line.origin.z) + t * L(line.dir.z);
-        if (z < -1 || z > 2) return false;
-        const L dz = z - 2;
-        return std::sqrt(x * x + y * y) <= 3 + std::sqrt(std::max(L(0), 9 - dz * dz));
-    };
+    const ArcPiece& torus = kGrownFillet;
     std::mt19937_64 rng(20261201);
     std::uniform_real_distribution<double> u01(0.0, 1.0);
     int checked = 0, hinted = 0;
@@ -524,17 +534,8 @@ TEST_CASE("an outer torus interval holds the torus's within the slack, whatever 
         const double cz = 2.0 * u01(rng) - 1.0, az = 2.0 * kPi * u01(rng), sz = std::sqrt(1.0 - cz * cz);
         const Vec3 dir(sz * std::cos(az), sz * std::sin(az), cz);
         const Line line{surface - depth * normal - 10.0 * dir, dir};
-        if (!inside(line, 10)) continue;
-        L lo = 10, hi = 10;
-        for (const int side : {-1, 1}) {
-            L in = 10, out = 10 + side * L(1e-3);
-            while (inside(line, out)) in = out, out = 10 + 2 * (out - 10);
-            while (std::abs(out - in) > L(1e-15)) {
-                const L m = 0.5L * (in + out);
-                (inside(line, m) ? in : out) = m;
-            }
-            (side < 0 ? lo : hi) = in;
-        }
+        if (!inGrownFillet(line, 10)) continue;
+        const auto [lo, hi] = grownFilletRun(line);
         const LocalLine local = LocalLine::make(ToolPose{}, line);
         const Interval slab = detail::slabRange(local, torus.z0, torus.z1);
         // The oracle's run in the local line's parameters.
