@@ -92,8 +92,9 @@ class MotionLaw {
     /// a turn about the axis itself, such as a rotary table's under an upright tool, does not.
     /// Never more than the sum of the turns' rates, which turnBound takes (motion.cpp).
     double axisTurnBound() const;
-    /// @brief A bound on |y''(u)| (mm per unit u squared) over the move for the tool point y at
-    /// distance `reach` from the tip along the tool axis, and at reach 1 a bound on |a''(u)|.
+    /// @brief A bound on |y''(u)| (mm per unit u squared) over the move for every tool point y
+    /// within `reach` of the tip (a point up the axis among them), and at reach 1 a bound on
+    /// |a''(u)|.
     /// When the tip runs on the straight line, y = p(u) + Q(u) v with p'' = 0 and
     /// Q = R_0 ... R_{n-1}, each R_i a turn about a fixed direction at the constant rate w_i, so
     /// |R_i'| = |w_i|, |R_i''| = w_i^2 and by the product rule |Q''| <= (sum_i |w_i|)^2. In

@@ -70,8 +70,9 @@ double turnAngle(const Move& move);
 /// g(c) = max(bottom c, length c) + radius sqrt(1 - c^2), the larger of two concave functions
 /// s c + radius sqrt(1 - c^2) (s = bottom, length), each largest over c's range at its peak
 /// s / hypot(s, radius) clamped to the range.
-/// A machine's rotary move (Move::rotary) gets a box of sampled poses padded by the law's speed
-/// bound (turning.cpp), which holds every pose.
+/// A machine's rotary move (Move::rotary) gets the box of sampled poses padded by what the law's
+/// acceleration bound lets a tool point stray from them (turning_box.cpp): it holds every pose
+/// and reaches at most 1e-3 mm beyond them.
 /// @throw Error if the axes are opposite (no one great circle joins them).
 Box turningMoveBox(const Move& move, double bottom, double length, double radius);
 
