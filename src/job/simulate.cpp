@@ -164,7 +164,7 @@ void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& 
         const SourceLocation at = path.where(m.source);
         Box reach;
         try {
-            reach = turningMoveBox(m, tool.bottom(), tool.totalLength(), tool.maxRadius());
+            reach = turningMoveBox(m, ToolReach(tool));
         } catch (const Error& e) {  // opposite axes: no one great circle to turn on
             std::ostringstream msg;
             msg.precision(6);

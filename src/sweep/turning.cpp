@@ -117,7 +117,7 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
                       kMinTurnTolerance, epsilon);
         throw Error(text);
     }
-    bounds_ = turningMoveBox(move, tool.bottom(), tool.totalLength(), tool.maxRadius()).padded(kBoxSlack);
+    bounds_ = turningMoveBox(move, ToolReach(tool)).padded(kBoxSlack);
     // Every tool point lies within hypot(total length, max radius) of the tip (note a).
     axisTurn_ = law_.axisTurnBound();
     tipSpeed_ = law_.speedBound(0.0);

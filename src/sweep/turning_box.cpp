@@ -1,9 +1,10 @@
 // The box of a move whose tool axis turns (turning.h): the tip's segment box plus the exact box of
-// the cylinder turning on its great circle, or for a machine's rotary move, sampled poses padded
-// by the law's speed bound.
+// the tool turning on its great circle, or for a machine's rotary move, sampled poses padded by
+// the law's acceleration bound.
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <variant>
 
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
@@ -15,19 +16,6 @@ namespace dexelmill {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-/// The largest g(c) = max(bottom c, length c) + radius sqrt(1 - c^2) over c in [lo, hi]
-/// (turning.h): the larger of the two concave functions' largest, each at its peak clamped to
-/// the range (a function with s = radius = 0 is 0 everywhere).
-double reachAlong(double lo, double hi, double bottom, double length, double radius) {
-    double best = -std::numeric_limits<double>::infinity();
-    for (const double s : {bottom, length}) {
-        const double size = std::hypot(s, radius);
-        const double c = std::clamp(size > 0.0 ? s / size : 0.0, lo, hi);
-        best = std::max(best, s * c + radius * std::sqrt(std::max(0.0, 1.0 - c * c)));
-    }
-    return best;
-}
 
 /// The great circle a move's axis turns on: a(t) = a0 cos t + b sin t, t in [0, theta], with b the
 /// unit tangent at a0 towards the end axis (zero, and theta 0, when the axis does not turn).
@@ -48,14 +36,13 @@ GreatCircle greatCircle(const Move& m) {
     return c;
 }
 
-/// The box of the tool (within `radius` of its axis, heights [bottom, length] above the tip) at
-/// one pose.
-Box poseBox(const ToolPose& p, double bottom, double length, double radius) {
+/// The box of the tool at one pose.
+Box poseBox(const ToolPose& p, const ToolReach& reach) {
     Box box;
     box.expand(p.tip);
     for (int i = 0; i < 3; ++i) {
-        box.lo[i] -= reachAlong(-p.axis[i], -p.axis[i], bottom, length, radius);
-        box.hi[i] += reachAlong(p.axis[i], p.axis[i], bottom, length, radius);
+        box.lo[i] -= reach.along(-p.axis[i], -p.axis[i]);
+        box.hi[i] += reach.along(p.axis[i], p.axis[i]);
     }
     return box;
 }
@@ -69,12 +56,43 @@ constexpr double kBoxPadding = 1e-3;
 
 }  // namespace
 
+ToolReach::ToolReach(double bottom, double length, double radius)
+    : terms_{{bottom, radius, 0.0, -1.0, 1.0}, {length, radius, 0.0, -1.0, 1.0}},
+      extent_(std::hypot(std::max(std::abs(bottom), std::abs(length)), radius)) {}
+
+ToolReach::ToolReach(const Tool& tool)
+    : extent_(std::hypot(std::max(std::abs(tool.bottom()), std::abs(tool.totalLength())), tool.maxRadius())) {
+    for (const ProfilePiece& piece : tool.pieces()) {
+        for (const double z : {pieceZ0(piece), pieceZ1(piece)}) terms_.push_back({z, pieceRadius(piece, z), 0.0, -1.0, 1.0});
+        if (const auto* arc = std::get_if<ArcPiece>(&piece))
+            // The outward normal at height z is (R(z) - rc, z - zc) / rho: its c runs from the
+            // lower end's to the upper end's.
+            terms_.push_back({arc->zc, arc->rc, arc->rho, (arc->z0 - arc->zc) / arc->rho, (arc->z1 - arc->zc) / arc->rho});
+    }
+}
+
+double ToolReach::along(double lo, double hi) const {
+    double best = -std::numeric_limits<double>::infinity();
+    for (const Term& t : terms_) {
+        const double from = std::max(lo, t.cLo), to = std::min(hi, t.cHi);
+        if (from > to) continue;
+        const double size = std::hypot(t.s, t.r);
+        const double c = std::clamp(size > 0.0 ? t.s / size : 0.0, from, to);
+        best = std::max(best, t.s * c + t.r * std::sqrt(std::max(0.0, 1.0 - c * c)) + t.d);
+    }
+    return best;
+}
+
 double turnAngle(const Move& m) {
     if (!m.turns()) return 0.0;
     return std::atan2(glm::length(glm::cross(*m.startAxis, m.axis)), glm::dot(*m.startAxis, m.axis));
 }
 
 Box turningMoveBox(const Move& m, double bottom, double length, double radius) {
+    return turningMoveBox(m, ToolReach(bottom, length, radius));
+}
+
+Box turningMoveBox(const Move& m, const ToolReach& reach) {
     if (m.rotary) {
         // Samples at u_k = k / N, both ends among them. Between two neighbours a tool point's path
         // y(u) lies within K / (8 N^2) of its chord (linear interpolation's remainder, with
@@ -85,11 +103,11 @@ Box turningMoveBox(const Move& m, double bottom, double length, double radius) {
         // padded by the speed bound's V / (2N), took a box 0.2 mm wider on every side, at 0.1 of
         // a D4 ball's radius, and 4 % more dexels of the impeller were bounded.)
         const MotionLaw law(m);
-        const double accel = law.axisPointAccelerationBound(std::hypot(std::max(std::abs(bottom), length), radius));
+        const double accel = law.axisPointAccelerationBound(reach.extent());
         const int n = int(std::clamp(std::ceil(std::sqrt(accel / (8.0 * kBoxPadding))), 1.0, double(kMaxBoxSamples)));
         Box box;
         for (int k = 0; k <= n; ++k) {
-            const Box b = poseBox(law.pose(double(k) / n), bottom, length, radius);
+            const Box b = poseBox(law.pose(double(k) / n), reach);
             box.expand(b.lo);
             box.expand(b.hi);
         }
@@ -111,8 +129,8 @@ Box turningMoveBox(const Move& m, double bottom, double length, double radius) {
             lo = std::min(lo, rho * std::cos(t - phi));
             hi = std::max(hi, rho * std::cos(t - phi));
         }
-        box.lo[i] -= reachAlong(-hi, -lo, bottom, length, radius);
-        box.hi[i] += reachAlong(lo, hi, bottom, length, radius);
+        box.lo[i] -= reach.along(-hi, -lo);
+        box.hi[i] += reach.along(lo, hi);
     }
     return box;
 }

@@ -14,6 +14,8 @@
 #include <random>
 #include <thread>
 #include <tuple>
+#include <utility>
+#include <variant>
 #include <vector>
 
 #include "dexelmill/error.h"
@@ -103,6 +105,118 @@ TEST_CASE("turning move box: holds and touches every pose of the cylinder, on ra
             const double tipLo = std::min(m.start[i], m.end[i]), tipHi = std::max(m.start[i], m.end[i]);
             CHECK(box.lo[i] >= tipLo + turn.lo[i] - slack);
             CHECK(box.hi[i] <= tipHi + turn.hi[i] + slack);
+        }
+    }
+}
+
+namespace {
+
+/// Points of a tool's meridian profile, (height, radius): each cone piece's ends and each arc at
+/// `perArc` angles, from the pieces' own definitions (profile.h).
+std::vector<std::pair<double, double>> profilePoints(const Tool& tool, int perArc) {
+    std::vector<std::pair<double, double>> points;
+    for (const ProfilePiece& piece : tool.pieces()) {
+        if (const auto* c = std::get_if<ConePiece>(&piece)) {
+            points.push_back({c->z0, c->r0});
+            points.push_back({c->z1, c->r1});
+            continue;
+        }
+        const ArcPiece& a = std::get<ArcPiece>(piece);
+        const double t0 = std::asin(std::clamp((a.z0 - a.zc) / a.rho, -1.0, 1.0));
+        const double t1 = std::asin(std::clamp((a.z1 - a.zc) / a.rho, -1.0, 1.0));
+        for (int k = 0; k <= perArc; ++k) {
+            const double t = t0 + (t1 - t0) * k / perArc;
+            points.push_back({a.zc + a.rho * std::sin(t), a.rc + a.rho * std::cos(t)});
+        }
+    }
+    return points;
+}
+
+/// Grows `box` by the circles of `points` (height s, radius r about the axis) at one pose: a
+/// circle's extent along coordinate i is s a_i plus or minus r sqrt(1 - a_i^2).
+void addPose(Box& box, const Vec3& tip, const Vec3& axis, const std::vector<std::pair<double, double>>& points) {
+    for (const auto& [s, r] : points)
+        for (int i = 0; i < 3; ++i) {
+            const double across = r * std::sqrt(std::max(0.0, 1.0 - axis[i] * axis[i]));
+            box.lo[i] = std::min(box.lo[i], tip[i] + s * axis[i] - across);
+            box.hi[i] = std::max(box.hi[i], tip[i] + s * axis[i] + across);
+        }
+}
+
+}  // namespace
+
+TEST_CASE("turning move box: a tool's own profile, held and touched at every pose", "[sweep][turning]") {
+    // Ball, bull nose, tapered, tapered ball, chamfer, drill and APT cutters, whole, the region
+    // above their flutes, and thin bands of a ball's and a fillet's arcs: the box of ToolReach holds the profile at 600 poses of each move and, for
+    // a turn in place, touches it. The samples miss the extremes by at most 60 (pi / 600)^2 / 2
+    // along a turn and 10 (pi / 400)^2 / 2 around an arc: below 1e-3 mm. A cylinder's box (the
+    // tool's widest radius over its heights) reaches up to a radius times the tilt's sine beyond
+    // a ball's tip.
+    const std::vector<Tool> tools = {ballEndMill(6.0, {20.0, 30.0}),
+                                     bullNoseEndMill(10.0, 2.0, {25.0, 40.0}),
+                                     taperEndMill(2.0, 0.1, {20.0, 30.0}),
+                                     taperBallMill(3.0, 0.1, {20.0, 30.0}),
+                                     chamferMill(1.0, 0.785, 8.0, {20.0, 30.0}),
+                                     drill(8.0, 2.06, {30.0, 40.0}),
+                                     aptCutter(16, 3, 5, 3, 0, 0, 50),
+                                     aptCutter(10, 0, 5, 1.5, 20 * kPi / 180, 5 * kPi / 180, 30),
+                                     // Cut below a ball's equator and within a fillet: an arc's
+                                     // centre reaches only along its own normals.
+                                     ballEndMill(6.0, {20.0, 30.0}).region(0.0, 2.0),
+                                     bullNoseEndMill(10.0, 2.0, {25.0, 40.0}).region(0.5, 1.0)};
+    std::mt19937 rng(20261201);
+    std::uniform_real_distribution<double> coord(-50, 50), unit(-1, 1);
+    const auto direction = [&] {
+        for (;;) {
+            const Vec3 v(unit(rng), unit(rng), unit(rng));
+            if (glm::length(v) > 0.1 && glm::length(v) <= 1) return glm::normalize(v);
+        }
+    };
+    const Machine ac = loadMachine("xyzac-trt");
+    for (std::size_t k = 0; k < tools.size(); ++k) {
+        for (const bool shank : {false, true}) {
+            if (shank && tools[k].cuttingLength() >= tools[k].totalLength()) continue;  // all flutes
+            const Tool tool =
+                shank ? tools[k].region(tools[k].cuttingLength(), tools[k].totalLength()) : tools[k];
+            const std::vector<std::pair<double, double>> points = profilePoints(tool, 400);
+            const ToolReach reach(tool);
+            for (int trial = 0; trial < 4; ++trial) {
+                Move m;
+                m.start = Vec3(coord(rng), coord(rng), coord(rng));
+                m.end = trial == 0 ? m.start : Vec3(coord(rng), coord(rng), coord(rng));
+                m.axis = direction();
+                Vec3 a0 = direction();
+                if (glm::dot(a0, m.axis) < 0.0) a0 = -a0;
+                m.startAxis = a0;
+                RotaryAngles from, to;
+                from['A'] = 60 * unit(rng), from['C'] = 180 * unit(rng);
+                to['A'] = from['A'] + 20 * unit(rng), to['C'] = from['C'] + 40 * unit(rng);
+                // The last trial a machine's rotary move with TCP: its tip on the line.
+                const bool rotary = trial == 3;
+                if (rotary) m.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, true, m.start, m.end));
+                INFO(tool.description() << (shank ? ", above the flutes" : "") << ", trial " << trial);
+                const Box box = turningMoveBox(m, reach);
+                const Vec3 cross = glm::cross(a0, m.axis);
+                const double angle = std::atan2(glm::length(cross), glm::dot(a0, m.axis));
+                Box seen, inPlace;
+                for (int j = 0; j <= 600; ++j) {
+                    const double u = j / 600.0;
+                    const double a = from['A'] + u * (to['A'] - from['A']), c = from['C'] + u * (to['C'] - from['C']);
+                    const Vec3 axis = rotary ? testing::xyzacAxis(a, c) : rotated(a0, glm::normalize(cross), u * angle);
+                    addPose(seen, m.start + u * (m.end - m.start), axis, points);
+                    addPose(inPlace, Vec3(0.0), axis, points);
+                }
+                for (int i = 0; i < 3; ++i) {
+                    CHECK(box.lo[i] <= seen.lo[i] + 1e-9);
+                    CHECK(box.hi[i] >= seen.hi[i] - 1e-9);
+                    // A great circle's box is the tip's plus the turn in place's; a rotary move's
+                    // reaches 1e-3 mm beyond its sampled poses (turning_box.cpp).
+                    const double tipLo = std::min(m.start[i], m.end[i]), tipHi = std::max(m.start[i], m.end[i]);
+                    const Box& near = rotary ? seen : inPlace;
+                    CHECK(box.lo[i] >= (rotary ? 0.0 : tipLo) + near.lo[i] - 2e-3);
+                    CHECK(box.hi[i] <= (rotary ? 0.0 : tipHi) + near.hi[i] + 2e-3);
+                }
+            }
         }
     }
 }

@@ -53,27 +53,52 @@ constexpr std::size_t kDefaultLinearNodeBudget = std::size_t(1) << 16;
 /// @brief The angle (radians, in [0, pi]) the axis of a move turns through; 0 for a fixed axis.
 double turnAngle(const Move& move);
 
-/// @brief A box that holds the tool (within `radius` of its axis, heights [bottom, length] above
-/// the tip) at every pose of a turning move; for a fixed-axis move, at its one axis. A tool
-/// region above the tip, such as a shank (Tool::bottom), gives its own bottom: the box of a shank
-/// 25 mm above the tip of a flat D10 x 40 was three times as large, in the faces the dexels cross,
-/// with the heights from the tip.
+/// @brief How far a tool, or a region of one, reaches from its tip along a unit direction e at
+/// c = a.e from its axis a: the largest s c + r sqrt(1 - c^2) over its points tip + s a + r n
+/// (n a unit vector normal to a, r >= 0), the support of its meridian profile in the direction
+/// (sqrt(1 - c^2), c). It is kept as terms s c + r sqrt(1 - c^2) + d over ranges of c, each
+/// concave in c and so largest over an interval of c at its peak s / hypot(s, r) clamped to it:
+/// the pieces' ends (d = 0, every c), where a cone piece's support lies, and for an arc (the
+/// outer half of a circle, profile.h) its centre with d its radius over the c of its outward
+/// normals, where the arc's support is that, or else at an end.
+class ToolReach {
+  public:
+    /// A cylinder of `radius` over heights [bottom, length] above the tip.
+    ToolReach(double bottom, double length, double radius);
+    /// The tool's (or tool region's) own profile: a ball end's lowest point is its tip, where its
+    /// cylinder's rim reaches below the tip by the radius times the tilt's sine.
+    explicit ToolReach(const Tool& tool);
+    /// The largest reach for c in [lo, hi], within [-1, 1].
+    double along(double lo, double hi) const;
+    /// The largest distance of a tool point from the tip.
+    double extent() const { return extent_; }
+
+  private:
+    struct Term {
+        double s, r, d, cLo, cHi;
+    };
+    std::vector<Term> terms_;
+    double extent_ = 0.0;
+};
+
+/// @brief A box that holds the tool at every pose of a turning move; for a fixed-axis move, at its
+/// one axis. A tool region above the tip, such as a shank (Tool::bottom), gives its own bottom:
+/// the box of a shank 25 mm above the tip of a flat D10 x 40 was three times as large, in the
+/// faces the dexels cross, with the heights from the tip.
 ///
-/// The box is the tip's segment box plus the box of the turning cylinder (that radius and those
-/// heights) with its tip held at the origin. The second is exact: each of its faces touches some
-/// pose. The sum is exact for a turn in place and larger than needed when the tip's extreme and
-/// the axis's lie at different points of the move (at most by the tip's travel along each
-/// coordinate). Along the arc a(t) = a0 cos t + b sin t (b the unit tangent at a0, t in
-/// [0, theta]) each coordinate a_i is rho cos(t - phi), whose extremes are at the ends and where
-/// t - phi is 0 or pi. A tool point is tip + s a + r n with s in [bottom, length], |r| <= radius
-/// and n a unit vector normal to a; along a unit direction e with c = a.e it reaches
-/// g(c) = max(bottom c, length c) + radius sqrt(1 - c^2), the larger of two concave functions
-/// s c + radius sqrt(1 - c^2) (s = bottom, length), each largest over c's range at its peak
-/// s / hypot(s, radius) clamped to the range.
+/// The box is the tip's segment box plus the box of the turning tool with its tip held at the
+/// origin. The second is exact: each of its faces touches some pose. The sum is exact for a turn
+/// in place and larger than needed when the tip's extreme and the axis's lie at different points
+/// of the move (at most by the tip's travel along each coordinate). Along the arc
+/// a(t) = a0 cos t + b sin t (b the unit tangent at a0, t in [0, theta]) each coordinate a_i is
+/// rho cos(t - phi), whose extremes are at the ends and where t - phi is 0 or pi; the tool
+/// reaches ToolReach::along those.
 /// A machine's rotary move (Move::rotary) gets the box of sampled poses padded by what the law's
 /// acceleration bound lets a tool point stray from them (turning_box.cpp): it holds every pose
 /// and reaches at most 1e-3 mm beyond them.
 /// @throw Error if the axes are opposite (no one great circle joins them).
+Box turningMoveBox(const Move& move, const ToolReach& reach);
+/// @brief The same for the cylinder within `radius` of the axis over heights [bottom, length].
 Box turningMoveBox(const Move& move, double bottom, double length, double radius);
 
 /// @brief The swept volume of a tool (or tool region) on one move whose axis turns, along lines.
