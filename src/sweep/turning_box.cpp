@@ -63,11 +63,14 @@ ToolReach::ToolReach(double bottom, double length, double radius)
 ToolReach::ToolReach(const Tool& tool)
     : extent_(std::hypot(std::max(std::abs(tool.bottom()), std::abs(tool.totalLength())), tool.maxRadius())) {
     for (const ProfilePiece& piece : tool.pieces()) {
-        for (const double z : {pieceZ0(piece), pieceZ1(piece)}) terms_.push_back({z, pieceRadius(piece, z), 0.0, -1.0, 1.0});
-        if (const auto* arc = std::get_if<ArcPiece>(&piece))
+        for (const double z : {pieceZ0(piece), pieceZ1(piece)})
+            terms_.push_back({z, pieceRadius(piece, z), 0.0, -1.0, 1.0});
+        if (const auto* arc = std::get_if<ArcPiece>(&piece)) {
             // The outward normal at height z is (R(z) - rc, z - zc) / rho: its c runs from the
             // lower end's to the upper end's.
-            terms_.push_back({arc->zc, arc->rc, arc->rho, (arc->z0 - arc->zc) / arc->rho, (arc->z1 - arc->zc) / arc->rho});
+            const double cLo = (arc->z0 - arc->zc) / arc->rho, cHi = (arc->z1 - arc->zc) / arc->rho;
+            terms_.push_back({arc->zc, arc->rc, arc->rho, cLo, cHi});
+        }
     }
 }
 

@@ -263,7 +263,8 @@ TEST_CASE("machine: the axis turn bound holds and is tight, and sees a table spi
         const bool upright = i % 3 == 0;
         const double scale = i % 4 == 3 ? 0.02 : 1.0;
         from['A'] = upright ? 3 * uni(rng) : 80 * uni(rng), from['C'] = 180 * uni(rng);
-        to['A'] = upright ? 3 * uni(rng) : from['A'] + scale * 40 * uni(rng), to['C'] = from['C'] + scale * 90 * uni(rng);
+        to['A'] = upright ? 3 * uni(rng) : from['A'] + scale * 40 * uni(rng);
+        to['C'] = from['C'] + scale * 90 * uni(rng);
         const double rateA = (to['A'] - from['A']) * kDeg, rateC = (to['C'] - from['C']) * kDeg;
         const Vec3 j0(30 * uni(rng), 30 * uni(rng), 30 * uni(rng)), j1(30 * uni(rng), 30 * uni(rng), 30 * uni(rng));
         for (const bool tcp : {true, false}) {
@@ -284,7 +285,8 @@ TEST_CASE("machine: the axis turn bound holds and is tight, and sees a table spi
             CHECK(bound <= largest + rates * std::max(rates, 1.0) / 64.0 + rates * rates / 8000.0 + 1e-12);
             CHECK(bound <= rates);
             // Upright, C's turn barely counts: sin A <= sin 3 degrees.
-            if (upright) CHECK(bound <= std::abs(rateA) + 0.053 * std::abs(rateC) + rates * std::max(rates, 1.0) / 64.0);
+            if (upright)
+                CHECK(bound <= std::abs(rateA) + 0.053 * std::abs(rateC) + rates * std::max(rates, 1.0) / 64.0);
         }
     }
     // On a great circle the axis turns at its angle, uniformly.

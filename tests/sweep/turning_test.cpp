@@ -147,8 +147,8 @@ void addPose(Box& box, const Vec3& tip, const Vec3& axis, const std::vector<std:
 
 TEST_CASE("turning move box: a tool's own profile, held and touched at every pose", "[sweep][turning]") {
     // Ball, bull nose, tapered, tapered ball, chamfer, drill and APT cutters, whole, the region
-    // above their flutes, and thin bands of a ball's and a fillet's arcs: the box of ToolReach holds the profile at 600 poses of each move and, for
-    // a turn in place, touches it. The samples miss the extremes by at most 60 (pi / 600)^2 / 2
+    // above their flutes, and thin bands of a ball's and a fillet's arcs: the box of ToolReach
+    // holds the profile at 600 poses of each move and, for a turn in place, touches it. The samples miss the extremes by at most 60 (pi / 600)^2 / 2
     // along a turn and 10 (pi / 400)^2 / 2 around an arc: below 1e-3 mm. A cylinder's box (the
     // tool's widest radius over its heights) reaches up to a radius times the tilt's sine beyond
     // a ball's tip.
