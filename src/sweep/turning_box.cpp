@@ -75,6 +75,8 @@ ToolReach::ToolReach(const Tool& tool)
 }
 
 double ToolReach::along(double lo, double hi) const {
+    // A unit vector's coordinate rounded past 1 would leave every term out.
+    lo = std::clamp(lo, -1.0, 1.0), hi = std::clamp(hi, -1.0, 1.0);
     double best = -std::numeric_limits<double>::infinity();
     for (const Term& t : terms_) {
         const double from = std::max(lo, t.cLo), to = std::min(hi, t.cHi);

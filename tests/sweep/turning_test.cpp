@@ -180,7 +180,13 @@ TEST_CASE("turning move box: a tool's own profile, held and touched at every pos
                 shank ? tools[k].region(tools[k].cuttingLength(), tools[k].totalLength()) : tools[k];
             const std::vector<std::pair<double, double>> points = profilePoints(tool, 400);
             const ToolReach reach(tool);
-            for (int trial = 0; trial < 4; ++trial) {
+            // A coordinate of a unit axis rounded just past 1 is 1 (along the axis: its top, and
+            // against it: its bottom).
+            CHECK(reach.along(std::nextafter(1.0, 2.0), std::nextafter(1.0, 2.0)) == reach.along(1.0, 1.0));
+            CHECK(reach.along(std::nextafter(-1.0, -2.0), -1.0) == reach.along(-1.0, -1.0));
+            CHECK(reach.along(1.0, 1.0) == Approx(tool.totalLength()));
+            CHECK(reach.along(-1.0, -1.0) == Approx(-tool.bottom()));
+            for (int trial = 0; trial < 5; ++trial) {
                 Move m;
                 m.start = Vec3(coord(rng), coord(rng), coord(rng));
                 m.end = trial == 0 ? m.start : Vec3(coord(rng), coord(rng), coord(rng));
@@ -191,9 +197,14 @@ TEST_CASE("turning move box: a tool's own profile, held and touched at every pos
                 RotaryAngles from, to;
                 from['A'] = 60 * unit(rng), from['C'] = 180 * unit(rng);
                 to['A'] = from['A'] + 20 * unit(rng), to['C'] = from['C'] + 40 * unit(rng);
-                // The last trial a machine's rotary move with TCP: its tip on the line.
-                const bool rotary = trial == 3;
-                if (rotary) m.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, true, m.start, m.end));
+                // The last two trials a machine's rotary moves: with TCP, the tip on the line, and
+                // without, the joints on theirs (m.start and m.end then the joints).
+                const bool rotary = trial >= 3, tcp = trial == 3;
+                const Vec3 j0 = m.start, j1 = m.end;
+                if (rotary) {
+                    m.rotary = std::make_shared<const RotaryMotion>(ac.motion(from, to, tcp, j0, j1));
+                    if (!tcp) m.start = ac.partFromJoints(j0, from), m.end = ac.partFromJoints(j1, to);
+                }
                 INFO(tool.description() << (shank ? ", above the flutes" : "") << ", trial " << trial);
                 const Box box = turningMoveBox(m, reach);
                 const Vec3 cross = glm::cross(a0, m.axis);
@@ -203,7 +214,8 @@ TEST_CASE("turning move box: a tool's own profile, held and touched at every pos
                     const double u = j / 600.0;
                     const double a = from['A'] + u * (to['A'] - from['A']), c = from['C'] + u * (to['C'] - from['C']);
                     const Vec3 axis = rotary ? testing::xyzacAxis(a, c) : rotated(a0, glm::normalize(cross), u * angle);
-                    addPose(seen, m.start + u * (m.end - m.start), axis, points);
+                    const Vec3 joints = j0 + u * (j1 - j0);
+                    addPose(seen, rotary && !tcp ? testing::xyzacForward(joints, a, c) : joints, axis, points);
                     addPose(inPlace, Vec3(0.0), axis, points);
                 }
                 for (int i = 0; i < 3; ++i) {
@@ -211,7 +223,7 @@ TEST_CASE("turning move box: a tool's own profile, held and touched at every pos
                     CHECK(box.hi[i] >= seen.hi[i] - 1e-9);
                     // A great circle's box is the tip's plus the turn in place's; a rotary move's
                     // reaches 1e-3 mm beyond its sampled poses (turning_box.cpp).
-                    const double tipLo = std::min(m.start[i], m.end[i]), tipHi = std::max(m.start[i], m.end[i]);
+                    const double tipLo = std::min(j0[i], j1[i]), tipHi = std::max(j0[i], j1[i]);
                     const Box& near = rotary ? seen : inPlace;
                     CHECK(box.lo[i] >= (rotary ? 0.0 : tipLo) + near.lo[i] - 2e-3);
                     CHECK(box.hi[i] <= (rotary ? 0.0 : tipHi) + near.hi[i] + 2e-3);

@@ -68,7 +68,7 @@ class ToolReach {
     /// The tool's (or tool region's) own profile: a ball end's lowest point is its tip, where its
     /// cylinder's rim reaches below the tip by the radius times the tilt's sine.
     explicit ToolReach(const Tool& tool);
-    /// The largest reach for c in [lo, hi], within [-1, 1].
+    /// The largest reach for c in [lo, hi], each clamped to [-1, 1].
     double along(double lo, double hi) const;
     /// The largest distance of a tool point from the tip.
     double extent() const { return extent_; }
@@ -94,8 +94,9 @@ class ToolReach {
 /// rho cos(t - phi), whose extremes are at the ends and where t - phi is 0 or pi; the tool
 /// reaches ToolReach::along those.
 /// A machine's rotary move (Move::rotary) gets the box of sampled poses padded by what the law's
-/// acceleration bound lets a tool point stray from them (turning_box.cpp): it holds every pose
-/// and reaches at most 1e-3 mm beyond them.
+/// acceleration bound K lets a tool point stray from them (turning_box.cpp): it holds every pose
+/// and reaches at most 1e-3 mm beyond them, or K / (8 4096^2) where K passes 134,000 mm per unit
+/// u squared (a table spinning turns on end far from its centre) and the samples their limit.
 /// @throw Error if the axes are opposite (no one great circle joins them).
 Box turningMoveBox(const Move& move, const ToolReach& reach);
 /// @brief The same for the cylinder within `radius` of the axis over heights [bottom, length].
