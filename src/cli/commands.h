@@ -73,7 +73,20 @@ struct CompareArgs {
 
 CLI::App* addStudy(CLI::App& app, StudyArgs& args);
 int runStudy(const StudyArgs& args);
-int runInfo(const std::string& file, const std::string& machine);
+/// @brief `dexelmill info` options as typed.
+struct InfoArgs {
+    std::string file;
+    std::string machine;
+    std::string start;
+};
+
+CLI::App* addInfo(CLI::App& app, InfoArgs& args);
+int runInfo(const InfoArgs& args);
+/// @brief --start X,Y,Z (mm), as simulate and info take it: none where `text` is empty.
+/// @throw UsageError unless three numbers within the 1e9 mm a program may reach.
+std::optional<Vec3> parseStart(const std::string& text);
+/// @brief --start's help, the same for simulate and info.
+extern const char* const kStartHelp;
 CLI::App* addCompare(CLI::App& app, CompareArgs& args);
 int runCompare(const CompareArgs& args);
 

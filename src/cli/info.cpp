@@ -71,7 +71,17 @@ void printProgram(const Program& p) {
 
 }  // namespace
 
-int runInfo(const std::string& file, const std::string& machine) {
+CLI::App* addInfo(CLI::App& app, InfoArgs& a) {
+    CLI::App* c = app.add_subcommand("info", "What a program, project or VDB file holds: moves, tools, extents.");
+    c->add_option("FILE", a.file, "A G-code or APT program, a .camotics project or a .vdb file")->required();
+    c->add_option("--machine", a.machine,
+                  "NAME or FILE.json: the machine whose rotary axes a G-code program turns (as for simulate)");
+    c->add_option("--start", a.start, kStartHelp);
+    return c;
+}
+
+int runInfo(const InfoArgs& args) {
+    const std::string& file = args.file;
     std::printf("%-14s %s\n", "file", file.c_str());
     if (endsWith(file, ".vdb")) {
         const LevelSet ls = readVdb(file);
@@ -85,7 +95,8 @@ int runInfo(const std::string& file, const std::string& machine) {
     }
     const MemoryBudget budget = memoryBudget();
     GcodeOptions gcode = jobGcodeOptions(SimulateOptions().chordTolerance, budget);
-    if (!machine.empty()) gcode.machine = loadMachine(machine);
+    if (!args.machine.empty()) gcode.machine = loadMachine(args.machine);
+    gcode.startPosition = parseStart(args.start);
     if (endsWith(file, ".camotics")) {
         const Project project = readCamoticsProject(file);
         std::printf("%-14s CAMotics project, %s units\n", "kind", project.metric ? "metric" : "imperial");

@@ -40,12 +40,8 @@ int main(int argc, char** argv) {
 
     dexelmill::cli::SimulateArgs sim;
     CLI::App* simulate = dexelmill::cli::addSimulate(app, sim);
-    std::string infoFile;
-    CLI::App* info = app.add_subcommand("info", "What a program, project or VDB file holds: moves, tools, extents.");
-    info->add_option("FILE", infoFile, "A G-code or APT program, a .camotics project or a .vdb file")->required();
-    std::string infoMachine;
-    info->add_option("--machine", infoMachine,
-                     "NAME or FILE.json: the machine whose rotary axes a G-code program turns (as for simulate)");
+    dexelmill::cli::InfoArgs infoArgs;
+    CLI::App* info = dexelmill::cli::addInfo(app, infoArgs);
 
     dexelmill::cli::StudyArgs study;
     CLI::App* studyCmd = dexelmill::cli::addStudy(app, study);
@@ -60,7 +56,7 @@ int main(int argc, char** argv) {
     }
     try {
         if (simulate->parsed()) return dexelmill::cli::runSimulate(sim);
-        if (info->parsed()) return dexelmill::cli::runInfo(infoFile, infoMachine);
+        if (info->parsed()) return dexelmill::cli::runInfo(infoArgs);
         if (studyCmd->parsed()) return dexelmill::cli::runStudy(study);
         if (compareCmd->parsed()) return dexelmill::cli::runCompare(compare);
     } catch (const dexelmill::cli::UsageError& e) {

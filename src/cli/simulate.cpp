@@ -76,6 +76,25 @@ Frustum parseRoundStock(const std::string& kind, const std::string& text) {
 
 }  // namespace
 
+const char* const kStartHelp =
+    "X,Y,Z: where the machine stands when a G-code program starts (mm). Unset, moves only\n"
+    "set the position until the program has given X, Y and Z (for example a 4-axis\n"
+    "program that never names Y needs --start)";
+
+std::optional<Vec3> parseStart(const std::string& text) {
+    if (text.empty()) return std::nullopt;
+    const std::vector<double> v = parseNumbers(text, "--start");
+    if (v.size() != 3) throw UsageError("--start takes X,Y,Z (mm)");
+    // A program's own positions stop there too (a move from 1e300 mm cut 85 of its 612.5 mm^3).
+    for (const double x : v)
+        if (!(std::abs(x) <= kMaxCoordinateMm)) {
+            char message[160];
+            std::snprintf(message, sizeof message, "--start: %g mm is beyond the 1e9 mm a program may reach", x);
+            throw UsageError(message);
+        }
+    return Vec3(v[0], v[1], v[2]);
+}
+
 Affine parseTransform(const std::string& text) {
     const std::vector<double> v = parseNumbers(text, "--design-transform");
     Affine a;
@@ -161,18 +180,7 @@ SimulateOptions toOptions(const SimulateArgs& a) {
     }
     o.turnTolerance = a.turnTolerance;
     o.machine = a.machine;
-    if (!a.start.empty()) {
-        const std::vector<double> v = parseNumbers(a.start, "--start");
-        if (v.size() != 3) throw UsageError("--start takes X,Y,Z (mm)");
-        o.startPosition = Vec3(v[0], v[1], v[2]);
-        // A program's own positions stop there too (a move from 1e300 mm cut 85 of its 612.5 mm^3).
-        for (const double x : v)
-            if (!(std::abs(x) <= kMaxCoordinateMm)) {
-                char text[160];
-                std::snprintf(text, sizeof text, "--start: %g mm is beyond the 1e9 mm a program may reach", x);
-                throw UsageError(text);
-            }
-    }
+    o.startPosition = parseStart(a.start);
     if (!(a.adaptivity >= 0.0 && a.adaptivity <= 1.0)) throw UsageError("--adaptivity must lie in [0, 1]");
     o.adaptivity = a.adaptivity;
     o.refineRounds = a.refineRounds;
@@ -282,10 +290,7 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
                   "tool centre point control on (X Y Z are the tip in the part frame), M429 / G49 off\n"
                   "(X Y Z are joints; the tip's path is carried by the tables). The file form is in\n"
                   "the README");
-    c->add_option("--start", a.start,
-                  "X,Y,Z: where the machine stands when a G-code program starts (mm). Unset, moves only\n"
-                  "set the position until the program has given X, Y and Z (for example a 4-axis\n"
-                  "program that never names Y needs --start)");
+    c->add_option("--start", a.start, kStartHelp);
     c->add_option("--mesher", a.mesher,
                   "dexel: the surface placed from the dexels' exact crossings and normals, sharp edges kept;\n"
                   "vdb: OpenVDB's volumeToMesh on the level set alone")

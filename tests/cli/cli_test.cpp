@@ -305,6 +305,19 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     const Run turning = cli("info turn.apt");
     CHECK(turning.code == 0);
     CHECK_THAT(turning.out, Contains("0 3-axis (+z), 1 3+2 (fixed, tilted), 1 simultaneous multi-axis"));
+    // A 4-axis program that never names Y, as UGS's rotation.ngc: info takes --start as simulate
+    // does, and without it counts only the moves made once X, Y and Z are known.
+    cli.file("wrap.ngc", "G21 G90\nG0 X0 Z25 A0\nG1 X10 Z19 A30\nG1 X20 A90\nM2\n");
+    const Run unplaced = cli("info wrap.ngc --machine xyza");
+    CHECK(unplaced.code == 0);
+    CHECK_THAT(unplaced.out, Contains("moves          0 (0 rapid)") && Contains("start position is unknown"));
+    const Run placed = cli("info wrap.ngc --machine xyza --start 0,0,0");
+    CHECK(placed.code == 0);
+    CHECK_THAT(placed.out, Contains("moves          3 (1 rapid)") && Contains("1 3-axis (+z), 0 3+2 (fixed, tilted), 2 simultaneous") &&
+                               Contains("rotary range   A 0 .. 90 degrees"));
+    const Run badStart = cli("info wrap.ngc --machine xyza --start 0,0");
+    CHECK(badStart.code == 2);
+    CHECK_THAT(badStart.err, Contains("--start takes X,Y,Z (mm)") && Contains("dexelmill info --help"));
     const Run turned = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 0.001 --quiet");
     CHECK(turned.code == 0);
     const Run badTolerance = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 0 --quiet");
