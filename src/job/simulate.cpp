@@ -388,7 +388,7 @@ Simulation runStages(const SimulateOptions& o) {
     const MemoryBudget budget = memoryBudget(o.maxMemoryBytes);
     GcodeOptions gcode = jobGcodeOptions(o.chordTolerance, budget);
     gcode.files = o.files;
-    if (!o.machine.empty()) gcode.machine = loadMachine(o.machine);
+    if (!o.machine.empty()) gcode.machine = loadMachine(o.machine, o.files);
     if (o.startPosition) gcode.startPosition = o.startPosition;
     const AptOptions apt = jobAptOptions(o.chordTolerance, budget);
     std::optional<Project> project;

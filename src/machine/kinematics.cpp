@@ -218,19 +218,26 @@ Machine parseMachine(const std::string& text, const std::string& fileName) {
     return m;
 }
 
-Machine loadMachine(const std::string& nameOrFile) {
+Machine loadMachine(const std::string& nameOrFile,
+                    const std::function<std::optional<std::string>(const std::string&)>& read) {
     Machine m = builtin(nameOrFile);
     if (!m.name.empty()) return m;
+    const auto missing = [&] {
+        std::string names;
+        for (const std::string& n : builtinMachineNames()) names += (names.empty() ? "" : ", ") + n;
+        return Error("--machine '" + nameOrFile + "': no built-in machine of that name (" + names +
+                     ") and no file to read");
+    };
+    if (read) {
+        const std::optional<std::string> text = read(nameOrFile);
+        if (!text) throw missing();
+        return parseMachine(*text, nameOrFile);
+    }
     std::error_code ec;
     if (std::filesystem::is_directory(nameOrFile, ec))
         throw Error("--machine '" + nameOrFile + "': a folder, not a machine description file");
     std::ifstream in(nameOrFile, std::ios::binary);
-    if (!in) {
-        std::string names;
-        for (const std::string& n : builtinMachineNames()) names += (names.empty() ? "" : ", ") + n;
-        throw Error("--machine '" + nameOrFile + "': no built-in machine of that name (" + names +
-                    ") and no file to read");
-    }
+    if (!in) throw missing();
     std::ostringstream text;
     text << in.rdbuf();
     return parseMachine(text.str(), nameOrFile);

@@ -543,6 +543,19 @@ TEST_CASE("machine: description files and their errors", "[machine]") {
     CHECK_THROWS_WITH(parseMachine(R"({"axes": [{"letter": "D", "direction": [1, 0, 0]}]})", "d.json"), Contains("letter"));
     CHECK_THROWS_WITH(parseMachine(R"({"axes": [{"letter": "A", "direction": [0, 0, 0]}]})", "d.json"), Contains("zero"));
     CHECK_THROWS_WITH(loadMachine("no-such-machine"), Contains("xyzac-trt") && Contains("no-such-machine"));
+    // Read through a job's file source where one is given, as its programs are: the disk is not
+    // asked, and a name the source lacks is the same error.
+    const auto source = [](const std::string& path) -> std::optional<std::string> {
+        if (path != "in/ht.json") return std::nullopt;
+        return R"({"name": "sourced", "axes": [{"letter": "B", "on": "head", "direction": [0, 1, 0]}]})";
+    };
+    CHECK(loadMachine("in/ht.json", source).name == "sourced");
+    CHECK(loadMachine("xyzbc-trt", source).name == "xyzbc-trt");
+    CHECK_THROWS_WITH(loadMachine("in/none.json", source), Contains("in/none.json") && Contains("no file to read"));
+    CHECK_THROWS_WITH(loadMachine("in/ht.json", [](const std::string&) -> std::optional<std::string> {
+                          return std::string("{\"axes\": 5}");
+                      }),
+                      Contains("in/ht.json: error"));
     // Wrong types, unknown keys and numbers beyond a double's range: each a located error of this
     // reader's own, never the JSON library's.
     const struct {

@@ -66,8 +66,8 @@ struct SimulateOptions {
     double chordTolerance = 0.001;
     /// The tolerance (mm) of the sweep of a feed move whose tool axis turns (CutOptions).
     double turnTolerance = kDefaultTurnTolerance;
-    /// The machine whose rotary axes G-code programs move: a built-in name or a JSON file
-    /// (machine/kinematics.h); empty for none.
+    /// The machine whose rotary axes G-code programs move: a built-in name or a JSON file, read
+    /// as the inputs are (machine/kinematics.h); empty for none.
     std::string machine;
     /// Where the machine stands when a G-code program starts (mm, machine coordinates); unset, the
     /// readers wait until the program has set X, Y and Z (GcodeOptions::startPosition).

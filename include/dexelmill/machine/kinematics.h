@@ -17,6 +17,7 @@
 ///    in the part frame is the joint path carried by the tables' turns, a curve.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -85,8 +86,11 @@ std::vector<std::string> builtinMachineNames();
 /// @brief A built-in machine by name, or a machine described in a JSON file:
 /// `{"name": ..., "tcp_at_start": false, "axes": [{"letter": "A", "on": "table" | "head",
 ///   "direction": [x, y, z], "pivot": [x, y, z]}, ...]}` (mm; axes in chain order).
+/// The file is read by `read` where one is given (a job's FileSource, path/toolpath.h: none where
+/// it has no such file), else from disk.
 /// @throw Error naming the file (and the JSON error's place) or listing the built-ins.
-Machine loadMachine(const std::string& nameOrFile);
+Machine loadMachine(const std::string& nameOrFile,
+                    const std::function<std::optional<std::string>(const std::string&)>& read = {});
 
 /// @brief Parses a machine description (the JSON of loadMachine) from text.
 /// @throw ParseError with the file's name and the place of the fault.
