@@ -1,7 +1,9 @@
 // libFuzzer target: the G-code reader, with the command line's limits, must either read a program
-// or throw dexelmill::Error. Subroutine files come from the input (harness.h).
+// or throw dexelmill::Error. Subroutine files and the machine whose rotary axes the program turns
+// come from the input (harness.h).
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <string_view>
 
 #include "dexelmill/error.h"
@@ -13,6 +15,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     dexelmill::GcodeOptions options = fuzz::gcodeOptions();
     options.files = fuzz::sourceOf(files);
     try {
+        const std::string machine = fuzz::machineOf(files);
+        if (!machine.empty()) options.machine = dexelmill::loadMachine(machine, options.files);
         dexelmill::parseGcode(files.at("fuzz.ngc"), "fuzz.ngc", options);
     } catch (const dexelmill::Error&) {
     }

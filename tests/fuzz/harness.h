@@ -1,6 +1,6 @@
 // What the fuzz targets share: the command line's reading options for a process that may use
-// kMemory, and programs that name other files (subroutines, a project's programs) read from the
-// input itself rather than from disk.
+// kMemory, and programs that name other files (subroutines, a project's programs, a machine) read
+// from the input itself rather than from disk.
 #pragma once
 
 #include <cstddef>
@@ -55,6 +55,18 @@ inline dexelmill::FileSource sourceOf(const std::map<std::string, std::string>& 
         if (it == files.end()) return std::nullopt;
         return it->second;
     };
+}
+
+/// The --machine an input asks for: the text of its file "machine" ("//@file machine"), spaces
+/// and line ends trimmed, naming a built-in machine or another file of the input that describes
+/// one. Empty where it has none, as a command line without --machine.
+inline std::string machineOf(const std::map<std::string, std::string>& files) {
+    const auto it = files.find("machine");
+    if (it == files.end()) return {};
+    const std::string& text = it->second;
+    const std::size_t first = text.find_first_not_of(" \t\r\n");
+    if (first == std::string::npos) return {};
+    return text.substr(first, text.find_last_not_of(" \t\r\n") + 1 - first);
 }
 
 }  // namespace fuzz

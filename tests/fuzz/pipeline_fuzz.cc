@@ -1,5 +1,5 @@
 // libFuzzer target for the whole pipeline: a G-code program (and any subroutine files after
-// "//@file NAME" lines, harness.h) is read, cut from a small block on a coarse lattice, rebuilt,
+// "//@file NAME" lines, and a machine, harness.h) is read, cut from a small block on a coarse lattice, rebuilt,
 // meshed and refined once against the exact part, on one thread, by the job the command line runs
 // with `--max-memory 1G --refine 1`. It must either give a closed mesh with no degenerate triangles
 // or throw dexelmill::Error; anything else aborts.
@@ -19,6 +19,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     SimulateOptions job;
     job.inputs = {"fuzz.ngc"};
     job.files = fuzz::sourceOf(files);
+    job.machine = fuzz::machineOf(files);
     job.stockBox = Box{Vec3(-10.0, -10.0, -6.0), Vec3(10.0, 10.0, 0.0)};
     job.resolution = 0.5;
     job.defaultTool = ballEndMill(3.0, {10.0, 20.0});
