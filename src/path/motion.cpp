@@ -214,10 +214,15 @@ double MotionLaw::speedBound(double reach) const {
 // (each turn at a constant rate), so between samples u_k = (k + 1/2) / N, every u being within
 // 1 / (2N) of one, |a'(u)| <= max_k |a'(u_k)| + (sum_i |rate_i|)^2 / (2N); N = min(32, ceil(32
 // rates)) makes that at most rates max(rates, 1) / 64. And |a'| <= |w| <= sum_i |rate_i|.
-double MotionLaw::axisTurnBound() const {
+double MotionLaw::rateSum() const {
     double rates = 0.0;
     for (const std::vector<RotaryTurn>* chain : {&turns_, &heads_})
         for (const RotaryTurn& t : *chain) rates += std::abs(t.to - t.from);
+    return rates;
+}
+
+double MotionLaw::axisTurnBound() const {
+    const double rates = rateSum();
     if (rates == 0.0) return 0.0;
     const int samples = int(std::min(double(kAxisTurnSamples), std::ceil(kAxisTurnSamples * rates)));
     double largest = 0.0;
@@ -243,9 +248,7 @@ double MotionLaw::axisTurnBound() const {
 // headReach). Every rho_i and sigma_j is a constant plus reach, so by induction the bound is a
 // constant plus (sum of every turn's rate)^2 reach: axisBendBound's rate, as the header says.
 double MotionLaw::axisPointAccelerationBound(double reach) const {
-    double rate = 0.0;
-    for (const std::vector<RotaryTurn>* chain : {&turns_, &heads_})
-        for (const RotaryTurn& t : *chain) rate += std::abs(t.to - t.from);
+    const double rate = rateSum();
     if (!carried_) return rate * rate * reach;
     // Down a chain from its innermost point, rho bounding that point's distance from the
     // chain's last pivot: speed and accel, the bounds on |z'| and |z''|, grow turn by turn.
@@ -270,17 +273,13 @@ double MotionLaw::axisPointAccelerationBound(double reach) const {
 }
 
 double MotionLaw::axisBendBound() const {
-    double rate = 0.0;
-    for (const std::vector<RotaryTurn>* chain : {&turns_, &heads_})
-        for (const RotaryTurn& t : *chain) rate += std::abs(t.to - t.from);
+    const double rate = rateSum();
     return rate * rate;
 }
 
 double MotionLaw::axisJerkBound() const {
     if (carried_) return std::numeric_limits<double>::infinity();
-    double rate = 0.0;
-    for (const std::vector<RotaryTurn>* chain : {&turns_, &heads_})
-        for (const RotaryTurn& t : *chain) rate += std::abs(t.to - t.from);
+    const double rate = rateSum();
     return rate * rate * rate;
 }
 

@@ -78,6 +78,9 @@ class MotionLaw {
     /// at one phase: twist(phase).at(y) is velocity(phase, y) up to rounding (a rigid motion's
     /// velocities are affine in the point), for a few products instead of a walk of the turns.
     Twist twist(const TurnPhase& phase) const;
+    /// @brief The sum of the turns' rates, sum_i |to_i - from_i| (heads' turns included): radians
+    /// per unit u, and over the whole move the most any direction the motion carries turns through.
+    double rateSum() const;
     /// @brief A bound on |velocity| over the move for every tool point within `reach` of the tip:
     ///  - tip on the line: |f| + sum_i |to_i - from_i| reach, since a tool point moves as
     ///    y' = f + w x (y - p) with |w| <= sum_i |angle rate_i|;
