@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <string>
 
 #include "dexelmill/error.h"
@@ -300,6 +301,35 @@ double MotionLaw::turnBound(double reach) const {
                std::max(glm::length(machineStart_ - last), glm::length(machineStart_ + machineFeed_ - last)) + headReach,
                v);
     return v;
+}
+
+Move subMove(const Move& move, double u0, double u1) {
+    const MotionLaw law(move);
+    Move piece = move;
+    const ToolPose first = law.pose(u0), last = law.pose(u1);
+    // A straight tip's segment cut by its own formula (the law's pose is that, for a machine's
+    // move under TCP too); a carried tip's ends are the law's poses.
+    const bool carried = move.rotary && move.rotary->tipCarried;
+    piece.start = carried ? first.tip : move.start + u0 * move.feed();
+    piece.end = carried ? last.tip : move.start + u1 * move.feed();
+    if (!move.turns()) return piece;
+    piece.startAxis = first.axis;
+    piece.axis = last.axis;
+    if (move.rotary) {
+        RotaryMotion r = *move.rotary;
+        const auto cut = [u0, u1](RotaryTurn& t) {
+            const double from = t.from, span = t.to - t.from;
+            t.from = from + u0 * span;
+            t.to = from + u1 * span;
+        };
+        for (RotaryTurn& t : r.turns) cut(t);
+        for (RotaryTurn& t : r.headTurns) cut(t);
+        const Vec3 joints = r.machineEnd - r.machineStart;
+        r.machineStart = move.rotary->machineStart + u0 * joints;
+        r.machineEnd = move.rotary->machineStart + u1 * joints;
+        piece.rotary = std::make_shared<const RotaryMotion>(std::move(r));
+    }
+    return piece;
 }
 
 }  // namespace dexelmill

@@ -153,6 +153,80 @@ TEST_CASE("machine: the law of random xyzac-trt moves matches the trt formulas a
     }
 }
 
+TEST_CASE("motion: a stretch of a move, as a move of its own, has the move's poses", "[machine]") {
+    // Against the trt formulas (xyzac-trt, TCP and identity), the machine's own kinematics (a
+    // head B turning in identity kinematics under a table C) and a great circle written out here
+    // (APT), at s in [0, 1] of stretches [u0, u1] drawn down to a millionth of the move.
+    const Machine ac = loadMachine("xyzac-trt");
+    const Machine ht = parseMachine(
+        R"({"name": "ht", "axes": [{"letter": "C", "on": "table", "direction": [0, 0, 1]},
+            {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 150]}]})",
+        "ht.json");
+    std::mt19937 rng(20261201);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (int i = 0; i < 80; ++i) {
+        const AcMove drawn = randomAcMove(rng);
+        double u0 = unit(rng), u1 = unit(rng);
+        if (u0 > u1) std::swap(u0, u1);
+        if (i % 4 == 0) u1 = std::min(1.0, u0 + 1e-6);
+        if (i % 8 == 1) u0 = 0.0, u1 = 1.0;
+        INFO("move " << i << ", stretch [" << u0 << ", " << u1 << "]");
+        const auto at = [&](double s) { return u0 + (u1 - u0) * s; };
+        // xyzac-trt, under TCP and in identity kinematics.
+        for (const bool tcp : {true, false}) {
+            const MotionLaw law(subMove(drawn.move(ac, tcp), u0, u1));
+            for (int k = 0; k <= 8; ++k) {
+                const double u = at(k / 8.0);
+                const Vec3 j = drawn.j0 + u * (drawn.j1 - drawn.j0);
+                const double a = drawn.from['A'] + u * (drawn.to['A'] - drawn.from['A']);
+                const double c = drawn.from['C'] + u * (drawn.to['C'] - drawn.from['C']);
+                const ToolPose p = law.pose(k / 8.0);
+                CHECK(distance(p.tip, tcp ? j : xyzacForward(j, a, c)) < 1e-11);
+                CHECK(distance(p.axis, drawn.axis(u)) < 1e-14);
+            }
+        }
+        // A head turning in identity kinematics under a table: the machine's kinematics at u.
+        RotaryAngles from, to;
+        from['C'] = drawn.from['C'], to['C'] = drawn.to['C'];
+        from['B'] = drawn.from['A'] / 2, to['B'] = drawn.to['A'] / 2;
+        Move headMove;
+        headMove.start = ht.partFromJoints(drawn.j0, from), headMove.end = ht.partFromJoints(drawn.j1, to);
+        headMove.rotary = std::make_shared<const RotaryMotion>(ht.motion(from, to, false, drawn.j0, drawn.j1));
+        const Move headPiece = subMove(headMove, u0, u1);
+        const MotionLaw headLaw(headPiece);
+        for (int k = 0; k <= 8; ++k) {
+            const double u = at(k / 8.0);
+            RotaryAngles angles;
+            angles['B'] = from['B'] + u * (to['B'] - from['B']), angles['C'] = from['C'] + u * (to['C'] - from['C']);
+            const ToolPose p = headLaw.pose(k / 8.0);
+            CHECK(distance(p.tip, ht.partFromJoints(drawn.j0 + u * (drawn.j1 - drawn.j0), angles)) < 1e-10);
+            CHECK(distance(p.axis, ht.toolAxis(angles)) < 1e-14);
+        }
+        CHECK(distance(headPiece.start, headLaw.pose(0.0).tip) < 1e-12);
+        CHECK(distance(headPiece.end, headLaw.pose(1.0).tip) < 1e-12);
+        // APT: the tip on the segment, the axis on the great circle a0 cos(t) + b sin(t).
+        const Move apt = randomAptMove(rng, drawn);
+        const MotionLaw aptLaw(subMove(apt, u0, u1));
+        const Vec3 a0 = *apt.startAxis;
+        const double theta = std::acos(std::clamp(glm::dot(a0, apt.axis), -1.0, 1.0));
+        const Vec3 b = glm::normalize(apt.axis - glm::dot(apt.axis, a0) * a0);
+        for (int k = 0; k <= 8; ++k) {
+            const double u = at(k / 8.0);
+            const ToolPose p = aptLaw.pose(k / 8.0);
+            CHECK(distance(p.tip, apt.start + u * (apt.end - apt.start)) < 1e-12);
+            CHECK(distance(p.axis, std::cos(theta * u) * a0 + std::sin(theta * u) * b) < 1e-13);
+        }
+    }
+    // A fixed axis: the segment alone.
+    Move still;
+    still.start = Vec3(1, 2, 3), still.end = Vec3(11, -8, 3), still.axis = glm::normalize(Vec3(0, 1, 1));
+    const Move piece = subMove(still, 0.25, 0.5);
+    CHECK(distance(piece.start, Vec3(3.5, -0.5, 3)) < 1e-15);
+    CHECK(distance(piece.end, Vec3(6, -3, 3)) < 1e-15);
+    CHECK(!piece.turns());
+    CHECK(piece.axis == still.axis);
+}
+
 TEST_CASE("machine: the acceleration bound of a tool point on the axis holds with TCP, in APT and in identity",
           "[machine]") {
     // A second central difference of the pose (h = 1e-3: its rounding error, about 1e-16 x 100 mm

@@ -124,4 +124,12 @@ class MotionLaw {
     std::vector<RotaryTurn> heads_;  ///< RotaryMotion::headTurns
 };
 
+/// @brief The stretch [u0, u1] of a move (0 <= u0 < u1 <= 1) as a move of its own, whose pose at
+/// s in [0, 1] is the move's at u0 + (u1 - u0) s, to rounding: the tip's segment cut at u0 and u1;
+/// for an APT move whose axis turns, the axes there, on the same great circle at the same uniform
+/// rate; for a machine's move, each turn's angles, the joints' segment and the heads' turns taken
+/// at u0 and u1, which run linearly in u as the whole move's do. The union of a move's stretches'
+/// poses is the move's, so is their swept volume.
+Move subMove(const Move& move, double u0, double u1);
+
 }  // namespace dexelmill
