@@ -267,6 +267,8 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
     if (windows.empty()) return out;
     const float freach = float(reach);
     const std::map<int, ToolRegions> regions = toolRegions(path, tools);
+    // Pieces of moves, as the cutting loop sweeps them (MovePieces).
+    const MovePieces pieces(path, regions, turnTolerance);
     std::vector<Material> material;
     std::vector<MoveGeometry> geoms;
     std::vector<SweepReach> cutReach, shankReach;
@@ -274,9 +276,9 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
     const double slack = reach * (1.0 + 1e-9) + 1e-9;
     std::vector<std::vector<std::uint32_t>> runMoves;
     std::vector<std::size_t> active;
-    reservePopulated(geoms, std::min(kBatch, path.moves.size()));
+    reservePopulated(geoms, std::min(kBatch, pieces.size()));
     const std::size_t chunks = (windows.size() + kChunk - 1) / kChunk;
-    const std::size_t total = chunks * path.moves.size();
+    const std::size_t total = chunks * pieces.size();
     std::size_t done = 0;
 
     for (std::size_t w0 = 0; w0 < windows.size(); w0 += kChunk) {
@@ -287,19 +289,20 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
         tbb::parallel_for(w0, w1, [&](std::size_t i) { material[i - w0] = stockMaterial(windows[i], freach, stock); });
         runMoves.assign(b.runStart.size() - 1, {});
 
-        // geoms[i - m0] is the sweep of move i (and the reaches alike); the first `built` of them
+        // geoms[i - m0] is the sweep of piece i (and the reaches alike); the first `built` of them
         // were built with the batch before.
         std::size_t built = 0;
-        for (std::size_t m0 = 0, m1 = 0; m0 < path.moves.size(); m0 = m1) {
-            const std::size_t end = std::min(path.moves.size(), m0 + kBatch);
+        for (std::size_t m0 = 0, m1 = 0; m0 < pieces.size(); m0 = m1) {
+            const std::size_t end = std::min(pieces.size(), m0 + kBatch);
             geoms.resize(end - m0);
             cutReach.resize(end - m0);
             shankReach.resize(end - m0);
             tbb::parallel_for(m0 + built, end, [&](std::size_t i) {
-                const ToolRegions& r = regions.at(path.moves[i].tool);
-                geoms[i - m0] = MoveGeometry(r, path.moves[i], turnTolerance);
-                cutReach[i - m0] = SweepReach(*r.cutting, path.moves[i]);
-                if (r.shank) shankReach[i - m0] = SweepReach(*r.shank, path.moves[i]);
+                const Move piece = pieces.piece(i);
+                const ToolRegions& r = regions.at(piece.tool);
+                geoms[i - m0] = MoveGeometry(r, piece, turnTolerance);
+                cutReach[i - m0] = SweepReach(*r.cutting, piece);
+                if (r.shank) shankReach[i - m0] = SweepReach(*r.shank, piece);
             });
             // The batch ends before its turning sweeps could keep more linear nodes than the budget.
             m1 = m0 + movesWithinNodeBudget(geoms.data(), end - m0);

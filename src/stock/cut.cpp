@@ -12,6 +12,7 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
+#include "dexelmill/path/motion.h"
 #include "dexelmill/sweep/sweep.h"
 
 namespace dexelmill {
@@ -332,9 +333,45 @@ bool sweepsTurning(const Move& move, const Tool& tool, double turnTolerance) {
     return move.turns() && !move.rapid && turnAngle(move) * reach > turnTolerance;
 }
 
+bool sweptTurning(const ToolRegions& regions, const Move& move, double turnTolerance) {
+    return sweepsTurning(move, *regions.cutting, turnTolerance) ||
+           (regions.shank && sweepsTurning(move, *regions.shank, turnTolerance));
+}
+
+MovePieces::MovePieces(const ToolPath& path, const std::map<int, ToolRegions>& regions, double turnTolerance)
+    : path_(path), size_(path.moves.size()) {
+    for (std::size_t i = 0; i < path.moves.size(); ++i) {
+        const Move& m = path.moves[i];
+        if (!m.turns() || !sweptTurning(regions.at(m.tool), m, turnTolerance)) continue;
+        const double pieces = std::ceil(MotionLaw(m).rateSum() / kMaxPieceTurn);
+        if (!(pieces > 1.0)) continue;
+        // The pieces of the moves cut before add to this one's place.
+        cuts_.push_back({i, i + (size_ - path.moves.size()), std::size_t(pieces)});
+        size_ += std::size_t(pieces) - 1;
+    }
+}
+
+const MovePieces::Cut* MovePieces::before(std::size_t i) const {
+    const auto after = std::upper_bound(cuts_.begin(), cuts_.end(), i,
+                                        [](std::size_t piece, const Cut& c) { return piece < c.first; });
+    return after == cuts_.begin() ? nullptr : &*(after - 1);
+}
+
+std::size_t MovePieces::move(std::size_t i) const {
+    const Cut* c = before(i);
+    if (!c) return i;
+    return i < c->first + c->count ? c->move : c->move + 1 + (i - (c->first + c->count));
+}
+
+Move MovePieces::piece(std::size_t i) const {
+    const Cut* c = before(i);
+    if (!c || i >= c->first + c->count) return path_.moves[move(i)];
+    const double n = double(c->count), k = double(i - c->first);
+    return subMove(path_.moves[c->move], k / n, (k + 1.0) / n);
+}
+
 MoveGeometry::MoveGeometry(const ToolRegions& regions, const Move& move, double turnTolerance) {
-    const bool turning = sweepsTurning(move, *regions.cutting, turnTolerance) ||
-                         (regions.shank && sweepsTurning(move, *regions.shank, turnTolerance));
+    const bool turning = sweptTurning(regions, move, turnTolerance);
     auto sweep = [&](const Tool& region, RegionSweep& out) {
         if (turning) out.turning.emplace(region, move, turnTolerance);
         else out.fixed.emplace(region, move);
@@ -367,6 +404,8 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
     result.moves.resize(nMoves);
 
     const std::map<int, ToolRegions> regions = toolRegions(path, tools);
+    const MovePieces pieces(path, regions, options.turnTolerance);
+    const std::size_t nPieces = pieces.size();
 
     // Every tile of every kept family, with its material extent.
     std::vector<TileSlot> slots;
@@ -392,7 +431,7 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
     const Lattice& lattice = stock.lattice();
     const double cell = lattice.h * lattice.h / std::max(1, familyCount);
     const std::size_t batch =
-        options.batchMoves > 0 ? options.batchMoves : std::max<std::size_t>(64, (nMoves + 99) / 100);
+        options.batchMoves > 0 ? options.batchMoves : std::max<std::size_t>(64, (nPieces + 99) / 100);
     std::vector<std::vector<std::uint32_t>> tileMoves(slots.size());
     std::vector<std::vector<TileMoveStats>> tileStats(slots.size());
     std::vector<std::vector<DesignStretch>> tileStretches(slots.size());
@@ -422,16 +461,17 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
     std::vector<MoveGeometry> geoms;
     std::vector<DesignStretch> batchStretches;
 
-    // geoms[i - m0] is the sweep of move i; the first `built` of them were built with the batch before.
+    // geoms[i - m0] is the sweep of piece i; the first `built` of them were built with the batch
+    // before. A batch, a tile's list and its statistics count pieces (MovePieces), the reports moves.
     std::size_t built = 0;
-    for (std::size_t m0 = 0, m1 = 0; m0 < nMoves; m0 = m1) {
+    for (std::size_t m0 = 0, m1 = 0; m0 < nPieces; m0 = m1) {
         // The batch's sweeps, built once and shared read-only by the tiles.
-        const std::size_t end = std::min(nMoves, m0 + batch);
+        const std::size_t end = std::min(nPieces, m0 + batch);
         geoms.resize(end - m0);
         arena.execute([&] {
             tbb::parallel_for(m0 + built, end, [&](std::size_t i) {
-                const Move& mv = path.moves[i];
-                geoms[i - m0] = MoveGeometry(regions.at(mv.tool), mv, options.turnTolerance);
+                const Move piece = pieces.piece(i);
+                geoms[i - m0] = MoveGeometry(regions.at(piece.tool), piece, options.turnTolerance);
             });
         });
         // The batch ends before its turning sweeps could keep more linear nodes than the budget.
@@ -467,7 +507,7 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
         // Reduce in tile order: the same sums in the same order for any thread count.
         for (std::size_t t : active) {
             for (const TileMoveStats& s : tileStats[t]) {
-                MoveStats& ms = result.moves[m0 + s.move];
+                MoveStats& ms = result.moves[pieces.move(m0 + s.move)];
                 ms.bounded += s.bounded;
                 ms.visited += s.visited;
                 ms.changed += s.changed;
@@ -476,7 +516,7 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
                 ms.designRemoved[std::size_t(slots[t].family)] += s.design * lattice.h * lattice.h;
             }
             for (DesignStretch& d : tileStretches[t]) {
-                d.move += std::uint32_t(m0);
+                d.move = std::uint32_t(pieces.move(m0 + d.move));
                 batchStretches.push_back(d);
             }
             tileStats[t].clear();
@@ -488,7 +528,8 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
                          [](const DesignStretch& x, const DesignStretch& y) { return x.move < y.move; });
         result.designStretches.insert(result.designStretches.end(), batchStretches.begin(), batchStretches.end());
         batchStretches.clear();
-        if (options.progress) options.progress(m1, nMoves);
+        // The moves done: those before the one whose piece comes next.
+        if (options.progress) options.progress(m1 == nPieces ? nMoves : pieces.move(m1), nMoves);
         // The sweeps built past the batch's end go with the next batch.
         geoms.erase(geoms.begin(), geoms.begin() + std::ptrdiff_t(m1 - m0));
         built = end - m1;

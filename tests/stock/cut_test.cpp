@@ -210,6 +210,85 @@ TEST_CASE("cut: batches ended by the linear-node budget give the same stock bit 
     }
 }
 
+TEST_CASE("cut: a move that turns far is swept in pieces, its statistics its own, in any batch and thread",
+          "[stock][cut][turning]") {
+    // A fixed-axis feed, a move turning 5 degrees (one piece), one turning 25 (three), a rapid
+    // turning 60 (swept with its end axis: whole) and a feed turning 95 (ten), in the block.
+    const ToolTable tools = testTools();
+    ToolPath path;
+    path.files.push_back("pieces.nc");
+    const double deg = std::acos(-1.0) / 180.0;
+    const double turns[] = {0.0, 5.0, 25.0, 60.0, 95.0};
+    for (int i = 0; i < 5; ++i) {
+        Move m;
+        m.start = Vec3(-2.0, 3.0 + 3.5 * i, 8.0);
+        m.end = Vec3(22.0, 4.0 + 3.5 * i, 7.0);
+        m.axis = Vec3(0.0, 0.0, 1.0);
+        if (turns[i] > 0.0) m.startAxis = Vec3(std::sin(turns[i] * deg), 0.0, std::cos(turns[i] * deg));
+        m.rapid = i == 3;
+        m.tool = 1 + i % 2;
+        m.source = SourceRef{0, 10 + i};
+        path.moves.push_back(m);
+    }
+    const std::map<int, ToolRegions> regions = toolRegions(path, tools);
+    const MovePieces pieces(path, regions, kDefaultTurnTolerance);
+    const std::vector<std::size_t> owners{0, 1, 2, 2, 2, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4};
+    REQUIRE(pieces.size() == owners.size());
+    for (std::size_t i = 0; i < owners.size(); ++i) {
+        INFO("piece " << i);
+        CHECK(pieces.move(i) == owners[i]);
+        // Each piece starts where the one before it in its move ends, and keeps the move's tool
+        // and source; the first starts and the last ends with the move.
+        const Move piece = pieces.piece(i);
+        const Move& whole = path.moves[owners[i]];
+        CHECK(piece.tool == whole.tool);
+        CHECK(piece.source.line == whole.source.line);
+        const bool first = i == 0 || owners[i - 1] != owners[i];
+        const bool last = i + 1 == owners.size() || owners[i + 1] != owners[i];
+        if (first) CHECK(glm::length(piece.start - whole.start) < 1e-12);
+        else CHECK(glm::length(piece.start - pieces.piece(i - 1).end) < 1e-12);
+        if (last) CHECK(glm::length(piece.end - whole.end) < 1e-12);
+        if (!first && piece.startAxis) CHECK(glm::length(*piece.startAxis - pieces.piece(i - 1).axis) < 1e-12);
+    }
+    // Batches and threads change nothing; the statistics are per move, the progress in moves.
+    TriDexelStock reference = TriDexelStock::fromBox(kStockBox, 0.3);
+    std::vector<std::size_t> done;
+    CutOptions one;
+    one.threads = 1;
+    one.progress = [&](std::size_t moves, std::size_t total) {
+        CHECK(total == path.moves.size());
+        done.push_back(moves);
+    };
+    const CutResult a = cutStock(reference, path, tools, one);
+    REQUIRE(a.moves.size() == path.moves.size());
+    REQUIRE(a.moves[4].removed > 50.0);
+    // The turning pieces' node trees end most batches (the linear-node budget): the moves done
+    // so far, in order, up to all of them.
+    CHECK(std::is_sorted(done.begin(), done.end()));
+    CHECK(done.back() == path.moves.size());
+    for (const std::size_t batch : {1, 2, 7}) {
+        for (const int threads : {1, 2}) {
+            INFO(threads << " threads, batches of " << batch << " pieces");
+            TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.3);
+            CutOptions opt;
+            opt.threads = threads;
+            opt.batchMoves = batch;
+            done.clear();
+            opt.progress = [&](std::size_t moves, std::size_t) { done.push_back(moves); };
+            const CutResult b = cutStock(stock, path, tools, opt);
+            CHECK(sameStock(reference, stock));
+            for (std::size_t i = 0; i < path.moves.size(); ++i) {
+                CHECK(b.moves[i].removed == a.moves[i].removed);
+                CHECK(b.moves[i].changed == a.moves[i].changed);
+            }
+            CHECK(std::is_sorted(done.begin(), done.end()));
+            CHECK(done.back() == path.moves.size());
+            // Batches of one piece: the moves before the piece that comes next.
+            if (batch == 1) CHECK(done == std::vector<std::size_t>{1, 2, 2, 2, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5});
+        }
+    }
+}
+
 TEST_CASE("cut: a rapid through material is a collision with its source line", "[stock][cut]") {
     TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.25);
     ToolPath path;

@@ -51,11 +51,12 @@ namespace {
 
 /// Whether some pose of a pure rotation about the tip (the origin) puts the point (X, y, Z) inside
 /// the cylinder of radius r between heights lo >= 0 and hi along the tool axis. The axis turns in
-/// the xz-plane from +z towards +x through angles [0, turn]. In the tool's frame at angle t the
+/// the xz-plane from +z towards +x through angles [from, to]. In the tool's frame at angle t the
 /// point lies at angle psi = phi - t from the axis (phi: its own angle from +z); it is inside
 /// when rho |sin psi| <= sqrt(r^2 - y^2) and lo <= rho cos psi <= hi, that is when
-/// b <= |psi| <= a for the angles a and b below. Closed form: no sweep code is shared.
-bool inTurningCylinder(double X, double y, double Z, double r, double lo, double hi, double turn) {
+/// b <= |psi| <= a for the angles a and b below, psi taken in [-pi, pi] (the turn's angles
+/// reach the point's from either side). Closed form: no sweep code is shared.
+bool inTurningCylinder(double X, double y, double Z, double r, double lo, double hi, double from, double to) {
     if (std::abs(y) >= r) return false;
     const double c = std::sqrt(r * r - y * y), rho = std::hypot(X, Z);
     if (rho <= 0.0 || lo > rho) return false;
@@ -64,8 +65,14 @@ bool inTurningCylinder(double X, double y, double Z, double r, double lo, double
     const double b = hi >= rho ? 0.0 : std::acos(hi / rho);
     if (b > a) return false;
     const double phi = std::atan2(X, Z);
-    const auto meets = [&](double l, double h) { return std::max(l, phi - turn) <= std::min(h, phi); };
-    return meets(b, a) || meets(-a, -b);
+    const double twoPi = 4.0 * halfPi;
+    for (const double wrap : {-twoPi, 0.0, twoPi}) {
+        const auto meets = [&](double l, double h) {
+            return std::max(l, phi - to + wrap) <= std::min(h, phi - from + wrap);
+        };
+        if (meets(b, a) || meets(-a, -b)) return true;
+    }
+    return false;
 }
 
 }  // namespace
@@ -74,8 +81,9 @@ TEST_CASE("a turning move whose shank sweeps through material is reported with w
           "[stock][cut][turning]") {
     // A flat D6, 10 mm of flutes on 40 mm, turns 20 degrees about its tip at (20, 20, 12), from
     // +z towards +x, in a block 30 mm high: the flutes sweep a fan from heights 12 to 22, the
-    // shank one above them. What the shank meets is the block inside the shank's fan and outside
-    // the flutes' (they come first on every dexel).
+    // shank one above them. The move turns past kMaxPieceTurn, so it is swept in equal pieces of
+    // its turn, in order, each piece's flutes before its shank: what the shank meets is what the
+    // first piece to reach a point reaches with its shank and not its flutes.
     const double turn = 20.0 * std::acos(-1.0) / 180.0;
     const Vec3 tip(20.0, 20.0, 12.0);
     ToolTable table;
@@ -90,16 +98,23 @@ TEST_CASE("a turning move whose shank sweeps through material is reported with w
     const CutResult r = cutStock(s, p, table);
 
     // The oracle's volumes: the midpoint rule on 0.05 mm cells over the block's reach.
+    const int pieces = int(std::ceil(turn / kMaxPieceTurn));
+    REQUIRE(pieces == 2);
     double cut = 0.0, shank = 0.0;
     const double step = 0.05;
     for (double x = 15.0 + 0.5 * step; x < 36.0; x += step)
         for (double y = 16.5 + 0.5 * step; y < 23.5; y += step)
             for (double z = 10.0 + 0.5 * step; z < block.hi.z; z += step) {
                 const double X = x - tip.x, Y = y - tip.y, Z = z - tip.z;
-                const bool flutes = inTurningCylinder(X, Y, Z, 3.0, 0.0, 10.0, turn);
-                const bool stick = inTurningCylinder(X, Y, Z, 3.0, 10.0, 40.0, turn);
-                cut += (flutes || stick) ? 1.0 : 0.0;
-                shank += (stick && !flutes) ? 1.0 : 0.0;
+                for (int k = 0; k < pieces; ++k) {
+                    const double from = turn * k / pieces, to = turn * (k + 1) / pieces;
+                    const bool flutes = inTurningCylinder(X, Y, Z, 3.0, 0.0, 10.0, from, to);
+                    const bool stick = inTurningCylinder(X, Y, Z, 3.0, 10.0, 40.0, from, to);
+                    if (!flutes && !stick) continue;
+                    cut += 1.0;
+                    shank += flutes ? 0.0 : 1.0;
+                    break;
+                }
             }
     cut *= step * step * step;
     shank *= step * step * step;
@@ -110,6 +125,37 @@ TEST_CASE("a turning move whose shank sweeps through material is reported with w
     CHECK(r.collisions[0].kind == CollisionKind::Shank);
     CHECK(r.collisions[0].move == 0);
     CHECK(r.collisions[0].source.line == 7);
-    CHECK(r.collisions[0].volume == Approx(shank).epsilon(0.005));  // measured: 0.01 %
+    CHECK(r.collisions[0].volume == Approx(shank).epsilon(0.005));  // measured: 0.04 %
     CHECK(r.removedVolume == Approx(cut).epsilon(0.005));  // measured: 0.02 %
+}
+
+TEST_CASE("a move turning 120 degrees is swept in twelve pieces whose union is its fan", "[stock][cut][turning]") {
+    // The flat D6 of the test above turns 120 degrees about its tip, from +z towards +x and down
+    // into the block: twelve pieces of kMaxPieceTurn, each its own sweep, together the fan of the
+    // closed form.
+    const double turn = 120.0 * std::acos(-1.0) / 180.0;
+    const Vec3 tip(20.0, 20.0, 12.0);
+    ToolTable table;
+    table.emplace(1, flatEndMill(6, {10, 40}));
+    ToolPath p;
+    p.files = {"fan.ngc"};
+    Move m{tip, tip, Vec3(std::sin(turn), 0.0, std::cos(turn)), 1, false, {0, 3}, {}, {}};
+    m.startAxis = Vec3(0.0, 0.0, 1.0);
+    p.moves.push_back(m);
+    REQUIRE(MovePieces(p, toolRegions(p, table), kDefaultTurnTolerance).size() == 12);
+    const Box block{Vec3(10.0, 10.0, 0.0), Vec3(40.0, 30.0, 30.0)};
+    TriDexelStock s = TriDexelStock::fromBox(block, 0.25);
+    const CutResult r = cutStock(s, p, table);
+    // The oracle's volume: the midpoint rule on 0.1 mm cells over the block's reach.
+    double cut = 0.0;
+    const double step = 0.1;
+    for (double x = block.lo.x + 0.5 * step; x < block.hi.x; x += step)
+        for (double y = 16.5 + 0.5 * step; y < 23.5; y += step)
+            for (double z = block.lo.z + 0.5 * step; z < block.hi.z; z += step)
+                cut += inTurningCylinder(x - tip.x, y - tip.y, z - tip.z, 3.0, 0.0, 40.0, 0.0, turn) ? 1.0 : 0.0;
+    cut *= step * step * step;
+    INFO("oracle " << cut << " mm^3, cut " << r.removedVolume << " mm^3");
+    REQUIRE(r.moves.size() == 1);
+    CHECK(r.moves[0].removed == Approx(r.removedVolume));
+    CHECK(r.removedVolume == Approx(cut).epsilon(0.001));  // measured: 0.003 %
 }

@@ -4,7 +4,8 @@
 ///
 /// Per move, the volume the cutting part of the tool sweeps (heights [0, cutting length]) is
 /// removed from every dexel it meets (MoveSweep, sweep.h; for a feed move whose axis turns,
-/// TurningSweep, turning.h, solved to its tolerance where the dexel has material). Localisation: the sweep's tight
+/// TurningSweep, turning.h, solved to its tolerance where the dexel has material, and where it
+/// turns far, piece by piece: MovePieces). Localisation: the sweep's tight
 /// axis-aligned box selects the 16 x 16 dexel tiles of each family it overlaps; inside a tile,
 /// only the dexels whose line crosses the box and whose material reaches into it are intersected
 /// with the sweep.
@@ -17,7 +18,9 @@
 ///  - a rapid move whose cutting part removes material (a crash through the stock);
 ///  - material met by the shank region (heights [cutting length, total length]) swept along the
 ///    move. It is measured after the move's cutting part has removed what it sweeps, so a shank
-///    following its flutes into their own cut is not a collision. By default that material is
+///    following its flutes into their own cut is not a collision. A move swept in pieces
+///    (MovePieces) is measured piece by piece, each piece's flutes first: the shank meets what
+///    the flutes of a later piece would take, as it does in time. By default that material is
 ///    removed as well (the tool went through it; CutOptions::removeShankMaterial = false keeps
 ///    it, to show what the flutes alone would have cut).
 #pragma once
@@ -155,6 +158,10 @@ struct RegionSweep {
     Interval bound(const Line& line) const { return fixed ? fixed->bound(line) : turning->bound(line); }
 };
 
+/// @brief Whether the cutting loop sweeps `move` turning: where either region of its tool turns
+/// past the tolerance (sweepsTurning).
+bool sweptTurning(const ToolRegions& regions, const Move& move, double turnTolerance);
+
 /// @brief One move's sweeps: its cutting part's, its shank's if the tool has one, and the box
 /// that holds both. Both are turning when either region's turn exceeds the tolerance; a rapid
 /// that turns is swept with its end axis (its path is the machine's, not the program's).
@@ -167,6 +174,39 @@ struct MoveGeometry {
     MoveGeometry(const ToolRegions& regions, const Move& move, double turnTolerance = kDefaultTurnTolerance);
     /// @brief The most linear nodes the move's turning sweeps can keep (TurningSweep::linearNodeBound).
     std::size_t linearNodeBound() const;
+};
+
+/// @brief The most a piece of a turning move turns (radians, MotionLaw::rateSum): 10 degrees.
+/// A move swept turning whose turns sum past it is swept in the fewest equal stretches of u that
+/// keep within it (MovePieces), each a sweep with its own box, whose union is the move's sweep.
+/// A move swept whole is searched along every line its one box crosses, down to where the tool
+/// is near it: a 4-axis helix turning A ten times in one block (ball D3, 50 mm along a bar) took
+/// 75 s to cut, against 1.3 s as 360 blocks of 10 degrees (1.2 at 3, 2.0 at 30, 6.8 at 90).
+constexpr double kMaxPieceTurn = 10.0 * 3.14159265358979323846 / 180.0;
+
+/// @brief The pieces the cutting loop sweeps a path's moves in, in the moves' order: each move
+/// whole, or a turning move cut into equal stretches (kMaxPieceTurn, subMove). Piece i belongs to
+/// move(i); a move's statistics and reports sum its pieces'. Holds only the moves it cuts.
+class MovePieces {
+  public:
+    MovePieces(const ToolPath& path, const std::map<int, ToolRegions>& regions, double turnTolerance);
+    std::size_t size() const { return size_; }
+    /// @brief The move piece `i` belongs to.
+    std::size_t move(std::size_t i) const;
+    /// @brief Piece `i` as a move: its stretch of its move, or the move itself.
+    Move piece(std::size_t i) const;
+
+  private:
+    /// A move cut into `count` pieces, the first of them piece `first`.
+    struct Cut {
+        std::size_t move = 0, first = 0, count = 0;
+    };
+    /// The cut move at or before piece i, if any.
+    const Cut* before(std::size_t i) const;
+
+    const ToolPath& path_;
+    std::vector<Cut> cuts_;
+    std::size_t size_ = 0;
 };
 
 /// @brief How many of `count` consecutive moves' sweeps, from the first, one batch may hold: as
