@@ -5,8 +5,9 @@
 //  BM_SweepQueryNormals/<tool>/<move>: the same lines, each with the Hermite data (the normals at
 //    both ends of every part's interval), as the cutting loop asks for them.
 //  BM_SweepBuild/<tool>/<grown>: the cost of building one convex part's sweep (MoveSweep).
-//  BM_TurningQuery/<tool>/<turn in degrees>: the tilted move with its axis turning, against the
-//    same move with the axis held (turn 0), over the same lines: the cost of a 5-axis move per line.
+//  BM_TurningQuery/<tool>/<turn in degrees>: the tilted move with its axis turning (in the cutting
+//    loop's pieces), against the same move with the axis held (turn 0), over the same lines: the
+//    cost of a 5-axis move per line.
 //  BM_TurningShortQuery/<tool>/<turn in tenths of a degree>: the same for a move as short as a
 //    real 5-axis program's, half a millimetre.
 //  BM_Raster/<threads>/<h in um>: a 10,000-move ball-end finishing raster over a wavy surface on a
@@ -130,9 +131,10 @@ void BM_SweepBuild(benchmark::State& state) {
 BENCHMARK(BM_SweepBuild)->ArgsProduct({{0, 1, 2, 3}, {0, 1}})->Unit(benchmark::kNanosecond);
 
 /// A tilted move from `start` to `end` with its axis turning by `turn` (rad) in the plane of the
-/// tilt, ending at the tilted axis, swept within the default tolerance with its Hermite data. A
-/// turn of 0 is the same move with the end axis held, swept by the fixed-axis solver: the 3+2 move
-/// the turning one is compared with. Both query the same lines, those through the turning sweep's
+/// tilt, ending at the tilted axis, swept within the default tolerance with its Hermite data, in
+/// the pieces the cutting loop sweeps it in (MovePieces: three for 30 degrees). A turn of 0 is the
+/// same move with the end axis held, swept by the fixed-axis solver: the 3+2 move the turning one
+/// is compared with. Both query the same lines, those through the turning sweep's
 /// box below z = 0 (a stock's top), as the cutting loop does (bound first, then the sweep where
 /// the bound meets the line's material), so ns_per_query of two rows is the cost ratio per dexel
 /// line.
@@ -148,10 +150,19 @@ void turningQuery(benchmark::State& state, const Vec3& start, const Vec3& end, d
     const Vec3 startAxis = std::cos(turn) * m.axis + std::sin(turn) * towards;
     Move turning = m;
     turning.startAxis = startAxis;
-    const TurningSweep sweep(tool, turning);
+    ToolPath path;
+    path.moves.push_back(turning);
+    ToolTable table;
+    table.emplace(0, tool);
+    const MovePieces pieces(path, toolRegions(path, table), kDefaultTurnTolerance);
+    std::vector<TurningSweep> sweeps;
+    Box box;
+    for (std::size_t k = 0; k < pieces.size(); ++k) {
+        sweeps.emplace_back(tool, pieces.piece(k));
+        box.expand(sweeps.back().bounds());
+    }
     // A stock with its top at z = 0, which the move enters 3 mm deep: the lines through it, and
     // on each the stretch of material the cutting loop would pass as `care`.
-    Box box = sweep.bounds();
     box.hi.z = 0.0;
     const std::vector<Line> lines = linesThrough(box, 0.1);
     std::vector<std::vector<Interval>> care;
@@ -178,10 +189,14 @@ void turningQuery(benchmark::State& state, const Vec3& start, const Vec3& end, d
                 const std::size_t n = fixed.intersectParts(fixed.toLocal(lines[i]), parts, inCare);
                 hits += n > 0 && !parts[0].isEmpty();
             } else {
-                met.assign(1, sweep.bound(lines[i]).intersect(care[i].front()));
-                if (met.front().isEmpty()) continue;
-                sweep.intersect(lines[i], met, turned);
-                hits += !turned.empty();
+                bool hit = false;
+                for (const TurningSweep& sweep : sweeps) {
+                    met.assign(1, sweep.bound(lines[i]).intersect(care[i].front()));
+                    if (met.front().isEmpty()) continue;
+                    sweep.intersect(lines[i], met, turned);
+                    hit = hit || !turned.empty();
+                }
+                hits += hit;
             }
         }
     }
