@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <deque>
 #include <limits>
 #include <utility>
 
@@ -270,13 +271,12 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
     // Pieces of moves, as the cutting loop sweeps them (MovePieces).
     const MovePieces pieces(path, regions, turnTolerance);
     std::vector<Material> material;
-    std::vector<MoveGeometry> geoms;
-    std::vector<SweepReach> cutReach, shankReach;
+    BuiltSweeps geoms;
+    std::deque<SweepReach> cutReach, shankReach;
     // The slack of the cheap test: the window's half-length, and a margin for its own rounding.
     const double slack = reach * (1.0 + 1e-9) + 1e-9;
     std::vector<std::vector<std::uint32_t>> runMoves;
     std::vector<std::size_t> active;
-    reservePopulated(geoms, std::min(kBatch, pieces.size()));
     const std::size_t chunks = (windows.size() + kChunk - 1) / kChunk;
     const std::size_t total = chunks * pieces.size();
     std::size_t done = 0;
@@ -305,7 +305,7 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
                 if (r.shank) shankReach[i - m0] = SweepReach(*r.shank, piece);
             });
             // The batch ends before its turning sweeps could keep more linear nodes than the budget.
-            m1 = m0 + movesWithinNodeBudget(geoms.data(), end - m0);
+            m1 = m0 + movesWithinNodeBudget(geoms, end - m0);
             // Each move to the runs of windows its box (grown by the reach) overlaps, in order.
             active.clear();
             for (std::size_t i = m0; i < m1; ++i) {

@@ -168,7 +168,7 @@ struct SweepWindow {
 };
 
 /// Applies the moves `moves` (indices into the batch) to one tile, in order.
-void processTile(TriDexelStock& stock, TileSlot& slot, const std::vector<MoveGeometry>& geoms,
+void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                  const std::vector<std::uint32_t>& moves, bool removeShank, const DesignWatch& design,
                  std::vector<TileMoveStats>& out, std::vector<DesignStretch>& stretches) {
     const Lattice& lattice = stock.lattice();
@@ -388,7 +388,7 @@ std::size_t MoveGeometry::linearNodeBound() const {
     return nodes;
 }
 
-std::size_t movesWithinNodeBudget(const MoveGeometry* geoms, std::size_t count) {
+std::size_t movesWithinNodeBudget(const BuiltSweeps& geoms, std::size_t count) {
     const std::size_t budget = TurningSweep::linearNodeBudget();
     std::size_t nodes = geoms[0].linearNodeBound(), n = 1;
     for (; n < count; ++n) {
@@ -458,7 +458,7 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
         return w;
     };
     std::vector<std::size_t> active;
-    std::vector<MoveGeometry> geoms;
+    BuiltSweeps geoms;
     std::vector<DesignStretch> batchStretches;
 
     // geoms[i - m0] is the sweep of piece i; the first `built` of them were built with the batch
@@ -475,7 +475,7 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
             });
         });
         // The batch ends before its turning sweeps could keep more linear nodes than the budget.
-        m1 = m0 + movesWithinNodeBudget(geoms.data(), end - m0);
+        m1 = m0 + movesWithinNodeBudget(geoms, end - m0);
         // Bucket the moves by the tiles their boxes overlap, in program order.
         active.clear();
         for (std::size_t i = m0; i < m1; ++i) {

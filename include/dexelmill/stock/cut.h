@@ -28,6 +28,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <limits>
 #include <map>
@@ -209,11 +210,17 @@ class MovePieces {
     std::size_t size_ = 0;
 };
 
-/// @brief How many of `count` consecutive moves' sweeps, from the first, one batch may hold: as
-/// many as keep their turning sweeps' linear nodes within the budget (TurningSweep::
-/// linearNodeBudget, MoveGeometry::linearNodeBound), and at least one. Past the budget a query
-/// makes each node it needs and drops it.
-std::size_t movesWithinNodeBudget(const MoveGeometry* geoms, std::size_t count);
+/// @brief The sweeps the cutting loop has built ahead, in order. A batch ends where the node
+/// budget says, often after one turning sweep, and drops its sweeps from the front: a deque
+/// drops them without moving the rest (a vector moved every sweep built ahead each time: 800
+/// ten-turn blocks, cut in 8,000 pieces, took 53 s).
+using BuiltSweeps = std::deque<MoveGeometry>;
+
+/// @brief How many of the first `count` sweeps of `geoms` one batch may hold: as many as keep
+/// their turning sweeps' linear nodes within the budget (TurningSweep::linearNodeBudget,
+/// MoveGeometry::linearNodeBound), and at least one. Past the budget a query makes each node it
+/// needs and drops it.
+std::size_t movesWithinNodeBudget(const BuiltSweeps& geoms, std::size_t count);
 
 /// @brief Whether the cutting loop sweeps `move` of `tool` as a turning move with tolerance
 /// `turnTolerance`: a feed move whose axis turns far enough to move some tool point (all within
