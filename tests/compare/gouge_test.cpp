@@ -161,6 +161,26 @@ TEST_CASE("gouges: a floor cut 0.1 mm too deep, and a rapid through the design",
     fs::remove_all(dir);
 }
 
+TEST_CASE("gouges: named by their moves after a move swept in pieces", "[compare][design][job]") {
+    // The pocket's passes after a rotary table's quarter turn there and back on xyza, 50 mm above
+    // the part's axis (x), out of the stock's reach: each turn is swept in nine pieces, and the
+    // gouges must still name the lines of the moves that made them.
+    const fs::path dir = scratch("pieces");
+    const std::string design = writeStl(dir / "l.stl", prismFacets(lShape(), -1.0, 41.0));
+    std::string program = kPocket;
+    program.replace(program.find("G0 X35 Y-10 Z5\n"), 15, "G0 X20 Y20 Z50 A0\nG1 A90 F100\nG1 A0\nG0 X35 Y-10 Z5\n");
+    SimulateOptions o = job(program, design, 10.0);
+    o.machine = "xyza";
+    const SimulateReport r = simulate(o);
+    REQUIRE(r.gouges.size() == 2);
+    CHECK(r.gouges[0].where.line == 16);  // the rapid at z = -7, three lines later than in kPocket
+    CHECK(r.gouges[0].rapid);
+    CHECK(r.gouges[0].depthMm == Approx(1.9).margin(1e-3));
+    CHECK(r.gouges[1].where.line == 12);  // the floor pass
+    CHECK(r.gouges[1].volumeMm3 == Approx(10.0 * 40.0 * 0.1).epsilon(1e-4));
+    fs::remove_all(dir);
+}
+
 TEST_CASE("gouges: a design reaching past the stock on every side", "[compare][design][job]") {
     const fs::path dir = scratch("beyond");
     // The design fills x and y -5..45 and z -15..5, around the whole stock. A pass at z = -0.005
