@@ -82,6 +82,8 @@ CLI::App* addInfo(CLI::App& app, InfoArgs& a) {
 
 int runInfo(const InfoArgs& args) {
     const std::string& file = args.file;
+    // Checked before anything is read, whatever the file: a malformed option is an error.
+    const std::optional<Vec3> start = parseStart(args.start);
     std::printf("%-14s %s\n", "file", file.c_str());
     if (endsWith(file, ".vdb")) {
         const LevelSet ls = readVdb(file);
@@ -96,7 +98,7 @@ int runInfo(const InfoArgs& args) {
     const MemoryBudget budget = memoryBudget();
     GcodeOptions gcode = jobGcodeOptions(SimulateOptions().chordTolerance, budget);
     if (!args.machine.empty()) gcode.machine = loadMachine(args.machine);
-    gcode.startPosition = parseStart(args.start);
+    gcode.startPosition = start;
     if (endsWith(file, ".camotics")) {
         const Project project = readCamoticsProject(file);
         std::printf("%-14s CAMotics project, %s units\n", "kind", project.metric ? "metric" : "imperial");

@@ -318,6 +318,8 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     const Run badStart = cli("info wrap.ngc --machine xyza --start 0,0");
     CHECK(badStart.code == 2);
     CHECK_THAT(badStart.err, Contains("--start takes X,Y,Z (mm)") && Contains("dexelmill info --help"));
+    // Checked for any file, a level set's too.
+    CHECK(cli("info part.vdb --start here").code == 2);
     const Run turned = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 0.001 --quiet");
     CHECK(turned.code == 0);
     const Run badTolerance = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 0 --quiet");
