@@ -300,7 +300,7 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
             tbb::parallel_for(m0 + built, end, [&](std::size_t i) {
                 const Move piece = pieces.piece(i);
                 const ToolRegions& r = regions.at(piece.tool);
-                geoms[i - m0] = MoveGeometry(r, piece, turnTolerance);
+                geoms[i - m0] = MoveGeometry(r, piece, turnTolerance, pieces.regions(i));
                 cutReach[i - m0] = SweepReach(*r.cutting, piece);
                 if (r.shank) shankReach[i - m0] = SweepReach(*r.shank, piece);
             });

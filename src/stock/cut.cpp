@@ -343,11 +343,13 @@ MovePieces::MovePieces(const ToolPath& path, const std::map<int, ToolRegions>& r
     for (std::size_t i = 0; i < path.moves.size(); ++i) {
         const Move& m = path.moves[i];
         if (!m.turns() || !sweptTurning(regions.at(m.tool), m, turnTolerance)) continue;
-        const double pieces = std::ceil(MotionLaw(m).rateSum() / kMaxPieceTurn);
+        const double pieces = std::ceil(MotionLaw(m).rateSum() / kMaxPieceTurn - kPieceRounding);
         if (!(pieces > 1.0)) continue;
-        // The pieces of the moves cut before add to this one's place.
-        cuts_.push_back({i, i + (size_ - path.moves.size()), std::size_t(pieces)});
-        size_ += std::size_t(pieces) - 1;
+        const std::size_t count = std::size_t(pieces);
+        const std::size_t sweeps = regions.at(m.tool).shank ? 2 * count : count;
+        // The sweeps of the moves cut before add to this one's place.
+        cuts_.push_back({i, i + (size_ - path.moves.size()), count, sweeps});
+        size_ += sweeps - 1;
     }
 }
 
@@ -360,25 +362,31 @@ const MovePieces::Cut* MovePieces::before(std::size_t i) const {
 std::size_t MovePieces::move(std::size_t i) const {
     const Cut* c = before(i);
     if (!c) return i;
-    return i < c->first + c->count ? c->move : c->move + 1 + (i - (c->first + c->count));
+    return i < c->first + c->sweeps ? c->move : c->move + 1 + (i - (c->first + c->sweeps));
 }
 
 Move MovePieces::piece(std::size_t i) const {
     const Cut* c = before(i);
-    if (!c || i >= c->first + c->count) return path_.moves[move(i)];
-    const double n = double(c->count), k = double(i - c->first);
+    if (!c || i >= c->first + c->sweeps) return path_.moves[move(i)];
+    const double n = double(c->count), k = double((i - c->first) % c->count);
     return subMove(path_.moves[c->move], k / n, (k + 1.0) / n);
 }
 
-MoveGeometry::MoveGeometry(const ToolRegions& regions, const Move& move, double turnTolerance) {
+Regions MovePieces::regions(std::size_t i) const {
+    const Cut* c = before(i);
+    if (!c || i >= c->first + c->sweeps) return Regions::Both;
+    return i - c->first < c->count ? Regions::Cutting : Regions::Shank;
+}
+
+MoveGeometry::MoveGeometry(const ToolRegions& regions, const Move& move, double turnTolerance, Regions which) {
     const bool turning = sweptTurning(regions, move, turnTolerance);
     auto sweep = [&](const Tool& region, RegionSweep& out) {
         if (turning) out.turning.emplace(region, move, turnTolerance);
         else out.fixed.emplace(region, move);
         box.expand(out.bounds());
     };
-    sweep(*regions.cutting, cutting);
-    if (regions.shank) sweep(*regions.shank, shank);
+    if (which != Regions::Shank) sweep(*regions.cutting, cutting);
+    if (regions.shank && which != Regions::Cutting) sweep(*regions.shank, shank);
 }
 
 std::size_t MoveGeometry::linearNodeBound() const {
@@ -471,7 +479,7 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
         arena.execute([&] {
             tbb::parallel_for(m0 + built, end, [&](std::size_t i) {
                 const Move piece = pieces.piece(i);
-                geoms[i - m0] = MoveGeometry(regions.at(piece.tool), piece, options.turnTolerance);
+                geoms[i - m0] = MoveGeometry(regions.at(piece.tool), piece, options.turnTolerance, pieces.regions(i));
             });
         });
         // The batch ends before its turning sweeps could keep more linear nodes than the budget.

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numeric>
 #include <random>
+#include <string>
 
 #include <tbb/global_control.h>
 
@@ -213,7 +214,8 @@ TEST_CASE("cut: batches ended by the linear-node budget give the same stock bit 
 TEST_CASE("cut: a move that turns far is swept in pieces, its statistics its own, in any batch and thread",
           "[stock][cut][turning]") {
     // A fixed-axis feed, a move turning 5 degrees (one piece), one turning 25 (three), a rapid
-    // turning 60 (swept with its end axis: whole) and a feed turning 95 (ten), in the block.
+    // turning 60 (swept with its end axis: whole) and a feed turning 95 (ten), in the block. The
+    // tools have shanks: a move in pieces is swept first in its flutes' pieces, then its shank's.
     const ToolTable tools = testTools();
     ToolPath path;
     path.files.push_back("pieces.nc");
@@ -232,24 +234,39 @@ TEST_CASE("cut: a move that turns far is swept in pieces, its statistics its own
     }
     const std::map<int, ToolRegions> regions = toolRegions(path, tools);
     const MovePieces pieces(path, regions, kDefaultTurnTolerance);
-    const std::vector<std::size_t> owners{0, 1, 2, 2, 2, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4};
+    // The sweeps' moves and regions (B both, C the cutting part, S the shank), in order.
+    std::vector<std::size_t> owners{0, 1};
+    std::string kinds = "BB";
+    for (const char region : {'C', 'S'})
+        for (int k = 0; k < 3; ++k) owners.push_back(2), kinds += region;
+    owners.push_back(3), kinds += 'B';
+    for (const char region : {'C', 'S'})
+        for (int k = 0; k < 10; ++k) owners.push_back(4), kinds += region;
     REQUIRE(pieces.size() == owners.size());
     for (std::size_t i = 0; i < owners.size(); ++i) {
-        INFO("piece " << i);
+        INFO("sweep " << i);
         CHECK(pieces.move(i) == owners[i]);
-        // Each piece starts where the one before it in its move ends, and keeps the move's tool
-        // and source; the first starts and the last ends with the move.
+        CHECK("BCS"[int(pieces.regions(i))] == kinds[i]);
+        // Each region's pieces start where the one before ends, and keep the move's tool and
+        // source; the first starts and the last ends with the move.
         const Move piece = pieces.piece(i);
         const Move& whole = path.moves[owners[i]];
         CHECK(piece.tool == whole.tool);
         CHECK(piece.source.line == whole.source.line);
-        const bool first = i == 0 || owners[i - 1] != owners[i];
-        const bool last = i + 1 == owners.size() || owners[i + 1] != owners[i];
+        const bool first = i == 0 || owners[i - 1] != owners[i] || kinds[i - 1] != kinds[i];
+        const bool last = i + 1 == owners.size() || owners[i + 1] != owners[i] || kinds[i + 1] != kinds[i];
         if (first) CHECK(glm::length(piece.start - whole.start) < 1e-12);
         else CHECK(glm::length(piece.start - pieces.piece(i - 1).end) < 1e-12);
         if (last) CHECK(glm::length(piece.end - whole.end) < 1e-12);
         if (!first && piece.startAxis) CHECK(glm::length(*piece.startAxis - pieces.piece(i - 1).axis) < 1e-12);
     }
+    // A turn within rounding of a multiple of the piece's takes that many pieces: 150 degrees,
+    // whose quotient rounds up past 15, takes 15 (30 sweeps with the shank's).
+    ToolPath even = path;
+    even.moves.resize(1);
+    even.moves[0].startAxis = Vec3(std::sin(150.0 * deg), 0.0, std::cos(150.0 * deg));
+    REQUIRE(std::ceil(150.0 * deg / kMaxPieceTurn) == 16.0);
+    CHECK(MovePieces(even, regions, kDefaultTurnTolerance).size() == 30);
     // Batches and threads change nothing; the statistics are per move, the progress in moves.
     TriDexelStock reference = TriDexelStock::fromBox(kStockBox, 0.3);
     std::vector<std::size_t> done;
@@ -283,8 +300,12 @@ TEST_CASE("cut: a move that turns far is swept in pieces, its statistics its own
             }
             CHECK(std::is_sorted(done.begin(), done.end()));
             CHECK(done.back() == path.moves.size());
-            // Batches of one piece: the moves before the piece that comes next.
-            if (batch == 1) CHECK(done == std::vector<std::size_t>{1, 2, 2, 2, 3, 4, 4, 4, 4, 4, 4, 4, 4, 4, 4, 5});
+            // Batches of one sweep: the moves before the sweep that comes next.
+            if (batch == 1) {
+                std::vector<std::size_t> expected;
+                for (std::size_t i = 1; i <= owners.size(); ++i) expected.push_back(i == owners.size() ? 5 : owners[i]);
+                CHECK(done == expected);
+            }
         }
     }
 }

@@ -81,9 +81,9 @@ TEST_CASE("a turning move whose shank sweeps through material is reported with w
           "[stock][cut][turning]") {
     // A flat D6, 10 mm of flutes on 40 mm, turns 20 degrees about its tip at (20, 20, 12), from
     // +z towards +x, in a block 30 mm high: the flutes sweep a fan from heights 12 to 22, the
-    // shank one above them. The move turns past kMaxPieceTurn, so it is swept in equal pieces of
-    // its turn, in order, each piece's flutes before its shank: what the shank meets is what the
-    // first piece to reach a point reaches with its shank and not its flutes.
+    // shank one above them. What the shank meets is the block inside the shank's fan and outside
+    // the flutes' (they come first on every dexel). The move turns past kMaxPieceTurn, so it is
+    // swept in two pieces, both pieces' flutes before their shanks.
     const double turn = 20.0 * std::acos(-1.0) / 180.0;
     const Vec3 tip(20.0, 20.0, 12.0);
     ToolTable table;
@@ -98,23 +98,17 @@ TEST_CASE("a turning move whose shank sweeps through material is reported with w
     const CutResult r = cutStock(s, p, table);
 
     // The oracle's volumes: the midpoint rule on 0.05 mm cells over the block's reach.
-    const int pieces = int(std::ceil(turn / kMaxPieceTurn));
-    REQUIRE(pieces == 2);
+    REQUIRE(MovePieces(p, toolRegions(p, table), kDefaultTurnTolerance).size() == 4);
     double cut = 0.0, shank = 0.0;
     const double step = 0.05;
     for (double x = 15.0 + 0.5 * step; x < 36.0; x += step)
         for (double y = 16.5 + 0.5 * step; y < 23.5; y += step)
             for (double z = 10.0 + 0.5 * step; z < block.hi.z; z += step) {
                 const double X = x - tip.x, Y = y - tip.y, Z = z - tip.z;
-                for (int k = 0; k < pieces; ++k) {
-                    const double from = turn * k / pieces, to = turn * (k + 1) / pieces;
-                    const bool flutes = inTurningCylinder(X, Y, Z, 3.0, 0.0, 10.0, from, to);
-                    const bool stick = inTurningCylinder(X, Y, Z, 3.0, 10.0, 40.0, from, to);
-                    if (!flutes && !stick) continue;
-                    cut += 1.0;
-                    shank += flutes ? 0.0 : 1.0;
-                    break;
-                }
+                const bool flutes = inTurningCylinder(X, Y, Z, 3.0, 0.0, 10.0, 0.0, turn);
+                const bool stick = inTurningCylinder(X, Y, Z, 3.0, 10.0, 40.0, 0.0, turn);
+                cut += (flutes || stick) ? 1.0 : 0.0;
+                shank += (stick && !flutes) ? 1.0 : 0.0;
             }
     cut *= step * step * step;
     shank *= step * step * step;
@@ -142,7 +136,8 @@ TEST_CASE("a move turning 120 degrees is swept in twelve pieces whose union is i
     Move m{tip, tip, Vec3(std::sin(turn), 0.0, std::cos(turn)), 1, false, {0, 3}, {}, {}};
     m.startAxis = Vec3(0.0, 0.0, 1.0);
     p.moves.push_back(m);
-    REQUIRE(MovePieces(p, toolRegions(p, table), kDefaultTurnTolerance).size() == 12);
+    // Twelve pieces of the flutes, then twelve of the shank.
+    REQUIRE(MovePieces(p, toolRegions(p, table), kDefaultTurnTolerance).size() == 24);
     const Box block{Vec3(10.0, 10.0, 0.0), Vec3(40.0, 30.0, 30.0)};
     TriDexelStock s = TriDexelStock::fromBox(block, 0.25);
     const CutResult r = cutStock(s, p, table);
