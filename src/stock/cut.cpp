@@ -167,7 +167,7 @@ struct SweepWindow {
     }
 };
 
-/// Applies the moves `moves` (indices into the batch) to one tile, in order.
+/// Applies the sweeps `moves` (indices into the batch's, MovePieces) to one tile, in order.
 void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                  const std::vector<std::uint32_t>& moves, bool removeShank, const DesignWatch& design,
                  std::vector<TileMoveStats>& out, std::vector<DesignStretch>& stretches) {
