@@ -55,6 +55,14 @@ AcMove randomAcMove(std::mt19937& rng) {
     return m;
 }
 
+/// A head-table machine: a table C about z through the origin, and a head B about y pivoting
+/// 150 mm above the tip.
+Machine headTable() {
+    return parseMachine(R"({"name": "ht", "axes": [{"letter": "C", "on": "table", "direction": [0, 0, 1]},
+                            {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 150]}]})",
+                        "ht.json");
+}
+
 /// An APT move between a drawn move's joints whose axis turns on a great circle between two
 /// random axes.
 Move randomAptMove(std::mt19937& rng, const AcMove& drawn) {
@@ -158,10 +166,7 @@ TEST_CASE("motion: a stretch of a move, as a move of its own, has the move's pos
     // head B turning in identity kinematics under a table C) and a great circle written out here
     // (APT), at s in [0, 1] of stretches [u0, u1] drawn down to a millionth of the move.
     const Machine ac = loadMachine("xyzac-trt");
-    const Machine ht = parseMachine(
-        R"({"name": "ht", "axes": [{"letter": "C", "on": "table", "direction": [0, 0, 1]},
-            {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 150]}]})",
-        "ht.json");
+    const Machine ht = headTable();
     std::mt19937 rng(20261201);
     std::uniform_real_distribution<double> unit(0.0, 1.0);
     for (int i = 0; i < 80; ++i) {
@@ -383,10 +388,7 @@ TEST_CASE("machine: a head that turns in identity kinematics swings the tool abo
           "[machine]") {
     // A table C about z and a head B about y pivoting 150 above the tip: a tool point v (relative
     // to the tip at B = 0) of joints j sits at Rz(-C) (j + P + Ry(B) (v - P)), P = (0, 0, 150).
-    const Machine m = parseMachine(
-        R"({"name": "ht", "axes": [{"letter": "C", "on": "table", "direction": [0, 0, 1]},
-            {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 150]}]})",
-        "ht.json");
+    const Machine m = headTable();
     auto forward = [](const Vec3& j, const Vec3& v, double bDeg, double cDeg) {
         const double b = bDeg * kDeg, c = -cDeg * kDeg;
         const Vec3 w = v - Vec3(0, 0, 150);
@@ -450,10 +452,7 @@ TEST_CASE("machine: the acceleration bound holds where heads turn in identity ki
     // pivoting 200 above the tip, carrying a head B about y pivoting 150 above it, at
     // j + Q + Rz(C) (P + Ry(B) (v - P) - Q), Q = (0, 0, 200).
     constexpr double kH = 1e-3, kRounding = 1e-6;
-    const Machine ht = parseMachine(
-        R"({"name": "ht", "axes": [{"letter": "C", "on": "table", "direction": [0, 0, 1]},
-            {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 150]}]})",
-        "ht.json");
+    const Machine ht = headTable();
     const Machine hh = parseMachine(
         R"({"name": "hh", "axes": [{"letter": "C", "on": "head", "direction": [0, 0, 1], "pivot": [0, 0, 200]},
             {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 150]}]})",
@@ -514,10 +513,7 @@ TEST_CASE("motion: poses stepped by the angle sum stay within kPhaseStepError of
     // from the middle's own sines and cosines. Bound: m steps, n turns, a point at distance d
     // from the pivots moves by at most m n d kPhaseStepError (motion.h).
     const Machine ac = loadMachine("xyzac-trt");
-    const Machine ht = parseMachine(
-        R"({"name": "ht", "axes": [{"letter": "C", "on": "table", "direction": [0, 0, 1]},
-            {"letter": "B", "on": "head", "direction": [0, 1, 0], "pivot": [0, 0, 150]}]})",
-        "ht.json");
+    const Machine ht = headTable();
     std::mt19937 rng(23);
     std::uniform_real_distribution<double> uni(-1.0, 1.0);
     for (int i = 0; i < 60; ++i) {
