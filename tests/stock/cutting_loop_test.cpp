@@ -75,6 +75,26 @@ bool inTurningCylinder(double X, double y, double Z, double r, double lo, double
     return false;
 }
 
+/// The tip both turning tests turn the tool about.
+const Vec3 kTurnTip(20.0, 20.0, 12.0);
+
+/// A flat D6 with 10 mm of flutes on 40 mm, as tool 1.
+ToolTable flutedD6() {
+    ToolTable table;
+    table.emplace(1, flatEndMill(6, {10, 40}));
+    return table;
+}
+
+/// One move of tool 1 at `line` of `file`, turning `turn` radians about kTurnTip from +z towards +x.
+ToolPath turnAboutTip(double turn, const char* file, int line) {
+    ToolPath p;
+    p.files = {file};
+    Move m{kTurnTip, kTurnTip, Vec3(std::sin(turn), 0.0, std::cos(turn)), 1, false, {0, line}, {}, {}};
+    m.startAxis = Vec3(0.0, 0.0, 1.0);
+    p.moves.push_back(m);
+    return p;
+}
+
 }  // namespace
 
 TEST_CASE("a turning move whose shank sweeps through material is reported with what it meets",
@@ -85,14 +105,9 @@ TEST_CASE("a turning move whose shank sweeps through material is reported with w
     // the flutes' (they come first on every dexel). The move turns past kMaxPieceTurn, so it is
     // swept in two pieces, both pieces' flutes before their shanks.
     const double turn = 20.0 * std::acos(-1.0) / 180.0;
-    const Vec3 tip(20.0, 20.0, 12.0);
-    ToolTable table;
-    table.emplace(1, flatEndMill(6, {10, 40}));
-    ToolPath p;
-    p.files = {"tilt.ngc"};
-    Move m{tip, tip, Vec3(std::sin(turn), 0.0, std::cos(turn)), 1, false, {0, 7}, {}, {}};
-    m.startAxis = Vec3(0.0, 0.0, 1.0);
-    p.moves.push_back(m);
+    const Vec3& tip = kTurnTip;
+    const ToolTable table = flutedD6();
+    const ToolPath p = turnAboutTip(turn, "tilt.ngc", 7);
     const Box block{Vec3(10.0, 10.0, 0.0), Vec3(40.0, 30.0, 30.0)};
     TriDexelStock s = TriDexelStock::fromBox(block, 0.25);
     const CutResult r = cutStock(s, p, table);
@@ -128,14 +143,9 @@ TEST_CASE("a move turning 120 degrees is swept in twelve pieces whose union is i
     // into the block: twelve pieces of kMaxPieceTurn, each its own sweep, together the fan of the
     // closed form.
     const double turn = 120.0 * std::acos(-1.0) / 180.0;
-    const Vec3 tip(20.0, 20.0, 12.0);
-    ToolTable table;
-    table.emplace(1, flatEndMill(6, {10, 40}));
-    ToolPath p;
-    p.files = {"fan.ngc"};
-    Move m{tip, tip, Vec3(std::sin(turn), 0.0, std::cos(turn)), 1, false, {0, 3}, {}, {}};
-    m.startAxis = Vec3(0.0, 0.0, 1.0);
-    p.moves.push_back(m);
+    const Vec3& tip = kTurnTip;
+    const ToolTable table = flutedD6();
+    const ToolPath p = turnAboutTip(turn, "fan.ngc", 3);
     // Twelve pieces of the flutes, then twelve of the shank.
     REQUIRE(MovePieces(p, toolRegions(p, table), kDefaultTurnTolerance).size() == 24);
     const Box block{Vec3(10.0, 10.0, 0.0), Vec3(40.0, 30.0, 30.0)};
