@@ -166,3 +166,34 @@ TEST_CASE("files: a FileSource serves a project's programs, subroutine files and
     options.toolTableFile.clear();
     CHECK_THROWS_WITH(readGcodeFiles({"a.ngc", "gone.ngc"}, options), Catch::Matchers::Contains("'gone.ngc'"));
 }
+
+TEST_CASE("files: a call of an undefined subroutine says which file was looked for", "[path][files][errors]") {
+    // LinuxCNC finds o<name> in name.ngc on its SUBROUTINE_PATH; dexelmill beside the caller, and
+    // the error names that file, whether it is missing or does not define the subroutine.
+    const std::map<std::string, std::string> files = {
+        {"jobs/main.ngc", "G0 X0 Y0 Z5\no<gone> call\n"},
+        {"jobs/other.ngc", "G0 X0 Y0 Z5\no<wrong> call\n"},
+        {"jobs/wrong.ngc", "o<right> sub\nG1 X1 F100\no<right> endsub\n"},
+    };
+    GcodeOptions options;
+    options.files = [&](const std::string& path) -> std::optional<std::string> {
+        const auto it = files.find(path);
+        if (it == files.end()) return std::nullopt;
+        return it->second;
+    };
+    const auto messageOf = [&](const std::string& name) {
+        try {
+            readGcodeFiles({name}, options);
+        } catch (const ParseError& e) {
+            CHECK(e.where().file == name);
+            CHECK(e.where().line == 2);
+            return std::string(e.what());
+        }
+        FAIL("no error");
+        return std::string();
+    };
+    CHECK_THAT(messageOf("jobs/main.ngc"),
+               Catch::Matchers::Contains("o<gone>: the program does not define it, and there is no file jobs/gone.ngc"));
+    CHECK_THAT(messageOf("jobs/other.ngc"),
+               Catch::Matchers::Contains("o<wrong>: the program does not define it, nor does jobs/wrong.ngc"));
+}

@@ -336,11 +336,17 @@ void Interpreter::checkRestIsComment(std::size_t pos) {
 int Interpreter::callSub(const OWord& li, int pc, std::size_t pos) {
     auto it = subs_.find(li.label);
     if (it == subs_.end()) {
-        loadSubroutineFile(li.label);
+        // Where it was looked for: a user whose sub lives in LinuxCNC's SUBROUTINE_PATH learns
+        // to put the file beside the program.
+        const std::size_t known = files_.size();
+        const std::string path = loadSubroutineFile(li.label);
         it = subs_.find(li.label);
+        if (it == subs_.end())
+            fail(1,
+                 "call of an undefined subroutine o<" + li.label + ">: the program does not define it" +
+                     (files_.size() > known ? ", nor does " + path : ", and there is no file " + path),
+                 std::string(line_.substr(0, 40)));
     }
-    if (it == subs_.end())
-        fail(1, "call of an undefined subroutine o<" + li.label + ">", std::string(line_.substr(0, 40)));
     std::array<double, 31> args{};
     int nargs = 0;
     pos = skipSpaces(line_, pos);
@@ -369,11 +375,11 @@ int Interpreter::callSub(const OWord& li, int pc, std::size_t pos) {
     return s.start + 1;
 }
 
-void Interpreter::loadSubroutineFile(const std::string& label) {
+std::string Interpreter::loadSubroutineFile(const std::string& label) {
     const std::string dir = detail::directoryOf(files_[std::size_t(curFile_)]->name());
     const std::string path = detail::joinPath(dir, label + ".ngc");
     std::optional<std::string> text = detail::readFileIfAny(opt_.files, path);
-    if (!text) return;
+    if (!text) return path;
     const int saved = curFile_;
     const int savedLine = curLineNo_;
     const std::string_view savedText = line_;
@@ -387,6 +393,7 @@ void Interpreter::loadSubroutineFile(const std::string& label) {
     curLineNo_ = savedLine;
     line_ = savedText;
     diags_.note(where(), "subroutine o<" + label + "> read from " + path);
+    return path;
 }
 
 int Interpreter::popFrame() {

@@ -188,8 +188,8 @@ private:
     int callSub(const OWord& li, int pc, std::size_t pos);
 
     /// LinuxCNC looks for an undefined subroutine `o<name>` in the file `name.ngc` of the
-    /// subroutine path; here: the folder of the calling file.
-    void loadSubroutineFile(const std::string& label);
+    /// subroutine path; here: the folder of the calling file. Returns that file's path, read or not.
+    std::string loadSubroutineFile(const std::string& label);
 
     int popFrame();
 
