@@ -25,6 +25,22 @@ constexpr double kRimReach = 4.0;
 /// resolution of the normals the stock keeps (PackedNormal::kMaxAngleError).
 constexpr double kRimAngle = 1e-4;
 
+/// Near a rim, an end takes its Hermite data from the normal velocities a1 and a2 of the rim's two
+/// faces there (endNormal). Where both are below this fraction of the speed, the rim slides along
+/// itself: the swept rim's normal, square to the velocity across the rim, turns with the ratio of
+/// two small numbers that the end's pose (near the one that sweeps S there, not at it) does not
+/// give. Both faces graze there, and their sheets meet at a crease. A cylinder turning about an
+/// axis through its tip slides its rims so exactly where its side grazes: an end 1.1 tolerances
+/// below such a rim took a normal 53 degrees off the side's (normal velocities 5e-5 of the speed).
+constexpr double kRimSlide = 0.02;
+
+/// Where the normal velocity of the face an end lies on is at most this fraction of the other
+/// face's, that face grazes and the end lies on its sheet of the envelope. At a ball end's top rim
+/// an end on the cylinder, at a pose whose side moved at 0.011 of the speed across itself and
+/// whose top at 0.33, was marked sharp with no crease near; below a stepped shank's shoulder, the
+/// side at 1.6e-5 and the shoulder at 0.042.
+constexpr double kGrazeRatio = 0.1;
+
 /// A face of a convex part at a pose (forEachFace): its squared distance from a point (to the end
 /// faces, the disks; to a lateral piece, to its point at the same height, or its nearer end),
 /// which orders the faces as the distance does without a square root each, and its outward normal
@@ -249,7 +265,26 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
         normal = glm::normalize(n1 + n2);
         sharp = true;
         if (rho <= 0.0 || u <= 0.0 || u >= 1.0) return;
-        if (const std::optional<Vec3> n = sweptRim(n1, n2, x)) normal = *n, sharp = false;
+        // The faces' normal velocities (mm per unit of u). Where they have opposite signs, the rim
+        // grazes: its swept normal, alpha n1 + beta n2 square to the velocity, unless both are
+        // so small that the rim slides along itself (then a crease). Where both advance or both
+        // recede, the end lies on the sheet of the face that grazes, the other bounding S only as
+        // the last pose's face (where it advances) or the first's (where it recedes): a crease
+        // where that pose's face lies within reach, as where neither face grazes.
+        const Vec3 velocity = law_.velocity(phase, x);
+        const double a1 = glm::dot(n1, velocity), a2 = glm::dot(n2, velocity);
+        if ((a1 > 0.0) != (a2 > 0.0)) {
+            if (std::max(std::abs(a1), std::abs(a2)) <= kRimSlide * glm::length(velocity)) return;
+            normal = glm::normalize(std::abs(a2) * n1 + std::abs(a1) * n2), sharp = false;
+            return;
+        }
+        // How far the last or first pose's face lies ahead of a face moving across itself at a.
+        const auto ahead = [u](double a) { return a > 0.0 ? (1.0 - u) * a : -u * a; };
+        if (std::abs(a1) <= kGrazeRatio * std::abs(a2) && ahead(a2) > nearRim) {
+            normal = n1, sharp = false;
+        } else if (std::abs(a2) <= kGrazeRatio * std::abs(a1) && ahead(a1) > nearRim) {
+            normal = n2, sharp = false;
+        }
         return;
     }
     // The nearest face's rims: below it (faces nearest - 1 and nearest) and above it. Not at the
