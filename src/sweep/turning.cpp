@@ -167,6 +167,7 @@ TurningSweep::TurningSweep(const Tool& tool, const Move& move, double epsilon)
         grownEpsilon_.push_back(offsetPart(tool_, part, epsilon_));
         faces_.push_back(meridianFaces(tool_.pieces(), part));
     }
+    markCoveredDisks(faces_, parts_, !balls_.empty());
     for (const Ball& ball : balls_) {
         const double r = ball.rho + epsilon_;
         grownEpsilon_.push_back({ArcPiece{ball.zc - r, ball.zc + r, 0.0, ball.zc, r}});

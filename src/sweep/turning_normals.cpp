@@ -48,6 +48,8 @@ constexpr double kGrazeRatio = 0.1;
 struct Face {
     double gap2;
     double nr, nz;
+    bool covered = false;  ///< a disk inside the tool (MeridianFace::covered)
+    bool edge = false;     ///< and its rim an edge of the tool (MeridianFace::edge)
     /// The normal in space, at a point whose direction across the axis is `radial`.
     Vec3 normal(const Vec3& radial, const Vec3& axis) const { return nr * radial + nz * axis; }
 };
@@ -71,7 +73,7 @@ void forEachFace(const Faces& faces, const ToolPose& ps, const Vec3& x, double& 
     for (const auto& f : faces) {
         if (f.kind == Kind::Disk) {  // the distance to a disk of radius r0 at height z0
             const double dr = std::max(rho - f.r0, 0.0), dz = z - f.z0;
-            visit(Face{dr * dr + dz * dz, f.nr, f.nz});
+            visit(Face{dr * dr + dz * dz, f.nr, f.nz, f.covered, f.edge});
             continue;
         }
         // The lateral point at x's height, clamped to the piece.
@@ -139,6 +141,22 @@ std::vector<TurningSweep::MeridianFace> TurningSweep::meridianFaces(const std::v
     top.nz = 1.0;
     faces.push_back(top);
     return faces;
+}
+
+void TurningSweep::markCoveredDisks(std::vector<std::vector<MeridianFace>>& faces, const std::vector<ConvexPart>& parts,
+                                    bool ball) {
+    // Neighbouring parts meet at one height (Tool::convexParts): the wider disk there covers the
+    // narrower, and a joint where the radius does not step (a concave joint) covers both.
+    for (std::size_t p = 0; p + 1 < parts.size(); ++p) {
+        if (parts[p].z1 != parts[p + 1].z0) continue;
+        MeridianFace& top = faces[p].back();
+        MeridianFace& bottom = faces[p + 1].front();
+        // Tool::convexParts cuts a profile only at a step or a concave joint: an edge either way.
+        top.covered = top.edge = bottom.r0 >= top.r0 - tol::kProfileJoint;
+        bottom.covered = bottom.edge = top.r0 >= bottom.r0 - tol::kProfileJoint;
+    }
+    // The ball's equator is as wide as the part cut there (ballEnd).
+    if (ball && !faces.empty()) faces.front().front().covered = true;
 }
 
 Vec3 TurningSweep::faceNormal(const ToolPose& pose, std::size_t part, const Vec3& x, int* face, bool* alone) const {
@@ -227,12 +245,22 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     Vec3 radial(0.0);
     boost::container::small_vector<Face, 8> faces;
     forEachFace(faces_[part], ps, x, rho, radial, [&](const Face& f) { faces.push_back(f); });
+    const double nearRim = kRimReach * epsilon_;
+    // A covered disk gives no normal. Where its rim is an edge of the tool, concave or a step, an
+    // end near it lies near a crease of S: the first or last pose's, or the envelope's, whose two
+    // faces' sheets meet there at an angle as the tool's faces do (a tool turning about its tip
+    // sweeps its profile's concave corners as creases).
+    bool nearJoint = false;
+    for (Face& f : faces)
+        if (f.covered) {
+            nearJoint = nearJoint || (f.edge && f.gap2 <= nearRim * nearRim);
+            f.gap2 = std::numeric_limits<double>::infinity();
+        }
     std::size_t nearest = 0;
     for (std::size_t k = 1; k < faces.size(); ++k)
         if (faces[k].gap2 < faces[nearest].gap2) nearest = k;
     normal = faces[nearest].normal(radial, ps.axis);
-    sharp = false;
-    const double nearRim = kRimReach * epsilon_;
+    sharp = nearJoint;
     const Vec3 tangent = glm::cross(ps.axis, radial);
     // The normal of the surface a rim point sweeps, across the rim's tangent and the point's
     // velocity (MotionLaw::velocity), where it lies within the rim's normal cone (the normals
@@ -275,15 +303,15 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
         const double a1 = glm::dot(n1, velocity), a2 = glm::dot(n2, velocity);
         if ((a1 > 0.0) != (a2 > 0.0)) {
             if (std::max(std::abs(a1), std::abs(a2)) <= kRimSlide * glm::length(velocity)) return;
-            normal = glm::normalize(std::abs(a2) * n1 + std::abs(a1) * n2), sharp = false;
+            normal = glm::normalize(std::abs(a2) * n1 + std::abs(a1) * n2), sharp = nearJoint;
             return;
         }
         // How far the last or first pose's face lies ahead of a face moving across itself at a.
         const auto ahead = [u](double a) { return a > 0.0 ? (1.0 - u) * a : -u * a; };
         if (std::abs(a1) <= kGrazeRatio * std::abs(a2) && ahead(a2) > nearRim) {
-            normal = n1, sharp = false;
+            normal = n1, sharp = nearJoint;
         } else if (std::abs(a2) <= kGrazeRatio * std::abs(a1) && ahead(a1) > nearRim) {
-            normal = n2, sharp = false;
+            normal = n2, sharp = nearJoint;
         }
         return;
     }
@@ -292,6 +320,7 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     if (u <= 0.0 || u >= 1.0) return;
     for (const std::size_t below : {nearest - 1, nearest}) {
         if (below >= faces.size() - 1) continue;  // above the top face, or below the bottom one
+        if (faces_[part][below].covered || faces_[part][below + 1].covered) continue;  // inside the tool
         const std::optional<Rim> r = rim(part, int(below));
         if (!r) continue;  // a smooth joint, or an apex
         const Vec3 n1 = r->across[0] * radial + r->along[0] * ps.axis;

@@ -251,6 +251,13 @@ class TurningSweep {
         double r0 = 0.0, r1 = 0.0;           ///< a disk's radius (r0), a cone's at z0 and z1
         double nr = 0.0, nz = 0.0;           ///< a disk's or a cone's normal
         double rc = 0.0, zc = 0.0, rho = 0.0;  ///< an arc's circle (ArcPiece)
+        /// A disk inside the tool: where the part meets a neighbouring part (or a ball end's ball)
+        /// that covers the disk whole. It bounds its part, as the searches take the part, but is
+        /// no face of the tool, and endNormal takes neither it nor its rims.
+        bool covered = false;
+        /// A covered disk whose rim is an edge of the tool: where the next part's face meets this
+        /// part's at a concave angle (a necked ball's neck) or a step, not a ball end's equator.
+        bool edge = false;
         /// R(z), z clamped to the face's heights, as pieceRadius; a disk's radius.
         double radius(double z) const;
         /// The outward normal (nr across the axis, nz along it) at the face's point of radius R at
@@ -260,6 +267,11 @@ class TurningSweep {
     /// The faces of convex part `part` in order up the meridian: the bottom disk, the lateral
     /// pieces, the top disk (faceNormal's indices).
     static std::vector<MeridianFace> meridianFaces(const std::vector<ProfilePiece>& pieces, const ConvexPart& part);
+    /// Marks the disks of `faces` (per part of `parts`, in order up the axis) that the next part
+    /// or the one before covers, and with a ball end (`ball`) the lowest part's bottom disk, cut
+    /// at the ball's equator.
+    static void markCoveredDisks(std::vector<std::vector<MeridianFace>>& faces, const std::vector<ConvexPart>& parts,
+                                 bool ball);
     /// The outward normal of the face of part `part` at pose `pose` nearest the point x
     /// (turning_normals.cpp); `face`, when given, gets that face's index up the meridian (0 the
     /// bottom face, then the lateral pieces, then the top face), and `alone` whether every other
