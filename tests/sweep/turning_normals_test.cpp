@@ -250,11 +250,13 @@ void report(const NormalTally& t, bool throughCreases = false, int allowed = 0) 
 /// kinds must be ball ends), at a pose inside the move: a point x of the face at height z and azimuth phi whose outward normal n is square
 /// to its velocity f + theta k x (x - tip) (the great circle turns about k at the rate theta, the
 /// tip runs at f), the azimuth found by bisection, and x taken only where the oracle finds S's
-/// boundary across it. Returns how many lines were checked.
-int checkGrazesNearEnds(std::mt19937_64& rng, const std::vector<models::Kind>& kinds, int count, NormalTally& t,
-                        bool equator = false) {
+/// boundary across it. Up to `allowedPercent` of the ends may be wrong (kNearRimWrongPercent).
+void checkGrazesNearEnds(std::uint64_t seed, const std::vector<models::Kind>& kinds, bool equator,
+                         int allowedPercent) {
+    std::mt19937_64 rng(seed);
+    NormalTally t;
     int found = 0;
-    for (int i = 0; i < count; ++i) {
+    for (int i = 0, n = scaled(300); i < n; ++i) {
         Case c;
         c.kind = kinds[rng() % kinds.size()];
         c.model.emplace(models::make(c.kind, rng));
@@ -306,7 +308,10 @@ int checkGrazesNearEnds(std::mt19937_64& rng, const std::vector<models::Kind>& k
             break;
         }
     }
-    return found;
+    report(t, true, t.ends * allowedPercent / 100);
+    INFO(found << " lines, " << t.checked << " of " << t.ends << " ends checked");
+    CHECK(found >= scaled(300) / 3);
+    CHECK(t.checked >= t.ends / 3);
 }
 
 }  // namespace
@@ -421,15 +426,10 @@ TEST_CASE("turning sweep normals vs oracle: lines where a face grazes near a rim
     // faces' normal velocities (endNormal). A cylinder turning about its tip slides its rims
     // along themselves where its side grazes, and the rim's swept normal there took an end 1.1
     // tolerances below the rim 53 degrees off the side's.
-    std::mt19937_64 rng(20261204);
-    NormalTally t;
-    const int found = checkGrazesNearEnds(
-        rng, {models::Kind::Flat, models::Kind::Bull, models::Kind::Chamfer, models::Kind::Taper, models::Kind::Apt},
-        scaled(300), t);
-    report(t, true, t.ends * kNearRimWrongPercent / 100);
-    INFO(found << " lines, " << t.checked << " of " << t.ends << " ends checked");
-    CHECK(found >= scaled(300) / 3);
-    CHECK(t.checked >= t.ends / 3);
+    checkGrazesNearEnds(20261204,
+                        {models::Kind::Flat, models::Kind::Bull, models::Kind::Chamfer, models::Kind::Taper,
+                         models::Kind::Apt},
+                        false, kNearRimWrongPercent);
 }
 
 TEST_CASE("turning sweep normals vs oracle: lines near a ball end's equator", "[sweep][turning]") {
@@ -438,13 +438,7 @@ TEST_CASE("turning sweep normals vs oracle: lines near a ball end's equator", "[
     // the cylinder smoothly there. Taken as a face, that disk marked ends on the cylinder just
     // above the equator sharp, or mixed its normal in: 23 ends wrong of 594 on these lines, 3
     // since (as a rim's lines may have, kNearRimWrongPercent). Allowed: 1 %.
-    std::mt19937_64 rng(20261205);
-    NormalTally t;
-    const int found = checkGrazesNearEnds(rng, {models::Kind::Ball}, scaled(300), t, true);
-    report(t, true, t.ends / 100);
-    INFO(found << " lines, " << t.checked << " of " << t.ends << " ends checked");
-    CHECK(found >= scaled(300) / 3);
-    CHECK(t.checked >= t.ends / 3);
+    checkGrazesNearEnds(20261205, {models::Kind::Ball}, true, 1);
 }
 
 TEST_CASE("turning sweep normals vs oracle: lines near the joints of a tool's convex parts", "[sweep][turning]") {
@@ -454,11 +448,5 @@ TEST_CASE("turning sweep normals vs oracle: lines near the joints of a tool's co
     // crease where the joint is an edge of the tool: on a necked ball turning 79 degrees about
     // its tip, an end 0.03 mm below its neck took a normal 54 degrees off, the disk's and the
     // cone's mixed, at a tolerance of 0.01 mm.
-    std::mt19937_64 rng(20261203);
-    NormalTally t;
-    const int found = checkGrazesNearEnds(rng, {models::Kind::NonConvex}, scaled(300), t);
-    report(t, true, t.ends * kNearRimWrongPercent / 100);
-    INFO(found << " lines, " << t.checked << " of " << t.ends << " ends checked");
-    CHECK(found >= scaled(300) / 3);
-    CHECK(t.checked >= t.ends / 3);
+    checkGrazesNearEnds(20261203, {models::Kind::NonConvex}, false, kNearRimWrongPercent);
 }
