@@ -320,7 +320,7 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     if (u <= 0.0 || u >= 1.0) return;
     for (const std::size_t below : {nearest - 1, nearest}) {
         if (below >= faces.size() - 1) continue;  // above the top face, or below the bottom one
-        if (faces_[part][below].covered || faces_[part][below + 1].covered) continue;  // inside the tool
+        if (faces[below].covered || faces[below + 1].covered) continue;  // inside the tool
         const std::optional<Rim> r = rim(part, int(below));
         if (!r) continue;  // a smooth joint, or an apex
         const Vec3 n1 = r->across[0] * radial + r->along[0] * ps.axis;
