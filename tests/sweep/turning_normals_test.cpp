@@ -247,10 +247,10 @@ void report(const NormalTally& t, bool throughCreases = false, int allowed = 0) 
 /// Lines that leave S where a lateral face of the tool grazes, a few tolerances from an end of
 /// one of its oracle parts (a rim of the tool, or where two convex parts meet) or, with
 /// `equator`, from a ball end's equator (where the solver cuts the ball from its cylinder: the
-/// kinds must be ball ends), at a pose inside the move: a point x of the face at height z and azimuth phi whose outward normal n is square
-/// to its velocity f + theta k x (x - tip) (the great circle turns about k at the rate theta, the
-/// tip runs at f), the azimuth found by bisection, and x taken only where the oracle finds S's
-/// boundary across it. Up to `allowedPercent` of the ends may be wrong (kNearRimWrongPercent).
+/// kinds must be ball ends), at a pose inside the move: a point x of the face at height z and
+/// azimuth phi whose outward normal n is square to its velocity f + theta k x (x - tip) (the great
+/// circle turns about k at the rate theta, the tip runs at f), the azimuth found by bisection, and
+/// x taken only where the oracle finds S's boundary across it. Up to `allowedPercent` of the ends may be wrong (kNearRimWrongPercent).
 void checkGrazesNearEnds(std::uint64_t seed, const std::vector<models::Kind>& kinds, bool equator,
                          int allowedPercent) {
     std::mt19937_64 rng(seed);
@@ -292,9 +292,10 @@ void checkGrazesNearEnds(std::uint64_t seed, const std::vector<models::Kind>& ki
                 if ((graze(start + s * step) > 0.0) != (graze(start + (s - 1) * step) > 0.0))
                     lo = start + (s - 1) * step, hi = start + s * step;
             if (lo == hi) continue;
+            const bool loSign = graze(lo) > 0.0;  // kept by lo as the bisection moves it
             for (int s = 0; s < 60; ++s) {
                 const double mid = 0.5 * (lo + hi);
-                ((graze(mid) > 0.0) == (graze(lo) > 0.0) ? lo : hi) = mid;
+                ((graze(mid) > 0.0) == loSign ? lo : hi) = mid;
             }
             const Vec3 point = at(lo), normal = normalAt(lo);
             const double across = 0.2 * c.epsilon;
