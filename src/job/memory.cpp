@@ -111,15 +111,20 @@ bool heapOnHugePages() {
 
 std::size_t residentBytes() { return std::size_t(procNumber("/proc/self/status", "VmRSS:") * 1024.0); }
 
+std::size_t bytesInUse(const MemoryBudget& budget) {
+    if (!budget.addressSpace) return residentBytes();
+    return std::size_t(procNumber("/proc/self/status", "VmSize:") * 1024.0);
+}
+
 MemoryBudget memoryBudget(std::size_t maxBytes) {
     if (maxBytes > 0) return {maxBytes, "--max-memory"};
     MemoryBudget b{std::numeric_limits<std::size_t>::max(), "no limit the system states"};
-    auto take = [&](std::size_t bytes, const char* source) {
-        if (bytes > 0 && bytes < b.bytes) b = {bytes, source};
+    auto take = [&](std::size_t bytes, const char* source, bool addressSpace = false) {
+        if (bytes > 0 && bytes < b.bytes) b = {bytes, source, addressSpace};
     };
     rlimit as{};
     if (getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY)
-        take(std::size_t(as.rlim_cur), "the address-space limit (ulimit -v)");
+        take(std::size_t(as.rlim_cur), "the address-space limit (ulimit -v)", true);
     take(cgroupLimit(), "the cgroup's memory.max");
     const double available = procNumber("/proc/meminfo", "MemAvailable:") * 1024.0;
     if (available > 0) take(std::size_t(available) + residentBytes(), "the memory available (MemAvailable)");
@@ -150,8 +155,8 @@ std::string formatBytes(double bytes) {
 }
 
 std::size_t movesThatFit(const MemoryBudget& budget, std::size_t limit) {
-    const double free = double(budget.bytes) - double(residentBytes());
-    return std::size_t(std::min(double(limit), std::max(0.0, free / (2.0 * sizeof(Move)))));
+    const double free = double(budget.bytes) - double(bytesInUse(budget));
+    return std::size_t(std::min(double(limit), std::max(0.0, free / (3.0 * sizeof(Move)))));
 }
 
 double stockBytes(const Lattice& lattice, FamilySet families) {

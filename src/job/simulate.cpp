@@ -290,7 +290,7 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
     // set and mesh of the block's own faces.
     const double dexels = (design ? 2.0 : 1.0) * stockBytes(lattice, o.families);
     const double faces = kSurfaceBytesPerCrossing * boxCrossings(lattice);
-    const double base = double(residentBytes());
+    const double base = double(bytesInUse(budget));
     if (base + dexels + faces > double(budget.bytes)) {
         char text[512];
         std::snprintf(text, sizeof text,
@@ -352,7 +352,7 @@ namespace {
 void checkSurfaceFits(const TriDexelStock& stock, const MemoryBudget& budget) {
     const double crossings = stockCrossings(stock);
     const double need = kSurfaceBytesPerCrossing * crossings;
-    const double base = double(residentBytes());
+    const double base = double(bytesInUse(budget));
     if (base + need <= double(budget.bytes)) return;
     const double h = stock.lattice().h;
     char text[512];
@@ -595,7 +595,7 @@ Simulation runStages(const SimulateOptions& o) {
         refine.turnTolerance = o.turnTolerance;
         refine.progress = o.progress;
         refine.window = 0.5 * stock.lattice().h;
-        refine.memoryBytes = std::max(0.0, double(budget.bytes) - double(residentBytes()));
+        refine.memoryBytes = std::max(0.0, double(budget.bytes) - double(bytesInUse(budget)));
         RefineStats stats;
         refineMesh(sim.mesh, report.stockBox, program.path, tools, refine, &stats);
         check = stats.check;
@@ -605,7 +605,7 @@ Simulation runStages(const SimulateOptions& o) {
                           "--refine %d: stopped after %d round(s): the next would need about %s on top of the %s "
                           "in use, more than the %s this job may use (%s)",
                           o.refineRounds, stats.rounds, formatBytes(stats.roundNeeded).c_str(),
-                          formatBytes(double(residentBytes())).c_str(), formatBytes(double(budget.bytes)).c_str(),
+                          formatBytes(double(bytesInUse(budget))).c_str(), formatBytes(double(budget.bytes)).c_str(),
                           budget.source.c_str());
             ReportWarning w;
             w.message = text;

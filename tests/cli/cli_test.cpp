@@ -277,6 +277,27 @@ TEST_CASE("the launcher starts the tool with malloc's heap on huge pages where t
     CHECK_THAT(alone.err, Contains("cannot start") && Contains((cli.dir() / "dexelmill-core").string()));
 }
 
+TEST_CASE("under an address-space limit a program's moves stop at the reader's limit, not the allocator's",
+          "[cli][memory][errors]") {
+#if defined(__SANITIZE_ADDRESS__)
+    // AddressSanitizer reserves terabytes of address space for its shadow at start.
+    SUCCEED("skipped: an AddressSanitizer build cannot start under ulimit -v");
+#else
+    const Cli cli("address_space");
+    // A loop that never ends makes moves until a limit stops it. Under ulimit -v the process's
+    // stacks, allocator arenas and libraries count too, beyond its resident memory.
+    cli.file("loop.ngc", "G21 G90\n#1 = 1\no100 do\nG1 X#1 Y0 Z0 F100\n#1 = [0 - #1]\no100 while [1 GT 0]\nM2\n");
+    for (const char* limit : {"600000", "1500000"}) {
+        INFO("ulimit -v " << limit);
+        const Run r = cli.runIn(std::string("ulimit -v ") + limit + " && '" + DEXELMILL_CLI_PATH + "' info loop.ngc");
+        CHECK(r.code == 1);
+        CHECK_THAT(r.err, Contains("loop.ngc:4:") && Contains("program makes more than") &&
+                              Contains("the address-space limit (ulimit -v)"));
+        CHECK_THAT(r.err, !Contains("out of memory"));
+    }
+#endif
+}
+
 TEST_CASE("a successful run writes every output and a one-line summary in mm", "[cli]") {
     const Cli cli("success");
     cli.file("slot.ngc", "G21 G90\nT1 M6\nG0 X5 Y15 Z15\nG1 Z7 F100\nG1 X35\nG0 Z15\nM30\n");

@@ -19,6 +19,9 @@ struct MemoryBudget {
     /// "--max-memory", "the address-space limit (ulimit -v)", "the cgroup's memory.max" or
     /// "the memory available (MemAvailable)".
     std::string source;
+    /// Whether the budget bounds the address space (ulimit -v), which counts every mapping the
+    /// process holds (thread stacks, allocator arenas, libraries), not only the memory in use.
+    bool addressSpace = false;
 };
 
 /// @brief The budget: `maxBytes` when it is not 0, else the least of the address-space limit, the
@@ -27,6 +30,10 @@ MemoryBudget memoryBudget(std::size_t maxBytes = 0);
 
 /// @brief The resident memory of this process now (bytes; 0 when the system does not say).
 std::size_t residentBytes();
+
+/// @brief What the budget counts of this process now (bytes): its address space (VmSize) where the
+/// budget is the address-space limit, else its resident memory.
+std::size_t bytesInUse(const MemoryBudget& budget);
 
 /// @brief Peak resident memory of this process so far (MiB), or since resetPeakMemory.
 double peakMemoryMb();
@@ -71,8 +78,8 @@ std::size_t parseMemorySize(const std::string& text);
 /// @brief "1.23 GiB", "456 MiB".
 std::string formatBytes(double bytes);
 
-/// @brief The most moves whose list fits in what the budget leaves free (the list doubles as it
-/// grows, so half of it), and never more than `limit`.
+/// @brief The most moves whose list fits in what the budget leaves free, and never more than
+/// `limit`: a third of it, since a list of c moves that grows copies them into room for 2 c.
 std::size_t movesThatFit(const MemoryBudget& budget, std::size_t limit);
 
 /// @brief Memory the rebuild and the mesh take per surface crossing of a lattice edge: the level
