@@ -74,9 +74,13 @@ int main(int argc, char** argv) {
         return 1;
     } catch (const std::bad_alloc&) {
         // The job checks its big allocations beforehand; this is what slipped past the estimates.
+        // Only the commands that build a stock have options that shrink it.
+        const char* advice = simulate->parsed()   ? "; try a larger --resolution or fewer --families"
+                             : studyCmd->parsed() ? "; try larger --resolutions or fewer --families"
+                                                  : "";
         std::cerr << "dexelmill: error: out of memory after a peak of " << dexelmill::formatBytes(dexelmill::peakMemoryMb() * 1024.0 * 1024.0)
-                  << " (the budget: " << dexelmill::formatBytes(double(dexelmill::memoryBudget().bytes))
-                  << "); try a larger --resolution or fewer --families\n";
+                  << " (the budget: " << dexelmill::formatBytes(double(dexelmill::memoryBudget().bytes)) << ")"
+                  << advice << "\n";
         return 1;
     } catch (const std::exception& e) {
         std::cerr << "dexelmill: error: " << e.what() << "\n";
