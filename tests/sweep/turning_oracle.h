@@ -43,7 +43,9 @@
 //      settling takes about V / (2 d) nodes, so it decides such points only for d >~ V / 2e5.
 //  (f) deepWitness looks for a witness pose: a grid over u and a golden-section refinement of a
 //      cheap guide (the least of z - za, zb - z and R(z) - rho); only the certified depth at
-//      the chosen poses, by (a) to (c), can fail the test, so the guide need not be exact.
+//      the chosen poses, by (a) to (c), can fail the test, so the guide need not be exact. Where
+//      the guide's peak is no witness but the guide reaches the depth, the golden-section search
+//      is made again on the certified depth itself.
 // Whether a point is inside a part at all is decided exactly, from R itself; the samples only
 // bound distances. The oracle is itself tested first, without the solver: against closed forms
 // (a ball on a line, a ball turning in place, a cylinder plunging) and against oracle.h's
@@ -291,6 +293,25 @@ class SweepOracle {
         }
         for (double u : {double(best) / kPoseGrid, g1 >= g2 ? x1 : x2})
             if (clearance(x, u, depth) >= depth) return u;
+        // The guide is at least the depth (each of its terms is a distance to the boundary), so
+        // where its peak stays below `depth`, no pose near it is a witness. Where not, the peak
+        // may lie off the depth's (near a ball's pole the distance to the top plane is far more
+        // than the depth): a golden-section search of the certified clearance over the same cells.
+        if (std::max(g1, g2) < depth && bestGuide < depth) return std::nullopt;
+        a = double(std::max(best - 1, 0)) / kPoseGrid, b = double(std::min(best + 1, kPoseGrid)) / kPoseGrid;
+        x1 = b - ratio * (b - a), x2 = a + ratio * (b - a);
+        g1 = clearance(x, x1, depth), g2 = clearance(x, x2, depth);
+        for (int i = 0; i < kGoldenSteps && std::max(g1, g2) < depth; ++i) {
+            if (g1 >= g2) {
+                b = x2, x2 = x1, g2 = g1;
+                x1 = b - ratio * (b - a), g1 = clearance(x, x1, depth);
+            } else {
+                a = x1, x1 = x2, g1 = g2;
+                x2 = a + ratio * (b - a), g2 = clearance(x, x2, depth);
+            }
+        }
+        if (g1 >= depth) return x1;
+        if (g2 >= depth) return x2;
         return std::nullopt;
     }
 
