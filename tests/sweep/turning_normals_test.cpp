@@ -385,6 +385,34 @@ TEST_CASE("turning sweep normals vs oracle: pure rotations and large turns", "[s
     CHECK(byStaticPoses <= t.cases - t.cases / 20);
 }
 
+TEST_CASE("turning sweep normals vs oracle: an end near a taper ball's tangent joint is smooth", "[sweep][turning]") {
+    // A taper ball (its ball meets the flank cone tangentially, below the equator) turning 151
+    // degrees about its tip, met by a line whose far end lies on the ball 2.5e-3 mm below that
+    // joint, where both faces graze: the ball's normal there differs from the cone's by more than
+    // a rim's least angle, and the end was marked sharp with no crease near (found by running
+    // the pure rotations' family on other seeds). The tool as the solver was given it, and its
+    // oracle radius from the ball and the flank line.
+    const double rb = 5.536396448231014, zt = 5.1452405073138143, top = 9.675521857031157;
+    const double rt = 5.522561241115409, rTop = 5.8434352679664761, slope = (rTop - rt) / (top - zt);
+    Case c;
+    c.kind = models::Kind::TaperBall;
+    c.model.emplace(models::Model{
+        Tool("taper ball", {ArcPiece{0, zt, 0, rb, rb}, ConePiece{zt, top, rt, rTop}}, top),
+        {models::part(0, top, [=](double z) { return z <= zt ? models::capRadius(rb, z) : rt + (z - zt) * slope; },
+                      rTop + rb)}});
+    c.move.start = c.move.end = Vec3(-14.167876438890577, -19.18498365339347, 0.78073412545817789);
+    c.move.axis = Vec3(-0.28394341882005208, -0.6418963905038082, -0.71228165690754885);
+    c.move.startAxis = Vec3(-0.18998429805539438, 0.53994129803642044, 0.81998131757201909);
+    c.line = Line{Vec3(-23.421757092525873, -20.317967782375597, -1.7040075208577288),
+                  Vec3(0.74663618633583706, -0.59919396574376826, 0.28896539009046207)};
+    c.epsilon = 1e-3;
+    NormalTally t;
+    checkNormals(c, t);
+    report(t);
+    CHECK(t.sharp == 0);
+    CHECK(t.checked == 2);
+}
+
 TEST_CASE("turning sweep normals vs oracle: lines through the rims of the first and last poses", "[sweep][turning]") {
     // The start and end poses' rims (where a part's bottom or top face meets its side) are creases
     // of the sweep wherever the moving rim does not graze there: a line through one, in a random

@@ -288,6 +288,9 @@ class TurningSweep {
     /// The rim between faces k and k + 1 of part `part` (faceNormal's order); none where they
     /// meet smoothly, or on the axis (turning_normals.cpp).
     std::optional<Rim> rim(std::size_t part, int k) const;
+    /// Whether faces k and k + 1 of `faces` meet smoothly: their normals at their common rim
+    /// differ by less than kRimAngle (turning_normals.cpp).
+    static bool smoothJoint(const std::vector<MeridianFace>& faces, std::size_t k);
     /// The Hermite data of an output end at line parameter t that band `band`'s leaf `heap` made
     /// (turning_normals.cpp).
     void nodeEndNormal(const Line& line, double t, std::size_t band, std::uint32_t heap, bool upper, Vec3& normal,
