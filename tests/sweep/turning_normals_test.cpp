@@ -381,8 +381,9 @@ TEST_CASE("turning sweep normals vs oracle: pure rotations and large turns", "[s
         checkNormals(c, t);
     }
     report(t);
-    CHECK(byStaticPoses >= t.cases / 20);
-    CHECK(byStaticPoses <= t.cases - t.cases / 20);
+    // Over twenty seeds, 6 to 19 of the 150 cases were searched by static poses.
+    CHECK(byStaticPoses >= t.cases / 50);
+    CHECK(byStaticPoses <= t.cases - t.cases / 50);
 }
 
 TEST_CASE("turning sweep normals vs oracle: an end near a taper ball's tangent joint is smooth", "[sweep][turning]") {
@@ -447,9 +448,9 @@ TEST_CASE("turning sweep normals vs oracle: lines through the rims of the first 
 /// every line at one tolerance, 1e-4, 1e-3 and 1e-2 mm: near rims 5, 5 and 19 ends wrong of 602,
 /// 602 and 604 (before endNormal weighed those velocities and knew covered disks, 169, 159 and
 /// 75); near joints 1, 4 and 0 of 746, 738 and 772 (before, 86, 112 and 86). With the tests'
-/// mixed tolerances, over six seeds: near rims 5 to 11 of about 606, near a ball end's equator 1
-/// to 6 of about 600, near joints 0 to 4 of about 740. Solving for that pose (n.v = 0 for the
-/// face or the rim the end lies on) would settle the rest.
+/// mixed tolerances, over six seeds: near rims 5 to 11 of about 606, near joints 0 to 4 of about
+/// 740 (near a ball end's equator 1 to 6 of about 600, none since tangent joints make no rim).
+/// Solving for that pose (n.v = 0 for the face or the rim the end lies on) would settle the rest.
 constexpr int kNearRimWrongPercent = 3;
 
 TEST_CASE("turning sweep normals vs oracle: lines where a face grazes near a rim", "[sweep][turning]") {
@@ -468,8 +469,9 @@ TEST_CASE("turning sweep normals vs oracle: lines near a ball end's equator", "[
     // (turning.cpp, note g): the cut part's bottom disk lies inside the tool, and the ball meets
     // the cylinder smoothly there. Taken as a face, that disk marked ends on the cylinder just
     // above the equator sharp, or mixed its normal in: 23 ends wrong of 594 on these lines, 3
-    // since (as a rim's lines may have, kNearRimWrongPercent).
-    checkGrazesNearEnds(20261205, {models::Kind::Ball}, true, kNearRimWrongPercent);
+    // since. The ball and the cylinder meet at a tangent joint, which makes no rim (endNormal):
+    // none wrong since, on 25 seeds.
+    checkGrazesNearEnds(20261205, {models::Kind::Ball}, true, 0);
 }
 
 TEST_CASE("turning sweep normals vs oracle: lines near the joints of a tool's convex parts", "[sweep][turning]") {
