@@ -190,6 +190,30 @@ struct Profile {
     }
 };
 
+/// The last two points of a golden-section search and f there.
+struct Golden {
+    double x1, g1, x2, g2;
+};
+
+/// Golden-section search for the largest f on [a, b]: kGoldenSteps steps, or fewer where `done`
+/// accepts the points so far.
+template <class F, class Done>
+Golden goldenPeak(F&& f, double a, double b, Done&& done) {
+    const double ratio = 0.5 * (std::sqrt(5.0) - 1.0);
+    Golden g{b - ratio * (b - a), 0.0, a + ratio * (b - a), 0.0};
+    g.g1 = f(g.x1), g.g2 = f(g.x2);
+    for (int i = 0; i < kGoldenSteps && !done(g); ++i) {
+        if (g.g1 >= g.g2) {
+            b = g.x2, g.x2 = g.x1, g.g2 = g.g1;
+            g.x1 = b - ratio * (b - a), g.g1 = f(g.x1);
+        } else {
+            a = g.x1, g.x1 = g.x2, g.g1 = g.g2;
+            g.x2 = a + ratio * (b - a), g.g2 = f(g.x2);
+        }
+    }
+    return g;
+}
+
 /// The oracle for one tool on one move.
 class SweepOracle {
   public:
@@ -278,40 +302,19 @@ class SweepOracle {
             const double g = guide(x, double(j) / kPoseGrid);
             if (g > bestGuide) bestGuide = g, best = j;
         }
-        const double ratio = 0.5 * (std::sqrt(5.0) - 1.0);
-        double a = double(std::max(best - 1, 0)) / kPoseGrid, b = double(std::min(best + 1, kPoseGrid)) / kPoseGrid;
-        double x1 = b - ratio * (b - a), x2 = a + ratio * (b - a);
-        double g1 = guide(x, x1), g2 = guide(x, x2);
-        for (int i = 0; i < kGoldenSteps; ++i) {
-            if (g1 >= g2) {
-                b = x2, x2 = x1, g2 = g1;
-                x1 = b - ratio * (b - a), g1 = guide(x, x1);
-            } else {
-                a = x1, x1 = x2, g1 = g2;
-                x2 = a + ratio * (b - a), g2 = guide(x, x2);
-            }
-        }
-        for (double u : {double(best) / kPoseGrid, g1 >= g2 ? x1 : x2})
+        const double a = double(std::max(best - 1, 0)) / kPoseGrid, b = double(std::min(best + 1, kPoseGrid)) / kPoseGrid;
+        const Golden byGuide = goldenPeak([&](double u) { return guide(x, u); }, a, b, [](const Golden&) { return false; });
+        for (double u : {double(best) / kPoseGrid, byGuide.g1 >= byGuide.g2 ? byGuide.x1 : byGuide.x2})
             if (clearance(x, u, depth) >= depth) return u;
         // The guide is at least the depth (each of its terms is a distance to the boundary), so
         // where its peak stays below `depth`, no pose near it is a witness. Where not, the peak
         // may lie off the depth's (near a ball's pole the distance to the top plane is far more
         // than the depth): a golden-section search of the certified clearance over the same cells.
-        if (std::max(g1, g2) < depth && bestGuide < depth) return std::nullopt;
-        a = double(std::max(best - 1, 0)) / kPoseGrid, b = double(std::min(best + 1, kPoseGrid)) / kPoseGrid;
-        x1 = b - ratio * (b - a), x2 = a + ratio * (b - a);
-        g1 = clearance(x, x1, depth), g2 = clearance(x, x2, depth);
-        for (int i = 0; i < kGoldenSteps && std::max(g1, g2) < depth; ++i) {
-            if (g1 >= g2) {
-                b = x2, x2 = x1, g2 = g1;
-                x1 = b - ratio * (b - a), g1 = clearance(x, x1, depth);
-            } else {
-                a = x1, x1 = x2, g1 = g2;
-                x2 = a + ratio * (b - a), g2 = clearance(x, x2, depth);
-            }
-        }
-        if (g1 >= depth) return x1;
-        if (g2 >= depth) return x2;
+        if (std::max(byGuide.g1, byGuide.g2) < depth && bestGuide < depth) return std::nullopt;
+        const Golden byDepth = goldenPeak([&](double u) { return clearance(x, u, depth); }, a, b,
+                                          [depth](const Golden& g) { return std::max(g.g1, g.g2) >= depth; });
+        if (byDepth.g1 >= depth) return byDepth.x1;
+        if (byDepth.g2 >= depth) return byDepth.x2;
         return std::nullopt;
     }
 
