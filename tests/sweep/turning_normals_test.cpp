@@ -9,8 +9,10 @@
 // a grid of kNormalPoseGrid poses, then by golden-section steps about each of the grid's kPeaks
 // highest local maxima: near S's boundary, g(x, u) peaks at the poses that sweep x's
 // neighbourhood and is smooth or has a kink there (a rim), so the steps find the peak's value to
-// rounding. S's boundary on a line is then bisected on the sign of G from a bracket about the
-// solver's end.
+// rounding. A pose with g >= 0 certifies x inside; where none is found, the cells about those
+// maxima are searched again on a grid kSubGrid times finer, as the guide is no distance and its
+// peak may lie a cell off (depthG). S's boundary on a line is then bisected on the sign of G from
+// a bracket about the solver's end.
 //
 // The finite differences (normal_stencil.h): the line and four lines offset by kStep across it
 // meet S's boundary at five points, whose central difference spans the tangent plane and whose
@@ -65,6 +67,8 @@ constexpr double kBracket = 0.05;     ///< how far past an end the bisections st
 constexpr int kNormalPoseGrid = 256;  ///< poses of G's grid
 constexpr int kPeaks = 3;             ///< the grid's local maxima refined
 constexpr int kNormalGoldenSteps = 60;  ///< golden-section steps per peak: 2 / grid times 0.618^60
+constexpr int kSubCells = 2;  ///< where no pose holds x: the cells each side of a peak searched finer
+constexpr int kSubGrid = 16;  ///< ... at this many poses per cell
 constexpr double kCurvatureStep = 1e-3;  ///< the central differences' step for R' and R'' (mm)
 constexpr int kCurvatureSamples = 20;    ///< heights sampled across localRadius's window
 
@@ -87,22 +91,29 @@ Peak depthG(const SweepOracle& o, const Vec3& x) {
     Peak best;
     for (int j = 0; j <= kNormalPoseGrid; ++j)
         if (g[std::size_t(j)] > best.g) best = {g[std::size_t(j)], double(j) / kNormalPoseGrid};
-    const double ratio = 0.5 * (std::sqrt(5.0) - 1.0);
+    const auto guide = [&](double u) { return o.guide(x, u); };
+    const auto refine = [&](double a, double b) {
+        const Golden r = goldenPeak(guide, std::max(a, 0.0), std::min(b, 1.0), [](const Golden&) { return false; },
+                                    kNormalGoldenSteps);
+        if (r.g1 > best.g) best = {r.g1, r.x1};
+        if (r.g2 > best.g) best = {r.g2, r.x2};
+    };
+    const double cell = 1.0 / kNormalPoseGrid;
+    for (const int j : peaks) refine((j - 1) * cell, (j + 1) * cell);
+    if (best.g >= 0.0) return best;
+    // No pose found holding x, which only a pose does certify. The grid's local maxima may lie
+    // off the guide's: it is no distance, and falls steeply where the meridian curve stands
+    // upright (a bull nose's torus at its bottom), so a peak narrower than a cell can sit beside
+    // a cell that only a lower peak makes higher. A finer grid over the cells about each, then.
     for (const int j : peaks) {
-        double a = double(std::max(j - 1, 0)) / kNormalPoseGrid, b = double(std::min(j + 1, kNormalPoseGrid)) / kNormalPoseGrid;
-        double x1 = b - ratio * (b - a), x2 = a + ratio * (b - a);
-        double g1 = o.guide(x, x1), g2 = o.guide(x, x2);
-        for (int i = 0; i < kNormalGoldenSteps; ++i) {
-            if (g1 >= g2) {
-                b = x2, x2 = x1, g2 = g1;
-                x1 = b - ratio * (b - a), g1 = o.guide(x, x1);
-            } else {
-                a = x1, x1 = x2, g1 = g2;
-                x2 = a + ratio * (b - a), g2 = o.guide(x, x2);
-            }
+        const double a = std::max(j - kSubCells, 0) * cell, b = std::min(j + kSubCells, kNormalPoseGrid) * cell;
+        const int n = int(std::lround((b - a) / cell)) * kSubGrid;
+        Peak sub;
+        for (int k = 0; k <= n; ++k) {
+            const double u = a + (b - a) * k / n, gu = o.guide(x, u);
+            if (gu > sub.g) sub = {gu, u};
         }
-        if (g1 > best.g) best = {g1, x1};
-        if (g2 > best.g) best = {g2, x2};
+        refine(sub.u - (b - a) / n, sub.u + (b - a) / n);
     }
     return best;
 }
@@ -412,6 +423,32 @@ TEST_CASE("turning sweep normals vs oracle: an end near a taper ball's tangent j
     report(t);
     CHECK(t.sharp == 0);
     CHECK(t.checked == 2);
+}
+
+TEST_CASE("turning sweep normals vs oracle: the oracle finds a pose a grid cell off its guide's peak", "[sweep][turning]") {
+    // A bull nose D2.34 R0.5 on a 35 mm move turning 6 degrees, met by a line whose far end lies
+    // on the torus near its bottom (found by running the random family on other seeds). Inside
+    // S just short of that end, the guide peaks over u in [0.9084, 0.9097], within one grid cell,
+    // while the cell beyond is higher at the grid's poses (the point leaves the tool through its
+    // bottom there, where the guide takes the flat's radius): depthG refined that cell alone,
+    // took the points as outside, and put S's boundary 8e-4 mm short of the solver's end, at a
+    // normal 0.106 rad off. The tool as the solver was given it, and its oracle radius.
+    const double inner = 0.6712954338369943, r = 0.4994841796493294, top = 12.586301094019447;
+    Case c;
+    c.kind = models::Kind::Bull;
+    c.model.emplace(models::Model{
+        Tool("bull nose", {ArcPiece{0, r, inner, r, r}, ConePiece{r, top, inner + r, inner + r}}, 9.0774410671795174),
+        {models::part(0, top, [=](double z) { return z < r ? inner + models::capRadius(r, z) : inner + r; }, inner + r)}});
+    c.move.start = Vec3(-8.288415262950819, -16.124400460780176, -3.598817259148813);
+    c.move.end = Vec3(-28.30620104128225, -19.059506479758486, 25.437828680103209);
+    c.move.axis = Vec3(0.0033316446073465853, 0.97119311954077259, 0.2382704864243006);
+    c.move.startAxis = Vec3(0.048379792237214704, 0.98904024086507636, 0.13949479435676418);
+    c.line = Line{Vec3(-26.56663880219655, 10.161381258487285, 23.50201075865569), Vec3(0, -1, 0)};
+    c.epsilon = 1e-4;
+    NormalTally t;
+    checkNormals(c, t);
+    report(t);
+    CHECK(t.checked == t.ends);
 }
 
 TEST_CASE("turning sweep normals vs oracle: lines through the rims of the first and last poses", "[sweep][turning]") {

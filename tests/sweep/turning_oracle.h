@@ -195,14 +195,14 @@ struct Golden {
     double x1, g1, x2, g2;
 };
 
-/// Golden-section search for the largest f on [a, b]: kGoldenSteps steps, or fewer where `done`
+/// Golden-section search for the largest f on [a, b]: `steps` steps, or fewer where `done`
 /// accepts the points so far.
 template <class F, class Done>
-Golden goldenPeak(F&& f, double a, double b, Done&& done) {
+Golden goldenPeak(F&& f, double a, double b, Done&& done, int steps = kGoldenSteps) {
     const double ratio = 0.5 * (std::sqrt(5.0) - 1.0);
     Golden g{b - ratio * (b - a), 0.0, a + ratio * (b - a), 0.0};
     g.g1 = f(g.x1), g.g2 = f(g.x2);
-    for (int i = 0; i < kGoldenSteps && !done(g); ++i) {
+    for (int i = 0; i < steps && !done(g); ++i) {
         if (g.g1 >= g.g2) {
             b = g.x2, g.x2 = g.x1, g.g2 = g.g1;
             g.x1 = b - ratio * (b - a), g.g1 = f(g.x1);
