@@ -539,7 +539,7 @@ void TurningSweep::intersect(const Line& line, const std::vector<Interval>& care
             nodeEndNormal(line, t, part, node, upper, normal, sharp);
         } else if (!endNormalsFromSearch.load(std::memory_order_relaxed) ||
                    !search.knownEndNormal(t, u, part, normal, sharp)) {
-            endNormal(line, t, u, part, normal, sharp);
+            endNormal(line, t, u, part, upper, normal, sharp);
         }
     };
     out.reserve(pieces.size());

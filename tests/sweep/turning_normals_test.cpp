@@ -452,6 +452,35 @@ TEST_CASE("turning sweep normals vs oracle: an end near a taper ball's tangent j
     CHECK(t.checked == 2);
 }
 
+TEST_CASE("turning sweep normals vs oracle: an end at the pose that sweeps it takes its face's normal", "[sweep][turning]") {
+    // A taper ball with a shank turning 134 degrees about its tip, met by a line whose far end
+    // a search node made near the joint of the flank and the shank, at a tolerance of 0.01 mm
+    // (found by running the pure rotations' family on other seeds). At the pose that sweeps S
+    // there (TurningSweep::contactPose), the end lies on the shank's side 4.2 tolerances below
+    // the top rim, whose swept surface's tangent plane passes within reach: it took that rim's
+    // swept normal, 1 rad off the side's. The tool as the solver was given it, and its oracle
+    // radius from the ball, the flank line and the shank.
+    const double rb = 5.0522584860031516, zt = 4.0367605394452015, lc = 6.4674084463244652;
+    const double top = 8.7585410005568143, rt = 4.9491493945856435, rTop = 5.4478851896581473;
+    const double slope = (rTop - rt) / (lc - zt);
+    Case c;
+    c.kind = models::Kind::TaperBall;
+    c.model.emplace(models::Model{
+        Tool("taper ball", {ArcPiece{0, zt, 0, rb, rb}, ConePiece{zt, lc, rt, rTop}, ConePiece{lc, top, rTop, rTop}}, lc),
+        {models::part(0, top,
+                      [=](double z) { return z <= zt ? models::capRadius(rb, z) : rt + (std::min(z, lc) - zt) * slope; },
+                      rTop + rb)}});
+    c.move.start = c.move.end = Vec3(16.721342184087653, -0.428477718912184, 11.758208938462332);
+    c.move.axis = Vec3(-0.070559174626974197, 0.83267741134502937, 0.54924469183752778);
+    c.move.startAxis = Vec3(0.80382771364875716, 0.1515549890339021, -0.57523220708609979);
+    c.line = Line{Vec3(20.772660656881712, 5.0891677236185835, 35.732832254160165), Vec3(0, 0, 1)};
+    c.epsilon = 1e-2;
+    NormalTally t;
+    checkNormals(c, t);
+    report(t);
+    CHECK(t.checked == t.ends);
+}
+
 TEST_CASE("turning sweep normals vs oracle: the oracle finds a pose a grid cell off its guide's peak", "[sweep][turning]") {
     // A bull nose D2.34 R0.5 on a 35 mm move turning 6 degrees, met by a line whose far end lies
     // on the torus near its bottom (found by running the random family on other seeds). Inside

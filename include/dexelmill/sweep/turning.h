@@ -180,9 +180,14 @@ class TurningSweep {
     std::vector<Interval> intersectAll(const Line& line) const;
 
   private:
-    /// The Hermite data of an output end at line parameter t, made by part `part` at pose u
-    /// (turning_normals.cpp).
-    void endNormal(const Line& line, double t, double u, std::size_t part, Vec3& normal, bool& sharp) const;
+    /// The Hermite data of an output end at line parameter t, the upper end of an interval or the
+    /// lower, made by part `part` at pose u (turning_normals.cpp). Near a rim, at the pose that
+    /// sweeps S there (contactPose) unless `atPose`.
+    void endNormal(const Line& line, double t, double u, std::size_t part, bool upper, Vec3& normal, bool& sharp,
+                   bool atPose = false) const;
+    /// The pose near u at which part `part` reaches farthest out along the line at its upper end
+    /// (lower), and the part's interval on the line there in `range`: u where none reaches farther.
+    double contactPose(const Line& line, double u, std::size_t part, bool upper, Interval& range) const;
 
     /// A ball inside the tool whose sphere is the tool's lower face below its centre (a ball end
     /// mill's, at the bottom): swept as capsules along chords of its centre's path (turning.cpp,
