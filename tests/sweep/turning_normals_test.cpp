@@ -41,7 +41,7 @@
 // the oracle then looks for one with a wide stencil, of step kSharpReach epsilon, whose turn must
 // exceed kCreaseTurn, unless one of its lines falls off an edge of S. A shallower crease, of at
 // least kLeastCrease, is told from curvature by how the turn grows with the stencil's step
-// (creaseBetween): in proportion to it on a smooth surface, not at all where the narrow stencil
+// (stencil::creaseBetween): in proportion to it on a smooth surface, not at all where the narrow stencil
 // already holds the crease, and faster where the crease lies between the two stencils' reaches.
 #include <catch2/catch.hpp>
 
@@ -63,12 +63,6 @@ namespace {
 constexpr double kStep = 1e-4;        ///< finite-difference offset (mm)
 constexpr double kAngle = 1e-3;       ///< tolerance on the angle to the difference normal (rad)
 constexpr double kSmallestRadius = 0.1;  ///< below the smallest radius of curvature of the random tools (mm)
-constexpr double kSharpReach = 8.0;   ///< the wide stencil's step for ends marked sharp, in epsilons
-constexpr double kCreaseTurn = 0.05;  ///< a larger turn across the stencil: a crease (rad)
-/// The shallowest crease creaseBetween tells from curvature (rad): far above the stencils' rounding
-/// (their points are bisected to ~1e-13 mm, 1e-9 rad over kStep), and the solver's own least angle
-/// between two faces at a rim.
-constexpr double kLeastCrease = 1e-4;
 constexpr double kGrazing = 0.05;     ///< a smaller sine between line and surface: grazing
 constexpr double kBracket = 0.05;     ///< how far past an end the bisections start outside (mm)
 constexpr int kNormalPoseGrid = 256;  ///< poses of G's grid
@@ -78,21 +72,6 @@ constexpr int kSubCells = 2;  ///< where no pose holds x: the cells each side of
 constexpr int kSubGrid = 16;  ///< ... at this many poses per cell
 constexpr double kCurvatureStep = 1e-3;  ///< the central differences' step for R' and R'' (mm)
 constexpr int kCurvatureSamples = 20;    ///< heights sampled across localRadius's window
-
-/// Whether a crease of S lies within the wide stencil's reach, from the turns across the narrow
-/// stencil (step kStep) and the wide one (`ratio` times as wide). Where S is smooth, its one-sided
-/// normals turn by its curvature times the step, so the wide turn is about `ratio` times the
-/// narrow. A crease within both gives both its angle; one beyond the narrow stencil's reach gives
-/// the wide stencil its angle and the narrow one curvature alone. So a wide turn of at least
-/// kLeastCrease that is at most twice the narrow, or at least twice `ratio` times it, is a crease
-/// (or a curvature that grows more than twice across the wide stencil). Measured over 31 seeds
-/// (the families' seeds offset by 7919 k, k = 0 to 30): of the 11 ends marked sharp that
-/// kCreaseTurn alone took as wrong, 9 are so told, with wide turns of 9.6e-4 to 0.048 rad. The
-/// other 2, at a tolerance of 0.01 mm, turn in proportion to the step (narrow 2.4e-5 and 7.1e-6,
-/// wide 0.0115 and 0.0057 rad across 0.08 mm): no crease, and they fail.
-bool creaseBetween(double narrow, double wide, double ratio) {
-    return wide > kCreaseTurn || (wide >= kLeastCrease && (wide <= 2.0 * narrow || wide >= 2.0 * ratio * narrow));
-}
 
 /// G(x), the largest guide over the poses (>= 0 inside S), and the pose where it is largest.
 struct Peak {
@@ -212,22 +191,16 @@ void checkNormals(const Case& c, NormalTally& t, double radius = kSmallestRadius
             }
             const Vec3 central = stencil::central(p, sense * w);
             const double turn = stencil::turn(p);
-            if (turn > kCreaseTurn) {
+            if (turn > stencil::kCreaseTurn) {
                 ++t.creases;
                 t.sharpOnCrease += sharp;
                 continue;
             }
             if (sharp) {
-                // A crease within the solver's rim reach: the wide stencil bends, or one of its
-                // lines falls off an edge of S (its end leaves the bracket).
-                Vec3 wide[5];
-                const double step = kSharpReach * c.epsilon;
-                if (!stencil::points(in, c.line, step, inside, v + sense * (kBracket + 4.0 * step), wide)) {
-                    ++t.sharpNearCrease;
-                    continue;
-                }
-                const double wideTurn = stencil::turn(wide);
-                if (creaseBetween(turn, wideTurn, step / kStep)) {
+                // A crease within the solver's rim reach.
+                const double step = stencil::kSharpReach * c.epsilon;
+                double wideTurn = 0.0;
+                if (stencil::creaseNear(in, c.line, kStep, turn, step, inside, v, sense, kBracket, wideTurn)) {
                     ++t.sharpNearCrease;
                     continue;
                 }
