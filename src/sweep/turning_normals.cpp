@@ -362,6 +362,17 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     // end's height differs from the other's by its curvature times the height between. On a
     // taper ball turning 150 degrees, an end on the arc 2.5e-3 mm below such a joint was marked
     // sharp, both faces grazing there.
+    // The Hermite data decided again at the pose that sweeps S at the end (contactPose), where
+    // the part there still meets the line on the end's inner side: the steps out to that pose may
+    // pass a gap in S to a pose that meets the line farther on. (An end a node made may lie just
+    // beyond the part, within the tolerance its band grew by.) False where it is not.
+    const auto atContact = [&]() {
+        Interval range;
+        const double at = contactPose(line, u, part, upper, range);
+        if (at == u || range.isEmpty() || !(upper ? range.lo <= t : range.hi >= t)) return false;
+        endNormal(line, upper ? range.hi : range.lo, at, part, upper, normal, sharp, true);
+        return true;
+    };
     const Face* other = nullptr;
     for (std::size_t k = 0; k < faces.size() && !other; ++k) {
         if (k == nearest || faces[k].gap2 > nearRim * nearRim) continue;
@@ -381,15 +392,7 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
         // the faces' velocities, which point the wrong way as often as the end's pose lies on the
         // wrong side of that one: so it decides at that pose, where the part reaches farthest
         // along the line, and at the end the part makes there.
-        // Only where the part there still meets the line on the end's inner side: the steps out
-        // to that pose may pass a gap in S to a pose that meets the line farther on. (An end a
-        // node made may lie just beyond the part, within the tolerance its band grew by.)
-        if (!atPose) {
-            Interval range;
-            const double at = contactPose(line, u, part, upper, range);
-            if (at != u && !range.isEmpty() && (upper ? range.lo <= t : range.hi >= t))
-                return endNormal(line, upper ? range.hi : range.lo, at, part, upper, normal, sharp, true);
-        }
+        if (!atPose && atContact()) return;
         // The faces' normal velocities (mm per unit of u). Where they have opposite signs, the rim
         // grazes: its swept normal, alpha n1 + beta n2 square to the velocity, unless both are
         // so small that the rim slides along itself (then a crease). Where both advance or both
@@ -416,7 +419,10 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
     // first or last pose, whose own faces bound the sweep where an end they make lies, nor at the
     // pose that sweeps S at the end (contactPose), where the end lies on the face that does: a
     // taper ball turning 134 degrees about its tip took the swept normal of its top rim, 4.2
-    // tolerances above such an end, 1 rad off the side's.
+    // tolerances above such an end, 1 rad off the side's. Where a rim would give the end its
+    // swept normal, the end is decided at that pose instead: an APT cutter's end 4.2 tolerances
+    // below its top rim took that rim's swept normal, 0.1 rad off, where at the pose that sweeps
+    // S it lay 2.4 tolerances from the rim on a side that grazes, and took the side's normal.
     if (atPose || u <= 0.0 || u >= 1.0) return;
     for (const std::size_t below : {nearest - 1, nearest}) {
         if (below >= faces.size() - 1) continue;  // above the top face, or below the bottom one
@@ -428,7 +434,7 @@ void TurningSweep::endNormal(const Line& line, double t, double u, std::size_t p
         const Vec3 at = ps.tip + r->z * ps.axis + r->radius * radial;
         const std::optional<Vec3> n = sweptRim(n1, n2, at);
         if (n && std::abs(glm::dot(x - at, *n)) <= nearRim) {
-            normal = *n;
+            if (!atContact()) normal = *n;
             return;
         }
     }

@@ -454,6 +454,36 @@ TEST_CASE("turning sweep normals vs oracle: an end at the pose that sweeps it ta
     CHECK(t.checked == t.ends);
 }
 
+TEST_CASE("turning sweep normals vs oracle: an end near a rim's swept surface is decided where S is swept", "[sweep][turning]") {
+    // An APT cutter with no corner radius turning 45 degrees over a 0.35 mm move, met by a line
+    // whose far end lies on the side flank 4.2 tolerances below the top rim, beyond the solver's
+    // rim reach, and within reach of that rim's swept surface's tangent plane (found by running
+    // the near-rim family on other lines of its seed). It took the rim's swept normal, 0.1 rad
+    // off; at the pose that sweeps S there (TurningSweep::contactPose) the end lies 2.4
+    // tolerances below the rim on a flank that grazes, whose normal is the oracle's. The tool
+    // as the solver was given it, and its oracle radius.
+    const double zc = 0.18133293680406348, top = 10.136039668835329;
+    const double rTip = 1.2935865371242901, rc = 2.5000368735073351, rTop = 3.3471816182322138;
+    Case c;
+    c.kind = models::Kind::Apt;
+    c.model.emplace(models::Model{
+        Tool("APT", {ConePiece{0, zc, rTip, rc}, ConePiece{zc, top, rc, rTop}}, 10.097141571349082),
+        {models::part(0, top,
+                      [=](double z) { return z < zc ? rTip + (rc - rTip) * z / zc : rc + (rTop - rc) * (z - zc) / (top - zc); },
+                      rTop)}});
+    c.move.start = Vec3(-2.6568436274443137, 4.2589981522284113, 13.76107015088175);
+    c.move.end = Vec3(-2.3901037497081057, 4.0866366228223461, 13.568122166566264);
+    c.move.axis = Vec3(0.49404321534407214, 0.68695770080020047, -0.53292627884520094);
+    c.move.startAxis = Vec3(-0.19224316107860964, 0.48471576738614053, -0.85328376983613641);
+    c.line = Line{Vec3(-13.002539729426807, 16.083602704164303, 17.47416833397633),
+                  Vec3(0.65963842351198154, -0.38622832574124477, -0.64475175891326009)};
+    c.epsilon = 1e-4;
+    NormalTally t;
+    checkNormals(c, t);
+    report(t);
+    CHECK(t.checked == t.ends);
+}
+
 TEST_CASE("turning sweep normals vs oracle: the oracle finds a pose a grid cell off its guide's peak", "[sweep][turning]") {
     // A bull nose D2.34 R0.5 on a 35 mm move turning 6 degrees, met by a line whose far end lies
     // on the torus near its bottom (found by running the random family on other seeds). Inside
