@@ -9,6 +9,7 @@
 // smooth surface, as large as the crease's angle where the end lies within step of a crease.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -16,6 +17,7 @@
 
 namespace stencil {
 
+using dexelmill::Interval;
 using dexelmill::Line;
 using dexelmill::Vec3;
 
@@ -48,6 +50,20 @@ std::optional<double> boundary(const In& in, const Line& line, double inside, do
         (in(line.at(mid)) ? inside : outside) = mid;
     }
     return 0.5 * (inside + outside);
+}
+
+/// An end of a line's interval, and the bracket its stencils are bisected in.
+struct End {
+    double v;        ///< the end's parameter on the line
+    double sense;    ///< outward along the line: +1 at the upper end, -1 at the lower
+    double inside;   ///< inside the interval: half way in, at most `reach` from v
+    double outside;  ///< outside it: `reach` past v
+};
+
+/// The upper end of `range` (`upper`) or its lower, bracketed to within `reach` of it.
+inline End bracket(const Interval& range, bool upper, double reach) {
+    const double v = upper ? range.hi : range.lo, sense = upper ? 1.0 : -1.0;
+    return {v, sense, v - sense * std::min(0.5 * range.length(), reach), v + sense * reach};
 }
 
 /// Two unit vectors across `dir` and across each other.
@@ -84,6 +100,24 @@ inline double turn(const Vec3 p[5]) {
     return angle(glm::cross(p[1] - p[0], p[3] - p[0]), glm::cross(p[0] - p[2], p[0] - p[4]));
 }
 
+/// What the stencil about an end reads of S: its five boundary points (points), its central
+/// difference normal, outward, and its turn.
+struct Reading {
+    Vec3 p[5];
+    Vec3 normal;
+    double turn = 0.0;
+};
+
+/// The stencil of step `step` about end `e` of `line`; empty when a point is not bracketed.
+template <class In>
+std::optional<Reading> read(const In& in, const Line& line, double step, const End& e) {
+    Reading r;
+    if (!points(in, line, step, e.inside, e.outside, r.p)) return {};
+    r.normal = central(r.p, e.sense * line.dir);
+    r.turn = turn(r.p);
+    return r;
+}
+
 /// Whether a crease of S lies within the wide stencil's reach, from the turns across a narrow
 /// stencil and a wide one (`ratio` times as wide). Where S is smooth, its one-sided normals turn
 /// by its curvature times the step, so the wide turn is about `ratio` times the narrow. A crease
@@ -99,17 +133,16 @@ inline bool creaseBetween(double narrow, double wide, double ratio) {
     return wide > kCreaseTurn || (wide >= kLeastCrease && (wide <= 2.0 * narrow || wide >= 2.0 * ratio * narrow));
 }
 
-/// Whether the end at parameter v of `line`, whose narrow stencil (step `narrowStep`) turned by
-/// `narrowTurn`, lies within the reach of a crease of S: the stencil of step `wideStep` bends
-/// (creaseBetween), or one of its lines falls off an edge of S (its end leaves the bracket from
-/// `inside` to `bracket` plus four steps past v, `sense` the outward sign along the line). Sets
-/// `wideTurn`, or 0 where the wide stencil is not bracketed.
+/// Whether end `e` of `line`, whose narrow stencil (step `narrowStep`) turned by `narrowTurn`,
+/// lies within the reach of a crease of S: the stencil of step `wideStep` bends (creaseBetween),
+/// or one of its lines falls off an edge of S (its end leaves e's bracket widened outward by four
+/// steps). Sets `wideTurn`, or 0 where the wide stencil is not bracketed.
 template <class In>
-bool creaseNear(const In& in, const Line& line, double narrowStep, double narrowTurn, double wideStep, double inside,
-                double v, double sense, double bracket, double& wideTurn) {
+bool creaseNear(const In& in, const Line& line, double narrowStep, double narrowTurn, double wideStep, const End& e,
+                double& wideTurn) {
     Vec3 wide[5];
     wideTurn = 0.0;
-    if (!points(in, line, wideStep, inside, v + sense * (bracket + 4.0 * wideStep), wide)) return true;
+    if (!points(in, line, wideStep, e.inside, e.outside + e.sense * 4.0 * wideStep, wide)) return true;
     wideTurn = turn(wide);
     return creaseBetween(narrowTurn, wideTurn, wideStep / narrowStep);
 }

@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <random>
 
 #include "dexelmill/machine/kinematics.h"
@@ -258,38 +259,32 @@ void checkEnds(const TurningSweep& sweep, const RotaryOracle& oracle, const Soli
     const Vec3& dir = line.dir;
     for (const LineHit& hit : sweep.intersect(line)) {
         for (const bool hi : {false, true}) {
-            const double v = hi ? hit.range.hi : hit.range.lo, sense = hi ? 1.0 : -1.0;
-            const double inside = v - sense * std::min(0.5 * hit.range.length(), kBracket);
-            Vec3 pts[5];
-            if (!stencil::points(in, line, kNormalStep, inside, v + sense * kBracket, pts)) {
-                ++t.skipped;
-                continue;
-            }
-            const Vec3 central = stencil::central(pts, sense * dir);
-            const double turn = stencil::turn(pts);
-            if (turn > stencil::kCreaseTurn) {
+            const stencil::End e = stencil::bracket(hit.range, hi, kBracket);
+            const std::optional<stencil::Reading> narrow = stencil::read(in, line, kNormalStep, e);
+            if (!narrow || narrow->turn > stencil::kCreaseTurn) {
                 ++t.skipped;
                 continue;
             }
             const bool sharp = hi ? hit.sharpHi : hit.sharpLo;
-            INFO("line " << li << (hi ? " hi" : " lo") << " end " << line.at(v).x << " " << line.at(v).y << " "
-                         << line.at(v).z << (sharp ? " sharp" : "") << " turn " << turn);
+            const Vec3 end = line.at(e.v);
+            INFO("line " << li << (hi ? " hi" : " lo") << " end " << end.x << " " << end.y << " " << end.z
+                         << (sharp ? " sharp" : "") << " turn " << narrow->turn);
             if (sharp) {
                 ++t.checked, ++t.sharp;
                 double wideTurn = 0.0;
                 const double step = stencil::kSharpReach * kEpsilon;
-                const bool near = stencil::creaseNear(in, line, kNormalStep, turn, step, inside, v, sense, kBracket, wideTurn);
+                const bool near = stencil::creaseNear(in, line, kNormalStep, narrow->turn, step, e, wideTurn);
                 INFO("marked sharp; the stencil of step " << step << " mm turns " << wideTurn << " rad");
                 CHECK(near);
                 continue;
             }
-            if (std::abs(glm::dot(central, dir)) < kGrazing) {
+            if (std::abs(glm::dot(narrow->normal, dir)) < kGrazing) {
                 ++t.skipped;
                 continue;
             }
             ++t.checked;
             const Vec3 normal = hi ? hit.normalHi : hit.normalLo;
-            CHECK(stencil::angle(normal, central) <= kNormalAngle + std::sqrt(2.0 * kEpsilon / s.r) + turn);
+            CHECK(stencil::angle(normal, narrow->normal) <= kNormalAngle + std::sqrt(2.0 * kEpsilon / s.r) + narrow->turn);
         }
     }
 }

@@ -180,17 +180,15 @@ void checkNormals(const Case& c, NormalTally& t, double radius = kSmallestRadius
             const Vec3 normal = hi ? hit.normalHi : hit.normalLo;
             const bool sharp = hi ? hit.sharpHi : hit.sharpLo;
             t.sharp += sharp;
-            const double v = hi ? hit.range.hi : hit.range.lo;
-            const double sense = hi ? 1.0 : -1.0;  // outward along the line
-            const double inside = v - sense * std::min(0.5 * hit.range.length(), kBracket);
-            const double outside = v + sense * kBracket;
-            Vec3 p[5];
-            if (!stencil::points(in, c.line, kStep, inside, outside, p)) {
+            const stencil::End e = stencil::bracket(hit.range, hi, kBracket);
+            const double v = e.v;
+            const std::optional<stencil::Reading> narrow = stencil::read(in, c.line, kStep, e);
+            if (!narrow) {
                 ++t.unbracketed;
                 continue;
             }
-            const Vec3 central = stencil::central(p, sense * w);
-            const double turn = stencil::turn(p);
+            const Vec3& central = narrow->normal;
+            const double turn = narrow->turn;
             if (turn > stencil::kCreaseTurn) {
                 ++t.creases;
                 t.sharpOnCrease += sharp;
@@ -200,7 +198,7 @@ void checkNormals(const Case& c, NormalTally& t, double radius = kSmallestRadius
                 // A crease within the solver's rim reach.
                 const double step = stencil::kSharpReach * c.epsilon;
                 double wideTurn = 0.0;
-                if (stencil::creaseNear(in, c.line, kStep, turn, step, inside, v, sense, kBracket, wideTurn)) {
+                if (stencil::creaseNear(in, c.line, kStep, turn, step, e, wideTurn)) {
                     ++t.sharpNearCrease;
                     continue;
                 }
@@ -231,7 +229,7 @@ void checkNormals(const Case& c, NormalTally& t, double radius = kSmallestRadius
             std::ostringstream m;
             m << "FAIL case #" << t.cases - 1 << (hi ? " hi" : " lo") << ": " << describe(c) << "\n   end "
               << cases::str(c.line.at(v)) << (sharp ? " sharp" : "") << " normal " << cases::str(normal) << "\n   oracle "
-              << cases::str(central) << " at " << cases::str(p[0]) << " turn " << turn << ", angle " << err
+              << cases::str(central) << " at " << cases::str(narrow->p[0]) << " turn " << turn << ", angle " << err
               << " allowed " << allowed << " (radius " << std::max(radius, local) << " mm)\n";
             t.log += m.str();
         }
