@@ -427,7 +427,7 @@ Simulation runStages(const SimulateOptions& o) {
     if (program.path.moves.empty()) {
         ReportWarning w;
         if (!o.inputs.empty()) w.where.file = o.inputs.back();
-        w.message = "the program makes no moves (empty, or only comments and settings): the part is the stock";
+        w.message = "the program makes no moves: the part is the stock";
         notes.push_back(w);
     }
     // The design's mesh first: with no stock given, its box is the stock's.

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dexelmill/error.h"
@@ -565,4 +566,27 @@ TEST_CASE("gcode: with no start position, moves only place the tool until X, Y a
     bool warned = false;
     for (const Diagnostic& d : p.diagnostics) warned = warned || d.message.find("start position is unknown") != std::string::npos;
     CHECK(warned);
+}
+
+TEST_CASE("gcode: a file of subroutines alone names each one it never calls", "[path][gcode]") {
+    const std::string subs = "(pockets)\no<pocket> sub\nG1 X#1 F100\no<pocket> endsub\n"
+                             "o<slot> sub\nG1 Y#1 F100\no<slot> endsub\n";
+    const Program alone = run(subs + "M2\n");
+    CHECK(alone.path.moves.empty());
+    std::vector<std::pair<std::string, int>> named;
+    for (const Diagnostic& d : alone.diagnostics)
+        if (d.message.find("never called") != std::string::npos) {
+            CHECK(d.where.file == "test.ngc");
+            named.emplace_back(d.message.substr(0, d.message.find('>') + 1), d.where.line);
+        }
+    CHECK(named == std::vector<std::pair<std::string, int>>{{"subroutine o<pocket>", 2}, {"subroutine o<slot>", 5}});
+    // A program that moves is not told of the subroutines it leaves unused, nor of those it calls.
+    const Program moving = run(subs + "G0 X1 Y2 Z3\nM2\n");
+    CHECK(moving.path.moves.size() == 1);
+    CHECK_FALSE(hasDiagnostic(moving, "never called"));
+    const Program called = run("o<pocket> sub\nG1 X#1 F100\no<pocket> endsub\nG0 X0 Y0 Z5\no<pocket> call [4]\nM2\n");
+    CHECK(called.path.moves.size() == 2);
+    CHECK_FALSE(hasDiagnostic(called, "never called"));
+    // A called subroutine that makes no moves is not one left uncalled.
+    CHECK_FALSE(hasDiagnostic(run("o<none> sub\n#1 = 2\no<none> endsub\no<none> call\nM2\n"), "never called"));
 }

@@ -347,6 +347,7 @@ int Interpreter::callSub(const OWord& li, int pc, std::size_t pos) {
                      (files_.size() > known ? ", nor does " + path : ", and there is no file " + path),
                  std::string(line_.substr(0, 40)));
     }
+    it->second.called = true;
     std::array<double, 31> args{};
     int nargs = 0;
     pos = skipSpaces(line_, pos);

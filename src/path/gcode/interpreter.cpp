@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "dexelmill/error.h"
 #include "dexelmill/tool/builders.h"
@@ -59,6 +61,25 @@ void Interpreter::run(std::string name, std::string text) {
     const std::size_t room = opt_.maxMoves - std::min(opt_.maxMoves, out_.path.moves.size());
     out_.path.moves.reserve(out_.path.moves.size() + std::min(f.contentLines(), room));
     execute(index);
+}
+
+void Interpreter::finish() {
+    // LinuxCNC keeps a subroutine in a file of its own, which the program that calls it finds.
+    // Run alone, such a file makes no moves; the user learns why where the subroutine stands.
+    if (out_.path.moves.empty()) {
+        std::vector<std::pair<const std::string*, const Sub*>> uncalled;
+        for (const auto& [label, sub] : subs_)
+            if (!sub.called) uncalled.emplace_back(&label, &sub);
+        std::sort(uncalled.begin(), uncalled.end(), [](const auto& a, const auto& b) {
+            return std::pair(a.second->file, a.second->start) < std::pair(b.second->file, b.second->start);
+        });
+        for (const auto& [label, sub] : uncalled)
+            diags_.warn({files_[std::size_t(sub->file)]->name(), SourceFile::lineNumber(sub->start), 1},
+                        "subroutine o<" + *label +
+                            "> is defined but never called; a file of subroutines makes no moves on its "
+                            "own: run the program that calls it");
+    }
+    diags_.appendTo(out_.diagnostics);
 }
 
 void Interpreter::fail(int col, const std::string& message, std::string offending) const {

@@ -59,6 +59,7 @@ struct Sub {
     int file = 0;
     int start = 0;  ///< line index of `sub` or of the Fanuc program number
     int end = -1;   ///< line index of `endsub`; -1 for Fanuc programs (end at M99)
+    bool called = false;
 };
 
 /// One line's words, as parsed.
@@ -143,7 +144,9 @@ public:
 
     void run(std::string name, std::string text);
 
-    void finish() { diags_.appendTo(out_.diagnostics); }
+    /// Hands the diagnostics to the program; one that made no moves first learns of each
+    /// subroutine it defines and never calls.
+    void finish();
 
 private:
     static constexpr std::size_t kNone = std::size_t(-1);
