@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <sstream>
+#include <string>
 
 #include "commands.h"
 #include "dexelmill/error.h"
@@ -223,6 +224,11 @@ std::string where(const ReportLocation& l) {
     return l.line > 0 ? l.file + ":" + std::to_string(l.line) : l.file;
 }
 
+/// A count and its noun, plural unless the count is one: "1 move", "0 moves".
+std::string counted(std::size_t n, const char* noun) {
+    return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
+
 }  // namespace
 
 void warnThreads(int requested) {
@@ -428,17 +434,20 @@ int runSimulate(const SimulateArgs& args) {
     if (!r.designFile.empty()) {
         char text[320];
         std::snprintf(text, sizeof text,
-                      "%zu gouges (deepest %.4g mm, tolerance %.4g mm), excess %.4g mm^3 outside the design "
+                      "%s (deepest %.4g mm, tolerance %.4g mm), excess %.4g mm^3 outside the design "
                       "(thickest %.4g mm, tolerance %.4g mm), ",
-                      r.gouges.size(), r.gouges.empty() ? 0.0 : r.gouges.front().depthMm, r.gougeToleranceMm,
+                      counted(r.gouges.size(), "gouge").c_str(),
+                      r.gouges.empty() ? 0.0 : r.gouges.front().depthMm, r.gougeToleranceMm,
                       r.excessVolumeMm3, r.excessThicknessMm, r.excessToleranceMm);
         gouges = text;
     }
     std::printf(
-        "dexelmill: %zu moves, %zu tool changes; removed %.6g mm^3 (%.1f %% of the stock), part %.6g mm^3; "
-        "h %.4g mm; %zu collisions, %s%zu warnings; mesh %zu triangles%s; %.2f s, %.0f MiB\n",
-        r.moves, r.toolChanges, r.removedVolumeMm3, pct, r.finalVolumeMm3, r.resolutionMm, r.collisions.size(),
-        gouges.c_str(), r.warnings.size(), r.meshTriangles, meshState.c_str(), r.timingS.total, r.peakMemoryMb);
+        "dexelmill: %s, %s; removed %.6g mm^3 (%.1f %% of the stock), part %.6g mm^3; h %.4g mm; %s, %s%s; "
+        "mesh %s%s; %.2f s, %.0f MiB\n",
+        counted(r.moves, "move").c_str(), counted(r.toolChanges, "tool change").c_str(), r.removedVolumeMm3, pct,
+        r.finalVolumeMm3, r.resolutionMm, counted(r.collisions.size(), "collision").c_str(), gouges.c_str(),
+        counted(r.warnings.size(), "warning").c_str(), counted(r.meshTriangles, "triangle").c_str(),
+        meshState.c_str(), r.timingS.total, r.peakMemoryMb);
     return 0;
 }
 
