@@ -4,6 +4,7 @@
 #include <iostream>
 #include <new>
 #include <sstream>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -48,6 +49,16 @@ int main(int argc, char** argv) {
     dexelmill::cli::CompareArgs compare;
     CLI::App* compareCmd = dexelmill::cli::addCompare(app, compare);
 
+    // Every usage error, CLI11's (an option's value out of range, an unknown option) as the
+    // commands' own, names the tool and points at the help of the command it was given to.
+    const auto usage = [&](const std::string& message) {
+        std::string command;
+        for (const CLI::App* sub : {simulate, info, studyCmd, compareCmd})
+            if (sub->parsed()) command = " " + sub->get_name();
+        return "dexelmill: " + message + "\nRun 'dexelmill" + command + " --help' for usage.\n";
+    };
+    app.failure_message([&](const CLI::App*, const CLI::Error& e) { return usage(e.what()); });
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -60,11 +71,7 @@ int main(int argc, char** argv) {
         if (studyCmd->parsed()) return dexelmill::cli::runStudy(study);
         if (compareCmd->parsed()) return dexelmill::cli::runCompare(compare);
     } catch (const dexelmill::cli::UsageError& e) {
-        const char* command = simulate->parsed() ? " simulate"
-                              : info->parsed()   ? " info"
-                              : compareCmd->parsed() ? " compare"
-                                                 : " study";
-        std::cerr << "dexelmill: " << e.what() << "\nRun 'dexelmill" << command << " --help' for usage.\n";
+        std::cerr << usage(e.what());
         return 2;
     } catch (const dexelmill::Error& e) {
         // ParseErrors already read "file:line:col: error: ..."; others get a prefix.

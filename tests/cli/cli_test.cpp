@@ -76,6 +76,7 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
     CHECK_THAT(r.err, Contains("INPUTS"));
     r = cli("simulate ok.ngc --bogus");
     CHECK(r.code == 2);
+    CHECK_THAT(r.err, StartsWith("dexelmill: ") && Contains("--bogus") && Contains("'dexelmill simulate --help'"));
     r = cli("simulate ok.ngc --tool ball:d=x");
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Contains("'x' is not a number"));
@@ -129,6 +130,8 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
         CHECK(r.code == 2);
         CHECK_THAT(r.err, Contains(says));
         CHECK_THAT(r.err, !Contains("Options::"));
+        // CLI11's own errors (ranges, numbers) read as the tool's: named, with the command's help.
+        CHECK_THAT(r.err, StartsWith("dexelmill: ") && Contains("Run 'dexelmill simulate --help' for usage."));
     }
     r = cli("simulate ok.ngc --tool flat:d=3 --machine .");
     CHECK(r.code == 1);
