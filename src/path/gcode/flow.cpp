@@ -203,6 +203,7 @@ int Interpreter::executeOWord(SourceFile& f, int pc) {
         checkRestIsComment(pos);
         return pc + 1;
     case OKind::Sub:
+        checkRestIsComment(pos);
         return li.match + 1;  // definition: skip the body
     case OKind::EndSub:
     case OKind::Return: {
@@ -210,11 +211,13 @@ int Interpreter::executeOWord(SourceFile& f, int pc) {
             fail(1, "endsub/return outside a subroutine call", std::string(line_.substr(0, 40)));
         pos = skipSpaces(line_, pos);
         if (pos < line_.size() && line_[pos] == '[') storeNamed(named_, "_value", readRealValue(pos));
+        checkRestIsComment(pos);
         return popFrame();
     }
     case OKind::Call:
         return callSub(li, pc, pos);
     case OKind::Do:
+        checkRestIsComment(pos);
         return pc + 1;
     case OKind::While:
         if (li.whileIsTail) {
@@ -224,6 +227,7 @@ int Interpreter::executeOWord(SourceFile& f, int pc) {
         }
         return condition() ? pc + 1 : li.match + 1;
     case OKind::EndWhile:
+        checkRestIsComment(pos);
         backEdge(pc);
         return li.match;  // back to the head, which tests again
     case OKind::If: {
@@ -231,28 +235,35 @@ int Interpreter::executeOWord(SourceFile& f, int pc) {
         return nextBranch(f, li.match);
     }
     case OKind::ElseIf:
+        // Reached by falling out of the branch above: skip to endif. As LinuxCNC, the condition
+        // of a branch not taken is not read, and neither is what follows it.
+        return li.endIf + 1;
     case OKind::Else:
-        // Reached by falling out of the branch above: skip to endif.
+        checkRestIsComment(pos);
         return li.endIf + 1;
     case OKind::EndIf:
+        checkRestIsComment(pos);
         return pc + 1;
     case OKind::Repeat: {
         pos = skipSpaces(line_, pos);
         const int countCol = int(pos) + 1;
         const double v = readRealValue(pos);
         chargeRepeats(v, countCol, "repeat");
+        checkRestIsComment(pos);
         const long count = std::lround(v);
         if (count <= 0) return li.match + 1;
         frameCounters()[pc] = count;
         return pc + 1;
     }
     case OKind::EndRepeat: {
+        checkRestIsComment(pos);
         long& c = frameCounters()[li.match];
         if (--c > 0) return li.match + 1;
         return pc + 1;
     }
     case OKind::Break:
     case OKind::Continue: {
+        checkRestIsComment(pos);
         // The innermost loop with this label around pc.
         const auto& owords = f.owords();
         for (auto it = std::make_reverse_iterator(owords.lower_bound(pc)); it != owords.rend(); ++it) {
@@ -294,13 +305,17 @@ int Interpreter::nextBranch(SourceFile& f, int k) {
         const OWord& b = f.owords().at(k);
         curLineNo_ = SourceFile::lineNumber(k);
         line_ = f.line(k);
-        if (b.kind == OKind::EndIf) return k + 1;
-        if (b.kind == OKind::Else) return k + 1;
-        // elseif
         std::size_t pos = skipSpaces(line_, b.argPos);
+        if (b.kind == OKind::EndIf || b.kind == OKind::Else) {
+            checkRestIsComment(pos);
+            return k + 1;
+        }
+        // elseif
         if (pos >= line_.size() || line_[pos] != '[')
             fail(int(pos) + 1, "expected a [condition]", tokenAt(int(pos) + 1));
-        if (readRealValue(pos) != 0.0) return k + 1;
+        const bool taken = readRealValue(pos) != 0.0;
+        checkRestIsComment(pos);
+        if (taken) return k + 1;
         k = b.match;
     }
 }
