@@ -235,7 +235,7 @@ int Interpreter::executeOWord(SourceFile& f, int pc) {
         return nextBranch(f, li.match);
     }
     case OKind::ElseIf:
-        // Reached by falling out of the branch above: skip to endif. As LinuxCNC, the condition
+        // Reached by falling out of the branch above: skip to endif. As in LinuxCNC, the condition
         // of a branch not taken is not read, and neither is what follows it.
         return li.endIf + 1;
     case OKind::Else:
