@@ -103,12 +103,27 @@ int runInfo(const InfoArgs& args) {
         const Project project = readCamoticsProject(file);
         std::printf("%-14s CAMotics project, %s units\n", "kind", project.metric ? "metric" : "imperial");
         for (const std::string& f : project.files) std::printf("%-14s %s\n", "program", f.c_str());
-        if (project.workpiece.automatic)
+        const Program program = runProject(project, gcode);
+        Box workpiece = project.workpiece.bounds;
+        if (project.workpiece.automatic) {
             std::printf("%-14s automatic, margin %.3g %%\n", "workpiece", project.workpiece.marginPercent);
-        else
-            printBox("workpiece", project.workpiece.bounds);
-        if (project.resolution > 0) std::printf("%-14s %.6g mm\n", "resolution", project.resolution);
-        printProgram(runProject(project, gcode));
+            workpiece = automaticWorkpieceBounds(program, project.workpiece.marginPercent);
+            printBox("stock", workpiece);
+        } else {
+            printBox("workpiece", workpiece);
+        }
+        if (project.resolutionMode != ResolutionMode::Manual) {
+            static const char* const kModes[] = {"manual", "low", "medium", "high", "very high"};
+            const char* mode = kModes[int(project.resolutionMode)];
+            if (workpiece.isEmpty())
+                std::printf("%-14s %s, from the workpiece\n", "resolution", mode);
+            else
+                std::printf("%-14s %.6g mm (%s, from the workpiece)\n", "resolution",
+                            projectResolution(project.resolutionMode, workpiece), mode);
+        } else if (project.resolution > 0) {
+            std::printf("%-14s %.6g mm (manual)\n", "resolution", project.resolution);
+        }
+        printProgram(program);
         return 0;
     }
     printProgram(readProgram(file, gcode, jobAptOptions(SimulateOptions().chordTolerance, budget)));

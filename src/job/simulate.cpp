@@ -37,6 +37,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+/// The margin (percent of each size) of the stock guessed from a program's cuts.
+constexpr double kGuessMarginPercent = 5.0;
+
+/// How far (relative) a project's stored resolution may lie from the one its mode computes before
+/// the job says which it took: CAMotics saves 6 significant digits.
+constexpr double kStoredResolutionSlack = 1e-5;
+
 double seconds(Clock::time_point since) {
     return std::chrono::duration<double>(Clock::now() - since).count();
 }
@@ -190,11 +197,25 @@ struct LoadedStock {
     bool isBox = true;  ///< the stock is the box itself (not a file cast into the lattice)
 };
 
-/// A stock box from the program when none is given: its cutting moves' extent (CAMotics'
-/// automatic workpiece), else every move's; an axis the program never moves along gets a
-/// thickness of 5 % of the largest extent (at least 1 mm) on both sides.
-Box guessStock(const ToolPath& path, const ToolTable& tools, double marginPercent) {
-    Box box = automaticWorkpieceBounds(path, tools, marginPercent);
+/// A stock box from the program when none is given. For a project, CAMotics' automatic workpiece
+/// with its margin. For a program, its cutting moves' extent, topped at z = 0 where the cuts go
+/// below it, grown by kGuessMarginPercent of each size (not above the top). Else every move's
+/// extent; an axis the program never moves along gets a thickness of 5 % of the largest extent (at
+/// least 1 mm) on both sides.
+Box guessStock(const ToolPath& path, const ToolTable& tools, const Project* project) {
+    Box box;
+    if (project) {
+        box = automaticWorkpieceBounds(path, tools, project->workpiece.marginPercent);
+    } else {
+        box = cuttingBounds(path, tools);
+        if (!box.isEmpty()) {
+            if (box.lo.z < 0.0 && box.hi.z > 0.0) box.hi.z = 0.0;
+            const Vec3 margin = box.size() * (kGuessMarginPercent / 100.0);
+            box.lo -= margin;
+            box.hi.x += margin.x;
+            box.hi.y += margin.y;
+        }
+    }
     if (box.isEmpty()) {
         box = path.bounds();
         double widest = 0.0;
@@ -241,8 +262,7 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
         box = designStockBox(design->bounds(), program.statedStock, w.message);
         notes.push_back(w);
     } else {
-        const double margin = project ? project->workpiece.marginPercent : 5.0;
-        box = guessStock(program.path, tools, margin);
+        box = guessStock(program.path, tools, project);
         if (!project) {
             ReportWarning w;
             w.message = "no --stock given: using the program's cutting extent plus 5 %";
@@ -261,7 +281,26 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
     if (!(size.x > 0 && size.y > 0 && size.z > 0)) throw Error("the stock box has no volume");
 
     double h = o.resolution;
-    if (h <= 0 && project && project->resolution > 0) h = project->resolution;
+    if (h <= 0 && project) {
+        if (project->resolutionMode != ResolutionMode::Manual) {
+            // CAMotics computes the resolution from the workpiece; the number stored beside the
+            // mode is only the manual mode's, and may be older than the workpiece.
+            h = projectResolution(project->resolutionMode, box);
+            if (project->resolution > 0 && std::abs(h - project->resolution) > kStoredResolutionSlack * h) {
+                ReportWarning w;
+                w.where.file = project->file;
+                char text[240];
+                std::snprintf(text, sizeof text,
+                              "the project's resolution mode computes %g mm from the stock, as CAMotics does; "
+                              "its stored resolution %g mm applies in the manual mode only",
+                              h, project->resolution);
+                w.message = text;
+                notes.push_back(w);
+            }
+        } else if (project->resolution > 0) {
+            h = project->resolution;
+        }
+    }
     if (h <= 0) {
         h = chooseResolution(box, o.cellsAlongLongestSide);
         report.resolutionChosen = true;

@@ -51,45 +51,6 @@ double number(const Json& j, const char* key, const std::string& where, const st
     return d;
 }
 
-Tool camoticsTool(const Json& t, const std::string& where, const std::string& file) {
-    if (!t.is_object()) throw ParseError({file, 0, 0}, where + ": a tool must be an object", t.dump());
-    const std::string units = t.value("units", std::string("metric"));
-    if (units != "metric" && units != "imperial")
-        throw ParseError({file, 0, 0}, where + ": units must be \"metric\" or \"imperial\"", units);
-    const double s = units == "imperial" ? kInch : 1.0;
-    const std::string shape = t.value("shape", std::string("cylindrical"));
-    const double d = number(t, "diameter", where, file, 0.0, true) * s;
-    const double length = number(t, "length", where, file, 0.0, true) * s;
-    if (!(d > 0) || !(length > 0))
-        throw ParseError({file, 0, 0}, where + ": diameter and length must be positive", t.dump());
-    ToolLengths lengths{length, 0.0};
-    try {
-        if (shape == "cylindrical") return flatEndMill(d, lengths);
-        if (shape == "ballnose") return ballEndMill(d, lengths);
-        if (shape == "conical") {
-            // CAMotics: a cone from the point to the full diameter at the tool's length.
-            return chamferMill(0.0, std::atan2(d / 2, length), d, lengths);
-        }
-        if (shape == "snubnose") {
-            const double snub = number(t, "snub_diameter", where, file, 0.0, true) * s;
-            if (!(snub > 0) || snub > d)
-                throw ParseError({file, 0, 0}, where + ": snub_diameter must be in (0, diameter]", t.dump());
-            return taperEndMill(snub, std::atan2((d - snub) / 2, length), lengths);
-        }
-    } catch (const ParseError&) {
-        throw;
-    } catch (const Error& e) {
-        throw ParseError({file, 0, 0}, where + ": no real tool: " + e.what(), t.dump());
-    }
-    throw ParseError({file, 0, 0}, where + ": unknown tool shape", shape);
-}
-
-Vec3 vec3(const Json& j, const std::string& where, const std::string& file) {
-    if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
-        throw ParseError({file, 0, 0}, where + " must be an array of 3 numbers", j.dump());
-    return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
-}
-
 Diagnostic warning(SourceLocation where, std::string message) {
     Diagnostic d;
     d.severity = Diagnostic::Severity::Warning;
@@ -98,12 +59,121 @@ Diagnostic warning(SourceLocation where, std::string message) {
     return d;
 }
 
+/// The string `key` of object j, or `fallback` when j has none.
+std::string text(const Json& j, const char* key, const std::string& where, const std::string& file,
+                 const std::string& fallback) {
+    if (!j.contains(key)) return fallback;
+    const Json& v = j.at(key);
+    if (!v.is_string()) throw ParseError({file, 0, 0}, where + ": \"" + key + "\" must be a string", v.dump());
+    return v.get<std::string>();
+}
+
+/// The boolean `key` of object j, or `fallback` when j has none.
+bool boolean(const Json& j, const char* key, const std::string& where, const std::string& file, bool fallback) {
+    if (!j.contains(key)) return fallback;
+    const Json& v = j.at(key);
+    if (!v.is_boolean())
+        throw ParseError({file, 0, 0}, where + ": \"" + key + "\" must be true or false", v.dump());
+    return v.get<bool>();
+}
+
+/// CAMotics reads its enumerations' names in any case of letters.
 std::string lower(std::string s) {
     for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
     return s;
 }
 
+/// The units a tool's or the project's "units" names: true for metric.
+bool metricUnits(const Json& j, const std::string& where, const std::string& file) {
+    const std::string units = lower(text(j, "units", where, file, "metric"));
+    if (units != "metric" && units != "imperial")
+        throw ParseError({file, 0, 0}, where + ": units must be \"metric\" or \"imperial\"", units);
+    return units == "metric";
+}
+
+ResolutionMode resolutionMode(const Json& j, const std::string& file) {
+    std::string mode = lower(text(j, "resolution-mode", "project", file, "medium"));
+    for (char& c : mode)
+        if (c == ' ' || c == '-') c = '_';
+    if (mode == "manual") return ResolutionMode::Manual;
+    if (mode == "low") return ResolutionMode::Low;
+    if (mode == "medium") return ResolutionMode::Medium;
+    if (mode == "high") return ResolutionMode::High;
+    if (mode == "very_high") return ResolutionMode::VeryHigh;
+    throw ParseError({file, 0, 0}, "project: \"resolution-mode\" must be manual, low, medium, high or very_high",
+                     j.at("resolution-mode").dump());
+}
+
+/// The tool CAMotics makes of `t`; none for a shape dexelmill has no cutter for, which a warning
+/// in `diags` names.
+std::optional<Tool> camoticsTool(const Json& t, const std::string& where, const std::string& file,
+                                 std::vector<Diagnostic>& diags) {
+    if (!t.is_object()) throw ParseError({file, 0, 0}, where + ": a tool must be an object", t.dump());
+    const double s = metricUnits(t, where, file) ? 1.0 : kInch;
+    std::string shape = lower(text(t, "shape", where, file, "cylindrical"));
+    // CAMotics' other names for two of its shapes.
+    if (shape == "cylinder") shape = "cylindrical";
+    if (shape == "cone") shape = "conical";
+    const double d = number(t, "diameter", where, file, 0.0, true) * s;
+    const double length = number(t, "length", where, file, 0.0, true) * s;
+    if (!(d > 0) || !(length > 0))
+        throw ParseError({file, 0, 0}, where + ": diameter and length must be positive", t.dump());
+    ToolLengths lengths{length, 0.0};
+    try {
+        if (shape == "snubnose") {
+            // CAMotics sweeps a cone from the snub at the tip to the diameter at the tool's length:
+            // a snub as wide as the tool is a cylinder, and none (or none given) a point.
+            const double snub = number(t, "snub_diameter", where, file, 0.0) * s;
+            if (!(snub >= 0) || snub > d)
+                throw ParseError({file, 0, 0}, where + ": snub_diameter must be in [0, diameter]", t.dump());
+            if (snub == d) shape = "cylindrical";
+            else if (snub == 0.0) shape = "conical";
+            else return taperEndMill(snub, std::atan2((d - snub) / 2, length), lengths);
+        }
+        if (shape == "cylindrical") return flatEndMill(d, lengths);
+        if (shape == "ballnose") return ballEndMill(d, lengths);
+        if (shape == "conical") {
+            // CAMotics: a cone from the point to the full diameter at the tool's length.
+            return chamferMill(0.0, std::atan2(d / 2, length), d, lengths);
+        }
+    } catch (const ParseError&) {
+        throw;
+    } catch (const Error& e) {
+        throw ParseError({file, 0, 0}, where + ": no real tool: " + e.what(), t.dump());
+    }
+    if (shape == "spheroid" || shape == "sphere") {
+        diags.push_back(warning({file, 0, 0}, where + ": CAMotics' spheroid tool (an ellipse turned about the axis) "
+                                                      "is not supported, as dexelmill's cutters are made of straight "
+                                                      "and circular-arc profiles: the project leaves this number "
+                                                      "undefined, for a --tool N=SPEC"));
+        return std::nullopt;
+    }
+    throw ParseError({file, 0, 0},
+                     where + ": unknown tool shape (CAMotics' are cylindrical, ballnose, conical, snubnose "
+                             "and spheroid)",
+                     shape);
+}
+
+Vec3 vec3(const Json& j, const std::string& where, const std::string& file) {
+    if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
+        throw ParseError({file, 0, 0}, where + " must be an array of 3 numbers", j.dump());
+    return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+}
+
 }  // namespace
+
+double projectResolution(ResolutionMode mode, const Box& workpiece) {
+    double cells = 0.0;
+    switch (mode) {
+    case ResolutionMode::Low: cells = 1e5; break;
+    case ResolutionMode::Medium: cells = 2.5e5; break;
+    case ResolutionMode::High: cells = 5e6; break;
+    case ResolutionMode::VeryHigh: cells = 1e7; break;
+    case ResolutionMode::Manual: throw Error("projectResolution: the manual mode keeps the project's own number");
+    }
+    const Vec3 size = workpiece.size();
+    return std::cbrt(size.x * size.y * size.z / cells);
+}
 
 Project parseCamoticsProject(std::string_view text, const std::string& fileName,
                              const std::string& directory) {
@@ -122,17 +192,18 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
     Project p;
     p.file = fileName;
     try {
-        const std::string units = j.value("units", std::string("metric"));
-        if (units != "metric" && units != "imperial")
-            throw ParseError({fileName, 0, 0}, "project units must be \"metric\" or \"imperial\"", units);
-        p.metric = units == "metric";
-        const double s = p.metric ? 1.0 : kInch;
-        p.resolution = number(j, "resolution", "project", fileName, 0.0) * s;
+        p.metric = metricUnits(j, "project", fileName);
+        if (!p.metric)
+            p.diagnostics.push_back(warning(
+                {fileName, 0, 0}, "project units are imperial: as in CAMotics, they only choose how lengths are "
+                                  "shown; the workpiece and resolution are in mm, and G-code starts in mm until "
+                                  "it says G20"));
+        p.resolutionMode = resolutionMode(j, fileName);
+        p.resolution = number(j, "resolution", "project", fileName, 0.0);
         if (j.contains("resolution") && !(p.resolution > 0)) {
             p.unusableResolution = p.resolution;
             p.resolution = 0.0;
         }
-        p.resolutionMode = j.value("resolution-mode", std::string());
         if (j.contains("tools")) {
             const Json& tools = j.at("tools");
             if (!tools.is_object()) throw ParseError({fileName, 0, 0}, "\"tools\" must be an object", tools.dump().substr(0, 40));
@@ -145,20 +216,21 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
                 } catch (const std::exception&) {
                     throw ParseError({fileName, 0, 0}, "tool numbers must be integers", key);
                 }
-                p.tools.insert_or_assign(n, camoticsTool(t, "tool " + key, fileName));
+                if (auto tool = camoticsTool(t, "tool " + key, fileName, p.diagnostics))
+                    p.tools.insert_or_assign(n, std::move(*tool));
             }
         }
         if (j.contains("workpiece")) {
             const Json& w = j.at("workpiece");
             if (!w.is_object()) throw ParseError({fileName, 0, 0}, "\"workpiece\" must be an object", w.dump().substr(0, 40));
-            p.workpiece.automatic = w.value("automatic", false);
-            p.workpiece.marginPercent = number(w, "margin", "workpiece", fileName, 0.0);
+            p.workpiece.automatic = boolean(w, "automatic", "workpiece", fileName, p.workpiece.automatic);
+            p.workpiece.marginPercent = number(w, "margin", "workpiece", fileName, p.workpiece.marginPercent);
             if (w.contains("bounds")) {
                 const Json& b = w.at("bounds");
                 if (!b.is_object() || !b.contains("min") || !b.contains("max"))
                     throw ParseError({fileName, 0, 0}, "workpiece bounds need min and max", b.dump().substr(0, 40));
-                p.workpiece.bounds.lo = vec3(b.at("min"), "workpiece bounds min", fileName) * s;
-                p.workpiece.bounds.hi = vec3(b.at("max"), "workpiece bounds max", fileName) * s;
+                p.workpiece.bounds.lo = vec3(b.at("min"), "workpiece bounds min", fileName);
+                p.workpiece.bounds.hi = vec3(b.at("max"), "workpiece bounds max", fileName);
                 if (!p.workpiece.automatic && p.workpiece.bounds.isEmpty())
                     throw ParseError({fileName, 0, 0}, "workpiece bounds are empty (min > max)", b.dump().substr(0, 60));
             }
@@ -192,7 +264,6 @@ Project readCamoticsProject(const std::string& path, const FileSource& files) {
 
 Program runProject(const Project& project, const GcodeOptions& options) {
     GcodeOptions o = options;
-    o.initialInches = !project.metric;
     o.toolChangeOnT = true;
     // Each program is read once: the text read to tell its kind goes on to its reader.
     std::vector<detail::gcode::NamedText> gcodeFiles;
@@ -237,6 +308,21 @@ Box automaticWorkpieceBounds(const Program& program, double marginPercent) {
 }
 
 Box automaticWorkpieceBounds(const ToolPath& path, const ToolTable& tools, double marginPercent) {
+    Box box = cuttingBounds(path, tools);
+    if (box.isEmpty()) return box;
+    // CAMotics starts the block at z = 0, and makes it kMinAutomaticThickness thicker where it
+    // would be thinner than that. Cuts wholly above z = 0 leave a block of that thickness below it.
+    box.hi.z = 0.0;
+    if (box.hi.z - box.lo.z < kMinAutomaticThickness) box.lo.z = std::min(box.lo.z, 0.0) - kMinAutomaticThickness;
+    const Vec3 size = box.size();
+    const Vec3 margin = size * (marginPercent / 100.0);
+    box.lo -= margin;
+    box.hi.x += margin.x;
+    box.hi.y += margin.y;
+    return box;
+}
+
+Box cuttingBounds(const ToolPath& path, const ToolTable& tools) {
     Box box;
     // A tool the program calls but nobody defined counts as the widest defined tool.
     double widest = 0.0;
@@ -259,13 +345,6 @@ Box automaticWorkpieceBounds(const ToolPath& path, const ToolTable& tools, doubl
             }
         }
     }
-    if (box.isEmpty()) return box;
-    if (box.lo.z < 0.0 && box.hi.z > 0.0) box.hi.z = 0.0;
-    const Vec3 size = box.size();
-    const Vec3 margin = size * (marginPercent / 100.0);
-    box.lo -= margin;
-    box.hi.x += margin.x;
-    box.hi.y += margin.y;
     return box;
 }
 

@@ -228,6 +228,32 @@ TEST_CASE("programs after a project replace its programs; its tools and stock st
     CHECK(r.removedVolumeMm3 == Approx(kSlotVolume).epsilon(0.02));
 }
 
+TEST_CASE("a project's resolution mode computes the spacing from the stock, as CAMotics does", "[job]") {
+    const fs::path dir = scratch("resolution_mode");
+    write(dir / "own.ngc", "G21 G90\nT1\nG0 X5 Y5 Z5\nG1 Z-1 F100\nG1 X15\n");
+    // A 40 x 30 x 10 mm block in the low mode: the cube root of 12,000 mm^3 over 1e5 cells.
+    const double low = std::cbrt(12000.0 / 1e5);
+    for (const char* stored : {"", R"("resolution": 0.493242,)", R"("resolution": 0.1,)"}) {
+        INFO(stored);
+        const std::string project = write(dir / "p.camotics", std::string(R"({"resolution-mode": "low", )") + stored +
+                                                                   R"(
+          "tools": {"1": {"units": "metric", "shape": "cylindrical", "length": 20, "diameter": 6}},
+          "workpiece": {"automatic": false, "bounds": {"min": [0, 0, 0], "max": [40, 30, 10]}},
+          "files": ["own.ngc"]
+        })");
+        SimulateOptions o;
+        o.inputs = {project};
+        const SimulateReport r = runSimulation(o).report;
+        CHECK_FALSE(r.resolutionChosen);
+        CHECK(r.resolutionMm == Approx(low).epsilon(1e-12));
+        // Only a stored number that differs from the mode's is named, as the manual mode's.
+        bool said = false;
+        for (const ReportWarning& w : r.warnings)
+            said = said || (w.where.file == project && w.message.find("manual mode only") != std::string::npos);
+        CHECK(said == (std::string(stored).find("0.1,") != std::string::npos));
+    }
+}
+
 TEST_CASE("a program without moves says so", "[job][errors]") {
     const fs::path dir = scratch("no_moves");
     for (const char* text : {"", "(only a comment)\n\n%\n", "G21 G90 M3 S1000\n"}) {
@@ -365,7 +391,7 @@ TEST_CASE("a project resolution that is not positive is replaced with a warning 
     for (const char* value : {"0", "-1"}) {
         INFO(value);
         const std::string project = write(dir / "p.camotics", std::string(R"({
-          "resolution": )") + value + R"(,
+          "resolution-mode": "manual", "resolution": )") + value + R"(,
           "tools": {"1": {"units": "metric", "shape": "cylindrical", "length": 20, "diameter": 6}},
           "workpiece": {"automatic": false, "bounds": {"min": [0, 0, 0], "max": [40, 30, 10]}},
           "files": ["own.ngc"]

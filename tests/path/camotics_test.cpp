@@ -2,10 +2,13 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <map>
+#include <optional>
 #include <string>
 
 #include "dexelmill/error.h"
 #include "dexelmill/path/camotics.h"
+#include "dexelmill/tool/builders.h"
 #include "testdata.h"
 
 using namespace dexelmill;
@@ -76,7 +79,6 @@ TEST_CASE("camotics: comments are allowed, errors carry their place", "[path][ca
     const Project p = parseCamoticsProject(text, "p.camotics", "/tmp");
     CHECK_FALSE(p.metric);
     CHECK(p.tools.at(2).cuttingRadius() == Approx(1.5));
-    CHECK(p.workpiece.bounds.hi.x == Approx(25.4));
     CHECK(p.files.at(0) == "/tmp/a.nc");
 
     try {
@@ -89,6 +91,150 @@ TEST_CASE("camotics: comments are allowed, errors carry their place", "[path][ca
     CHECK_THROWS_AS(parseCamoticsProject(R"({"tools": {"1": {"shape": "hexagon", "length": 1, "diameter": 1}}})", "x", ""), ParseError);
     CHECK_THROWS_AS(parseCamoticsProject(R"({"tools": {"1": {"shape": "ballnose", "length": 1, "diameter": -1}}})", "x", ""), ParseError);
     CHECK_THROWS_AS(parseCamoticsProject(R"({"workpiece": {"bounds": {"min": [0, 0], "max": [1, 1, 1]}}})", "x", ""), ParseError);
+}
+
+TEST_CASE("camotics: project units only choose how CAMotics shows lengths", "[path][camotics]") {
+    // CAMotics keeps the workpiece and the resolution in mm (its window divides them by 25.4 to
+    // show inches), its G-code starts in mm whatever the project's units, and only a tool's own
+    // units scale the tool.
+    const std::string text = R"({
+      "units": "imperial", "resolution-mode": "manual", "resolution": 0.5,
+      "tools": {"1": {"units": "imperial", "shape": "cylindrical", "length": 1, "diameter": 0.25},
+                "2": {"shape": "cylindrical", "length": 10, "diameter": 3}},
+      "workpiece": {"automatic": false, "bounds": {"min": [0, 0, -10], "max": [40, 30, 0]}},
+      "files": ["a.nc"]
+    })";
+    const Project p = parseCamoticsProject(text, "p.camotics", "/d");
+    CHECK_FALSE(p.metric);
+    CHECK(p.resolution == 0.5);
+    CHECK(p.workpiece.bounds.hi.x == 40.0);
+    CHECK(p.workpiece.bounds.lo.z == -10.0);
+    CHECK(p.tools.at(1).cuttingRadius() == Approx(0.125 * 25.4));
+    CHECK(p.tools.at(2).cuttingRadius() == Approx(1.5));
+    bool said = false;
+    for (const Diagnostic& d : p.diagnostics) said = said || d.message.find("project units are imperial") != std::string::npos;
+    CHECK(said);
+
+    GcodeOptions o;
+    const std::map<std::string, std::string> files = {{"/d/a.nc", "T1\nG0 X0 Y0 Z5\nG1 X20 F100\nG20\nG1 X1\n"}};
+    o.files = [&files](const std::string& path) -> std::optional<std::string> {
+        const auto it = files.find(path);
+        if (it == files.end()) return std::nullopt;
+        return it->second;
+    };
+    const Program program = runProject(p, o);
+    REQUIRE(program.path.moves.size() == 2);
+    CHECK(program.path.moves[0].end.x == Approx(20.0));  // mm until G20
+    CHECK(program.path.moves[1].end.x == Approx(25.4));
+}
+
+TEST_CASE("camotics: the resolution of a mode is CAMotics' own number", "[path][camotics]") {
+    // The numbers CAMotics saved beside each mode in the shared projects, with their workpieces.
+    CHECK(projectResolution(ResolutionMode::High, Box{Vec3(0, 0, -20), Vec3(80, 80, 0)}) ==
+          Approx(0.294723).epsilon(2e-6));  // bear
+    CHECK(projectResolution(ResolutionMode::High, Box{Vec3(-40, -40, -12.7), Vec3(40, 40, 0)}) ==
+          Approx(0.253321).epsilon(2e-6));  // heart
+    CHECK(projectResolution(ResolutionMode::Medium, Box{Vec3(-45.7195, -45.7195, -20), Vec3(45.7195, 147.3195, 0)}) ==
+          Approx(1.121903).epsilon(2e-6));  // botomata_bottom
+    CHECK(projectResolution(ResolutionMode::Medium, Box{Vec3(-2.89442, 0.476477, -0.5), Vec3(13.5167, 5.56491, 0.25)}) ==
+          Approx(0.06304).epsilon(2e-5));  // vcarve
+    // Low and very high by their cell counts: 1e5 and 1e7 cells of a 1000 mm^3 block.
+    const Box block{Vec3(0.0), Vec3(10, 10, 10)};
+    CHECK(projectResolution(ResolutionMode::Low, block) == Approx(std::cbrt(1e-2)));
+    CHECK(projectResolution(ResolutionMode::VeryHigh, block) == Approx(std::cbrt(1e-4)));
+
+    auto mode = [](const char* m) {
+        return parseCamoticsProject(std::string(R"({"resolution-mode": ")") + m + "\"}", "p.camotics", "")
+            .resolutionMode;
+    };
+    CHECK(parseCamoticsProject("{}", "p.camotics", "").resolutionMode == ResolutionMode::Medium);
+    CHECK(mode("manual") == ResolutionMode::Manual);
+    CHECK(mode("High") == ResolutionMode::High);
+    CHECK(mode("very_high") == ResolutionMode::VeryHigh);
+    CHECK_THROWS_WITH(mode("fine"), Catch::Matchers::Contains("resolution-mode"));
+}
+
+TEST_CASE("camotics: an automatic workpiece is CAMotics' block from z = 0", "[path][camotics]") {
+    // A flat D2 (radius 1) cutting along x from (0, 0) to (40, 20) at one depth, after a rapid
+    // from above: CAMotics' block spans the cuts widened by the radius, from z = 0 down to the
+    // lowest cut, and 2 mm further where it would be thinner than 2 mm; the margin grows every
+    // side but the top.
+    ToolTable tools;
+    tools.insert_or_assign(1, flatEndMill(2.0, {10.0, 0.0}));
+    auto slot = [&](double z) {
+        ToolPath path;
+        auto add = [&](Vec3 a, Vec3 b, bool rapid) {
+            Move m;
+            m.start = a;
+            m.end = b;
+            m.rapid = rapid;
+            m.tool = 1;
+            path.moves.push_back(m);
+        };
+        add(Vec3(0, 0, 5), Vec3(0, 0, z), true);
+        add(Vec3(0, 0, z), Vec3(40, 0, z), false);
+        add(Vec3(40, 0, z), Vec3(40, 20, z), false);
+        return path;
+    };
+    auto check = [](const Box& b, Vec3 lo, Vec3 hi) {
+        for (int k = 0; k < 3; ++k) {
+            CHECK(b.lo[k] == Approx(lo[k]).margin(1e-12));
+            CHECK(b.hi[k] == Approx(hi[k]).margin(1e-12));
+        }
+    };
+    check(automaticWorkpieceBounds(slot(-0.5), tools, 0.0), Vec3(-1, -1, -2.5), Vec3(41, 21, 0));  // an engraving
+    check(automaticWorkpieceBounds(slot(-1.0), tools, 0.0), Vec3(-1, -1, -3), Vec3(41, 21, 0));
+    check(automaticWorkpieceBounds(slot(-5.0), tools, 0.0), Vec3(-1, -1, -5), Vec3(41, 21, 0));
+    check(automaticWorkpieceBounds(slot(3.0), tools, 0.0), Vec3(-1, -1, -2), Vec3(41, 21, 0));  // cuts in the air
+    // 10 %: 4.2 and 2.2 mm on x and y, 0.5 mm below.
+    check(automaticWorkpieceBounds(slot(-5.0), tools, 10.0), Vec3(-5.2, -3.2, -5.5), Vec3(45.2, 23.2, 0));
+
+    // CAMotics' defaults where the project leaves the workpiece out: automatic, 5 % margin.
+    const Project none = parseCamoticsProject("{}", "p.camotics", "");
+    CHECK(none.workpiece.automatic);
+    CHECK(none.workpiece.marginPercent == 5.0);
+    const Project bare = parseCamoticsProject(R"({"workpiece": {"margin": 1}})", "p.camotics", "");
+    CHECK(bare.workpiece.automatic);
+    CHECK(bare.workpiece.marginPercent == 1.0);
+}
+
+TEST_CASE("camotics: tool shapes by CAMotics' names, in any case", "[path][camotics]") {
+    auto tool = [](const std::string& fields) {
+        const Project p = parseCamoticsProject(R"({"tools": {"1": {)" + fields + R"(, "length": 10, "diameter": 4}}})",
+                                               "p.camotics", "");
+        return p.tools.at(1);
+    };
+    // Flat: radius 2 at the tip; a cone (V-bit): a point at the tip and radius 2 at the length.
+    CHECK(tool(R"("shape": "Cylindrical")").radiusAt(0.0) == Approx(2.0));
+    CHECK(tool(R"("shape": "cylinder")").radiusAt(0.0) == Approx(2.0));
+    CHECK(tool(R"("shape": "BALLNOSE")").radiusAt(0.0) == Approx(0.0).margin(1e-12));
+    CHECK(tool(R"("shape": "cone")").radiusAt(0.0) == Approx(0.0).margin(1e-12));
+    CHECK(tool(R"("shape": "cone")").radiusAt(5.0) == Approx(1.0));
+    // A snub as wide as the tool is a cylinder; no snub, a cone; one between, a taper.
+    CHECK(tool(R"("shape": "snubnose", "snub_diameter": 4)").radiusAt(0.0) == Approx(2.0));
+    CHECK(tool(R"("shape": "snubnose", "snub_diameter": 4)").radiusAt(5.0) == Approx(2.0));
+    CHECK(tool(R"("shape": "snubnose", "snub_diameter": 0)").radiusAt(5.0) == Approx(1.0));
+    CHECK(tool(R"("shape": "snubnose")").radiusAt(0.0) == Approx(0.0).margin(1e-12));
+    CHECK(tool(R"("shape": "snubnose", "snub_diameter": 2)").radiusAt(5.0) == Approx(1.5));
+    CHECK_THROWS_AS(tool(R"("shape": "snubnose", "snub_diameter": 5)"), ParseError);
+
+    // CAMotics' spheroid has no cutter here: the number is left for --tool, with a warning.
+    const Project p = parseCamoticsProject(
+        R"({"tools": {"1": {"shape": "spheroid", "length": 10, "diameter": 4}}})", "p.camotics", "");
+    CHECK(p.tools.count(1) == 0);
+    REQUIRE(p.diagnostics.size() == 1);
+    CHECK(p.diagnostics[0].message.find("spheroid") != std::string::npos);
+    CHECK(p.diagnostics[0].message.find("--tool") != std::string::npos);
+}
+
+TEST_CASE("camotics: a field of the wrong type is named", "[path][camotics][errors]") {
+    CHECK_THROWS_WITH(parseCamoticsProject(R"({"workpiece": {"automatic": "true"}})", "p.camotics", ""),
+                      Catch::Matchers::Contains("\"automatic\" must be true or false"));
+    CHECK_THROWS_WITH(parseCamoticsProject(R"({"units": 5})", "p.camotics", ""),
+                      Catch::Matchers::Contains("\"units\" must be a string"));
+    CHECK_THROWS_WITH(parseCamoticsProject(R"({"tools": {"1": {"shape": 2, "length": 1, "diameter": 1}}})",
+                                           "p.camotics", ""),
+                      Catch::Matchers::Contains("tool 1: \"shape\" must be a string"));
 }
 
 TEST_CASE("readProgram: the bundled samples of every kind read", "[path][camotics]") {
