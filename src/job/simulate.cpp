@@ -86,17 +86,27 @@ void checkOutputs(const SimulateOptions& o) {
 /// defines get the default tool, or the only tool there is (with a warning).
 ToolTable resolveTools(const SimulateOptions& o, Program& program) {
     ToolTable table = program.tools;
-    for (const auto& [n, t] : o.tools) table.insert_or_assign(n, t);
     std::set<int> used;
     std::map<int, SourceRef> firstUse;
     for (const Move& m : program.path.moves) {
         if (used.insert(m.tool).second) firstUse[m.tool] = m.source;
     }
+    for (const auto& [n, t] : o.tools) {
+        const auto defined = table.find(n);
+        if (defined != table.end() && used.count(n))
+            program.diagnostics.push_back({Diagnostic::Severity::Note, program.path.where(firstUse[n]),
+                                           "--tool " + std::to_string(n) + "=... (" + t.description() +
+                                               ") replaces the program's tool " + std::to_string(n) + " (" +
+                                               defined->second.description() + ")"});
+        table.insert_or_assign(n, t);
+    }
+    bool defaultUsed = false;
     for (int n : used) {
         if (table.count(n)) continue;
         const SourceLocation at = program.path.where(firstUse[n]);
         if (o.defaultTool) {
             table.insert_or_assign(n, *o.defaultTool);
+            defaultUsed = true;
             continue;
         }
         if (table.size() == 1) {
@@ -115,6 +125,11 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
                                       " but no tool of that number is defined; use --tool " + std::to_string(n) +
                                       "=SPEC");
     }
+    if (o.defaultTool && !defaultUsed && !program.path.moves.empty())
+        program.diagnostics.push_back({Diagnostic::Severity::Warning, {},
+                                       "--tool without a number (" + o.defaultTool->description() +
+                                           ") is not used: it serves only tool numbers nothing else defines, and "
+                                           "the program defines every tool it calls; --tool N=SPEC replaces tool N"});
     return table;
 }
 
@@ -438,7 +453,15 @@ Simulation runStages(const SimulateOptions& o) {
         // A project, and optionally programs that replace its own (its tools, workpiece and
         // resolution still apply).
         project = readCamoticsProject(o.inputs[0], o.files);
-        if (o.inputs.size() > 1) project->files.assign(o.inputs.begin() + 1, o.inputs.end());
+        if (o.inputs.size() > 1) {
+            std::string own;
+            for (const std::string& f : project->files) own += (own.empty() ? "" : ", ") + f;
+            project->diagnostics.push_back({Diagnostic::Severity::Note, {project->file, 0, 0},
+                                            "the programs given after the project replace its own (" +
+                                                (own.empty() ? std::string("none") : own) +
+                                                "); its tools, workpiece and resolution still apply"});
+            project->files.assign(o.inputs.begin() + 1, o.inputs.end());
+        }
         for (const std::string& f : project->files)
             if (lowerExtension(f) == ".camotics") throw Error("'" + f + "': only the first input may be a project");
         program = runProject(*project, gcode);

@@ -254,6 +254,41 @@ TEST_CASE("a project's resolution mode computes the spacing from the stock, as C
     }
 }
 
+TEST_CASE("a tool option the job cannot use, or that replaces the program's tool, is named", "[job]") {
+    const fs::path dir = scratch("tool_options");
+    const std::string program = write(dir / "p.ngc", "G21 G90\nT1 M6\nG0 X5 Y5 Z5\nG1 Z-1 F100\nG1 X15\n");
+    const std::string project = write(dir / "p.camotics", R"({
+      "resolution-mode": "manual", "resolution": 0.5,
+      "tools": {"1": {"units": "metric", "shape": "cylindrical", "length": 20, "diameter": 6}},
+      "workpiece": {"automatic": false, "bounds": {"min": [0, 0, -5], "max": [40, 30, 0]}},
+      "files": ["p.ngc"]
+    })");
+    auto said = [](const SimulateReport& r, const char* text) {
+        for (const ReportWarning& w : r.warnings)
+            if (w.message.find(text) != std::string::npos) return true;
+        return false;
+    };
+    SimulateOptions bare;
+    bare.inputs = {project};
+    bare.defaultTool = flatEndMill(10.0, {20.0, 30.0});
+    const SimulateReport unused = runSimulation(bare).report;
+    CHECK(said(unused, "--tool without a number (flat D10"));
+    CHECK(said(unused, "is not used"));
+    // The project's D6 cut the 1 mm deep slot: 10 mm long, 6 wide, with round ends.
+    CHECK(unused.removedVolumeMm3 == Approx(10 * 6 + kPi * 9).epsilon(0.02));
+
+    SimulateOptions numbered;
+    numbered.inputs = {project};
+    numbered.tools.insert_or_assign(1, flatEndMill(10.0, {20.0, 30.0}));
+    const SimulateReport replaced = runSimulation(numbered).report;
+    CHECK(said(replaced, "replaces the program's tool 1 (flat D6"));
+    CHECK(replaced.removedVolumeMm3 == Approx(10 * 10 + kPi * 25).epsilon(0.02));
+
+    SimulateOptions after;
+    after.inputs = {project, program};
+    CHECK(said(runSimulation(after).report, "replace its own ("));
+}
+
 TEST_CASE("a program without moves says so", "[job][errors]") {
     const fs::path dir = scratch("no_moves");
     for (const char* text : {"", "(only a comment)\n\n%\n", "G21 G90 M3 S1000\n"}) {
