@@ -480,6 +480,21 @@ TEST_CASE("gcode: units, distance modes, offsets and homes", "[path][gcode]") {
     CHECK(m[3].source.line == 6);
 }
 
+TEST_CASE("gcode: G43.1's axis words set the offset and move nothing, G43.2's feed the modal motion",
+          "[path][gcode]") {
+    // LinuxCNC's enhance_block takes no motion for a block with G43.1 and no motion code, even
+    // with G80 active; a G43.2 block's axis words go to the modal motion as any others do.
+    const Program p = run("G0 X0 Y0 Z10\nG1 X5 F100\nG43.1 Z5\nG1 X6\nG80\nG43.1 Z7\nG1 X7\nG43.2 Z-5\n");
+    const auto& m = p.path.moves;
+    REQUIRE(m.size() == 5);
+    CHECK(near(m[1].end, Vec3(5, 0, 10)));
+    CHECK(m[2].source.line == 4);
+    CHECK(near(m[2].end, Vec3(6, 0, 10)));
+    CHECK(near(m[3].end, Vec3(7, 0, 10)));
+    CHECK(m[4].source.line == 8);
+    CHECK(near(m[4].end, Vec3(7, 0, -5)));
+}
+
 TEST_CASE("gcode: tools, warnings and their aggregation", "[path][gcode]") {
     std::string text = "T1 M6\nS1000 M3\n";
     for (int i = 0; i < 1000; ++i) text += "G1 X" + std::to_string(i) + " F100\n";

@@ -256,11 +256,15 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
                  "cutter comp");
         }
     }
+    bool axisConsumed = false;
     if (groupCode[8] >= 0) {
         if (b.has('H')) b.use('H');
         if (groupCode[8] == 431 || groupCode[8] == 432)
             for (char c : {'X', 'Y', 'Z', 'I', 'J', 'K'})
                 if (b.has(c) && groupCode[1] < 0 && motion < 0) b.use(c);
+        // LinuxCNC's enhance_block gives the axis words of a block with G43.1 and no motion code
+        // to the offset alone: the modal motion does not run. G43.2's words still feed it there.
+        if (groupCode[8] == 431 && motion < 0) axisConsumed = true;
         if (groupCode[8] == 434) {
             setTcp(true, 0, "G43.4");
             tcpByG434_ = true;
@@ -284,7 +288,6 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
     if (groupCode[4] >= 0) arcAbsolute_ = groupCode[4] == 901;
     if (groupCode[10] >= 0) retract_ = groupCode[10];
     // 7. Tilted work plane.
-    bool axisConsumed = false;
     if (groupCode[16] >= 0) {
         if (groupCode[16] == 690) {
             cancelTwp();
@@ -295,7 +298,7 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
     }
     // 8. Non-modal codes.
     if (nonModal >= 0 && nonModal != 40) {
-        axisConsumed = executeNonModal(nonModal, b, motion);
+        if (executeNonModal(nonModal, b, motion)) axisConsumed = true;
     }
     // 9. Motion.
     if (motion >= 0) {
