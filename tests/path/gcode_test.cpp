@@ -572,6 +572,19 @@ TEST_CASE("gcode: G68.2 tilts coordinates and, after G53.1, the tool axis", "[pa
     CHECK(near(p.path.moves[1].end, Vec3(0, 0, 5)));
 }
 
+TEST_CASE("gcode: G69 cancels the tilted plane and keeps the coordinate system", "[path][gcode]") {
+    // LinuxCNC's G69 (work_plane_cancel in interp_workplane.cc) clears only the plane: G55 and
+    // #5220 stay as they were.
+    const Program p = run("G10 L2 P2 X100\nG55\nG0 X0 Y0 Z10\nG68.2 X0 Y0 Z0 I0 J0 K0\nG69\nG0 X0 Y0 Z10\n"
+                          "G0 X1\nG0 X#5220\n");
+    const auto& m = p.path.moves;
+    REQUIRE(m.size() == 4);
+    CHECK(near(m[0].end, Vec3(100, 0, 10)));
+    CHECK(near(m[1].end, Vec3(100, 0, 10)));
+    CHECK(near(m[2].end, Vec3(101, 0, 10)));
+    CHECK(near(m[3].end, Vec3(102, 0, 10)));
+}
+
 TEST_CASE("gcode: canned cycles G73 G83 G85 G89 and G99", "[path][gcode]") {
     const Program p = run("G0 X0 Y0 Z10\nG99 G83 X1 Y1 Z-3 R2 Q2\nG85 X2 Z-1 R2\nG80\nG98 G73 X3 Z-1 R1 Q0.5\nG89 X4 Z-1 R1 P1\nM2\n");
     const auto& m = p.path.moves;

@@ -341,7 +341,6 @@ void Interpreter::cancelTwp() {
     twpRot_ = Mat3{};
     twpOrigin_ = Vec3(0.0);
     axis_ = baseAxis_;
-    coordSys_ = 0;
 }
 
 void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
