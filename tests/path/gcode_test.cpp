@@ -255,6 +255,9 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
         {"two words of one letter", "G1 X1 X2\n", 1, 7, "two X words", "X2"},
         {"arc radius does not fit", "G0 X0 Y0\nG2 X10 Y0 R2\n", 2, 11, "radius too small", "R2"},
         {"arc end not on circle", "G0 X0 Y0\nG2 X10 Y0 I3 J0\n", 2, 1, "radius to end of arc differs", "G2"},
+        // LinuxCNC's arc_data_ijk: 3 mm is within 0.1 % of 3003 mm but past 100 x 0.0283 mm.
+        {"large arc end off by more than the cap", "G0 X0 Y0\nG2 X6003 Y0 I3000 J0\n", 2, 1,
+         "LinuxCNC accepts a difference up to 0.0282843 mm, or up to 2.82843 mm", "G2"},
         {"arc without centre", "G0 X0 Y0\nG2 X10 Y0\n", 2, 1, "arc without", "G2"},
         {"arc without end", "G0 X0 Y0\nG2 I5\n", 2, 1, "arc without end", "G2"},
         {"R arc to itself", "G0 X1 Y1\nG2 X1 Y1 R5\n", 2, 10, "same start and end", "R5"},
@@ -438,6 +441,18 @@ TEST_CASE("gcode: arcs are split within the chord tolerance and end exactly", "[
         CHECK(full == std::size_t(std::ceil(2 * M_PI / (2 * std::acos(1 - tol / 10)) - 1e-12)));
         CHECK(near(p.path.moves.back().end, Vec3(-10, 0, -4)));
     }
+}
+
+TEST_CASE("gcode: an arc's end may be off its circle by LinuxCNC's tolerance of the program's units",
+          "[path][gcode]") {
+    // LinuxCNC's arc_data_ijk refuses only e > 0.0283 mm (G21) or 0.00283 inch (G20) when e is
+    // also past 0.1 % of the radius: 0.025 mm of 10 mm and 0.0015 inch of 1 inch pass.
+    const Program mm = run("G21 G0 X0 Y0\nG2 X20.025 Y0 I10 J0\n");
+    REQUIRE(mm.path.moves.size() > 2);
+    CHECK(near(mm.path.moves.back().end, Vec3(20.025, 0, 0), 1e-12));
+    const Program inch = run("G20 G0 X0 Y0\nG2 X2.0015 Y0 I1 J0\n");
+    REQUIRE(inch.path.moves.size() > 2);
+    CHECK(near(inch.path.moves.back().end, Vec3(2.0015 * 25.4, 0, 0), 1e-9));
 }
 
 TEST_CASE("gcode: arcs in G18 and G19 turn the right way (UGS fixtures)", "[path][gcode]") {

@@ -36,10 +36,16 @@ inline constexpr double kPi = 3.14159265358979323846;
 inline constexpr double kDeg = kPi / 180.0;
 /// LinuxCNC parameters #1..#5602 (and Fanuc system variables below #10000).
 inline constexpr int kNumParams = 10000;
-/// An arc's radius to its end may differ from its radius to its start by this much (mm) and
-/// this fraction before the arc is rejected (LinuxCNC uses similar limits).
-inline constexpr double kArcRadiusAbsTol = 0.02;
-inline constexpr double kArcRadiusRelTol = 0.001;
+/// How far a centre-format arc's radius to its end may differ from its radius to its start: the
+/// rule of LinuxCNC's arc_data_ijk (interp_arc.cc) with its default tolerances
+/// (interp_internal.hh). With t the absolute tolerance of the program's units
+/// (CENTER_ARC_RADIUS_TOLERANCE_MM or _INCH) and e = |r_end - r_start|, the arc is refused when
+/// e > kArcSpiralCapFactor t, or when e > t and e / max(r_start, r_end) > kArcSpiralRelTol.
+inline constexpr double kSqrt2 = 1.41421356237309504880;
+inline constexpr double kArcSpiralAbsTolMm = 2 * 0.01 * kSqrt2;    ///< mm, in G21
+inline constexpr double kArcSpiralAbsTolInch = 2 * 0.001 * kSqrt2; ///< inch, in G20
+inline constexpr double kArcSpiralRelTol = 0.001;                 ///< SPIRAL_RELATIVE_TOLERANCE
+inline constexpr double kArcSpiralCapFactor = 100.0;
 /// An R-form arc whose chord exceeds the diameter by less than this (mm) is a half circle.
 inline constexpr double kArcRadiusFit = 0.002;
 /// Peck clearances of G83 and G73 (LinuxCNC: 0.010 inch and 0.002 inch).

@@ -429,10 +429,16 @@ void Interpreter::arc(bool clockwise, Block& b, int motionCol) {
     const double rs = std::hypot(s[p0] - c0, s[p1] - c1);
     const double re = std::hypot(e[p0] - c0, e[p1] - c1);
     if (rs < 1e-9) fail(motionCol, "arc of zero radius", tokenAt(motionCol));
-    if (std::abs(rs - re) > kArcRadiusAbsTol && std::abs(rs - re) > kArcRadiusRelTol * rs)
+    const double absTol = units_ == kInch ? kArcSpiralAbsTolInch * kInch : kArcSpiralAbsTolMm;
+    const double absErr = std::abs(rs - re);
+    const double relErr = absErr / std::max(rs, re);
+    if (absErr > kArcSpiralCapFactor * absTol || (absErr > absTol && relErr > kArcSpiralRelTol))
         fail(rForm ? b.col['R' - 'A'] : motionCol,
              "radius to end of arc differs from radius to start (" + std::to_string(re) + " vs " +
-                 std::to_string(rs) + " mm)",
+                 std::to_string(rs) + " mm): LinuxCNC accepts a difference up to " +
+                 detail::formatNumber(absTol) + " mm, or up to " +
+                 detail::formatNumber(kArcSpiralCapFactor * absTol) + " mm within " +
+                 detail::formatNumber(100 * kArcSpiralRelTol) + " % of the radius",
              tokenAt(rForm ? b.col['R' - 'A'] : motionCol, 60));
     const double as = std::atan2(s[p1] - c1, s[p0] - c0);
     const double ae = std::atan2(e[p1] - c1, e[p0] - c0);
