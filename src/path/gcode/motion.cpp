@@ -415,6 +415,15 @@ void Interpreter::arc(bool clockwise, Block& b, int motionCol) {
     } else {
         if (!b.has(o0) && !b.has(o1))
             fail(arcCol, std::string("arc without ") + o0 + "/" + o1 + " or R", tokenAt(motionCol));
+        if (arcAbsolute_ && !(b.has(o0) && b.has(o1))) {
+            // LinuxCNC's convert_arc: an absolute centre has no default for a word left out.
+            const char given = b.has(o0) ? o0 : o1, missing = b.has(o0) ? o1 : o0;
+            fail(b.col[given - 'A'],
+                 std::string(1, missing) +
+                     " word missing in absolute center arc (G90.1): LinuxCNC needs both " + o0 +
+                     " and " + o1 + " in the G" + std::to_string(plane_) + " plane",
+                 tokenAt(b.col[given - 'A']));
+        }
         const double i0 = b.has(o0) ? b.get(o0) * units_ : 0.0;
         const double i1 = b.has(o1) ? b.get(o1) * units_ : 0.0;
         if (arcAbsolute_) {
