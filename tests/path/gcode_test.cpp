@@ -264,6 +264,7 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
          "J word missing in absolute center arc (G90.1): LinuxCNC needs both I and J in the G17 plane", "I10"},
         {"absolute centre without I in G18", "G18 G90.1\nG0 X0 Z0\nG2 X10 Z0 K0\n", 3, 11,
          "I word missing in absolute center arc", "K0"},
+        {"dwell with an arc", "G0 X0 Y0\nG4 P2 G2 X10 Y0 I5\n", 2, 1, "G4 with G2 in one block: both use P", "G4"},
         {"R arc to itself", "G0 X1 Y1\nG2 X1 Y1 R5\n", 2, 10, "same start and end", "R5"},
         {"unterminated comment", "G0 X1 (rapid\n", 1, 7, "unterminated comment", "(rapid"},
         {"unterminated subroutine", "o100 sub\nG1 X1\n", 1, 1, "unterminated subroutine", "o100 sub"},

@@ -174,7 +174,12 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
         if (grp == 1) motion = code, motionCol = b.gcol[k];
         if (grp == 0 && code != 530) nonModal = code, nonModalCol = b.gcol[k];
     }
-    (void)nonModalCol;
+    // LinuxCNC's check_g_codes: the dwell's time and the arc's turns would both be the P word.
+    if (nonModal == 40 && (motion == 20 || motion == 30))
+        fail(nonModalCol,
+             "G4 with G" + codeText(motion) +
+                 " in one block: both use P (dwell time, arc turns); LinuxCNC refuses them together",
+             tokenAt(nonModalCol));
     const bool g53 = b.hasG(530);
     int mGroups[12];
     std::fill(std::begin(mGroups), std::end(mGroups), -1);
