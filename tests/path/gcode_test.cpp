@@ -616,6 +616,25 @@ TEST_CASE("gcode: canned cycles G73 G83 G85 G89 and G99", "[path][gcode]") {
     CHECK(hasDiagnostic(p, "dwell"));
 }
 
+TEST_CASE("gcode: after a G99 hole the next block travels at the R plane", "[path][gcode]") {
+    // LinuxCNC's CYCLE_MACRO traverses to a block's first hole at the level the block starts
+    // from (current_cc) when it is above R: after a G99 hole that is R itself, not the level
+    // the series began at; G98 then climbs back to that level (old_cc).
+    const Program p = run("G17 G99\nG0 X0 Y0 Z10\nG81 X0 Y0 Z-5 R2\nX20\nG98 X40\nG80\nM2\n");
+    const std::vector<Vec3> expected = {{0, 0, 10}, {0, 0, 10}, {0, 0, 2},   {0, 0, -5},  {0, 0, 2},
+                                        {20, 0, 2}, {20, 0, -5}, {20, 0, 2}, {40, 0, 10}, {40, 0, 2},
+                                        {40, 0, -5}, {40, 0, 10}};
+    const auto& m = p.path.moves;
+    REQUIRE(m.size() == expected.size());
+    for (std::size_t k = 0; k < m.size(); ++k) {
+        INFO("move " << k);
+        CHECK(near(m[k].end, expected[k]));
+    }
+    CHECK(m[5].source.line == 4);
+    CHECK(m[5].rapid);
+    CHECK_FALSE(m[6].rapid);
+}
+
 TEST_CASE("gcode: with no start position, moves only place the tool until X, Y and Z are known", "[path]") {
     const Program p = parseGcode("G21 G90\nG0 Z15\nG0 X5 Y15\nG1 Z7 F100\nG1 X35\n", "start.ngc");
     REQUIRE(p.path.moves.size() == 2);

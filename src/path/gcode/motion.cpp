@@ -522,7 +522,10 @@ void Interpreter::cycle(int mode, Block& b) {
         cycleIl_ = pp[ic];
         cycleIlFlag_ = true;
     }
+    // LinuxCNC's convert_cycle_xy: old_cc, the level the series of cycles began at, and
+    // current_cc, where this block begins (the R plane after a G99 hole).
     double oldcc = cycleIl_;
+    double currentCc = pp[ic];
     double r, cc, aa, bb, da = 0, db = 0;
     if (absolute_) {
         r = rWord;
@@ -563,13 +566,17 @@ void Interpreter::cycle(int mode, Block& b) {
     if (oldcc < r) {
         emit(at(pp[ia], pp[ib], r), true);
         oldcc = r;
+        currentCc = r;
     }
     const double clear = retract_ == 990 ? r : oldcc;
     for (long rep = 0; rep < repeats; ++rep) {
         aa += da;
         bb += db;
-        emit(at(aa, bb, oldcc), true);
-        if (oldcc != r) emit(at(aa, bb, r), true);
+        // LinuxCNC's CYCLE_MACRO: the first hole is reached at the block's starting level when
+        // that is above R, every other at the clearance level, where the previous hole left it.
+        const double travel = rep == 0 && currentCc > r ? currentCc : clear;
+        emit(at(aa, bb, travel), true);
+        if (travel > r) emit(at(aa, bb, r), true);
         switch (mode) {
         case 810: case 820:
             emit(at(aa, bb, cc), false);
@@ -606,7 +613,6 @@ void Interpreter::cycle(int mode, Block& b) {
             break;
         }
         }
-        oldcc = clear;
     }
     cycleActive_ = true;
     cycleCc_ = ccWord;
