@@ -167,10 +167,13 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
             motion = code, motionCol = b.gcol[k];
             continue;
         }
-        if (groupCode[grp] >= 0 && !(grp == 0 && (code == 530 || groupCode[grp] == 530)))
-            fail(b.gcol[k], "two G-codes from one modal group (group " + std::to_string(grp) + ")",
+        // LinuxCNC's read_g: one code per modal group in a block, G53 among the non-modal group 0.
+        if (groupCode[grp] >= 0)
+            fail(b.gcol[k],
+                 "two G-codes from one modal group (group " + std::to_string(grp) +
+                     "): LinuxCNC allows one per block",
                  tokenAt(b.gcol[k]));
-        if (groupCode[grp] < 0 || code != 530) groupCode[grp] = code;
+        groupCode[grp] = code;
         if (grp == 1) motion = code, motionCol = b.gcol[k];
         if (grp == 0 && code != 530) nonModal = code, nonModalCol = b.gcol[k];
     }
