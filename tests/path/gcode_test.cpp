@@ -518,6 +518,20 @@ TEST_CASE("gcode: G43.1's axis words set the offset and move nothing, G43.2's fe
     CHECK(near(m[4].end, Vec3(7, 0, -5)));
 }
 
+TEST_CASE("gcode: stored positions and offsets keep their machine position across G20/G21", "[path][gcode]") {
+    // LinuxCNC stores #5161.. (G28.1), #5211.. (G92) and #5221.. (G10 L2) in the machine's units
+    // (mm here) and converts them to the program's units on use.
+    const Program home = run("G21 G0 X10 Y0 Z5\nG28.1\nG0 X0 Y0 Z5\nG20\nG28\n");
+    REQUIRE(home.path.moves.size() == 3);
+    CHECK(near(home.path.moves[2].end, Vec3(10, 0, 5)));
+    const Program g92 = run("G21 G0 X0 Y0 Z0\nG0 X10\nG92 X0\nG92.2\nG20\nG92.3\nG0 X0\n");
+    REQUIRE(g92.path.moves.size() == 3);
+    CHECK(near(g92.path.moves[2].end, Vec3(10, 0, 0)));
+    const Program g10 = run("G20 G10 L2 P1 X1\nG21 G0 X#5221 Y0 Z0\n");
+    REQUIRE(g10.path.moves.size() == 1);
+    CHECK(near(g10.path.moves[0].end, Vec3(50.8, 0, 0), 1e-12));
+}
+
 TEST_CASE("gcode: tools, warnings and their aggregation", "[path][gcode]") {
     std::string text = "T1 M6\nS1000 M3\n";
     for (int i = 0; i < 1000; ++i) text += "G1 X" + std::to_string(i) + " F100\n";

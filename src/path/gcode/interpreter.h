@@ -343,6 +343,9 @@ private:
     std::unordered_map<std::string, Sub> programs_;
     std::vector<Frame> frames_;
     std::unordered_map<int, long> topCounters_;
+    /// #0..#9999. The stored positions and offsets among them (G28 #5161.., G30 #5181.., G92
+    /// #5211.., G54..G59.3 #5221..) are in mm, the machine's units: LinuxCNC keeps them in its
+    /// machine units and converts on use (USER_TO_PROGRAM_LEN), whatever G20/G21 is active.
     std::vector<double> params_;
     std::unordered_map<std::string, double> named_;
     std::vector<std::pair<ParamRef, double>> pending_;

@@ -222,15 +222,15 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
                 g5x_[std::size_t(cs)][a] = v;
             else
                 g5x_[std::size_t(cs)][a] = mpos_[a] - g92_[a] - v;
-            store(params_[std::size_t(5221 + 20 * cs + a)], g5x_[std::size_t(cs)][a] / units_);
+            store(params_[std::size_t(5221 + 20 * cs + a)], g5x_[std::size_t(cs)][a]);
         }
         return true;
     }
     case 280: case 300: {  // G28, G30: via the given point to the stored position
         axisConflict();
         const int base = code == 280 ? 5161 : 5181;
-        Vec3 home(params_[std::size_t(base)], params_[std::size_t(base + 1)], params_[std::size_t(base + 2)]);
-        home *= units_;
+        const Vec3 home(params_[std::size_t(base)], params_[std::size_t(base + 1)],
+                        params_[std::size_t(base + 2)]);
         const Vec3 pp = toProgram(mpos_);
         if (anyXYZ) {
             checkRotary(b, !absolute_);
@@ -248,7 +248,7 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
     }
     case 281: case 301: {
         const int base = code == 281 ? 5161 : 5181;
-        for (int a = 0; a < 3; ++a) store(params_[std::size_t(base + a)], mpos_[a] / units_);
+        for (int a = 0; a < 3; ++a) store(params_[std::size_t(base + a)], mpos_[a]);
         return false;
     }
     case 520: case 920: {  // G52, G92
@@ -276,7 +276,7 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
                 g92_[a] = mpos_[a] - g5x_[std::size_t(coordSys_)][a] - v;
             else
                 g92_[a] = v;
-            store(params_[std::size_t(5211 + a)], g92_[a] / units_);
+            store(params_[std::size_t(5211 + a)], g92_[a]);
         }
         // Offsets that change under a tilted plane would need the plane's frame.
         if (twp_ && g92_ != before)
@@ -291,7 +291,7 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
             for (int a = 0; a < 3; ++a) store(params_[std::size_t(5211 + a)], 0.0);
         return false;
     case 923:
-        for (int a = 0; a < 3; ++a) g92_[a] = params_[std::size_t(5211 + a)] * units_;
+        for (int a = 0; a < 3; ++a) g92_[a] = params_[std::size_t(5211 + a)];
         return false;
     default:
         return false;
