@@ -252,7 +252,8 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
     // 5. Plane, units, cutter compensation, tool length offsets.
     if (groupCode[2] >= 0) {
         const int p = groupCode[2];
-        if (p != 170 && p != 180 && p != 190) fail(0, "UVW planes are not supported", "G" + codeText(p));
+        if (p != 170 && p != 180 && p != 190)
+            fail(b.gColumn(p), "UVW planes are not supported", "G" + codeText(p));
         plane_ = p / 10;
     }
     if (groupCode[6] >= 0) units_ = groupCode[6] == 200 ? kInch : 1.0;
@@ -376,7 +377,7 @@ std::string Interpreter::codeText(int code) {
 }
 
 int Interpreter::callFanuc(Block& b, int pc) {
-    if (!b.has('P')) fail(0, "M98 without P program number", "M98");
+    if (!b.has('P')) fail(b.mColumn(98), "M98 without P program number", "M98");
     const double p = b.get('P');
     long repeats = 1;
     if (b.has('L')) {
@@ -390,8 +391,9 @@ int Interpreter::callFanuc(Block& b, int pc) {
     if (it == programs_.end() || it->second.file != curFile_)
         fail(b.col['P' - 'A'], "M98 calls a missing program O" + label, tokenAt(b.col['P' - 'A']));
     if (int(frames_.size()) >= opt_.maxCallDepth)
-        fail(0, "subprogram calls nested deeper than " + std::to_string(opt_.maxCallDepth) +
-                    " (recursion without end?)",
+        fail(b.mColumn(98),
+             "subprogram calls nested deeper than " + std::to_string(opt_.maxCallDepth) +
+                 " (recursion without end?)",
              "M98");
     Frame fr;
     fr.file = curFile_;

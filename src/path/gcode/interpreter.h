@@ -92,6 +92,18 @@ struct Block {
             if (g[i] == code) return true;
         return false;
     }
+    /// The column of G-code `code` in the block; 0 when the block lacks it (a modal code).
+    int gColumn(int code) const {
+        for (int i = 0; i < ng; ++i)
+            if (g[i] == code) return gcol[i];
+        return 0;
+    }
+    /// The column of M-code `code` in the block; 0 when the block lacks it.
+    int mColumn(int code) const {
+        for (int i = 0; i < nm; ++i)
+            if (m[i] == code) return mcol[i];
+        return 0;
+    }
 };
 
 /// A parameter a line names: #n, #<name>.

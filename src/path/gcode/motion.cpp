@@ -184,7 +184,7 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
     switch (code) {
     case 100: {  // G10
         axisConflict();
-        if (!b.has('L')) fail(0, "G10 without L", "G10");
+        if (!b.has('L')) fail(b.gColumn(100), "G10 without L", "G10");
         const int l = int(std::lround(b.get('L')));
         if (l == 1 || l == 10 || l == 11) {
             for (char c : {'P', 'X', 'Y', 'Z', 'R', 'I', 'J', 'Q', 'D'})
@@ -193,7 +193,7 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
             return true;
         }
         if (l != 2 && l != 20) fail(b.col['L' - 'A'], "unsupported G10 L" + std::to_string(l), tokenAt(b.col['L' - 'A']));
-        if (!b.has('P')) fail(0, "G10 L" + std::to_string(l) + " without P", "G10");
+        if (!b.has('P')) fail(b.gColumn(100), "G10 L" + std::to_string(l) + " without P", "G10");
         const int p = int(std::lround(b.get('P')));
         if (p < 0 || p > 9) fail(b.col['P' - 'A'], "G10 P out of range 0..9", tokenAt(b.col['P' - 'A']));
         const int cs = p == 0 ? coordSys_ : p - 1;
@@ -214,7 +214,8 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         }
         refuseUvw(b);
         static const char letters[3] = {'X', 'Y', 'Z'};
-        if (l == 20 && twp_) fail(0, "G10 L20 with an active G68.2 is not supported", "G10");
+        if (l == 20 && twp_)
+            fail(b.gColumn(100), "G10 L20 with an active G68.2 is not supported", "G10");
         for (int a = 0; a < 3; ++a) {
             if (!b.has(letters[a])) continue;
             const double v = b.get(letters[a]) * units_;
@@ -280,7 +281,8 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         }
         // Offsets that change under a tilted plane would need the plane's frame.
         if (twp_ && g92_ != before)
-            fail(0, "G52/G92 changing the offset under an active G68.2 is not supported",
+            fail(b.gColumn(code),
+                 "G52/G92 changing the offset under an active G68.2 is not supported",
                  "G" + codeText(code));
         return true;
     }
@@ -315,7 +317,9 @@ void Interpreter::defineTwp(Block& b) {
     static const char letters[3] = {'X', 'Y', 'Z'};
     for (int a = 0; a < 3; ++a)
         if (b.has(letters[a])) origin[a] = b.get(letters[a]) * units_;
-    if (twp_) fail(0, "G68.2 while a tilted plane is active: cancel it with G69 first", "G68.2");
+    if (twp_)
+        fail(b.gColumn(682), "G68.2 while a tilted plane is active: cancel it with G69 first",
+             "G68.2");
     twp_ = true;
     twpRot_ = r;
     twpOrigin_ = origin;
@@ -325,7 +329,9 @@ void Interpreter::defineTwp(Block& b) {
 }
 
 void Interpreter::orientTool(int code, Block& b) {
-    if (!twp_) fail(0, "G" + codeText(code) + " without an active G68.2 plane", "G" + codeText(code));
+    if (!twp_)
+        fail(b.gColumn(code), "G" + codeText(code) + " without an active G68.2 plane",
+             "G" + codeText(code));
     if (b.has('P')) b.use('P');
     axis_ = glm::normalize(twpRot_ * Vec3(0, 0, 1));
     if (code == 533) {
@@ -349,7 +355,7 @@ void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
         Vec3 target;
         if (g53) {
             if (!absolute_ && (b.has('X') || b.has('Y') || b.has('Z')))
-                fail(0, "G53 in incremental mode (G91)", "G53");
+                fail(b.gColumn(530), "G53 in incremental mode (G91)", "G53");
             target = mpos_;
             static const char letters[3] = {'X', 'Y', 'Z'};
             for (int a = 0; a < 3; ++a)
@@ -494,20 +500,20 @@ void Interpreter::cycle(int mode, Block& b) {
     double ccWord;
     if (b.has(cl)) ccWord = b.get(cl) * units_;
     else if (!newCycle) ccWord = cycleCc_;
-    else fail(0, std::string("canned cycle without ") + cl + " depth", "G" + codeText(mode));
+    else fail(b.gColumn(mode), std::string("canned cycle without ") + cl + " depth", "G" + codeText(mode));
     double rWord;
     if (b.has('R')) rWord = b.get('R') * units_;
     else if (!newCycle) rWord = cycleR_;
-    else fail(0, "canned cycle without R plane", "G" + codeText(mode));
+    else fail(b.gColumn(mode), "canned cycle without R plane", "G" + codeText(mode));
     double q = cycleQ_;
     if (mode == 730 || mode == 830) {
         if (b.has('Q')) q = b.get('Q') * units_;
-        else if (newCycle) fail(0, "G73/G83 without Q peck depth", "G" + codeText(mode));
+        else if (newCycle) fail(b.gColumn(mode), "G73/G83 without Q peck depth", "G" + codeText(mode));
         if (!(q > 0)) fail(b.col['Q' - 'A'], "Q peck depth must be positive", tokenAt(b.col['Q' - 'A']));
     }
     if (mode == 820 || mode == 890) {
         if (b.has('P')) b.use('P');
-        else if (newCycle) fail(0, "G82/G89 without P dwell", "G" + codeText(mode));
+        else if (newCycle) fail(b.gColumn(mode), "G82/G89 without P dwell", "G" + codeText(mode));
         warn("dwell in canned cycle ignored (time is not simulated)", "cycle dwell");
     }
     long repeats = 1;
