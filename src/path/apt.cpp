@@ -37,6 +37,9 @@ constexpr double kCutterRounding = 1e-5;
 /// An i,j,k vector printed with about 6 significant digits has a length within a few 1e-6 of 1;
 /// one further off than this was not meant as a unit vector, and its normalisation is reported.
 constexpr double kUnitVectorRounding = 1e-5;
+/// The largest tool number LOAD/TOOL takes: the entries the reader makes are numbered after the
+/// program's, and stay far below INT_MAX.
+constexpr double kMaxToolNumber = 1e7;
 
 struct Token {
     std::string text;  ///< upper case, trimmed
@@ -57,6 +60,13 @@ struct CutterSpec {
     std::vector<double> params;  ///< mm (angles in degrees)
     double cuttingLength = 0.0;
     SourceLocation where;
+    bool cut = false;  ///< some move was made with it
+
+    /// Whether `later` states this tool again: the same numbers, and the same cutting length
+    /// where it gives one.
+    bool restatedBy(const CutterSpec& later) const {
+        return params == later.params && (later.cuttingLength == 0.0 || later.cuttingLength == cuttingLength);
+    }
 };
 
 class AptReader {
@@ -80,6 +90,7 @@ public:
         }
         if (circle_)
             throw ParseError(circleWhere_, "CIRCLE without the GOTO that ends it (truncated file?)");
+        numberNewTools();
         buildTools();
         diags_.appendTo(out_.diagnostics);
     }
@@ -238,7 +249,7 @@ private:
         }
         if (w == "GODLTA") return godlta(s);
         if (w == "CUTTER") return cutter(s);
-        if (w == "LOAD" || w == "TOOLNO") return loadTool(s);
+        if (w == "LOAD" || w == "TOOLNO" || w == "LOADTL") return loadTool(s);
         if (w == "UNITS" || w == "UNIT") return units(s);
         if (w == "CSYS") return csys(s);
         if (w == "TRNTYP") {
@@ -261,8 +272,8 @@ private:
         if (w == "CSI_SET_FLUTE_LENGTH") {
             const auto v = numbers(s);
             if (v.size() != 1 || !(v[0] > 0)) fail(s, "CSI_SET_FLUTE_LENGTH needs one positive length");
-            if (tool_ != 0 && cutters_.count(tool_)) cutters_[tool_].cuttingLength = v[0] * scale_;
-            else if (pending_) pending_->cuttingLength = v[0] * scale_;
+            if (pending_) pending_->cuttingLength = v[0] * scale_;
+            else if (tool_ != 0 && cutters_.count(key_)) cutters_[key_].cuttingLength = v[0] * scale_;
             return;
         }
         if (w == "FINI") {
@@ -370,45 +381,103 @@ private:
         if (v.size() == 2 && v[1] > 0.5 * v[0] + kCutterRounding * v[0])
             fail(s.args[1], "CUTTER corner radius exceeds half the diameter");
         if (v.size() == 7 && !(v[6] >= 0)) fail(s.args[6], "CUTTER height must not be negative");
-        pending_ = spec;
-        if (tool_ != 0 && !cutters_.count(tool_)) cutters_[tool_] = spec, pending_.reset();
+        // After LOAD/TOOL, a CUTTER describes the loaded tool; otherwise the LOAD/TOOL that
+        // follows claims it, or the next motion takes it (requireTool).
+        if (tool_ != 0 && !cutters_.count(key_)) cutters_[key_] = spec;
+        else pending_ = spec;
     }
 
+    /// LOAD/TOOL,n, TOOLNO/n and LOADTL/n (the word of the Fusion and NCL posts): load tool n.
     void loadTool(const Statement& s) {
         std::size_t k = 0;
         if (!s.args.empty() && s.args[0].text == "TOOL") k = 1;
-        if (k >= s.args.size()) fail(s, "LOAD/TOOL needs a tool number");
+        const std::string form = s.major == "LOAD" ? "LOAD/TOOL" : s.major;
+        if (k >= s.args.size()) fail(s, form + " needs a tool number");
         const double n = number(s.args[k]);
-        if (n < 0 || n != std::floor(n) || n > 1e7) fail(s.args[k], "bad tool number");
-        changeTool(int(n), s);
+        if (n < 0 || n != std::floor(n) || n > kMaxToolNumber) fail(s.args[k], "bad tool number");
+        tool_ = int(n);
+        largestNumber_ = std::max(largestNumber_, tool_);
+        const auto known = keyOf_.find(tool_);
+        selectKey(known != keyOf_.end() ? known->second : tool_, s);
+        keyOf_[tool_] = key_;
         if (pending_) {
-            cutters_[tool_] = *pending_;
+            cutters_[key_] = *pending_;
             pending_.reset();
         }
         for (std::size_t t = k + 1; t < s.args.size(); ++t)
-            diags_.warn(loc(s.args[t]), "LOAD/TOOL argument ignored", "load args");
+            diags_.warn(loc(s.args[t]), form + " argument ignored", "load args");
     }
 
-    void changeTool(int n, const Statement& s) {
-        if (n == tool_) return;
-        tool_ = n;
+    /// Moves from here on are made with the tool-table entry `key`: a tool change unless it is
+    /// the one in use. Changes with no move between them are one change.
+    void selectKey(int key, const Statement& s) {
+        if (key == key_) return;
+        key_ = key;
+        auto& changes = out_.path.toolChanges;
+        if (!changes.empty() && changes.back().moveIndex == out_.path.moves.size()) changes.pop_back();
+        if (!changes.empty() && changes.back().tool == key) return;
         ToolChange tc;
         tc.moveIndex = out_.path.moves.size();
-        tc.tool = n;
+        tc.tool = key;
         tc.source = {0, s.line};
-        out_.path.toolChanges.push_back(tc);
+        changes.push_back(tc);
     }
 
-    void requireTool(const Statement& s) {
-        if (tool_ == 0) {
-            if (!pending_) fail(s, "motion before any CUTTER statement (missing CUTTER)");
-            diags_.note(loc(s), "CUTTER without LOAD/TOOL: taken as tool 1");
-            changeTool(1, s);
-            cutters_[1] = *pending_;
-            pending_.reset();
+    /// Gives the tool in the spindle the cutter `spec`: in place until a move has been made with
+    /// its entry, after that (unless spec only states it again) as a new entry of its own, so
+    /// that the moves made before keep the tool they were made with.
+    void define(const CutterSpec& spec, const Statement& s) {
+        const auto it = cutters_.find(key_);
+        if (it == cutters_.end() || !it->second.cut) {
+            cutters_[key_] = spec;
+            return;
         }
-        if (!cutters_.count(tool_))
+        if (it->second.restatedBy(spec)) return;
+        const int key = -int(newTools_.size()) - 1;
+        newTools_.push_back({tool_, spec.where, it->second.where.line});
+        cutters_[key] = spec;
+        keyOf_[tool_] = key;
+        selectKey(key, s);
+    }
+
+    /// A motion statement: the CUTTER no LOAD/TOOL claimed takes effect here, and there must be
+    /// a tool.
+    void requireTool(const Statement& s) {
+        if (pending_) {
+            const CutterSpec spec = *pending_;
+            pending_.reset();
+            if (tool_ == 0) {
+                diags_.note(loc(s), "CUTTER without LOAD/TOOL: taken as tool 1");
+                tool_ = 1;
+                largestNumber_ = std::max(largestNumber_, tool_);
+                keyOf_[tool_] = tool_;
+                selectKey(tool_, s);
+            }
+            define(spec, s);
+        }
+        if (tool_ == 0) fail(s, "motion before any CUTTER statement (missing CUTTER)");
+        if (!cutters_.count(key_))
             fail(s, "tool " + std::to_string(tool_) + " has no CUTTER (missing CUTTER)");
+    }
+
+    /// Numbers the entries define() made, after the largest number the program names, so that
+    /// none takes a number of the program's own; says which number each got.
+    void numberNewTools() {
+        if (newTools_.empty()) return;
+        const auto numbered = [this](int key) { return key < 0 ? largestNumber_ - key : key; };
+        for (Move& m : out_.path.moves) m.tool = numbered(m.tool);
+        for (ToolChange& c : out_.path.toolChanges) c.tool = numbered(c.tool);
+        for (std::size_t i = 0; i < newTools_.size(); ++i) {
+            const int key = -int(i) - 1;
+            auto node = cutters_.extract(key);
+            node.key() = numbered(key);
+            cutters_.insert(std::move(node));
+            const NewTool& t = newTools_[i];
+            diags_.note(t.where, "CUTTER changes tool " + std::to_string(t.number) +
+                                     " after it has cut (its moves before keep the CUTTER of line " +
+                                     std::to_string(t.replacedLine) + "): the moves from here are tool T" +
+                                     std::to_string(numbered(key)) + ", a number the program does not use");
+        }
     }
 
     /// A position the program names, checked against kMaxCoordinateMm.
@@ -425,10 +494,11 @@ private:
         m.end = to;
         m.axis = axis_;
         if (posAxis_ != axis_) m.startAxis = posAxis_;
-        m.tool = tool_;
+        m.tool = key_;
         m.rapid = rapid;
         m.source = {0, s.line};
         out_.path.moves.push_back(m);
+        cutters_.at(key_).cut = true;
         pos_ = to;
         posAxis_ = axis_;
     }
@@ -666,9 +736,21 @@ private:
     bool rapidNext_ = false;
     bool multax_ = false;
     bool finished_ = false;
-    int tool_ = 0;
-    std::optional<CutterSpec> pending_;
-    std::map<int, CutterSpec> cutters_;
+    /// A tool-table entry the reader made for a CUTTER that changed tool `number` after it had
+    /// cut (define()).
+    struct NewTool {
+        int number = 0;
+        SourceLocation where;
+        int replacedLine = 0;
+    };
+
+    int tool_ = 0;  ///< the program's number of the tool in the spindle (0: none loaded)
+    int key_ = 0;   ///< its entry in cutters_ and the tool table, which its moves name
+    int largestNumber_ = 0;  ///< of the tool numbers the program names
+    std::map<int, int> keyOf_;  ///< the entry each tool number names now
+    std::vector<NewTool> newTools_;  ///< entry -1 - i is newTools_[i] until numberNewTools()
+    std::optional<CutterSpec> pending_;  ///< a CUTTER that no LOAD/TOOL has claimed yet
+    std::map<int, CutterSpec> cutters_;  ///< by entry
     std::optional<Circle> circle_;
     SourceLocation circleWhere_;
     Cycle cycle_;

@@ -204,3 +204,41 @@ TEST_CASE("apt: a stock size stated as CAMWorks' INSERT/Stock Size", "[path][apt
     }
     CHECK_THROWS_WITH(parseApt("INSERT/Stock Size X0 Y2 Z3\n", "z.apt"), Catch::Contains("z.apt:1") && Catch::Contains("positive"));
 }
+
+TEST_CASE("apt: a CUTTER applies to the moves after it, with or without LOAD/TOOL", "[path][apt]") {
+    // CUTTER/2 with no LOAD/TOOL after the D10 has cut: the move after it is made with a D2, as a
+    // tool change, and the moves before keep the D10.
+    const Program p = parseApt("CUTTER/10\nGOTO/0,0,10\nGOTO/10,0,10\nCUTTER/2\nGOTO/20,0,10\nFINI\n", "c.apt");
+    REQUIRE(p.path.moves.size() == 2);
+    const int first = p.path.moves[0].tool, second = p.path.moves[1].tool;
+    CHECK(first == 1);
+    CHECK(second != first);
+    REQUIRE(p.tools.count(first) == 1);
+    REQUIRE(p.tools.count(second) == 1);
+    CHECK(p.tools.at(first).cuttingRadius() == Approx(5));
+    CHECK(p.tools.at(second).cuttingRadius() == Approx(1));
+    REQUIRE(p.path.toolChanges.size() == 2);
+    CHECK(p.path.toolChanges[1].moveIndex == 1);
+    CHECK(p.path.toolChanges[1].tool == second);
+    // A CUTTER that states the tool in use again changes nothing.
+    const Program same = parseApt("CUTTER/10\nGOTO/0,0,10\nGOTO/10,0,10\nCUTTER/10\nGOTO/20,0,10\n", "s.apt");
+    CHECK(same.tools.size() == 1);
+    CHECK(same.path.toolChanges.size() == 1);
+    // CUTTER then LOAD/TOOL (the usual order), LOAD/TOOL then CUTTER, and LOADTL/n, the Fusion
+    // and NCL posts' word for loading tool n: one change per tool, each with its own cutter.
+    for (const char* text : {"CUTTER/10\nLOAD/TOOL,3\nGOTO/0,0,10\nGOTO/10,0,10\nCUTTER/2\nLOAD/TOOL,4\nGOTO/20,0,10\n",
+                             "LOAD/TOOL,3\nCUTTER/10\nGOTO/0,0,10\nGOTO/10,0,10\nLOAD/TOOL,4\nCUTTER/2\nGOTO/20,0,10\n",
+                             "LOADTL/3,IN,0,LENGTH,40\nCUTTER/10\nGOTO/0,0,10\nGOTO/10,0,10\nLOADTL/4\nCUTTER/2\n"
+                             "GOTO/20,0,10\n"}) {
+        INFO(text);
+        const Program q = parseApt(text, "q.apt");
+        REQUIRE(q.path.moves.size() == 2);
+        CHECK(q.path.moves[0].tool == 3);
+        CHECK(q.path.moves[1].tool == 4);
+        REQUIRE(q.tools.size() == 2);
+        CHECK(q.tools.at(3).cuttingRadius() == Approx(5));
+        CHECK(q.tools.at(4).cuttingRadius() == Approx(1));
+        CHECK(q.path.toolChanges.size() == 2);
+        CHECK_FALSE(hasDiagnostic(q, "statement LOADTL ignored"));
+    }
+}
