@@ -269,13 +269,7 @@ private:
         }
         if (w == "SPINDL") return warnKind(s, "spindle SPINDL is not simulated (ignored)");
         if (w == "COOLNT") return warnKind(s, "coolant COOLNT is not simulated (ignored)");
-        if (w == "CSI_SET_FLUTE_LENGTH") {
-            const auto v = numbers(s);
-            if (v.size() != 1 || !(v[0] > 0)) fail(s, "CSI_SET_FLUTE_LENGTH needs one positive length");
-            if (pending_) pending_->cuttingLength = v[0] * scale_;
-            else if (tool_ != 0 && cutters_.count(key_)) cutters_[key_].cuttingLength = v[0] * scale_;
-            return;
-        }
+        if (w == "CSI_SET_FLUTE_LENGTH") return fluteLength(s);
         if (w == "FINI") {
             finished_ = true;
             return;
@@ -286,6 +280,23 @@ private:
         if (w == "SELECT") return warnKind(s, "SELECT/TOOL (tool preselection) ignored");
         if (w.empty()) fail(s, "statement without a major word");
         warnKind(s, "statement " + w + " ignored");
+    }
+
+    /// CSI_SET_FLUTE_LENGTH/L (CAMWorks): the cutting length of the CUTTER waiting for its
+    /// LOAD/TOOL, or else of the tool in the spindle.
+    void fluteLength(const Statement& s) {
+        const auto v = numbers(s);
+        if (v.size() != 1 || !(v[0] > 0)) fail(s, "CSI_SET_FLUTE_LENGTH needs one positive length");
+        if (pending_) {
+            pending_->cuttingLength = v[0] * scale_;
+            return;
+        }
+        if (tool_ == 0 || !cutters_.count(key_)) return;
+        CutterSpec spec = cutters_.at(key_);
+        spec.cuttingLength = v[0] * scale_;
+        if (spec.cut) spec.where = loc(s);
+        spec.cut = false;
+        define(spec, s);
     }
 
     /// CAMWorks states the stock's size as `INSERT/Stock Size X350. Y150. Z10.5` (in the program's
@@ -401,8 +412,9 @@ private:
         selectKey(known != keyOf_.end() ? known->second : tool_, s);
         keyOf_[tool_] = key_;
         if (pending_) {
-            cutters_[key_] = *pending_;
+            const CutterSpec spec = *pending_;
             pending_.reset();
+            define(spec, s);
         }
         for (std::size_t t = k + 1; t < s.args.size(); ++t)
             diags_.warn(loc(s.args[t]), form + " argument ignored", "load args");
@@ -473,8 +485,8 @@ private:
             node.key() = numbered(key);
             cutters_.insert(std::move(node));
             const NewTool& t = newTools_[i];
-            diags_.note(t.where, "CUTTER changes tool " + std::to_string(t.number) +
-                                     " after it has cut (its moves before keep the CUTTER of line " +
+            diags_.note(t.where, "tool " + std::to_string(t.number) +
+                                     " is described anew after it has cut (its moves before keep the CUTTER of line " +
                                      std::to_string(t.replacedLine) + "): the moves from here are tool T" +
                                      std::to_string(numbered(key)) + ", a number the program does not use");
         }

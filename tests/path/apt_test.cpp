@@ -242,3 +242,35 @@ TEST_CASE("apt: a CUTTER applies to the moves after it, with or without LOAD/TOO
         CHECK_FALSE(hasDiagnostic(q, "statement LOADTL ignored"));
     }
 }
+
+TEST_CASE("apt: a tool number described anew keeps the moves made before with their cutter", "[path][apt]") {
+    // Tool 1 is a D10 for the first move and a D2 from the second CUTTER on: the later moves get
+    // an entry of their own, numbered after the largest number the program names (1).
+    const Program p = parseApt(
+        "CUTTER/10\nLOAD/TOOL,1\nGOTO/0,0,10\nGOTO/10,0,10\nCUTTER/2\nLOAD/TOOL,1\nGOTO/20,0,10\nFINI\n", "r.apt");
+    REQUIRE(p.path.moves.size() == 2);
+    CHECK(p.path.moves[0].tool == 1);
+    CHECK(p.path.moves[1].tool == 2);
+    REQUIRE(p.tools.size() == 2);
+    CHECK(p.tools.at(1).cuttingRadius() == Approx(5));
+    CHECK(p.tools.at(2).cuttingRadius() == Approx(1));
+    REQUIRE(p.path.toolChanges.size() == 2);
+    CHECK(p.path.toolChanges[1].tool == 2);
+    CHECK(hasDiagnostic(p, "tool T2"));
+    // A cutting length stated anew after the tool has cut is a new description too.
+    const Program f = parseApt("CUTTER/10\nLOAD/TOOL,1\nCSI_SET_FLUTE_LENGTH/20\nGOTO/0,0,10\nGOTO/10,0,10\n"
+                               "CUTTER/10\nLOAD/TOOL,1\nCSI_SET_FLUTE_LENGTH/30\nGOTO/20,0,10\n",
+                               "f.apt");
+    REQUIRE(f.path.moves.size() == 2);
+    REQUIRE(f.tools.size() == 2);
+    CHECK(f.tools.at(f.path.moves[0].tool).cuttingLength() == Approx(20));
+    CHECK(f.tools.at(f.path.moves[1].tool).cuttingLength() == Approx(30));
+    // Loading a tool again with the CUTTER it had (as CAMWorks writes it) is no new tool.
+    const Program q = parseApt("CUTTER/5\nLOAD/TOOL,13\nGOTO/0,0,10\nGOTO/10,0,10\nCUTTER/6\nLOAD/TOOL,15\n"
+                               "GOTO/20,0,10\nCUTTER/5\nLOAD/TOOL,13\nGOTO/30,0,10\n",
+                               "q.apt");
+    REQUIRE(q.path.moves.size() == 3);
+    CHECK(q.tools.size() == 2);
+    CHECK(q.path.moves[2].tool == 13);
+    CHECK(q.path.toolChanges.size() == 3);
+}
