@@ -599,7 +599,31 @@ private:
         pts_.back() = end;
         const bool rapid = rapidNext_;
         rapidNext_ = false;
-        for (const Vec3& p : pts_) emit(p, rapid, s);
+        const Vec3 endAxis = axis_;
+        if (posAxis_ == endAxis) {
+            for (const Vec3& p : pts_) emit(p, rapid, s);
+            return;
+        }
+        // The axis turns over the whole arc as a GOTO's does over its move: on the great circle
+        // from the start's axis to the end's, at a uniform rate, here in the arc's angle. Chord i
+        // of n ends at the share (i + 1) / n of the arc, so it turns between the axes that law
+        // has at i / n and (i + 1) / n (on the same great circle, at the same rate).
+        Move whole;
+        whole.start = pos_;
+        whole.end = end;
+        whole.startAxis = posAxis_;
+        whole.axis = endAxis;
+        std::optional<MotionLaw> law;
+        try {
+            law.emplace(whole);
+        } catch (const Error& e) {
+            fail(s, std::string("CIRCLE: the tool axis cannot turn from ") + detail::formatPoint(posAxis_) + " to " +
+                        detail::formatPoint(endAxis) + " over the arc: " + e.what());
+        }
+        for (std::size_t i = 0; i < n; ++i) {
+            axis_ = i + 1 == n ? endAxis : law->pose(double(i + 1) / double(n)).axis;
+            emit(pts_[i], rapid, s);
+        }
     }
 
     // ---- drilling cycles ----

@@ -274,3 +274,31 @@ TEST_CASE("apt: a tool number described anew keeps the moves made before with th
     CHECK(q.path.moves[2].tool == 13);
     CHECK(q.path.toolChanges.size() == 3);
 }
+
+TEST_CASE("apt: an arc between GOTOs whose tool axes differ turns the axis over all its chords", "[path][apt]") {
+    // A half circle of radius 10 about +z from (10, 0, 0) to (-10, 0, 0), while the axis turns
+    // from +z to (0.6, 0, 0.8), theta = atan2(0.6, 0.8) in all. At the share t of the arc the
+    // axis is (sin(t theta), 0, cos(t theta)), so each chord turns by theta / n.
+    const Program p = parseApt("MULTAX\nCUTTER/10\nGOTO/10,0,0,0,0,1\nCIRCLE/0,0,0,0,0,1,10\nGOTO/-10,0,0,0.6,0,0.8\n",
+                               "a.apt");
+    const auto& m = p.path.moves;
+    REQUIRE(m.size() >= 4);
+    const double theta = std::atan2(0.6, 0.8);
+    const double n = double(m.size());
+    for (std::size_t i = 0; i < m.size(); ++i) {
+        INFO(i);
+        REQUIRE(m[i].turns());
+        const double t0 = double(i) / n, t1 = double(i + 1) / n;
+        CHECK(m[i].startAxis->x == Approx(std::sin(t0 * theta)).margin(1e-12));
+        CHECK(m[i].startAxis->y == Approx(0).margin(1e-12));
+        CHECK(m[i].startAxis->z == Approx(std::cos(t0 * theta)).margin(1e-12));
+        CHECK(m[i].axis.x == Approx(std::sin(t1 * theta)).margin(1e-12));
+        CHECK(m[i].axis.y == Approx(0).margin(1e-12));
+        CHECK(m[i].axis.z == Approx(std::cos(t1 * theta)).margin(1e-12));
+        CHECK(std::hypot(m[i].end.x, m[i].end.y) == Approx(10));
+    }
+    CHECK(glm::length(m.back().axis - Vec3(0.6, 0, 0.8)) < 1e-15);
+    // Opposite axes have no one great circle: an error at the GOTO that ends the arc.
+    CHECK_THROWS_WITH(parseApt("MULTAX\nCUTTER/10\nGOTO/10,0,0,0,0,1\nCIRCLE/0,0,0,0,0,1,10\nGOTO/-10,0,0,0,0,-1\n", "o.apt"),
+                      Catch::Contains("o.apt:5:1") && Catch::Contains("opposite"));
+}
