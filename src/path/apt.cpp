@@ -127,7 +127,8 @@ private:
             if (cm != std::string_view::npos) line = line.substr(0, cm);
             std::size_t end = line.size();
             while (end > 0 && (line[end - 1] == ' ' || line[end - 1] == '\t')) --end;
-            if (end > 0 && line[end - 1] == '$') {
+            // A text statement's text is literal: a '$' that ends it is text, not a continuation.
+            if (end > 0 && line[end - 1] == '$' && (continuing || !isTextStatement(line))) {
                 cont = true;
                 --end;
             }
@@ -161,18 +162,31 @@ private:
         return out;
     }
 
-    void parseHead(Statement& st, std::string_view line, std::size_t i, int lineNo) {
-        st.raw = std::string(line.substr(i));
-        const std::size_t slash = line.find('/', i);
-        std::string_view head = line.substr(i, slash == std::string_view::npos ? std::string_view::npos : slash - i);
+    /// The major word of a statement whose line starts with `head`: without blanks, upper case.
+    static std::string majorWord(std::string_view head) {
         std::string major;
         for (char c : head)
             if (c != ' ' && c != '\t') major += upper(c);
-        st.major = major;
+        return major;
+    }
+    /// Statements whose argument is the rest of their line, as text.
+    static bool isTextMajor(const std::string& major) {
+        return major == "PARTNO" || major == "INSERT" || major == "PPRINT" || major == "REMARK";
+    }
+    /// Whether a line that starts a statement starts a text statement (MAJOR/text).
+    static bool isTextStatement(std::string_view line) {
+        const std::size_t slash = line.find('/');
+        return slash != std::string_view::npos && isTextMajor(majorWord(line.substr(0, slash)));
+    }
+
+    void parseHead(Statement& st, std::string_view line, std::size_t i, int lineNo) {
+        st.raw = std::string(line.substr(i));
+        const std::size_t slash = line.find('/', i);
+        st.major = majorWord(line.substr(i, slash == std::string_view::npos ? std::string_view::npos : slash - i));
         if (slash == std::string_view::npos) return;
         st.hasSlash = true;
-        // Text statements keep their text as one argument.
-        if (major == "PARTNO" || major == "INSERT" || major == "PPRINT" || major == "REMARK") {
+        // Text statements keep their text as one argument; they never continue (split).
+        if (isTextMajor(st.major)) {
             st.args.push_back({std::string(line.substr(slash + 1)), lineNo, int(slash) + 2});
             return;
         }
@@ -180,10 +194,6 @@ private:
     }
 
     void parseArgs(Statement& st, std::string_view line, std::size_t i, int lineNo) {
-        if (st.major == "PARTNO" || st.major == "INSERT" || st.major == "PPRINT") {
-            if (!st.args.empty()) st.args.back().text += std::string(line);
-            return;
-        }
         while (i <= line.size()) {
             std::size_t e = line.find(',', i);
             if (e == std::string_view::npos) e = line.size();

@@ -302,3 +302,18 @@ TEST_CASE("apt: an arc between GOTOs whose tool axes differ turns the axis over 
     CHECK_THROWS_WITH(parseApt("MULTAX\nCUTTER/10\nGOTO/10,0,0,0,0,1\nCIRCLE/0,0,0,0,0,1,10\nGOTO/-10,0,0,0,0,-1\n", "o.apt"),
                       Catch::Contains("o.apt:5:1") && Catch::Contains("opposite"));
 }
+
+TEST_CASE("apt: a '$' that ends PPRINT, INSERT or PARTNO text is text, not a continuation", "[path][apt]") {
+    for (const std::string word : {"PPRINT", "INSERT", "PARTNO"}) {
+        INFO(word);
+        const Program p = parseApt("CUTTER/10\nGOTO/0,0,10\n" + word + "/COST IN $\nGOTO/10,0,10\nGOTO/10,10,10\nFINI\n",
+                                   "t.apt");
+        REQUIRE(p.path.moves.size() == 2);
+        CHECK(p.path.moves[0].end == Vec3(10, 0, 10));
+        CHECK(p.path.moves[1].end == Vec3(10, 10, 10));
+    }
+    // Other statements still continue on the next line.
+    const Program q = parseApt("CUTTER/10\nGOTO/0,0,10\nGOTO/10,$\n0,10\n", "q.apt");
+    REQUIRE(q.path.moves.size() == 1);
+    CHECK(q.path.moves[0].end == Vec3(10, 0, 10));
+}
