@@ -252,7 +252,7 @@ private:
             const auto v = numbers(s);
             if (v.size() != 3 && v.size() != 6) fail(s, "FROM needs x,y,z[,i,j,k]");
             pos_ = reachable(toPart(Vec3(v[0], v[1], v[2]) * scale_), s);
-            if (v.size() == 6) axis_ = axisOf(s, v, 3, "tool axis");
+            if (v.size() == 6) axis_ = toolAxisOf(s, v);
             posAxis_ = axis_;
             havePos_ = true;
             return;
@@ -267,10 +267,7 @@ private:
             if (!world_) diags_.warn(loc(s), "TRNTYP other than WORLD: CSYS maps local coordinates to the part frame", "TRNTYP");
             return;
         }
-        if (w == "MULTAX") {
-            multax_ = s.args.empty() || s.args[0].text != "OFF";
-            return;
-        }
+        if (w == "MULTAX") return multax(s);
         if (w == "CYCLE") return cycle(s);
         if (w == "CUTCOM") {
             if (!s.args.empty() && s.args[0].text != "OFF")
@@ -362,7 +359,33 @@ private:
             std::abs(glm::dot(rot_[0], rot_[2])) > 1e-3)
             fail(s, "CSYS rotation is not orthonormal");
         haveCsys_ = true;
-        axis_ = glm::normalize(rot_[2]);
+        axis_ = defaultAxis();
+    }
+
+    /// The axis of a GOTO without i,j,k where no MULTAX/ON is in force: the CSYS's z column, or +z.
+    Vec3 defaultAxis() const { return haveCsys_ ? glm::normalize(rot_[2]) : Vec3(0, 0, 1); }
+
+    /// MULTAX[/ON] gives GOTO and FROM a tool axis i,j,k after x,y,z; MULTAX/OFF ends that, and
+    /// the tool goes back to the default axis (its next move turns there).
+    void multax(const Statement& s) {
+        const std::string word = s.args.empty() ? "ON" : s.args[0].text;
+        if (word == "ON") {
+            multax_ = Multax::On;
+        } else if (word == "OFF") {
+            multax_ = Multax::Off;
+            axis_ = defaultAxis();
+        } else {
+            fail(s.args[0], "MULTAX takes ON or OFF");
+        }
+    }
+
+    /// The tool axis of a GOTO or FROM with 6 numbers. Under MULTAX/OFF a CL point is x,y,z alone
+    /// (a record's six numbers are two points there), so they are no axis: an error.
+    Vec3 toolAxisOf(const Statement& s, const std::vector<double>& v) {
+        if (multax_ == Multax::Off)
+            fail(s.args[3], s.major + " with 6 numbers under MULTAX/OFF, where a point is x,y,z: a tool axis i,j,k "
+                                      "needs MULTAX/ON");
+        return axisOf(s, v, 3, "tool axis");
     }
 
     Vec3 toPart(const Vec3& p) const {
@@ -530,7 +553,7 @@ private:
         if (v.size() != 3 && v.size() != 6) fail(s, "GOTO needs x,y,z or x,y,z,i,j,k");
         requireTool(s);
         const Vec3 p = reachable(toPart(Vec3(v[0], v[1], v[2]) * scale_), s);
-        if (v.size() == 6) axis_ = axisOf(s, v, 3, "tool axis");
+        if (v.size() == 6) axis_ = toolAxisOf(s, v);
         const bool rapid = rapidNext_;
         rapidNext_ = false;
         if (!havePos_) {
@@ -780,7 +803,10 @@ private:
     Vec3 posAxis_{0, 0, 1};  ///< the axis the tool has at pos_: a move from there to a new axis_ turns
     bool havePos_ = false;
     bool rapidNext_ = false;
-    bool multax_ = false;
+    /// MULTAX as last stated: SolidWorks CAM writes GOTO/x,y,z,i,j,k without any, so a program
+    /// that never states it reads i,j,k as under MULTAX/ON.
+    enum class Multax { Unstated, On, Off };
+    Multax multax_ = Multax::Unstated;
     bool finished_ = false;
     /// A tool-table entry the reader made for a CUTTER that changed tool `number` after it had
     /// cut (define()).

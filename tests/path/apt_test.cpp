@@ -317,3 +317,44 @@ TEST_CASE("apt: a '$' that ends PPRINT, INSERT or PARTNO text is text, not a con
     REQUIRE(q.path.moves.size() == 1);
     CHECK(q.path.moves[0].end == Vec3(10, 0, 10));
 }
+
+TEST_CASE("apt: MULTAX/OFF brings back the axis of a GOTO without i,j,k, and takes no i,j,k", "[path][apt]") {
+    const Program p = parseApt("UNITS/MM\nCUTTER/10\nMULTAX/ON\nGOTO/0,0,10,0,0.6,0.8\nGOTO/10,0,10,0,0.6,0.8\n"
+                               "MULTAX/OFF\nGOTO/10,0,20\nGOTO/30,0,20\nFINI\n",
+                               "m.apt");
+    const auto& m = p.path.moves;
+    REQUIRE(m.size() == 3);
+    CHECK(glm::length(m[0].axis - Vec3(0, 0.6, 0.8)) < 1e-15);
+    // The first move after MULTAX/OFF turns back to +z, as a GOTO with new i,j,k turns.
+    REQUIRE(m[1].turns());
+    CHECK(glm::length(*m[1].startAxis - Vec3(0, 0.6, 0.8)) < 1e-15);
+    CHECK(m[1].axis == Vec3(0, 0, 1));
+    CHECK_FALSE(m[2].turns());
+    CHECK(m[2].axis == Vec3(0, 0, 1));
+    // With a CSYS, the default axis is its z column, (1, 0, 0) here.
+    const Program c = parseApt("MULTAX\nCUTTER/6\nCSYS/0,0,1,5,0,1,0,0,-1,0,0,0\nFROM/0,0,0\nGOTO/0,0,10,0,1,0\n"
+                               "MULTAX/OFF\nGOTO/0,0,20\n",
+                               "c.apt");
+    REQUIRE(c.path.moves.size() == 2);
+    CHECK(glm::length(c.path.moves[0].axis - Vec3(0, 1, 0)) < 1e-15);
+    CHECK(glm::length(c.path.moves[1].axis - Vec3(1, 0, 0)) < 1e-15);
+    // Under MULTAX/OFF a point is x,y,z: six numbers are an error at the fourth, not an axis.
+    const struct {
+        const char* text;
+        int line, column;
+    } refused[] = {
+        {"CUTTER/10\nMULTAX/OFF\nGOTO/0,0,10\nGOTO/10,0,10,0,0.6,0.8\n", 4, 14},
+        {"MULTAX/OFF\nCUTTER/10\nFROM/0,0,10,0,0,1\n", 3, 13},
+    };
+    for (const auto& r : refused) {
+        INFO(r.text);
+        try {
+            parseApt(r.text, "off.apt");
+            FAIL("no error");
+        } catch (const ParseError& e) {
+            CHECK(e.where().line == r.line);
+            CHECK(e.where().column == r.column);
+            CHECK(e.message().find("MULTAX/OFF") != std::string::npos);
+        }
+    }
+}
