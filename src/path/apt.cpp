@@ -5,6 +5,7 @@
 #include "dexelmill/path/apt.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -40,6 +41,8 @@ constexpr double kUnitVectorRounding = 1e-5;
 /// The largest tool number LOAD/TOOL takes: the entries the reader makes are numbered after the
 /// program's, and stay far below INT_MAX.
 constexpr double kMaxToolNumber = 1e7;
+/// CUTTER/d,r,e,f,alpha,beta,h: APT's full form; CUTTER/d and CUTTER/d,r are its short ones.
+constexpr std::array<const char*, 7> kCutterNames = {"d", "r", "e", "f", "alpha", "beta", "h"};
 
 struct Token {
     std::string text;  ///< upper case, trimmed
@@ -414,8 +417,15 @@ private:
 
     void cutter(const Statement& s) {
         const auto v = numbers(s);
-        if (v.empty() || v.size() > 7 || v.size() == 3 || v.size() == 4)
-            fail(s, "CUTTER needs d, or d,r, or d,r,h... (1, 2, 5, 6 or 7 numbers)");
+        if (v.empty() || v.size() > kCutterNames.size())
+            fail(s, "CUTTER needs d, d,r or d,r,e,f,alpha,beta,h (1, 2 or 7 numbers)");
+        if (v.size() > 2 && v.size() < kCutterNames.size()) {
+            std::string missing;
+            for (std::size_t k = v.size(); k < kCutterNames.size(); ++k)
+                missing += std::string(missing.empty() ? "" : ",") + kCutterNames[k];
+            fail(s, "CUTTER with " + std::to_string(v.size()) +
+                        " numbers: APT's forms are d, d,r and d,r,e,f,alpha,beta,h; this one lacks " + missing);
+        }
         CutterSpec spec;
         for (std::size_t k = 0; k < v.size(); ++k)
             spec.params.push_back((k == 4 || k == 5) ? v[k] : v[k] * scale_);
@@ -757,12 +767,12 @@ private:
                     else if (std::abs(r - d / 2) < 1e-9) out_.tools.insert_or_assign(n, ballEndMill(d, lengths));
                     else out_.tools.insert_or_assign(n, bullNoseEndMill(d, r, lengths));
                 } else {
-                    // CUTTER/d,r,e,f,alpha,beta,h with defaults for the short forms.
-                    const double e = v.size() > 2 ? v[2] : d / 2 - r;
-                    const double f0 = v.size() > 3 ? v[3] : r;
-                    const double alpha = (v.size() > 4 ? v[4] : 0.0) * kPi / 180.0;
-                    const double beta = (v.size() > 5 ? v[5] : 0.0) * kPi / 180.0;
-                    const double h = v.size() > 6 ? v[6] : 0.0;
+                    // CUTTER/d,r,e,f,alpha,beta,h.
+                    const double e = v[2];
+                    const double f0 = v[3];
+                    const double alpha = v[4] * kPi / 180.0;
+                    const double beta = v[5] * kPi / 180.0;
+                    const double h = v[6];
                     // CL files print 6 digits: a pointed tip (drill) whose flank misses the axis
                     // by rounding alone is snapped onto it.
                     double f = f0;

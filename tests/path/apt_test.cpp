@@ -162,6 +162,10 @@ TEST_CASE("apt: malformed programs give a parse error with file:line:col and the
         {"UNITS/FURLONGS\n", 1, "unknown units", "FURLONGS"},
         {"CUTTER/6,0,3,0,0,0,-5\nLOAD/TOOL,1\n", 1, "height must not be negative", "-5"},
         {"CUTTER/6,2,5,2,0,0,10\nLOAD/TOOL,1\n", 1, "no real tool", ""},
+        // APT's CUTTER has 1, 2 or 7 numbers: the 5- and 6-number forms lack the last ones.
+        {"CUTTER/10,0,5,0,0\nGOTO/0,0,0\nGOTO/1,0,0\n", 1, "lacks beta,h", "CUTTER"},
+        {"CUTTER/10,0,5,0,0,0\nGOTO/0,0,0\nGOTO/1,0,0\n", 1, "lacks h", "CUTTER"},
+        {"CUTTER/10,0,5,0,0,0,30,1\n", 1, "1, 2 or 7 numbers", "CUTTER"},
         {"MULTAX\nCUTTER/6\nGOTO/1,2,3,0,0,1\nGOTO/4,5,6,0,0,0\n", 4, "tool axis i,j,k of zero length", "GOTO"},
         {"CUTTER/6\nFROM/0,0,5,0,0,0\n", 2, "tool axis i,j,k of zero length", "FROM"},
         {"CUTTER/6\nFROM/5,0,0\nCIRCLE/0,0,0,0,0,0,5\nGOTO/0,5,0\n", 3, "CIRCLE axis i,j,k of zero length", "CIRCLE"},
