@@ -41,6 +41,8 @@ constexpr double kUnitVectorRounding = 1e-5;
 /// The largest tool number LOAD/TOOL takes: the entries the reader makes are numbered after the
 /// program's, and stay far below INT_MAX.
 constexpr double kMaxToolNumber = 1e7;
+/// A FROM within this distance (mm) of where the tool is only states its place again.
+constexpr double kRestatedPositionMm = 1e-6;
 /// CUTTER/d,r,e,f,alpha,beta,h: APT's full form; CUTTER/d and CUTTER/d,r are its short ones.
 constexpr std::array<const char*, 7> kCutterNames = {"d", "r", "e", "f", "alpha", "beta", "h"};
 
@@ -251,15 +253,7 @@ private:
             return;
         }
         if (w == "CIRCLE") return circle(s);
-        if (w == "FROM") {
-            const auto v = numbers(s);
-            if (v.size() != 3 && v.size() != 6) fail(s, "FROM needs x,y,z[,i,j,k]");
-            pos_ = reachable(toPart(Vec3(v[0], v[1], v[2]) * scale_), s);
-            if (v.size() == 6) axis_ = toolAxisOf(s, v);
-            posAxis_ = axis_;
-            havePos_ = true;
-            return;
-        }
+        if (w == "FROM") return from(s);
         if (w == "GODLTA") return godlta(s);
         if (w == "CUTTER") return cutter(s);
         if (w == "LOAD" || w == "TOOLNO" || w == "LOADTL") return loadTool(s);
@@ -576,6 +570,24 @@ private:
         if (circle_) return arcTo(p, s);
         if (cycle_.active) return drill(p, s);
         emit(p, rapid, s);
+    }
+
+    /// FROM/x,y,z[,i,j,k] says where the tool is, with no move. Once the tool has a place, a FROM
+    /// that puts it elsewhere skips the way between: a warning, since that is not simulated.
+    void from(const Statement& s) {
+        const auto v = numbers(s);
+        if (v.size() != 3 && v.size() != 6) fail(s, "FROM needs x,y,z[,i,j,k]");
+        const Vec3 p = reachable(toPart(Vec3(v[0], v[1], v[2]) * scale_), s);
+        if (v.size() == 6) axis_ = toolAxisOf(s, v);
+        if (havePos_ && (glm::length(p - pos_) > kRestatedPositionMm || axis_ != posAxis_)) {
+            std::string msg = "FROM moves the tool from " + detail::formatPoint(pos_) + " to " + detail::formatPoint(p);
+            if (axis_ != posAxis_)
+                msg += " and its axis from " + detail::formatPoint(posAxis_) + " to " + detail::formatPoint(axis_);
+            diags_.warn(loc(s), msg + " with no move: the way between is not simulated", "apt FROM jump");
+        }
+        pos_ = p;
+        posAxis_ = axis_;
+        havePos_ = true;
     }
 
     void godlta(const Statement& s) {

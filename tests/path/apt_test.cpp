@@ -362,3 +362,23 @@ TEST_CASE("apt: MULTAX/OFF brings back the axis of a GOTO without i,j,k, and tak
         }
     }
 }
+
+TEST_CASE("apt: a FROM that puts the tool elsewhere after it has a place is reported", "[path][apt]") {
+    // The tool is at (10, 0, 0) when FROM says (50, 0, 0): the 40 mm between are not simulated.
+    const Program p = parseApt("CUTTER/10\nFROM/0,0,0\nGOTO/10,0,0\nFROM/50,0,0\nGOTO/60,0,0\nFINI\n", "f.apt");
+    REQUIRE(p.path.moves.size() == 2);
+    CHECK(p.path.moves[1].start == Vec3(50, 0, 0));
+    int warned = 0;
+    for (const Diagnostic& d : p.diagnostics) {
+        if (d.message.find("not simulated") == std::string::npos) continue;
+        ++warned;
+        CHECK(d.where.line == 4);
+        CHECK(d.where.column == 1);
+        CHECK(d.message.find("(10, 0, 0)") != std::string::npos);
+        CHECK(d.message.find("(50, 0, 0)") != std::string::npos);
+    }
+    CHECK(warned == 1);
+    // The first FROM, and a FROM that states the place the tool is at, move nothing.
+    const Program q = parseApt("CUTTER/10\nFROM/0,0,0\nGOTO/10,0,0\nFROM/10,0,0\nGOTO/20,0,0\n", "q.apt");
+    CHECK_FALSE(hasDiagnostic(q, "not simulated"));
+}
