@@ -608,6 +608,7 @@ private:
         const auto v = numbers(s);
         if (v.size() < 6) fail(s, "CIRCLE needs xc,yc,zc,i,j,k[,r,...]");
         if (circle_) fail(s, "CIRCLE follows CIRCLE without the GOTO that ends the first");
+        if (!havePos_) fail(s, "CIRCLE before any position (no FROM or GOTO): the arc has no start");
         Circle c;
         c.centre = toPart(Vec3(v[0], v[1], v[2]) * scale_);
         c.axis = axisOf(s, v, 3, "CIRCLE axis");

@@ -155,6 +155,8 @@ TEST_CASE("apt: malformed programs give a parse error with file:line:col and the
         {"CUTTER/6\nFROM/5,0,0\nCIRCLE/0,0,0,0,0,1,0\nGOTO/0,5,0\n", 3, "CIRCLE radius must be positive", "0"},
         {"CUTTER/6\nFROM/1,0,0\nCIRCLE/0,0,0,0,0,1\nGOTO/3,3,0\n", 4, "not on the circle", "GOTO"},
         {"CUTTER/6\nFROM/1,0,0\nCIRCLE/0,0,0,0,0,1\n", 3, "truncated", ""},
+        // An arc starts where the tool is: before any position it has no start.
+        {"CUTTER/6\nCIRCLE/0,0,0,0,0,1\nGOTO/10,0,0\nGOTO/20,0,0\n", 2, "CIRCLE before any position", "CIRCLE"},
         {"CUTTER/6\nGOTO/1,2,$\n", 2, "truncated", "GOTO"},
         {"CUTTER/6\nCYCLE/TAPX,FEDTO,1\n", 2, "unsupported CYCLE", "TAPX"},
         {"CUTTER/6\nCYCLE/DRILL,RAPTO,1\n", 2, "without FEDTO", "CYCLE"},
