@@ -119,6 +119,7 @@ private:
         int lineNo = 0;
         Statement st;
         bool continuing = false;
+        int dollarCol = 0;  // of the last line's continuing '$'
         while (pos < text.size()) {
             std::size_t e = text.find('\n', pos);
             if (e == std::string_view::npos) e = text.size();
@@ -135,6 +136,7 @@ private:
             // A text statement's text is literal: a '$' that ends it is text, not a continuation.
             if (end > 0 && line[end - 1] == '$' && (continuing || !isTextStatement(line))) {
                 cont = true;
+                dollarCol = int(end);
                 --end;
             }
             line = line.substr(0, end);
@@ -161,7 +163,7 @@ private:
             if (!continuing) out.push_back(std::move(st));
         }
         if (continuing)
-            throw ParseError({file_, lineNo, 0},
+            throw ParseError({file_, lineNo, dollarCol},
                              "statement continued with '$' at the end of the file (truncated file?)",
                              st.raw.substr(0, 60));
         return out;

@@ -384,3 +384,24 @@ TEST_CASE("apt: a FROM that puts the tool elsewhere after it has a place is repo
     const Program q = parseApt("CUTTER/10\nFROM/0,0,0\nGOTO/10,0,0\nFROM/10,0,0\nGOTO/20,0,0\n", "q.apt");
     CHECK_FALSE(hasDiagnostic(q, "not simulated"));
 }
+
+TEST_CASE("apt: a statement continued at the end of the file names the '$'", "[path][apt][errors]") {
+    const struct {
+        const char* text;
+        int line, column;
+    } cases[] = {
+        {"CUTTER/6\nGOTO/1,2,$", 2, 10},
+        {"CUTTER/6\nGOTO/1,$\n  2,$\n", 3, 5},
+    };
+    for (const auto& c : cases) {
+        INFO(c.text);
+        try {
+            parseApt(c.text, "eof.apt");
+            FAIL("no error");
+        } catch (const ParseError& e) {
+            CHECK(e.where().line == c.line);
+            CHECK(e.where().column == c.column);
+            CHECK(e.message().find("end of the file") != std::string::npos);
+        }
+    }
+}
