@@ -252,7 +252,7 @@ private:
         if (w == "FEDRAT") return warnKind(s, "feed rate FEDRAT is not simulated (ignored)");
         if (w == "RAPID") {
             rapidNext_ = true;
-            return;
+            return ignoreArgs(s, 0, "RAPID");
         }
         if (w == "CIRCLE") return circle(s);
         if (w == "FROM") return from(s);
@@ -278,7 +278,7 @@ private:
         if (w == "CSI_SET_FLUTE_LENGTH") return fluteLength(s);
         if (w == "FINI") {
             finished_ = true;
-            return;
+            return ignoreArgs(s, 0, "FINI");
         }
         if (w == "INSERT" && statedStock(s)) return;
         if (w == "PARTNO" || w == "INSERT" || w == "PPRINT" || w == "REMARK")
@@ -340,6 +340,13 @@ private:
         if (u == "MM") scale_ = 1.0;
         else if (u == "INCHES" || u == "INCH" || u == "IN") scale_ = kInch;
         else fail(s.args[0], "unknown units");
+        if (s.args.size() > 1) fail(s.args[1], "UNITS takes one word, MM or INCHES");
+    }
+
+    /// Warns of the arguments of s from `first` on, which its form does not take.
+    void ignoreArgs(const Statement& s, std::size_t first, const std::string& form) {
+        for (std::size_t k = first; k < s.args.size(); ++k)
+            diags_.warn(loc(s.args[k]), form + " argument " + s.args[k].text + " ignored", "apt args " + form);
     }
 
     void csys(const Statement& s) {
@@ -376,6 +383,7 @@ private:
         } else {
             fail(s.args[0], "MULTAX takes ON or OFF");
         }
+        ignoreArgs(s, 1, "MULTAX");
     }
 
     /// The tool axis of a GOTO or FROM with 6 numbers. Under MULTAX/OFF a CL point is x,y,z alone
@@ -455,8 +463,7 @@ private:
             pending_.reset();
             define(spec, s);
         }
-        for (std::size_t t = k + 1; t < s.args.size(); ++t)
-            diags_.warn(loc(s.args[t]), form + " argument ignored", "load args");
+        ignoreArgs(s, k + 1, form);
     }
 
     /// Moves from here on are made with the tool-table entry `key`: a tool change unless it is
@@ -697,7 +704,7 @@ private:
         const std::string& kind = s.args[0].text;
         if (kind == "OFF") {
             cycle_.active = false;
-            return;
+            return ignoreArgs(s, 1, "CYCLE/OFF");
         }
         if (kind == "INIT" || kind == "CLEAR") return warnKind(s, "CYCLE/INIT and CYCLE/CLEAR ignored");
         if (kind != "DRILL" && kind != "DEEP" && kind != "DEEP2" && kind != "BRKCHP" && kind != "FACE")

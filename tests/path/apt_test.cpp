@@ -405,3 +405,31 @@ TEST_CASE("apt: a statement continued at the end of the file names the '$'", "[p
         }
     }
 }
+
+TEST_CASE("apt: arguments a statement does not take are reported where they stand", "[path][apt]") {
+    const Program p = parseApt("UNITS/MM\nCUTTER/10\nRAPID/100,200\nGOTO/0,0,10\nGOTO/10,0,10\nCYCLE/OFF,FOO\n"
+                               "MULTAX/ON,X\nFINI/BAR\n",
+                               "a.apt");
+    const struct {
+        const char* message;
+        int line, column;
+    } expected[] = {
+        {"RAPID argument 100 ignored (2 occurrences", 3, 7},
+        {"CYCLE/OFF argument FOO ignored", 6, 11},
+        {"MULTAX argument X ignored", 7, 11},
+        {"FINI argument BAR ignored", 8, 6},
+    };
+    for (const auto& e : expected) {
+        INFO(e.message);
+        int found = 0;
+        for (const Diagnostic& d : p.diagnostics) {
+            if (d.message.find(e.message) == std::string::npos) continue;
+            ++found;
+            CHECK(d.where.line == e.line);
+            CHECK(d.where.column == e.column);
+        }
+        CHECK(found == 1);
+    }
+    // Two units cannot both hold: an error at the second.
+    CHECK_THROWS_WITH(parseApt("UNITS/MM,INCHES\n", "u.apt"), Catch::Contains("u.apt:1:10") && Catch::Contains("one word"));
+}
