@@ -297,7 +297,7 @@ private:
             pending_->cuttingLength = v[0] * scale_;
             return;
         }
-        if (tool_ == 0 || !cutters_.count(key_)) return;
+        if (!loaded_ || !cutters_.count(key_)) return;
         CutterSpec spec = cutters_.at(key_);
         spec.cuttingLength = v[0] * scale_;
         if (spec.cut) spec.where = loc(s);
@@ -441,7 +441,7 @@ private:
         if (v.size() == 7 && !(v[6] >= 0)) fail(s.args[6], "CUTTER height must not be negative");
         // After LOAD/TOOL, a CUTTER describes the loaded tool; otherwise the LOAD/TOOL that
         // follows claims it, or the next motion takes it (requireTool).
-        if (tool_ != 0 && !cutters_.count(key_)) cutters_[key_] = spec;
+        if (loaded_ && !cutters_.count(key_)) cutters_[key_] = spec;
         else pending_ = spec;
     }
 
@@ -469,7 +469,8 @@ private:
     /// Moves from here on are made with the tool-table entry `key`: a tool change unless it is
     /// the one in use. Changes with no move between them are one change.
     void selectKey(int key, const Statement& s) {
-        if (key == key_) return;
+        if (loaded_ && key == key_) return;
+        loaded_ = true;
         key_ = key;
         auto& changes = out_.path.toolChanges;
         if (!changes.empty() && changes.back().moveIndex == out_.path.moves.size()) changes.pop_back();
@@ -504,7 +505,7 @@ private:
         if (pending_) {
             const CutterSpec spec = *pending_;
             pending_.reset();
-            if (tool_ == 0) {
+            if (!loaded_) {
                 diags_.note(loc(s), "CUTTER without LOAD/TOOL: taken as tool 1");
                 tool_ = 1;
                 largestNumber_ = std::max(largestNumber_, tool_);
@@ -513,7 +514,7 @@ private:
             }
             define(spec, s);
         }
-        if (tool_ == 0) fail(s, "motion before any CUTTER statement (missing CUTTER)");
+        if (!loaded_) fail(s, "motion before any CUTTER statement (missing CUTTER)");
         if (!cutters_.count(key_))
             fail(s, "tool " + std::to_string(tool_) + " has no CUTTER (missing CUTTER)");
     }
@@ -848,8 +849,9 @@ private:
         int replacedLine = 0;
     };
 
-    int tool_ = 0;  ///< the program's number of the tool in the spindle (0: none loaded)
-    int key_ = 0;   ///< its entry in cutters_ and the tool table, which its moves name
+    bool loaded_ = false;  ///< a tool is in the spindle: tool_ and key_ say which
+    int tool_ = 0;         ///< the program's number of the tool in the spindle
+    int key_ = 0;          ///< its entry in cutters_ and the tool table, which its moves name
     int largestNumber_ = 0;  ///< of the tool numbers the program names
     std::map<int, int> keyOf_;  ///< the entry each tool number names now
     std::vector<NewTool> newTools_;  ///< entry -1 - i is newTools_[i] until numberNewTools()

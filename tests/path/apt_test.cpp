@@ -433,3 +433,13 @@ TEST_CASE("apt: arguments a statement does not take are reported where they stan
     // Two units cannot both hold: an error at the second.
     CHECK_THROWS_WITH(parseApt("UNITS/MM,INCHES\n", "u.apt"), Catch::Contains("u.apt:1:10") && Catch::Contains("one word"));
 }
+
+TEST_CASE("apt: LOAD/TOOL,0 after a CUTTER loads tool 0", "[path][apt]") {
+    const Program p = parseApt("CUTTER/10\nLOAD/TOOL,0\nGOTO/0,0,10\nGOTO/10,0,10\nFINI\n", "z.apt");
+    REQUIRE(p.path.moves.size() == 1);
+    CHECK(p.path.moves[0].tool == 0);
+    REQUIRE(p.tools.count(0) == 1);
+    CHECK(p.tools.at(0).cuttingRadius() == Approx(5));
+    REQUIRE(p.path.toolChanges.size() == 1);
+    CHECK(p.path.toolChanges[0].tool == 0);
+}
