@@ -44,6 +44,16 @@ const char* kSlot =
     "M30\n";
 const double kSlotVolume = 3 * (30 * 6 + kPi * 9);
 
+/// A project in `dir` that runs its `own.ngc` with a flat D6 as tool 1 on a 40 x 30 x 10 mm
+/// block, its JSON members `resolution` (each with its comma) first.
+std::string blockProject(const fs::path& dir, const std::string& resolution) {
+    return write(dir / "p.camotics", "{" + resolution + R"(
+      "tools": {"1": {"units": "metric", "shape": "cylindrical", "length": 20, "diameter": 6}},
+      "workpiece": {"automatic": false, "bounds": {"min": [0, 0, 0], "max": [40, 30, 10]}},
+      "files": ["own.ngc"]
+    })");
+}
+
 }  // namespace
 
 TEST_CASE("a slot removes its analytic volume and the report says so", "[job]") {
@@ -235,12 +245,7 @@ TEST_CASE("a project's resolution mode computes the spacing from the stock, as C
     const double low = std::cbrt(12000.0 / 1e5);
     for (const char* stored : {"", R"("resolution": 0.493242,)", R"("resolution": 0.1,)"}) {
         INFO(stored);
-        const std::string project = write(dir / "p.camotics", std::string(R"({"resolution-mode": "low", )") + stored +
-                                                                   R"(
-          "tools": {"1": {"units": "metric", "shape": "cylindrical", "length": 20, "diameter": 6}},
-          "workpiece": {"automatic": false, "bounds": {"min": [0, 0, 0], "max": [40, 30, 10]}},
-          "files": ["own.ngc"]
-        })");
+        const std::string project = blockProject(dir, std::string(R"("resolution-mode": "low", )") + stored);
         SimulateOptions o;
         o.inputs = {project};
         const SimulateReport r = runSimulation(o).report;
@@ -425,12 +430,8 @@ TEST_CASE("a project resolution that is not positive is replaced with a warning 
     write(dir / "own.ngc", "G21 G90\nT1\nG0 X5 Y5 Z5\nG1 Z-1 F100\nG1 X15\n");
     for (const char* value : {"0", "-1"}) {
         INFO(value);
-        const std::string project = write(dir / "p.camotics", std::string(R"({
-          "resolution-mode": "manual", "resolution": )") + value + R"(,
-          "tools": {"1": {"units": "metric", "shape": "cylindrical", "length": 20, "diameter": 6}},
-          "workpiece": {"automatic": false, "bounds": {"min": [0, 0, 0], "max": [40, 30, 10]}},
-          "files": ["own.ngc"]
-        })");
+        const std::string project =
+            blockProject(dir, std::string(R"("resolution-mode": "manual", "resolution": )") + value + ",");
         SimulateOptions o;
         o.inputs = {project};
         const SimulateReport r = runSimulation(o).report;
