@@ -443,3 +443,25 @@ TEST_CASE("apt: LOAD/TOOL,0 after a CUTTER loads tool 0", "[path][apt]") {
     REQUIRE(p.path.toolChanges.size() == 1);
     CHECK(p.path.toolChanges[0].tool == 0);
 }
+
+TEST_CASE("apt: two programs run in turn keep their own tools where they share a number", "[path][apt]") {
+    // Each file loads its own CUTTER as tool 1: the first's moves are cut with its D10, the
+    // second's with its D6 under a number neither file uses (2), and a note says so.
+    Program p = parseApt("CUTTER/10\nLOAD/TOOL,1\nGOTO/0,0,10\nGOTO/10,0,10\nFINI\n", "a.apt");
+    p.append(parseApt("CUTTER/6\nLOAD/TOOL,1\nGOTO/0,0,10\nGOTO/0,10,10\nFINI\n", "b.apt"));
+    REQUIRE(p.path.moves.size() == 2);
+    CHECK(p.path.moves[0].tool == 1);
+    CHECK(p.path.moves[1].tool == 2);
+    REQUIRE(p.tools.size() == 2);
+    CHECK(p.tools.at(1).cuttingRadius() == Approx(5));
+    CHECK(p.tools.at(2).cuttingRadius() == Approx(3));
+    REQUIRE(p.path.toolChanges.size() == 2);
+    CHECK(p.path.toolChanges[1].tool == 2);
+    CHECK(hasDiagnostic(p, "its moves here are tool T2"));
+
+    // The same CUTTER under the same number is one tool.
+    Program same = parseApt("CUTTER/10\nLOAD/TOOL,1\nGOTO/0,0,10\nGOTO/10,0,10\nFINI\n", "a.apt");
+    same.append(parseApt("CUTTER/10\nLOAD/TOOL,1\nGOTO/0,0,10\nGOTO/0,10,10\nFINI\n", "c.apt"));
+    CHECK(same.tools.size() == 1);
+    CHECK(same.path.moves[1].tool == 1);
+}

@@ -130,25 +130,11 @@ struct Program {
     std::array<Interval, 3> rotaryRanges{Interval::empty(), Interval::empty(), Interval::empty()};
 
     /// @brief Runs `next` after this program: its files, moves and tool changes are renumbered
-    /// onto the end of these, its tools replace same-numbered ones, its diagnostics follow.
-    void append(Program&& next) {
-        const auto fileBase = std::uint32_t(path.files.size());
-        const std::size_t moveBase = path.moves.size();
-        for (std::string& f : next.path.files) path.files.push_back(std::move(f));
-        for (Move m : next.path.moves) {
-            m.source.file += fileBase;
-            path.moves.push_back(m);
-        }
-        for (ToolChange c : next.path.toolChanges) {
-            c.moveIndex += moveBase;
-            c.source.file += fileBase;
-            path.toolChanges.push_back(c);
-        }
-        for (auto& [n, t] : next.tools) tools.insert_or_assign(n, std::move(t));
-        for (Diagnostic& d : next.diagnostics) diagnostics.push_back(std::move(d));
-        if (next.statedStock) statedStock = std::move(next.statedStock);
-        for (std::size_t a = 0; a < 3; ++a) rotaryRanges[a] = rotaryRanges[a].hull(next.rotaryRanges[a]);
-    }
+    /// onto the end of these, its tools join these, its diagnostics follow. A number both define
+    /// as different tools (two APT files that each load another CUTTER as tool 1) keeps its tool
+    /// here, and next's takes a number neither uses, for its own moves, with a note that says so:
+    /// no move is cut with the other program's tool.
+    void append(Program&& next);
 };
 
 /// @brief Where the readers get the text of a file they are told to read (a project's programs,
