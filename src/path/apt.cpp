@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -134,7 +135,7 @@ private:
             std::size_t end = line.size();
             while (end > 0 && (line[end - 1] == ' ' || line[end - 1] == '\t')) --end;
             // A text statement's text is literal: a '$' that ends it is text, not a continuation.
-            if (end > 0 && line[end - 1] == '$' && (continuing || !isTextStatement(line))) {
+            if (end > 0 && line[end - 1] == '$' && (continuing || textStart(line) == std::string_view::npos)) {
                 cont = true;
                 dollarCol = int(end);
                 --end;
@@ -180,23 +181,33 @@ private:
     static bool isTextMajor(const std::string& major) {
         return major == "PARTNO" || major == "INSERT" || major == "PPRINT" || major == "REMARK";
     }
-    /// Whether a line that starts a statement starts a text statement (MAJOR/text).
-    static bool isTextStatement(std::string_view line) {
-        const std::size_t slash = line.find('/');
-        return slash != std::string_view::npos && isTextMajor(majorWord(line.substr(0, slash)));
+    /// Where the text begins when a line starts a text statement, in either of APT's forms,
+    /// `PARTNO text` or `PARTNO/text`; npos for any other statement.
+    static std::size_t textStart(std::string_view line) {
+        std::size_t i = 0;
+        while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+        const std::size_t slash = line.find('/', i);
+        if (slash != std::string_view::npos && isTextMajor(majorWord(line.substr(i, slash - i)))) return slash + 1;
+        std::size_t e = i;
+        while (e < line.size() && std::isalpha(static_cast<unsigned char>(line[e]))) ++e;
+        if (e < line.size() && (line[e] == ' ' || line[e] == '\t') && isTextMajor(majorWord(line.substr(i, e - i))))
+            return e + 1;
+        return std::string_view::npos;
     }
 
     void parseHead(Statement& st, std::string_view line, std::size_t i, int lineNo) {
         st.raw = std::string(line.substr(i));
+        // Text statements keep their text as one argument; they never continue (split).
+        if (const std::size_t text = textStart(line); text != std::string_view::npos) {
+            st.major = majorWord(line.substr(i, text - 1 - i));
+            st.hasSlash = line[text - 1] == '/';
+            st.args.push_back({std::string(line.substr(text)), lineNo, int(text) + 1});
+            return;
+        }
         const std::size_t slash = line.find('/', i);
         st.major = majorWord(line.substr(i, slash == std::string_view::npos ? std::string_view::npos : slash - i));
         if (slash == std::string_view::npos) return;
         st.hasSlash = true;
-        // Text statements keep their text as one argument; they never continue (split).
-        if (isTextMajor(st.major)) {
-            st.args.push_back({std::string(line.substr(slash + 1)), lineNo, int(slash) + 2});
-            return;
-        }
         parseArgs(st, line, slash + 1, lineNo);
     }
 

@@ -218,7 +218,7 @@ TEST_CASE("apt: a CUTTER applies to the moves after it, with or without LOAD/TOO
     REQUIRE(p.path.moves.size() == 2);
     const int first = p.path.moves[0].tool, second = p.path.moves[1].tool;
     CHECK(first == 1);
-    CHECK(second != first);
+    CHECK(second == 2);  // numbered after the largest number the program names
     REQUIRE(p.tools.count(first) == 1);
     REQUIRE(p.tools.count(second) == 1);
     CHECK(p.tools.at(first).cuttingRadius() == Approx(5));
@@ -310,13 +310,16 @@ TEST_CASE("apt: an arc between GOTOs whose tool axes differ turns the axis over 
 }
 
 TEST_CASE("apt: a '$' that ends PPRINT, INSERT or PARTNO text is text, not a continuation", "[path][apt]") {
-    for (const std::string word : {"PPRINT", "INSERT", "PARTNO"}) {
+    // In either of APT's forms: with a slash, and with a blank (`PARTNO text`).
+    for (const std::string word : {"PPRINT/", "INSERT/", "PARTNO/", "PPRINT ", "PARTNO ", "REMARK "}) {
         INFO(word);
-        const Program p = parseApt("CUTTER/10\nGOTO/0,0,10\n" + word + "/COST IN $\nGOTO/10,0,10\nGOTO/10,10,10\nFINI\n",
+        const Program p = parseApt("CUTTER/10\nGOTO/0,0,10\n" + word + "COST IN $\nGOTO/10,0,10\nGOTO/10,10,10\nFINI\n",
                                    "t.apt");
         REQUIRE(p.path.moves.size() == 2);
         CHECK(p.path.moves[0].end == Vec3(10, 0, 10));
         CHECK(p.path.moves[1].end == Vec3(10, 10, 10));
+        const std::string major = word.substr(0, 6);
+        CHECK(hasDiagnostic(p, major + " text ignored"));
     }
     // Other statements still continue on the next line.
     const Program q = parseApt("CUTTER/10\nGOTO/0,0,10\nGOTO/10,$\n0,10\n", "q.apt");

@@ -185,7 +185,9 @@ TEST_CASE("camotics: an automatic workpiece is CAMotics' block from z = 0", "[pa
     check(automaticWorkpieceBounds(slot(-0.5), tools, 0.0), Vec3(-1, -1, -2.5), Vec3(41, 21, 0));  // an engraving
     check(automaticWorkpieceBounds(slot(-1.0), tools, 0.0), Vec3(-1, -1, -3), Vec3(41, 21, 0));
     check(automaticWorkpieceBounds(slot(-5.0), tools, 0.0), Vec3(-1, -1, -5), Vec3(41, 21, 0));
-    check(automaticWorkpieceBounds(slot(3.0), tools, 0.0), Vec3(-1, -1, -2), Vec3(41, 21, 0));  // cuts in the air
+    // Cuts wholly above z = 0, where CAMotics' box turns inside out (its top at 0 under its
+    // bottom at the cuts): ours keeps the top at z = 0 and the least thickness below it.
+    check(automaticWorkpieceBounds(slot(3.0), tools, 0.0), Vec3(-1, -1, -2), Vec3(41, 21, 0));
     // 10 %: 4.2 and 2.2 mm on x and y, 0.5 mm below.
     check(automaticWorkpieceBounds(slot(-5.0), tools, 10.0), Vec3(-5.2, -3.2, -5.5), Vec3(45.2, 23.2, 0));
 

@@ -357,7 +357,9 @@ private:
     std::unordered_map<int, long> topCounters_;
     /// #0..#9999. The stored positions and offsets among them (G28 #5161.., G30 #5181.., G92
     /// #5211.., G54..G59.3 #5221..) are in mm, the machine's units: LinuxCNC keeps them in its
-    /// machine units and converts on use (USER_TO_PROGRAM_LEN), whatever G20/G21 is active.
+    /// machine units and converts on use (USER_TO_PROGRAM_LEN), whatever G20/G21 is active. The
+    /// reader is a machine configured in mm, as it starts in G21: on one configured in inches a
+    /// program that reads these parameters after G20 would get inches.
     std::vector<double> params_;
     std::unordered_map<std::string, double> named_;
     std::vector<std::pair<ParamRef, double>> pending_;
