@@ -105,8 +105,10 @@ int runInfo(const InfoArgs& args) {
         for (const std::string& f : project.files) std::printf("%-14s %s\n", "program", f.c_str());
         const Program program = runProject(project, gcode);
         Box workpiece = project.workpiece.bounds;
-        if (project.workpiece.automatic) {
-            std::printf("%-14s automatic, margin %.3g %%\n", "workpiece", project.workpiece.marginPercent);
+        // As the job takes it: fixed bounds where the project gives them, else the automatic box.
+        if (project.workpiece.automatic || project.workpiece.bounds.isEmpty()) {
+            std::printf("%-14s %sautomatic, margin %.3g %%\n", "workpiece",
+                        project.workpiece.automatic ? "" : "no bounds given: ", project.workpiece.marginPercent);
             workpiece = automaticWorkpieceBounds(program, project.workpiece.marginPercent);
             printBox("stock", workpiece);
         } else {

@@ -280,7 +280,10 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
         box = guessStock(program.path, tools, project);
         if (!project) {
             ReportWarning w;
-            w.message = "no --stock given: using the program's cutting extent plus 5 %";
+            char extent[120];
+            std::snprintf(extent, sizeof extent, "no --stock given: using the program's cutting extent plus %g %%",
+                          kGuessMarginPercent);
+            w.message = extent;
             if (program.statedStock) {
                 const StatedStock& st = *program.statedStock;
                 char text[200];
