@@ -317,6 +317,9 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
         {"cycle R below Z", "G0 Z5\nG81 X1 Y1 Z2 R-1\n", 2, 14, "R plane below", "R"},
         {"cycle without R", "G0 Z5\nG81 X1 Y1 Z-2\n", 2, 1, "without R", "G81"},
         {"cycle without Z", "G0 Z5\nG90 G81 X1 Y1 R2\n", 2, 5, "without Z depth", "G81"},
+        // LinuxCNC's enhance_block: all axes missing with a motion code other than G0 and G1.
+        {"cycle without axes", "G0 X0 Y0 Z10\nG81 R2\n", 2, 1, "all axes missing with motion code G81", "G81"},
+        {"probe without axes", "G0 X0 Y0 Z10\nG91 G38.2 F10\n", 2, 5, "all axes missing with motion code G38.2", "G38.2"},
         {"dwell cycle without P", "G0 Z5\nG17 G82 X1 Y1 Z-2 R1\n", 2, 5, "G82/G89 without P", "G82"},
         {"peck without Q", "G0 Z5\nG83 X1 Y1 Z-2 R1\n", 2, 1, "without Q", "G83"},
         {"G10 without L", "G90 G10 P1 X5\n", 1, 5, "G10 without L", "G10"},

@@ -310,17 +310,21 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
         if (executeNonModal(nonModal, b, motion)) axisConsumed = true;
     }
     // 9. Motion.
-    if (motion >= 0) {
-        if (motion != motion_ && motion >= 730 && motion <= 890) {
-            // new cycle: R and Z are required
-        }
-        if (motion == 800) {
-            motion_ = 800;
-            cycleIlFlag_ = false;
-        }
+    if (motion == 800) {
+        motion_ = 800;
+        cycleIlFlag_ = false;
     }
     const bool anyAxis = b.has('X') || b.has('Y') || b.has('Z') || b.has('A') || b.has('B') ||
                          b.has('C') || b.has('U') || b.has('V') || b.has('W');
+    // LinuxCNC's enhance_block allows all axes missing with G0 and G1 only: a canned cycle, a
+    // probe or a spline code in a block without an axis word is an error, not a block that does
+    // nothing (arcs get their own message below).
+    if (motion >= 0 && !axisConsumed && !anyAxis && motion != 0 && motion != 10 && motion != 20 && motion != 30 &&
+        motion != 800)
+        fail(motionCol,
+             "all axes missing with motion code G" + codeText(motion) +
+                 ": LinuxCNC takes a block without X, Y, Z or a rotary axis for G0 and G1 only",
+             "G" + codeText(motion));
     if (groupCode[17] >= 0) {
         orientTool(groupCode[17], b);
         axisConsumed = true;
