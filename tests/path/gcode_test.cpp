@@ -262,7 +262,11 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
         {"large arc end off by more than the cap", "G0 X0 Y0\nG2 X6003 Y0 I3000 J0\n", 2, 1,
          "LinuxCNC accepts a difference up to 0.0282843 mm, or up to 2.82843 mm", "G2"},
         {"arc without centre", "G0 X0 Y0\nG2 X10 Y0\n", 2, 1, "arc without", "G2"},
-        {"arc without end", "G0 X0 Y0\nG2 I5\n", 2, 1, "arc without end", "G2"},
+        // LinuxCNC's convert_arc: a centre word across the plane, and check_g_codes: G4 needs P.
+        {"K word on a G17 arc", "G0 X0 Y0\nG2 X10 Y0 I5 K1\n", 2, 14, "K word given for an arc in the G17 plane", "K1"},
+        {"J word on a G18 arc", "G0 X0 Z0\nG18 G3 X10 Z0 I5 J0\n", 2, 18, "J word given for an arc in the G18 plane", "J0"},
+        {"I word on a G19 arc", "G0 Y0 Z0\nG19 G2 Y10 J5 I2\n", 2, 15, "I word given for an arc in the G19 plane", "I2"},
+        {"dwell without a time", "G0 X0\nG4\n", 2, 1, "dwell time missing with G4", "G4"},
         {"absolute centre without J", "G0 X0 Y0\nG90.1\nG3 X20 Y0 I10\n", 3, 11,
          "J word missing in absolute center arc (G90.1): LinuxCNC needs both I and J in the G17 plane", "I10"},
         {"absolute centre without I in G18", "G18 G90.1\nG0 X0 Z0\nG2 X10 Z0 K0\n", 3, 11,
@@ -457,6 +461,56 @@ TEST_CASE("gcode: arcs are split within the chord tolerance and end exactly", "[
         CHECK(full == std::size_t(std::ceil(2 * M_PI / (2 * std::acos(1 - tol / 10)) - 1e-12)));
         CHECK(near(p.path.moves.back().end, Vec3(-10, 0, -4)));
     }
+}
+
+TEST_CASE("gcode: an arc without axis words is a full circle, and centre words alone take the modal arc",
+          "[path][gcode]") {
+    // LinuxCNC's enhance_block lets G2/G3 go without axis words (the arc ends where it starts)
+    // and gives a block of I/J/K alone to the active arc motion.
+    const Program p = run("G0 X10 Y0 Z-1\nG2 I-10\nG3 J5 P2\nI-10\n");
+    for (int line : {2, 3, 4}) {
+        Vec3 first(0.0), last(0.0);
+        bool seen = false;
+        std::size_t chords = 0;
+        for (const Move& m : p.path.moves) {
+            if (m.source.line != line) continue;
+            if (!seen) first = m.start, seen = true;
+            last = m.end;
+            ++chords;
+            CHECK(m.start.z == -1.0);
+        }
+        INFO("line " << line);
+        REQUIRE(chords > 8);
+        CHECK(near(first, Vec3(10, 0, -1)));
+        CHECK(near(last, Vec3(10, 0, -1)));
+    }
+    // Line 2: a clockwise circle about the origin; line 3: two counter-clockwise turns about
+    // (10, 5); line 4: the modal G3 of line 3 again, one counter-clockwise turn about the origin.
+    const auto centreOf = [&](int line, const Vec3& c, double radius, int turnSign, double turns) {
+        double swept = 0.0;
+        for (const Move& m : p.path.moves) {
+            if (m.source.line != line) continue;
+            CHECK(std::hypot(m.start.x - c.x, m.start.y - c.y) == Approx(radius).margin(1e-9));
+            const double a0 = std::atan2(m.start.y - c.y, m.start.x - c.x);
+            const double a1 = std::atan2(m.end.y - c.y, m.end.x - c.x);
+            double d = a1 - a0;
+            if (d > M_PI) d -= 2 * M_PI;
+            if (d < -M_PI) d += 2 * M_PI;
+            swept += d;
+        }
+        CHECK(swept == Approx(turnSign * turns * 2 * M_PI).margin(1e-9));
+    };
+    centreOf(2, Vec3(0, 0, 0), 10.0, -1, 1.0);
+    centreOf(3, Vec3(10, 5, 0), 5.0, +1, 2.0);
+    centreOf(4, Vec3(0, 0, 0), 10.0, +1, 1.0);
+    CHECK_FALSE(hasDiagnostic(p, "has no effect"));
+}
+
+TEST_CASE("gcode: G4 X is Fanuc's dwell time, not a move", "[path][gcode]") {
+    const Program p = run("G0 X0 Y0 Z5\nG1 Z-1\nG04 X1.5\nG4 P1 \nG1 Y3\n");
+    for (const Move& m : p.path.moves) CHECK(m.end.x == 0.0);
+    CHECK(p.path.moves.back().end.y == 3.0);
+    CHECK(hasDiagnostic(p, "dwell G4 X: the time in seconds, as Fanuc writes it"));
 }
 
 TEST_CASE("gcode: an arc's end may be off its circle by LinuxCNC's tolerance of the program's units",

@@ -244,10 +244,20 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
             warn("unknown M-code M" + std::to_string(m) + " ignored", "M" + std::to_string(m), col);
         }
     }
-    // 4. Dwell.
+    // 4. Dwell. LinuxCNC's check_g_codes needs the time in P. Fanuc writes it as X (seconds), and
+    // a block "G04 X1.5" must not become a move to X1.5: without P, X is the time.
     if (nonModal == 40) {
-        if (b.has('P')) b.use('P');
-        warn("dwell G4 ignored (time is not simulated)", "dwell");
+        if (b.has('P')) {
+            b.use('P');
+            warn("dwell G4 ignored (time is not simulated)", "dwell");
+        } else if (b.has('X')) {
+            b.mask &= ~(1u << ('X' - 'A'));
+            warn("dwell G4 X: the time in seconds, as Fanuc writes it; no move to X (time is not simulated)",
+                 "dwell", b.col['X' - 'A']);
+        } else {
+            fail(nonModalCol, "dwell time missing with G4: give it as P (seconds), as LinuxCNC needs",
+                 tokenAt(nonModalCol));
+        }
     }
     // 5. Plane, units, cutter compensation, tool length offsets.
     if (groupCode[2] >= 0) {
@@ -341,8 +351,12 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
             fail(axCol, "axis words with no motion mode active (G80 or none yet)", tokenAt(axCol));
         if (g53 && active != 0 && active != 10) fail(axCol, "G53 needs G0 or G1", tokenAt(axCol));
         executeMotion(active, b, g53, motionCol);
-    } else if (!axisConsumed && (motion == 20 || motion == 30)) {
-        fail(motionCol, "arc without end point (no axis words)", tokenAt(motionCol));
+    } else if (!axisConsumed && (motion == 20 || motion == 30 ||
+                                 (motion < 0 && (active == 20 || active == 30) &&
+                                  (b.has('I') || b.has('J') || b.has('K'))))) {
+        // LinuxCNC's enhance_block: an arc without axis words ends where it starts, a full circle
+        // (G2 I5), and a block of centre words alone ("I5") takes the modal arc.
+        executeMotion(active, b, g53, motionCol);
     }
     // 10. Unused words.
     const std::uint32_t unused = b.mask & ~b.used;

@@ -381,10 +381,17 @@ void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
 
 void Interpreter::arc(bool clockwise, Block& b, int motionCol) {
     int p0, p1, p2;
-    char o0, o1;
-    if (plane_ == 17) { p0 = 0; p1 = 1; p2 = 2; o0 = 'I'; o1 = 'J'; }
-    else if (plane_ == 18) { p0 = 2; p1 = 0; p2 = 1; o0 = 'K'; o1 = 'I'; }
-    else { p0 = 1; p1 = 2; p2 = 0; o0 = 'J'; o1 = 'K'; }
+    char o0, o1, o2;
+    if (plane_ == 17) { p0 = 0; p1 = 1; p2 = 2; o0 = 'I'; o1 = 'J'; o2 = 'K'; }
+    else if (plane_ == 18) { p0 = 2; p1 = 0; p2 = 1; o0 = 'K'; o1 = 'I'; o2 = 'J'; }
+    else { p0 = 1; p1 = 2; p2 = 0; o0 = 'J'; o1 = 'K'; o2 = 'I'; }
+    // LinuxCNC's convert_arc: the centre word of the axis across the plane is an error, not a
+    // word dropped (K on a G17 arc).
+    if (b.has(o2))
+        fail(b.col[o2 - 'A'],
+             std::string(1, o2) + " word given for an arc in the G" + std::to_string(plane_) +
+                 " plane: its centre takes " + o0 + " and " + o1 + " only, as LinuxCNC reads it",
+             tokenAt(b.col[o2 - 'A']));
     checkRotary(b, !absolute_);
     const Vec3 s = toProgram(mpos_);
     const Vec3 e = targetOf(b, s, !absolute_);
