@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "dexelmill/error.h"
 #include "dexelmill/io/file_name.h"
@@ -22,6 +23,18 @@ constexpr double kSameSpacing = 1e-9;
 
 }  // namespace
 
+Lattice stockLattice(const Mesh& mesh, double h) {
+    return Lattice::fromBox(mesh.bounds().padded(kStlBoxMargin * h), h);
+}
+
+Lattice stockLattice(const LevelSet& levelSet, double h) {
+    const std::optional<Lattice> recorded = levelSet.lattice();
+    if (recorded && std::abs(recorded->h - h) <= kSameSpacing * h) return *recorded;
+    const Box box = materialBounds(levelSet);
+    if (box.isEmpty()) throw Error("the level set holds no material (no negative voxel)");
+    return Lattice::fromBox(box, h);
+}
+
 TriDexelStock readStock(const std::string& path, double h, FamilySet families,
                         MeshCastStats* stats) {
     if (!(h > 0.0) || !std::isfinite(h))
@@ -29,17 +42,15 @@ TriDexelStock readStock(const std::string& path, double h, FamilySet families,
     const std::string ext = lowerExtension(path);
     if (ext == ".stl") {
         const Mesh mesh = readStl(path);
-        const Lattice lattice = Lattice::fromBox(mesh.bounds().padded(kStlBoxMargin * h), h);
-        return stockFromMesh(mesh, lattice, families, stats);
+        return stockFromMesh(mesh, stockLattice(mesh, h), families, stats);
     }
     if (ext == ".vdb") {
         const LevelSet ls = readVdb(path);
-        const std::optional<Lattice> recorded = ls.lattice();
-        if (recorded && std::abs(recorded->h - h) <= kSameSpacing * h)
-            return stockFromLevelSet(ls, *recorded, families);
-        const Box box = materialBounds(ls);
-        if (box.isEmpty()) throw Error("'" + path + "' holds no material (no negative voxel)");
-        return stockFromLevelSet(ls, Lattice::fromBox(box, h), families);
+        try {
+            return stockFromLevelSet(ls, stockLattice(ls, h), families);
+        } catch (const Error& e) {
+            throw Error("'" + path + "': " + e.what());
+        }
     }
     throw Error("stock from '" + path + "': unknown file type '" + ext + "' (expected .stl or .vdb)");
 }

@@ -18,6 +18,7 @@
 #include "dexelmill/io/file_name.h"
 #include "dexelmill/io/mesh_io.h"
 #include "dexelmill/io/picture.h"
+#include "dexelmill/io/stock_io.h"
 #include "dexelmill/io/vdb_io.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/machine/kinematics.h"
@@ -342,7 +343,12 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
                       h, size.x, size.y, size.z, kMinCellsAcross, size[thin], "xyz"[thin], size[thin] / kMinCellsAcross);
         throw Error(text);
     }
-    const Lattice lattice = Lattice::fromBox(box, h);
+    // A stock file takes the lattice readStock gives it: one whose lines miss an STL's faces at
+    // round coordinates, or the one a VDB of dexelmill's records at its own spacing (a line on
+    // the box's faces there would lose the outer ring of dexels).
+    const Lattice lattice = fromStl   ? stockLattice(*fromStl, h)
+                            : fromVdb ? stockLattice(*fromVdb, h)
+                                      : Lattice::fromBox(box, h);
     // The stock's dexels (and the design's, cast on the same lattice) and, at the least, the level
     // set and mesh of the block's own faces.
     const double dexels = (design ? 2.0 : 1.0) * stockBytes(lattice, o.families);
@@ -359,7 +365,17 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
                       budget.source.c_str(), spacingThatFits(h, dexels + faces, double(budget.bytes) - base));
         throw Error(text);
     }
-    if (fromStl) return {stockFromMesh(*fromStl, lattice, o.families), box, false};
+    if (fromStl) {
+        // An open mesh casts a different solid into each family (a line that meets one face of
+        // it keeps no material), which no surface can be rebuilt from.
+        MeshCastStats cast;
+        TriDexelStock stock = stockFromMesh(*fromStl, lattice, o.families, &cast);
+        if (cast.unpairedDexels > 0)
+            throw Error("stock '" + o.stockFile + "' is not closed: " + std::to_string(cast.unpairedDexels) +
+                        " dexel lines meet an odd number of its faces; a stock must be a closed solid (repair the "
+                        "mesh, or give --stock box:...)");
+        return {std::move(stock), box, false};
+    }
     if (fromVdb) return {stockFromLevelSet(*fromVdb, lattice, o.families), box, false};
     if (o.stockFrustum) return {stockFromFrustum(*o.stockFrustum, lattice, o.families), box, false};
     return {TriDexelStock::fromBox(box, h, o.families), box, true};

@@ -2,6 +2,7 @@
 // failures that leave existing files alone.
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -208,6 +209,58 @@ TEST_CASE("the job names what is missing or malformed", "[job][errors]") {
     o.meshPath.clear();
     o.inputs = {(dir / "missing.ngc").string()};
     CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains("missing.ngc"));
+}
+
+TEST_CASE("a stock file keeps its solid: an open STL is refused, a VDB read back at its spacing keeps its dexels",
+          "[job][errors][degenerate]") {
+    const fs::path dir = scratch("stockfile");
+    // A 20 x 20 x 15 mm block, x and y from -10 to 10 and z from -15 to 0, its faces' triangles
+    // counter-clockwise seen from outside; the open one lacks a triangle of the top.
+    std::string facets;
+    const auto quad = [&](const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+        for (const auto& t : {std::array<Vec3, 3>{a, b, c}, std::array<Vec3, 3>{a, c, d}}) {
+            facets += "facet normal 0 0 0\nouter loop\n";
+            for (const Vec3& v : t)
+                facets += "vertex " + std::to_string(v.x) + " " + std::to_string(v.y) + " " + std::to_string(v.z) + "\n";
+            facets += "endloop\nendfacet\n";
+        }
+    };
+    const double x0 = -10, x1 = 10, y0 = -10, y1 = 10, z0 = -15, z1 = 0;
+    quad({x0, y0, z0}, {x0, y1, z0}, {x1, y1, z0}, {x1, y0, z0});  // bottom
+    quad({x0, y0, z0}, {x1, y0, z0}, {x1, y0, z1}, {x0, y0, z1});  // front, y = y0
+    quad({x1, y0, z0}, {x1, y1, z0}, {x1, y1, z1}, {x1, y0, z1});  // right
+    quad({x1, y1, z0}, {x0, y1, z0}, {x0, y1, z1}, {x1, y1, z1});  // back
+    quad({x0, y1, z0}, {x0, y0, z0}, {x0, y0, z1}, {x0, y1, z1});  // left
+    const std::string sides = facets;
+    quad({x0, y0, z1}, {x1, y0, z1}, {x1, y1, z1}, {x0, y1, z1});  // top
+    const std::string closedStl = write(dir / "block.stl", "solid block\n" + facets + "endsolid block\n");
+    const std::size_t lastFacet = facets.rfind("facet normal");
+    const std::string openStl = write(dir / "open.stl", "solid open\n" + facets.substr(0, lastFacet) + "endsolid open\n");
+    CHECK(sides.size() < lastFacet);
+
+    SimulateOptions o;
+    o.inputs = {write(dir / "far.ngc", "G21 G90\nG0 X100 Y100 Z100\nG0 X101\nM2\n")};
+    o.defaultTool = flatEndMill(10);
+    o.resolution = 0.25;
+    o.stockFile = openStl;
+    // Cast whole, the open block's lines through the missing triangle meet one face: before, the
+    // z family lost them and the dexel mesher crashed on families that disagreed.
+    CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains("open.stl' is not closed"));
+
+    o.stockFile = closedStl;
+    o.vdbPath = (dir / "block.vdb").string();
+    const SimulateReport fromStl = simulate(o);
+    CHECK(fromStl.stockVolumeMm3 == Approx(20 * 20 * 15).epsilon(1e-6));
+    // Read back at the spacing it was written with, the level set keeps its lattice: taken on the
+    // material box instead, the lines on the block's faces lost a ring of dexels (2.5 %, 5850 mm^3).
+    o.stockFile = o.vdbPath;
+    o.vdbPath.clear();
+    const SimulateReport fromVdb = simulate(o);
+    CHECK(fromVdb.stockVolumeMm3 == Approx(20 * 20 * 15).epsilon(1e-3));
+    for (int a = 0; a < 3; ++a) {
+        REQUIRE(fromVdb.familyVolumesMm3[a]);
+        CHECK(*fromVdb.familyVolumesMm3[a] == Approx(20 * 20 * 15).epsilon(1e-3));
+    }
 }
 
 TEST_CASE("the default spacing is a round fraction of the stock", "[job]") {
