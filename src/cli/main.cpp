@@ -85,8 +85,17 @@ int main(int argc, char** argv) {
         const char* advice = simulate->parsed()   ? "; try a larger --resolution or fewer --families"
                              : studyCmd->parsed() ? "; try larger --resolutions or fewer --families"
                                                   : "";
+        // The budget the job kept to: --max-memory's, as the job read it (it parsed before the
+        // job began), or the system's.
+        std::size_t budgetAsked = 0;
+        if (simulate->parsed() && !sim.maxMemory.empty()) {
+            try {
+                budgetAsked = dexelmill::parseMemorySize(sim.maxMemory);
+            } catch (const dexelmill::Error&) {
+            }
+        }
         std::cerr << "dexelmill: error: out of memory after a peak of " << dexelmill::formatBytes(dexelmill::peakMemoryMb() * 1024.0 * 1024.0)
-                  << " (the budget: " << dexelmill::formatBytes(double(dexelmill::memoryBudget().bytes)) << ")"
+                  << " (the budget: " << dexelmill::formatBytes(double(dexelmill::memoryBudget(budgetAsked).bytes)) << ")"
                   << advice << "\n";
         return 1;
     } catch (const std::exception& e) {

@@ -117,18 +117,37 @@ std::size_t bytesInUse(const MemoryBudget& budget) {
 }
 
 MemoryBudget memoryBudget(std::size_t maxBytes) {
-    if (maxBytes > 0) return {maxBytes, "--max-memory"};
     MemoryBudget b{std::numeric_limits<std::size_t>::max(), "no limit the system states"};
     auto take = [&](std::size_t bytes, const char* source, bool addressSpace = false) {
-        if (bytes > 0 && bytes < b.bytes) b = {bytes, source, addressSpace};
+        if (bytes > 0 && bytes < b.bytes) b = {bytes, source, addressSpace, false, {}};
     };
     rlimit as{};
     if (getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY)
         take(std::size_t(as.rlim_cur), "the address-space limit (ulimit -v)", true);
     take(cgroupLimit(), "the cgroup's memory.max");
+    b.enforced = b.bytes != std::numeric_limits<std::size_t>::max();
+    const MemoryBudget enforced = b;
     const double available = procNumber("/proc/meminfo", "MemAvailable:") * 1024.0;
     if (available > 0) take(std::size_t(available) + residentBytes(), "the memory available (MemAvailable)");
-    return b;
+    if (maxBytes == 0) return b;
+    const std::string asked = "--max-memory " + formatBytes(double(maxBytes));
+    if (maxBytes > enforced.bytes) {
+        MemoryBudget cut = enforced;
+        cut.source += ", less than " + asked;
+        cut.note = asked + " is more than " + enforced.source + " allows: the job keeps to " +
+                   formatBytes(double(enforced.bytes));
+        return cut;
+    }
+    MemoryBudget given{maxBytes, "--max-memory"};
+    if (maxBytes > b.bytes)
+        given.note = asked + " is more than " + b.source + ", " + formatBytes(double(b.bytes)) +
+                     " now: the job may run out of memory or swap";
+    return given;
+}
+
+std::string moreMemoryAdvice(const MemoryBudget& budget) {
+    if (budget.enforced) return "";
+    return budget.source == "--max-memory" ? ", or a larger --max-memory" : ", or set --max-memory";
 }
 
 std::size_t parseMemorySize(const std::string& text) {

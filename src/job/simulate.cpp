@@ -359,10 +359,11 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
         std::snprintf(text, sizeof text,
                       "a spacing of %g mm on this %g x %g x %g mm stock needs about %s (its dexels%s %s, the level "
                       "set and mesh of the block's faces alone %s), more than the %s this job may use (%s); a "
-                      "spacing of %g mm or more fits, or set --max-memory",
+                      "spacing of %g mm or more fits%s",
                       h, size.x, size.y, size.z, formatBytes(base + dexels + faces).c_str(),
                       design ? " and the design's" : "", formatBytes(dexels).c_str(), formatBytes(faces).c_str(), formatBytes(double(budget.bytes)).c_str(),
-                      budget.source.c_str(), spacingThatFits(h, dexels + faces, double(budget.bytes) - base));
+                      budget.source.c_str(), spacingThatFits(h, dexels + faces, double(budget.bytes) - base),
+                      moreMemoryAdvice(budget).c_str());
         throw Error(text);
     }
     if (fromStl) {
@@ -432,10 +433,10 @@ void checkSurfaceFits(const TriDexelStock& stock, const MemoryBudget& budget) {
     std::snprintf(text, sizeof text,
                   "the cut part's surface crosses %.4g lattice edges at a spacing of %g mm: its level set and mesh "
                   "need about %s on top of the %s in use, more than the %s this job may use (%s); a spacing of "
-                  "%g mm or more fits, or set --max-memory",
+                  "%g mm or more fits%s",
                   crossings, h, formatBytes(need).c_str(), formatBytes(base).c_str(),
                   formatBytes(double(budget.bytes)).c_str(), budget.source.c_str(),
-                  spacingThatFits(h, base + need, double(budget.bytes)));
+                  spacingThatFits(h, base + need, double(budget.bytes)), moreMemoryAdvice(budget).c_str());
     throw Error(text);
 }
 
@@ -459,6 +460,12 @@ Simulation runStages(const SimulateOptions& o) {
     // Parse.
     auto t = Clock::now();
     const MemoryBudget budget = memoryBudget(o.maxMemoryBytes);
+    // A budget the process has spent before it starts would fail the first check of the readers,
+    // and blame the program's length.
+    if (const std::size_t held = bytesInUse(budget); held >= budget.bytes)
+        throw Error("the memory this job may use, " + formatBytes(double(budget.bytes)) + " (" + budget.source +
+                    "), is less than the " + formatBytes(double(held)) + " the process holds before it reads the "
+                    "programs" + (budget.enforced ? "" : ": give a larger --max-memory"));
     GcodeOptions gcode = jobGcodeOptions(o.chordTolerance, budget);
     gcode.files = o.files;
     if (!o.machine.empty()) gcode.machine = loadMachine(o.machine, o.files);
@@ -500,6 +507,11 @@ Simulation runStages(const SimulateOptions& o) {
                                               [](const Move& m) { return m.rapid; }));
     report.toolChanges = program.path.toolChanges.size();
     std::vector<ReportWarning> notes;
+    if (!budget.note.empty()) {
+        ReportWarning w;
+        w.message = budget.note;
+        notes.push_back(w);
+    }
     if (std::string cut = threadsCutNote(o.threads); !cut.empty()) {
         ReportWarning w;
         w.message = std::move(cut);

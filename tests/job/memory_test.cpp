@@ -39,6 +39,28 @@ TEST_CASE("memory: sizes as users write them", "[job][memory]") {
     CHECK(system.bytes > residentBytes());
 }
 
+TEST_CASE("memory: a --max-memory beyond what the system gives is named, and cut where it is enforced",
+          "[job][memory]") {
+    // 1e18 bytes is more than any machine's memory available: kept with a warning, or cut to the
+    // address-space or cgroup limit (which this process may run under) with a warning.
+    const std::size_t huge = std::size_t(1e18);
+    const MemoryBudget b = memoryBudget(huge);
+    CHECK(b.note.find("--max-memory") != std::string::npos);
+    if (b.enforced) {
+        CHECK(b.bytes < huge);
+        CHECK(b.note.find("the job keeps to") != std::string::npos);
+        CHECK(moreMemoryAdvice(b).empty());
+    } else {
+        CHECK(b.bytes == huge);
+        CHECK(b.note.find("may run out of memory") != std::string::npos);
+        CHECK(moreMemoryAdvice(b) == ", or a larger --max-memory");
+    }
+    // A budget well within what the system gives says nothing.
+    CHECK(memoryBudget(std::size_t(64) << 20).note.empty());
+    MemoryBudget soft{std::size_t(1) << 30, "the memory available (MemAvailable)"};
+    CHECK(moreMemoryAdvice(soft) == ", or set --max-memory");
+}
+
 TEST_CASE("memory: a fresh stock's estimates against the stock itself", "[job][memory]") {
     for (const auto& [box, h, families] :
          {std::tuple<Box, double, const char*>{Box{Vec3(0.0), Vec3(40, 30, 10)}, 0.5, "xyz"},

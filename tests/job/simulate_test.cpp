@@ -263,6 +263,19 @@ TEST_CASE("a stock file keeps its solid: an open STL is refused, a VDB read back
     }
 }
 
+TEST_CASE("a --max-memory the process has spent before it starts is named, not blamed on the program",
+          "[job][errors][memory]") {
+    const fs::path dir = scratch("tinybudget");
+    SimulateOptions o;
+    o.inputs = {write(dir / "slot.ngc", kSlot)};
+    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
+    o.tools.emplace(1, flatEndMill(6, {20, 40}));
+    // A test process holds more than a mebibyte before any job (its code and libraries alone).
+    o.maxMemoryBytes = std::size_t(1) << 20;
+    CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains("the process holds before it reads the programs") &&
+                                            Catch::Matchers::Contains("give a larger --max-memory"));
+}
+
 TEST_CASE("the default spacing is a round fraction of the stock", "[job]") {
     CHECK(chooseResolution(Box{Vec3(0.0), Vec3(1694, 890, 870)}) == Approx(2.0));
     CHECK(chooseResolution(Box{Vec3(0.0), Vec3(80, 80, 20)}) == Approx(0.2));

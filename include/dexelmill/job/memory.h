@@ -22,10 +22,21 @@ struct MemoryBudget {
     /// Whether the budget bounds the address space (ulimit -v), which counts every mapping the
     /// process holds (thread stacks, allocator arenas, libraries), not only the memory in use.
     bool addressSpace = false;
+    /// Whether the system enforces the budget (ulimit -v, the cgroup), so that --max-memory cannot
+    /// raise it.
+    bool enforced = false;
+    /// A warning for the user, empty when none: a `maxBytes` the system does not give.
+    std::string note;
 };
 
-/// @brief The budget: `maxBytes` when it is not 0, else the least of the address-space limit, the
-/// cgroup's limit and the memory available now plus what the process already holds.
+/// @brief What a message that a job does not fit `budget` adds about --max-memory: ", or set
+/// --max-memory", ", or a larger --max-memory", or nothing where the system enforces the budget.
+std::string moreMemoryAdvice(const MemoryBudget& budget);
+
+/// @brief The budget: the least of the address-space limit, the cgroup's limit and the memory
+/// available now plus what the process already holds; or `maxBytes` when it is not 0. A
+/// `maxBytes` beyond one of the two limits, which the system enforces, is cut to it, and one
+/// beyond the memory available (which may yet be freed) is kept; either way `note` says so.
 MemoryBudget memoryBudget(std::size_t maxBytes = 0);
 
 /// @brief The resident memory of this process now (bytes; 0 when the system does not say).
