@@ -2,6 +2,7 @@
 #pragma once
 
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,9 @@ struct SimulateArgs {
     int threads = 0;
     std::string maxMemory;
     bool quiet = false;
+    /// The options the command line gave, by their long names ("--gouge-tolerance"): an option's
+    /// value alone cannot say whether it is the default or was typed.
+    std::set<std::string> given;
 };
 
 /// @brief `dexelmill study` options as typed.

@@ -1,6 +1,8 @@
 // dexelmill: the command-line tool. It parses options, calls the library and prints; nothing
 // else. Exit codes: 0 success, 1 an input or processing error, 2 a usage error.
+#include <algorithm>
 #include <cstdio>
+#include <iterator>
 #include <iostream>
 #include <new>
 #include <sstream>
@@ -59,6 +61,15 @@ int main(int argc, char** argv) {
     };
     app.failure_message([&](const CLI::App*, const CLI::Error& e) { return usage(e.what()); });
 
+    // A first word that is neither an option nor a command is a command mistyped: CLI11 would
+    // only say that one is required.
+    const CLI::App* commands[] = {simulate, info, studyCmd, compareCmd};
+    if (argc > 1 && argv[1][0] != '-' && std::none_of(std::begin(commands), std::end(commands), [&](const CLI::App* sub) {
+            return sub->check_name(argv[1]);
+        })) {
+        std::cerr << usage(std::string("unknown command '") + argv[1] + "': the commands are simulate, compare, info and study");
+        return 2;
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -192,6 +192,18 @@ SimulateOptions toOptions(const SimulateArgs& a) {
     if (a.sharpEdges && o.mesher == Mesher::Vdb)
         throw UsageError("--sharp-edges: volumeToMesh rounds sharp edges; the dexel mesher (the default) keeps them");
     if (a.gougeCsv.size() && a.design.empty()) throw UsageError("--gouge-csv needs --design PART.stl");
+    // Options that only serve another option are refused without it, not dropped.
+    if (a.design.empty())
+        for (const char* name : {"--gouge-tolerance", "--excess-tolerance"})
+            if (a.given.count(name)) throw UsageError(std::string(name) + " needs --design PART.stl");
+    if (a.given.count("--refine-tolerance") && a.refineRounds == 0)
+        throw UsageError("--refine-tolerance needs --refine ROUNDS (1 or more)");
+    for (const auto& [name, path] : {std::pair<const char*, const std::string&>{"--output", a.output},
+                                     {"--vdb", a.vdb}, {"--png", a.png}, {"--report", a.report},
+                                     {"--design", a.design}, {"--gouge-csv", a.gougeCsv},
+                                     {"--deviation-ply", a.deviationPly}, {"--stock", a.stock},
+                                     {"--machine", a.machine}})
+        if (a.given.count(name) && path.empty()) throw UsageError(std::string(name) + ": the path is empty");
     o.designPath = a.design;
     if (!a.designTransform.empty()) {
         if (a.design.empty()) throw UsageError("--design-transform needs --design PART.stl");
@@ -267,6 +279,10 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
     CLI::Option* in =
         c->add_option("INPUTS", a.inputs, "PROJECT.camotics or PROGRAM... (.ngc, .nc, .gcode, .tap, .apt, .cl)");
     if (inputsRequired) in->required();
+    c->parse_complete_callback([c, &a] {
+        for (const CLI::Option* opt : c->get_options())
+            if (opt->count() > 0 && !opt->get_lnames().empty()) a.given.insert("--" + opt->get_lnames().front());
+    });
     c->add_option("--stock", a.stock,
                   "box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX | cylinder:AXIS,X,Y,Z,R,H |\n"
                   "cone:AXIS,X,Y,Z,R0,R1,H (bar stock, a turned blank: AXIS x, y or z, or -x...;\n"

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -393,8 +394,9 @@ Mesh parseAsciiStl(std::string_view text, const std::string& path) {
 Mesh readStl(const std::string& path) {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) throw Error("cannot read '" + path + "': it is a folder");
+    errno = 0;
     std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot open '" + path + "'");
+    if (!in) throw Error("cannot open '" + path + "'" + (errno != 0 ? std::string(": ") + std::strerror(errno) : ""));
     // A file in one read, into pages faulted in at once; a pipe as it comes.
     std::vector<char, NoZeroAllocator<char>> data;
     const bool regular = std::filesystem::is_regular_file(path, ec);

@@ -70,8 +70,10 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
     const Cli cli("usage");
     cli.file("ok.ngc", "G21\nG0 X0 Y0 Z5\nG1 X5 F100\n");
     CHECK(cli("").code == 2);
-    CHECK(cli("frobnicate").code == 2);
-    Run r = cli("simulate");
+    Run r = cli("frobnicate");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, StartsWith("dexelmill: unknown command 'frobnicate'") && Contains("simulate, compare, info and study"));
+    r = cli("simulate");
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Contains("INPUTS"));
     r = cli("simulate ok.ngc --bogus");
@@ -123,6 +125,12 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
                                      {"--design d.stl --design-transform 1,2", "TX,TY,TZ or the 3 rows"},
                                      {"--design d.stl --design-transform 1,2,z", "'z' is not a number"},
                                      {"--gouge-tolerance -1", "--gouge-tolerance"},
+                                     // Options that serve another option are refused without it.
+                                     {"--gouge-tolerance 0.1", "--gouge-tolerance needs --design"},
+                                     {"--excess-tolerance 0.1", "--excess-tolerance needs --design"},
+                                     {"--refine-tolerance 0.5", "--refine-tolerance needs --refine"},
+                                     {"-o ''", "--output: the path is empty"},
+                                     {"--report ''", "--report: the path is empty"},
                                      {"--stock box:0x10,0,0,20,20,5", "--stock box: '0x10' is not a number"},
                                      {"--start 1e300,0,-5", "--start: 1e+300 mm is beyond the 1e9 mm a program may reach"}}) {
         INFO(args);
@@ -195,6 +203,9 @@ TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
     // An output in a folder that is not there fails before the cut, naming it; the other outputs
     // are not written.
     cli.file("ok.ngc", "G21\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X5\n");
+    r = cli("simulate ok.ngc --tool flat:d=3 --stock nowhere.stl");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("cannot open 'nowhere.stl': No such file or directory"));
     r = cli("simulate ok.ngc --tool flat:d=3 --stock box:0,0,-5,10,10,0 -o part.stl --report missing/r.json");
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Contains("missing/r.json") && Contains("No such file or directory"));
