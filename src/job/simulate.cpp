@@ -101,6 +101,11 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
                                                defined->second.description() + ")"});
         table.insert_or_assign(n, t);
     }
+    for (const auto& [n, t] : o.tools)
+        if (!used.count(n) && !program.path.moves.empty())
+            program.diagnostics.push_back({Diagnostic::Severity::Warning, {},
+                                           "--tool " + std::to_string(n) + "=... (" + t.description() +
+                                               ") is not used: no move cuts with tool " + std::to_string(n)});
     bool defaultUsed = false;
     for (int n : used) {
         if (table.count(n)) continue;

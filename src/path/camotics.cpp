@@ -385,6 +385,12 @@ Program readProgram(const std::string& path, const GcodeOptions& gcode, const Ap
                         " is not used: an APT CL file gives the tool axis in the part frame (GOTO's i,j,k)";
             p.diagnostics.insert(p.diagnostics.begin(), d);
         }
+        if (gcode.startPosition) {
+            Diagnostic d;
+            d.where = SourceLocation{path, 0, 0};
+            d.message = "--start is not used: an APT CL file places the tool itself (FROM, or its first GOTO)";
+            p.diagnostics.insert(p.diagnostics.begin(), d);
+        }
         return p;
     }
     case ProgramKind::Gcode:

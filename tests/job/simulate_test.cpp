@@ -358,6 +358,22 @@ TEST_CASE("a tool option the job cannot use, or that replaces the program's tool
     SimulateOptions after;
     after.inputs = {project, program};
     CHECK(said(runSimulation(after).report, "replace its own ("));
+
+    // A numbered tool no move takes is named; so is a --start an APT file has no use for.
+    SimulateOptions extra;
+    extra.inputs = {program};
+    extra.stockBox = Box{Vec3(0, 0, -5), Vec3(40, 30, 0)};
+    extra.tools.emplace(1, flatEndMill(6.0, {20.0, 30.0}));
+    extra.tools.emplace(5, flatEndMill(3.0, {20.0, 30.0}));
+    const SimulateReport five = runSimulation(extra).report;
+    CHECK(said(five, "--tool 5=... (flat D3"));
+    CHECK(said(five, "no move cuts with tool 5"));
+    CHECK_FALSE(said(five, "no move cuts with tool 1"));
+    SimulateOptions apt;
+    apt.inputs = {write(dir / "p.apt", "CUTTER/6\nFROM/5,5,5\nGOTO/5,5,-1\nGOTO/15,5,-1\n")};
+    apt.stockBox = extra.stockBox;
+    apt.startPosition = Vec3(0.0);
+    CHECK(said(runSimulation(apt).report, "--start is not used: an APT CL file places the tool itself"));
 }
 
 TEST_CASE("a program without moves says so", "[job][errors]") {
