@@ -3,6 +3,7 @@
 /// the command-line tool catches once in main.
 #pragma once
 
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 
@@ -14,20 +15,41 @@ public:
     explicit Error(const std::string& message) : std::runtime_error(message) {}
 };
 
-/// @brief Text from an input file made safe to print: control bytes (below 0x20 but tab, and 0x7f)
-/// become \xNN, so that a NUL or an escape sequence neither cuts nor garbles a message.
+/// @brief The length of the well-formed UTF-8 sequence at `s[i]` (Unicode's table 3-7: no
+/// overlong forms, surrogates or code points past U+10FFFF), 0 when there is none.
+inline std::size_t utf8Sequence(const std::string& s, std::size_t i) {
+    const auto at = [&](std::size_t k) { return k < s.size() ? static_cast<unsigned char>(s[k]) : 0u; };
+    const unsigned c = at(i);
+    std::size_t n = 0;
+    unsigned lo = 0x80, hi = 0xbf;  // the second byte's range
+    if (c >= 0xc2 && c <= 0xdf) n = 2;
+    else if (c >= 0xe0 && c <= 0xef) n = 3, lo = c == 0xe0 ? 0xa0 : 0x80, hi = c == 0xed ? 0x9f : 0xbf;
+    else if (c >= 0xf0 && c <= 0xf4) n = 4, lo = c == 0xf0 ? 0x90 : 0x80, hi = c == 0xf4 ? 0x8f : 0xbf;
+    else return 0;
+    if (at(i + 1) < lo || at(i + 1) > hi) return 0;
+    for (std::size_t k = 2; k < n; ++k)
+        if (at(i + k) < 0x80 || at(i + k) > 0xbf) return 0;
+    return n;
+}
+
+/// @brief Text from an input file made safe to print: control bytes (below 0x20 but tab, and
+/// 0x7f) and bytes that are not part of well-formed UTF-8 become \xNN, so that a NUL, an escape
+/// sequence or a stray byte of another encoding neither cuts nor garbles a message.
 inline std::string printable(const std::string& text) {
     static const char hex[] = "0123456789abcdef";
     std::string out;
     out.reserve(text.size());
-    for (const char ch : text) {
-        const auto c = static_cast<unsigned char>(ch);
-        if ((c < 0x20 && c != '\t') || c == 0x7f) {
+    for (std::size_t i = 0; i < text.size();) {
+        const auto c = static_cast<unsigned char>(text[i]);
+        const std::size_t n = c < 0x80 ? 1 : utf8Sequence(text, i);
+        if ((c < 0x20 && c != '\t') || c == 0x7f || n == 0) {
             out += "\\x";
             out += hex[c >> 4];
             out += hex[c & 15];
+            ++i;
         } else {
-            out += ch;
+            out.append(text, i, n);
+            i += n;
         }
     }
     return out;

@@ -128,6 +128,14 @@ TEST_CASE("files: control bytes in a message are escaped, and NUL does not cut i
     CHECK_THAT(esc, Catch::Matchers::Contains("\\x1b"));
     CHECK(esc.find('\x1b') == std::string::npos);
     CHECK(printable("a\tb\x7f") == "a\tb\\x7f");
+    // Well-formed UTF-8 stays (a degree sign, a euro sign, an emoji); a byte of Latin-1, a lone
+    // continuation, an overlong form, a surrogate and a sequence cut short are escaped.
+    CHECK(printable("30\xc2\xb0 \xe2\x82\xac \xf0\x9f\x94\xa7") == "30\xc2\xb0 \xe2\x82\xac \xf0\x9f\x94\xa7");
+    CHECK(printable("30\xb0") == "30\\xb0");
+    CHECK(printable("\x80x") == "\\x80x");
+    CHECK(printable("\xc0\xaf") == "\\xc0\\xaf");
+    CHECK(printable("\xed\xa0\x80") == "\\xed\\xa0\\x80");
+    CHECK(printable("\xe2\x82") == "\\xe2\\x82");
 }
 
 TEST_CASE("files: a FileSource serves a project's programs, subroutine files and tool tables", "[path][files]") {
