@@ -19,15 +19,35 @@ std::string systemError(const std::string& what, const std::string& path) {
     return what + " '" + path + "': " + std::strerror(errno);
 }
 
+/// The longest file name `dir` takes: its file system's NAME_MAX, or 255 where it does not say.
+std::size_t longestName(const std::filesystem::path& dir) {
+    const long max = ::pathconf(dir.c_str(), _PC_NAME_MAX);
+    return max > 0 ? std::size_t(max) : 255;
+}
+
+/// "." + `name` + `suffix`, with `name` cut short (at a UTF-8 character's start) where the whole
+/// would be longer than `longest` bytes: a temporary file of any name the folder takes is still
+/// recognisably the target's.
+std::string temporaryName(const std::string& name, const std::string& suffix, std::size_t longest) {
+    std::size_t keep = name.size();
+    if (1 + keep + suffix.size() > longest) {
+        keep = longest > 1 + suffix.size() ? longest - 1 - suffix.size() : 0;
+        while (keep > 0 && (static_cast<unsigned char>(name[keep]) & 0xC0) == 0x80) --keep;
+    }
+    return "." + name.substr(0, keep) + suffix;
+}
+
 /// Creates a new, empty, uniquely named file beside `target` and returns its path.
 std::string createTemporary(const std::filesystem::path& target) {
     static std::atomic<unsigned> counter{0};
     const std::filesystem::path dir =
         target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
+    const std::size_t longest = longestName(dir);
     for (int attempt = 0; attempt < 100; ++attempt) {
-        const std::string name = "." + target.filename().string() + ".tmp" +
-                                 std::to_string(::getpid()) + "_" +
-                                 std::to_string(counter.fetch_add(1));
+        const std::string name = temporaryName(target.filename().string(),
+                                               ".tmp" + std::to_string(::getpid()) + "_" +
+                                                   std::to_string(counter.fetch_add(1)),
+                                               longest);
         const std::string path = (dir / name).string();
         // O_EXCL: never reuse a file someone else made; mode 0666 less the umask, like any new
         // file the user writes.

@@ -128,6 +128,50 @@ TEST_CASE("atomic write: a failed writer leaves the target and the directory unt
     CHECK_THROWS_AS(writeStreamAtomically(dir.file("no/such/dir/x"), [](std::ostream&) {}), Error);
 }
 
+TEST_CASE("atomic write: a name as long as the folder takes gets a temporary file within the limit", "[io]") {
+    // Linux file systems take names of up to 255 bytes; the temporary file's name adds a dot and
+    // ".tmpPID_N" to the target's, and is cut to fit.
+    TempDir dir;
+    for (const std::string& name : {std::string(246, 'a') + ".stl", std::string(251, 'a') + ".stl"}) {
+        INFO(name.size() << " bytes");
+        const std::string target = dir.file(name);
+        checkWritable(target);
+        std::string temp;
+        writeFileAtomically(target, [&](const std::string& path) {
+            temp = fs::path(path).filename().string();
+            std::ofstream(path) << "mesh";
+        });
+        CHECK(slurp(target) == "mesh");
+        CHECK(temp.size() <= 255);
+        CHECK(temp.rfind("." + std::string(200, 'a'), 0) == 0);
+        CHECK(dir.entries() == 1);
+        fs::remove(target);
+    }
+    // A cut falls between characters, never inside one: names of three-byte characters after
+    // 0 to 5 one-byte ones put the cut at each place in a character.
+    const std::string euro = "\xe2\x82\xac";
+    for (std::size_t ascii = 0; ascii < 6; ++ascii) {
+        std::string name(ascii, 'a');
+        while (name.size() + euro.size() + 4 <= 255) name += euro;
+        name += ".stl";
+        std::string temp;
+        writeFileAtomically(dir.file(name), [&](const std::string& path) {
+            temp = fs::path(path).filename().string();
+            std::ofstream(path) << "mesh";
+        });
+        INFO(temp);
+        CHECK(temp.size() <= 255);
+        const std::size_t end = temp.rfind(".tmp");
+        REQUIRE(end != std::string::npos);
+        REQUIRE(temp.substr(0, 1 + ascii) == "." + std::string(ascii, 'a'));
+        const std::string kept = temp.substr(1 + ascii, end - 1 - ascii);
+        CHECK(kept.size() % euro.size() == 0);
+        CHECK(name.rfind(std::string(ascii, 'a') + kept, 0) == 0);
+        CHECK(slurp(dir.file(name)) == "mesh");
+        fs::remove(dir.file(name));
+    }
+}
+
 TEST_CASE("mesh files: OBJ, binary STL and PLY", "[io]") {
     TempDir dir;
     const Mesh mesh = meshLevelSet(rebuildLevelSet(dentedBox()));
