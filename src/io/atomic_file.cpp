@@ -5,8 +5,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "dexelmill/error.h"
@@ -37,57 +39,121 @@ std::string temporaryName(const std::string& name, const std::string& suffix, st
     return "." + name.substr(0, keep) + suffix;
 }
 
-/// Creates a new, empty, uniquely named file beside `target` and returns its path.
-std::string createTemporary(const std::filesystem::path& target) {
+/// The file `target` ends at: `target` itself, or the file its chain of symbolic links leads to
+/// (which need not exist). Each link's text is taken from the link's folder, as the system reads it.
+/// @throw Error for a link that cannot be read, or a chain as long as the system refuses (ELOOP).
+std::filesystem::path followLinks(const std::string& target) {
+    constexpr int kMostLinks = 40;  // Linux's MAXSYMLINKS
+    std::filesystem::path file = target;
+    for (int links = 0;; ++links) {
+        std::error_code ec;
+        if (!std::filesystem::is_symlink(std::filesystem::symlink_status(file, ec))) return file;
+        if (links == kMostLinks) throw Error("cannot write '" + target + "': too many levels of symbolic links");
+        const std::filesystem::path to = std::filesystem::read_symlink(file, ec);
+        if (ec) throw Error("cannot read the link '" + file.string() + "': " + ec.message());
+        file = to.is_absolute() ? to : file.parent_path() / to;
+    }
+}
+
+/// Where and how a target is written (see atomic_file.h).
+struct Destination {
+    std::filesystem::path file;  ///< the target with its symbolic links followed
+    bool inPlace = false;        ///< a device or FIFO: opened and written as it is
+    /// The regular file the new one replaces, whose owner, group and mode it takes.
+    std::optional<struct stat> replaces;
+};
+
+Destination destinationOf(const std::string& target) {
+    if (target.empty()) throw Error("cannot write a file with an empty name");
+    Destination d;
+    d.file = followLinks(target);
+    struct stat st {};
+    if (::stat(d.file.c_str(), &st) != 0) {
+        // A new file; where its folder is missing, the temporary file's creation says so.
+        if (errno == ENOENT) return d;
+        throw Error(systemError("cannot write", target));
+    }
+    if (S_ISDIR(st.st_mode)) throw Error("cannot write '" + target + "': it is a folder");
+    if (S_ISSOCK(st.st_mode)) throw Error("cannot write '" + target + "': it is a socket");
+    if (S_ISREG(st.st_mode)) d.replaces = st;
+    else d.inPlace = true;
+    return d;
+}
+
+/// Creates a new, empty, uniquely named file beside `d.file` and returns its path.
+std::string createTemporary(const std::string& target, const Destination& d) {
     static std::atomic<unsigned> counter{0};
     const std::filesystem::path dir =
-        target.has_parent_path() ? target.parent_path() : std::filesystem::path(".");
+        d.file.has_parent_path() ? d.file.parent_path() : std::filesystem::path(".");
     const std::size_t longest = longestName(dir);
+    // O_EXCL: never reuse a file someone else made. Mode 0666 less the umask, like any new file
+    // the user writes; or, replacing a file, no more than its own bits (and read and write for
+    // its writer, who reopens it), so that no one may read the content who may not read the file.
+    const mode_t mode = d.replaces ? (d.replaces->st_mode & 0777) | 0600 : 0666;
     for (int attempt = 0; attempt < 100; ++attempt) {
-        const std::string name = temporaryName(target.filename().string(),
+        const std::string name = temporaryName(d.file.filename().string(),
                                                ".tmp" + std::to_string(::getpid()) + "_" +
                                                    std::to_string(counter.fetch_add(1)),
                                                longest);
         const std::string path = (dir / name).string();
-        // O_EXCL: never reuse a file someone else made; mode 0666 less the umask, like any new
-        // file the user writes.
-        const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
         if (fd >= 0) {
             ::close(fd);
             return path;
         }
-        if (errno != EEXIST) throw Error(systemError("cannot create a temporary file for", target.string()));
+        if (errno != EEXIST) throw Error(systemError("cannot create a temporary file for", target));
     }
-    throw Error("cannot find a free temporary file name for '" + target.string() + "'");
+    throw Error("cannot find a free temporary file name for '" + target + "'");
 }
 
-void syncFile(const std::string& path) {
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) throw Error(systemError("cannot reopen", path));
+/// Gives the written temporary file the owner, group and mode of the file it replaces, as
+/// `sed -i` does (the owner and group where the user may set them: root may, others keep their
+/// own), and flushes it to disk.
+void finishTemporary(const std::string& temp, const Destination& d) {
+    const int fd = ::open(temp.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw Error(systemError("cannot reopen", temp));
+    if (d.replaces) {
+        const struct stat& st = *d.replaces;
+        // The owner first: a change of owner clears the set-user-ID bit the mode then restores.
+        if (::fchown(fd, st.st_uid, st.st_gid) != 0 && ::fchown(fd, uid_t(-1), st.st_gid) != 0) {
+            // Neither may be set: the new file is the user's own, as any file the user makes.
+        }
+        if (::fchmod(fd, st.st_mode & 07777) != 0) {
+            const std::string message = systemError("cannot set the mode of", temp);
+            ::close(fd);
+            throw Error(message);
+        }
+    }
     const int rc = ::fsync(fd);
     ::close(fd);
-    if (rc != 0) throw Error(systemError("cannot flush", path));
+    if (rc != 0) throw Error(systemError("cannot flush", temp));
 }
 
 }  // namespace
 
 void checkWritable(const std::string& target) {
-    if (target.empty()) throw Error("cannot write a file with an empty name");
+    const Destination d = destinationOf(target);
+    if (d.inPlace) {
+        if (::access(d.file.c_str(), W_OK) != 0) throw Error(systemError("cannot write", target));
+        return;
+    }
     std::error_code ec;
-    if (std::filesystem::is_directory(target, ec)) throw Error("cannot write '" + target + "': it is a folder");
-    const std::string temp = createTemporary(std::filesystem::path(target));
-    std::filesystem::remove(temp, ec);
+    std::filesystem::remove(createTemporary(target, d), ec);
 }
 
 void writeFileAtomically(const std::string& target,
-                         const std::function<void(const std::string& tempPath)>& write) {
-    if (target.empty()) throw Error("cannot write a file with an empty name");
-    const std::string temp = createTemporary(std::filesystem::path(target));
+                         const std::function<void(const std::string& path)>& write) {
+    const Destination d = destinationOf(target);
+    if (d.inPlace) {
+        write(d.file.string());
+        return;
+    }
+    const std::string temp = createTemporary(target, d);
     try {
         write(temp);
-        syncFile(temp);
+        finishTemporary(temp, d);
         std::error_code ec;
-        std::filesystem::rename(temp, target, ec);
+        std::filesystem::rename(temp, d.file, ec);
         if (ec) throw Error("cannot rename '" + temp + "' to '" + target + "': " + ec.message());
     } catch (...) {
         std::error_code ignored;

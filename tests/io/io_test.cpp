@@ -13,6 +13,11 @@
 #include <sstream>
 #include <vector>
 
+#include <fcntl.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <sys/un.h>
 #include <unistd.h>
 
 #include <tbb/task_arena.h>
@@ -126,6 +131,116 @@ TEST_CASE("atomic write: a failed writer leaves the target and the directory unt
     CHECK(slurp(target) == "second");
     CHECK(dir.entries() == 1);
     CHECK_THROWS_AS(writeStreamAtomically(dir.file("no/such/dir/x"), [](std::ostream&) {}), Error);
+}
+
+TEST_CASE("atomic write: a link is followed and a replaced file keeps its mode", "[io]") {
+    TempDir dir;
+    const std::string real = dir.file("real.stl");
+    std::ofstream(real) << "old";
+    fs::create_directories(dir.path / "sub");
+    // link.stl -> sub/hop.stl -> ../real.stl: each link's text is read from its own folder.
+    fs::create_symlink("../real.stl", dir.path / "sub" / "hop.stl");
+    fs::create_symlink("sub/hop.stl", dir.path / "link.stl");
+    checkWritable(dir.file("link.stl"));
+    writeStreamAtomically(dir.file("link.stl"), [](std::ostream& out) { out << "new"; });
+    CHECK(fs::is_symlink(dir.path / "link.stl"));
+    CHECK(fs::is_symlink(dir.path / "sub" / "hop.stl"));
+    CHECK(slurp(real) == "new");
+    CHECK(dir.entries() == 3);
+    // A link to a missing file makes the file.
+    fs::create_symlink("made.stl", dir.path / "dangling.stl");
+    writeStreamAtomically(dir.file("dangling.stl"), [](std::ostream& out) { out << "made"; });
+    CHECK(fs::is_symlink(dir.path / "dangling.stl"));
+    CHECK(slurp(dir.file("made.stl")) == "made");
+    // Links in a loop, or to a folder, are refused.
+    fs::create_symlink("loop2", dir.path / "loop1");
+    fs::create_symlink("loop1", dir.path / "loop2");
+    CHECK_THROWS_WITH(writeStreamAtomically(dir.file("loop1"), [](std::ostream&) {}),
+                      Catch::Matchers::Contains("too many levels of symbolic links"));
+    fs::create_symlink("sub", dir.path / "folder.stl");
+    CHECK_THROWS_WITH(checkWritable(dir.file("folder.stl")), Catch::Matchers::Contains("it is a folder"));
+    CHECK(fs::is_symlink(dir.path / "folder.stl"));
+
+    // The mode of the file replaced, whatever the umask: 022 would take 0664's group write.
+    const ::mode_t umaskWas = ::umask(022);
+    for (const fs::perms mode : {fs::perms(0600), fs::perms(0664), fs::perms(0751)}) {
+        INFO(std::oct << int(mode));
+        fs::permissions(real, mode);
+        writeFileAtomically(dir.file("link.stl"), [&](const std::string& temp) {
+            // While written, no one may read it who may not read the file (its writer aside).
+            CHECK((fs::status(temp).permissions() & ~(mode | fs::perms(0600))) == fs::perms::none);
+            std::ofstream(temp) << "again";
+        });
+        CHECK(fs::status(real).permissions() == mode);
+        CHECK(slurp(real) == "again");
+    }
+    ::umask(umaskWas);
+}
+
+TEST_CASE("atomic write: a replaced file keeps its owner and group where root writes it", "[io]") {
+    if (::geteuid() != 0) {
+        WARN("not root: a user cannot give a file to another, skipped");
+        return;
+    }
+    TempDir dir;
+    const std::string file = dir.file("theirs.json");
+    std::ofstream(file) << "old";
+    REQUIRE(::chown(file.c_str(), 65534, 65533) == 0);
+    REQUIRE(::chmod(file.c_str(), 02640) == 0);  // a change of owner clears set-ID bits
+    writeStreamAtomically(file, [](std::ostream& out) { out << "new"; });
+    struct stat st {};
+    REQUIRE(::stat(file.c_str(), &st) == 0);
+    CHECK(st.st_uid == 65534);
+    CHECK(st.st_gid == 65533);
+    CHECK((st.st_mode & 07777) == 02640);
+    CHECK(slurp(file) == "new");
+}
+
+TEST_CASE("atomic write: a FIFO or a device is written in place, a socket refused", "[io]") {
+    TempDir dir;
+    const std::string fifo = dir.file("pipe.json");
+    REQUIRE(::mkfifo(fifo.c_str(), 0644) == 0);
+    // The reader's end is open before the write (without blocking), so the write does not wait.
+    const int reader = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);
+    REQUIRE(reader >= 0);
+    checkWritable(fifo);
+    writeStreamAtomically(fifo, [](std::ostream& out) { out << "through the pipe"; });
+    char got[64] = {};
+    const ::ssize_t n = ::read(reader, got, sizeof got);
+    ::close(reader);
+    CHECK(std::string(got, std::size_t(std::max<::ssize_t>(n, 0))) == "through the pipe");
+    CHECK(fs::is_fifo(fifo));
+    CHECK(dir.entries() == 1);
+
+    // A device node of its own (the null device's numbers), never the system's /dev/null; making
+    // one takes root.
+    const std::string null = dir.file("null.json");
+    if (::mknod(null.c_str(), S_IFCHR | 0666, ::makedev(1, 3)) == 0) {
+        fs::create_symlink("null.json", dir.path / "to-null.json");
+        for (const std::string& target : {null, dir.file("to-null.json")}) {
+            INFO(target);
+            checkWritable(target);
+            writeStreamAtomically(target, [](std::ostream& out) { out << "gone"; });
+            CHECK(fs::is_character_file(null));
+        }
+        CHECK(fs::is_symlink(dir.path / "to-null.json"));
+        CHECK(dir.entries() == 3);
+    } else {
+        WARN("cannot make a device node (not root): the device case skipped");
+    }
+
+    const std::string socketPath = dir.file("sock.json");
+    const int sock = ::socket(AF_UNIX, SOCK_STREAM, 0);
+    REQUIRE(sock >= 0);
+    ::sockaddr_un address{};
+    address.sun_family = AF_UNIX;
+    std::strncpy(address.sun_path, socketPath.c_str(), sizeof address.sun_path - 1);
+    REQUIRE(::bind(sock, reinterpret_cast<const ::sockaddr*>(&address), sizeof address) == 0);
+    CHECK_THROWS_WITH(checkWritable(socketPath), Catch::Matchers::Contains("it is a socket"));
+    CHECK_THROWS_WITH(writeStreamAtomically(socketPath, [](std::ostream& out) { out << "x"; }),
+                      Catch::Matchers::Contains("it is a socket"));
+    ::close(sock);
+    CHECK(fs::is_socket(socketPath));
 }
 
 TEST_CASE("atomic write: a name as long as the folder takes gets a temporary file within the limit", "[io]") {
