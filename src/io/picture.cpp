@@ -1,7 +1,9 @@
 #include "dexelmill/io/picture.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
@@ -252,18 +254,28 @@ void writePng(const std::string& path, const Image& image) {
     if (image.width < 1 || image.height < 1 ||
         image.rgb.size() != std::size_t(image.width) * image.height * 3)
         throw Error("cannot write '" + path + "': malformed image");
-    writeFileAtomically(path, [&](const std::string& temp) {
+    writeFileAtomically(path, [&](const std::string& file) {
+        // Through a stream of our own: png_image_write_to_file removes its file when a write fails,
+        // and the file may be a device written in place.
+        std::FILE* out = std::fopen(file.c_str(), "wb");
+        if (!out) throw Error("cannot write '" + path + "': " + std::strerror(errno));
         png_image png{};
         png.version = PNG_IMAGE_VERSION;
         png.width = png_uint_32(image.width);
         png.height = png_uint_32(image.height);
         png.format = PNG_FORMAT_RGB;
-        if (!png_image_write_to_file(&png, temp.c_str(), 0, image.rgb.data(), 0, nullptr)) {
-            const std::string message = png.message;
-            png_image_free(&png);
-            throw Error("cannot write '" + path + "': " + message);
-        }
+        bool written = png_image_write_to_stdio(&png, out, 0, image.rgb.data(), 0, nullptr) != 0;
+        std::string message = written ? std::string() : std::string(png.message);
         png_image_free(&png);
+        if (written && (std::fflush(out) != 0 || std::ferror(out))) {
+            written = false;
+            message = std::strerror(errno);
+        }
+        if (std::fclose(out) != 0 && written) {
+            written = false;
+            message = std::strerror(errno);
+        }
+        if (!written) throw Error("cannot write '" + path + "': " + message);
     });
 }
 
