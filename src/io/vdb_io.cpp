@@ -8,16 +8,27 @@
 
 namespace dexelmill {
 
+namespace {
+
+/// Writes grids as openvdb::io::File::write does (a random-access file: the grids' offsets in its
+/// header), but to a stream of ours: File::write opens its own and never looks at its state, so a
+/// full disk left a truncated file that was then renamed over the target.
+class RandomAccessWriter : public openvdb::io::Archive {
+public:
+    void writeTo(std::ostream& out, const openvdb::GridCPtrVec& grids) const {
+        Archive::write(out, grids, /*seekable=*/true);
+    }
+};
+
+}  // namespace
+
 void writeVdb(const std::string& path, const LevelSet& levelSet) {
     openvdb::FloatGrid::ConstPtr grid = gridOf(levelSet);
     if (!grid) throw Error("cannot write '" + path + "': the level set holds no grid");
     ensureOpenVdbInitialized();
-    writeFileAtomically(path, [&](const std::string& temp) {
+    writeStreamAtomically(path, [&](std::ostream& out) {
         try {
-            openvdb::io::File file(temp);
-            openvdb::GridCPtrVec grids{grid};
-            file.write(grids);
-            file.close();
+            RandomAccessWriter().writeTo(out, openvdb::GridCPtrVec{grid});
         } catch (const openvdb::Exception& e) {
             throw Error("cannot write '" + path + "': " + e.what());
         }

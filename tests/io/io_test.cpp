@@ -2,11 +2,13 @@
 
 #include <array>
 #include <cmath>
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <map>
 #include <random>
@@ -14,6 +16,7 @@
 #include <vector>
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
@@ -578,6 +581,55 @@ TEST_CASE("VDB: a level set written and read back is identical", "[io]") {
     CHECK(back.valueAt(Vec3(3.3, 4.4, 5.5)) == ls.valueAt(Vec3(3.3, 4.4, 5.5)));
     CHECK_THROWS_AS(readVdb(dir.file("part.vdb"), "nope"), Error);
     CHECK_THROWS_AS(readVdb(dir.file("missing.vdb")), Error);
+}
+
+namespace {
+
+/// While alive, writes past `bytes` in any file fail (EFBIG) as on a full disk: a file-size limit,
+/// with SIGXFSZ, which would end the process, ignored.
+class FileSizeLimit {
+public:
+    explicit FileSizeLimit(::rlim_t bytes) {
+        ::getrlimit(RLIMIT_FSIZE, &old_);
+        signal_ = std::signal(SIGXFSZ, SIG_IGN);
+        ::rlimit limit = old_;
+        limit.rlim_cur = bytes;
+        ::setrlimit(RLIMIT_FSIZE, &limit);
+    }
+    ~FileSizeLimit() {
+        ::setrlimit(RLIMIT_FSIZE, &old_);
+        std::signal(SIGXFSZ, signal_);
+    }
+
+private:
+    ::rlimit old_{};
+    void (*signal_)(int) = nullptr;
+};
+
+}  // namespace
+
+TEST_CASE("every writer fails on a full disk and leaves the file it would replace", "[io]") {
+    TempDir dir;
+    const TriDexelStock stock = dentedBox();
+    const LevelSet ls = rebuildLevelSet(stock);
+    const Mesh mesh = meshLevelSet(ls);
+    const std::map<std::string, std::function<void(const std::string&)>> writers{
+        {"part.vdb", [&](const std::string& p) { writeVdb(p, ls); }},
+        {"part.stl", [&](const std::string& p) { writeStl(p, mesh); }},
+        {"part.obj", [&](const std::string& p) { writeObj(p, mesh); }},
+        {"part.ply", [&](const std::string& p) { writePly(p, mesh); }},
+        {"part.png", [&](const std::string& p) { writePicture(p, mesh); }}};
+    for (const auto& [name, write] : writers) {
+        INFO(name);
+        std::ofstream(dir.file(name)) << "KEEP";
+        {
+            // Each file is larger than 4 KiB.
+            const FileSizeLimit full(4096);
+            CHECK_THROWS_AS(write(dir.file(name)), Error);
+        }
+        CHECK(slurp(dir.file(name)) == "KEEP");
+    }
+    CHECK(dir.entries() == writers.size());
 }
 
 TEST_CASE("stock from a mesh: lines through edges and vertices cross once", "[io][surface]") {
