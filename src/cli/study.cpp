@@ -4,7 +4,6 @@
 #include <sstream>
 
 #include "commands.h"
-#include "dexelmill/io/atomic_file.h"
 #include "dexelmill/study/study.h"
 #include "progress.h"
 
@@ -84,14 +83,13 @@ int runStudy(const StudyArgs& a) {
     o.surfacePoints = a.surfacePoints;
     o.samplePoints = a.samples;
     o.plyDeviationDir = a.plyDir;
+    o.csvPath = a.csv;
+    o.plotPath = a.plot;
     if (!a.job.quiet) warnThreads(a.job.threads);
     ProgressBar bar(!a.job.quiet && ProgressBar::stderrIsTerminal());
     o.progress = [&bar](const char* stage, std::size_t done, std::size_t total) { bar.update(stage, done, total); };
     const StudyResult r = runStudy(o);
     bar.finish();
-    const std::string csv = studyCsv(r);
-    if (!a.csv.empty()) writeStreamAtomically(a.csv, [&](std::ostream& out) { out << csv; });
-    if (!a.plot.empty()) writeStudyPlot(a.plot, r);
     std::printf("study of %s; reference volume %.6g mm^3 (%s)\n", r.subject.c_str(), r.referenceVolumeMm3,
                 r.reference.c_str());
     std::printf("deviations in mm at points over the mesh; 'inner': those at least one spacing from the stock's faces\n");

@@ -141,29 +141,57 @@ void checkWritable(const std::string& target) {
     std::filesystem::remove(createTemporary(target, d), ec);
 }
 
-void writeFileAtomically(const std::string& target,
-                         const std::function<void(const std::string& path)>& write) {
+OutputBatch::~OutputBatch() {
+    std::error_code ignored;
+    for (const Staged& s : staged_) std::filesystem::remove(s.temp, ignored);
+}
+
+void OutputBatch::stage(const std::string& target, const std::function<void(const std::string& path)>& write) {
     const Destination d = destinationOf(target);
     if (d.inPlace) {
         write(d.file.string());
         return;
     }
-    const std::string temp = createTemporary(target, d);
+    Staged s{createTemporary(target, d), d.file.string(), target};
     try {
-        write(temp);
-        finishTemporary(temp, d);
-        std::error_code ec;
-        std::filesystem::rename(temp, d.file, ec);
-        if (ec) throw Error("cannot rename '" + temp + "' to '" + target + "': " + ec.message());
+        write(s.temp);
+        finishTemporary(s.temp, d);
     } catch (...) {
         std::error_code ignored;
-        std::filesystem::remove(temp, ignored);
+        std::filesystem::remove(s.temp, ignored);
         throw;
     }
+    staged_.push_back(std::move(s));
 }
 
-void writeStreamAtomically(const std::string& target,
-                           const std::function<void(std::ostream& out)>& write) {
+void OutputBatch::commit() {
+    for (std::size_t i = 0; i < staged_.size(); ++i) {
+        std::error_code ec;
+        std::filesystem::rename(staged_[i].temp, staged_[i].file, ec);
+        if (ec) {
+            const std::string message =
+                "cannot rename '" + staged_[i].temp + "' to '" + staged_[i].target + "': " + ec.message();
+            // The files renamed are the targets' now; the destructor removes the rest.
+            staged_.erase(staged_.begin(), staged_.begin() + std::ptrdiff_t(i));
+            throw Error(message);
+        }
+    }
+    staged_.clear();
+}
+
+void writeFileAtomically(const std::string& target, const std::function<void(const std::string& path)>& write,
+                         OutputBatch* batch) {
+    if (batch) {
+        batch->stage(target, write);
+        return;
+    }
+    OutputBatch one;
+    one.stage(target, write);
+    one.commit();
+}
+
+void writeStreamAtomically(const std::string& target, const std::function<void(std::ostream& out)>& write,
+                           OutputBatch* batch) {
     writeFileAtomically(target, [&](const std::string& temp) {
         std::ofstream out(temp, std::ios::binary | std::ios::trunc);
         if (!out) throw Error(systemError("cannot open", temp));
@@ -172,7 +200,7 @@ void writeStreamAtomically(const std::string& target,
         if (!out) throw Error("writing '" + target + "' failed");
         out.close();
         if (out.fail()) throw Error("writing '" + target + "' failed");
-    });
+    }, batch);
 }
 
 }  // namespace dexelmill

@@ -76,7 +76,7 @@ void requireValidIndices(const Mesh& mesh) {
 
 }  // namespace
 
-void writeObj(const std::string& path, const Mesh& mesh) {
+void writeObj(const std::string& path, const Mesh& mesh, OutputBatch* batch) {
     requireValidIndices(mesh);
     writeStreamAtomically(path, [&](std::ostream& out) {
         BlockWriter w(out);
@@ -101,10 +101,10 @@ void writeObj(const std::string& path, const Mesh& mesh) {
             w.put('\n');
         }
         w.flush();
-    });
+    }, batch);
 }
 
-void writeStl(const std::string& path, const Mesh& mesh) {
+void writeStl(const std::string& path, const Mesh& mesh, OutputBatch* batch) {
     requireValidIndices(mesh);
     if (mesh.triangles.size() > std::numeric_limits<std::uint32_t>::max())
         throw Error("binary STL holds at most 2^32 - 1 triangles");
@@ -145,10 +145,10 @@ void writeStl(const std::string& path, const Mesh& mesh) {
             for (std::size_t c = c0; c < c1; ++c)
                 out.write(buffers[c - c0].data(), std::streamsize(buffers[c - c0].size()));
         }
-    });
+    }, batch);
 }
 
-void writePly(const std::string& path, const Mesh& mesh, const PlyVertexData& data) {
+void writePly(const std::string& path, const Mesh& mesh, const PlyVertexData& data, OutputBatch* batch) {
     requireValidIndices(mesh);
     const std::size_t n = mesh.vertices.size();
     const bool colours = !data.colours.empty(), scalar = !data.scalar.empty();
@@ -185,7 +185,7 @@ void writePly(const std::string& path, const Mesh& mesh, const PlyVertexData& da
             w.put(rec, 13);
         }
         w.flush();
-    });
+    }, batch);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -250,7 +250,7 @@ int textWidth(const std::string& text, int scale) {
     return stb_easy_font_width(copy.data()) * scale;
 }
 
-void writePng(const std::string& path, const Image& image) {
+void writePng(const std::string& path, const Image& image, OutputBatch* batch) {
     if (image.width < 1 || image.height < 1 ||
         image.rgb.size() != std::size_t(image.width) * image.height * 3)
         throw Error("cannot write '" + path + "': malformed image");
@@ -276,11 +276,11 @@ void writePng(const std::string& path, const Image& image) {
             message = std::strerror(errno);
         }
         if (!written) throw Error("cannot write '" + path + "': " + message);
-    });
+    }, batch);
 }
 
-void writePicture(const std::string& path, const Mesh& mesh, const PictureOptions& options) {
-    writePng(path, renderPicture(mesh, options));
+void writePicture(const std::string& path, const Mesh& mesh, const PictureOptions& options, OutputBatch* batch) {
+    writePng(path, renderPicture(mesh, options), batch);
 }
 
 }  // namespace dexelmill

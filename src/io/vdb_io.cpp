@@ -22,7 +22,7 @@ public:
 
 }  // namespace
 
-void writeVdb(const std::string& path, const LevelSet& levelSet) {
+void writeVdb(const std::string& path, const LevelSet& levelSet, OutputBatch* batch) {
     openvdb::FloatGrid::ConstPtr grid = gridOf(levelSet);
     if (!grid) throw Error("cannot write '" + path + "': the level set holds no grid");
     ensureOpenVdbInitialized();
@@ -32,7 +32,7 @@ void writeVdb(const std::string& path, const LevelSet& levelSet) {
         } catch (const openvdb::Exception& e) {
             throw Error("cannot write '" + path + "': " + e.what());
         }
-    });
+    }, batch);
 }
 
 LevelSet readVdb(const std::string& path, const std::string& gridName) {

@@ -37,6 +37,9 @@ void validate(const CompareOptions& o) {
         throw Error("output '" + o.pngPath + "': a picture is written as .png");
     if (!o.reportPath.empty() && lowerExtension(o.reportPath) != ".json")
         throw Error("output '" + o.reportPath + "': the report is written as .json");
+    // A folder that is missing or not writable is found now, not after the measurement.
+    for (const std::string* path : {&o.plyPath, &o.pngPath, &o.reportPath})
+        if (!path->empty()) checkWritable(*path);
 }
 
 CompareReport compareInArena(const CompareOptions& o) {
@@ -67,18 +70,21 @@ CompareReport compareInArena(const CompareOptions& o) {
     Deviation deviation = measureDeviation(machined, *design, o.tolerance);
     r.timingS.measure = seconds(t);
 
+    // Every file is staged, and renamed only once all are written.
     t = Clock::now();
+    OutputBatch outputs;
     std::vector<double> distance = std::move(deviation.distance);
     deviation.distance = {};
-    writeDeviationFiles(machined, deviation, std::move(distance), o.pngPath, o.plyPath);
+    writeDeviationFiles(machined, deviation, std::move(distance), o.pngPath, o.plyPath, outputs);
     r.deviation = std::move(deviation);
     r.timingS.write = seconds(t);
     r.timingS.total = seconds(tStart);
     r.peakMemoryMb = peakMemoryMb();
     if (!o.reportPath.empty()) {
         const std::string text = compareJson(r);
-        writeStreamAtomically(o.reportPath, [&](std::ostream& out) { out << text; });
+        writeStreamAtomically(o.reportPath, [&](std::ostream& out) { out << text; }, &outputs);
     }
+    outputs.commit();
     return r;
 }
 

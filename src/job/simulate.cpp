@@ -55,7 +55,7 @@ bool measuresSurface(const SimulateOptions& o) {
     return o.measureSurface || !o.pngPath.empty() || !o.deviationPlyPath.empty() || !o.reportPath.empty();
 }
 
-/// Fails before any work when an output names a format we cannot write.
+/// Fails before any work when an output names a format we cannot write, or cannot be written.
 void checkOutputs(const SimulateOptions& o) {
     if (!o.meshPath.empty()) {
         const std::string e = lowerExtension(o.meshPath);
@@ -760,24 +760,26 @@ SimulateReport simulateInArena(const SimulateOptions& o) {
     SimulateReport& report = sim.report;
     const Mesh& mesh = sim.mesh;
 
-    // Write.
+    // Write: every file is staged, and renamed only once all are written.
     auto t = Clock::now();
     if (o.progress) o.progress("write", 0, 1);
+    OutputBatch outputs;
     if (!o.meshPath.empty()) {
         const std::string e = lowerExtension(o.meshPath);
-        if (e == ".obj") writeObj(o.meshPath, mesh);
-        else if (e == ".stl") writeStl(o.meshPath, mesh);
-        else writePly(o.meshPath, mesh);
+        if (e == ".obj") writeObj(o.meshPath, mesh, &outputs);
+        else if (e == ".stl") writeStl(o.meshPath, mesh, &outputs);
+        else writePly(o.meshPath, mesh, {}, &outputs);
     }
-    if (!o.vdbPath.empty()) writeVdb(o.vdbPath, sim.levelSet);
+    if (!o.vdbPath.empty()) writeVdb(o.vdbPath, sim.levelSet, &outputs);
     if (report.surfaceDeviation) {
-        writeDeviationFiles(mesh, *report.surfaceDeviation, std::move(sim.deviation), o.pngPath, o.deviationPlyPath);
+        writeDeviationFiles(mesh, *report.surfaceDeviation, std::move(sim.deviation), o.pngPath, o.deviationPlyPath,
+                            outputs);
     } else if (!o.pngPath.empty()) {
-        writePicture(o.pngPath, mesh);
+        writePicture(o.pngPath, mesh, {}, &outputs);
     }
     if (!o.gougeCsvPath.empty()) {
         const std::string text = gougeCsv(report);
-        writeStreamAtomically(o.gougeCsvPath, [&](std::ostream& out) { out << text; });
+        writeStreamAtomically(o.gougeCsvPath, [&](std::ostream& out) { out << text; }, &outputs);
     }
     report.timingS.write = seconds(t);
     report.timingS.total = seconds(tStart);
@@ -786,8 +788,9 @@ SimulateReport simulateInArena(const SimulateOptions& o) {
     report.threadsStarted = threadsSince(threadsBefore);
     if (!o.reportPath.empty()) {
         const std::string text = reportJson(report);
-        writeStreamAtomically(o.reportPath, [&](std::ostream& out) { out << text; });
+        writeStreamAtomically(o.reportPath, [&](std::ostream& out) { out << text; }, &outputs);
     }
+    outputs.commit();
     return report;
 }
 

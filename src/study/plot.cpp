@@ -56,7 +56,7 @@ std::string fmt(double v) {
 
 }  // namespace
 
-void writeStudyPlot(const std::string& path, const StudyResult& result) {
+void writeStudyPlot(const std::string& path, const StudyResult& result, OutputBatch* batch) {
     if (result.runs.empty()) throw Error("study plot: no runs to plot");
     const int W = 1000, H = 720, left = 110, right = 230, top = 84, bottom = 80;
     Canvas c(W, H);
@@ -137,7 +137,7 @@ void writeStudyPlot(const std::string& path, const StudyResult& result) {
         }
         legendY += 8;
     }
-    writePng(path, c.image());
+    writePng(path, c.image(), batch);
 }
 
 }  // namespace dexelmill

@@ -15,6 +15,7 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/io/atomic_file.h"
+#include "dexelmill/io/file_name.h"
 #include "dexelmill/study/oracle.h"
 
 namespace dexelmill {
@@ -131,7 +132,19 @@ std::vector<SurfacePoint> surfacePoints(const Mesh& mesh, std::size_t count) {
     return out;
 }
 
-void writeDeviationPly(const std::string& path, const Mesh& mesh, const std::vector<double>& deviation, double h) {
+/// Fails before any run where an output names a format it is not written in, or cannot be
+/// written.
+void checkOutputs(const StudyOptions& o) {
+    if (!o.csvPath.empty() && lowerExtension(o.csvPath) != ".csv")
+        throw Error("output '" + o.csvPath + "': the table is written as .csv");
+    if (!o.plotPath.empty() && lowerExtension(o.plotPath) != ".png")
+        throw Error("output '" + o.plotPath + "': the plot is written as .png");
+    for (const std::string* path : {&o.csvPath, &o.plotPath})
+        if (!path->empty()) checkWritable(*path);
+}
+
+void writeDeviationPly(const std::string& path, const Mesh& mesh, const std::vector<double>& deviation, double h,
+                       OutputBatch& batch) {
     writeStreamAtomically(path, [&](std::ostream& out) {
         out << "ply\nformat ascii 1.0\ncomment dexelmill deviation from the exact part, red = extra material, "
                "blue = missing; full colour at one spacing "
@@ -147,7 +160,7 @@ void writeDeviationPly(const std::string& path, const Mesh& mesh, const std::vec
             out << v.x << ' ' << v.y << ' ' << v.z << ' ' << r << ' ' << g << ' ' << b << '\n';
         }
         for (const auto& t : mesh.triangles) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
-    });
+    }, &batch);
 }
 
 }  // namespace
@@ -162,6 +175,7 @@ StudyResult runStudy(const StudyOptions& o) {
     if (o.job.stockFrustum)
         throw Error("a study measures against the exact part cut from a box stock; a cylinder or cone stock is not "
                     "supported (give the stock as box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX)");
+    checkOutputs(o);
     if (!o.plyDeviationDir.empty()) {
         std::error_code ec;
         std::filesystem::create_directories(o.plyDeviationDir, ec);
@@ -177,6 +191,8 @@ StudyResult runStudy(const StudyOptions& o) {
             familySets.push_back(f);
     // The measurements use the job's thread count too.
     tbb::task_arena arena(arenaThreads(o.job.threads));
+    // Every file, the runs' deviation meshes too, is staged, and renamed only once all are written.
+    OutputBatch outputs;
 
     StudyResult result;
     result.subject = o.job.inputs.empty() ? std::string("program in memory") : o.job.inputs.front();
@@ -262,7 +278,7 @@ StudyResult runStudy(const StudyOptions& o) {
                 });
                 std::ostringstream name;
                 name << o.plyDeviationDir << "/deviation_h" << h << "_" << run.families << ".ply";
-                writeDeviationPly(name.str(), s.mesh, all, h);
+                writeDeviationPly(name.str(), s.mesh, all, h, outputs);
             }
 
             // Lost and invented material at random points (the same points for every run). Points
@@ -309,6 +325,12 @@ StudyResult runStudy(const StudyOptions& o) {
         }
     }
     tick("study");
+    if (!o.csvPath.empty()) {
+        const std::string csv = studyCsv(result);
+        writeStreamAtomically(o.csvPath, [&](std::ostream& out) { out << csv; }, &outputs);
+    }
+    if (!o.plotPath.empty()) writeStudyPlot(o.plotPath, result, &outputs);
+    outputs.commit();
     return result;
 }
 

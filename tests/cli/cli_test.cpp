@@ -3,10 +3,16 @@
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include "support/scratch.h"
 
@@ -215,6 +221,95 @@ TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Contains("'sub': it is a folder"));
     CHECK_FALSE(fs::exists(cli.dir() / "part.stl"));
+}
+
+namespace {
+
+/// Makes `path` a device that fails every write as a full disk does: a node of /dev/full's numbers
+/// of its own (root may make one), else a link to /dev/full (which a user cannot replace). False
+/// where neither fails so.
+bool makeFullDisk(const fs::path& path) {
+    if (::mknod(path.c_str(), S_IFCHR | 0666, ::makedev(1, 7)) != 0) {
+        std::error_code ec;
+        fs::create_symlink("/dev/full", path, ec);
+        if (ec) return false;
+    }
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) return false;
+    const bool full = ::write(fd, "x", 1) < 0 && errno == ENOSPC;
+    ::close(fd);
+    return full;
+}
+
+std::size_t entries(const fs::path& dir) {
+    return std::size_t(std::distance(fs::directory_iterator(dir), fs::directory_iterator()));
+}
+
+}  // namespace
+
+TEST_CASE("a run that fails writing its last output leaves the outputs written before as they were",
+          "[cli][errors]") {
+    const Cli cli("full_disk");
+    cli.file("slot.ngc", "G21 G90\nT1 M6\nG0 X5 Y15 Z15\nG1 Z7 F100\nG1 X35\nG0 Z15\nM30\n");
+    cli.file("part.stl", boxStl(10.0));
+    cli.file("design.stl", boxStl(9.875));
+    for (const char* f : {"keep.stl", "keep.png", "keep.ply", "keep.csv"}) cli.file(f, "KEEP\n");
+    if (!makeFullDisk(cli.dir() / "full.json") || !makeFullDisk(cli.dir() / "full.png")) {
+        WARN("no device that fails as a full disk (/dev/full): skipped");
+        return;
+    }
+    const std::size_t before = entries(cli.dir()) + 2;  // out.txt and err.txt
+    // The report (or the study's plot) is written last: the full disk fails it.
+    Run r = cli("simulate slot.ngc --stock box:0,0,0,40,30,10 --tool 1=flat:d=6 --resolution 0.5 -q "
+                "-o keep.stl --png keep.png --report full.json");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("full.json"));
+    r = cli("compare part.stl design.stl --ply keep.ply --png keep.png --report full.json");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("full.json"));
+    r = cli("study --case tilted-slot --resolutions 2 --families z --surface-points 100 --samples 100 --quiet "
+            "--csv keep.csv --plot full.png");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("full.png"));
+    for (const char* f : {"keep.stl", "keep.png", "keep.ply", "keep.csv"}) {
+        INFO(f);
+        CHECK(slurp(cli.dir() / f) == "KEEP\n");
+    }
+    CHECK(entries(cli.dir()) == before);  // no temporary file left
+}
+
+TEST_CASE("compare and study check their outputs before any work", "[cli][errors]") {
+    const Cli cli("outputs_first");
+    cli.file("part.stl", boxStl(10.0));
+    cli.file("design.stl", boxStl(9.875));
+    for (const char* f : {"keep.ply", "keep.png", "keep.csv"}) cli.file(f, "KEEP\n");
+    Run r = cli("compare part.stl design.stl --ply keep.ply --png keep.png --report missing/r.json");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("missing/r.json") && Contains("No such file or directory"));
+    // Before the parts are read.
+    r = cli("compare part.stl nowhere.stl --report missing/r.json");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("missing/r.json") && !Contains("nowhere.stl"));
+    // Before the program is read, and so before the runs.
+    cli.file("bad.ngc", "G21\nG1 X1..5\n");
+    fs::create_directories(cli.dir() / "table.csv");
+    const std::string study = "study bad.ngc --tool flat:d=3 --stock box:0,0,-5,20,20,0 ";
+    for (const auto& [args, says] : {std::pair<const char*, const char*>{"--csv table.csv", "'table.csv': it is a folder"},
+                                     {"--csv table.txt", "'table.txt': the table is written as .csv"},
+                                     {"--plot plot.jpg", "'plot.jpg': the plot is written as .png"},
+                                     {"--plot missing/p.png", "missing/p.png"}}) {
+        INFO(args);
+        r = cli(study + args);
+        CHECK(r.code == 1);
+        CHECK_THAT(r.err, Contains(says) && !Contains("bad.ngc"));
+    }
+    r = cli("study --case tilted-slot --resolutions 2 --families z --csv keep.csv --plot missing/p.png");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("missing/p.png"));
+    for (const char* f : {"keep.ply", "keep.png", "keep.csv"}) {
+        INFO(f);
+        CHECK(slurp(cli.dir() / f) == "KEEP\n");
+    }
 }
 
 TEST_CASE("every stage honours --threads N: the job starts at most N - 1 workers", "[cli][threads]") {

@@ -136,6 +136,37 @@ TEST_CASE("atomic write: a failed writer leaves the target and the directory unt
     CHECK_THROWS_AS(writeStreamAtomically(dir.file("no/such/dir/x"), [](std::ostream&) {}), Error);
 }
 
+TEST_CASE("output batch: the files are renamed together on commit, and none when one fails", "[io]") {
+    TempDir dir;
+    const std::string a = dir.file("a.txt"), b = dir.file("b.txt");
+    std::ofstream(a) << "old a";
+    std::ofstream(b) << "old b";
+    {
+        OutputBatch batch;
+        writeStreamAtomically(a, [](std::ostream& out) { out << "new a"; }, &batch);
+        writeStreamAtomically(b, [](std::ostream& out) { out << "new b"; }, &batch);
+        CHECK(slurp(a) == "old a");  // staged, not yet renamed
+        CHECK(dir.entries() == 4);
+        CHECK_THROWS_WITH(writeStreamAtomically(dir.file("c.txt"),
+                                                [](std::ostream& out) {
+                                                    out << "half";
+                                                    throw Error("disk full");
+                                                },
+                                                &batch),
+                          "disk full");
+    }
+    CHECK(slurp(a) == "old a");
+    CHECK(slurp(b) == "old b");
+    CHECK(dir.entries() == 2);  // the batch removed its temporary files
+    OutputBatch batch;
+    writeStreamAtomically(a, [](std::ostream& out) { out << "new a"; }, &batch);
+    writeStreamAtomically(b, [](std::ostream& out) { out << "new b"; }, &batch);
+    batch.commit();
+    CHECK(slurp(a) == "new a");
+    CHECK(slurp(b) == "new b");
+    CHECK(dir.entries() == 2);
+}
+
 TEST_CASE("atomic write: a link is followed and a replaced file keeps its mode", "[io]") {
     TempDir dir;
     const std::string real = dir.file("real.stl");

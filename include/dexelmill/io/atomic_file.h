@@ -1,7 +1,8 @@
 /// @file atomic_file.h
 /// @brief Every file the library writes goes through here: the content is written to a
 /// temporary file in the target's directory and renamed over the target only once it is
-/// complete, so a failed or interrupted run never leaves a half-written or clobbered file.
+/// complete, so a failed or interrupted run never leaves a half-written or clobbered file; an
+/// OutputBatch renames a run's files together, once all are written.
 ///
 /// What the target names decides how it is written, as a careful Unix tool treats its output
 /// (GNU `sed -i --follow-symlinks`, `cp` onto an existing file):
@@ -21,18 +22,52 @@
 #include <functional>
 #include <ostream>
 #include <string>
+#include <vector>
 
 namespace dexelmill {
 
-/// @brief Calls `write` with the path to write `target`'s content to (see the file comment): a
-/// fresh temporary file beside the file `target` leads to (created empty), which is then given the
-/// replaced file's mode, flushed to disk and renamed over it; or the device or FIFO itself.
-/// If `write` throws, the temporary file is removed and the exception propagates; `target` is
-/// untouched.
-/// @throw Error if `target` is a folder or a socket, or the temporary file cannot be created,
-/// flushed or renamed.
+/// @brief The files one run writes, renamed over their targets together: each is staged in its
+/// temporary file, complete and flushed to disk, and commit() renames them all, so that a run that
+/// fails at its last file (a full disk while writing the report) leaves every target as it was.
+/// A batch destroyed before commit() removes its temporary files. A device or FIFO target has no
+/// temporary file: it is written when staged.
+class OutputBatch {
+public:
+    OutputBatch() = default;
+    OutputBatch(const OutputBatch&) = delete;
+    OutputBatch& operator=(const OutputBatch&) = delete;
+    /// @brief Removes the temporary files not renamed.
+    ~OutputBatch();
+
+    /// @brief Calls `write` with the path to write `target`'s content to (see the file comment):
+    /// a fresh temporary file beside the file `target` leads to (created empty), which is then
+    /// given the replaced file's mode and flushed to disk, to be renamed by commit(); or the device
+    /// or FIFO itself. If `write` throws, its temporary file is removed and the exception
+    /// propagates; `target` and the files staged before are untouched.
+    /// @throw Error if `target` is a folder or a socket, or the temporary file cannot be created or
+    /// flushed.
+    void stage(const std::string& target, const std::function<void(const std::string& path)>& write);
+
+    /// @brief Renames every staged temporary file over its target, in the order staged.
+    /// @throw Error naming the file whose rename fails (its folder removed meanwhile, say): the
+    /// files before it are renamed, the others left as they were.
+    void commit();
+
+private:
+    struct Staged {
+        std::string temp;    ///< the temporary file
+        std::string file;    ///< what it is renamed to: the target with its links followed
+        std::string target;  ///< the target as named, for messages
+    };
+    std::vector<Staged> staged_;
+};
+
+/// @brief Writes `target` through `write` (OutputBatch::stage) and renames it at once; or, given a
+/// `batch`, stages it there, to be renamed by the batch's commit().
+/// @throw Error as OutputBatch::stage and commit do.
 void writeFileAtomically(const std::string& target,
-                         const std::function<void(const std::string& path)>& write);
+                         const std::function<void(const std::string& path)>& write,
+                         OutputBatch* batch = nullptr);
 
 /// @brief Fails now, rather than after a long run, where writeFileAtomically(target) could not
 /// start: for a device or FIFO, unless the user may write it; else it creates and removes a
@@ -40,9 +75,10 @@ void writeFileAtomically(const std::string& target,
 /// @throw Error naming `target` and the reason.
 void checkWritable(const std::string& target);
 
-/// @brief writeFileAtomically with a binary std::ostream on the temporary file.
+/// @brief writeFileAtomically with a binary std::ostream on the file written.
 /// @throw Error if the stream fails at any point.
 void writeStreamAtomically(const std::string& target,
-                           const std::function<void(std::ostream& out)>& write);
+                           const std::function<void(std::ostream& out)>& write,
+                           OutputBatch* batch = nullptr);
 
 }  // namespace dexelmill

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "dexelmill/geometry/types.h"
+#include "dexelmill/io/atomic_file.h"
 #include "dexelmill/io/colour.h"
 #include "dexelmill/surface/mesh.h"
 
@@ -69,11 +70,13 @@ void drawText(Image& image, int x, int y, const std::string& text, const Rgb& co
 /// @brief The width in pixels drawText gives the text's widest line.
 int textWidth(const std::string& text, int scale = 1);
 
-/// @brief Writes an image as an 8-bit RGB PNG (through writeFileAtomically).
+/// @brief Writes an image as an 8-bit RGB PNG (through writeFileAtomically; staged in `batch`
+/// when given).
 /// @throw Error on any failure.
-void writePng(const std::string& path, const Image& image);
+void writePng(const std::string& path, const Image& image, OutputBatch* batch = nullptr);
 
 /// @brief renderPicture then writePng.
-void writePicture(const std::string& path, const Mesh& mesh, const PictureOptions& options = {});
+void writePicture(const std::string& path, const Mesh& mesh, const PictureOptions& options = {},
+                  OutputBatch* batch = nullptr);
 
 }  // namespace dexelmill

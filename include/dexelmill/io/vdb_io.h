@@ -5,14 +5,15 @@
 
 #include <string>
 
+#include "dexelmill/io/atomic_file.h"
 #include "dexelmill/surface/levelset.h"
 
 namespace dexelmill {
 
 /// @brief Writes the level set's grid, with its metadata, to a .vdb file (through
-/// writeFileAtomically).
+/// writeFileAtomically; staged in `batch` when given).
 /// @throw Error if the handle is null or the file cannot be written.
-void writeVdb(const std::string& path, const LevelSet& levelSet);
+void writeVdb(const std::string& path, const LevelSet& levelSet, OutputBatch* batch = nullptr);
 
 /// @brief Reads a float level-set grid from a .vdb file: the grid named `gridName`, or when that
 /// is empty the grid named "stock" if there is one, else the first float grid of class level set

@@ -42,8 +42,9 @@ struct CompareReport {
 
 /// @brief Reads both parts, measures every vertex of the machined mesh against the design
 /// (measureDeviation) and writes the requested files.
-/// @throw Error for unreadable inputs, bad tolerances or unwritable outputs; no output is then
-/// left half-written.
+/// @throw Error for unreadable inputs, bad tolerances or unwritable outputs (these before any
+/// work); no output is then left half-written, and no existing file is replaced: the files are
+/// renamed together once all are written (OutputBatch).
 CompareReport compareParts(const CompareOptions& options);
 
 /// @brief The report as JSON text (snake_case, units in the names).

@@ -261,7 +261,8 @@ AptOptions jobAptOptions(double chordTolerance, const MemoryBudget& budget);
 
 /// @brief Runs the whole job: runSimulation, then writes the requested files.
 /// @throw Error as runSimulation, or when a file cannot be written; no output file is then left
-/// half-written, and existing files are not replaced.
+/// half-written, and no existing file is replaced: the files are renamed together once all are
+/// written (OutputBatch).
 SimulateReport simulate(const SimulateOptions& options);
 
 /// @brief The report as JSON text (the fields of SimulateReport, snake_case, units in the names).

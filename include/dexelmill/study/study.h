@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "dexelmill/io/atomic_file.h"
 #include "dexelmill/job/simulate.h"
 
 namespace dexelmill {
@@ -29,6 +30,10 @@ struct StudyOptions {
     /// When set, a PLY mesh coloured by deviation is written per run into this folder (made if
     /// missing).
     std::string plyDeviationDir;
+    /// Outputs; empty paths are not written: the table (studyCsv, .csv) and the plot
+    /// (writeStudyPlot, .png). They and the deviation meshes are renamed together once all are
+    /// written.
+    std::string csvPath, plotPath;
     /// Exact part volume when known (mm^3); otherwise a finer tri-dexel run is the reference.
     std::optional<double> exactVolumeMm3;
     std::function<void(const char* stage, std::size_t done, std::size_t total)> progress;
@@ -65,8 +70,9 @@ struct StudyResult {
     std::vector<StudyRun> runs;
 };
 
-/// @brief Runs and measures every (spacing, family set).
-/// @throw Error as the job does, or if the lists are empty.
+/// @brief Runs and measures every (spacing, family set), then writes the table and the plot.
+/// @throw Error as the job does, or if the lists are empty; before any run where an output
+/// cannot be written. No output is then left half-written, and no existing file is replaced.
 StudyResult runStudy(const StudyOptions& options);
 
 /// @brief One row per run: h_mm, families, points, dev_max_mm, dev_rms_mm, dev_p95_mm,
@@ -77,8 +83,8 @@ std::string studyCsv(const StudyResult& result);
 
 /// @brief A log-log PNG plot of the maximum, 95th percentile and RMS deviation against spacing over
 /// the points away from the stock's faces (StudyRun::inner*), one colour per family set (written
-/// atomically).
-void writeStudyPlot(const std::string& path, const StudyResult& result);
+/// atomically; staged in `batch` when given).
+void writeStudyPlot(const std::string& path, const StudyResult& result, OutputBatch* batch = nullptr);
 
 /// @brief A built-in study case: a program, its tools and stock, made in memory.
 struct StudyCase {

@@ -8,7 +8,7 @@
 namespace dexelmill {
 
 void writeDeviationFiles(const Mesh& mesh, const Deviation& deviation, std::vector<double> distance,
-                         const std::string& pngPath, const std::string& plyPath) {
+                         const std::string& pngPath, const std::string& plyPath, OutputBatch& batch) {
     if (pngPath.empty() && plyPath.empty()) return;
     const DeviationScale scale = deviationScale(deviation);
     PlyVertexData data;
@@ -18,12 +18,12 @@ void writeDeviationFiles(const Mesh& mesh, const Deviation& deviation, std::vect
         PictureOptions picture;
         picture.vertexColours = &data.colours;
         picture.legend = &legend;
-        writePicture(pngPath, mesh, picture);
+        writePicture(pngPath, mesh, picture, &batch);
     }
     if (!plyPath.empty()) {
         data.scalarName = "deviation_mm";
         data.scalar = std::move(distance);
-        writePly(plyPath, mesh, data);
+        writePly(plyPath, mesh, data, &batch);
     }
 }
 
