@@ -129,7 +129,37 @@ void finishTemporary(const std::string& temp, const Destination& d) {
     if (rc != 0) throw Error(systemError("cannot flush", temp));
 }
 
+/// Whether two paths name the same file (see checkSeparateFiles).
+bool sameFile(const std::string& a, const std::string& b) {
+    struct stat sa {}, sb {};
+    const int errorA = ::stat(a.c_str(), &sa) == 0 ? 0 : errno;
+    const int errorB = ::stat(b.c_str(), &sb) == 0 ? 0 : errno;
+    if (errorA == 0 && errorB == 0) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    // A file that exists is not one that does not; a path the system cannot follow (a loop of
+    // links, a folder it may not search) names no file to compare, and fails where it is used.
+    if (errorA != ENOENT || errorB != ENOENT) return false;
+    std::error_code ecA, ecB;
+    const std::filesystem::path pathA = std::filesystem::weakly_canonical(followLinks(a), ecA);
+    const std::filesystem::path pathB = std::filesystem::weakly_canonical(followLinks(b), ecB);
+    return !ecA && !ecB && pathA == pathB;
+}
+
 }  // namespace
+
+void checkSeparateFiles(const std::vector<NamedFile>& inputs, const std::vector<NamedFile>& outputs) {
+    for (std::size_t i = 0; i < outputs.size(); ++i) {
+        const NamedFile& out = outputs[i];
+        if (out.path.empty()) continue;
+        for (const NamedFile& in : inputs)
+            if (!in.path.empty() && sameFile(out.path, in.path))
+                throw Error(out.option + " '" + out.path + "' is the same file as " + in.option + " '" + in.path +
+                            "', which the job reads: give the output another name");
+        for (std::size_t j = 0; j < i; ++j)
+            if (!outputs[j].path.empty() && sameFile(out.path, outputs[j].path))
+                throw Error(outputs[j].option + " '" + outputs[j].path + "' and " + out.option + " '" + out.path +
+                            "' are the same file: give each output a name of its own");
+    }
+}
 
 void checkWritable(const std::string& target) {
     const Destination d = destinationOf(target);

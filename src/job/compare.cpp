@@ -37,6 +37,8 @@ void validate(const CompareOptions& o) {
         throw Error("output '" + o.pngPath + "': a picture is written as .png");
     if (!o.reportPath.empty() && lowerExtension(o.reportPath) != ".json")
         throw Error("output '" + o.reportPath + "': the report is written as .json");
+    checkSeparateFiles({{"MACHINED", o.machinedPath}, {"DESIGN", o.designPath}},
+                       {{"--ply", o.plyPath}, {"--png", o.pngPath}, {"--report", o.reportPath}});
     // A folder that is missing or not writable is found now, not after the measurement.
     for (const std::string* path : {&o.plyPath, &o.pngPath, &o.reportPath})
         if (!path->empty()) checkWritable(*path);

@@ -55,7 +55,8 @@ bool measuresSurface(const SimulateOptions& o) {
     return o.measureSurface || !o.pngPath.empty() || !o.deviationPlyPath.empty() || !o.reportPath.empty();
 }
 
-/// Fails before any work when an output names a format we cannot write, or cannot be written.
+/// Fails before any work when an output names a format we cannot write, cannot be written, or would
+/// overwrite an input or another output.
 void checkOutputs(const SimulateOptions& o) {
     if (!o.meshPath.empty()) {
         const std::string e = lowerExtension(o.meshPath);
@@ -66,6 +67,8 @@ void checkOutputs(const SimulateOptions& o) {
         throw Error("output '" + o.vdbPath + "': a level set is written as .vdb");
     if (!o.pngPath.empty() && lowerExtension(o.pngPath) != ".png")
         throw Error("output '" + o.pngPath + "': a picture is written as .png");
+    if (!o.reportPath.empty() && lowerExtension(o.reportPath) != ".json")
+        throw Error("output '" + o.reportPath + "': the report is written as .json");
     if (!o.gougeCsvPath.empty() && o.designPath.empty())
         throw Error("output '" + o.gougeCsvPath + "': gouges are found against a design: give --design PART.stl");
     if (!o.deviationPlyPath.empty() && o.designPath.empty())
@@ -76,6 +79,12 @@ void checkOutputs(const SimulateOptions& o) {
         throw Error("output '" + o.gougeCsvPath + "': the gouges are written as .csv");
     if (!(o.gougeTolerance >= 0.0) || !std::isfinite(o.gougeTolerance))
         throw Error("the gouge tolerance must be a finite distance of 0 mm or more");
+    checkSeparateFiles(jobInputFiles(o), {{"-o", o.meshPath},
+                                          {"--vdb", o.vdbPath},
+                                          {"--png", o.pngPath},
+                                          {"--gouge-csv", o.gougeCsvPath},
+                                          {"--deviation-ply", o.deviationPlyPath},
+                                          {"--report", o.reportPath}});
     // A folder that is missing or not writable is found now, not after the cut.
     for (const std::string* path : {&o.meshPath, &o.vdbPath, &o.pngPath, &o.gougeCsvPath, &o.deviationPlyPath, &o.reportPath})
         if (!path->empty()) checkWritable(*path);
@@ -416,6 +425,17 @@ Options readerOptions(double chordTolerance, const MemoryBudget& budget) {
 }
 
 }  // namespace
+
+std::vector<NamedFile> jobInputFiles(const SimulateOptions& o) {
+    std::vector<NamedFile> files;
+    if (!o.program)
+        for (const std::string& in : o.inputs) files.push_back({"INPUTS", in});
+    files.push_back({"--stock", o.stockFile});
+    files.push_back({"--design", o.designPath});
+    const std::vector<std::string> builtin = builtinMachineNames();
+    if (std::find(builtin.begin(), builtin.end(), o.machine) == builtin.end()) files.push_back({"--machine", o.machine});
+    return files;
+}
 
 GcodeOptions jobGcodeOptions(double chordTolerance, const MemoryBudget& budget) {
     return readerOptions<GcodeOptions>(chordTolerance, budget);

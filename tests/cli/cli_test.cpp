@@ -216,10 +216,10 @@ TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Contains("missing/r.json") && Contains("No such file or directory"));
     CHECK_FALSE(fs::exists(cli.dir() / "part.stl"));
-    fs::create_directories(cli.dir() / "sub");
-    r = cli("simulate ok.ngc --tool flat:d=3 --stock box:0,0,-5,10,10,0 -o part.stl --report sub");
+    fs::create_directories(cli.dir() / "sub.json");
+    r = cli("simulate ok.ngc --tool flat:d=3 --stock box:0,0,-5,10,10,0 -o part.stl --report sub.json");
     CHECK(r.code == 1);
-    CHECK_THAT(r.err, Contains("'sub': it is a folder"));
+    CHECK_THAT(r.err, Contains("'sub.json': it is a folder"));
     CHECK_FALSE(fs::exists(cli.dir() / "part.stl"));
 }
 
@@ -310,6 +310,43 @@ TEST_CASE("compare and study check their outputs before any work", "[cli][errors
         INFO(f);
         CHECK(slurp(cli.dir() / f) == "KEEP\n");
     }
+}
+
+TEST_CASE("an output that is an input or another output is refused before any work, naming both",
+          "[cli][errors]") {
+    const Cli cli("same_file");
+    cli.file("p1.ngc", "G21\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10\n");
+    cli.file("d2.stl", boxStl(10.0));
+    cli.file("part.stl", boxStl(10.0));
+    fs::create_symlink("p1.ngc", cli.dir() / "p1link.json");
+    fs::create_symlink("p1.ngc", cli.dir() / "p1link.png");
+    fs::create_symlink("part.stl", cli.dir() / "partlink.json");
+    fs::create_symlink("t.csv", cli.dir() / "t.png");  // to a file not made yet
+    const std::string run = "simulate p1.ngc --stock box:0,0,-5,20,20,0 --resolution 0.5 -q --tool ball:d=6 ";
+    for (const auto& [args, says] :
+         {std::pair<const char*, const char*>{"--report p1link.json", "--report 'p1link.json' is the same file as INPUTS 'p1.ngc'"},
+          {"--design d2.stl -o d2.stl", "-o 'd2.stl' is the same file as --design 'd2.stl'"},
+          {"--design d2.stl -o both.ply --deviation-ply both.ply", "-o 'both.ply' and --deviation-ply 'both.ply' are the same file"},
+          {"-o same.stl --report same.stl", "output 'same.stl': the report is written as .json"}}) {
+        INFO(args);
+        const Run r = cli(run + args);
+        CHECK(r.code == 1);
+        CHECK_THAT(r.err, Contains(says));
+    }
+    Run r = cli("compare part.stl d2.stl --report partlink.json");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("--report 'partlink.json' is the same file as MACHINED 'part.stl'"));
+    r = cli("study --case tilted-slot --resolutions 2 --families z --csv t.csv --plot t.png");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("--csv 't.csv' and --plot 't.png' are the same file"));
+    r = cli("study p1.ngc --stock box:0,0,-5,20,20,0 --tool ball:d=6 --plot p1link.png");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("--plot 'p1link.png' is the same file as INPUTS 'p1.ngc'"));
+    // The inputs are as they were, and no output was made.
+    CHECK(slurp(cli.dir() / "p1.ngc") == "G21\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10\n");
+    CHECK(slurp(cli.dir() / "d2.stl") == boxStl(10.0));
+    CHECK(slurp(cli.dir() / "part.stl") == boxStl(10.0));
+    for (const char* f : {"both.ply", "same.stl", "t.csv"}) CHECK_FALSE(fs::exists(cli.dir() / f));
 }
 
 TEST_CASE("every stage honours --threads N: the job starts at most N - 1 workers", "[cli][threads]") {

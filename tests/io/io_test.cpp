@@ -328,6 +328,35 @@ TEST_CASE("atomic write: a name as long as the folder takes gets a temporary fil
     }
 }
 
+TEST_CASE("separate files: an output that is an input or another output is refused, naming both", "[io]") {
+    TempDir dir;
+    const std::string program = dir.file("part.ngc");
+    std::ofstream(program) << "G0 X0";
+    fs::create_symlink("part.ngc", dir.path / "link.json");
+    fs::create_hard_link(program, dir.path / "hard.json");
+    fs::create_directories(dir.path / "sub");
+    const std::vector<NamedFile> inputs{{"INPUTS", program}, {"--design", ""}};
+    // The same file through a symbolic link, a hard link, or another spelling of its path.
+    for (const std::string& out : {dir.file("link.json"), dir.file("hard.json"), dir.file("sub/../part.ngc")}) {
+        INFO(out);
+        CHECK_THROWS_WITH(checkSeparateFiles(inputs, {{"-o", dir.file("part.stl")}, {"--report", out}}),
+                          "--report '" + out + "' is the same file as INPUTS '" + program +
+                              "', which the job reads: give the output another name");
+    }
+    // Two outputs not made yet: the same path, or a link to a missing file and that file.
+    fs::create_symlink("table.csv", dir.path / "plot.png");
+    for (const auto& [a, b] : {std::pair<std::string, std::string>{dir.file("out.ply"), dir.file("sub/../out.ply")},
+                               {dir.file("table.csv"), dir.file("plot.png")}}) {
+        INFO(a << " " << b);
+        CHECK_THROWS_WITH(checkSeparateFiles(inputs, {{"--csv", a}, {"--vdb", ""}, {"--plot", b}}),
+                          "--csv '" + a + "' and --plot '" + b + "' are the same file: give each output a name of its own");
+    }
+    // Files of their own, and options not given, pass.
+    CHECK_NOTHROW(checkSeparateFiles(inputs, {{"-o", dir.file("part.stl")}, {"--png", ""}, {"--report", dir.file("r.json")}}));
+    CHECK_NOTHROW(checkSeparateFiles({{"INPUTS", program}, {"INPUTS", program}}, {{"-o", ""}}));
+    CHECK(dir.entries() == 5);
+}
+
 TEST_CASE("mesh files: OBJ, binary STL and PLY", "[io]") {
     TempDir dir;
     const Mesh mesh = meshLevelSet(rebuildLevelSet(dentedBox()));

@@ -75,6 +75,20 @@ void writeFileAtomically(const std::string& target,
 /// @throw Error naming `target` and the reason.
 void checkWritable(const std::string& target);
 
+/// @brief A file a job reads or writes, and the option (or argument) that names it.
+struct NamedFile {
+    std::string option;  ///< as the user gives it: "-o", "--report", "INPUTS", "DESIGN", ...
+    std::string path;    ///< empty where the option is not given
+};
+
+/// @brief Fails before a job starts where an output would overwrite one of its inputs or another
+/// of its outputs. Two paths name the same file when they reach the same file (the same device
+/// and inode, through any links, hard ones too) or, where neither exists yet, the same path once
+/// their symbolic links are followed and the path is made absolute (weakly_canonical). Empty
+/// paths are not compared.
+/// @throw Error naming both options and paths.
+void checkSeparateFiles(const std::vector<NamedFile>& inputs, const std::vector<NamedFile>& outputs);
+
 /// @brief writeFileAtomically with a binary std::ostream on the file written.
 /// @throw Error if the stream fails at any point.
 void writeStreamAtomically(const std::string& target,

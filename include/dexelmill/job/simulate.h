@@ -15,6 +15,7 @@
 #include "dexelmill/compare/deviation.h"
 #include "dexelmill/geometry/affine.h"
 #include "dexelmill/geometry/types.h"
+#include "dexelmill/io/atomic_file.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/path/apt.h"
 #include "dexelmill/path/gcode.h"
@@ -264,6 +265,11 @@ AptOptions jobAptOptions(double chordTolerance, const MemoryBudget& budget);
 /// half-written, and no existing file is replaced: the files are renamed together once all are
 /// written (OutputBatch).
 SimulateReport simulate(const SimulateOptions& options);
+
+/// @brief The files the job reads that the options name, each with its option: the programs or
+/// project (INPUTS; none for a program in memory), the --stock, --design and --machine files
+/// (not a built-in machine's name). Outputs that are one of them are refused (checkSeparateFiles).
+std::vector<NamedFile> jobInputFiles(const SimulateOptions& options);
 
 /// @brief The report as JSON text (the fields of SimulateReport, snake_case, units in the names).
 std::string reportJson(const SimulateReport& report);
