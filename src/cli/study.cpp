@@ -42,8 +42,10 @@ CLI::App* addStudy(CLI::App& app, StudyArgs& a) {
     c->add_option("--ply-deviation", a.plyDir, "Folder for PLY meshes coloured by deviation, one per run");
     c->add_option("--surface-points", a.surfacePoints,
                   "Points measured per run, spread evenly over the mesh's triangles")
+        ->check(numberCheck(false))
         ->capture_default_str();
     c->add_option("--samples", a.samples, "Random points for the lost / invented material counts")
+        ->check(numberCheck(false))
         ->capture_default_str();
     return c;
 }
@@ -79,7 +81,6 @@ int runStudy(const StudyArgs& a) {
         }
     }
     if (o.resolutions.empty() || o.familySets.empty()) throw UsageError("study: --resolutions and --families need values");
-    if (a.surfacePoints == 0) throw UsageError("--surface-points: a study measures at least one point per run");
     o.surfacePoints = a.surfacePoints;
     o.samplePoints = a.samples;
     o.plyDeviationDir = a.plyDir;

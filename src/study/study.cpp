@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -16,6 +17,7 @@
 #include "dexelmill/error.h"
 #include "dexelmill/io/atomic_file.h"
 #include "dexelmill/io/file_name.h"
+#include "dexelmill/job/memory.h"
 #include "dexelmill/study/oracle.h"
 
 namespace dexelmill {
@@ -102,6 +104,39 @@ struct SurfacePoint {
     Vec3 p, n;
 };
 
+/// A sample point's findings: in the exact part and not the model (lost) or the reverse
+/// (invented), and whether more than one spacing from the model's surface (far).
+struct SampleCounts {
+    std::size_t lost = 0, invented = 0, lostFar = 0, inventedFar = 0;
+};
+
+/// Memory a run holds per surface point measured: the point and its normal, its deviation, and
+/// the copies the statistics take of it (the inner points' and the magnitudes).
+constexpr double kBytesPerSurfacePoint = sizeof(SurfacePoint) + 3 * sizeof(double);
+/// Memory a run holds per sample point: the point and its counts.
+constexpr double kBytesPerSamplePoint = sizeof(Vec3) + sizeof(SampleCounts);
+
+/// Fails before any run where the points measured per run would not fit in what the job's memory
+/// budget leaves free now; each run's own stock and surface are checked by the job.
+void checkPointsFit(const StudyOptions& o) {
+    if (o.surfacePoints == 0 || o.samplePoints == 0)
+        throw Error("a study measures at least one point on the mesh (--surface-points) and one in the stock "
+                    "(--samples) per run");
+    const MemoryBudget budget = memoryBudget(o.job.maxMemoryBytes);
+    const double need =
+        double(o.surfacePoints) * kBytesPerSurfacePoint + double(o.samplePoints) * kBytesPerSamplePoint;
+    const double base = double(bytesInUse(budget));
+    if (base + need <= double(budget.bytes)) return;
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "%zu points on the mesh (--surface-points) and %zu in the stock (--samples) need about %s per run "
+                  "on top of the %s in use, more than the %s this job may use (%s); measure fewer points, or set "
+                  "--max-memory",
+                  o.surfacePoints, o.samplePoints, formatBytes(need).c_str(), formatBytes(base).c_str(),
+                  formatBytes(double(budget.bytes)).c_str(), budget.source.c_str());
+    throw Error(text);
+}
+
 /// `count` points uniform over the triangles' area (fixed seed), each with its triangle's normal;
 /// triangles without area are never picked.
 std::vector<SurfacePoint> surfacePoints(const Mesh& mesh, std::size_t count) {
@@ -177,6 +212,7 @@ StudyResult runStudy(const StudyOptions& o) {
     if (o.job.stockFrustum)
         throw Error("a study measures against the exact part cut from a box stock; a cylinder or cone stock is not "
                     "supported (give the stock as box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX)");
+    checkPointsFit(o);
     checkOutputs(o);
     if (!o.plyDeviationDir.empty()) {
         std::error_code ec;
@@ -292,10 +328,7 @@ StudyResult runStudy(const StudyOptions& o) {
                 uz(box.lo.z, box.hi.z);
             std::vector<Vec3> pts(o.samplePoints);
             for (Vec3& p : pts) p = Vec3(ux(rng), uy(rng), uz(rng));
-            struct Counts {
-                std::size_t lost = 0, invented = 0, lostFar = 0, inventedFar = 0;
-            };
-            std::vector<Counts> perPoint(pts.size());
+            std::vector<SampleCounts> perPoint(pts.size());
             arena.execute([&] {
                 tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pts.size()), [&](const auto& r) {
                     for (std::size_t i = r.begin(); i < r.end(); ++i) {
@@ -304,14 +337,14 @@ StudyResult runStudy(const StudyOptions& o) {
                         const bool exact = oracle->inside(p);
                         const double phi = s.levelSet.valueAt(p);
                         const bool model = phi < 0;
-                        Counts& c = perPoint[i];
+                        SampleCounts& c = perPoint[i];
                         if (exact && !model) c.lost = 1, c.lostFar = phi > h;
                         if (!exact && model) c.invented = 1, c.inventedFar = phi < -h;
                     }
                 });
             });
-            Counts sum;
-            for (const Counts& c : perPoint) {
+            SampleCounts sum;
+            for (const SampleCounts& c : perPoint) {
                 sum.lost += c.lost;
                 sum.invented += c.invented;
                 sum.lostFar += c.lostFar;

@@ -115,8 +115,20 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
     r = cli("study --case nope");
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Contains("bull-undercut") && Contains("dexelmill study --help"));
-    r = cli("study --case v-carve --surface-points 0");
-    CHECK(r.code == 2);
+    // Counts of points, read as unsigned: -1 must not wrap around to 2^64 - 1.
+    for (const auto& [args, says] : {std::pair<const char*, const char*>{"--surface-points -1", "--surface-points: must be positive, got -1"},
+                                     {"--surface-points 0", "--surface-points: must be positive, got 0"},
+                                     {"--samples -5", "--samples: must be positive, got -5"},
+                                     {"--samples 0", "--samples: must be positive, got 0"}}) {
+        INFO(args);
+        r = cli(std::string("study --case v-carve ") + args);
+        CHECK(r.code == 2);
+        CHECK_THAT(r.err, StartsWith("dexelmill: ") && Contains(says) &&
+                              Contains("Run 'dexelmill study --help' for usage."));
+    }
+    r = cli("study --case v-carve --surface-points 1000000000000 --max-memory 1G");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("--surface-points") && Contains("--samples") && !Contains("out of memory"));
     // Values an option cannot take name the option and the value, not an internal field.
     for (const auto& [args, says] : {std::pair<const char*, const char*>{"--chord-tolerance 0", "--chord-tolerance: must be positive, got 0"},
                                      {"--resolution 0", "--resolution: must be positive, got 0"},

@@ -180,6 +180,29 @@ TEST_CASE("z-only dexels lose undercut wall material that three families keep", 
     CHECK(res.runs[2].innerP95Mm > 2.0 * res.runs[3].innerP95Mm);
 }
 
+TEST_CASE("a study refuses counts of points it cannot measure, before any run", "[study][errors]") {
+    StudyOptions o;
+    o.job.program = groove();
+    o.job.stockBox = Box{Vec3(0.0), Vec3(30, 20, 10)};
+    o.resolutions = {1.0};
+    o.familySets = {FamilySet::only(Axis::Z)};
+    o.samplePoints = 0;
+    CHECK_THROWS_WITH(runStudy(o), Catch::Contains("--samples"));
+    o.samplePoints = 100;
+    o.surfacePoints = 0;
+    CHECK_THROWS_WITH(runStudy(o), Catch::Contains("--surface-points"));
+    // 10^9 points on the mesh take tens of GB (a point and its normal alone are 48 bytes), far
+    // beyond a 1 GiB budget.
+    o.surfacePoints = 1000000000;
+    o.job.maxMemoryBytes = std::size_t(1) << 30;
+    CHECK_THROWS_WITH(runStudy(o), Catch::Contains("--surface-points") && Catch::Contains("--samples") &&
+                                       Catch::Contains("--max-memory"));
+    // As many in the stock.
+    o.surfacePoints = 100;
+    o.samplePoints = 1000000000;
+    CHECK_THROWS_WITH(runStudy(o), Catch::Contains("--samples") && Catch::Contains("--max-memory"));
+}
+
 TEST_CASE("every built-in case builds a program with its tools", "[study]") {
     for (const std::string& name : studyCaseNames()) {
         const StudyCase c = studyCase(name);

@@ -72,7 +72,9 @@ struct StudyResult {
 
 /// @brief Runs and measures every (spacing, family set), then writes the table and the plot.
 /// @throw Error as the job does, or if the lists are empty; before any run where an output
-/// cannot be written. No output is then left half-written, and no existing file is replaced.
+/// cannot be written, a count of points is 0, or the points would not fit in the job's memory
+/// budget (SimulateOptions::maxMemoryBytes) with what the process holds. No output is then left
+/// half-written, and no existing file is replaced.
 StudyResult runStudy(const StudyOptions& options);
 
 /// @brief One row per run: h_mm, families, points, dev_max_mm, dev_rms_mm, dev_p95_mm,
