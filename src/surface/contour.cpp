@@ -23,12 +23,17 @@
 // adaptivity flat regions are merged (mergeFlatRegions).
 // Passes 2 to 4 read only what pass 1 stored per block: bit masks with prefix counts, which turn a
 // lattice point or cell into a mesh index, and the mixed cells' configurations.
+// The blocks hold every cell with surface unless the level set changes sign between two of its
+// tiles, outside its band (families that disagree grossly make that): where a lookup then finds no
+// block the contourer throws Error naming the cell (throwOutsideBand) instead of reading a block
+// that is not there.
 #include "dexelmill/surface/contour.h"
 
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -350,7 +355,8 @@ private:
                 for (; i < splitCellBits_.size() && splitCellBits_[i].first == key; ++i) {}
                 continue;
             }
-            const Block& b = index_.blockAt(detail::BlockIndex::blockOrigin(key));
+            // countBlock of this block placed the cell: the index holds it.
+            const Block& b = *index_.blockAt(detail::BlockIndex::blockOrigin(key));
             std::uint64_t vertex = b.patchBase + b.patchBefore.back(), triangle = b.triangleBase + b.tableTriangles;
             for (; i < splitCellBits_.size() && splitCellBits_[i].first == key; ++i)
                 place(std::size_t(splitCellBits_[i].second >> 9), vertex, triangle);
@@ -500,11 +506,35 @@ private:
 
     // ------------------------------------------------------------------ lookups
 
-    /// The mesh index of the crossing on the edge from lattice point p along axis a.
-    std::uint32_t crossingIndex(const detail::BlockIndex::Around& near, const Coord& p, int a) const {
-        const Block& b = near.at(p);
+    /// The mesh index of the crossing on the edge from lattice point p along axis a, an edge of
+    /// the cell at `cell`.
+    /// @throw Error (throwOutsideBand) if no block holds p: the sign change lies between tiles.
+    std::uint32_t crossingIndex(const detail::BlockIndex::Around& near, const Coord& p, int a, const Coord& cell) const {
+        const Block* b = near.at(p);
+        if (!b) throwOutsideBand(cell);
+        return ownedIndex(*b, p, a);
+    }
+
+    /// The mesh index of the crossing that block b owns on the edge from its point p along a.
+    static std::uint32_t ownedIndex(const Block& b, const Coord& p, int a) {
         const int bit = a * kCells + localOffset(p.x(), p.y(), p.z());
         return b.crossingBase + b.ownedBefore[bit >> 6] + std::uint32_t(popcountBelow(b.owned[bit >> 6], bit & 63));
+    }
+
+    /// Throws the error for the cell at `cell`, which has surface but lies in no block of the index
+    /// or has a crossing that lies in none: the level set changes sign between two of its tiles
+    /// there, where the band of distances has a hole (BlockIndex::blockAt). No mesh made from the
+    /// index would be closed.
+    [[noreturn]] void throwOutsideBand(const Coord& cell) const {
+        const Vec3 c = latticePoint(cell) + 0.5 * h_;
+        char text[400];
+        std::snprintf(text, sizeof text,
+                      "contouring: the stock's dexel families disagree: the level set changes sign outside its band, "
+                      "where no family has a dexel end, at the lattice cell centred at (%.6g, %.6g, %.6g) mm, so no "
+                      "closed mesh can be made (a family empty where the others hold material does this, as in a "
+                      "stock cast from an open mesh)",
+                      c.x, c.y, c.z);
+        throw Error(text);
     }
 
     /// The loop of patch k of the cell at p: its crossings' mesh indices, in order.
@@ -515,7 +545,7 @@ private:
         const int len = patches.size[k];
         for (int i = 0; i < len; ++i) {
             const EdgeStart& e = starts[patches.edges[at + i]];
-            out[i] = crossingIndex(near, p.offsetBy(e.dx, e.dy, e.dz), e.axis);
+            out[i] = crossingIndex(near, p.offsetBy(e.dx, e.dy, e.dz), e.axis, p);
         }
         return len;
     }
@@ -656,9 +686,9 @@ private:
                 if (id & detail::SplitCells::kOrdinary) {
                     const auto& [g, a] = split_.ordinary[id & ~detail::SplitCells::kOrdinary];
                     const Coord lower(g[0], g[1], g[2]);
-                    const Block& b = index_.blockAt(lower);
-                    const int bit = a * kCells + localOffset(lower.x(), lower.y(), lower.z());
-                    loop.push_back(b.crossingBase + b.ownedBefore[bit >> 6] + std::uint32_t(popcountBelow(b.owned[bit >> 6], bit & 63)));
+                    const Block* b = index_.blockAt(lower);
+                    if (!b) throwOutsideBand(Coord(split_.patchCell[k][0], split_.patchCell[k][1], split_.patchCell[k][2]));
+                    loop.push_back(ownedIndex(*b, lower, a));
                 } else {
                     loop.push_back(crossings + id);
                 }
@@ -724,11 +754,14 @@ private:
 
     bool isFeature(std::uint32_t patchVertex) const { return feature_[patchVertex - patchVertexBase_] != 0; }
 
-    /// The cell whose lower corner is p: its patches and the mesh index of its first patch;
+    /// The mixed cell whose lower corner is p: its patches and the mesh index of its first patch;
     /// false for a plain cell, which has no patch vertex, and for a split cell, whose fans are
     /// never flipped.
+    /// @throw Error (throwOutsideBand) if no block holds p.
     bool cellAt(const detail::BlockIndex::Around& near, const Coord& p, const CellPatches*& patches, std::uint32_t& firstPatch) const {
-        const Block& b = near.at(p);
+        const Block* held = near.at(p);
+        if (!held) throwOutsideBand(p);
+        const Block& b = *held;
         const int off = localOffset(p.x(), p.y(), p.z());
         const int rank = b.rankOf(off);
         patches = &b.patchesOf(rank);

@@ -70,7 +70,15 @@ struct ContourStats {
 /// thinner than 0.02 h, and those where the surface grazes the dexel, are left out; so are split
 /// cells whose triangles fold after repair: the mesh is made again with their edges left to the
 /// table path (at most three times, the last time without split cells).
-/// @throw Error if the level set holds no grid or was not rebuilt from this stock's lattice.
+///
+/// Families that disagree a little (a near-tangent cut, a family marched from a VDB) only move
+/// crossings: where a dexel disagrees with the level set's vote the crossing is interpolated. Where
+/// they disagree grossly (a family empty where the others hold material, as a stock cast from an
+/// open mesh has) the level set can change sign where no family has an end, outside its band,
+/// and no closed mesh can be made: this throws where a cell with surface needs a crossing there.
+/// @throw Error if the level set holds no grid or was not rebuilt from this stock's lattice, or
+/// if a cell with surface needs a crossing where it changes sign outside its band (the message
+/// gives the cell's position in mm).
 Mesh contourStock(const LevelSet& levelSet, const TriDexelStock& stock, const ContourOptions& options = {},
                   ContourStats* stats = nullptr);
 

@@ -128,11 +128,16 @@ public:
         return Coord(kDim * (int((key >> 42) & mask) - int(kKeyBias)), kDim * (int((key >> 21) & mask) - int(kKeyBias)),
                      kDim * (int(key & mask) - int(kKeyBias)));
     }
-    /// The block holding lattice point p; it exists for every point this code asks about (the
-    /// lower corner of a mixed cell, or of one of its edges with a crossing).
-    const Block& blockAt(const Coord& p) const {
+    /// The block holding lattice point p, or null if the index has none. The lattice points the
+    /// contourer asks about (the lower corner of a mixed cell, or of one of its edges with a
+    /// crossing) have one when the level set changes sign only within its leaves or between a
+    /// leaf and a tile: find() keeps every block with such a change. A sign change between two
+    /// tiles, outside the band of distances, has none: the rebuild of a stock whose families
+    /// disagree grossly makes those (its vote changes where no family has an end).
+    const Block* blockAt(const Coord& p) const {
         const std::uint64_t key = blockKey(p);
-        return blocks[std::size_t(std::lower_bound(keys.begin(), keys.end(), key) - keys.begin())];
+        const auto it = std::lower_bound(keys.begin(), keys.end(), key);
+        return it != keys.end() && *it == key ? &blocks[std::size_t(it - keys.begin())] : nullptr;
     }
 
     /// The blocks around one block (3 x 3 x 3, null where there is none), so that the lookups
@@ -140,10 +145,11 @@ public:
     struct Around {
         Coord origin;
         const Block* near[27] = {};
-        const Block& at(const Coord& p) const {
+        /// The block holding p (within one block of `origin`'s), or null as blockAt says.
+        const Block* at(const Coord& p) const {
             const int i = (blockOf(p.x() - origin.x() + kDim) * 3 + blockOf(p.y() - origin.y() + kDim)) * 3 +
                           blockOf(p.z() - origin.z() + kDim);
-            return *near[i];
+            return near[i];
         }
     };
 
