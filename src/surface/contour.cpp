@@ -24,9 +24,9 @@
 // Passes 2 to 4 read only what pass 1 stored per block: bit masks with prefix counts, which turn a
 // lattice point or cell into a mesh index, and the mixed cells' configurations.
 // The blocks hold every cell with surface unless the level set changes sign between two of its
-// tiles, outside its band (families that disagree grossly make that): where a lookup then finds no
-// block the contourer throws Error naming the cell (throwOutsideBand) instead of reading a block
-// that is not there.
+// tiles, outside its band (families that disagree grossly make that): then a lookup finds no block,
+// or the mesh comes out open next to such a cell, and the contourer throws Error naming the cell
+// (throwOutsideBand) instead of reading a block that is not there or returning a mesh with a hole.
 #include "dexelmill/surface/contour.h"
 
 #include <algorithm>
@@ -36,6 +36,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <openvdb/openvdb.h>
@@ -281,6 +282,14 @@ public:
             stats.check = repairAndCheck(more);
             stats.pulledBack += more;
         }
+        // The passes mesh every cell with surface in the index's blocks, and the index holds all
+        // of them unless the level set changes sign between two tiles (BlockIndex::blockAt): a hole
+        // in the mesh is where, next to the index, it does.
+        if (stats.check.boundaryEdges > 0) {
+            detail::BlockIndex all;
+            all.find(grid_);
+            if (const std::optional<Coord> cell = all.mixedCellOutside(grid_)) throwOutsideBand(*cell);
+        }
         findFoldedSplitEdges();
         split_ = detail::SplitCells();
         if (adaptivity_ > 0.0) {
@@ -392,14 +401,12 @@ private:
         for (int x = 0; x < kDim; ++x) {
             for (int y = 0; y < kDim; ++y) {
                 const std::uint64_t shift = std::uint64_t(y * kDim);
-                const std::uint16_t r00 = rows[x][y], r10 = rows[x + 1][y], r01 = rows[x][y + 1], r11 = rows[x + 1][y + 1];
+                const std::uint16_t r00 = rows[x][y], r10 = rows[x + 1][y], r01 = rows[x][y + 1];
                 b.inside[x] |= std::uint64_t(r00 & 0xff) << shift;
                 b.owned[x] |= std::uint64_t((r00 ^ r10) & 0xff) << shift;
                 b.owned[kDim + x] |= std::uint64_t((r00 ^ r01) & 0xff) << shift;
                 b.owned[2 * kDim + x] |= std::uint64_t((r00 ^ (r00 >> 1)) & 0xff) << shift;
-                const std::uint16_t both = r00 & r10 & r01 & r11, either = r00 | r10 | r01 | r11;
-                const std::uint16_t mixed = std::uint16_t(((either | (either >> 1)) & ~(both & (both >> 1))) & 0xff);
-                b.mixed[x] |= std::uint64_t(mixed) << shift;
+                b.mixed[x] |= std::uint64_t(detail::BlockIndex::mixedRow(rows, x, y)) << shift;
             }
         }
         // Edges with several crossings get theirs from the split cells; their cells are split.

@@ -9,6 +9,7 @@
 #include "dexelmill/error.h"
 #include "dexelmill/surface/contour.h"
 #include "dexelmill/surface/levelset.h"
+#include "dexelmill/surface/levelset_vdb.h"
 #include "dexelmill/surface/voxelize.h"
 
 using namespace dexelmill;
@@ -90,5 +91,28 @@ TEST_CASE("contour: a stock cast from a box mesh missing a triangle gives a clos
         CHECK(cast.unpairedDexels > 0);
         CHECK(stock.volume(Axis::Z) < stock.volume(Axis::X) - 1.0);
         closedOrError(stock);
+    }
+}
+
+TEST_CASE("contour: a sign change between tiles beside the leaves is an error, not a hole", "[surface][contour]") {
+    // A level set that changes sign between tiles, as the rebuild of families that disagree makes
+    // one, here made by hand: far above the stock an empty leaf, and below it a tile of material.
+    // The index holds the blocks just below the leaf, whose cells mesh the tile's top and the top
+    // of its sides and ask for no crossing elsewhere; the cells of its sides further down lie in
+    // blocks it lacks. The mesh would have a hole there.
+    const TriDexelStock stock = TriDexelStock::fromBox(Box{Vec3(0.0), Vec3(16.0)}, 1.0);
+    const LevelSet rebuilt = rebuildLevelSet(stock);
+    openvdb::FloatGrid::Ptr grid = gridOf(rebuilt)->deepCopy();
+    const openvdb::Coord leaf(0, 0, 64), below(0, 0, 56);
+    REQUIRE(grid->tree().getValue(leaf) > 0.0f);
+    grid->tree().touchLeaf(leaf);
+    grid->tree().addTile(1, below, -grid->background(), false);
+    const LevelSet ls = levelSetFromGrid(grid);
+    try {
+        const Mesh mesh = contourStock(ls, stock);
+        FAIL("a mesh with " << checkMesh(mesh).boundaryEdges << " open edges");
+    } catch (const Error& e) {
+        INFO(e.what());
+        CHECK(std::string(e.what()).find("changes sign outside its band") != std::string::npos);
     }
 }

@@ -75,10 +75,10 @@ struct ContourStats {
 /// crossings: where a dexel disagrees with the level set's vote the crossing is interpolated. Where
 /// they disagree grossly (a family empty where the others hold material, as a stock cast from an
 /// open mesh has) the level set can change sign where no family has an end, outside its band,
-/// and no closed mesh can be made: this throws where a cell with surface needs a crossing there.
+/// and no closed mesh can be made: this throws instead of returning a mesh with a hole.
 /// @throw Error if the level set holds no grid or was not rebuilt from this stock's lattice, or
-/// if a cell with surface needs a crossing where it changes sign outside its band (the message
-/// gives the cell's position in mm).
+/// if it changes sign outside its band next to the surface in it (the message gives the cell's
+/// position in mm).
 Mesh contourStock(const LevelSet& levelSet, const TriDexelStock& stock, const ContourOptions& options = {},
                   ContourStats* stats = nullptr);
 

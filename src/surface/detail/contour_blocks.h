@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #if defined(__SSE2__)
@@ -194,6 +195,33 @@ public:
                         rows[x][y] |= std::uint16_t(data ? negativeBits(data + localOffset(x, y, 0)) : tile < 0.0f ? 0xffu : 0u);
                 }
         }
+    }
+
+    /// Bit z set when the cell at (x, y, z) of the block whose rows these are has corners both in
+    /// and out of material; x, y in 0..7.
+    static std::uint16_t mixedRow(const SignRows& rows, int x, int y) {
+        const std::uint16_t r00 = rows[x][y], r10 = rows[x + 1][y], r01 = rows[x][y + 1], r11 = rows[x + 1][y + 1];
+        const std::uint16_t both = r00 & r10 & r01 & r11, either = r00 | r10 | r01 | r11;
+        return std::uint16_t(((either | (either >> 1)) & ~(both & (both >> 1))) & 0xff);
+    }
+
+    /// The lower corner of a mixed cell in a block that the index lacks, next to one it holds,
+    /// if there is one: the level set changes sign between two tiles there (blockAt), and the mesh
+    /// the index makes has a hole there. Reads the 26 blocks around each block held: a diagnosis
+    /// for a mesh that came out open, not a step of every mesh.
+    std::optional<Coord> mixedCellOutside(const openvdb::FloatGrid& grid) const {
+        const auto acc = grid.getConstAccessor();
+        SignRows rows;
+        for (const Block& b : blocks)
+            for (int i = 0; i < 27; ++i) {
+                const Coord o = b.origin.offsetBy(kDim * (i / 9 - 1), kDim * (i / 3 % 3 - 1), kDim * (i % 3 - 1));
+                if (blockAt(o)) continue;
+                readSigns(acc, o, rows);
+                for (int x = 0; x < kDim; ++x)
+                    for (int y = 0; y < kDim; ++y)
+                        if (const std::uint16_t mixed = mixedRow(rows, x, y)) return o.offsetBy(x, y, __builtin_ctz(mixed));
+            }
+        return std::nullopt;
     }
 
 private:
