@@ -106,11 +106,9 @@ void warnThreads(int requested);
 /// @brief Prints a deviation's summary line on stderr.
 void printDeviation(const Deviation& deviation);
 
-/// @brief A CLI11 check that the value is a finite number, positive or (with zeroAllowed) zero.
+/// @brief A CLI11 check that the value is a decimal number (parseDecimal), positive or (with
+/// zeroAllowed) zero.
 CLI::Validator numberCheck(bool zeroAllowed);
-
-/// @brief The whole of `text` as a finite number, or nothing.
-std::optional<double> parseNumber(const std::string& text);
 
 /// @brief The library's options for a typed simulate command.
 /// @throw UsageError for malformed values.

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "commands.h"
+#include "dexelmill/decimal.h"
 #include "dexelmill/error.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/job/simulate.h"
@@ -26,7 +27,7 @@ std::vector<double> parseNumbers(const std::string& text, const std::string& opt
     std::stringstream s(text);
     std::string item;
     while (std::getline(s, item, ',')) {
-        const std::optional<double> x = parseNumber(item);
+        const std::optional<double> x = parseDecimal(item);
         if (!x) throw UsageError(option + ": '" + item + "' is not a number");
         v.push_back(*x);
     }
@@ -111,20 +112,6 @@ Affine parseTransform(const std::string& text) {
                          "M21,...,TZ (12 numbers)");
     }
     return a;
-}
-
-std::optional<double> parseNumber(const std::string& text) {
-    // Decimal only: std::stod also reads "0x10" as 16.
-    if (text.find_first_not_of("0123456789+-.eE ") != std::string::npos) return std::nullopt;
-    std::size_t used = 0;
-    double v = 0.0;
-    try {
-        v = std::stod(text, &used);
-    } catch (const std::exception&) {
-        return std::nullopt;
-    }
-    if (used != text.size() || !std::isfinite(v)) return std::nullopt;
-    return v;
 }
 
 SimulateOptions toOptions(const SimulateArgs& a) {
@@ -264,10 +251,10 @@ void printDeviation(const Deviation& d) {
 CLI::Validator numberCheck(bool zeroAllowed) {
     return CLI::Validator(
         [zeroAllowed](std::string& text) -> std::string {
-            char* end = nullptr;
-            const double v = std::strtod(text.c_str(), &end);
-            if (end == text.c_str() || *end != '\0') return "'" + text + "' is not a number";
-            if (!std::isfinite(v) || v < 0 || (v == 0 && !zeroAllowed))
+            const std::optional<double> number = parseDecimal(text);
+            if (!number) return "'" + text + "' is not a number";
+            const double v = *number;
+            if (v < 0 || (v == 0 && !zeroAllowed))
                 return std::string("must be ") + (zeroAllowed ? "0 or more" : "positive") + ", got " + text;
             return {};
         },

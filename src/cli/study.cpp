@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "dexelmill/decimal.h"
 #include "dexelmill/study/study.h"
 #include "progress.h"
 
@@ -68,7 +69,7 @@ int runStudy(const StudyArgs& a) {
     }
     o.resolutions.clear();
     for (const std::string& r : splitList(a.resolutions)) {
-        const std::optional<double> h = parseNumber(r);
+        const std::optional<double> h = parseDecimal(r);
         if (!h || !(*h > 0)) throw UsageError("--resolutions: '" + r + "' is not a positive number");
         o.resolutions.push_back(*h);
     }

@@ -14,6 +14,7 @@
 
 #include <tbb/info.h>
 
+#include "dexelmill/decimal.h"
 #include "dexelmill/error.h"
 #include "dexelmill/path/toolpath.h"
 #include "memory/heap_tunable.h"
@@ -151,17 +152,20 @@ std::string moreMemoryAdvice(const MemoryBudget& budget) {
 }
 
 std::size_t parseMemorySize(const std::string& text) {
-    char* end = nullptr;
-    const double v = std::strtod(text.c_str(), &end);
-    std::string unit(end ? end : "");
+    // The unit is the letters that end the text; the number before it is decimal.
+    std::size_t split = text.size();
+    while (split > 0 && std::isalpha(static_cast<unsigned char>(text[split - 1]))) --split;
+    const std::optional<double> number = parseDecimal(std::string_view(text).substr(0, split));
+    std::string unit = text.substr(split);
     for (char& c : unit) c = char(std::toupper(static_cast<unsigned char>(c)));
+    const double v = number.value_or(0.0);
     double scale = 0.0;
     if (unit.empty() || unit == "B") scale = 1.0;
     else if (unit == "K" || unit == "KB" || unit == "KIB") scale = 1024.0;
     else if (unit == "M" || unit == "MB" || unit == "MIB") scale = 1024.0 * 1024.0;
     else if (unit == "G" || unit == "GB" || unit == "GIB") scale = 1024.0 * 1024.0 * 1024.0;
     else if (unit == "T" || unit == "TB" || unit == "TIB") scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
-    if (end == text.c_str() || scale == 0.0 || !std::isfinite(v) || !(v > 0) || v * scale > 1e18)
+    if (!number || scale == 0.0 || !(v > 0) || v * scale > 1e18)
         throw Error("'" + text + "' is not a memory size (for example 4G, 512M or 800000000)");
     return std::size_t(v * scale);
 }

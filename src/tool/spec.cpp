@@ -1,10 +1,10 @@
 #include "dexelmill/tool/spec.h"
 
-#include <cmath>
 #include <map>
 #include <optional>
 #include <vector>
 
+#include "dexelmill/decimal.h"
 #include "dexelmill/error.h"
 #include "dexelmill/tool/builders.h"
 
@@ -27,16 +27,9 @@ std::vector<std::string> split(const std::string& s, char sep) {
 }
 
 double number(const std::string& spec, const std::string& text) {
-    std::size_t used = 0;
-    double v = 0.0;
-    try {
-        v = std::stod(text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used == 0 || used != text.size() || !std::isfinite(v))
-        throw Error("tool '" + spec + "': '" + text + "' is not a number");
-    return v;
+    const std::optional<double> v = parseDecimal(text);
+    if (!v) throw Error("tool '" + spec + "': '" + text + "' is not a number");
+    return *v;
 }
 
 }  // namespace

@@ -150,7 +150,10 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
                                      {"-o ''", "--output: the path is empty"},
                                      {"--report ''", "--report: the path is empty"},
                                      {"--stock box:0x10,0,0,20,20,5", "--stock box: '0x10' is not a number"},
-                                     {"--start 1e300,0,-5", "--start: 1e+300 mm is beyond the 1e9 mm a program may reach"}}) {
+                                     {"--start 1e300,0,-5", "--start: 1e+300 mm is beyond the 1e9 mm a program may reach"},
+                                     // Decimal only, as --stock and --tool (strtod reads 0x10 as 16).
+                                     {"--max-memory 0x10G", "--max-memory: '0x10G' is not a memory size"},
+                                     {"--resolution 0x.8", "--resolution: '0x.8' is not a number"}}) {
         INFO(args);
         r = cli(std::string("simulate ok.ngc --tool flat:d=3 ") + args);
         CHECK(r.code == 2);
@@ -159,6 +162,10 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
         // CLI11's own errors (ranges, numbers) read as the tool's: named, with the command's help.
         CHECK_THAT(r.err, StartsWith("dexelmill: ") && Contains("Run 'dexelmill simulate --help' for usage."));
     }
+    // A tool spec's numbers are decimal too.
+    r = cli("simulate ok.ngc --tool flat:d=0x6");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("'0x6' is not a number"));
     r = cli("simulate ok.ngc --tool flat:d=3 --machine .");
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Contains("--machine '.': a folder"));

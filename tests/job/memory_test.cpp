@@ -28,7 +28,9 @@ TEST_CASE("memory: sizes as users write them", "[job][memory]") {
     CHECK(parseMemorySize("1.5GiB") == (3ull << 30) / 2);
     CHECK(parseMemorySize("64k") == 64ull << 10);
     CHECK(parseMemorySize("800000000") == 800000000ull);
-    for (const char* bad : {"", "G", "4X", "-1G", "0", "nan", "1e30T"}) {
+    CHECK(parseMemorySize("2e3K") == 2000ull << 10);
+    // Decimal only, as every option: strtod reads "0x10" as 16 and "inf" as infinity.
+    for (const char* bad : {"", "G", "4X", "-1G", "0", "nan", "1e30T", "0x10G", "0x10", "0X1p4M", "infG", "inf"}) {
         INFO(bad);
         CHECK_THROWS_AS(parseMemorySize(bad), Error);
     }

@@ -55,3 +55,12 @@ TEST_CASE("bad tool specs say what is wrong", "[tool][errors]") {
     CHECK_THAT(errorOf("flat:6"), Contains("name=value"));
     CHECK_THAT(errorOf("ball:d=0"), Contains("diameter d must be positive"));
 }
+
+TEST_CASE("tool spec numbers are decimal, as every option's are", "[tool][errors]") {
+    // std::stod reads the first three as 6, infinity and NaN.
+    for (const char* number : {"0x6", "inf", "nan", "1e400", "6mm"}) {
+        INFO(number);
+        CHECK_THAT(errorOf(std::string("flat:d=") + number), Contains(std::string("'") + number + "' is not a number"));
+    }
+    CHECK_THAT(errorOf("flat:d=6,total=0X40"), Contains("'0X40' is not a number"));
+}

@@ -82,8 +82,9 @@ bool resetPeakMemory();
 /// in GLIBC_TUNABLES), as the tool's launcher does where that helps (src/launch).
 bool heapOnHugePages();
 
-/// @brief Reads a size such as "4G", "512M", "1.5GiB" or "800000000" (bytes; K, M, G and T are
-/// powers of 1024). @throw Error for anything else.
+/// @brief Reads a size such as "4G", "512M", "1.5GiB" or "800000000": a decimal number
+/// (parseDecimal) and a unit (bytes; K, M, G and T are powers of 1024). @throw Error for anything
+/// else.
 std::size_t parseMemorySize(const std::string& text);
 
 /// @brief "1.23 GiB", "456 MiB".

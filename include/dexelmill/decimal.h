@@ -1,0 +1,67 @@
+/// @file decimal.h
+/// @brief Decimal numbers as users write them (options, tool specs, memory sizes) and as messages
+/// print them: one reading shared by every option, so that none takes a form another refuses.
+#pragma once
+
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+
+namespace dexelmill {
+
+/// @brief The whole of `text` as a finite decimal number, the nearest double to it: an optional
+/// sign, digits with an optional decimal point (at least one digit), an optional exponent (e or E,
+/// an optional sign, digits); blanks (spaces, tabs) around it are allowed. Nothing else, in any
+/// locale: not the hexadecimal ("0x10"), "inf", "infinity" or "nan" that std::stod and strtod
+/// also read, nor a number beyond a double's range (1e400, or 1e-400, which would read as 0).
+/// @return std::nullopt for any other text.
+inline std::optional<double> parseDecimal(std::string_view text) {
+    const auto blank = [](char c) { return c == ' ' || c == '\t'; };
+    std::size_t first = 0, end = text.size();
+    while (first < end && blank(text[first])) ++first;
+    while (end > first && blank(text[end - 1])) --end;
+    std::size_t i = first;
+    const auto digits = [&] {
+        const std::size_t from = i;
+        while (i < end && text[i] >= '0' && text[i] <= '9') ++i;
+        return i - from;
+    };
+    if (i < end && (text[i] == '+' || text[i] == '-')) ++i;
+    std::size_t mantissa = digits();
+    if (i < end && text[i] == '.') {
+        ++i;
+        mantissa += digits();
+    }
+    if (mantissa == 0) return std::nullopt;
+    if (i < end && (text[i] == 'e' || text[i] == 'E')) {
+        ++i;
+        if (i < end && (text[i] == '+' || text[i] == '-')) ++i;
+        if (digits() == 0) return std::nullopt;
+    }
+    if (i != end) return std::nullopt;
+    // std::from_chars reads this grammar but for a leading '+', whatever the locale.
+    if (text[first] == '+') ++first;
+    double v = 0.0;
+    const auto [stop, error] = std::from_chars(text.data() + first, text.data() + end, v);
+    if (error != std::errc() || stop != text.data() + end || !std::isfinite(v)) return std::nullopt;
+    return v;
+}
+
+/// @brief `a` and `b` written with the same number of significant digits, the fewest from 6 up
+/// that tell them apart (6 where they are equal): for a message that compares two values, which
+/// then never reads "3 exceeds 3".
+inline std::pair<std::string, std::string> decimalsApart(double a, double b) {
+    char ta[32], tb[32];
+    for (int digits = 6;; ++digits) {
+        std::snprintf(ta, sizeof ta, "%.*g", digits, a);
+        std::snprintf(tb, sizeof tb, "%.*g", digits, b);
+        // 17 significant digits tell any two doubles apart.
+        if (a == b || std::string_view(ta) != std::string_view(tb) || digits == 17) return {ta, tb};
+    }
+}
+
+}  // namespace dexelmill

@@ -1,0 +1,44 @@
+// Decimal numbers as options, tool specs and memory sizes read them, and as messages compare them.
+#include <catch2/catch.hpp>
+
+#include <optional>
+#include <string>
+
+#include "dexelmill/decimal.h"
+
+using namespace dexelmill;
+
+TEST_CASE("decimal: a number written in decimal reads as the nearest double", "[decimal]") {
+    const std::pair<const char*, double> cases[] = {
+        {"6", 6.0},     {"-2.5", -2.5}, {"+3", 3.0},         {".5", 0.5},        {"7.", 7.0},
+        {"1e3", 1000.0}, {"1.5E-2", 0.015}, {"-0", -0.0},    {" 4\t", 4.0},      {"1e-310", 1e-310},
+    };
+    for (const auto& [text, value] : cases) {
+        INFO(text);
+        const std::optional<double> v = parseDecimal(text);
+        REQUIRE(v);
+        CHECK(*v == value);
+    }
+}
+
+TEST_CASE("decimal: hexadecimal, infinities, NaN and numbers beyond a double are not decimal numbers",
+          "[decimal]") {
+    // std::stod and strtod read the first four as 16, 6, infinity and NaN.
+    for (const char* text : {"0x10", "0X6", "0x1p4", "inf", "-infinity", "nan", "NAN(1)", "1e400", "-1e400", "1e-400",
+                             "", " ", ".", "e5", "1e", "1e+", "+-1", "1,5", "1.2.3", "6mm", "6 7"}) {
+        INFO("'" << text << "'");
+        CHECK_FALSE(parseDecimal(text));
+    }
+}
+
+TEST_CASE("decimal: two values a message compares print with the digits that tell them apart", "[decimal]") {
+    const auto [r, half] = decimalsApart(1.98438, 3.96875 / 2);
+    CHECK(r == "1.98438");
+    CHECK(half == "1.984375");
+    const auto [far, reach] = decimalsApart(1000000001.0, 1e9);
+    CHECK(far == "1000000001");
+    CHECK(reach == "1000000000");
+    // Six significant digits where they already differ, and where the two are equal.
+    CHECK(decimalsApart(1.0, 2.0) == std::pair<std::string, std::string>{"1", "2"});
+    CHECK(decimalsApart(1.0 / 3.0, 1.0 / 3.0) == std::pair<std::string, std::string>{"0.333333", "0.333333"});
+}
