@@ -86,6 +86,9 @@ struct InfoArgs {
 
 CLI::App* addInfo(CLI::App& app, InfoArgs& args);
 int runInfo(const InfoArgs& args);
+/// @brief The fields of a comma-separated option value, empty ones included: "1,,2," has four, ""
+/// none.
+std::vector<std::string> splitAtCommas(const std::string& text);
 /// @brief --start X,Y,Z (mm), as simulate and info take it: none where `text` is empty.
 /// @throw UsageError unless three numbers within the 1e9 mm a program may reach.
 std::optional<Vec3> parseStart(const std::string& text);

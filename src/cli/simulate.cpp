@@ -3,7 +3,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
-#include <sstream>
 #include <string>
 
 #include "commands.h"
@@ -21,12 +20,12 @@ namespace {
 /// Most warnings and collisions printed one by one; the rest are counted (all are in --report).
 constexpr std::size_t kPrintedDiagnostics = 20;
 
-/// The comma-separated numbers of an option's value; `option` names it in the message.
+/// The comma-separated numbers of an option's value; `option` names it in the message. Every
+/// field holds a number: "1,2," is refused, not read as two.
 std::vector<double> parseNumbers(const std::string& text, const std::string& option) {
     std::vector<double> v;
-    std::stringstream s(text);
-    std::string item;
-    while (std::getline(s, item, ',')) {
+    for (const std::string& item : splitAtCommas(text)) {
+        if (item.empty()) throw UsageError(option + ": '" + text + "' has an empty value");
         const std::optional<double> x = parseDecimal(item);
         if (!x) throw UsageError(option + ": '" + item + "' is not a number");
         v.push_back(*x);
@@ -34,9 +33,20 @@ std::vector<double> parseNumbers(const std::string& text, const std::string& opt
     return v;
 }
 
+/// Refuses a coordinate or a size beyond where a program may reach, kMaxCoordinateMm: far beyond
+/// it a stock's sizes are lost to rounding (a cylinder 10 mm high at z = 1e300 has no height).
+/// `option` and `name` (possibly empty) say which value it is.
+void requireWithinReach(const std::string& option, const std::string& name, double x) {
+    if (std::abs(x) <= kMaxCoordinateMm) return;
+    throw UsageError(option + ": " + (name.empty() ? "" : name + " = ") + decimalsApart(x, kMaxCoordinateMm).first +
+                     " mm is beyond the 1e9 mm a program may reach");
+}
+
 Box parseBox(const std::string& text) {
     const std::vector<double> v = parseNumbers(text, "--stock box");
     if (v.size() != 6) throw UsageError("--stock box: expected XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX (6 numbers, mm)");
+    const char* const names[] = {"XMIN", "YMIN", "ZMIN", "XMAX", "YMAX", "ZMAX"};
+    for (std::size_t i = 0; i < v.size(); ++i) requireWithinReach("--stock box", names[i], v[i]);
     const Box b{Vec3(v[0], v[1], v[2]), Vec3(v[3], v[4], v[5])};
     if (!(b.lo.x < b.hi.x && b.lo.y < b.hi.y && b.lo.z < b.hi.z))
         throw UsageError("--stock box: each minimum must be below its maximum");
@@ -69,6 +79,9 @@ Frustum parseRoundStock(const std::string& kind, const std::string& text) {
         throw UsageError("--stock " + form + ": expected the axis and " + std::to_string(want) +
                          " numbers (mm): the base face's centre, " + (cone ? "its radius, the far face's radius" : "the radius") +
                          " and the height");
+    const char* const coneNames[] = {"X", "Y", "Z", "R0", "R1", "H"};
+    const char* const cylinderNames[] = {"X", "Y", "Z", "R", "H"};
+    for (std::size_t i = 0; i < want; ++i) requireWithinReach("--stock " + form, (cone ? coneNames : cylinderNames)[i], v[i]);
     try {
         return Frustum::make(Vec3(v[0], v[1], v[2]), axis, v[want - 1], v[3], cone ? v[4] : v[3]);
     } catch (const Error& e) {
@@ -83,17 +96,24 @@ const char* const kStartHelp =
     "set the position until the program has given X, Y and Z (for example a 4-axis\n"
     "program that never names Y needs --start)";
 
+std::vector<std::string> splitAtCommas(const std::string& text) {
+    std::vector<std::string> fields;
+    if (text.empty()) return fields;
+    std::size_t start = 0;
+    for (std::size_t comma = text.find(','); comma != std::string::npos; comma = text.find(',', start)) {
+        fields.push_back(text.substr(start, comma - start));
+        start = comma + 1;
+    }
+    fields.push_back(text.substr(start));
+    return fields;
+}
+
 std::optional<Vec3> parseStart(const std::string& text) {
     if (text.empty()) return std::nullopt;
     const std::vector<double> v = parseNumbers(text, "--start");
     if (v.size() != 3) throw UsageError("--start takes X,Y,Z (mm)");
     // A program's own positions stop there too (a move from 1e300 mm cut 85 of its 612.5 mm^3).
-    for (const double x : v)
-        if (!(std::abs(x) <= kMaxCoordinateMm)) {
-            char message[160];
-            std::snprintf(message, sizeof message, "--start: %g mm is beyond the 1e9 mm a program may reach", x);
-            throw UsageError(message);
-        }
+    for (const double x : v) requireWithinReach("--start", "", x);
     return Vec3(v[0], v[1], v[2]);
 }
 

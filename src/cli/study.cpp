@@ -1,7 +1,6 @@
 // `dexelmill study`: run the job per (spacing, family set) and measure against the exact part.
 #include <cstdio>
 #include <iostream>
-#include <sstream>
 
 #include "commands.h"
 #include "dexelmill/decimal.h"
@@ -9,18 +8,6 @@
 #include "progress.h"
 
 namespace dexelmill::cli {
-
-namespace {
-
-std::vector<std::string> splitList(const std::string& s) {
-    std::vector<std::string> out;
-    std::stringstream in(s);
-    std::string item;
-    while (std::getline(in, item, ',')) out.push_back(item);
-    return out;
-}
-
-}  // namespace
 
 CLI::App* addStudy(CLI::App& app, StudyArgs& a) {
     std::string names;
@@ -68,13 +55,13 @@ int runStudy(const StudyArgs& a) {
         o.job.inputs = {"case:" + c.name};
     }
     o.resolutions.clear();
-    for (const std::string& r : splitList(a.resolutions)) {
+    for (const std::string& r : splitAtCommas(a.resolutions)) {
         const std::optional<double> h = parseDecimal(r);
         if (!h || !(*h > 0)) throw UsageError("--resolutions: '" + r + "' is not a positive number");
         o.resolutions.push_back(*h);
     }
     o.familySets.clear();
-    for (const std::string& f : splitList(a.familySets)) {
+    for (const std::string& f : splitAtCommas(a.familySets)) {
         try {
             o.familySets.push_back(FamilySet::parse(f));
         } catch (const Error& e) {

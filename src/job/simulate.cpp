@@ -282,7 +282,9 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
             fromVdb = readVdb(o.stockFile);
             box = materialBounds(*fromVdb);
         } else {
-            throw Error("stock '" + o.stockFile + "': expected box:..., an .stl or a .vdb file");
+            throw Error("stock '" + o.stockFile +
+                        "': expected box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX, cylinder:AXIS,X,Y,Z,R,H, "
+                        "cone:AXIS,X,Y,Z,R0,R1,H, a FILE.stl or a FILE.vdb");
         }
         if (box.isEmpty()) throw Error("stock '" + o.stockFile + "' holds no material");
     } else if (project && !project->workpiece.automatic && !project->workpiece.bounds.isEmpty()) {

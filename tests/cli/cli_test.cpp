@@ -153,7 +153,16 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
                                      {"--start 1e300,0,-5", "--start: 1e+300 mm is beyond the 1e9 mm a program may reach"},
                                      // Decimal only, as --stock and --tool (strtod reads 0x10 as 16).
                                      {"--max-memory 0x10G", "--max-memory: '0x10G' is not a memory size"},
-                                     {"--resolution 0x.8", "--resolution: '0x.8' is not a number"}}) {
+                                     {"--resolution 0x.8", "--resolution: '0x.8' is not a number"},
+                                     // An empty field is an error, not a field less.
+                                     {"--stock box:0,0,-5,20,20,0,", "--stock box: '0,0,-5,20,20,0,' has an empty value"},
+                                     {"--start 1,2,", "--start: '1,2,' has an empty value"},
+                                     // Stock where a program may not reach: its sizes there are lost to rounding.
+                                     {"--stock box:0,0,-5,20,20,2e9",
+                                      "--stock box: ZMAX = 2e+09 mm is beyond the 1e9 mm a program may reach"},
+                                     {"--stock cylinder:z,0,0,1e300,5,10",
+                                      "--stock cylinder:AXIS,X,Y,Z,R,H: Z = 1e+300 mm is beyond the 1e9 mm"},
+                                     {"--stock cone:x,0,0,0,5,2,-3e9", "--stock cone:AXIS,X,Y,Z,R0,R1,H: H = -3e+09 mm is beyond"}}) {
         INFO(args);
         r = cli(std::string("simulate ok.ngc --tool flat:d=3 ") + args);
         CHECK(r.code == 2);
@@ -166,6 +175,17 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
     r = cli("simulate ok.ngc --tool flat:d=0x6");
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Contains("'0x6' is not a number"));
+    // A stock the program cannot read names every form it takes.
+    for (const char* stock : {"sphere:1,2,3", "Box:0,0,0,10,10,10"}) {
+        INFO(stock);
+        r = cli(std::string("simulate ok.ngc --tool flat:d=3 --stock ") + stock);
+        CHECK(r.code == 1);
+        CHECK_THAT(r.err, Contains("box:XMIN,YMIN,ZMIN,XMAX,YMAX,ZMAX") && Contains("cylinder:AXIS,X,Y,Z,R,H") &&
+                              Contains("cone:AXIS,X,Y,Z,R0,R1,H") && Contains(".stl") && Contains(".vdb"));
+    }
+    r = cli("study --case v-carve --resolutions 1,");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("--resolutions: '' is not a positive number"));
     r = cli("simulate ok.ngc --tool flat:d=3 --machine .");
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Contains("--machine '.': a folder"));
