@@ -3,6 +3,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "dexelmill/decimal.h"
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
 
@@ -28,12 +29,23 @@ std::string deg(double radians) { return num(radians * 180.0 / kPi) + " deg"; }
     throw Error(tool + ": " + what);
 }
 
-void requirePositive(const std::string& tool, const char* name, double v) {
-    if (!(v > 0.0) || !std::isfinite(v)) bad(tool, std::string(name) + " must be positive, got " + num(v));
+/// Refuses a length beyond kMaxToolSizeMm.
+void requireWithinSize(const std::string& tool, const char* name, double v) {
+    if (v <= kMaxToolSizeMm) return;
+    const auto [value, cap] = decimalsApart(v, kMaxToolSizeMm);
+    bad(tool, std::string(name) + " = " + value + " mm is beyond the " + cap + " mm a tool may measure");
 }
 
-void requireNonNegative(const std::string& tool, const char* name, double v) {
-    if (!(v >= 0.0) || !std::isfinite(v)) bad(tool, std::string(name) + " must not be negative, got " + num(v));
+/// A length that must be positive and within kMaxToolSizeMm.
+void requirePositiveLength(const std::string& tool, const char* name, double v) {
+    if (!(v > 0.0)) bad(tool, std::string(name) + " must be positive, got " + num(v));
+    requireWithinSize(tool, name, v);
+}
+
+/// A length that must not be negative and be within kMaxToolSizeMm.
+void requireLength(const std::string& tool, const char* name, double v) {
+    if (!(v >= 0.0)) bad(tool, std::string(name) + " must not be negative, got " + num(v));
+    requireWithinSize(tool, name, v);
 }
 
 /// An angle in [0, 90 deg) (or (0, 90) when `open` is set), e.g. a flank angle.
@@ -43,13 +55,14 @@ void requireAngle(const std::string& tool, const char* name, double a, bool posi
 }
 
 /// Resolves default lengths: cutting length 3 diameters (at least 10 mm), total length the
-/// cutting length plus 2 diameters. `minimum` is the height of the profile's shaped end, which
-/// the total length must reach.
+/// cutting length plus 2 diameters, neither beyond kMaxToolSizeMm. `minimum` is the height of the
+/// profile's shaped end, which the total length must reach.
 ToolLengths resolve(const std::string& tool, ToolLengths l, double diameter, double minimum) {
-    requireNonNegative(tool, "cutting length", l.cutting);
-    requireNonNegative(tool, "total length", l.total);
-    if (l.cutting == 0.0) l.cutting = std::max({3.0 * diameter, 10.0, minimum});
-    if (l.total == 0.0) l.total = std::max(l.cutting + 2.0 * diameter, minimum);
+    requireLength(tool, "cutting length", l.cutting);
+    requireLength(tool, "total length", l.total);
+    requireWithinSize(tool, "the shaped end's height", minimum);
+    if (l.cutting == 0.0) l.cutting = std::min(std::max({3.0 * diameter, 10.0, minimum}), kMaxToolSizeMm);
+    if (l.total == 0.0) l.total = std::min(std::max(l.cutting + 2.0 * diameter, minimum), kMaxToolSizeMm);
     if (l.total < l.cutting)
         bad(tool, "total length " + num(l.total) + " is shorter than the cutting length " + num(l.cutting));
     if (l.total <= minimum + tol::kLength)
@@ -70,14 +83,14 @@ void addShank(std::vector<ProfilePiece>& pieces, double z0, double z1, double r)
 
 Tool flatEndMill(double d, ToolLengths lengths) {
     const std::string who = "flat end mill";
-    requirePositive(who, "diameter d", d);
+    requirePositiveLength(who, "diameter d", d);
     const ToolLengths l = resolve(who, lengths, d, 0.0);
     return Tool(name("flat D" + num(d), l), {ConePiece{0.0, l.total, d / 2, d / 2}}, l.cutting);
 }
 
 Tool ballEndMill(double d, ToolLengths lengths) {
     const std::string who = "ball end mill";
-    requirePositive(who, "diameter d", d);
+    requirePositiveLength(who, "diameter d", d);
     const double r = d / 2;
     const ToolLengths l = resolve(who, lengths, d, r);
     return Tool(name("ball D" + num(d), l), {ArcPiece{0.0, r, 0.0, r, r}, ConePiece{r, l.total, r, r}},
@@ -86,8 +99,8 @@ Tool ballEndMill(double d, ToolLengths lengths) {
 
 Tool bullNoseEndMill(double d, double r, ToolLengths lengths) {
     const std::string who = "bull-nose end mill";
-    requirePositive(who, "diameter d", d);
-    requirePositive(who, "corner radius r", r);
+    requirePositiveLength(who, "diameter d", d);
+    requirePositiveLength(who, "corner radius r", r);
     if (r > d / 2 + tol::kLength) bad(who, "corner radius r = " + num(r) + " exceeds d/2 = " + num(d / 2));
     r = std::min(r, d / 2);
     const ToolLengths l = resolve(who, lengths, d, r);
@@ -97,7 +110,7 @@ Tool bullNoseEndMill(double d, double r, ToolLengths lengths) {
 
 Tool taperEndMill(double tipD, double halfAngle, ToolLengths lengths) {
     const std::string who = "taper end mill";
-    requireNonNegative(who, "tip diameter", tipD);
+    requireLength(who, "tip diameter", tipD);
     requireAngle(who, "half angle", halfAngle, true);
     const ToolLengths l = resolve(who, lengths, std::max(tipD, 1.0), 0.0);
     const double rTop = tipD / 2 + l.cutting * std::tan(halfAngle);
@@ -108,8 +121,8 @@ Tool taperEndMill(double tipD, double halfAngle, ToolLengths lengths) {
 
 Tool chamferMill(double tipD, double halfAngle, double d, ToolLengths lengths) {
     const std::string who = "chamfer mill";
-    requireNonNegative(who, "tip diameter", tipD);
-    requirePositive(who, "diameter d", d);
+    requireLength(who, "tip diameter", tipD);
+    requirePositiveLength(who, "diameter d", d);
     requireAngle(who, "half angle", halfAngle, true);
     if (!(d > tipD)) bad(who, "diameter d = " + num(d) + " must exceed the tip diameter " + num(tipD));
     const double hCone = (d - tipD) / 2 / std::tan(halfAngle);
@@ -122,7 +135,7 @@ Tool chamferMill(double tipD, double halfAngle, double d, ToolLengths lengths) {
 
 Tool taperBallMill(double ballD, double halfAngle, ToolLengths lengths) {
     const std::string who = "tapered ball mill";
-    requirePositive(who, "ball diameter", ballD);
+    requirePositiveLength(who, "ball diameter", ballD);
     requireAngle(who, "half angle", halfAngle, false);
     const double rb = ballD / 2;
     // The flank touches the sphere where the sphere's normal is perpendicular to it.
@@ -142,7 +155,7 @@ Tool taperBallMill(double ballD, double halfAngle, ToolLengths lengths) {
 
 Tool drill(double d, double pointAngle, ToolLengths lengths) {
     const std::string who = "drill";
-    requirePositive(who, "diameter d", d);
+    requirePositiveLength(who, "diameter d", d);
     if (!std::isfinite(pointAngle) || !(pointAngle > 0.0) || !(pointAngle < kPi))
         bad(who, "point angle must lie in (0, 180) deg, got " + deg(pointAngle));
     const double hTip = d / 2 / std::tan(pointAngle / 2);
@@ -156,11 +169,11 @@ Tool aptCutter(double d, double r, double e, double f, double alpha, double beta
                double cuttingLength) {
     const std::string who = "CUTTER/" + num(d) + "," + num(r) + "," + num(e) + "," + num(f) + "," +
                             deg(alpha) + "," + deg(beta) + "," + num(h);
-    requirePositive(who, "d", d);
-    requireNonNegative(who, "r", r);
-    requireNonNegative(who, "e", e);
-    requireNonNegative(who, "f", f);
-    requirePositive(who, "h", h);
+    requirePositiveLength(who, "d", d);
+    requireLength(who, "r", r);
+    requireLength(who, "e", e);
+    requireLength(who, "f", f);
+    requirePositiveLength(who, "h", h);
     requireAngle(who, "alpha", alpha, false);
     if (!std::isfinite(beta) || std::abs(beta) >= 0.5 * kPi)
         bad(who, "beta must lie in (-90, 90) deg, got " + deg(beta));

@@ -4,9 +4,11 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <utility>
 
 #include <boost/math/tools/roots.hpp>
 
+#include "dexelmill/decimal.h"
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/roots.h"
 #include "dexelmill/geometry/tolerance.h"
@@ -354,6 +356,13 @@ Tool::Tool(std::string description, std::vector<ProfilePiece> pieces, double cut
                 cuttingRadius_, maxRadiusOver(p, pieceZ0(p), std::min(pieceZ1(p), cuttingLength_)));
     }
     if (!(maxRadius_ > 0.0)) throw Error(who + "the profile has no positive radius");
+    // The builders check the sizes they are given; this catches those they derive (a taper's top).
+    const std::pair<const char*, double> sizes[] = {{"largest diameter", 2.0 * maxRadius_}, {"length", totalLength_}};
+    for (const auto& [what, size] : sizes) {
+        if (size <= kMaxToolSizeMm) continue;
+        const auto [value, cap] = decimalsApart(size, kMaxToolSizeMm);
+        throw Error(who + "its " + what + ", " + value + " mm, is beyond the " + cap + " mm a tool may measure");
+    }
 }
 
 double Tool::radiusAt(double z) const {

@@ -171,6 +171,13 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
         // CLI11's own errors (ranges, numbers) read as the tool's: named, with the command's help.
         CHECK_THAT(r.err, StartsWith("dexelmill: ") && Contains("Run 'dexelmill simulate --help' for usage."));
     }
+    // A tool larger than a tool may be is refused, not swept (the square of 1e155 overflows).
+    for (const char* tool : {"flat:d=1e155", "ball:d=1e155", "flat:d=6,total=1e300"}) {
+        INFO(tool);
+        r = cli(std::string("simulate ok.ngc --stock box:0,0,-5,20,20,0 --resolution 0.5 -q --tool ") + tool);
+        CHECK(r.code == 2);
+        CHECK_THAT(r.err, Contains("mm is beyond the 10000 mm a tool may measure"));
+    }
     // A tool spec's numbers are decimal too.
     r = cli("simulate ok.ngc --tool flat:d=0x6");
     CHECK(r.code == 2);

@@ -176,6 +176,9 @@ TEST_CASE("apt: malformed programs give a parse error with file:line:col and the
         {"UNITS/FURLONGS\n", 1, "unknown units", "FURLONGS"},
         {"CUTTER/6,0,3,0,0,0,-5\nLOAD/TOOL,1\n", 1, "height must not be negative", "-5"},
         {"CUTTER/6,2,5,2,0,0,10\nLOAD/TOOL,1\n", 1, "no real tool", ""},
+        // The size a tool may have applies in mm: 400 inches are 10160 mm.
+        {"CUTTER/1E155\nLOAD/TOOL,1\n", 1, "diameter d = 1e+155 mm is beyond the 10000 mm", ""},
+        {"UNITS/INCHES\nCUTTER/400\nLOAD/TOOL,1\n", 2, "diameter d = 10160 mm is beyond the 10000 mm", ""},
         // APT's CUTTER has 1, 2 or 7 numbers: the 5- and 6-number forms lack the last ones.
         {"CUTTER/10,0,5,0,0\nGOTO/0,0,0\nGOTO/1,0,0\n", 1, "lacks beta,h", "CUTTER"},
         {"CUTTER/10,0,5,0,0,0\nGOTO/0,0,0\nGOTO/1,0,0\n", 1, "lacks h", "CUTTER"},

@@ -219,6 +219,9 @@ TEST_CASE("camotics: tool shapes by CAMotics' names, in any case", "[path][camot
     CHECK(tool(R"("shape": "snubnose")").radiusAt(0.0) == Approx(0.0).margin(1e-12));
     CHECK(tool(R"("shape": "snubnose", "snub_diameter": 2)").radiusAt(5.0) == Approx(1.5));
     CHECK_THROWS_AS(tool(R"("shape": "snubnose", "snub_diameter": 5)"), ParseError);
+    // A tool larger than a tool may be is an error that names the size.
+    CHECK_THROWS_WITH(parseCamoticsProject(R"({"tools": {"1": {"length": 10, "diameter": 1e155}}})", "p.camotics", ""),
+                      Catch::Matchers::Contains("diameter d = 1e+155 mm is beyond the 10000 mm"));
 
     // CAMotics' spheroid has no cutter here: the number is left for --tool, with a warning.
     const Project p = parseCamoticsProject(

@@ -2,7 +2,10 @@
 // method.md section 5. Expected values are derived in the comments, not taken from the code.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <random>
+#include <utility>
 
 #include "dexelmill/error.h"
 #include "dexelmill/sweep/sweep.h"
@@ -176,6 +179,77 @@ TEST_CASE("sweep: dexel parallel to a tilted tool axis", "[sweep]") {
     // The box in x: the top face's centre at x = 10 plus 3 cos(30 deg).
     CHECK(s.bounds().hi.x == Approx(10.0 + 3.0 * std::sqrt(3.0) / 2));
     CHECK(s.bounds().lo.x == Approx(-3.0 * std::sqrt(3.0) / 2));
+}
+
+TEST_CASE("sweep: a tilted bull nose as wide as a tool may be is swept to a 1e-7 mm", "[sweep]") {
+    // kMaxToolSizeMm bounds the tools the sweep is given because its rounding grows with the
+    // square of the tool's size: at the cap it must still place the surface within kAtTheCap.
+    // A bull nose of that diameter, corner radius r, R = d/2 - r from its axis to the corner's
+    // centre, its axis a in the x-z plane tilted by up to 0.6 rad, moves along y across the plane
+    // y = 0. There the swept volume's section is the tool's meridian section: its sections a
+    // distance off the axis lie inside it, moved toward the axis. Near the corner on the side s
+    // (s . a = 0), that section is the points within r of Q = { v <= R, w >= r }, in
+    // w = (p - tip) . a, the height above the tip, and v = (p - tip) . s.
+    constexpr double kAtTheCap = 1e-7;  // mm: the stock keeps dexel ends 8e-6 mm apart at 100 mm
+    constexpr double r = 2.0, h = 200.0;
+    const double R = kMaxToolSizeMm / 2 - r;
+    const Tool bull = bullNoseEndMill(kMaxToolSizeMm, r, {h, h});
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> unit(-1.0, 1.0);
+    int checked = 0;
+    for (int pose = 0; pose < 8; ++pose) {
+        const double tilt = 0.6 * unit(rng);
+        const Vec3 a(std::sin(tilt), 0.0, std::cos(tilt)), s(-std::cos(tilt), 0.0, std::sin(tilt));
+        const Vec3 corner(10.0, 0.0, -1.0);  // the corner circle's centre: v = R, w = r
+        const Vec3 tip = corner - r * a - R * s;
+        const MoveSweep sweep(bull, tip - Vec3(0, 50, 0), tip + Vec3(0, 60, 0), a);
+        for (int k = 0; k < 400; ++k) {
+            const double turn = M_PI * unit(rng);
+            const Vec3 dir(std::cos(turn), 0.0, std::sin(turn));
+            const Vec3 origin = corner + Vec3(3.0 * unit(rng), 0.0, 3.0 * unit(rng));
+            // Along the line, v = v0 + vd t and w = w0 + wd t. The section holds the half-planes'
+            // w >= 0 and v <= R + r but for the square's corner beyond the quarter disk, where an
+            // end moves to the line's crossing with the circle (v - R)^2 + (w - r)^2 = r^2.
+            const double v0 = glm::dot(origin - tip, s), vd = glm::dot(dir, s);
+            const double w0 = glm::dot(origin - tip, a), wd = glm::dot(dir, a);
+            const auto upTo = [](double c0, double c1) {  // { t : c0 + c1 t <= 0 }
+                if (c1 == 0.0) return c0 <= 0.0 ? Interval::all() : Interval::empty();
+                const double t = -c0 / c1;
+                return c1 > 0.0 ? Interval{-INFINITY, t} : Interval{t, INFINITY};
+            };
+            Interval want = upTo(-w0, -wd).intersect(upTo(v0 - R - r, vd));
+            const auto cornerOff = [&](double t) {  // beyond Q in v and in w: (v - R, r - w), both > 0
+                return std::pair<double, double>{v0 + vd * t - R, r - (w0 + wd * t)};
+            };
+            const auto outsideDisk = [&](double t) {
+                const auto [dv, dw] = cornerOff(t);
+                return dv > 0.0 && dw > 0.0 && dv * dv + dw * dw > r * r;
+            };
+            const double b = (v0 - R) * vd + (w0 - r) * wd, c = (v0 - R) * (v0 - R) + (w0 - r) * (w0 - r) - r * r;
+            const double disc = b * b - c;
+            if (outsideDisk(want.lo)) want.lo = disc >= 0.0 ? -b - std::sqrt(disc) : INFINITY;
+            if (outsideDisk(want.hi)) want.hi = disc >= 0.0 ? -b + std::sqrt(disc) : -INFINITY;
+            // Lines that reach the far side of the tool or its top, and those that barely touch.
+            if (want.isEmpty() || want.length() > 50.0 || want.length() < 0.1) continue;
+            // The boundary's outward normal at an end: from Q's nearest point.
+            const auto across = [&](double t) {
+                const auto [dv, dw] = cornerOff(t);
+                const double nv = std::max(dv, 0.0), nw = std::max(dw, 0.0);
+                return std::abs(glm::dot(nv * s - nw * a, dir)) / std::hypot(nv, nw);
+            };
+            const double acrossLo = across(want.lo), acrossHi = across(want.hi);
+            // An end the line crosses at a grazing angle moves far along it for a small error.
+            if (acrossLo < 0.05 || acrossHi < 0.05) continue;
+            const Interval got = sweep.intersect(Line{origin, dir});
+            INFO("tilt " << tilt << ", line from (" << origin.x << ", " << origin.z << ") at " << turn << " rad");
+            REQUIRE_FALSE(got.isEmpty());
+            // Each end's distance from the section's boundary, across it.
+            CHECK(std::abs(got.lo - want.lo) * acrossLo <= kAtTheCap);
+            CHECK(std::abs(got.hi - want.hi) * acrossHi <= kAtTheCap);
+            ++checked;
+        }
+    }
+    CHECK(checked > 1000);
 }
 
 TEST_CASE("sweep: dexel lying in a flat face (closed convention)", "[sweep]") {

@@ -64,3 +64,10 @@ TEST_CASE("tool spec numbers are decimal, as every option's are", "[tool][errors
     }
     CHECK_THAT(errorOf("flat:d=6,total=0X40"), Contains("'0X40' is not a number"));
 }
+
+TEST_CASE("a tool spec larger than a tool may be is refused, naming the parameter", "[tool][errors]") {
+    CHECK_THAT(errorOf("flat:d=1e155"), Contains("diameter d = 1e+155 mm is beyond the 10000 mm a tool may measure"));
+    CHECK_THAT(errorOf("ball:d=1e155"), Contains("diameter d = 1e+155 mm is beyond the 10000 mm"));
+    CHECK_THAT(errorOf("flat:d=6,total=1e300"), Contains("total length = 1e+300 mm is beyond the 10000 mm"));
+    CHECK_THAT(errorOf("apt:10,0,5,0,0,0,2e4"), Contains("h = 20000 mm is beyond the 10000 mm"));
+}

@@ -660,3 +660,33 @@ TEST_CASE("impossible tool parameters name the parameter and the value", "[tool]
     CHECK_THAT(errorOf([] { Tool("none", {}, 5); }), Contains("no pieces"));
     CHECK_THAT(errorOf([] { Tool("flat", {ConePiece{0, 5, 3, 3}}, 6); }), Contains("cutting length 6"));
 }
+
+TEST_CASE("a tool's sizes, given or derived, stop at kMaxToolSizeMm, named with the cap", "[tool][errors]") {
+    using Catch::Matchers::Contains;
+    const std::string beyond = " mm is beyond the 10000 mm a tool may measure";
+    // Given sizes name their parameter (the square of 1e155 overflows a double).
+    CHECK_THAT(errorOf([] { flatEndMill(1e155); }), Contains("diameter d = 1e+155" + beyond));
+    CHECK_THAT(errorOf([] { ballEndMill(6, {0, 1e300}); }), Contains("total length = 1e+300" + beyond));
+    CHECK_THAT(errorOf([] { ballEndMill(6, {2e4, 0}); }), Contains("cutting length = 20000" + beyond));
+    CHECK_THAT(errorOf([] { bullNoseEndMill(10, 1e155); }), Contains("corner radius r = 1e+155" + beyond));
+    CHECK_THAT(errorOf([] { chamferMill(2e4, deg(45), 3e4); }), Contains("tip diameter = 20000" + beyond));
+    CHECK_THAT(errorOf([] { taperBallMill(3e4, deg(5)); }), Contains("ball diameter = 30000" + beyond));
+    CHECK_THAT(errorOf([] { aptCutter(1e155, 0, 5e154, 0, 0, 0, 50); }), Contains("d = 1e+155" + beyond));
+    CHECK_THAT(errorOf([] { aptCutter(10, 0, 5, 0, 0, 0, 1e300); }), Contains("h = 1e+300" + beyond));
+    // Just past the cap the message still tells the two numbers apart.
+    const double past = std::nextafter(kMaxToolSizeMm, 2 * kMaxToolSizeMm);
+    CHECK_THAT(errorOf([past] { flatEndMill(past); }), Contains("diameter d = 10000.000000000002" + beyond));
+    // At the cap a tool is built, and its default lengths (3 d of flute, 2 d more) stop there.
+    const Tool widest = flatEndMill(kMaxToolSizeMm);
+    CHECK(widest.cuttingRadius() == 5000);
+    CHECK(widest.cuttingLength() == 10000);
+    CHECK(widest.totalLength() == 10000);
+    // Derived sizes. A V-bit D12 at a half angle of 1e-9 deg has a cone 6 / tan(1e-9 deg) =
+    // 3.43775e11 mm tall; a taper D2 at 89.99 deg widens over its 10 mm of flute to
+    // 2 (1 + 10 tan(89.99 deg)) = 114594 mm; an APT cutter's flank at beta = 89.99 deg to
+    // 2 (5 + 50 tan(89.99 deg)) = 572968 mm at h = 50.
+    CHECK_THAT(errorOf([] { chamferMill(0, deg(1e-9), 12); }), Contains("height = 3.43775e+11" + beyond));
+    CHECK_THAT(errorOf([] { taperEndMill(2, deg(89.99)); }), Contains("its largest diameter, 114594 mm, is beyond the 10000 mm"));
+    CHECK_THAT(errorOf([] { aptCutter(10, 0, 5, 0, 0, deg(89.99), 50); }),
+               Contains("its largest diameter, 572968 mm, is beyond the 10000 mm"));
+}

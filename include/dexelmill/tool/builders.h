@@ -1,7 +1,7 @@
 /// @file builders.h
 /// @brief Builders for the common cutters and the APT 7-parameter cutter. Lengths in mm, angles
 /// in radians. Every builder throws dexelmill::Error naming the parameter and its value when the
-/// parameters describe no real tool.
+/// parameters describe no real tool, or one larger than kMaxToolSizeMm (tool.h).
 #pragma once
 
 #include "dexelmill/tool/tool.h"
@@ -10,7 +10,7 @@ namespace dexelmill {
 
 /// @brief Cutting length and total length (stick-out) of a tool, in mm. Zero means "default":
 /// the cutting length defaults to 3 cutting diameters (at least 10 mm), the total length to the
-/// cutting length plus 2 diameters.
+/// cutting length plus 2 diameters, neither beyond kMaxToolSizeMm.
 struct ToolLengths {
     double cutting = 0.0;
     double total = 0.0;

@@ -11,6 +11,13 @@
 
 namespace dexelmill {
 
+/// @brief The largest size (mm) of a tool: its diameters and lengths, given or derived (a V-bit's
+/// cone, a taper's top). No machine carries a cutter, or a stick-out, of 10 m. And the sweep needs
+/// a bound, as its rounding grows with the square of the tool's size: a tilted bull nose's swept
+/// surface comes out within 2e-11 mm of the exact one at 1 m across, 3e-9 mm at this size, 2e-7 mm
+/// at 100 m and 3 mm at 1 km (tests/sweep/sweep_test.cpp checks 1e-7 mm at this size).
+constexpr double kMaxToolSizeMm = 1e4;
+
 /// @brief A maximal run of pieces whose solid is convex (R concave and continuous over it).
 struct ConvexPart {
     std::size_t first = 0;  ///< index of the first piece
@@ -27,8 +34,8 @@ class Tool {
   public:
     /// @brief Validates and takes a profile chain.
     /// @throw Error if the chain is empty, starts below the tip, has gaps or overlaps, a negative
-    /// radius, a zero-height piece, an arc outside its circle, no positive radius, or if
-    /// cuttingLength is not in (0, total length].
+    /// radius, a zero-height piece, an arc outside its circle, no positive radius, a diameter or a
+    /// length beyond kMaxToolSizeMm, or if cuttingLength is not in (0, total length].
     Tool(std::string description, std::vector<ProfilePiece> pieces, double cuttingLength);
 
     /// @brief What the tool is, e.g. "ball D6 L25/50".
