@@ -302,6 +302,11 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
                   "      chamfer:d=12,angle=45[,tip=T] | vbit:d=6,angle=30 | taperball:d=3,angle=5 |\n"
                   "      drill:d=6[,angle=118] | apt:D,R,E,F,ALPHA,BETA,H\n"
                   "      optional ,length=L (cutting length) ,total=T (stick-out); mm, degrees.\n"
+                  "      angle= is the HALF angle from the axis for taper, chamfer, vbit and taperball\n"
+                  "      (a 60 degree V-bit is vbit:d=6,angle=30), the INCLUDED point angle for drill\n"
+                  "      (118, not 59). d= is the TIP diameter for taper (it widens upward over the\n"
+                  "      cutting length), the LARGEST for chamfer and vbit (the cone runs from tip=T,\n"
+                  "      default 0, up to d), the ball's for taperball.\n"
                   "A bare SPEC serves every tool number nothing else defines.");
     c->add_option("--chord-tolerance", a.chordTolerance, "Largest arc-to-chord distance when arcs are linearised (mm)")
         ->check(numberCheck(false))

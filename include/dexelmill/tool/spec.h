@@ -8,7 +8,9 @@
 ///
 /// followed by optional `,length=L` (cutting length) and `,total=T` (stick-out). Lengths in mm,
 /// angles in degrees: for taper, chamfer, vbit and taperball the half angle from the axis, for
-/// drill the included point angle.
+/// drill the included point angle. d is the tip's diameter for taper (which widens over the
+/// cutting length), the largest for chamfer and vbit (whose tip is `tip=`, 0 unless given), the
+/// ball's for taperball.
 #pragma once
 
 #include <string>
