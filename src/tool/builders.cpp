@@ -54,19 +54,34 @@ void requireAngle(const std::string& tool, const char* name, double a, bool posi
         bad(tool, std::string(name) + " must lie in " + (positive ? "(0" : "[0") + ", 90) deg, got " + deg(a));
 }
 
-/// Resolves default lengths: cutting length 3 diameters (at least 10 mm), total length the
-/// cutting length plus 2 diameters, neither beyond kMaxToolSizeMm. `minimum` is the height of the
-/// profile's shaped end, which the total length must reach.
-ToolLengths resolve(const std::string& tool, ToolLengths l, double diameter, double minimum) {
+/// The end a profile shapes below its cylinder (a ball, a drill's point): its height, which the
+/// total length must clear, and what it is, for messages. None for a flat or taper end.
+struct ShapedEnd {
+    double height = 0.0;
+    const char* what = nullptr;
+};
+
+/// Resolves default lengths: cutting length 3 diameters (at least 10 mm and the shaped end),
+/// total length 2 diameters more than the cutting length or the shaped end, whichever is longer,
+/// neither beyond kMaxToolSizeMm. A total length given alone caps the default cutting length: the
+/// tool asked for is no longer.
+ToolLengths resolve(const std::string& tool, ToolLengths l, double diameter, ShapedEnd end = {}) {
     requireLength(tool, "cutting length", l.cutting);
     requireLength(tool, "total length", l.total);
-    requireWithinSize(tool, "the shaped end's height", minimum);
-    if (l.cutting == 0.0) l.cutting = std::min(std::max({3.0 * diameter, 10.0, minimum}), kMaxToolSizeMm);
-    if (l.total == 0.0) l.total = std::min(std::max(l.cutting + 2.0 * diameter, minimum), kMaxToolSizeMm);
-    if (l.total < l.cutting)
-        bad(tool, "total length " + num(l.total) + " is shorter than the cutting length " + num(l.cutting));
-    if (l.total <= minimum + tol::kLength)
-        bad(tool, "total length " + num(l.total) + " does not clear the shaped end (" + num(minimum) + " mm)");
+    if (end.what) requireWithinSize(tool, (std::string("the ") + end.what + "'s height").c_str(), end.height);
+    if (l.cutting == 0.0) {
+        l.cutting = std::min(std::max({3.0 * diameter, 10.0, end.height}), kMaxToolSizeMm);
+        if (l.total != 0.0) l.cutting = std::min(l.cutting, l.total);
+    }
+    if (l.total == 0.0) l.total = std::min(std::max(l.cutting, end.height) + 2.0 * diameter, kMaxToolSizeMm);
+    if (end.what && l.total <= end.height + tol::kLength) {
+        const auto [total, height] = decimalsApart(l.total, end.height);
+        bad(tool, "total length " + total + " mm does not clear the " + height + " mm " + end.what);
+    }
+    if (l.total < l.cutting) {
+        const auto [total, cutting] = decimalsApart(l.total, l.cutting);
+        bad(tool, "total length " + total + " mm is shorter than the cutting length " + cutting + " mm");
+    }
     return l;
 }
 
@@ -84,7 +99,7 @@ void addShank(std::vector<ProfilePiece>& pieces, double z0, double z1, double r)
 Tool flatEndMill(double d, ToolLengths lengths) {
     const std::string who = "flat end mill";
     requirePositiveLength(who, "diameter d", d);
-    const ToolLengths l = resolve(who, lengths, d, 0.0);
+    const ToolLengths l = resolve(who, lengths, d);
     return Tool(name("flat D" + num(d), l), {ConePiece{0.0, l.total, d / 2, d / 2}}, l.cutting);
 }
 
@@ -92,7 +107,7 @@ Tool ballEndMill(double d, ToolLengths lengths) {
     const std::string who = "ball end mill";
     requirePositiveLength(who, "diameter d", d);
     const double r = d / 2;
-    const ToolLengths l = resolve(who, lengths, d, r);
+    const ToolLengths l = resolve(who, lengths, d, {r, "ball"});
     return Tool(name("ball D" + num(d), l), {ArcPiece{0.0, r, 0.0, r, r}, ConePiece{r, l.total, r, r}},
                 l.cutting);
 }
@@ -103,7 +118,7 @@ Tool bullNoseEndMill(double d, double r, ToolLengths lengths) {
     requirePositiveLength(who, "corner radius r", r);
     if (r > d / 2 + tol::kLength) bad(who, "corner radius r = " + num(r) + " exceeds d/2 = " + num(d / 2));
     r = std::min(r, d / 2);
-    const ToolLengths l = resolve(who, lengths, d, r);
+    const ToolLengths l = resolve(who, lengths, d, {r, "corner"});
     return Tool(name("bull D" + num(d) + " R" + num(r), l),
                 {ArcPiece{0.0, r, d / 2 - r, r, r}, ConePiece{r, l.total, d / 2, d / 2}}, l.cutting);
 }
@@ -112,7 +127,7 @@ Tool taperEndMill(double tipD, double halfAngle, ToolLengths lengths) {
     const std::string who = "taper end mill";
     requireLength(who, "tip diameter", tipD);
     requireAngle(who, "half angle", halfAngle, true);
-    const ToolLengths l = resolve(who, lengths, std::max(tipD, 1.0), 0.0);
+    const ToolLengths l = resolve(who, lengths, std::max(tipD, 1.0));
     const double rTop = tipD / 2 + l.cutting * std::tan(halfAngle);
     std::vector<ProfilePiece> pieces{ConePiece{0.0, l.cutting, tipD / 2, rTop}};
     addShank(pieces, l.cutting, l.total, rTop);
@@ -126,7 +141,7 @@ Tool chamferMill(double tipD, double halfAngle, double d, ToolLengths lengths) {
     requireAngle(who, "half angle", halfAngle, true);
     if (!(d > tipD)) bad(who, "diameter d = " + num(d) + " must exceed the tip diameter " + num(tipD));
     const double hCone = (d - tipD) / 2 / std::tan(halfAngle);
-    const ToolLengths l = resolve(who, lengths, d, hCone);
+    const ToolLengths l = resolve(who, lengths, d, {hCone, "cone"});
     std::vector<ProfilePiece> pieces{ConePiece{0.0, hCone, tipD / 2, d / 2}};
     addShank(pieces, hCone, l.total, d / 2);
     return Tool(name("chamfer D" + num(d) + " tip " + num(tipD) + " A" + deg(halfAngle), l), std::move(pieces),
@@ -141,7 +156,7 @@ Tool taperBallMill(double ballD, double halfAngle, ToolLengths lengths) {
     // The flank touches the sphere where the sphere's normal is perpendicular to it.
     const double zT = rb * (1.0 - std::sin(halfAngle));
     const double rT = rb * std::cos(halfAngle);
-    const ToolLengths l = resolve(who, lengths, ballD, rb);
+    const ToolLengths l = resolve(who, lengths, ballD, {rb, "ball"});
     const double rTop = rT + (l.cutting - zT) * std::tan(halfAngle);
     std::vector<ProfilePiece> pieces{ArcPiece{0.0, zT, 0.0, rb, rb}};
     if (halfAngle == 0.0) {
@@ -159,7 +174,7 @@ Tool drill(double d, double pointAngle, ToolLengths lengths) {
     if (!std::isfinite(pointAngle) || !(pointAngle > 0.0) || !(pointAngle < kPi))
         bad(who, "point angle must lie in (0, 180) deg, got " + deg(pointAngle));
     const double hTip = d / 2 / std::tan(pointAngle / 2);
-    const ToolLengths l = resolve(who, lengths, d, hTip);
+    const ToolLengths l = resolve(who, lengths, d, {hTip, "point"});
     std::vector<ProfilePiece> pieces{ConePiece{0.0, hTip, 0.0, d / 2}};
     addShank(pieces, hTip, l.total, d / 2);
     return Tool(name("drill D" + num(d) + " P" + deg(pointAngle), l), std::move(pieces), l.cutting);

@@ -54,6 +54,9 @@ TEST_CASE("bad tool specs say what is wrong", "[tool][errors]") {
     CHECK_THAT(errorOf("apt:10,0,5"), Contains("7 values"));
     CHECK_THAT(errorOf("flat:6"), Contains("name=value"));
     CHECK_THAT(errorOf("ball:d=0"), Contains("diameter d must be positive"));
+    // Only total given: no complaint about a cutting length the spec never set.
+    CHECK(parseToolSpec("ball:d=6,total=15").cuttingLength() == 15);
+    CHECK_THAT(errorOf("drill:d=6,total=1"), Contains("total length 1 mm does not clear the 1.80258 mm point"));
 }
 
 TEST_CASE("tool spec numbers are decimal, as every option's are", "[tool][errors]") {

@@ -661,6 +661,27 @@ TEST_CASE("impossible tool parameters name the parameter and the value", "[tool]
     CHECK_THAT(errorOf([] { Tool("flat", {ConePiece{0, 5, 3, 3}}, 6); }), Contains("cutting length 6"));
 }
 
+TEST_CASE("a total length given alone caps the default cutting length, and must clear the tool's end", "[tool]") {
+    using Catch::Matchers::Contains;
+    // 3 d = 18 mm of flute would not fit a 15 mm tool: the flute is the whole of it.
+    const Tool ball = ballEndMill(6, {0, 15});
+    CHECK(ball.cuttingLength() == 15);
+    CHECK(ball.totalLength() == 15);
+    const Tool drill2 = drill(6, deg(118), {0, 2});
+    CHECK(drill2.cuttingLength() == 2);
+    CHECK(drill2.totalLength() == 2);
+    // A D6 118 deg point is 3 / tan(59 deg) = 1.80258 mm tall: 1 mm of tool does not clear it.
+    CHECK_THAT(errorOf([] { drill(6, deg(118), {0, 1}); }), Contains("total length 1 mm does not clear the 1.80258 mm point"));
+    CHECK_THAT(errorOf([] { ballEndMill(6, {0, 2}); }), Contains("total length 2 mm does not clear the 3 mm ball"));
+    // Both given, the user's cutting length stands, and the message compares the two.
+    CHECK_THAT(errorOf([] { ballEndMill(6, {20, 15}); }), Contains("total length 15 mm is shorter than the cutting length 20 mm"));
+    // A short flute under a tall cone: the default total clears the cone, 6 / tan(0.5 deg) = 687.526 mm,
+    // by 2 d, as it would clear the flute.
+    const Tool vbit = chamferMill(0, deg(0.5), 12, {5, 0});
+    CHECK(vbit.cuttingLength() == 5);
+    CHECK(vbit.totalLength() == Approx(6 / std::tan(deg(0.5)) + 24));
+}
+
 TEST_CASE("a tool's sizes, given or derived, stop at kMaxToolSizeMm, named with the cap", "[tool][errors]") {
     using Catch::Matchers::Contains;
     const std::string beyond = " mm is beyond the 10000 mm a tool may measure";

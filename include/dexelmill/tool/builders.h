@@ -9,8 +9,9 @@
 namespace dexelmill {
 
 /// @brief Cutting length and total length (stick-out) of a tool, in mm. Zero means "default":
-/// the cutting length defaults to 3 cutting diameters (at least 10 mm), the total length to the
-/// cutting length plus 2 diameters, neither beyond kMaxToolSizeMm.
+/// the cutting length defaults to 3 cutting diameters (at least 10 mm, and no more than a total
+/// length given), the total length to 2 diameters more than the cutting length or the shaped end
+/// (a ball, a drill's point), whichever is longer; neither beyond kMaxToolSizeMm.
 struct ToolLengths {
     double cutting = 0.0;
     double total = 0.0;
