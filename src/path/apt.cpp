@@ -13,6 +13,7 @@
 #include <optional>
 #include <sstream>
 
+#include "dexelmill/decimal.h"
 #include "dexelmill/error.h"
 #include "dexelmill/tool/builders.h"
 #include "path/detail/arc.h"
@@ -33,9 +34,6 @@ constexpr double kArcRadiusAbsTol = 0.02;
 constexpr double kArcRadiusRelTol = 0.001;
 /// Peck drilling: the rapid back into the hole stops this far above the previous depth (mm).
 constexpr double kPeckClearance = 0.254;
-/// CUTTER values are printed with about 6 significant digits: mismatches below this fraction of
-/// the diameter are rounding.
-constexpr double kCutterRounding = 1e-5;
 /// An i,j,k vector printed with about 6 significant digits has a length within a few 1e-6 of 1;
 /// one further off than this was not meant as a unit vector, and its normalisation is reported.
 constexpr double kUnitVectorRounding = 1e-5;
@@ -64,6 +62,7 @@ struct Statement {
 
 struct CutterSpec {
     std::vector<double> params;  ///< mm (angles in degrees)
+    double unit = 1.0;           ///< the length unit the values were printed in (mm)
     double cuttingLength = 0.0;
     SourceLocation where;
     bool cut = false;  ///< some move was made with it
@@ -444,11 +443,14 @@ private:
         CutterSpec spec;
         for (std::size_t k = 0; k < v.size(); ++k)
             spec.params.push_back((k == 4 || k == 5) ? v[k] : v[k] * scale_);
+        spec.unit = scale_;
         spec.where = loc(s);
         if (!(spec.params[0] > 0)) fail(s.args[0], "CUTTER diameter must be positive");
         if (v.size() >= 2 && !(v[1] >= 0)) fail(s.args[1], "CUTTER corner radius must not be negative");
-        if (v.size() == 2 && v[1] > 0.5 * v[0] + kCutterRounding * v[0])
-            fail(s.args[1], "CUTTER corner radius exceeds half the diameter");
+        if (v.size() == 2 && !roundsTo(v[1], 0.5 * v[0], 1.0) && v[1] > 0.5 * v[0]) {
+            const auto [r, halfD] = decimalsApart(v[1], 0.5 * v[0]);
+            fail(s.args[1], "CUTTER corner radius " + r + " exceeds half the diameter, " + halfD);
+        }
         if (v.size() == 7 && !(v[6] >= 0)) fail(s.args[6], "CUTTER height must not be negative");
         // After LOAD/TOOL, a CUTTER describes the loaded tool; otherwise the LOAD/TOOL that
         // follows claims it, or the next motion takes it (requireTool).
@@ -789,6 +791,30 @@ private:
         emit(clear, true, s);
     }
 
+    /// Whether two CUTTER values printed in `unit` (mm per unit, for lengths in mm) may be the
+    /// same value, each rounded as CL files print (cutterRounding).
+    static bool roundsTo(double a, double b, double unit) {
+        return std::abs(a - b) <= cutterRounding(a, unit) + cutterRounding(b, unit);
+    }
+
+    /// The ball end mill of diameter d a CUTTER describes with r = d/2 (and e = 0, f = r in the
+    /// 7-value form) to the digits CL files print; where the values differ from those, a note
+    /// names them, as they are replaced.
+    Tool ball(const CutterSpec& spec, ToolLengths lengths) {
+        const std::vector<double>& v = spec.params;
+        const double d = v[0], r = v[1];
+        const bool full = v.size() == 7;
+        if (r != d / 2 || (full && (v[2] != 0.0 || v[3] != r))) {
+            const auto [rText, halfD] = decimalsApart(r, d / 2);
+            std::string values = "r = " + rText + " mm";
+            if (full) values += ", e = " + detail::formatNumber(v[2]) + " mm, f = " + detail::formatNumber(v[3]) + " mm";
+            diags_.note(spec.where, "CUTTER with " + values + " describes, to the digits CL files print, a ball end "
+                                    "mill of diameter " + detail::formatNumber(d) + " mm (d/2 = " + halfD +
+                                    " mm): taken as that ball");
+        }
+        return ballEndMill(d, lengths);
+    }
+
     void buildTools() {
         for (auto& [n, spec] : cutters_) {
             const auto& v = spec.params;
@@ -798,7 +824,7 @@ private:
                 if (v.size() <= 2) {
                     ToolLengths lengths{spec.cuttingLength, 0.0};
                     if (r <= 0) out_.tools.insert_or_assign(n, flatEndMill(d, lengths));
-                    else if (std::abs(r - d / 2) < 1e-9) out_.tools.insert_or_assign(n, ballEndMill(d, lengths));
+                    else if (roundsTo(r, d / 2, spec.unit)) out_.tools.insert_or_assign(n, ball(spec, lengths));
                     else out_.tools.insert_or_assign(n, bullNoseEndMill(d, r, lengths));
                 } else {
                     // CUTTER/d,r,e,f,alpha,beta,h.
@@ -807,16 +833,23 @@ private:
                     const double alpha = v[4] * kPi / 180.0;
                     const double beta = v[5] * kPi / 180.0;
                     const double h = v[6];
-                    // CL files print 6 digits: a pointed tip (drill) whose flank misses the axis
-                    // by rounding alone is snapped onto it.
+                    // A pointed tip (drill) whose flank misses the axis by the rounding of
+                    // printed values alone (f against e tan(alpha)) is snapped onto it.
                     double f = f0;
                     if (r == 0.0 && alpha > 0.0) {
-                        const double pointed = e * std::tan(alpha);
-                        if (std::abs(f - pointed) < kCutterRounding * std::max(1.0, d)) f = pointed;
+                        const double pointed = e * std::tan(alpha), cosA = std::cos(alpha);
+                        const double printed = cutterRounding(f, spec.unit) + cutterRounding(e, spec.unit) * std::tan(alpha) +
+                                               e * cutterRounding(v[4], 1.0) * kPi / 180.0 / (cosA * cosA);
+                        if (std::abs(f - pointed) <= printed) f = pointed;
                     }
                     double cutting = spec.cuttingLength;
                     if (h > 0 && cutting > h) cutting = h;
-                    out_.tools.insert_or_assign(n, aptCutter(d, r, e, f, alpha, beta, h, cutting));
+                    // APT's ball end mill, CUTTER/d,d/2,0,d/2,0,0,h: the ball the short form makes.
+                    if (alpha == 0.0 && beta == 0.0 && roundsTo(e, 0.0, spec.unit) && roundsTo(r, d / 2, spec.unit) &&
+                        roundsTo(f, r, spec.unit) && h > d / 2)
+                        out_.tools.insert_or_assign(n, ball(spec, {cutting > 0.0 ? cutting : h, h}));
+                    else
+                        out_.tools.insert_or_assign(n, aptCutter(d, r, e, f, alpha, beta, h, cutting, spec.unit));
                 }
             } catch (const ParseError&) {
                 throw;

@@ -1,5 +1,6 @@
 #include "dexelmill/tool/builders.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -12,10 +13,6 @@ namespace dexelmill {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-/// CL files print CUTTER values with about six significant digits, so an APT profile that should
-/// meet the axis or a corner exactly may miss it by this much relative to the diameter.
-constexpr double kAptDigits = 1e-6;
 
 std::string num(double v) {
     std::ostringstream s;
@@ -116,7 +113,10 @@ Tool bullNoseEndMill(double d, double r, ToolLengths lengths) {
     const std::string who = "bull-nose end mill";
     requirePositiveLength(who, "diameter d", d);
     requirePositiveLength(who, "corner radius r", r);
-    if (r > d / 2 + tol::kLength) bad(who, "corner radius r = " + num(r) + " exceeds d/2 = " + num(d / 2));
+    if (r > d / 2 + tol::kLength) {
+        const auto [rText, halfD] = decimalsApart(r, d / 2);
+        bad(who, "corner radius r = " + rText + " exceeds d/2 = " + halfD);
+    }
     r = std::min(r, d / 2);
     const ToolLengths l = resolve(who, lengths, d, {r, "corner"});
     return Tool(name("bull D" + num(d) + " R" + num(r), l),
@@ -180,8 +180,17 @@ Tool drill(double d, double pointAngle, ToolLengths lengths) {
     return Tool(name("drill D" + num(d) + " P" + deg(pointAngle), l), std::move(pieces), l.cutting);
 }
 
+double cutterRounding(double value, double unit) {
+    // Half a unit in the sixth significant digit is at most this fraction of the value (1.00000
+    // to 9.99999: 5e-6 to 5e-7).
+    constexpr double kSixDigits = 5e-6;
+    // Half a unit in the fourth decimal place.
+    constexpr double kFourDecimals = 5e-5;
+    return std::max(kSixDigits * std::abs(value), kFourDecimals * unit);
+}
+
 Tool aptCutter(double d, double r, double e, double f, double alpha, double beta, double h,
-               double cuttingLength) {
+               double cuttingLength, double lengthUnit) {
     const std::string who = "CUTTER/" + num(d) + "," + num(r) + "," + num(e) + "," + num(f) + "," +
                             deg(alpha) + "," + deg(beta) + "," + num(h);
     requirePositiveLength(who, "d", d);
@@ -192,21 +201,37 @@ Tool aptCutter(double d, double r, double e, double f, double alpha, double beta
     requireAngle(who, "alpha", alpha, false);
     if (!std::isfinite(beta) || std::abs(beta) >= 0.5 * kPi)
         bad(who, "beta must lie in (-90, 90) deg, got " + deg(beta));
-    if (r > d / 2 + tol::kLength) bad(who, "r = " + num(r) + " exceeds d/2 = " + num(d / 2));
+    // Each relation among the values holds within what their printing may have moved it: the
+    // rounding of each value times the relation's slope in it (angles in radians).
+    const auto printed = [lengthUnit](double length) { return cutterRounding(length, lengthUnit); };
+    const auto printedAngle = [](double angle) { return cutterRounding(angle / kPi * 180.0, 1.0) * kPi / 180.0; };
+    if (r - d / 2 > printed(r) + printed(d) / 2) {
+        const auto [rText, halfD] = decimalsApart(r, d / 2);
+        bad(who, "r = " + rText + " exceeds d/2 = " + halfD);
+    }
     // The side flank touches the corner at T2; its radius there is the nominal d/2.
     const double r2 = e + r * std::cos(beta), z2 = f - r * std::sin(beta);
-    const double dTol = 1e-3 * std::max(1.0, d);
-    if (std::abs(r2 - d / 2) > dTol)
-        bad(who, "d/2 = " + num(d / 2) + " does not match the corner, e + r cos(beta) = " + num(r2));
+    if (std::abs(r2 - d / 2) > printed(d) / 2 + printed(e) + printed(r) + r * printedAngle(beta)) {
+        const auto [dText, cornerD] = decimalsApart(d, 2 * r2);
+        bad(who, "d = " + dText + " is not the diameter its corner makes, 2 (e + r cos(beta)) = " + cornerD);
+    }
     // The bottom flank at alpha touches the corner at T1 (the corner point itself when r = 0).
     const double r1 = e + r * std::sin(alpha), z1 = f - r * std::cos(alpha);
-    if (z1 < -kAptDigits * std::max(1.0, d)) bad(who, "the corner reaches below the tip: f - r cos(alpha) = " + num(z1));
+    const double z1Printed = printed(f) + printed(r) + r * printedAngle(alpha);
+    if (z1 < -z1Printed) bad(who, "the corner reaches below the tip: f - r cos(alpha) = " + num(z1));
     double rTip = r1;
-    if (alpha > 0.0) rTip = r1 - z1 / std::tan(alpha);
-    else if (z1 > kAptDigits * std::max(1.0, d))
-        bad(who, "with alpha = 0 the bottom is flat, so f must equal r, got f = " + num(f) + ", r = " + num(r));
-    if (rTip < -kAptDigits * std::max(1.0, d))
-        bad(who, "the bottom flank meets the axis " + num(-rTip * std::tan(alpha)) + " mm above the tip");
+    if (alpha > 0.0) {
+        rTip = r1 - z1 / std::tan(alpha);
+        // d rTip / d(e, r, f, alpha) = (1, 1 / sin(alpha), -1 / tan(alpha), z1 / sin(alpha)^2).
+        const double sinA = std::sin(alpha);
+        const double rTipPrinted = printed(e) + printed(r) / sinA + printed(f) / std::tan(alpha) +
+                                   std::abs(z1) * printedAngle(alpha) / (sinA * sinA);
+        if (rTip < -rTipPrinted)
+            bad(who, "the bottom flank meets the axis " + num(-rTip * std::tan(alpha)) + " mm above the tip");
+    } else if (z1 > z1Printed) {
+        const auto [fText, rText] = decimalsApart(f, r);
+        bad(who, "with alpha = 0 the bottom is flat, so f must equal r, got f = " + fText + ", r = " + rText);
+    }
     rTip = std::max(rTip, 0.0);
     if (!(h > std::max(z1, z2) + tol::kLength)) bad(who, "h = " + num(h) + " does not clear the corner");
     const double rTop = r2 + (h - z2) * std::tan(beta);

@@ -476,3 +476,69 @@ TEST_CASE("apt: two programs run in turn keep their own tools where they share a
     CHECK(same.tools.size() == 1);
     CHECK(same.path.moves[1].tool == 1);
 }
+
+namespace {
+
+/// The one tool a CUTTER loaded as tool 1 makes, and the program's diagnostics.
+Program cutterProgram(const std::string& cutter) {
+    return parseApt(cutter + "\nLOAD/TOOL,1\nFROM/0,0,10\nGOTO/10,0,10\nFINI\n", "c.apt");
+}
+
+}  // namespace
+
+TEST_CASE("apt: a ball CUTTER printed to six digits or four decimals is the ball of its diameter, with a note",
+          "[path][apt]") {
+    // A 5/32 inch ball in mm: d = 3.96875, r = 1.984375, printed 1.98438. r - d/2 = 5e-6 mm.
+    for (const char* cutter : {"CUTTER/3.96875,1.98438", "CUTTER/3.96875,1.98438,0,1.98438,0,0,50"}) {
+        INFO(cutter);
+        const Program p = cutterProgram(cutter);
+        REQUIRE(p.tools.count(1) == 1);
+        const Tool& t = p.tools.at(1);
+        CHECK(t.cuttingRadius() == 3.96875 / 2);
+        CHECK(t.radiusAt(0.0) == 0.0);
+        CHECK(t.radiusAt(3.96875 / 2) == 3.96875 / 2);
+        CHECK(hasDiagnostic(p, "r = 1.98438 mm"));
+        CHECK(hasDiagnostic(p, "ball end mill of diameter 3.96875 mm (d/2 = 1.984375 mm)"));
+    }
+    CHECK(hasDiagnostic(cutterProgram("CUTTER/3.96875,1.98438,0,1.98438,0,0,50"), "e = 0 mm, f = 1.98438 mm"));
+    // The same ball printed to four decimals in inches: d/2 = 0.07815 and r = 0.0781 inch are
+    // each within half a unit of the fourth decimal of 5/64 = 0.078125.
+    const Program inch = cutterProgram("UNITS/INCHES\nCUTTER/0.1563,0.0781");
+    REQUIRE(inch.tools.count(1) == 1);
+    CHECK(inch.tools.at(1).cuttingRadius() == Approx(0.1563 * 25.4 / 2));
+    CHECK(inch.tools.at(1).radiusAt(0.0) == 0.0);
+    // An exact ball needs no note; a corner radius short of d/2 by more than the digits is a bull nose.
+    const Program exact = cutterProgram("CUTTER/6,3");
+    CHECK(exact.tools.at(1).radiusAt(0.0) == 0.0);
+    CHECK_FALSE(hasDiagnostic(exact, "ball end mill"));
+    const Program bull = cutterProgram("CUTTER/6,2.999");
+    CHECK(bull.tools.at(1).radiusAt(0.0) == Approx(0.001));
+    CHECK_FALSE(hasDiagnostic(bull, "ball end mill"));
+    // One past the digits is refused, and its message tells the two numbers apart.
+    const std::optional<ParseError> e = errorOf("CUTTER/6,3.0002\nLOAD/TOOL,1\n", "r.apt");
+    REQUIRE(e);
+    CHECK_THAT(e->message(), Catch::Contains("corner radius 3.0002 exceeds half the diameter, 3"));
+}
+
+TEST_CASE("apt: a CUTTER whose d is not its corner's diameter beyond the printed digits is refused, naming both",
+          "[path][apt][errors]") {
+    // d/2 = 50.05 but e + r = 50: 0.05 mm, where six digits of each value allow 5e-4 mm.
+    for (const auto& [cutter, says] :
+         {std::pair<const char*, const char*>{"CUTTER/100.1,2,48,2,0,0,50", "d = 100.1 is not the diameter its corner makes, 2 (e + r cos(beta)) = 100"},
+          {"CUTTER/10.02,2,3,2,0,0,50", "d = 10.02 is not the diameter its corner makes, 2 (e + r cos(beta)) = 10"},
+          {"CUTTER/6.352,0.7937,2.3812,0.7937,0,0,50", "d = 6.352 is not the diameter its corner makes"}}) {
+        INFO(cutter);
+        const std::optional<ParseError> e = errorOf(std::string(cutter) + "\nLOAD/TOOL,1\n", "d.apt");
+        REQUIRE(e);
+        CHECK(e->where().line == 1);
+        CHECK_THAT(e->message(), Catch::Contains("CUTTER describes no real tool") && Catch::Contains(says));
+    }
+    // A 1/4 inch bull nose with a 1/32 inch corner printed to four decimals, in mm (6.35, 0.79375,
+    // 2.38125 rounded) and in inches: e + r misses d/2 by 1e-4 of the unit, within the digits.
+    for (const char* cutter : {"CUTTER/6.35,0.7937,2.3812,0.7937,0,0,50", "UNITS/INCHES\nCUTTER/0.25,0.0313,0.0938,0.0313,0,0,2"}) {
+        INFO(cutter);
+        const Program p = cutterProgram(cutter);
+        REQUIRE(p.tools.count(1) == 1);
+    }
+    CHECK(cutterProgram("CUTTER/6.35,0.7937,2.3812,0.7937,0,0,50").tools.at(1).cuttingRadius() == Approx(3.1749));
+}

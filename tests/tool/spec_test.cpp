@@ -52,6 +52,7 @@ TEST_CASE("bad tool specs say what is wrong", "[tool][errors]") {
     CHECK_THAT(errorOf("bull:d=10,r=6"), Contains("corner radius r = 6"));
     CHECK_THAT(errorOf("saw:d=100"), Contains("unknown kind 'saw'"));
     CHECK_THAT(errorOf("apt:10,0,5"), Contains("7 values"));
+    CHECK_THAT(errorOf("apt:100.1,2,48,2,0,0,50"), Contains("d = 100.1 is not the diameter its corner makes"));
     CHECK_THAT(errorOf("flat:6"), Contains("name=value"));
     CHECK_THAT(errorOf("ball:d=0"), Contains("diameter d must be positive"));
     // Only total given: no complaint about a cutting length the spec never set.

@@ -651,7 +651,8 @@ TEST_CASE("impossible tool parameters name the parameter and the value", "[tool]
     CHECK_THAT(errorOf([] { aptCutter(10, 6, 0, 6, 0, 0, 50); }), Contains("r = 6") && Contains("d/2 = 5"));
     CHECK_THAT(errorOf([] { aptCutter(10, 0, 5, 0, deg(-10), 0, 50); }), Contains("alpha") && Contains("-10"));
     CHECK_THAT(errorOf([] { aptCutter(10, 2, 3, 3, 0, 0, 50); }), Contains("f must equal r"));
-    CHECK_THAT(errorOf([] { aptCutter(10, 0, 4, 0, 0, 0, 50); }), Contains("d/2 = 5") && Contains("4"));
+    CHECK_THAT(errorOf([] { aptCutter(10, 0, 4, 0, 0, 0, 50); }),
+               Contains("d = 10 is not the diameter its corner makes, 2 (e + r cos(beta)) = 8"));
     CHECK_THAT(errorOf([] { aptCutter(10, 0, 5, 0, 0, 0, 0); }), Contains("h must be positive"));
     CHECK_THAT(errorOf([] { aptCutter(10, 0, 5, 20, deg(30), 0, 50); }), Contains("meets the axis"));
     CHECK_THAT(errorOf([] { Tool("gap", {ConePiece{0, 5, 3, 3}, ConePiece{6, 9, 3, 3}}, 9); }),
@@ -659,6 +660,24 @@ TEST_CASE("impossible tool parameters name the parameter and the value", "[tool]
     CHECK_THAT(errorOf([] { Tool("neg", {ConePiece{0, 5, 3, -1}}, 5); }), Contains("negative radius"));
     CHECK_THAT(errorOf([] { Tool("none", {}, 5); }), Contains("no pieces"));
     CHECK_THAT(errorOf([] { Tool("flat", {ConePiece{0, 5, 3, 3}}, 6); }), Contains("cutting length 6"));
+}
+
+TEST_CASE("APT relations hold within the rounding of printed values, and messages tell the values apart", "[tool]") {
+    using Catch::Matchers::Contains;
+    // d/2 = 50.05 against e + r = 50: beyond six digits of each (5e-4 mm all told), refused.
+    CHECK_THAT(errorOf([] { aptCutter(100.1, 2, 48, 2, 0, 0, 50); }),
+               Contains("d = 100.1 is not the diameter its corner makes, 2 (e + r cos(beta)) = 100"));
+    // r = d/2 + 5e-6 (1.984375 printed 1.98438) is within them: the profile is the one r, e, f give.
+    const Tool ball = aptCutter(3.96875, 1.98438, 0, 1.98438, 0, 0, 50);
+    CHECK(ball.radiusAt(0.0) == 0.0);
+    CHECK(ball.cuttingRadius() == 1.98438);
+    // Four decimals of an inch: 0.0001 inch = 2.54e-3 mm off in d/2, within 3 times 1.27e-3 mm.
+    CHECK(aptCutter(6.35, 0.0313 * 25.4, 0.0938 * 25.4, 0.0313 * 25.4, 0, 0, 50, 0.0, 25.4).cuttingRadius() ==
+          Approx(0.1251 * 25.4));
+    CHECK_THAT(errorOf([] { aptCutter(6.35, 0.0313 * 25.4, 0.0938 * 25.4, 0.0313 * 25.4, 0, 0, 50); }),
+               Contains("is not the diameter its corner makes"));
+    // A named bull nose takes exact values: 1e-7 over d/2 is not rounding, and the message shows it.
+    CHECK_THAT(errorOf([] { bullNoseEndMill(6, 3.0000001); }), Contains("corner radius r = 3.0000001 exceeds d/2 = 3"));
 }
 
 TEST_CASE("a total length given alone caps the default cutting length, and must clear the tool's end", "[tool]") {

@@ -35,12 +35,23 @@ Tool taperBallMill(double ballD, double halfAngle, ToolLengths lengths = {});
 /// @brief Twist drill of diameter d with included point angle (e.g. 118 degrees, in radians).
 Tool drill(double d, double pointAngle, ToolLengths lengths = {});
 
+/// @brief How far a CUTTER value may lie from the one meant, as CL files print it: to six
+/// significant digits or four decimal places of its unit, whichever is coarser (1.984375 mm is
+/// printed 1.98438; Autodesk's short APT format prints four decimals).
+/// @param unit the unit the value was printed in, in the value's units: 1 for a length in mm or an
+/// angle in degrees, 25.4 for a length in mm printed in inches.
+double cutterRounding(double value, double unit);
+
 /// @brief The APT `CUTTER/d, r, e, f, alpha, beta, h` cutter: corner circle of radius r centred
 /// (e, f) in the (radial, axial) plane, bottom flank at alpha above the horizontal, side flank at
 /// beta from the vertical, height h. With r = 0 the corner is the sharp point (e, f) and the
-/// bottom flank runs through it, leaving a flat tip where it meets z = 0 (chamfer mills).
+/// bottom flank runs through it, leaving a flat tip where it meets z = 0 (chamfer mills). The
+/// relations the values must meet (d/2 = e + r cos(beta), f = r where alpha = 0, r <= d/2, the
+/// corner above the tip) need hold only within the rounding of printed values (cutterRounding);
+/// the profile is built from r, e, f, alpha and beta, so d is the one value it does not use.
 /// @param cuttingLength flute length; 0 means all of h.
+/// @param lengthUnit the length unit the values were printed in, in mm (25.4 for inches).
 Tool aptCutter(double d, double r, double e, double f, double alpha, double beta, double h,
-               double cuttingLength = 0.0);
+               double cuttingLength = 0.0, double lengthUnit = 1.0);
 
 }  // namespace dexelmill
