@@ -27,11 +27,6 @@ Vec3 stretchPoint(const Lattice& lattice, const DexelStretch& s, double t) {
 
 }  // namespace
 
-double endRounding(const Lattice& lattice) {
-    const double longest = std::max({lattice.n[0], lattice.n[1], lattice.n[2]}) * lattice.h;
-    return std::ldexp(std::max(longest, 1.0), -23);
-}
-
 Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, StretchSpan stretches,
                      double eps) {
     // An interval [t0, t1] of one stretch's coordinate, with the depths at its ends and the

@@ -1,5 +1,6 @@
 #include "dexelmill/stock/lattice.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -47,6 +48,11 @@ std::array<int, 2> Lattice::indexRange(Axis a, double lo, double hi) const {
     const double f = std::min(std::max(first, 0.0), double(n[ax]));
     const double l = std::max(std::min(last, double(n[ax] - 1)), -1.0);
     return {int(f), int(l)};
+}
+
+double endRounding(const Lattice& lattice) {
+    const double longest = std::max({lattice.n[0], lattice.n[1], lattice.n[2]}) * lattice.h;
+    return std::ldexp(std::max(longest, 1.0), -23);
 }
 
 }  // namespace dexelmill

@@ -52,4 +52,9 @@ struct Lattice {
     std::array<int, 2> indexRange(Axis a, double lo, double hi) const;
 };
 
+/// @brief How far a dexel end, stored as a float along the dexel from the lattice's origin, may lie
+/// from the surface point it rounds (mm): half a float step at the lattice's longest side is 2^-24
+/// of it; twice that covers the double arithmetic that found the point.
+double endRounding(const Lattice& lattice);
+
 }  // namespace dexelmill

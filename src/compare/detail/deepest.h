@@ -30,11 +30,6 @@ struct Deepest {
     Vec3 point{0.0};
 };
 
-/// How far a dexel end, stored as a float along the dexel from the lattice's origin, may lie from
-/// the surface point it rounds (mm): half a float step at the lattice's longest side is 2^-24 of
-/// it; twice that covers the double arithmetic that found the point.
-double endRounding(const Lattice& lattice);
-
 /// The point of `stretches` farthest from the mesh, within `eps` (mm) of the farthest: its
 /// distance is that of a real point, and no point lies farther than depth + eps.
 Deepest deepestPoint(const MeshDistance& distance, const Lattice& lattice, StretchSpan stretches,
