@@ -36,11 +36,20 @@ struct TileMoveStats {
     double removed = 0.0, shank = 0.0, design = 0.0;
 };
 
-/// What a tile needs to watch the design: its dexels' design material, and the depth below which
-/// a stretch is not kept.
+/// What a tile needs to watch the design: its dexels' design material, the depth below which
+/// a stretch is not kept, and the length at or below which it is not kept either (`sliver`).
 struct DesignWatch {
     const DexelTile* tile = nullptr;
     double depth = 0.0;
+    /// Twice the ends' rounding (endRounding, L 2^-23 for a lattice whose longest side is L mm):
+    /// a stretch whose true ends coincide is stored at most this long. So is what a move removes
+    /// along a line its sweep only touches. The tool's side tangent to a dexel meets it in a point,
+    /// which double arithmetic makes a chord of about sqrt(r L) 2^-25 mm for a tool of radius r
+    /// (r^2 - d^2 off by a few r L 2^-53), at most L 2^-23 for any r up to 16 L, and float storage
+    /// adds at most that again; a move retracing an earlier one's surface stores the same end or
+    /// the next float. Such a stretch removes no design material, and a move is named for the
+    /// material it removes.
+    double sliver = 0.0;
     /// The dexels' length, and whether the design runs on past their start and their end (the
     /// cast cut it off at the lattice's box there).
     float length = 0.0f;
@@ -48,9 +57,10 @@ struct DesignWatch {
 };
 
 /// The material of `segs` inside [lo, hi] that the design's segments keep: returns its length, and
-/// appends to `out` (with only the dexel's [lo, hi] filled in) the pieces where the design's
-/// segment reaches farther than `watch.depth` beyond some point of the piece on both sides. A
-/// design segment at an open end of the dexel (DesignWatch) reaches without bound that way.
+/// appends to `out` (with only the dexel's [lo, hi] filled in) the pieces longer than
+/// `watch.sliver` where the design's segment reaches farther than `watch.depth` beyond some point
+/// of the piece on both sides. A design segment at an open end of the dexel (DesignWatch) reaches
+/// without bound that way.
 double designOverlap(const SegmentSpan& segs, const DesignWatch& watch, const SegmentSpan& design, float lo, float hi,
                      const DesignStretch& at, std::vector<DesignStretch>& out) {
     constexpr double kUnbounded = std::numeric_limits<double>::infinity();
@@ -77,7 +87,7 @@ double designOverlap(const SegmentSpan& segs, const DesignWatch& watch, const Se
             } else if (std::isfinite(dlo)) {
                 reach = double(q) - dlo;
             }
-            if (reach > watch.depth) {
+            if (reach > watch.depth && double(q) - double(p) > watch.sliver) {
                 DesignStretch piece = at;
                 piece.lo = p;
                 piece.hi = q;
@@ -456,6 +466,7 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
         if (options.design) {
             w.tile = &options.design->family(axisFromIndex(s.family)).tile(s.tb, s.tc);
             w.depth = options.designDepth;
+            w.sliver = 2.0 * endRounding(lattice);
             const int a = s.family;
             const double len = lattice.n[std::size_t(a)] * lattice.h;
             w.length = float(len);

@@ -181,6 +181,26 @@ TEST_CASE("gouges: named by their moves after a move swept in pieces", "[compare
     fs::remove_all(dir);
 }
 
+TEST_CASE("gouges: a move that only touches a dexel line at its side is no gouge", "[compare][design][job]") {
+    const fs::path dir = scratch("tangent");
+    const std::string design = writeStl(dir / "l.stl", prismFacets(lShape(), -1.0, 41.0));
+    // Line 4 plunges a D10 at (35, 20.125) to z = -5.6, 0.5 mm into the floor at -5.1: a gouge.
+    // Its sides at y = 15.125 and 25.125 lie on x dexels (y = (i + 1/2) h, h = 0.25), and those at
+    // z = -5.375 lie 0.275 mm inside the floor. Line 5 moves back over the plunge's own path, and
+    // line 6 retracts out of the hole: each touches those dexels at a single point (x = 35) and
+    // removes nothing the plunge left. Line 8 plunges at y = 20.1, off the lattice: a second gouge.
+    const std::string program =
+        "G21 G90\nT1 M6\nG0 X35 Y20.125 Z5\nG1 Z-5.6 F500\nG1 Z-5.3\nG0 Z5\n"
+        "G0 Y10.1\nG1 Z-5.35\nG0 Z5\nM30\n";
+    const SimulateReport r = simulate(job(program, design, 10.0));
+    REQUIRE(r.gouges.size() == 2);
+    CHECK(r.gouges[0].where.line == 4);
+    CHECK(r.gouges[0].depthMm == Approx(0.5).margin(1e-3));
+    CHECK(r.gouges[1].where.line == 8);
+    CHECK(r.gouges[1].depthMm == Approx(0.25).margin(1e-3));
+    fs::remove_all(dir);
+}
+
 TEST_CASE("gouges: a design reaching past the stock on every side", "[compare][design][job]") {
     const fs::path dir = scratch("beyond");
     // The design fills x and y -5..45 and z -15..5, around the whole stock. A pass at z = -0.005
