@@ -291,7 +291,8 @@ std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, 
     groups.push_back(stretches.size());
     const double eps = depthBound(tolerance, lattice.h);
     // Each stretch lies within its reach of the design's surface: the ends of the design's segment
-    // along the dexel.
+    // along the dexel. Its own ends are floats, each within `rounding` of the end of the cut it
+    // stores, so its points' depths are within `rounding` of those of the cut along the dexel.
     const double rounding = endRounding(lattice);
     std::vector<DexelStretch> lines(stretches.size());
     for (std::size_t i = 0; i < stretches.size(); ++i) {
@@ -303,7 +304,8 @@ std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, 
     const Axis measure = design.dexels.measuringFamily();
     std::vector<Gouge> gouges;
     for (std::size_t g = 0; g + 1 < groups.size(); ++g) {
-        if (!(deepest[g].depth > tolerance)) continue;
+        // A cut at most `tolerance` deep has stretches at most `rounding` deeper.
+        if (!(deepest[g].depth > tolerance + rounding)) continue;
         Gouge gouge;
         gouge.move = stretches[groups[g]].move;
         gouge.depth = deepest[g].depth;

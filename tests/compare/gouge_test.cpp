@@ -286,6 +286,27 @@ TEST_CASE("gouges: shallower than the tolerance is not reported", "[compare][des
     fs::remove_all(dir);
 }
 
+TEST_CASE("gouges: a cut exactly as deep as the tolerance is not reported", "[compare][design][job]") {
+    const fs::path dir = scratch("at_tolerance");
+    // The floor at z = -5, exact in float and double. A pass at z = -5.01 cuts 0.01 mm into it, the
+    // tolerance (the double -5.01 lies a hair above, so not deeper); its z dexels store the cut's
+    // end as a float 4.99 mm above the stock's bottom, 2.3e-7 mm lower than the cut.
+    const std::string design =
+        writeStl(dir / "l.stl", prismFacets({{0, -10}, {40, -10}, {40, -5}, {30, -5}, {30, 0}, {0, 0}}, -1, 41));
+    auto pass = [](const char* z) {
+        return std::string("G21 G90\nT1 M6\nG0 X35 Y-10 Z5\nG1 Z") + z + " F500\nG1 Y50\nG0 Z5\nM30\n";
+    };
+    CHECK(simulate(job(pass("-5.01"), design, 10.0)).gouges.empty());
+    // A thousandth of a millimetre deeper is a gouge, its depth that of the stored end: within a
+    // float step at the stock's longest side, 40 mm, of the cut's.
+    const SimulateReport r = simulate(job(pass("-5.011"), design, 10.0));
+    REQUIRE(r.gouges.size() == 1);
+    CHECK(r.gouges[0].where.line == 5);
+    const double floatStep = std::ldexp(40.0, -23);
+    CHECK(r.gouges[0].depthMm == Approx(0.011).margin(floatStep));
+    fs::remove_all(dir);
+}
+
 TEST_CASE("gouges: the same for any thread count, and written as CSV", "[compare][design][job]") {
     const fs::path dir = scratch("threads");
     const std::string design = writeStl(dir / "l.stl", prismFacets(lShape(), -1.0, 41.0));

@@ -118,9 +118,12 @@ double depthBound(double tolerance, double h);
 /// Depths are exact distances to the design's triangles (MeshDistance). Along a stretch the depth
 /// changes by at most the distance moved, and the distance to one triangle is convex along a
 /// line, so a branch and bound over pieces of the stretches finds a point within
-/// depthBound(tolerance, h) of the deepest one. So every move that cuts deeper than
-/// tolerance + depthBound is reported, none that
-/// cuts at most `tolerance` deep is, and the reported depth is that of a real point of the cut.
+/// depthBound(tolerance, h) of the deepest one. A stretch's ends are the floats the stock stores,
+/// each within endRounding(lattice) of the end of the cut (5e-6 mm on a 40 mm stock), so a move is
+/// kept when that point lies deeper than tolerance + endRounding. So every move that cuts deeper
+/// than tolerance + depthBound + 2 endRounding along its dexels is reported, none that cuts at
+/// most `tolerance` deep is, and the reported depth is that of a point of its stretches, within
+/// endRounding of a real point of the cut.
 std::vector<Gouge> findGouges(const DesignPart& design, const Lattice& lattice, const CutResult& cut, double tolerance);
 
 }  // namespace dexelmill
