@@ -388,8 +388,8 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
         ->check(numberCheck(true))
         ->capture_default_str();
     c->add_option("--gouge-csv", a.gougeCsv,
-                  "The gouges as GOUGES.csv, deepest first: move, file, line, tool, depth_mm, volume_mm3,\n"
-                  "x, y, z, rapid (needs --design)");
+                  "The gouges as GOUGES.csv, deepest first: move (counted from 1, as on the console and in\n"
+                  "the report), file, line, tool, depth_mm, volume_mm3, x, y, z, rapid (needs --design)");
     c->add_option("--deviation-ply", a.deviationPly,
                   "The part's mesh as DEVIATION.ply, each vertex coloured by its signed distance to the\n"
                   "design (red: inside it, a gouge; green: within tolerance; blue: excess) and carrying\n"
@@ -428,7 +428,7 @@ int runSimulate(const SimulateArgs& args) {
         for (const ReportCollision& c : r.collisions) {
             if (shown++ == kPrintedDiagnostics) break;
             std::fprintf(stderr, "%s: collision: %s move %zu removes %.4g mm^3\n", where(c.where).c_str(),
-                         c.kind.c_str(), c.move + 1, c.volumeMm3);
+                         c.kind.c_str(), c.move, c.volumeMm3);
         }
         if (r.collisions.size() > kPrintedDiagnostics)
             std::cerr << "dexelmill: " << r.collisions.size() - kPrintedDiagnostics << " more collisions\n";
@@ -436,7 +436,7 @@ int runSimulate(const SimulateArgs& args) {
         for (const ReportGouge& g : r.gouges) {
             if (shown++ == kPrintedDiagnostics) break;
             std::fprintf(stderr, "%s: gouge: %smove %zu (T%d) cuts %.4g mm into the design, %.4g mm^3, deepest at (%.4f, %.4f, %.4f)\n",
-                         where(g.where).c_str(), g.rapid ? "rapid " : "", g.move + 1, g.tool,
+                         where(g.where).c_str(), g.rapid ? "rapid " : "", g.move, g.tool,
                          g.depthMm, g.volumeMm3, g.point.x, g.point.y, g.point.z);
         }
         if (r.gouges.size() > kPrintedDiagnostics)

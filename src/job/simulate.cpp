@@ -614,7 +614,7 @@ Simulation runStages(const SimulateOptions& o) {
             const Move& mv = program.path.moves[g.move];
             const SourceLocation at = program.path.where(mv.source);
             report.gouges.push_back(
-                {g.move, {at.file, at.line}, mv.tool, mv.rapid, g.depth, g.volume, g.point});
+                {ToolPath::moveNumber(g.move), {at.file, at.line}, mv.tool, mv.rapid, g.depth, g.volume, g.point});
         }
         std::stable_sort(report.gouges.begin(), report.gouges.end(),
                          [](const ReportGouge& a, const ReportGouge& b) { return a.depthMm > b.depthMm; });
@@ -635,7 +635,7 @@ Simulation runStages(const SimulateOptions& o) {
     }
     for (const CutCollision& c : cut.collisions) {
         const SourceLocation at = program.path.where(c.source);
-        report.collisions.push_back({c.move, {at.file, at.line}, c.kind == CollisionKind::Rapid ? "rapid" : "shank",
+        report.collisions.push_back({ToolPath::moveNumber(c.move), {at.file, at.line}, c.kind == CollisionKind::Rapid ? "rapid" : "shank",
                                      c.volume});
     }
     for (int a = 0; a < 3; ++a)

@@ -321,7 +321,7 @@ std::map<int, ToolRegions> toolRegions(const ToolPath& path, const ToolTable& to
         if (regions.count(mv.tool)) continue;
         const auto it = tools.find(mv.tool);
         if (it == tools.end())
-            throw Error(path.where(mv.source).str() + ": move " + std::to_string(i + 1) + " uses tool T" +
+            throw Error(path.where(mv.source).str() + ": move " + std::to_string(ToolPath::moveNumber(i)) + " uses tool T" +
                         std::to_string(mv.tool) + ", which is not in the tool table");
         const Tool& t = it->second;
         ToolRegions r;

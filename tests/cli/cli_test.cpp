@@ -14,6 +14,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <nlohmann/json.hpp>
+
 #include "support/scratch.h"
 
 using Catch::Matchers::Contains;
@@ -56,6 +58,24 @@ public:
 private:
     fs::path dir_;
 };
+
+/// The box [lo, hi] as ASCII STL, two triangles a face, facing out.
+std::string boxStl(const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+    std::string s = "solid box\n";
+    auto corner = [&](int bits) {
+        return std::to_string((bits & 1) ? hi[0] : lo[0]) + " " + std::to_string((bits & 2) ? hi[1] : lo[1]) + " " +
+               std::to_string((bits & 4) ? hi[2] : lo[2]);
+    };
+    // Each face's corners counter-clockwise seen from outside (bit 0: x, 1: y, 2: z high).
+    for (const std::array<int, 4>& q : {std::array<int, 4>{0, 4, 6, 2}, std::array<int, 4>{1, 3, 7, 5},
+                                        std::array<int, 4>{0, 1, 5, 4}, std::array<int, 4>{2, 6, 7, 3},
+                                        std::array<int, 4>{0, 2, 3, 1}, std::array<int, 4>{4, 5, 7, 6}})
+        for (const std::array<int, 3>& t : {std::array<int, 3>{0, 1, 2}, std::array<int, 3>{0, 2, 3}})
+            s += " facet normal 0 0 0\n  outer loop\n   vertex " + corner(q[std::size_t(t[0])]) + "\n   vertex " +
+                 corner(q[std::size_t(t[1])]) + "\n   vertex " + corner(q[std::size_t(t[2])]) +
+                 "\n  endloop\n endfacet\n";
+    return s + "endsolid box\n";
+}
 
 }  // namespace
 
@@ -549,6 +569,33 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     const Run tooCoarse = cli("simulate turn.apt --stock box:-10,-10,-10,50,10,0 --turn-tolerance 1e300 --quiet");
     CHECK(tooCoarse.code == 2);
     CHECK_THAT(tooCoarse.err, Contains("--turn-tolerance: 1e+300 mm") && Contains("0.1 mm or less"));
+}
+
+TEST_CASE("a gouge and a collision carry one move number on the console, in the CSV and the report", "[cli]") {
+    const Cli cli("move_numbers");
+    // The design is the stock's lower half, z -10 .. -5. Line 3 only sets the start position; the
+    // moves are lines 4 to 8, counted from 1: line 7, a rapid through the stock at z = -6, is
+    // move 4, and cuts 1 mm into the design.
+    cli.file("design.stl", boxStl({0, 0, -10}, {40, 30, -5}));
+    cli.file("slot.ngc", "G21 G90\nT1 M6\nG0 X-5 Y15 Z5\nG1 Z-2 F300\nG1 X45\nG0 Z-6\nG0 X-5\nG0 Z5\nM30\n");
+    const Run r = cli("simulate slot.ngc --stock box:0,0,-10,40,30,0 --tool 1=flat:d=6 --resolution 0.5 "
+                      "--design design.stl --gouge-csv gouges.csv --report report.json");
+    REQUIRE(r.code == 0);
+    CHECK_THAT(r.err, Contains("slot.ngc:7: gouge: rapid move 4 (T1) cuts 1 mm") &&
+                          Contains("slot.ngc:7: collision: rapid move 4 removes"));
+    const std::string csv = slurp(cli.dir() / "gouges.csv");
+    CHECK_THAT(csv, StartsWith("move,file,line,") && Contains("\n4,\"slot.ngc\",7,1,1.000000,"));
+    const nlohmann::json j = nlohmann::json::parse(slurp(cli.dir() / "report.json"));
+    REQUIRE(j["design"]["gouges"].size() == 1);
+    CHECK(j["design"]["gouges"][0]["move"] == 4);
+    bool rapid = false;
+    for (const auto& c : j["collisions"])
+        if (c["kind"] == "rapid") {
+            rapid = true;
+            CHECK(c["move"] == 4);
+            CHECK(c["line"] == 7);
+        }
+    CHECK(rapid);
 }
 
 TEST_CASE("a study writes its table, CSV, plot and deviation meshes", "[cli][study]") {

@@ -130,7 +130,7 @@ struct ReportLocation {
 
 /// @brief A collision found while cutting.
 struct ReportCollision {
-    std::size_t move = 0;  ///< 0-based index into the program's moves
+    std::size_t move = 0;  ///< the move's number: the program's moves counted from 1 (ToolPath::moveNumber)
     ReportLocation where;
     std::string kind;  ///< "rapid" (a rapid move removed material) or "shank" (above the flutes)
     double volumeMm3 = 0.0;
@@ -138,7 +138,7 @@ struct ReportCollision {
 
 /// @brief A move that cut into the design (Gouge), with its place and tool.
 struct ReportGouge {
-    std::size_t move = 0;  ///< 0-based index into the program's moves
+    std::size_t move = 0;  ///< the move's number: the program's moves counted from 1 (ToolPath::moveNumber)
     ReportLocation where;
     int tool = 0;
     bool rapid = false;

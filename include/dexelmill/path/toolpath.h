@@ -92,6 +92,9 @@ struct ToolPath {
     std::vector<Move> moves;
     std::vector<ToolChange> toolChanges;
 
+    /// @brief The number every output gives moves[i]: the moves counted from 1 in the order the
+    /// program makes them, as a person reads "move 1".
+    static std::size_t moveNumber(std::size_t i) { return i + 1; }
     /// @brief "file:line" of a move's source.
     SourceLocation where(const SourceRef& ref) const {
         SourceLocation loc;
