@@ -170,13 +170,15 @@ TEST_CASE("memory: a cut part whose surface will not fit stops before the rebuil
 }
 
 TEST_CASE("memory: a program whose moves will not fit stops in the reader, which says why", "[job][memory][errors]") {
-    // A loop of 100,000 moves (G-code) and 20,000 GOTOs (APT), against a budget that leaves room
-    // for a few thousand moves.
+    // A loop of 200,000 moves (G-code) and 60,000 GOTOs (APT), against a budget that leaves room
+    // for some ten thousand moves (3 x sizeof(Move), over 400 bytes, each). The room is 8 MiB, more
+    // than the job's threads take on starting (under a sanitizer too): the budget must not be spent
+    // before the readers start, which is an error of its own.
     const std::map<std::string, std::string> files = {
         {"loop.ngc", "G21 G90\nG0 X0 Y0 Z5\no1 repeat [100000]\nG1 X1\nG1 X0\no1 endrepeat\nM2\n"},
         {"long.apt", [] {
              std::string t = "CUTTER/6\nFROM/0,0,5\n";
-             for (int i = 0; i < 20000; ++i) t += "GOTO/" + std::to_string(i % 7) + ",0,-1\n";
+             for (int i = 0; i < 60000; ++i) t += "GOTO/" + std::to_string(i % 7) + ",0,-1\n";
              return t;
          }()},
     };
@@ -192,7 +194,7 @@ TEST_CASE("memory: a program whose moves will not fit stops in the reader, which
         o.stockBox = Box{Vec3(-10.0), Vec3(10.0)};
         o.resolution = 1.0;
         o.defaultTool = flatEndMill(6.0);
-        o.maxMemoryBytes = residentBytes() + (std::size_t(1) << 20);
+        o.maxMemoryBytes = residentBytes() + (std::size_t(8) << 20);
         CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains(input + ":") &&
                                                 Catch::Matchers::Contains("program makes more than") &&
                                                 Catch::Matchers::Contains("would not fit in the memory this job may use") &&
