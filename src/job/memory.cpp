@@ -118,7 +118,7 @@ std::size_t bytesInUse(const MemoryBudget& budget) {
 }
 
 MemoryBudget memoryBudget(std::size_t maxBytes) {
-    MemoryBudget b{std::numeric_limits<std::size_t>::max(), "no limit the system states"};
+    MemoryBudget b{std::numeric_limits<std::size_t>::max(), "no limit the system states", false, false, {}};
     auto take = [&](std::size_t bytes, const char* source, bool addressSpace = false) {
         if (bytes > 0 && bytes < b.bytes) b = {bytes, source, addressSpace, false, {}};
     };
@@ -139,7 +139,7 @@ MemoryBudget memoryBudget(std::size_t maxBytes) {
                    formatBytes(double(enforced.bytes));
         return cut;
     }
-    MemoryBudget given{maxBytes, "--max-memory"};
+    MemoryBudget given{maxBytes, "--max-memory", false, false, {}};
     if (maxBytes > b.bytes)
         given.note = asked + " is more than " + b.source + ", " + formatBytes(double(b.bytes)) +
                      " now: the job may run out of memory or swap";

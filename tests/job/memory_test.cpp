@@ -59,7 +59,7 @@ TEST_CASE("memory: a --max-memory beyond what the system gives is named, and cut
     }
     // A budget well within what the system gives says nothing.
     CHECK(memoryBudget(std::size_t(64) << 20).note.empty());
-    MemoryBudget soft{std::size_t(1) << 30, "the memory available (MemAvailable)"};
+    MemoryBudget soft{std::size_t(1) << 30, "the memory available (MemAvailable)", false, false, {}};
     CHECK(moreMemoryAdvice(soft) == ", or set --max-memory");
 }
 
