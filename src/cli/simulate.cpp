@@ -333,6 +333,7 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
                   "Rounds of refinement against the exact part (catches cusps finer than the spacing):\n"
                   "vertices and edge midpoints off it move to, or are split at, the surface the moves'\n"
                   "sweeps cut there. 0 keeps the mesher's mesh. Needs a box stock; costs time")
+        ->check(numberCheck(true))
         ->check(CLI::Range(0, 8))
         ->capture_default_str();
     c->add_option("--refine-tolerance", a.refineTolerance,
@@ -397,6 +398,7 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
     c->add_option("--adaptivity", a.adaptivity,
                   "Merging of flat regions, from 0 (none) to 1 (triangles within 15 degrees merge,\n"
                   "moving the surface by at most 0.05 spacings); the mesh stays closed")
+        ->check(numberCheck(true))
         ->capture_default_str();
     c->add_flag("--sharp-edges", a.sharpEdges,
                 "Kept for old scripts: the dexel mesher always places sharp edges and corners from the\n"

@@ -174,6 +174,8 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
                                      // Decimal only, as --stock and --tool (strtod reads 0x10 as 16).
                                      {"--max-memory 0x10G", "--max-memory: '0x10G' is not a memory size"},
                                      {"--resolution 0x.8", "--resolution: '0x.8' is not a number"},
+                                     {"--adaptivity 0x0.8", "--adaptivity: '0x0.8' is not a number"},
+                                     {"--refine 0x1", "--refine: '0x1' is not a number"},
                                      // An empty field is an error, not a field less.
                                      {"--stock box:0,0,-5,20,20,0,", "--stock box: '0,0,-5,20,20,0,' has an empty value"},
                                      {"--start 1,2,", "--start: '1,2,' has an empty value"},
