@@ -50,10 +50,12 @@ int runCompare(const CompareArgs& a) {
     o.threads = a.threads;
     warnThreads(a.threads);
     const CompareReport r = compareParts(o);
+    for (const std::string& w : r.warnings) std::fprintf(stderr, "dexelmill: warning: %s\n", printable(w).c_str());
     const Deviation& d = r.deviation;
-    std::printf("dexelmill: %s (%zu triangles%s) against %s (%zu triangles), tolerances -%g / +%g mm\n",
+    std::printf("dexelmill: %s (%zu triangles%s) against %s (%zu triangles%s), tolerances -%g / +%g mm\n",
                 r.machinedFile.c_str(), r.machinedTriangles, r.machinedClosed ? "" : ", NOT closed",
-                r.designFile.c_str(), r.designTriangles, d.tolerance.gouge, d.tolerance.excess);
+                r.designFile.c_str(), r.designTriangles, r.designClosed ? "" : ", NOT closed", d.tolerance.gouge,
+                d.tolerance.excess);
     std::printf("  %-22s %14s %8s %10s\n", "deviation (mm)", "area (mm^2)", "area %", "vertices");
     for (const DeviationBin& b : d.histogram) {
         char range[64];

@@ -64,6 +64,12 @@ CompareReport compareInArena(const CompareOptions& o) {
     {
         const Mesh mesh = readDesign(o.designPath, o.designTransform);
         r.designTriangles = mesh.triangles.size();
+        const MeshCheck designCheck = checkMesh(mesh);
+        r.designClosed = designCheck.closedManifold();
+        if (!r.designClosed)
+            r.warnings.push_back("'" + o.designPath + "': the design is not closed (" + designCheck.openness() +
+                                 "): which side of it is inside is a guess near the gaps, and so is the sign of "
+                                 "the deviation there");
         design.emplace(mesh);
     }
     r.timingS.read = seconds(t);
@@ -105,7 +111,8 @@ std::string compareJson(const CompareReport& r) {
                      {"vertices", r.machinedVertices},
                      {"triangles", r.machinedTriangles},
                      {"closed", r.machinedClosed}};
-    j["design"] = {{"file", r.designFile}, {"triangles", r.designTriangles}};
+    j["design"] = {{"file", r.designFile}, {"triangles", r.designTriangles}, {"closed", r.designClosed}};
+    j["warnings"] = r.warnings;
     j["surface"] = deviationJson(r.deviation);
     j["timing_s"] = {{"read", r.timingS.read}, {"measure", r.timingS.measure}, {"write", r.timingS.write},
                      {"total", r.timingS.total}};

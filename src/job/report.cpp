@@ -102,6 +102,7 @@ std::string reportJson(const SimulateReport& r) {
                                {"thickness_mm", e.thicknessMm},
                                {"thickest_point_mm", {e.point.x, e.point.y, e.point.z}}});
         j["design"] = {{"file", r.designFile},
+                       {"closed", r.designClosed},
                        {"gouge_tolerance_mm", r.gougeToleranceMm},
                        {"gouge_count", r.gouges.size()},
                        {"worst_gouge_mm", r.gouges.empty() ? 0.0 : r.gouges.front().depthMm},

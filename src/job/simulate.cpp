@@ -183,6 +183,42 @@ void noteFineFeatures(const FineFeatures& f, double h, double part, Mesher meshe
     note(f.gaps, "gaps narrower than the lattice (slots, grooves) are filled in the level set and the mesh:");
 }
 
+/// How far (relative to the largest coordinate, at least 1 mm) a design may reach past the stock's
+/// box before the job says so: an STL stores float coordinates, which round by half of 2^-23
+/// relative, so a design face on a stock face may lie that far out.
+constexpr double kDesignBeyondStockSlack = 0x1p-23;
+
+/// Warns when the design reaches past a stock the user gave (`stock`, its box): there the part
+/// cannot hold the design, and the cut there is not compared, since no material is.
+void noteDesignBeyondStock(const Box& design, const Box& stock, const std::string& designPath,
+                           std::vector<ReportWarning>& notes) {
+    const char* sides[3][2] = {{"-x", "+x"}, {"-y", "+y"}, {"-z", "+z"}};
+    std::string beyond;
+    for (int i = 0; i < 3; ++i) {
+        const double scale =
+            std::max({1.0, std::abs(design.lo[i]), std::abs(design.hi[i]), std::abs(stock.lo[i]), std::abs(stock.hi[i])});
+        const double slack = kDesignBeyondStockSlack * scale;
+        const double out[2] = {stock.lo[i] - design.lo[i], design.hi[i] - stock.hi[i]};
+        for (int s = 0; s < 2; ++s) {
+            if (!(out[s] > slack)) continue;
+            char text[80];
+            std::snprintf(text, sizeof text, "%s%.4g mm on %s", beyond.empty() ? "" : ", ", out[s], sides[i][s]);
+            beyond += text;
+        }
+    }
+    if (beyond.empty()) return;
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "the design reaches past the stock's box (%s): its box is (%.4f, %.4f, %.4f)-(%.4f, %.4f, %.4f), "
+                  "the stock's (%.4f, %.4f, %.4f)-(%.4f, %.4f, %.4f); the part cannot hold the design there",
+                  beyond.c_str(), design.lo.x, design.lo.y, design.lo.z, design.hi.x, design.hi.y, design.hi.z,
+                  stock.lo.x, stock.lo.y, stock.lo.z, stock.hi.x, stock.hi.y, stock.hi.z);
+    ReportWarning w;
+    w.where.file = designPath;
+    w.message = std::string(text) + "; check --stock and --design-transform";
+    notes.push_back(w);
+}
+
 /// Moves whose tool axis turns. A feed move is swept turning (TurningSweep, within the job's
 /// turn tolerance); its axes must not be opposite, where no one great circle joins them. A rapid
 /// that turns is a reorientation whose path is the machine's, not the program's straight line: it
@@ -225,6 +261,7 @@ struct LoadedStock {
     TriDexelStock stock;
     Box box;
     bool isBox = true;  ///< the stock is the box itself (not a file cast into the lattice)
+    bool aroundDesign = false;  ///< the box was made around the design (no stock given)
 };
 
 /// A stock box from the program when none is given. For a project, CAMotics' automatic workpiece
@@ -267,6 +304,7 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
                       const ToolTable& tools, const Project* project, const Mesh* design, SimulateReport& report,
                       std::vector<ReportWarning>& notes) {
     Box box;
+    bool aroundDesign = false;
     std::optional<LevelSet> fromVdb;
     std::optional<Mesh> fromStl;
     if (o.stockBox) {
@@ -292,6 +330,7 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
     } else if (design) {
         ReportWarning w;
         box = designStockBox(design->bounds(), program.statedStock, w.message);
+        aroundDesign = true;
         notes.push_back(w);
     } else {
         box = guessStock(program.path, tools, project);
@@ -391,11 +430,11 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
             throw Error("stock '" + o.stockFile + "' is not closed: " + std::to_string(cast.unpairedDexels) +
                         " dexel lines meet an odd number of its faces; a stock must be a closed solid (repair the "
                         "mesh, or give --stock box:...)");
-        return {std::move(stock), box, false};
+        return {std::move(stock), box, false, false};
     }
-    if (fromVdb) return {stockFromLevelSet(*fromVdb, lattice, o.families), box, false};
-    if (o.stockFrustum) return {stockFromFrustum(*o.stockFrustum, lattice, o.families), box, false};
-    return {TriDexelStock::fromBox(box, h, o.families), box, true};
+    if (fromVdb) return {stockFromLevelSet(*fromVdb, lattice, o.families), box, false, false};
+    if (o.stockFrustum) return {stockFromFrustum(*o.stockFrustum, lattice, o.families), box, false, false};
+    return {TriDexelStock::fromBox(box, h, o.families), box, true, aroundDesign};
 }
 
 Simulation runStages(const SimulateOptions& o);
@@ -552,6 +591,7 @@ Simulation runStages(const SimulateOptions& o) {
     }
     // The design's mesh first: with no stock given, its box is the stock's.
     std::optional<Mesh> designMesh;
+    MeshCheck designCheck;
     if (!o.designPath.empty()) {
         t = Clock::now();
         if (o.progress) o.progress("design", 0, 1);
@@ -561,6 +601,12 @@ Simulation runStages(const SimulateOptions& o) {
     LoadedStock loaded = loadStock(o, budget, program, tools, project ? &*project : nullptr,
                                    designMesh ? &*designMesh : nullptr, report, notes);
     checkTurningMoves(program.path, tools, loaded.box, notes);
+    if (designMesh) {
+        // A stock made from the design's box holds it; a stock the user gave may not.
+        if (!loaded.aroundDesign) noteDesignBeyondStock(designMesh->bounds(), loaded.box, o.designPath, notes);
+        designCheck = checkMesh(*designMesh);
+        report.designClosed = designCheck.closedManifold();
+    }
     sim.stock.emplace(std::move(loaded.stock));
     TriDexelStock& stock = *sim.stock;
     report.stockBox = loaded.box;
@@ -587,6 +633,12 @@ Simulation runStages(const SimulateOptions& o) {
             w.where.file = o.designPath;
             w.message = "the design is not closed: " + std::to_string(design->cast.unpairedDexels) +
                         " dexels met an odd number of its faces; its solid there is a guess";
+            notes.push_back(w);
+        } else if (!report.designClosed) {
+            ReportWarning w;
+            w.where.file = o.designPath;
+            w.message = "the design's mesh is not closed (" + designCheck.openness() +
+                        "); every dexel met its faces in pairs, but distances near the gaps may take the wrong sign";
             notes.push_back(w);
         }
         report.designFile = o.designPath;

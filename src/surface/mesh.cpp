@@ -506,6 +506,20 @@ MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, st
 
 }  // namespace
 
+std::string MeshCheck::openness() const {
+    std::string out;
+    const auto add = [&](std::size_t n, const char* what) {
+        if (n == 0) return;
+        out += (out.empty() ? "" : ", ") + std::to_string(n) + what;
+    };
+    add(boundaryEdges, boundaryEdges == 1 ? " edge on one triangle" : " edges on one triangle");
+    add(nonManifoldEdges, nonManifoldEdges == 1 ? " edge on three or more" : " edges on three or more");
+    add(misorientedEdges, misorientedEdges == 1 ? " edge used twice the same way" : " edges used twice the same way");
+    add(invalidIndices, invalidIndices == 1 ? " triangle past the vertex list" : " triangles past the vertex list");
+    if (triangleCount == 0) out = "no triangles";
+    return out;
+}
+
 MeshCheck checkMesh(const Mesh& mesh, std::vector<std::uint32_t>* folded) {
     if (folded) folded->clear();
     return check(nullptr, mesh, nullptr, nullptr, folded);

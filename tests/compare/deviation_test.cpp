@@ -240,12 +240,16 @@ TEST_CASE("compare: a sphere's STL against a cube's, with report, PLY and pictur
     CHECK(r.machinedClosed);
     CHECK(r.machinedTriangles == machined.triangles.size());
     CHECK(r.designTriangles == 12);
+    CHECK(r.designClosed);
+    CHECK(r.warnings.empty());
     // Written as float, the sphere's vertices move by up to 6e-8 * 6 mm.
     CHECK(r.deviation.farthest == Approx(kRadius - kHalf).margin(1e-6));
     CHECK(r.deviation.deepest == Approx(cubeExtremes(machined).first).margin(1e-6));
 
     const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "report.json"));
     CHECK(j["units"] == "mm");
+    CHECK(j["design"]["closed"] == true);
+    CHECK(j["warnings"].empty());
     CHECK(j["surface"]["farthest_mm"].get<double>() == Approx(kRadius - kHalf).margin(1e-6));
     CHECK(j["surface"]["histogram"].size() == r.deviation.histogram.size());
     double binned = 0;
@@ -274,6 +278,28 @@ TEST_CASE("compare: a sphere's STL against a cube's, with report, PLY and pictur
     bad.reportPath = (dir / "report.txt").string();
     CHECK_THROWS_WITH(compareParts(bad), Catch::Contains(".json"));
     CHECK_FALSE(fs::exists(dir / "report.txt"));
+    fs::remove_all(dir);
+}
+
+TEST_CASE("compare: a design with a triangle missing is measured, with a warning", "[compare][deviation][job][degenerate]") {
+    const fs::path dir = scratch("open");
+    writeStl((dir / "sphere.stl").string(), sphere(kRadius, 3));
+    Mesh open = cube(kHalf);
+    open.triangles.pop_back();
+    std::ofstream(dir / "open.stl") << asciiStl(open);
+    CompareOptions o;
+    o.machinedPath = (dir / "sphere.stl").string();
+    o.designPath = (dir / "open.stl").string();
+    o.reportPath = (dir / "report.json").string();
+    const CompareReport r = compareParts(o);
+    CHECK(r.machinedClosed);
+    CHECK_FALSE(r.designClosed);
+    REQUIRE(r.warnings.size() == 1);
+    // The missing triangle leaves its three edges on one triangle each.
+    CHECK_THAT(r.warnings[0], Catch::Contains("open.stl': the design is not closed (3 edges on one triangle)"));
+    const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "report.json"));
+    CHECK(j["design"]["closed"] == false);
+    CHECK(j["warnings"].size() == 1);
     fs::remove_all(dir);
 }
 

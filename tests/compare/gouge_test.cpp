@@ -214,6 +214,46 @@ TEST_CASE("gouges: a design reaching past the stock on every side", "[compare][d
     CHECK(r.gouges[0].where.line == 5);
     CHECK(r.gouges[0].depthMm == Approx(5.005).margin(depthBound(0.01, kH)));
     CHECK(r.gouges[0].volumeMm3 == Approx(10.0 * 40.0 * 0.005).epsilon(1e-3));
+    // The part cannot hold such a design, and the job says so, naming every side by how much.
+    const auto beyond = std::find_if(r.warnings.begin(), r.warnings.end(), [](const ReportWarning& w) {
+        return w.message.find("the design reaches past the stock's box") != std::string::npos;
+    });
+    REQUIRE(beyond != r.warnings.end());
+    CHECK(beyond->where.file == design);
+    for (const char* side : {"5 mm on -x", "5 mm on +x", "5 mm on -y", "5 mm on +y", "5 mm on -z", "5 mm on +z"})
+        CHECK_THAT(beyond->message, Catch::Contains(side));
+    fs::remove_all(dir);
+}
+
+/// The warnings of `r` that contain `text`.
+std::size_t warningsWith(const SimulateReport& r, const std::string& text) {
+    return std::size_t(std::count_if(r.warnings.begin(), r.warnings.end(), [&](const ReportWarning& w) {
+        return w.message.find(text) != std::string::npos;
+    }));
+}
+
+TEST_CASE("design: one within the stock, one past a single face, and one not closed", "[compare][design][job]") {
+    const fs::path dir = scratch("inside");
+    const char* program = "G21 G90\nT1 M6\nG0 X5 Y-10 Z5\nG1 Z-1 F500\nG1 Y50\nG0 Z5\nM30\n";
+    // Within the stock, touching its bottom face (z = -10) and its sides at x = 0 and 40: closed,
+    // and nothing to say.
+    const std::string inside = writeStl(dir / "inside.stl", prismFacets({{0, -10}, {40, -10}, {40, -2}, {0, -2}}, 0.0, 40.0));
+    SimulateReport r = simulate(job(program, inside, 10.0));
+    CHECK(r.designClosed);
+    CHECK(warningsWith(r, "reaches past the stock") == 0);
+    CHECK(warningsWith(r, "not closed") == 0);
+    // 0.5 mm above the stock's top, and nowhere else.
+    const std::string tall = writeStl(dir / "tall.stl", prismFacets({{0, -10}, {40, -10}, {40, 0.5}, {0, 0.5}}, 0.0, 40.0));
+    r = simulate(job(program, tall, 10.0));
+    REQUIRE(warningsWith(r, "reaches past the stock's box (0.5 mm on +z)") == 1);
+    // The same prism with one facet of its cap at y = 0 left out: the x = 5 pass's z dexels miss
+    // that cap, but y dexels through the hole meet one face.
+    std::string facets = prismFacets({{0, -10}, {40, -10}, {40, -2}, {0, -2}}, 0.0, 40.0);
+    facets.erase(0, facets.find(" facet", 1));
+    const std::string open = writeStl(dir / "open.stl", facets);
+    r = simulate(job(program, open, 10.0));
+    CHECK_FALSE(r.designClosed);
+    CHECK(warningsWith(r, "the design is not closed") == 1);
     fs::remove_all(dir);
 }
 

@@ -6,6 +6,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "dexelmill/compare/deviation.h"
 #include "dexelmill/geometry/affine.h"
@@ -32,6 +33,11 @@ struct CompareReport {
     std::string version, machinedFile, designFile;
     std::size_t machinedVertices = 0, machinedTriangles = 0, designTriangles = 0;
     bool machinedClosed = false;
+    /// Whether the design's mesh is closed (checkMesh). Where it is open, which side of it is
+    /// inside is a guess, and so is the sign of the deviation near the gap.
+    bool designClosed = false;
+    /// What the user should know of the inputs: an open design.
+    std::vector<std::string> warnings;
     /// The machined surface against the design, without its per-vertex distances.
     Deviation deviation;
     struct Timing {

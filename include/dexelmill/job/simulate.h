@@ -175,6 +175,8 @@ struct SimulateReport {
     /// The design comparison, when a design was given: its file, the tolerance, and the gouges
     /// deepest first.
     std::string designFile;
+    /// Whether the design's mesh is closed (checkMesh): where it is open, its solid is a guess.
+    bool designClosed = false;
     double gougeToleranceMm = 0.0;
     std::vector<ReportGouge> gouges;
     /// Excess after the cut (findExcess): all the stock outside the design (mm^3), the largest

@@ -9,6 +9,7 @@
 #include <functional>
 #include <memory>
 #include <new>
+#include <string>
 #include <type_traits>
 #include <utility>
 #include <vector>
@@ -103,6 +104,9 @@ struct MeshCheck {
     }
     /// @brief closedManifold(), no degenerate and no folded triangles.
     bool ok() const { return closedManifold() && degenerateTriangles == 0 && foldedTriangles == 0; }
+    /// @brief Why the mesh is not closed, for a message: "12 edges on one triangle, 2 on three or
+    /// more", naming each count closedManifold() needs to be 0; empty when it is closed.
+    std::string openness() const;
 };
 
 /// @brief Checks a mesh: edge manifoldness and orientation, degenerate and folded triangles,
