@@ -132,7 +132,8 @@ Excess findExcess(const DesignPart& design, const TriDexelStock& stock, double t
                     for (double lo = p.line.lo; lo < p.line.hi;) {
                         const double wall = (std::floor(lo / cell) + 1.0) * cell;
                         const double hi = std::min(p.line.hi, wall);
-                        sum[step(a, 0.5 * (lo + hi)) + alongCells * step(b, atB)] += (hi - lo) * lattice.h * lattice.h;
+                        sum[step(a, 0.5 * (lo + hi)) + alongCells * step(b, atB)] +=
+                            (hi - lo) * lattice.dexelShare(ax, p.line.ib, p.line.ic) * lattice.h * lattice.h;
                         lo = hi;
                     }
                 }

@@ -24,7 +24,11 @@ constexpr double kSameSpacing = 1e-9;
 }  // namespace
 
 Lattice stockLattice(const Mesh& mesh, double h) {
-    return Lattice::fromBox(mesh.bounds().padded(kStlBoxMargin * h), h);
+    // The padded box is no face of the solid: each dexel stands for its whole cell
+    // (Lattice::share), the cells covering the solid. Only a box stock's faces are known exactly.
+    Lattice lattice = Lattice::fromBox(mesh.bounds().padded(kStlBoxMargin * h), h);
+    lattice.stockMax = lattice.cellBox().hi;
+    return lattice;
 }
 
 Lattice stockLattice(const LevelSet& levelSet, double h) {
@@ -32,7 +36,10 @@ Lattice stockLattice(const LevelSet& levelSet, double h) {
     if (recorded && std::abs(recorded->h - h) <= kSameSpacing * h) return *recorded;
     const Box box = materialBounds(levelSet);
     if (box.isEmpty()) throw Error("the level set holds no material (no negative voxel)");
-    return Lattice::fromBox(box, h);
+    // The material's box, from voxels, is no exact face of the solid (see above).
+    Lattice lattice = Lattice::fromBox(box, h);
+    lattice.stockMax = lattice.cellBox().hi;
+    return lattice;
 }
 
 TriDexelStock readStock(const std::string& path, double h, FamilySet families,

@@ -244,6 +244,8 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                 const MoveSweep::LocalLine shankLine =
                     shank && g.shank.fixed ? g.shank.fixed->toLocal(line) : MoveSweep::LocalLine{};
                 ++st.visited;
+                // The share of a cell's cross-section this dexel stands for (Lattice::share).
+                const double share = lattice.dexelShare(a, ib, ic);
                 double removed = 0.0;
                 // The Hermite data only for the interval ends that will become segment ends: those
                 // inside material. (A part's subtraction only removes material, so the ends flagged
@@ -260,8 +262,8 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                     if (kept.empty()) return;
                     DesignStretch at;
                     at.move = m, at.family = a, at.ib = ib, at.ic = ic;
-                    st.design += designOverlap(tile.segments(local), design, kept, toFloat(hit.range.lo),
-                                               toFloat(hit.range.hi), at, stretches);
+                    st.design += share * designOverlap(tile.segments(local), design, kept, toFloat(hit.range.lo),
+                                                       toFloat(hit.range.hi), at, stretches);
                 };
                 // Applies `apply` to the swept intervals of one region: a fixed-axis sweep's parts,
                 // or a turning sweep's intervals, solved to its tolerance where the dexel has
@@ -294,16 +296,17 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                         if (removeShank) {
                             watch(hit);
                             const double met = subtractHit(tile, local, hit);
-                            st.shank += met;
+                            st.shank += share * met;
                             removed += met;
                         } else {
-                            st.shank += overlapLength(tile.segments(local), toFloat(hit.range.lo), toFloat(hit.range.hi));
+                            st.shank += share * overlapLength(tile.segments(local), toFloat(hit.range.lo),
+                                                              toFloat(hit.range.hi));
                         }
                     });
                 }
                 if (removed > 0.0) {
                     ++st.changed;
-                    st.removed += removed;
+                    st.removed += share * removed;
                 }
             }
         }

@@ -9,6 +9,23 @@
 
 namespace dexelmill {
 
+namespace {
+
+/// How close (relative to the count) a box's size over h must be to a whole number of cells to
+/// be taken as one: sizes such as 20 mm at 0.1 mm, whose quotient rounds to 200.00000000000003.
+constexpr double kWholeCells = 1e-9;
+
+}  // namespace
+
+double Lattice::share(Axis a, int i) const {
+    const int ax = index(a);
+    if (i < 0 || i >= n[ax] || !(coord(a, i) < stockMax[ax])) return 0.0;
+    if (i + 1 < n[ax] && coord(a, i + 1) < stockMax[ax]) return 1.0;
+    const double cells = (stockMax[ax] - origin[ax]) / h;
+    if (std::abs(cells - n[ax]) <= kWholeCells * std::max(1.0, cells)) return 1.0;
+    return cells - i;
+}
+
 Lattice Lattice::fromBox(const Box& box, double h) {
     if (!(h > 0.0) || !std::isfinite(h)) {
         std::ostringstream s;
@@ -20,12 +37,13 @@ Lattice Lattice::fromBox(const Box& box, double h) {
     }
     Lattice l;
     l.origin = box.lo;
+    l.stockMax = box.hi;
     l.h = h;
     for (int a = 0; a < 3; ++a) {
         // A size that is a whole number of cells up to rounding gets exactly that many cells.
         const double cells = box.size()[a] / h;
         const double rounded = std::round(cells);
-        const double n = std::abs(cells - rounded) <= 1e-9 * std::max(1.0, cells) ? rounded : std::ceil(cells);
+        const double n = std::abs(cells - rounded) <= kWholeCells * std::max(1.0, cells) ? rounded : std::ceil(cells);
         if (n > double(std::numeric_limits<int>::max() / 2)) {
             std::ostringstream s;
             s << "stock is " << box.size()[a] << " mm along " << "xyz"[a] << ": spacing " << h

@@ -88,7 +88,25 @@ Line TriDexelStock::dexelLine(Axis a, int ib, int ic) const {
 }
 
 double TriDexelStock::volume(Axis a) const {
-    return family(a).materialLength() * lattice_.h * lattice_.h;
+    // Each dexel's material times the share of the stock box's cross-section it stands for
+    // (Lattice::share): 1 inside, clipped to the box at its maximum faces.
+    const DexelFamily& fam = family(a);
+    double sum = 0.0;
+    for (int tc = 0; tc < fam.tilesC(); ++tc) {
+        for (int tb = 0; tb < fam.tilesB(); ++tb) {
+            const DexelTile& tile = fam.tile(tb, tc);
+            if (tile.empty()) continue;
+            for (int local = 0; local < DexelTile::kDexels; ++local) {
+                const int ib = tb * DexelTile::kTile + local % DexelTile::kTile;
+                const int ic = tc * DexelTile::kTile + local / DexelTile::kTile;
+                if (ib >= fam.nb() || ic >= fam.nc()) continue;
+                double length = 0.0;
+                for (const Segment& g : tile.segments(local)) length += double(g.hi) - double(g.lo);
+                if (length > 0.0) sum += length * lattice_.dexelShare(a, ib, ic);
+            }
+        }
+    }
+    return sum * lattice_.h * lattice_.h;
 }
 
 bool TriDexelStock::inside(Axis a, int i, int j, int k) const {

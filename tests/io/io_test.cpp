@@ -699,6 +699,7 @@ TEST_CASE("stock from a mesh: lines through edges and vertices cross once", "[io
     lat.origin = Vec3(-2.5);
     lat.h = 1.0;
     lat.n = {15, 15, 15};
+    lat.stockMax = lat.cellBox().hi;
     MeshCastStats stats;
     const TriDexelStock stock = stockFromMesh(cubeMesh(0.0, 10.0), lat, FamilySet::all(), &stats);
     CHECK(stats.unpairedDexels == 0);

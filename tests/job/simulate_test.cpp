@@ -158,6 +158,30 @@ TEST_CASE("simulate: a wall thinner than the spacing is reported and meshed", "[
     CHECK(place["stretches"].get<std::size_t>() == wall.count);
 }
 
+TEST_CASE("the stock's volume is its box's at spacings that do not divide it", "[job]") {
+    // 40 x 30 x 10 mm at 0.3 mm is 133.3 x 100 x 33.3 cells, at 0.7 mm 57.1 x 42.9 x 14.3 and at
+    // 1.5 mm 26.7 x 20 x 6.7: every family must still measure 12,000 mm^3, the last lattice line
+    // of each axis standing for the stock up to its face (each dexel's length is a float, within
+    // 2^-24 of the box's). The slot's volume is the midpoint rule's across the dexels: within one
+    // spacing of its outline (shorter than its 36 x 6 mm box's perimeter, 84 mm) times its depth.
+    const fs::path dir = scratch("spacings");
+    SimulateOptions o;
+    o.inputs = {write(dir / "slot.ngc", kSlot)};
+    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
+    o.defaultTool = flatEndMill(6, {20, 40});
+    for (const double h : {0.3, 0.7, 1.5}) {
+        INFO("h = " << h);
+        o.resolution = h;
+        const SimulateReport r = simulate(o);
+        CHECK(r.stockVolumeMm3 == Approx(40.0 * 30.0 * 10.0).epsilon(0x1p-23));
+        for (const std::optional<double>& v : r.familyVolumesMm3) {
+            REQUIRE(v);
+            CHECK(*v + r.removedVolumeMm3 == Approx(40.0 * 30.0 * 10.0).margin(h * 2.0 * (36.0 + 6.0) * 3.0));
+        }
+        CHECK(r.removedVolumeMm3 == Approx(kSlotVolume).margin(h * 2.0 * (36.0 + 6.0) * 3.0));
+    }
+}
+
 TEST_CASE("z-only and x-only stocks measure the same slot", "[job]") {
     const fs::path dir = scratch("families");
     SimulateOptions o;

@@ -284,6 +284,7 @@ TEST_CASE("cut: a move that turns far is swept in pieces, its statistics its own
     CHECK(std::is_sorted(done.begin(), done.end()));
     CHECK(done.back() == path.moves.size());
     for (const std::size_t batch : {1, 2, 7}) {
+        std::vector<double> oneThread;  // the removed volumes on one thread, in this batch size
         for (const int threads : {1, 2}) {
             INFO(threads << " threads, batches of " << batch << " pieces");
             TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.3);
@@ -295,7 +296,12 @@ TEST_CASE("cut: a move that turns far is swept in pieces, its statistics its own
             const CutResult b = cutStock(stock, path, tools, opt);
             CHECK(sameStock(reference, stock));
             for (std::size_t i = 0; i < path.moves.size(); ++i) {
-                CHECK(b.moves[i].removed == a.moves[i].removed);
+                // A dexel of the last row or column inside the 0.3 mm lattice weighs its share of a
+                // cell (Lattice::share), so a move's sum, grouped by batch, rounds by batch: the
+                // same to the last bit for any thread count, and to 1e-12 for any batch size.
+                if (threads == 1) oneThread.push_back(b.moves[i].removed);
+                else CHECK(b.moves[i].removed == oneThread[i]);
+                CHECK(b.moves[i].removed == Approx(a.moves[i].removed).epsilon(1e-12));
                 CHECK(b.moves[i].changed == a.moves[i].changed);
             }
             CHECK(std::is_sorted(done.begin(), done.end()));

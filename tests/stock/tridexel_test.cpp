@@ -108,10 +108,10 @@ TEST_CASE("a box stock: one segment per dexel, equal volumes, inside everywhere"
     const Box box{Vec3(1, 2, 3), Vec3(11.3, 7, 9)};
     const TriDexelStock s = TriDexelStock::fromBox(box, 0.5);
     CHECK(s.lattice().n == std::array<int, 3>{21, 10, 12});
-    // Each family measures its cross-section of lattice cells times the exact length.
-    CHECK(s.volume(Axis::X) == Approx(10.3 * 10 * 12 * 0.25));
-    CHECK(s.volume(Axis::Y) == Approx(5.0 * 21 * 12 * 0.25));
-    CHECK(s.volume(Axis::Z) == Approx(6.0 * 21 * 10 * 0.25));
+    // Every family measures the box: 10.3 mm is 20.6 cells, and the last x line (at 10.25 of
+    // 10.3 mm) stands for the last 0.6 of a cell, not a whole one. The dexels' lengths are
+    // floats: 10.3 mm is stored within 2^-24 of itself.
+    for (const Axis a : {Axis::X, Axis::Y, Axis::Z}) CHECK(s.volume(a) == Approx(10.3 * 5.0 * 6.0).epsilon(0x1p-23));
     CHECK(s.inside(Axis::X, 20, 9, 11));
     CHECK(s.inside(Axis::Z, 0, 0, 0));
     CHECK(s.dexelCount() == std::size_t(10 * 12 + 12 * 21 + 21 * 10));

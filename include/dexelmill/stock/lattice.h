@@ -31,6 +31,9 @@ struct Lattice {
     Vec3 origin{0.0};               ///< minimum corner of the stock box (mm)
     double h = 1.0;                 ///< spacing (mm)
     std::array<int, 3> n{1, 1, 1};  ///< lattice points per axis
+    /// Maximum corner of the stock box (mm): no material lies beyond it. The last cells hang past
+    /// it when a size is not a whole number of cells; share() clips them to it.
+    Vec3 stockMax{1.0};
 
     /// @brief The lattice tiling `box` with spacing h: n = ceil(size / h) per axis (at least 1).
     /// @throw Error if the box is empty or degenerate, h is not positive, or the lattice would
@@ -42,6 +45,18 @@ struct Lattice {
     /// @brief World position of lattice point (i, j, k).
     Vec3 point(int i, int j, int k) const {
         return origin + (Vec3(i, j, k) + 0.5) * h;
+    }
+    /// @brief The width of the stock box's slab that lattice line i along axis a stands for, in
+    /// cells: 1 inside, 0 for a line at or past the box's maximum face (it holds no material), and
+    /// for the last line inside, the rest of the box up to that face (between 1/2 and 3/2 of a
+    /// cell). The shares of a row sum to the box's size over h, so a dexel's material length times
+    /// share(b) share(c) h^2 counts the stock box's volume exactly; inside, it is the midpoint
+    /// rule, as before.
+    double share(Axis a, int i) const;
+    /// @brief share(b, ib) share(c, ic) for the dexel (ib, ic) of family `a`, b and c the two
+    /// other axes in order (x: y, z; y: z, x; z: x, y), as DexelFamily's axisB and axisC.
+    double dexelShare(Axis a, int ib, int ic) const {
+        return share(axisFromIndex((index(a) + 1) % 3), ib) * share(axisFromIndex((index(a) + 2) % 3), ic);
     }
     /// @brief The box covered by the cells: origin to origin + n h.
     Box cellBox() const { return {origin, origin + Vec3(n[0], n[1], n[2]) * h}; }

@@ -21,6 +21,7 @@ inline constexpr const char* kMetaUnits = "units";
 inline constexpr const char* kMetaSource = "source";
 inline constexpr const char* kMetaLatticeOrigin = "lattice_origin";
 inline constexpr const char* kMetaLatticeSize = "lattice_size";
+inline constexpr const char* kMetaStockMax = "stock_max";
 
 /// @brief Writes spacing, units ("mm"), source and the lattice onto a grid.
 inline void writeMeta(openvdb::GridBase& grid, const Lattice& lattice, const std::string& source) {
@@ -32,6 +33,8 @@ inline void writeMeta(openvdb::GridBase& grid, const Lattice& lattice, const std
                         openvdb::Vec3d(lattice.origin.x, lattice.origin.y, lattice.origin.z)));
     grid.insertMeta(kMetaLatticeSize,
                     openvdb::Vec3IMetadata(openvdb::Vec3i(lattice.n[0], lattice.n[1], lattice.n[2])));
+    grid.insertMeta(kMetaStockMax, openvdb::Vec3DMetadata(
+                                       openvdb::Vec3d(lattice.stockMax.x, lattice.stockMax.y, lattice.stockMax.z)));
 }
 
 /// @brief The lattice recorded by writeMeta, if the grid has it.
@@ -45,6 +48,10 @@ inline std::optional<Lattice> latticeFromMeta(const openvdb::GridBase& grid) {
     l.origin = Vec3(origin->value().x(), origin->value().y(), origin->value().z());
     l.n = {size->value().x(), size->value().y(), size->value().z()};
     if (!(l.h > 0.0) || l.n[0] < 1 || l.n[1] < 1 || l.n[2] < 1) return std::nullopt;
+    // Files written before the stock box was recorded: the cells' box.
+    const auto stockMax = grid.getMetadata<openvdb::Vec3DMetadata>(kMetaStockMax);
+    l.stockMax = stockMax ? Vec3(stockMax->value().x(), stockMax->value().y(), stockMax->value().z())
+                          : l.cellBox().hi;
     return l;
 }
 
