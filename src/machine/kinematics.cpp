@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "dexelmill/error.h"
+#include "dexelmill/io/json_text.h"
 #include "dexelmill/geometry/rotation.h"
 #include "dexelmill/geometry/tolerance.h"
 
@@ -165,17 +166,23 @@ RotaryMotion Machine::motion(const RotaryAngles& from, const RotaryAngles& to, b
 std::vector<std::string> builtinMachineNames() { return {"xyzac-trt", "xyzbc-trt", "xyza"}; }
 
 Machine parseMachine(const std::string& text, const std::string& fileName) {
+    // A fault's line and column, from the byte offset of its first character.
+    const auto locate = [&](std::size_t byte) {
+        SourceLocation at{fileName, 1, 1};
+        for (std::size_t i = 0; i < byte && i < text.size(); ++i) {
+            if (text[i] == '\n') ++at.line, at.column = 1;
+            else ++at.column;
+        }
+        return at;
+    };
+    if (const std::optional<JsonTextFault> fault = jsonTextFault(text, /*comments=*/false))
+        throw ParseError(locate(fault->byte), "machine description: " + fault->message);
     nlohmann::json j;
     try {
         j = nlohmann::json::parse(text);
     } catch (const nlohmann::json::parse_error& e) {
-        // Place the fault by line and column from its byte offset.
-        SourceLocation at{fileName, 1, 1};
-        for (std::size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
-            if (text[i] == '\n') ++at.line, at.column = 1;
-            else ++at.column;
-        }
-        throw ParseError(at, "not valid JSON for a machine description");
+        // The library's offset counts the faulty character as read.
+        throw ParseError(locate(e.byte > 0 ? e.byte - 1 : 0), "not valid JSON for a machine description");
     } catch (const nlohmann::json::exception&) {  // a number beyond double's range, as 1e999
         throw ParseError(SourceLocation{fileName, 0, 0}, "not valid JSON for a machine description: a number "
                                                           "beyond the range of a double");

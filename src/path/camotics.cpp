@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "dexelmill/io/json_text.h"
+
 #include "dexelmill/error.h"
 #include "dexelmill/tool/builders.h"
 #include "path/detail/text.h"
@@ -177,6 +179,8 @@ double projectResolution(ResolutionMode mode, const Box& workpiece) {
 
 Project parseCamoticsProject(std::string_view text, const std::string& fileName,
                              const std::string& directory) {
+    if (const std::optional<JsonTextFault> fault = jsonTextFault(text, /*comments=*/true))
+        throw ParseError(locate(text, fault->byte, fileName), "CAMotics project: " + fault->message);
     Json j;
     try {
         j = Json::parse(text.begin(), text.end(), nullptr, true, /*ignore_comments=*/true);

@@ -608,6 +608,15 @@ TEST_CASE("machine: description files and their errors", "[machine]") {
     CHECK_THROWS_WITH(parseMachine("{\n  \"axes\": [\n  {\"letter\": \"A\",, }]}", "bad.json"),
                       Contains("bad.json:3:") && Contains("not valid JSON"));
     CHECK_THROWS_WITH(parseMachine("{}", "x.json"), Contains("x.json") && Contains("\"axes\""));
+    // A key given twice, which the JSON library resolves silently, and nesting so deep that the
+    // library's recursion overflowed the stack: located errors (jsonTextFault).
+    CHECK_THROWS_WITH(parseMachine("{\"axes\": [{\"letter\": \"A\",\n \"direction\": [1, 0, 0], \"direction\": [0, 1, 0]}]}",
+                                   "dup.json"),
+                      Contains("dup.json:2:26: error: machine description: the key \"direction\" is given twice"));
+    CHECK_THROWS_WITH(parseMachine("{\"axes\": [{\"letter\": \"A\", \"direction\": [1, 0, 0], \"pivot\": " +
+                                       std::string(60000, '[') + std::string(60000, ']') + "}]}",
+                                   "deep.json"),
+                      Contains("deep.json:1:") && Contains("nested deeper than 64 levels"));
     CHECK_THROWS_WITH(parseMachine(R"({"axes": [{"letter": "A", "direction": [1, 0, 0]}, {"letter": "A", "direction": [0, 1, 0]}]})", "d.json"),
                       Contains("twice"));
     CHECK_THROWS_WITH(parseMachine(R"({"axes": [{"letter": "D", "direction": [1, 0, 0]}]})", "d.json"), Contains("letter"));

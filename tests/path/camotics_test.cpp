@@ -89,6 +89,12 @@ TEST_CASE("camotics: comments are allowed, errors carry their place", "[path][ca
         CHECK(e.where().column > 0);
     }
     CHECK_THROWS_AS(parseCamoticsProject(R"({"tools": {"1": {"shape": "hexagon", "length": 1, "diameter": 1}}})", "x", ""), ParseError);
+    // A key twice (the library keeps the last) and nesting past the readers' limit: located.
+    CHECK_THROWS_WITH(parseCamoticsProject("{\n  \"units\": \"metric\",\n  \"units\": \"imperial\"\n}", "two.camotics", ""),
+                      Catch::Contains("two.camotics:3:3: error: CAMotics project: the key \"units\" is given twice"));
+    CHECK_THROWS_WITH(parseCamoticsProject("{\"files\": " + std::string(100000, '[') + std::string(100000, ']') + "}",
+                                           "deep.camotics", ""),
+                      Catch::Contains("deep.camotics:1:74: error") && Catch::Contains("nested deeper than 64"));
     CHECK_THROWS_AS(parseCamoticsProject(R"({"tools": {"1": {"shape": "ballnose", "length": 1, "diameter": -1}}})", "x", ""), ParseError);
     CHECK_THROWS_AS(parseCamoticsProject(R"({"workpiece": {"bounds": {"min": [0, 0], "max": [1, 1, 1]}}})", "x", ""), ParseError);
 }
