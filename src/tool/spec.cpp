@@ -2,6 +2,7 @@
 
 #include <map>
 #include <optional>
+#include <sstream>
 #include <vector>
 
 #include "dexelmill/decimal.h"
@@ -67,6 +68,16 @@ Tool parseToolSpec(const std::string& spec) {
         named.erase(it);
         return v;
     };
+    // ToolLengths reads 0 as "not given": a 0 written out is a tool without flutes or without a
+    // body, which no tool is, not a request for the default.
+    for (const char* key : {"length", "total"}) {
+        const auto given = named.find(key);
+        if (given != named.end() && !(given->second > 0.0)) {
+            std::ostringstream got;
+            got << given->second;
+            throw Error("tool '" + spec + "': " + key + " must be positive, got " + got.str());
+        }
+    }
     ToolLengths lengths;
     lengths.cutting = take("length", 0.0);
     lengths.total = take("total", 0.0);

@@ -55,6 +55,10 @@ TEST_CASE("bad tool specs say what is wrong", "[tool][errors]") {
     CHECK_THAT(errorOf("apt:100.1,2,48,2,0,0,50"), Contains("d = 100.1 is not the diameter its corner makes"));
     CHECK_THAT(errorOf("flat:6"), Contains("name=value"));
     CHECK_THAT(errorOf("ball:d=0"), Contains("diameter d must be positive"));
+    // A length written as 0 is no default: a tool without flutes or body.
+    CHECK_THAT(errorOf("flat:d=4,length=0"), Contains("flat:d=4,length=0': length must be positive, got 0"));
+    CHECK_THAT(errorOf("flat:d=4,total=0"), Contains("total must be positive, got 0"));
+    CHECK_THAT(errorOf("flat:d=4,length=-2"), Contains("length must be positive, got -2"));
     // Only total given: no complaint about a cutting length the spec never set.
     CHECK(parseToolSpec("ball:d=6,total=15").cuttingLength() == 15);
     CHECK_THAT(errorOf("drill:d=6,total=1"), Contains("total length 1 mm does not clear the 1.80258 mm point"));
