@@ -397,7 +397,8 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
                   "it as the property deviation_mm (needs --design)");
     c->add_option("--adaptivity", a.adaptivity,
                   "Merging of flat regions, from 0 (none) to 1 (triangles within 15 degrees merge,\n"
-                  "moving the surface by at most 0.05 spacings); the mesh stays closed")
+                  "moving the surface by at most 0.05 spacings); the mesh stays closed. With --mesher vdb,\n"
+                  "OpenVDB's own, which moves the surface without a bound (a warning says so)")
         ->check(numberCheck(true))
         ->capture_default_str();
     c->add_flag("--sharp-edges", a.sharpEdges,

@@ -574,6 +574,19 @@ TEST_CASE("the dexel mesher keeps the slot's volume, folds nothing, and works wi
     CHECK(v.meshClosed);
     // volumeToMesh rounds the edges: farther from the dexel volume.
     CHECK(std::abs(v.meshVolumeMm3 - v.finalVolumeMm3) > std::abs(r.meshVolumeMm3 - r.finalVolumeMm3));
+    const auto unbounded = [](const SimulateReport& s) {
+        return std::count_if(s.warnings.begin(), s.warnings.end(), [](const ReportWarning& w) {
+            return w.message.find("--adaptivity with --mesher vdb is OpenVDB's own") != std::string::npos;
+        });
+    };
+    CHECK(unbounded(v) == 0);
+    // Its adaptivity has no bound on how far the surface moves, and the job says so; the dexel
+    // mesher's keeps within 0.05 spacings and needs no word.
+    o.adaptivity = 1.0;
+    CHECK(unbounded(runSimulation(o).report) == 1);
+    o.mesher = Mesher::Dexel;
+    CHECK(unbounded(runSimulation(o).report) == 0);
+    o.adaptivity = 0.0;
     o.mesher = Mesher::Dexel;
     o.families = FamilySet::parse("z");
     const SimulateReport z = runSimulation(o).report;
