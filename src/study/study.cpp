@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <optional>
 #include <random>
 #include <sstream>
 
@@ -24,8 +25,9 @@ namespace dexelmill {
 
 namespace {
 
-/// Search range along a vertex normal for the exact surface, in spacings; a vertex farther than
-/// this from the exact surface is reported at this distance.
+/// Search range for the exact surface along a point's normal (and, where that fails, along the
+/// axes), in spacings; a point farther than this from the exact surface is reported at this
+/// distance.
 constexpr double kSearchSpacings = 4.0;
 /// Bisection steps along the normal: the distance is then known to 2^-40 of the range.
 constexpr int kBisections = 40;
@@ -46,8 +48,9 @@ std::vector<Vec3> vertexNormals(const Mesh& mesh) {
 
 /// Signed distance from the exact surface to p along the unit direction n (+ when p is outside
 /// the exact part, i.e. the model holds extra material there), found by bisection on the
-/// oracle's membership. Clamped to +-range.
-double signedDistanceAlong(const MachinedSolidOracle& oracle, const Vec3& p, const Vec3& n, double range) {
+/// oracle's membership; none when membership does not change within `range`.
+std::optional<double> signedDistanceAlong(const MachinedSolidOracle& oracle, const Vec3& p, const Vec3& n,
+                                          double range) {
     const bool in = oracle.inside(p);
     // Walk outwards (p inside) or inwards (p outside) until membership flips.
     const Vec3 dir = in ? n : -n;
@@ -61,13 +64,33 @@ double signedDistanceAlong(const MachinedSolidOracle& oracle, const Vec3& p, con
             break;
         }
     }
-    if (!found) return in ? -range : range;
+    if (!found) return std::nullopt;
     for (int i = 0; i < kBisections; ++i) {
         const double mid = 0.5 * (lo + hi);
         (oracle.inside(p + mid * dir) == in ? lo : hi) = mid;
     }
     const double d = 0.5 * (lo + hi);
     return in ? -d : d;
+}
+
+/// The signed distance of p to the exact surface along its normal n. Near the stock box's faces
+/// the normal may leave the box before it meets the part (a point just outside the part, on a
+/// rim where a cut meets a face, whose normal leans out of the face), and then the shortest of
+/// the distances along the six axis directions is taken: a surface point lies there, so it bounds
+/// the true distance from above. Clamped to +-range where neither finds the surface.
+double signedDistance(const MachinedSolidOracle& oracle, const Vec3& p, const Vec3& n, double range) {
+    if (const std::optional<double> along = signedDistanceAlong(oracle, p, n, range)) return *along;
+    std::optional<double> shortest;
+    for (int a = 0; a < 3; ++a) {
+        for (const double sign : {-1.0, 1.0}) {
+            Vec3 axis(0.0);
+            axis[a] = sign;
+            const std::optional<double> d = signedDistanceAlong(oracle, p, axis, range);
+            if (d && (!shortest || std::abs(*d) < std::abs(*shortest))) shortest = d;
+        }
+    }
+    if (shortest) return *shortest;
+    return oracle.inside(p) ? -range : range;
 }
 
 /// Distance from a point inside `box` to the nearest of its faces.
@@ -288,7 +311,7 @@ StudyResult runStudy(const StudyOptions& o) {
             arena.execute([&] {
                 tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size()), [&](const auto& r) {
                     for (std::size_t i = r.begin(); i < r.end(); ++i)
-                        dev[i] = signedDistanceAlong(*oracle, points[i].p, points[i].n, kSearchSpacings * h);
+                        dev[i] = signedDistance(*oracle, points[i].p, points[i].n, kSearchSpacings * h);
                 });
             });
             run.points = dev.size();
@@ -311,7 +334,7 @@ StudyResult runStudy(const StudyOptions& o) {
                     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, all.size()), [&](const auto& r) {
                         for (std::size_t v = r.begin(); v < r.end(); ++v)
                             if (normals[v] != Vec3(0.0))
-                                all[v] = signedDistanceAlong(*oracle, s.mesh.vertices[v], normals[v], kSearchSpacings * h);
+                                all[v] = signedDistance(*oracle, s.mesh.vertices[v], normals[v], kSearchSpacings * h);
                     });
                 });
                 std::ostringstream name;

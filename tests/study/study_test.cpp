@@ -136,6 +136,27 @@ TEST_CASE("surface deviation converges as the spacing halves", "[study]") {
     CHECK(std::count(csv.begin(), csv.end(), '\n') == 4);
 }
 
+TEST_CASE("a point whose normal leaves the stock is measured along the axes, not at the search's cap",
+          "[study]") {
+    // The ball raster cuts across the stock's side faces. A surface point just above a pass, on
+    // the rim where it meets the face at y = 0, has a normal leaning out through that face: along
+    // it the part is never met, and the point was reported at the search's range, 4 h (the
+    // table's max read 4 mm at h = 1). The axes meet the part within a spacing there; the
+    // largest measure left is a point of the side face above the rim, 1.69 h along its normal.
+    const StudyCase c = studyCase("ball-raster");
+    StudyOptions o;
+    o.job.program = c.program;
+    o.job.stockBox = c.stock;
+    o.resolutions = {1.0};
+    o.familySets = {FamilySet::all()};
+    o.surfacePoints = 20000;
+    o.samplePoints = 1000;
+    o.exactVolumeMm3 = 0.0;  // not measured here
+    const StudyResult res = runStudy(o);
+    REQUIRE(res.runs.size() == 1);
+    CHECK(res.runs[0].devMaxMm < 2.0 * res.runs[0].h);
+}
+
 TEST_CASE("z-only dexels lose undercut wall material that three families keep", "[study]") {
     // z dexels hold several segments, so the overhang itself survives; what one direction lacks
     // is the crossings across z. Its level set places the steep, overhanging walls midway between
