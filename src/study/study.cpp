@@ -274,7 +274,18 @@ StudyResult runStudy(const StudyOptions& o) {
         ref.resolution = hs.back() / 2;
         ref.families = FamilySet::all();
         ref.progress = nullptr;
-        const Simulation s = runSimulation(ref);
+        const Simulation s = [&] {
+            try {
+                return runSimulation(ref);
+            } catch (const ParseError&) {
+                throw;
+            } catch (const Error& e) {
+                std::ostringstream what;
+                what << "the study's reference run, at half the finest of --resolutions (h = " << ref.resolution
+                     << " mm): " << e.what();
+                throw Error(what.str());
+            }
+        }();
         result.referenceVolumeMm3 = s.stock->volume(Axis::Z);
         std::ostringstream r;
         r << "tri-dexel at h = " << ref.resolution << " mm";
@@ -292,7 +303,17 @@ StudyResult runStudy(const StudyOptions& o) {
             job.progress = nullptr;
             resetPeakMemory();  // the peak of this run, not of the runs before it
             const double memoryBefore = currentMemoryMb();
-            const Simulation s = runSimulation(job);
+            const Simulation s = [&] {
+                try {
+                    return runSimulation(job);
+                } catch (const ParseError&) {
+                    throw;
+                } catch (const Error& e) {
+                    std::ostringstream what;
+                    what << "the study's run at h = " << h << " mm with " << fams.str() << " dexels: " << e.what();
+                    throw Error(what.str());
+                }
+            }();
             StudyRun run;
             run.h = h;
             run.families = fams.str();

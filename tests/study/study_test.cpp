@@ -224,6 +224,23 @@ TEST_CASE("a study refuses counts of points it cannot measure, before any run", 
     CHECK_THROWS_WITH(runStudy(o), Catch::Contains("--samples") && Catch::Contains("--max-memory"));
 }
 
+TEST_CASE("a study's failing run is named by its spacing, the reference run as such", "[study][errors]") {
+    // The block is 10 mm thick and needs 2 cells across it (kMinCellsAcross): 6 mm fails, as the
+    // 12 mm the user gave would, but it is the reference run's spacing (half the finest), which no
+    // one typed.
+    StudyOptions o;
+    o.job.program = groove();
+    o.job.stockBox = Box{Vec3(0.0), Vec3(30, 20, 10)};
+    o.resolutions = {12.0};
+    o.familySets = {FamilySet::all()};
+    o.surfacePoints = 100;
+    o.samplePoints = 100;
+    CHECK_THROWS_WITH(runStudy(o), Catch::StartsWith("the study's reference run, at half the finest of --resolutions "
+                                                     "(h = 6 mm): a spacing of 6 mm is too coarse"));
+    o.exactVolumeMm3 = 1000.0;  // no reference run
+    CHECK_THROWS_WITH(runStudy(o), Catch::StartsWith("the study's run at h = 12 mm with xyz dexels: a spacing of 12 mm"));
+}
+
 TEST_CASE("every built-in case builds a program with its tools", "[study]") {
     for (const std::string& name : studyCaseNames()) {
         const StudyCase c = studyCase(name);
