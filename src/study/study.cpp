@@ -15,9 +15,11 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "dexelmill/compare/deviation.h"
 #include "dexelmill/error.h"
 #include "dexelmill/io/atomic_file.h"
 #include "dexelmill/io/file_name.h"
+#include "dexelmill/io/mesh_io.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/study/oracle.h"
 
@@ -203,24 +205,20 @@ void checkOutputs(const StudyOptions& o) {
         if (!path->empty()) checkWritable(*path);
 }
 
-void writeDeviationPly(const std::string& path, const Mesh& mesh, const std::vector<double>& deviation, double h,
+/// The mesh coloured as compare and simulate --deviation-ply colour theirs (deviationColour): red
+/// where the model lacks material of the exact part (as a gouge), blue where it holds more (as
+/// excess), with no tolerance between and darkest at one spacing; the distance as the property
+/// deviation_mm.
+void writeDeviationPly(const std::string& path, const Mesh& mesh, std::vector<double> deviation, double h,
                        OutputBatch& batch) {
-    writeStreamAtomically(path, [&](std::ostream& out) {
-        out << "ply\nformat ascii 1.0\ncomment dexelmill deviation from the exact part, red = extra material, "
-               "blue = missing; full colour at one spacing "
-            << h << " mm\nelement vertex " << mesh.vertices.size()
-            << "\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nproperty uchar "
-               "green\nproperty uchar blue\nelement face "
-            << mesh.triangles.size() << "\nproperty list uchar int vertex_indices\nend_header\n";
-        for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-            const double t = std::clamp(deviation[i] / h, -1.0, 1.0);
-            const int r = int(255 * (t > 0 ? 1.0 : 1.0 + t)), b = int(255 * (t < 0 ? 1.0 : 1.0 - t));
-            const int g = int(255 * (1.0 - std::abs(t)));
-            const Vec3& v = mesh.vertices[i];
-            out << v.x << ' ' << v.y << ' ' << v.z << ' ' << r << ' ' << g << ' ' << b << '\n';
-        }
-        for (const auto& t : mesh.triangles) out << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
-    }, &batch);
+    DeviationScale scale;
+    scale.tolerance = {0.0, 0.0};
+    scale.gougeFull = scale.excessFull = h;
+    PlyVertexData data;
+    data.colours = deviationColours(deviation, scale);
+    data.scalarName = "deviation_mm";
+    data.scalar = std::move(deviation);
+    writePly(path, mesh, data, &batch);
 }
 
 }  // namespace
@@ -360,7 +358,7 @@ StudyResult runStudy(const StudyOptions& o) {
                 });
                 std::ostringstream name;
                 name << o.plyDeviationDir << "/deviation_h" << h << "_" << run.families << ".ply";
-                writeDeviationPly(name.str(), s.mesh, all, h, outputs);
+                writeDeviationPly(name.str(), s.mesh, std::move(all), h, outputs);
             }
 
             // Lost and invented material at random points (the same points for every run). Points

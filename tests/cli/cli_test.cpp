@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -615,8 +617,33 @@ TEST_CASE("a study writes its table, CSV, plot and deviation meshes", "[cli][stu
     int plys = 0;
     for (const auto& e : fs::directory_iterator(cli.dir() / "dev")) {
         INFO(e.path());
-        CHECK(slurp(e.path()).rfind("ply\n", 0) == 0);
+        const std::string ply = slurp(e.path());
+        REQUIRE(ply.rfind("ply\nformat binary_little_endian 1.0\n", 0) == 0);
         ++plys;
+        // Coloured as compare colours: red where the model lacks material (a negative distance,
+        // as a gouge), blue where it holds more, with no tolerance between; the distance beside
+        // the colour.
+        const std::size_t vertices = std::stoul(ply.substr(ply.find("element vertex ") + 15));
+        REQUIRE(ply.find("property uchar red\nproperty uchar green\nproperty uchar blue\nproperty float "
+                         "deviation_mm\n") != std::string::npos);
+        const std::size_t body = ply.find("end_header\n") + 11;
+        std::size_t reddish = 0, bluish = 0;
+        for (std::size_t v = 0; v < vertices; ++v) {
+            const char* at = ply.data() + body + v * (12 + 3 + 4);
+            const auto r = std::uint8_t(at[12]), b = std::uint8_t(at[14]);
+            float d;
+            std::memcpy(&d, at + 15, 4);
+            if (d < 0.0f) {
+                CHECK(r > b);
+                ++reddish;
+            }
+            if (d > 0.0f) {
+                CHECK(b > r);
+                ++bluish;
+            }
+        }
+        CHECK(reddish > 0);
+        CHECK(bluish > 0);
     }
     CHECK(plys == 4);
 }
