@@ -12,6 +12,7 @@
 
 #include "commands.h"
 #include "dexelmill/error.h"
+#include "dexelmill/io/atomic_file.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/job/simulate.h"
 
@@ -28,6 +29,8 @@ const char* kDescription =
 }  // namespace
 
 int main(int argc, char** argv) {
+    // Ctrl-C during a write leaves no hidden partial file beside the output.
+    dexelmill::removeTemporariesOnSignals();
     CLI::App app{kDescription, "dexelmill"};
     app.set_version_flag("--version", std::string("dexelmill ") + DEXELMILL_VERSION);
     app.require_subcommand(1);

@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,39 @@
 namespace dexelmill {
 
 namespace {
+
+/// The temporary files alive, for removeLiveTemporaries: a slot is free (0), being filled or
+/// emptied (1), or holds a path (2). Paths longer than a slot are not tracked.
+struct TrackedTemporary {
+    std::atomic<int> state{0};
+    char path[4096];
+};
+TrackedTemporary tracked[kTrackedTemporaries];
+
+/// Puts `path` in a free slot of the table; -1 when none is free or the path does not fit.
+int track(const std::string& path) {
+    if (path.size() >= sizeof(TrackedTemporary::path)) return -1;
+    for (int i = 0; i < kTrackedTemporaries; ++i) {
+        int free = 0;
+        if (!tracked[i].state.compare_exchange_strong(free, 1)) continue;
+        std::memcpy(tracked[i].path, path.c_str(), path.size() + 1);
+        tracked[i].state.store(2, std::memory_order_release);
+        return i;
+    }
+    return -1;
+}
+
+/// Frees the slot of a temporary file that was renamed or removed.
+void untrack(int slot) {
+    if (slot >= 0) tracked[slot].state.store(0, std::memory_order_release);
+}
+
+void removeOnSignal(int signal) {
+    removeLiveTemporaries();
+    // End as the signal would have ended the process: its default action, raised again.
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
+}
 
 std::string systemError(const std::string& what, const std::string& path) {
     return what + " '" + path + "': " + std::strerror(errno);
@@ -173,7 +207,10 @@ void checkWritable(const std::string& target) {
 
 OutputBatch::~OutputBatch() {
     std::error_code ignored;
-    for (const Staged& s : staged_) std::filesystem::remove(s.temp, ignored);
+    for (const Staged& s : staged_) {
+        std::filesystem::remove(s.temp, ignored);
+        untrack(s.slot);
+    }
 }
 
 void OutputBatch::stage(const std::string& target, const std::function<void(const std::string& path)>& write) {
@@ -183,12 +220,14 @@ void OutputBatch::stage(const std::string& target, const std::function<void(cons
         return;
     }
     Staged s{createTemporary(target, d), d.file.string(), target};
+    s.slot = track(s.temp);
     try {
         write(s.temp);
         finishTemporary(s.temp, d);
     } catch (...) {
         std::error_code ignored;
         std::filesystem::remove(s.temp, ignored);
+        untrack(s.slot);
         throw;
     }
     staged_.push_back(std::move(s));
@@ -198,6 +237,7 @@ void OutputBatch::commit() {
     for (std::size_t i = 0; i < staged_.size(); ++i) {
         std::error_code ec;
         std::filesystem::rename(staged_[i].temp, staged_[i].file, ec);
+        if (!ec) untrack(staged_[i].slot);
         if (ec) {
             const std::string message =
                 "cannot rename '" + staged_[i].temp + "' to '" + staged_[i].target + "': " + ec.message();
@@ -207,6 +247,18 @@ void OutputBatch::commit() {
         }
     }
     staged_.clear();
+}
+
+void removeLiveTemporaries() noexcept {
+    for (TrackedTemporary& t : tracked)
+        if (t.state.load(std::memory_order_acquire) == 2) ::unlink(t.path);
+}
+
+void removeTemporariesOnSignals() {
+    // A signal the process was started ignoring (SIGINT in a shell's background job, SIGHUP under
+    // nohup) stays ignored.
+    for (const int signal : {SIGINT, SIGTERM, SIGHUP})
+        if (std::signal(signal, removeOnSignal) == SIG_IGN) std::signal(signal, SIG_IGN);
 }
 
 void writeFileAtomically(const std::string& target, const std::function<void(const std::string& path)>& write,

@@ -348,6 +348,27 @@ TEST_CASE("a run that fails writing its last output leaves the outputs written b
     CHECK(entries(cli.dir()) == before);  // no temporary file left
 }
 
+TEST_CASE("a run ended by a signal while it writes leaves no temporary file", "[cli][errors]") {
+    const Cli cli("signal");
+    cli.file("slot.ngc", "G21 G90\nT1 M6\nG0 X5 Y15 Z15\nG1 Z7 F100\nG1 X35\nG0 Z15\nM30\n");
+    cli.file("keep.stl", "KEEP\n");
+    // The report goes to a FIFO no one reads, written in place and last: the run stops there, its
+    // mesh staged beside keep.stl, until SIGTERM ends it (a shell's background job ignores SIGINT).
+    REQUIRE(::mkfifo((cli.dir() / "report.json").c_str(), 0600) == 0);
+    const Run r = cli.runIn(std::string("('") + DEXELMILL_CLI_PATH +
+                            "' simulate slot.ngc --stock box:0,0,0,40,30,10 --tool 1=flat:d=6 --resolution 0.5 -q "
+                            "-o keep.stl --report report.json & pid=$!; "
+                            "for i in $(seq 1 600); do ls -a | grep -q '^\\.keep\\.stl\\.tmp' && break; sleep 0.1; done; "
+                            "ls -a | grep -c '^\\.keep\\.stl\\.tmp'; kill -TERM $pid; wait $pid; echo \"status $?\")");
+    // The temporary file was there, and the signal ended the run (128 + 15) and took it away.
+    CHECK_THAT(r.out, StartsWith("1\n") && Contains("status 143"));
+    CHECK(slurp(cli.dir() / "keep.stl") == "KEEP\n");
+    for (const auto& e : fs::directory_iterator(cli.dir())) {
+        INFO(e.path());
+        CHECK(e.path().filename().string().find(".tmp") == std::string::npos);
+    }
+}
+
 TEST_CASE("compare and study check their outputs before any work", "[cli][errors]") {
     const Cli cli("outputs_first");
     cli.file("part.stl", boxStl(10.0));

@@ -167,6 +167,37 @@ TEST_CASE("output batch: the files are renamed together on commit, and none when
     CHECK(dir.entries() == 2);
 }
 
+TEST_CASE("atomic write: the temporary files alive are what an interruption removes", "[io]") {
+    TempDir dir;
+    std::ofstream(dir.file("kept.txt")) << "old";
+    OutputBatch batch;
+    std::string first;
+    batch.stage(dir.file("first.txt"), [&](const std::string& temp) {
+        first = temp;
+        std::ofstream(temp) << "new";
+    });
+    REQUIRE(fs::exists(first));
+    // What the signal handler does, called in the middle of the second file's write: both staged
+    // files go, the targets stay as they were, and the write fails as on a full disk.
+    CHECK_THROWS_AS(batch.stage(dir.file("kept.txt"),
+                                [&](const std::string& temp) {
+                                    std::ofstream(temp) << "new";
+                                    REQUIRE(fs::exists(temp));
+                                    removeLiveTemporaries();
+                                    CHECK_FALSE(fs::exists(temp));
+                                }),
+                    Error);
+    CHECK_FALSE(fs::exists(first));
+    CHECK(slurp(dir.file("kept.txt")) == "old");
+    CHECK(dir.entries() == 1);
+    // A file renamed over its target is no longer the handler's to remove.
+    OutputBatch done;
+    done.stage(dir.file("done.txt"), [](const std::string& temp) { std::ofstream(temp) << "done"; });
+    done.commit();
+    removeLiveTemporaries();
+    CHECK(slurp(dir.file("done.txt")) == "done");
+}
+
 TEST_CASE("atomic write: a link is followed and a replaced file keeps its mode", "[io]") {
     TempDir dir;
     const std::string real = dir.file("real.stl");

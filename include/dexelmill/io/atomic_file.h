@@ -58,6 +58,7 @@ private:
         std::string temp;    ///< the temporary file
         std::string file;    ///< what it is renamed to: the target with its links followed
         std::string target;  ///< the target as named, for messages
+        int slot = -1;       ///< its place in removeLiveTemporaries' table, -1 for none
     };
     std::vector<Staged> staged_;
 };
@@ -80,6 +81,21 @@ struct NamedFile {
     std::string option;  ///< as the user gives it: "-o", "--report", "INPUTS", "DESIGN", ...
     std::string path;    ///< empty where the option is not given
 };
+
+/// @brief Removes every temporary file this process has made and not yet renamed or removed, as
+/// a signal handler may: only unlink(2) on paths kept in a fixed table, no allocation, no lock.
+/// The table holds kTrackedTemporaries paths; a file made while it is full is not tracked, and
+/// would outlive an interruption. Called by the handler removeTemporariesOnSignals installs.
+void removeLiveTemporaries() noexcept;
+
+/// The temporary files removeLiveTemporaries can reach at once: a run stages one per output.
+constexpr int kTrackedTemporaries = 64;
+
+/// @brief Makes SIGINT, SIGTERM and SIGHUP remove the live temporary files
+/// (removeLiveTemporaries) before the process ends by the signal as it would have without the
+/// handler, so that Ctrl-C during a long write leaves no hidden partial file beside the output.
+/// A signal the process started ignoring (nohup, a shell's background job) stays ignored.
+void removeTemporariesOnSignals();
 
 /// @brief Fails before a job starts where an output would overwrite one of its inputs or another
 /// of its outputs. Two paths name the same file when they reach the same file (the same device
