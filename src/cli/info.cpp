@@ -35,14 +35,13 @@ void printProgram(const Program& p) {
     Box cutting;
     std::size_t vertical = 0, tilted = 0, turning = 0;
     for (const Move& m : p.path.moves) {
-        const double len = glm::length(m.end - m.start);
+        const double len = tipLength(m);
         if (m.rapid) {
             ++rapids;
             rapidLength += len;
         } else {
             feedLength += len;
-            cutting.expand(m.start);
-            cutting.expand(m.end);
+            cutting.expand(tipBounds(m));
         }
         if (m.turns()) ++turning;
         else if (std::abs(m.axis.z - 1.0) <= 1e-12) ++vertical;

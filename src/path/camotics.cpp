@@ -336,12 +336,18 @@ Box cuttingBounds(const ToolPath& path, const ToolTable& tools) {
         double radius = widest;
         auto it = tools.find(m.tool);
         if (it != tools.end()) radius = it->second.cuttingRadius();
-        for (const Vec3& p : {m.start, m.end}) {
+        // The tip's path, curved where a machine carries it, and the axis at each of its poses.
+        // Between poses the tip strays at most the path's sag, and the axis turns at most its
+        // axisStep, which moves the rim across by at most radius times that (|a x e_k| is
+        // 1-Lipschitz in a).
+        const TipPath path = tipPath(m);
+        const double pad = path.sag + radius * path.axisStep;
+        for (const ToolPose& pose : path.poses) {
             // Widen across the axis: for a vertical axis, in x and y.
-            const Vec3 a = glm::normalize(m.axis);
+            const Vec3 a = glm::normalize(pose.axis);
             for (int k = 0; k < 3; ++k) {
-                const double across = radius * std::sqrt(std::max(0.0, 1.0 - a[k] * a[k]));
-                Vec3 lo = p, hi = p;
+                const double across = radius * std::sqrt(std::max(0.0, 1.0 - a[k] * a[k])) + pad;
+                Vec3 lo = pose.tip, hi = pose.tip;
                 lo[k] -= across;
                 hi[k] += across;
                 box.expand(lo);

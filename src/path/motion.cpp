@@ -332,4 +332,43 @@ Move subMove(const Move& move, double u0, double u1) {
     return piece;
 }
 
+// The tip y(u) has |y''| <= K = axisPointAccelerationBound(0) over the move, so with n pieces of
+// h = 1/n:
+//  - sag: on a piece, y less its chord vanishes at both ends, and linear interpolation's remainder
+//    bounds it by K h^2 / 8; n is the least that brings this within kTipPathSag (K = 0 where the
+//    tip runs straight: one piece, exact);
+//  - axis: every u lies within h / 2 of a pose, and the axis turns at most axisTurnBound() per unit
+//    u, so it stays within that times h / 2 of the pose's;
+//  - length: on a piece with chord c, d = c / h and e(t) = y'(t) - d, |e(t)| <= (1/h) int |y'(t) -
+//    y'(s)| ds <= K h / 2, and int |e| <= K h^2 / 3. Since |d + e| <= |d| + (2 d.e + |e|^2) / (2|d|)
+//    and int e = 0, the piece's length int |d + e| exceeds |c| by at most int |e|^2 / (2|d|) <=
+//    K^2 h^4 / (8 |c|), and never by more than int |e| either: the smaller of the two, summed.
+TipPath tipPath(const Move& move) {
+    TipPath path;
+    const Vec3 startAxis = move.startAxis ? *move.startAxis : move.axis;
+    if (!(move.rotary && move.rotary->tipCarried)) {
+        path.poses = {ToolPose{move.start, startAxis}, ToolPose{move.end, move.axis}};
+        path.length = glm::length(move.feed());
+        if (move.turns()) path.axisStep = MotionLaw(move).axisTurnBound() / 2.0;
+        return path;
+    }
+    const MotionLaw law(move);
+    const double accel = law.axisPointAccelerationBound(0.0);
+    const int n = int(std::clamp(std::ceil(std::sqrt(accel / (8.0 * kTipPathSag))), 1.0, double(kMaxTipPathPieces)));
+    const double h = 1.0 / n;
+    path.sag = accel * h * h / 8.0;
+    path.axisStep = law.axisTurnBound() * h / 2.0;
+    path.poses.reserve(std::size_t(n) + 1);
+    for (int k = 0; k <= n; ++k) path.poses.push_back(law.pose(double(k) * h));
+    path.poses.front() = ToolPose{move.start, startAxis};
+    path.poses.back() = ToolPose{move.end, move.axis};
+    for (int k = 0; k < n; ++k) {
+        const double chord = glm::length(path.poses[std::size_t(k) + 1].tip - path.poses[std::size_t(k)].tip);
+        path.length += chord;
+        const double coarse = accel * h * h / 3.0;
+        path.lengthError += chord > 0.0 ? std::min(coarse, accel * accel * h * h * h * h / (8.0 * chord)) : coarse;
+    }
+    return path;
+}
+
 }  // namespace dexelmill

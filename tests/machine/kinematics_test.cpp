@@ -10,6 +10,8 @@
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
 #include "dexelmill/machine/kinematics.h"
+#include "dexelmill/tool/builders.h"
+#include "dexelmill/path/camotics.h"
 #include "dexelmill/path/gcode.h"
 #include "dexelmill/path/motion.h"
 #include "support/trt_kinematics.h"
@@ -746,4 +748,61 @@ TEST_CASE("G-code: rotary words need a machine, and M428 / M429 switch the kinem
     }
     CHECK(w.rotaryRanges[2].hi == 40);
     CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG10 L2 P1 B5\n", "w.ngc", o), Contains("w.ngc:2:") && Contains("no B axis"));
+}
+
+TEST_CASE("G-code: extents, the cutting box and the feed length follow the tip's curve in identity kinematics",
+          "[machine][gcode]") {
+    GcodeOptions o;
+    o.machine = loadMachine("xyzac-trt");
+    // Joint X10 at z -8, then the table C turns under it: in the part frame the tip runs on the
+    // circle of radius 10 about z at height -8 (C about z through the origin, A at zero).
+    const auto run = [&](const std::string& c) {
+        return parseGcode("G21 G90\nM429\nG0 X10 Y0 Z20 A0 C0\nG1 Z-8 F100\nG1 C" + c + "\nM2\n", "c.ngc", o);
+    };
+    const auto feed = [](const Program& p) {
+        double sum = 0.0;
+        for (const Move& m : p.path.moves) sum += tipLength(m);
+        return sum;
+    };
+    const double r = 10.0, plunge = 28.0, pi = std::acos(-1.0);
+    // Chords of a circle fall short of it by sag / (3 r) of its length: 2e-3 mm on ten turns.
+    const double shortfall = 0.005;
+    // The box holds the path and exceeds it by at most the polyline's sag.
+    const auto holds = [](double got, double want, double outward) {
+        CHECK(got * outward >= want * outward - 1e-9);
+        CHECK(got * outward <= want * outward + kTipPathSag + 1e-9);
+    };
+    {
+        // Ten full turns: the whole circle, 10 times its circumference.
+        const Program p = run("3600");
+        REQUIRE(p.path.moves.size() == 2);
+        const Box b = p.path.bounds();
+        holds(b.lo.x, -r, -1), holds(b.hi.x, r, 1), holds(b.lo.y, -r, -1), holds(b.hi.y, r, 1);
+        holds(b.lo.z, -8, -1), holds(b.hi.z, 20, 1);
+        CHECK(feed(p) == Approx(plunge + 10 * 2 * pi * r).margin(shortfall));
+        // A flat D6 upright: the cuts' box is the circle's grown by its radius 3 across x and y.
+        // The rim's pad for the axis's turn bound (the axis stands still here; the bound is
+        // looser) keeps it within 0.05 mm.
+        ToolTable tools;
+        tools.emplace(1, flatEndMill(6.0));
+        const Box cut = cuttingBounds(p.path, tools);
+        for (int k = 0; k < 2; ++k) {
+            CHECK(cut.lo[k] <= -(r + 3.0));
+            CHECK(cut.lo[k] >= -(r + 3.0) - 0.05);
+            CHECK(cut.hi[k] >= r + 3.0);
+            CHECK(cut.hi[k] <= r + 3.0 + 0.05);
+        }
+    }
+    {
+        // A half turn: from (10, 0) through the quarter the table turns the tip into, to (-10, 0).
+        const Program p = run("180");
+        const Vec3 quarter = xyzacForward(Vec3(r, 0, -8), 0, 90);
+        const Box b = p.path.bounds();
+        holds(b.lo.x, -r, -1), holds(b.hi.x, r, 1);
+        if (quarter.y < 0) holds(b.lo.y, -r, -1), holds(b.hi.y, 0, 1);
+        else holds(b.lo.y, 0, -1), holds(b.hi.y, r, 1);
+        CHECK(feed(p) == Approx(plunge + pi * r).margin(shortfall));
+    }
+    // A quarter turn: the quarter circle's 5 pi, not its chord's 10 sqrt(2).
+    CHECK(feed(run("90")) == Approx(plunge + pi * r / 2).margin(shortfall));
 }

@@ -132,4 +132,26 @@ class MotionLaw {
 /// poses is the move's, so is their swept volume.
 Move subMove(const Move& move, double u0, double u1);
 
+/// @brief The most the polyline tipPath takes a move's tip path as may stray from it, where its
+/// pieces suffice: a tenth of the arcs' default chord tolerance (1e-3 mm), so that extents and
+/// lengths read from it are as good as an arc's chords give.
+constexpr double kTipPathSag = 1e-4;
+/// @brief The most pieces tipPath cuts one move into (a table's ten turns with the tip 10 mm off
+/// its axis take 7,025); past it the sag it reports grows.
+constexpr int kMaxTipPathPieces = 1 << 16;
+
+/// @brief A move's tip path as the polyline through its poses at u = k / n, k = 0..n (the ends
+/// exactly the move's), with proven bounds on how far the path strays from it (motion.cpp).
+struct TipPath {
+    std::vector<ToolPose> poses;
+    double sag = 0.0;          ///< the tip's path lies within this of the polyline's chords (mm)
+    double axisStep = 0.0;     ///< the axis at every u lies within this (rad) of a pose's axis
+    double length = 0.0;       ///< the chords' total: the path's length, or short of it by
+    double lengthError = 0.0;  ///< at most this (mm)
+};
+
+/// @brief The tip path of a move: its two ends where the tip runs straight (a fixed axis, an APT
+/// turn, a machine's move under TCP), else as many pieces as keep the sag within kTipPathSag.
+TipPath tipPath(const Move& move);
+
 }  // namespace dexelmill

@@ -71,6 +71,26 @@ struct Move {
     bool turns() const { return startAxis.has_value() || rotary != nullptr; }
 };
 
+/// @brief The extent of a move's tip path: its ends where the tip runs straight, else the
+/// polyline of tipPath padded by its sag, which holds the curve a machine carries the tip on.
+inline Box tipBounds(const Move& m) {
+    Box b;
+    if (!(m.rotary && m.rotary->tipCarried)) {
+        b.expand(m.start);
+        b.expand(m.end);
+        return b;
+    }
+    const TipPath path = tipPath(m);
+    for (const ToolPose& p : path.poses) b.expand(p.tip);
+    return b.padded(path.sag);
+}
+
+/// @brief The length of a move's tip path: its chord where the tip runs straight, else tipPath's
+/// (short of the curve by at most its lengthError).
+inline double tipLength(const Move& m) {
+    return m.rotary && m.rotary->tipCarried ? tipPath(m).length : glm::length(m.feed());
+}
+
 /// @brief The tool in the spindle changes before move `moveIndex`.
 struct ToolChange {
     std::size_t moveIndex = 0;
@@ -102,13 +122,10 @@ struct ToolPath {
         loc.line = ref.line;
         return loc;
     }
-    /// @brief The extent of all CL points.
+    /// @brief The extent of the tip's paths (tipBounds), curved ones included.
     Box bounds() const {
         Box b;
-        for (const Move& m : moves) {
-            b.expand(m.start);
-            b.expand(m.end);
-        }
+        for (const Move& m : moves) b.expand(tipBounds(m));
         return b;
     }
 };
