@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <vector>
 
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
@@ -748,6 +749,36 @@ TEST_CASE("G-code: rotary words need a machine, and M428 / M429 switch the kinem
     }
     CHECK(w.rotaryRanges[2].hi == 40);
     CHECK_THROWS_WITH(parseGcode("G0 X0 Y0 Z0\nG10 L2 P1 B5\n", "w.ngc", o), Contains("w.ngc:2:") && Contains("no B axis"));
+}
+
+TEST_CASE("G-code: a kinematics switch before X, Y and Z are known keeps the position unknown", "[machine][gcode]") {
+    GcodeOptions o;
+    o.machine = loadMachine("xyzac-trt");
+    auto switchWarnings = [](const Program& p) {
+        std::vector<Diagnostic> found;
+        for (const Diagnostic& d : p.diagnostics)
+            if (d.message.find("before X, Y and Z are all known") != std::string::npos) found.push_back(d);
+        return found;
+    };
+    // Joint X10 at C90 with Y and Z never given: the tip's part position depends on them, so the
+    // plunge after M428 (whose X is not programmed again) only places the tool.
+    const Program guess = parseGcode("G21 G90\nM429\nG0 X10 C90\nM428\nG0 Y0 Z20\nG1 Z-8 F100\nM2\n", "g.ngc", o);
+    CHECK(guess.path.moves.empty());
+    const std::vector<Diagnostic> warned = switchWarnings(guess);
+    REQUIRE(warned.size() == 1);
+    CHECK(warned[0].where.line == 4);
+    CHECK(warned[0].where.column == 1);
+    CHECK(warned[0].message.find("M428") != std::string::npos);
+    CHECK(warned[0].message.find("(Y, Z not yet programmed)") != std::string::npos);
+    // Given X, Y and Z in the new frame, the tip goes where they say: straight down at the part's
+    // (3, 4), as TCP positions are the tip in the part frame.
+    const Program given =
+        parseGcode("M429\nG0 X10 C90\nM428\nG0 X3 Y4 Z20\nG1 Z-8 F100\nM2\n", "g.ngc", o);
+    REQUIRE(given.path.moves.size() == 1);
+    CHECK(distance(given.path.moves[0].start, Vec3(3, 4, 20)) < 1e-12);
+    CHECK(distance(given.path.moves[0].end, Vec3(3, 4, -8)) < 1e-12);
+    // A switch before anything is known forgets nothing, and says nothing.
+    CHECK(switchWarnings(parseGcode("M428\nG0 X0 Y0 Z20\nG1 Z-8 F100\n", "g.ngc", o)).empty());
 }
 
 TEST_CASE("G-code: extents, the cutting box and the feed length follow the tip's curve in identity kinematics",

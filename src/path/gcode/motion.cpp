@@ -171,6 +171,17 @@ void Interpreter::setTcp(bool on, int col, const char* code) {
     if (on == tcp_) return;
     mpos_ = on ? opt_.machine->partFromJoints(mpos_, angles_) : opt_.machine->jointsFromPart(mpos_, angles_);
     tcp_ = on;
+    if (positionKnown_ || !(known_[0] || known_[1] || known_[2])) return;
+    // Each coordinate in the new frame may mix all three of the old: with one of them never
+    // programmed, none of the converted ones is known, and the program must give X, Y and Z anew.
+    std::string unknown;
+    for (int a = 0; a < 3; ++a)
+        if (!known_[a]) unknown += (unknown.empty() ? "" : ", ") + std::string(1, char('X' + a));
+    std::fill(std::begin(known_), std::end(known_), false);
+    warn(std::string(code) + " before X, Y and Z are all known (" + unknown +
+             " not yet programmed): the position stays unknown until X, Y and Z are all programmed "
+             "in the new frame",
+         std::string(code) + " with the position unknown", col);
 }
 
 bool Interpreter::executeNonModal(int code, Block& b, int motion) {
