@@ -220,7 +220,7 @@ void noteDesignBeyondStock(const Box& design, const Box& stock, const std::strin
 }
 
 /// Moves whose tool axis turns. A feed move is swept turning (TurningSweep, within the job's
-/// turn tolerance); its axes must not be opposite, where no one great circle joins them. A rapid
+/// turn tolerance); the readers have refused opposite axes, which no one great circle joins. A rapid
 /// that turns is a reorientation whose path is the machine's, not the program's straight line: it
 /// is swept with its end axis, with a warning where it can reach the stock; a rapid of a machine's
 /// rotary axes follows the machine's law (Move::rotary) and needs no warning.
@@ -232,21 +232,9 @@ void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& 
         // A machine's rotary move has a known law, swept as it is (sweepsTurning): no great circle
         // to check and, at rapid, no end axis to warn of.
         if (!m.turns() || m.rotary) continue;
-        const Vec3& a = *m.startAxis;
-        const Tool& tool = tools.at(m.tool);
-        const SourceLocation at = path.where(m.source);
-        Box reach;
-        try {
-            reach = turningMoveBox(m, ToolReach(tool));
-        } catch (const Error& e) {  // opposite axes: no one great circle to turn on
-            std::ostringstream msg;
-            msg.precision(6);
-            msg << "the tool axis turns " << glm::degrees(turnAngle(m)) << " degrees during this move, from (" << a.x
-                << ", " << a.y << ", " << a.z << ") to (" << m.axis.x << ", " << m.axis.y << ", " << m.axis.z
-                << "): " << e.what();
-            throw ParseError(at, msg.str());
-        }
-        if (m.rapid && reach.overlaps(stockBox) && rapids++ == 0) firstRapid = at;
+        // The readers refuse opposite axes (APT's emit), so the great circle exists.
+        const Box reach = turningMoveBox(m, ToolReach(tools.at(m.tool)));
+        if (m.rapid && reach.overlaps(stockBox) && rapids++ == 0) firstRapid = path.where(m.source);
     }
     if (rapids == 0) return;
     ReportWarning w;

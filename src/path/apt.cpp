@@ -15,6 +15,7 @@
 
 #include "dexelmill/decimal.h"
 #include "dexelmill/error.h"
+#include "dexelmill/path/motion.h"
 #include "dexelmill/tool/builders.h"
 #include "path/detail/arc.h"
 #include "path/detail/diagnostics.h"
@@ -565,7 +566,19 @@ private:
         m.start = pos_;
         m.end = to;
         m.axis = axis_;
-        if (posAxis_ != axis_) m.startAxis = posAxis_;
+        if (posAxis_ != axis_) {
+            m.startAxis = posAxis_;
+            // The move's law turns the axis on the great circle between its ends: axes opposite
+            // have none, refused here so that info and simulate both stop at the statement.
+            try {
+                const MotionLaw law(m);
+            } catch (const Error& e) {
+                const double degrees =
+                    std::atan2(glm::length(glm::cross(posAxis_, axis_)), glm::dot(posAxis_, axis_)) * 180.0 / kPi;
+                fail(s, "the tool axis turns " + detail::formatNumber(degrees) + " degrees during this move, from " +
+                            detail::formatPoint(posAxis_) + " to " + detail::formatPoint(axis_) + ": " + e.what());
+            }
+        }
         m.tool = key_;
         m.rapid = rapid;
         m.source = {0, s.line};

@@ -518,7 +518,7 @@ TEST_CASE("a move that turns the tool axis cuts what its poses reach, and nothin
         o.inputs = {write(dir / "flip.apt", "MULTAX\nCUTTER/10\nFROM/0,0,100,0,0,1\nGOTO/0,0,100,0,0,-1\n")};
         o.stockBox = Box{Vec3(-20, -20, -20), Vec3(20, 20, 0)};
         o.resolution = 1.0;
-        CHECK_THROWS_WITH(runSimulation(o), Contains("flip.apt:4: error") && Contains("opposite"));
+        CHECK_THROWS_WITH(runSimulation(o), Contains("flip.apt:4:1: error") && Contains("opposite"));
     }
     // A turn too small to move any point of the tool by the sweep's accuracy is a fixed-axis move.
     {

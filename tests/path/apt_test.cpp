@@ -319,6 +319,11 @@ TEST_CASE("apt: an arc between GOTOs whose tool axes differ turns the axis over 
     // Opposite axes have no one great circle: an error at the GOTO that ends the arc.
     CHECK_THROWS_WITH(parseApt("MULTAX\nCUTTER/10\nGOTO/10,0,0,0,0,1\nCIRCLE/0,0,0,0,0,1,10\nGOTO/-10,0,0,0,0,-1\n", "o.apt"),
                       Catch::Contains("o.apt:5:1") && Catch::Contains("opposite"));
+    // So have a GOTO's: the same error, at the GOTO's line and column, from the reader that info
+    // and simulate share.
+    CHECK_THROWS_WITH(parseApt("MULTAX\nCUTTER/10\nFROM/0,0,20,0,0,1\nGOTO/0,0,-8,0,0,1\n  GOTO/5,0,-8,0,0,-1\n", "g.apt"),
+                      Catch::Contains("g.apt:5:3") && Catch::Contains("turns 180 degrees") &&
+                          Catch::Contains("opposite"));
 }
 
 TEST_CASE("apt: a '$' that ends PPRINT, INSERT or PARTNO text is text, not a continuation", "[path][apt]") {
