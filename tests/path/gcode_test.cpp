@@ -326,6 +326,13 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
         {"probe without axes", "G0 X0 Y0 Z10\nG91 G38.2 F10\n", 2, 5, "all axes missing with motion code G38.2", "G38.2"},
         {"dwell cycle without P", "G0 Z5\nG17 G82 X1 Y1 Z-2 R1\n", 2, 5, "G82/G89 without P", "G82"},
         {"peck without Q", "G0 Z5\nG83 X1 Y1 Z-2 R1\n", 2, 1, "without Q", "G83"},
+        // LinuxCNC's convert_straight and convert_arc: under G93 each feed move's F is its time.
+        {"inverse time G1 without F", "G0 X0 Y0 Z5\nG93\nG1 Z-1\n", 3, 1, "F word missing with inverse time G1 move",
+         "G1"},
+        {"inverse time modal G1 without F", "G0 X0 Y0 Z5\nG93 G1 Z-1 F2\nX4\n", 3, 1,
+         "F word missing with inverse time G1 move", "X4"},
+        {"inverse time arc without F", "G0 X0 Y0 Z5\nG93 G2 X10 I5 F1\nG3 X0 I-5\n", 3, 1,
+         "F word missing with inverse time arc move", "G3"},
         {"G10 without L", "G90 G10 P1 X5\n", 1, 5, "G10 without L", "G10"},
         {"G53 in G91", "G91 G53 G0 X5\n", 1, 5, "G53 in incremental mode", "G53"},
         {"M98 without P", "G0 X1 M98\nM30\n", 1, 7, "M98 without P", "M98"},
@@ -723,6 +730,12 @@ TEST_CASE("gcode: with no start position, moves only place the tool until X, Y a
     bool warned = false;
     for (const Diagnostic& d : p.diagnostics) warned = warned || d.message.find("start position is unknown") != std::string::npos;
     CHECK(warned);
+}
+
+TEST_CASE("gcode: inverse time needs F on each feed move until G94 ends it", "[path][gcode]") {
+    const Program p = run("G0 X0 Y0 Z5\nG93 G1 Z-1 F2\nG2 X10 I5 F1\nG0 Z5\nG94\nG1 Z-1\nM2\n");
+    CHECK(p.path.moves.size() > 4);
+    CHECK(p.path.moves.back().end.z == -1.0);
 }
 
 TEST_CASE("gcode: a file of subroutines alone names each one it never calls", "[path][gcode]") {

@@ -201,6 +201,7 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
 
     // 1. Feed mode, feed, speed.
     if (groupCode[5] >= 0) {
+        inverseTime_ = groupCode[5] == 930;
         if (groupCode[5] == 930) warn("G93 inverse-time feed: feeds are not simulated", "G93");
         else if (groupCode[5] == 950) warn("G95 feed per revolution: feeds are not simulated", "G95");
     }

@@ -393,6 +393,8 @@ private:
     /// Tool centre point control: positions are the tip in the part frame, not joints.
     bool tcp_ = false;
     bool tcpByG434_ = false;
+    /// G93 inverse-time feed is on: every G1, G2 and G3 move needs its own F word.
+    bool inverseTime_ = false;
     /// G92 / G52 offsets of the rotary axes (degrees): machine angle = programmed + this offset +
     /// the coordinate system's (g5xRotary_).
     std::array<double, 3> rotaryOffset_{0.0, 0.0, 0.0};  ///< TCP came from G43.4, so G49 ends it

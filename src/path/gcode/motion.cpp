@@ -361,6 +361,15 @@ void Interpreter::cancelTwp() {
 }
 
 void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
+    // LinuxCNC's convert_straight and convert_arc: in inverse time the F word is the move's
+    // time, so a feed move without one has no feed at all.
+    if (inverseTime_ && (mode == 10 || mode == 20 || mode == 30) && !b.has('F')) {
+        const int col = motionCol ? motionCol : b.col[firstAxisLetter(b) - 'A'];
+        fail(col,
+             std::string("F word missing with inverse time ") + (mode == 10 ? "G1" : "arc") +
+                 " move: after G93 each G1, G2 and G3 block needs its own F, as LinuxCNC requires",
+             tokenAt(col));
+    }
     switch (mode) {
     case 0: case 10: {
         Vec3 target;
