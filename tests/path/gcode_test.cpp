@@ -738,6 +738,21 @@ TEST_CASE("gcode: inverse time needs F on each feed move until G94 ends it", "[p
     CHECK(p.path.moves.back().end.z == -1.0);
 }
 
+TEST_CASE("gcode: a rotary word that turns nothing is a warning without --machine, not dropped silently",
+          "[path][gcode]") {
+    const Program p = run("G0 X0 Y0 Z20 A0\nG1 Z-8 F100\nG1 X5 C0\nM2\n");
+    CHECK(p.path.moves.size() == 3);
+    std::vector<std::pair<int, int>> at;
+    for (const Diagnostic& d : p.diagnostics)
+        if (d.message.find("turns nothing and is ignored") != std::string::npos) {
+            CHECK(d.message.find("--machine") != std::string::npos);
+            CHECK(d.message.find(d.where.line == 1 ? "'A0'" : "'C0'") != std::string::npos);
+            at.emplace_back(d.where.line, d.where.column);
+        }
+    // Counted as one warning, at the first word: line 1, column 14.
+    CHECK(at == std::vector<std::pair<int, int>>{{1, 14}});
+}
+
 TEST_CASE("gcode: a file of subroutines alone names each one it never calls", "[path][gcode]") {
     const std::string subs = "(pockets)\no<pocket> sub\nG1 X#1 F100\no<pocket> endsub\n"
                              "o<slot> sub\nG1 Y#1 F100\no<slot> endsub\n";

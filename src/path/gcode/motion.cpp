@@ -134,7 +134,13 @@ RotaryAngles Interpreter::rotaryTarget(Block& b, bool incremental) {
             warn(lacks + ": '" + tokenAt(b.col[a]) + "' leaves it at zero and is ignored", lacks, b.col[a]);
             continue;
         }
-        if (target == angles_.deg[a]) continue;
+        if (target == angles_.deg[a]) {
+            if (!opt_.machine)
+                warn("rotary word '" + tokenAt(b.col[a]) + "' turns nothing and is ignored: rotary axes "
+                     "are simulated only with --machine NAME|FILE.json",
+                     "rotary word without --machine", b.col[a]);
+            continue;
+        }
         if (!opt_.machine) {
             std::string names;
             for (const std::string& n : builtinMachineNames()) names += (names.empty() ? "" : ", ") + n;
