@@ -385,7 +385,7 @@ TEST_CASE("gcode: expressions nested past the limit are a located error, not a s
     const int limit = 1000;
     const Deep cases[] = {
         {"unary signs", "G1 X" + std::string(40000, '-') + "1\n", 5 + limit},
-        {"brackets", "G1 X" + std::string(20000, '[') + "1\n", 0},
+        {"brackets", "G1 X" + std::string(20000, '[') + "1\n", 5 + limit},
         {"powers", "#1 = [1" + [] {
              std::string s;
              for (int k = 0; k < 100000; ++k) s += "**1";
@@ -406,11 +406,13 @@ TEST_CASE("gcode: expressions nested past the limit are a located error, not a s
             CHECK(e.where().file == "deep.ngc");
             CHECK(e.where().line == 1);
             if (c.column) CHECK(e.where().column == c.column);
-            CHECK(e.message().find("nested deeper than 1000") != std::string::npos);
+            CHECK(e.message().find("nested deeper than " + std::to_string(limit) + " levels") !=
+                  std::string::npos);
         }
     }
-    // Within the limit the value is read as written.
-    const std::string fine = "G1 X" + std::string(400, '[') + "-7" + std::string(400, ']') + "\n";
+    // At the limit, each bracket and the sign one level, the value is read as written.
+    const std::string fine = "G1 X" + std::string(std::size_t(limit - 1), '[') + "-7" +
+                             std::string(std::size_t(limit - 1), ']') + "\n";
     GcodeOptions options;
     options.startPosition = Vec3(0.0);
     const Program p = parseGcode(fine, "fine.ngc", options);

@@ -69,11 +69,11 @@ ParamRef Interpreter::readParamRef(std::size_t& i) {
 }
 
 double Interpreter::readRealValue(std::size_t& i) {
-    const Nesting nesting(*this, depth_, i);
     i = skipSpaces(line_, i);
     if (i >= line_.size()) fail(int(i) + 1, "missing value at end of line", tokenAt(int(i)));
     const char c = line_[i];
     if (c == '[') {
+        const Nesting nesting(*this, depth_, i);
         const int col = int(i) + 1;
         ++i;
         const double v = parseExpression(i, 0);
@@ -88,6 +88,7 @@ double Interpreter::readRealValue(std::size_t& i) {
         return getParam(r);
     }
     if (c == '-' || c == '+') {
+        const Nesting nesting(*this, depth_, i);
         ++i;
         const double v = readRealValue(i);
         return c == '-' ? -v : v;
@@ -194,7 +195,6 @@ int Interpreter::peekOperator(std::size_t i, int& code, std::size_t& len) {
 }
 
 double Interpreter::parseExpression(std::size_t& i, int minPrec) {
-    const Nesting nesting(*this, depth_, i);
     double lhs = readRealValue(i);
     while (true) {
         int code = 0;
@@ -211,8 +211,15 @@ double Interpreter::parseExpression(std::size_t& i, int minPrec) {
         i = skipSpaces(line_, i);
         const int opCol = int(i) + 1;
         i += len;
-        // ** is right-associative; others left.
-        const double rhs = parseExpression(i, code == 'P' ? prec - 1 : prec);
+        // ** is right-associative, so a chain of them recurses once per operator and counts a
+        // level each; the others are left-associative and recurse at most once per precedence.
+        double rhs;
+        if (code == 'P') {
+            const Nesting nesting(*this, depth_, i);
+            rhs = parseExpression(i, prec - 1);
+        } else {
+            rhs = parseExpression(i, prec);
+        }
         switch (code) {
         case 'P': lhs = std::pow(lhs, rhs); break;
         case '*': lhs *= rhs; break;

@@ -52,9 +52,10 @@ inline constexpr double kArcRadiusFit = 0.002;
 inline constexpr double kG83RapidDelta = 0.010 * kInch;
 inline constexpr double kG73Clearance = 0.002 * kInch;
 
-/// The deepest nesting of an expression: brackets, unary signs, function arguments and the
-/// right-associative ** each add a level. LinuxCNC's own parser stops far sooner; the limit keeps
-/// the recursive reader within a few hundred kilobytes of stack.
+/// The deepest nesting of an expression: each bracket (a function's argument included), unary
+/// sign and right-associative ** adds one level. LinuxCNC's own parser stops far sooner; the limit
+/// keeps the recursive reader (two to four frames a level, and one more for each precedence an
+/// operator chain in it climbs) within a megabyte of stack.
 inline constexpr int kMaxExpressionDepth = 1000;
 
 /// Hot warning kinds, counted without building strings.
