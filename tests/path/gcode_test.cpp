@@ -382,7 +382,7 @@ TEST_CASE("gcode: expressions nested past the limit are a located error, not a s
         std::string text;
         int column;  // where the level past the limit starts
     };
-    const int limit = 1000;
+    const int limit = 500;
     const Deep cases[] = {
         {"unary signs", "G1 X" + std::string(40000, '-') + "1\n", 5 + limit},
         {"brackets", "G1 X" + std::string(20000, '[') + "1\n", 5 + limit},

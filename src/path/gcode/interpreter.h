@@ -55,8 +55,9 @@ inline constexpr double kG73Clearance = 0.002 * kInch;
 /// The deepest nesting of an expression: each bracket (a function's argument included), unary
 /// sign and right-associative ** adds one level. LinuxCNC's own parser stops far sooner; the limit
 /// keeps the recursive reader (two to four frames a level, and one more for each precedence an
-/// operator chain in it climbs) within a megabyte of stack.
-inline constexpr int kMaxExpressionDepth = 1000;
+/// operator chain in it climbs) as deep as it went when a bracket counted twice against 1000
+/// levels, which the sanitizer and fuzz builds, whose frames are larger, have run.
+inline constexpr int kMaxExpressionDepth = 500;
 
 /// Hot warning kinds, counted without building strings.
 enum HotKind { kHotFeed, kHotSpeed, kHotCount };
