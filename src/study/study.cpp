@@ -205,6 +205,18 @@ void checkOutputs(const StudyOptions& o) {
         if (!path->empty()) checkWritable(*path);
 }
 
+/// runSimulation(job), its errors prefixed with `which` run failed: the reference run's spacing is
+/// one the user never typed. A program's own errors (ParseError) name their file and line already.
+Simulation runNamed(const SimulateOptions& job, const std::string& which) {
+    try {
+        return runSimulation(job);
+    } catch (const ParseError&) {
+        throw;
+    } catch (const Error& e) {
+        throw Error(which + ": " + e.what());
+    }
+}
+
 /// The mesh coloured as compare and simulate --deviation-ply colour theirs (deviationColour): red
 /// where the model lacks material of the exact part (as a gouge), blue where it holds more (as
 /// excess), with no tolerance between and darkest at one spacing; the distance as the property
@@ -272,18 +284,9 @@ StudyResult runStudy(const StudyOptions& o) {
         ref.resolution = hs.back() / 2;
         ref.families = FamilySet::all();
         ref.progress = nullptr;
-        const Simulation s = [&] {
-            try {
-                return runSimulation(ref);
-            } catch (const ParseError&) {
-                throw;
-            } catch (const Error& e) {
-                std::ostringstream what;
-                what << "the study's reference run, at half the finest of --resolutions (h = " << ref.resolution
-                     << " mm): " << e.what();
-                throw Error(what.str());
-            }
-        }();
+        std::ostringstream which;
+        which << "the study's reference run, at half the finest of --resolutions (h = " << ref.resolution << " mm)";
+        const Simulation s = runNamed(ref, which.str());
         result.referenceVolumeMm3 = s.stock->volume(Axis::Z);
         std::ostringstream r;
         r << "tri-dexel at h = " << ref.resolution << " mm";
@@ -301,17 +304,9 @@ StudyResult runStudy(const StudyOptions& o) {
             job.progress = nullptr;
             resetPeakMemory();  // the peak of this run, not of the runs before it
             const double memoryBefore = currentMemoryMb();
-            const Simulation s = [&] {
-                try {
-                    return runSimulation(job);
-                } catch (const ParseError&) {
-                    throw;
-                } catch (const Error& e) {
-                    std::ostringstream what;
-                    what << "the study's run at h = " << h << " mm with " << fams.str() << " dexels: " << e.what();
-                    throw Error(what.str());
-                }
-            }();
+            std::ostringstream which;
+            which << "the study's run at h = " << h << " mm with " << fams.str() << " dexels";
+            const Simulation s = runNamed(job, which.str());
             StudyRun run;
             run.h = h;
             run.families = fams.str();
