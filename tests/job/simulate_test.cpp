@@ -45,6 +45,15 @@ const char* kSlot =
     "M30\n";
 const double kSlotVolume = 3 * (30 * 6 + kPi * 9);
 
+/// kSlot, written in `dir`, on a 40 x 30 x 10 mm block with a flat D6 for every tool number.
+SimulateOptions slotJob(const fs::path& dir) {
+    SimulateOptions o;
+    o.inputs = {write(dir / "slot.ngc", kSlot)};
+    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
+    o.defaultTool = flatEndMill(6, {20, 40});
+    return o;
+}
+
 /// A project in `dir` that runs its `own.ngc` with a flat D6 as tool 1 on a 40 x 30 x 10 mm
 /// block, its JSON members `resolution` (each with its comma) first.
 std::string blockProject(const fs::path& dir, const std::string& resolution) {
@@ -164,11 +173,7 @@ TEST_CASE("the stock's volume is its box's at spacings that do not divide it", "
     // of each axis standing for the stock up to its face (each dexel's length is a float, within
     // 2^-24 of the box's). The slot's volume is the midpoint rule's across the dexels: within one
     // spacing of its outline (shorter than its 36 x 6 mm box's perimeter, 84 mm) times its depth.
-    const fs::path dir = scratch("spacings");
-    SimulateOptions o;
-    o.inputs = {write(dir / "slot.ngc", kSlot)};
-    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
-    o.defaultTool = flatEndMill(6, {20, 40});
+    SimulateOptions o = slotJob(scratch("spacings"));
     for (const double h : {0.3, 0.7, 1.5}) {
         INFO("h = " << h);
         o.resolution = h;
@@ -183,11 +188,7 @@ TEST_CASE("the stock's volume is its box's at spacings that do not divide it", "
 }
 
 TEST_CASE("z-only and x-only stocks measure the same slot", "[job]") {
-    const fs::path dir = scratch("families");
-    SimulateOptions o;
-    o.inputs = {write(dir / "slot.ngc", kSlot)};
-    o.stockBox = Box{Vec3(0.0), Vec3(40, 30, 10)};
-    o.defaultTool = flatEndMill(6, {20, 40});
+    SimulateOptions o = slotJob(scratch("families"));
     o.resolution = 0.25;
     for (const char* f : {"z", "x"}) {
         o.families = FamilySet::parse(f);
