@@ -219,6 +219,24 @@ void noteDesignBeyondStock(const Box& design, const Box& stock, const std::strin
     notes.push_back(w);
 }
 
+/// Warns when the chords the readers cut arcs into lie farther from their arcs than the lattice
+/// spacing `h`: the part then shows the chords' facets, which the lattice resolves, where the
+/// program asked for arcs.
+void noteArcChords(const Program& program, double h, double chordTolerance, std::vector<ReportWarning>& notes) {
+    if (!(program.arcSag > h)) return;
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "arcs are cut as chords that lie up to %.4g mm from their arcs (--chord-tolerance %g mm), more "
+                  "than the lattice spacing of %g mm: the part shows the chords' facets; a --chord-tolerance of "
+                  "%g mm or less keeps them within the spacing",
+                  program.arcSag, chordTolerance, h, h);
+    const SourceLocation at = program.path.where(program.arcSagSource);
+    ReportWarning w;
+    w.where = {at.file, at.line};
+    w.message = text;
+    notes.push_back(w);
+}
+
 /// Moves whose tool axis turns. A feed move is swept turning (TurningSweep, within the job's
 /// turn tolerance); the readers have refused opposite axes, which no one great circle joins. A rapid
 /// that turns is a reorientation whose path is the machine's, not the program's straight line: it
@@ -600,6 +618,7 @@ Simulation runStages(const SimulateOptions& o) {
     report.stockBox = loaded.box;
     report.resolutionMm = stock.lattice().h;
     report.lattice = stock.lattice().n;
+    noteArcChords(program, report.resolutionMm, o.chordTolerance, notes);
     for (int a = 0; a < 3; ++a) {
         const Axis ax = axisFromIndex(a);
         if (stock.has(ax)) report.dexels[a] = std::size_t(stock.family(ax).nb()) * std::size_t(stock.family(ax).nc());

@@ -689,6 +689,10 @@ private:
         pts_.clear();
         detail::arcPoints(arc, n, pts_);
         pts_.back() = end;
+        if (const double sag = detail::chordSag(std::max(rs, re), sweep, n); sag > out_.arcSag) {
+            out_.arcSag = sag;
+            out_.arcSagSource = {0, s.line};
+        }
         const bool rapid = rapidNext_;
         rapidNext_ = false;
         const Vec3 endAxis = axis_;

@@ -52,6 +52,11 @@ void Program::append(Program&& next) {
         m.tool = number(m.tool);
         path.moves.push_back(m);
     }
+    if (next.arcSag > arcSag) {
+        arcSag = next.arcSag;
+        arcSagSource = next.arcSagSource;
+        arcSagSource.file += fileBase;
+    }
     for (ToolChange c : next.path.toolChanges) {
         c.moveIndex += moveBase;
         c.source.file += fileBase;

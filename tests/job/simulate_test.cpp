@@ -629,3 +629,29 @@ TEST_CASE("simulate: a spacing coarser than half the stock's thinnest side is re
                                                 Catch::Contains("give --resolution 2.5 mm or less"));
     }
 }
+
+TEST_CASE("arcs whose chords stray farther than the lattice spacing are named at the arc", "[job]") {
+    const fs::path dir = scratch("arc_chords");
+    // A full circle of radius 5 at z -1 on its line 4.
+    const std::string program = write(dir / "circle.ngc", "G21 G90\nG0 X5 Y0 Z5\nG1 Z-1\nG2 X5 Y0 I-5 J0\nG0 Z5\n");
+    const auto chordWarnings = [&](double chordTolerance) {
+        SimulateOptions o;
+        o.inputs = {program};
+        o.defaultTool = flatEndMill(2.0, {10.0, 20.0});
+        o.stockBox = Box{Vec3(-8, -8, -3), Vec3(8, 8, 0)};
+        o.resolution = 0.5;
+        o.chordTolerance = chordTolerance;
+        std::vector<ReportWarning> found;
+        for (const ReportWarning& w : runSimulation(o).report.warnings)
+            if (w.message.find("chords") != std::string::npos) found.push_back(w);
+        return found;
+    };
+    // Chords within 0.2 mm of the circle: finer than the spacing, nothing to say.
+    CHECK(chordWarnings(0.2).empty());
+    // A tolerance past the radius: two chords across the diameter, 5 mm from the circle's far side.
+    const std::vector<ReportWarning> coarse = chordWarnings(6.0);
+    REQUIRE(coarse.size() == 1);
+    CHECK(coarse[0].where.file == program);
+    CHECK(coarse[0].where.line == 4);
+    CHECK(coarse[0].message.find("up to 5 mm") != std::string::npos);
+}

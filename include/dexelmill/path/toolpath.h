@@ -148,6 +148,10 @@ struct Program {
     std::optional<StatedStock> statedStock;  ///< the last one stated
     /// The range (degrees) rotary axes A, B, C take over the moves; empty for an axis never set.
     std::array<Interval, 3> rotaryRanges{Interval::empty(), Interval::empty(), Interval::empty()};
+    /// How far the chords of the arcs the readers split (G2/G3, APT CIRCLE) lie from their arcs at
+    /// most (mm), and the arc whose chords do; 0 without arcs.
+    double arcSag = 0.0;
+    SourceRef arcSagSource;
 
     /// @brief Runs `next` after this program: its files, moves and tool changes are renumbered
     /// onto the end of these, its tools join these, its diagnostics follow. A number both define

@@ -24,8 +24,14 @@ struct ArcSpec {
 
 /// @brief The number of chords so that each chord stays within `tolerance` of the arc:
 /// a chord of angle phi on a circle of radius r deviates by the sagitta r (1 - cos(phi / 2)),
-/// so phi <= 2 acos(1 - tol / r). Returns 0 when more than maxSegments would be needed.
+/// so phi <= 2 acos(1 - tol / r), and phi <= pi (a chord of a half turn or less lies within its
+/// sagitta of its arc; a wider one does not). Returns 0 when more than maxSegments would be needed.
 std::size_t arcSegments(double radius, double sweep, double tolerance, std::size_t maxSegments);
+
+/// @brief How far `segments` equal chords of an arc of `radius` turning by `sweep` lie from it:
+/// the sagitta of one chord (exact for a circular arc; for a spiral or helix, of the circle of
+/// `radius`, the larger radius, as arcSegments takes it), for chords of at most a half turn each.
+double chordSag(double radius, double sweep, std::size_t segments);
 
 /// @brief The chord end points of the arc (not the start point), the last being the arc's end.
 void arcPoints(const ArcSpec& arc, std::size_t segments, std::vector<Vec3>& out);

@@ -1,5 +1,6 @@
 /// @file common.cpp
 /// @brief Shared helpers of the readers: arcs, numbers, files.
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -15,10 +16,21 @@
 
 namespace dexelmill::detail {
 
+namespace {
+constexpr double kHalfTurn = 3.14159265358979323846;
+}
+
+double chordSag(double radius, double sweep, std::size_t segments) {
+    if (segments == 0) return 0.0;
+    return radius * (1.0 - std::cos(std::abs(sweep) / double(segments) / 2.0));
+}
+
 std::size_t arcSegments(double radius, double sweep, double tolerance, std::size_t maxSegments) {
     const double a = std::abs(sweep);
-    if (!(a > 0.0) || !(radius > tolerance)) return 1;
-    const double maxStep = 2.0 * std::acos(1.0 - tolerance / radius);
+    if (!(a > 0.0) || !(radius > 0.0)) return 1;
+    // A tolerance of r or more still takes no chord wider than a half turn: the arc beyond a
+    // half turn bulges past the chord's ends, and a full circle's one chord has no length at all.
+    const double maxStep = tolerance >= radius ? kHalfTurn : 2.0 * std::acos(1.0 - tolerance / radius);
     const double n = std::ceil(a / maxStep - 1e-12);
     if (!(n <= double(maxSegments))) return 0;
     return std::max<std::size_t>(1, std::size_t(n));

@@ -515,7 +515,13 @@ void Interpreter::arc(bool clockwise, Block& b, int motionCol) {
     arcPts_.clear();
     detail::arcPoints(spec, n, arcPts_);
     arcPts_.back() = e;
+    const std::size_t before = out_.path.moves.size();
     for (const Vec3& p : arcPts_) emit(toMachine(p), false);
+    if (const double sag = detail::chordSag(std::max(rs, re), sweep, n);
+        out_.path.moves.size() > before && sag > out_.arcSag) {
+        out_.arcSag = sag;
+        out_.arcSagSource = out_.path.moves.back().source;
+    }
 }
 
 bool Interpreter::samePlanePoint(const Vec3& a, const Vec3& b, int p0, int p1) {
