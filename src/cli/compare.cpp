@@ -1,4 +1,5 @@
 // `dexelmill compare`: a machined part read from a file against the design.
+#include <cmath>
 #include <cstdio>
 
 #include "commands.h"
@@ -10,7 +11,8 @@ CLI::App* addCompare(CLI::App& app, CompareArgs& a) {
     CLI::App* c = app.add_subcommand(
         "compare",
         "Measures a machined part (a mesh or a level set, e.g. from 'simulate -o' or '--vdb') against\n"
-        "the design: how much of its surface lies within tolerance, how deep it cuts into the design\n"
+        "the design, at its vertices and at points inside its triangles (the spacing is printed):\n"
+        "how much of its surface lies within tolerance, how deep it cuts into the design\n"
         "and how far it stays outside, as a histogram; with a coloured PLY and picture. Without a\n"
         "program no move is named: 'simulate --design' does that.");
     c->add_option("MACHINED", a.machined, "The machined part: PART.stl or PART.vdb (whether its mesh is closed is\nreported)")->required();
@@ -56,12 +58,15 @@ int runCompare(const CompareArgs& a) {
                 r.machinedFile.c_str(), r.machinedTriangles, r.machinedClosed ? "" : ", NOT closed",
                 r.designFile.c_str(), r.designTriangles, r.designClosed ? "" : ", NOT closed", d.tolerance.gouge,
                 d.tolerance.excess);
-    std::printf("  %-22s %14s %8s %10s\n", "deviation (mm)", "area (mm^2)", "area %", "vertices");
+    std::printf("  measured at the vertices and at points inside the triangles: every point of the surface lies\n"
+                "  within %.4g mm of a measured one\n",
+                d.spacing / std::sqrt(3.0));
+    std::printf("  %-22s %14s %8s %10s\n", "deviation (mm)", "area (mm^2)", "area %", "points");
     for (const DeviationBin& b : d.histogram) {
         char range[64];
         std::snprintf(range, sizeof range, "%+.4g .. %+.4g", b.lo, b.hi);
         std::printf("  %-22s %14.6g %8.2f %10zu%s\n", range, b.area, d.area > 0 ? 100.0 * b.area / d.area : 0.0,
-                    b.vertices, b.lo == -d.tolerance.gouge && b.hi == d.tolerance.excess ? "  within tolerance" : "");
+                    b.points, b.lo == -d.tolerance.gouge && b.hi == d.tolerance.excess ? "  within tolerance" : "");
     }
     std::printf("  deepest %.4g mm into the design at (%.4f, %.4f, %.4f); farthest %.4g mm outside at "
                 "(%.4f, %.4f, %.4f); RMS %.4g mm; %.2f s, %.0f MiB\n",

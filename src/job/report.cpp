@@ -14,9 +14,10 @@ nlohmann::json deviationJson(const Deviation& d) {
     using nlohmann::json;
     json bins = json::array();
     for (const DeviationBin& b : d.histogram)
-        bins.push_back({{"from_mm", b.lo}, {"to_mm", b.hi}, {"area_mm2", b.area}, {"vertices", b.vertices}});
+        bins.push_back({{"from_mm", b.lo}, {"to_mm", b.hi}, {"area_mm2", b.area}, {"points", b.points}});
     return {{"gouge_tolerance_mm", d.tolerance.gouge},
             {"excess_tolerance_mm", d.tolerance.excess},
+            {"sample_spacing_mm", d.spacing},
             {"area_mm2", d.area},
             {"gouge_area_mm2", d.gougeArea},
             {"within_tolerance_area_mm2", d.withinArea},

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cerrno>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -248,12 +249,18 @@ TEST_CASE("compare measures a part against the design and writes its files", "[c
     Run r = cli("compare part.stl design.stl --ply dev.ply --png dev.png --report dev.json --threads 1");
     INFO(r.err);
     CHECK(r.code == 0);
-    // The top face stands 0.125 mm above the design's: excess; the rest lies on it. (Each of the 8
-    // vertices stands for a third of its triangles' area: half the area is the top's corners'.)
+    // The top face stands 0.125 mm above the design's: excess; so do the sides' top 0.125 mm, by
+    // z - 9.875. The bin from 0.1 to 0.25 mm holds the top (100 mm^2) and the sides' top 0.025 mm
+    // (1 mm^2), to within twice the sampling's spacing along the 40 mm where the sides cross 0.1.
     CHECK_THAT(r.out, Contains("within tolerance") && Contains("farthest 0.125 mm outside") && Contains("deepest 0 mm"));
+    const std::size_t bound = r.out.find("within ");
+    REQUIRE(bound != std::string::npos);
+    const double spacing = std::sqrt(3.0) * std::stod(r.out.substr(bound + 7));
+    CHECK(spacing < 0.1);
     const std::size_t row = r.out.find("+0.1 .. +0.25");
     REQUIRE(row != std::string::npos);
-    CHECK(r.out.substr(row, r.out.find('\n', row) - row).find(" 4") != std::string::npos);
+    const double area = std::stod(r.out.substr(row + 13));
+    CHECK(area == Approx(101.0).margin(2.0 * spacing * 40.0));
     for (const char* f : {"dev.ply", "dev.png", "dev.json"}) CHECK(fs::file_size(cli.dir() / f) > 100);
     CHECK(cli("compare part.stl").code == 2);
     r = cli("compare part.stl missing.stl");

@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -72,6 +73,27 @@ Mesh cube(double h) {
     return m;
 }
 
+/// A prism: the polygon `profile` (counter-clockwise in the x-z plane, x right, z up) between
+/// y = 0 and y = length, its caps the triangles `caps` (indices into the profile, counter-clockwise
+/// too). Closed, facing out.
+Mesh prism(const std::vector<std::pair<double, double>>& profile, const std::vector<std::array<std::uint32_t, 3>>& caps,
+           double length) {
+    Mesh m;
+    const std::uint32_t n = std::uint32_t(profile.size());
+    for (const double y : {0.0, length})
+        for (const auto& [x, z] : profile) m.vertices.emplace_back(x, y, z);
+    for (const auto& t : caps) {
+        m.triangles.push_back({t[0], t[1], t[2]});              // y = 0, facing -y
+        m.triangles.push_back({n + t[0], n + t[2], n + t[1]});  // y = length, facing +y
+    }
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const std::uint32_t j = (i + 1) % n;
+        m.triangles.push_back({i, n + i, n + j});
+        m.triangles.push_back({i, n + j, j});
+    }
+    return m;
+}
+
 /// The cube's signed distance in closed form: outside, the length of the excess over the faces;
 /// inside, minus the distance to the nearest face.
 double cubeDistance(const Vec3& p, double h) {
@@ -79,15 +101,66 @@ double cubeDistance(const Vec3& p, double h) {
     return glm::length(glm::max(q, Vec3(0.0))) + std::min(std::max({q.x, q.y, q.z}), 0.0);
 }
 
-/// Each vertex's third of its triangles' areas.
-std::vector<double> vertexAreas(const Mesh& m) {
-    std::vector<double> a(m.vertices.size(), 0.0);
-    for (const auto& t : m.triangles) {
-        const double area = 0.5 * glm::length(glm::cross(m.vertices[t[1]] - m.vertices[t[0]], m.vertices[t[2]] - m.vertices[t[0]]));
-        for (std::uint32_t v : t) a[v] += area / 3.0;
-    }
+double triangleArea(const Mesh& m, const std::array<std::uint32_t, 3>& t) {
+    return 0.5 * glm::length(glm::cross(m.vertices[t[1]] - m.vertices[t[0]], m.vertices[t[2]] - m.vertices[t[0]]));
+}
+
+double meshArea(const Mesh& m) {
+    double a = 0.0;
+    for (const auto& t : m.triangles) a += triangleArea(m, t);
     return a;
 }
+
+/// The least distance from the origin of a triangle's plane: no point of the mesh lies nearer.
+double innerRadius(const Mesh& m) {
+    double r = std::numeric_limits<double>::infinity();
+    for (const auto& t : m.triangles) {
+        const Vec3 n = glm::normalize(glm::cross(m.vertices[t[1]] - m.vertices[t[0]], m.vertices[t[2]] - m.vertices[t[0]]));
+        r = std::min(r, std::abs(glm::dot(n, m.vertices[t[0]])));
+    }
+    return r;
+}
+
+/// A mesh's distances to the cube [-h, h]^3 in closed form, each triangle cut into kCuts^2 copies
+/// of itself measured at their centroids: every point lies within `own` of its copy's centroid.
+class Oracle {
+public:
+    static constexpr int kCuts = 32;
+    double own = 0.0;
+
+    Oracle(const Mesh& m, double h) {
+        for (const auto& t : m.triangles) {
+            const Vec3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
+            const Vec3 u = (b - a) / double(kCuts), v = (c - a) / double(kCuts);
+            // A centroid lies 2/3 of a median, at most 2/3 of the longest edge, from a corner.
+            own = std::max(own, 2.0 / 3.0 * std::max({glm::length(u), glm::length(v), glm::length(v - u)}));
+            const double piece = triangleArea(m, t) / double(kCuts * kCuts);
+            for (int i = 0; i < kCuts; ++i)
+                for (int j = 0; i + j < kCuts; ++j) {
+                    const Vec3 corner = a + double(i) * u + double(j) * v;
+                    samples_.push_back({cubeDistance(corner + (u + v) / 3.0, h), piece});  // upright
+                    if (i + j + 1 < kCuts)  // and the copy upside down beside it
+                        samples_.push_back({cubeDistance(corner + 2.0 * (u + v) / 3.0, h), piece});
+                }
+        }
+    }
+    /// The area whose distance lies in [from, to].
+    double area(double from, double to) const {
+        double a = 0.0;
+        for (const auto& [d, w] : samples_)
+            if (d >= from && d <= to) a += w;
+        return a;
+    }
+    /// The area-weighted RMS distance.
+    double rms() const {
+        double sum2 = 0.0, a = 0.0;
+        for (const auto& [d, w] : samples_) sum2 += w * d * d, a += w;
+        return std::sqrt(sum2 / a);
+    }
+
+private:
+    std::vector<std::pair<double, double>> samples_;  ///< (distance, area)
+};
 
 std::string asciiStl(const Mesh& m) {
     std::ostringstream s;
@@ -128,51 +201,94 @@ TEST_CASE("deviation: every vertex's signed distance, the areas and the histogra
     const DeviationTolerance tol{0.01, 0.05};
     const Deviation d = measureDeviation(machined, design, tol);
     REQUIRE(d.distance.size() == machined.vertices.size());
-    const std::vector<double> area = vertexAreas(machined);
-    double total = 0, gouge = 0, within = 0, excess = 0, lo = 0, hi = 0, sum2 = 0;
+    double lo = 0, hi = 0;
     for (std::size_t i = 0; i < machined.vertices.size(); ++i) {
         const double expected = cubeDistance(machined.vertices[i], kHalf);
         INFO("vertex " << i);
         CHECK(d.distance[i] == Approx(expected).margin(1e-12));
-        total += area[i];
-        sum2 += area[i] * expected * expected;
-        (expected < -tol.gouge ? gouge : expected > tol.excess ? excess : within) += area[i];
         lo = std::min(lo, expected);
         hi = std::max(hi, expected);
     }
-    CHECK(d.deepest == Approx(lo).margin(1e-12));
+    // Outside the cube the distance is a convex function, largest at a triangle's corners: the
+    // farthest point is a vertex on an axis. Inside, points between the vertices may lie deeper,
+    // but no point at r from the centre lies deeper than r / sqrt(3) - kHalf (the diagonals).
     CHECK(d.farthest == Approx(hi).margin(1e-12));
-    CHECK(d.farthest == Approx(kRadius - kHalf).margin(1e-12));  // the vertices on the axes
-    CHECK(d.deepest >= kRadius / std::sqrt(3.0) - kHalf);        // no point lies deeper than the diagonals
+    CHECK(d.farthest == Approx(kRadius - kHalf).margin(1e-12));
+    CHECK(d.deepest <= lo + 1e-12);
+    CHECK(d.deepest >= innerRadius(machined) / std::sqrt(3.0) - kHalf);
     CHECK(cubeDistance(d.deepestPoint, kHalf) == Approx(d.deepest));
-    CHECK(d.area == Approx(total).epsilon(1e-12));
-    CHECK(d.gougeArea == Approx(gouge).epsilon(1e-12));
-    CHECK(d.withinArea == Approx(within).epsilon(1e-12));
-    CHECK(d.excessArea == Approx(excess).epsilon(1e-12));
-    CHECK(d.rms == Approx(std::sqrt(sum2 / total)).epsilon(1e-12));
+    CHECK(d.area == Approx(meshArea(machined)).epsilon(1e-9));  // a sum of a million shares
 
-    // Bins: -2 (the deepest is 1.23 mm) .. -1 .. -0.5 .. -0.2 .. -0.1 .. -0.05 .. -0.02 .. -0.01,
-    // within to +0.05, then 0.1, 0.25, 0.5, 1 (the farthest, 0.9 mm, lies in the last).
+    // The oracle: the areas by distance from the closed form at many more points. A measured
+    // point stands for surface within the spacing of it, and the oracle's for surface within
+    // `own`; so the two may differ only on surface whose distance lies within `band` of a class's
+    // edge, and by at most the oracle's area there.
+    const Oracle oracle(machined, kHalf);
+    const double band = d.spacing + 2.0 * oracle.own;
+    const auto between = [&](double from, double to) { return oracle.area(from, to); };
+    const auto near = [&](double edge) { return oracle.area(edge - band, edge + band); };
+    const double deep = -10.0, far = 10.0;
+    CHECK(d.gougeArea == Approx(between(deep, -tol.gouge)).margin(near(-tol.gouge)));
+    CHECK(d.excessArea == Approx(between(tol.excess, far)).margin(near(tol.excess)));
+    CHECK(d.withinArea == Approx(between(-tol.gouge, tol.excess)).margin(near(-tol.gouge) + near(tol.excess)));
+    CHECK(d.rms == Approx(oracle.rms()).margin(band));
+    CHECK(d.gougeArea > 0.0);
+    CHECK(d.excessArea > 0.0);
+
+    // Bins: -2 (the deepest is 1.23 to 1.6 mm) .. -1 .. -0.5 .. -0.2 .. -0.1 .. -0.05 .. -0.02 ..
+    // -0.01, within to +0.05, then 0.1, 0.25, 0.5, 1 (the farthest, 0.9 mm, lies in the last).
     REQUIRE(lo < -1.0);
     const std::vector<double> edges{-2, -1, -0.5, -0.2, -0.1, -0.05, -0.02, -0.01, 0.05, 0.1, 0.25, 0.5, 1.0};
     REQUIRE(d.histogram.size() == edges.size() - 1);
+    double binned = 0.0;
+    std::size_t points = 0;
     for (std::size_t b = 0; b < d.histogram.size(); ++b) {
         const DeviationBin& bin = d.histogram[b];
+        INFO("bin " << bin.lo << " .. " << bin.hi);
         CHECK(bin.lo == Approx(edges[b]).epsilon(1e-12));
         CHECK(bin.hi == Approx(edges[b + 1]).epsilon(1e-12));
-        double binArea = 0;
-        std::size_t count = 0;
-        for (std::size_t i = 0; i < machined.vertices.size(); ++i) {
-            const double e = cubeDistance(machined.vertices[i], kHalf);
-            const bool in = bin.hi <= -0.01 ? (e >= bin.lo && e < bin.hi)
-                            : bin.lo >= 0.05 ? (e > bin.lo && e <= bin.hi)
-                                             : (e >= bin.lo && e <= bin.hi);
-            if (in) binArea += area[i], ++count;
-        }
-        INFO("bin " << bin.lo << " .. " << bin.hi);
-        CHECK(bin.vertices == count);
-        CHECK(bin.area == Approx(binArea).epsilon(1e-12).margin(1e-12));
+        CHECK(bin.area == Approx(between(bin.lo, bin.hi)).margin(near(bin.lo) + near(bin.hi)));
+        binned += bin.area;
+        points += bin.points;
     }
+    CHECK(binned == Approx(d.area).epsilon(1e-9));
+    CHECK(points > machined.vertices.size());
+}
+
+TEST_CASE("deviation: an uncut block against a slotted design finds the slot between its vertices",
+          "[compare][deviation]") {
+    // The design: a 50 x 50 x 20 mm block with a slot 10 mm wide (x 20 .. 30) and 5 mm deep along
+    // y. The machined part: the uncut block, 12 triangles whose vertices all lie on the design.
+    // Its top face over the slot lies min(x - 20, 30 - x, 5) outside the design, and so do the
+    // ends of its end faces over the slot, min(x - 20, 30 - x, z - 15): excess beyond 0.05 mm on
+    // 9.9 x 50 mm of the top and 9.9 x 4.95 mm of each end. Everything else lies on the design.
+    const Mesh block = prism({{0, 0}, {50, 0}, {50, 20}, {0, 20}}, {{0, 1, 2}, {0, 2, 3}}, 50.0);
+    const Mesh slotted = prism({{0, 0}, {50, 0}, {50, 20}, {30, 20}, {30, 15}, {20, 15}, {20, 20}, {0, 20}},
+                               {{0, 1, 4}, {1, 2, 3}, {1, 3, 4}, {0, 4, 5}, {0, 5, 6}, {0, 6, 7}}, 50.0);
+    const MeshDistance design(slotted);
+    REQUIRE(design.orientation() == 1);
+    const DeviationTolerance tol{0.01, 0.05};
+    const Deviation d = measureDeviation(block, design, tol);
+    for (double v : d.distance) CHECK(std::abs(v) <= 1e-6);  // every vertex is on the design
+
+    const double area = 2 * 50 * 20 + 2 * 50 * 50 + 2 * 20 * 50;
+    const double excess = 9.9 * 50 + 2 * 9.9 * 4.95;
+    CHECK(d.area == Approx(area).epsilon(1e-12));
+    // A measured point stands for the surface within about the spacing of it: only along the
+    // lines where the class changes (2 x 50 mm on the top, the rims of the two 9.9 x 4.95 mm
+    // rectangles) may a point's class differ from its neighbourhood's.
+    REQUIRE(d.spacing > 0.0);
+    REQUIRE(d.spacing < 1.0);
+    const double lines = 2 * 50 + 2 * 2 * (9.9 + 4.95);
+    const double margin = 2.0 * d.spacing * lines;
+    CHECK(d.excessArea == Approx(excess).margin(margin));
+    CHECK(d.withinArea == Approx(area - excess).margin(margin));
+    CHECK(d.gougeArea == 0.0);
+    CHECK(d.withinArea < 0.95 * d.area);
+    // The farthest point is the slot's middle, 5 mm from its walls and its floor.
+    CHECK(d.farthest <= 5.0 + 1e-9);
+    CHECK(d.farthest >= 5.0 - d.spacing / std::sqrt(3.0));
+    CHECK(d.deepest >= -1e-9);
 }
 
 TEST_CASE("deviation: zero tolerances, a surface that matches, and the colours", "[compare][deviation][degenerate]") {
@@ -182,16 +298,19 @@ TEST_CASE("deviation: zero tolerances, a surface that matches, and the colours",
     CHECK(same.deepest == 0.0);
     CHECK(same.farthest == 0.0);
     REQUIRE(same.histogram.size() == 1);
-    CHECK(same.histogram[0].vertices == 8);
+    CHECK(same.histogram[0].points > 8);
     CHECK(same.withinArea == Approx(6 * 100.0));
 
-    // Zero tolerances step the bins in micrometres: 0, 1, 2, 5, 10 ... 1000 um (the deepest
-    // vertex of this coarser sphere is 0.83 mm inside).
+    // Zero tolerances step the bins in micrometres: 0, 1, 2, 5, 10 ... 1000 or 2000 um (the
+    // deepest vertex of this coarser sphere is 0.83 mm inside, points between them deeper, but
+    // less than 2 mm: no point at r from the centre is deeper than r / sqrt(3) - kHalf).
     const Mesh coarse = sphere(kRadius, 2);
     const auto [deepest, farthest] = cubeExtremes(coarse);
     REQUIRE(deepest < -0.5);
+    REQUIRE(innerRadius(coarse) / std::sqrt(3.0) - kHalf > -2.0);
     const Deviation d = measureDeviation(coarse, MeshDistance(c), {0.0, 0.0});
-    CHECK(d.histogram.front().lo == Approx(-1.0));
+    CHECK(d.deepest <= deepest);
+    CHECK(d.histogram.front().lo == Approx(d.deepest < -1.0 ? -2.0 : -1.0));
     CHECK(d.histogram.back().hi == Approx(1.0));
     const auto within = std::find_if(d.histogram.begin(), d.histogram.end(), [](const DeviationBin& b) { return b.lo == 0.0 && b.hi == 0.0; });
     REQUIRE(within != d.histogram.end());
@@ -199,9 +318,10 @@ TEST_CASE("deviation: zero tolerances, a surface that matches, and the colours",
     CHECK((within - 1)->lo == Approx(-0.001));
 
     // Colours: green within, reds below (darker deeper), blues above (darker farther).
-    const DeviationScale scale = deviationScale(measureDeviation(coarse, MeshDistance(c), {0.01, 0.05}));
+    const Deviation measured = measureDeviation(coarse, MeshDistance(c), {0.01, 0.05});
+    const DeviationScale scale = deviationScale(measured);
     CHECK(scale.excessFull == Approx(farthest));
-    CHECK(scale.gougeFull == Approx(-deepest));
+    CHECK(scale.gougeFull == Approx(-measured.deepest));
     const Rgb green = deviationColour(0.0, scale), shallow = deviationColour(-0.02, scale),
               deep = deviationColour(-1.5, scale), near = deviationColour(0.06, scale), far = deviationColour(0.9, scale);
     CHECK(deviationColour(-0.01, scale) == green);
@@ -214,7 +334,7 @@ TEST_CASE("deviation: zero tolerances, a surface that matches, and the colours",
     CHECK(deviationColour(-100.0, scale) == deviationColour(-scale.gougeFull, scale));
 
     // The legend: red at the bottom, green in the middle, blue at the top, labelled in mm.
-    const PictureLegend legend = deviationLegend(scale);
+    const PictureLegend legend = deviationLegend({{0.01, 0.05}, 0.828, 0.9});
     REQUIRE(legend.bar.size() % 3 == 0);
     CHECK(legend.bar[legend.bar.size() / 2] == green);
     CHECK(legend.bar.front()[0] > legend.bar.front()[2]);
@@ -244,7 +364,8 @@ TEST_CASE("compare: a sphere's STL against a cube's, with report, PLY and pictur
     CHECK(r.warnings.empty());
     // Written as float, the sphere's vertices move by up to 6e-8 * 6 mm.
     CHECK(r.deviation.farthest == Approx(kRadius - kHalf).margin(1e-6));
-    CHECK(r.deviation.deepest == Approx(cubeExtremes(machined).first).margin(1e-6));
+    CHECK(r.deviation.deepest <= cubeExtremes(machined).first + 1e-6);
+    CHECK(r.deviation.deepest >= innerRadius(machined) / std::sqrt(3.0) - kHalf - 1e-6);
 
     const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "report.json"));
     CHECK(j["units"] == "mm");
@@ -252,6 +373,8 @@ TEST_CASE("compare: a sphere's STL against a cube's, with report, PLY and pictur
     CHECK(j["warnings"].empty());
     CHECK(j["surface"]["farthest_mm"].get<double>() == Approx(kRadius - kHalf).margin(1e-6));
     CHECK(j["surface"]["histogram"].size() == r.deviation.histogram.size());
+    CHECK(j["surface"]["sample_spacing_mm"].get<double>() == r.deviation.spacing);
+    CHECK(r.deviation.spacing > 0.0);
     double binned = 0;
     for (const auto& b : j["surface"]["histogram"]) binned += b["area_mm2"].get<double>();
     CHECK(binned == Approx(j["surface"]["area_mm2"].get<double>()));
@@ -418,7 +541,7 @@ TEST_CASE("deviation: what it refuses, an empty mesh, a tolerance below a microm
     CHECK_THROWS_WITH(measureDeviation(bad, design, {0.01, 0.05}), Catch::Contains("finite"));
     const Deviation none = measureDeviation(Mesh{}, design, {0.01, 0.05});
     REQUIRE(none.histogram.size() == 1);
-    CHECK(none.histogram[0].vertices == 0);
+    CHECK(none.histogram[0].points == 0);
     // 1e-300 mm steps like 0: 1, 2, 5 ... um, a few dozen bins, not hundreds.
     const Deviation tiny = measureDeviation(sphere(kRadius, 2), design, {1e-300, 1e-300});
     CHECK(tiny.histogram.size() < 30);

@@ -1,7 +1,7 @@
 /// @file deviation.h
-/// @brief How far a machined surface lies from the design: the signed distance of every vertex of
-/// the machined mesh to the design's surface, its statistics and histogram, and the colours that
-/// show it (red where the machined surface lies inside the design, a gouge; blue where it lies
+/// @brief How far a machined surface lies from the design: the signed distance to the design's
+/// surface of every vertex of the machined mesh and of points inside its triangles, its statistics
+/// and histogram, and the colours that show it (red where the machined surface lies inside the design, a gouge; blue where it lies
 /// outside, excess; green within tolerance).
 #pragma once
 
@@ -29,7 +29,7 @@ struct DeviationTolerance {
 struct DeviationBin {
     double lo = 0.0, hi = 0.0;
     double area = 0.0;           ///< mm^2
-    std::size_t vertices = 0;
+    std::size_t points = 0;      ///< the measured points (vertices and points inside triangles)
 };
 
 /// @brief A machined surface measured against the design.
@@ -39,11 +39,15 @@ struct Deviation {
     /// may be given a distance up to 1e-6 mm off, or the other sign.
     std::vector<double> distance;
     DeviationTolerance tolerance;
+    /// The sampling's spacing (mm): every point of the machined surface lies within spacing /
+    /// sqrt(3) of a measured point, and its distance to the design differs from that point's by
+    /// at most as much. 0 for an empty mesh.
+    double spacing = 0.0;
     double area = 0.0;                                    ///< the machined surface (mm^2)
     double gougeArea = 0.0, withinArea = 0.0, excessArea = 0.0;  ///< mm^2, by tolerance
     double rms = 0.0;                                     ///< area-weighted RMS distance (mm)
-    double deepest = 0.0;   ///< the most negative distance (mm; 0 when no vertex is inside)
-    double farthest = 0.0;  ///< the most positive distance (mm; 0 when no vertex is outside)
+    double deepest = 0.0;   ///< the most negative distance measured (mm; 0 when no point is inside)
+    double farthest = 0.0;  ///< the most positive distance measured (mm; 0 when no point is outside)
     Vec3 deepestPoint{0.0}, farthestPoint{0.0};
     /// Bins from the deepest to the farthest: gouge bins with edges at 1, 2, 5, 10, 20, ... times
     /// the gouge tolerance below zero, one bin within tolerance, excess bins at 1, 2, 5, 10, ...
@@ -52,12 +56,15 @@ struct Deviation {
     std::vector<DeviationBin> histogram;
 };
 
-/// @brief Measures every vertex of `machined` against the design (MeshDistance::signedDistance).
-/// Each vertex stands for a third of the area of the triangles around it, so the areas are exact
-/// where the distance is the same over a vertex's triangles, and on a mesh as fine as the
-/// simulate job's (vertices a lattice spacing apart) err only along the lines where the class
-/// changes; on a coarse mesh (a CAD export) they are the vertices' neighbourhoods'. Runs in parallel on the
-/// calling arena.
+/// @brief Measures `machined` against the design (MeshDistance::signedDistance) at every vertex
+/// and, where a triangle's edges are longer than the sampling's spacing (Deviation::spacing), at
+/// the corners of the k^2 smaller copies it is cut into, so that a slot between a coarse mesh's
+/// vertices is not missed. Each point stands for a third of the area of the triangles (or copies)
+/// around it, so the areas are exact where the distance is the same over a point's triangles, and
+/// err only along the lines where the class changes, by about the spacing. The spacing is the
+/// finest the point budget allows (see deviation.cpp): a mesh as fine as the simulate job's is
+/// mostly measured at its vertices. Runs in parallel on the calling
+/// arena.
 /// @throw Error for an empty design, a tolerance that is negative or not finite, or a vertex that
 /// is not a finite point.
 Deviation measureDeviation(const Mesh& machined, const MeshDistance& design, const DeviationTolerance& tolerance);
