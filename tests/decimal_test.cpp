@@ -42,3 +42,15 @@ TEST_CASE("decimal: two values a message compares print with the digits that tel
     CHECK(decimalsApart(1.0, 2.0) == std::pair<std::string, std::string>{"1", "2"});
     CHECK(decimalsApart(1.0 / 3.0, 1.0 / 3.0) == std::pair<std::string, std::string>{"0.333333", "0.333333"});
 }
+
+TEST_CASE("decimal: a volume prints to a thousandth of a cubic millimetre, rounding noise as 0", "[decimal]") {
+    // The excess of a part that matches its design, summed over many dexels: 1.7e-15 mm^3.
+    CHECK(volumeText(1.7e-15) == "0.000 mm^3");
+    CHECK(volumeText(-1.7e-15) == "0.000 mm^3");
+    CHECK(volumeText(0.0) == "0.000 mm^3");
+    CHECK(volumeText(-0.0) == "0.000 mm^3");
+    CHECK(volumeText(12.3456) == "12.346 mm^3");
+    CHECK(volumeText(0.0125) == "0.013 mm^3");
+    CHECK(volumeText(-2.5) == "-2.500 mm^3");
+    CHECK(volumeText(612345.0) == "612345.000 mm^3");
+}

@@ -64,4 +64,19 @@ inline std::pair<std::string, std::string> decimalsApart(double a, double b) {
     }
 }
 
+/// The decimals a volume is printed with (mm^3): a thousandth of a cubic millimetre is a cube
+/// 0.1 mm across, finer than the lattice measures a volume at its usual spacings, and the rounding
+/// of a sum of volumes (1e-15 mm^3 where they cancel) prints as 0.
+constexpr int kVolumeDecimals = 3;
+
+/// @brief A volume as messages print it: kVolumeDecimals decimals and the unit, "12.346 mm^3";
+/// one that rounds to 0 prints "0.000 mm^3", whatever its sign.
+inline std::string volumeText(double mm3) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%.*f", kVolumeDecimals, mm3);
+    std::string s = text;
+    if (s.find_first_of("123456789") == std::string::npos && s.front() == '-') s.erase(0, 1);
+    return s + " mm^3";
+}
+
 }  // namespace dexelmill

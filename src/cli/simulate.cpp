@@ -430,17 +430,17 @@ int runSimulate(const SimulateArgs& args) {
         shown = 0;
         for (const ReportCollision& c : r.collisions) {
             if (shown++ == kPrintedDiagnostics) break;
-            std::fprintf(stderr, "%s: collision: %s move %zu removes %.4g mm^3\n", where(c.where).c_str(),
-                         c.kind.c_str(), c.move, c.volumeMm3);
+            std::fprintf(stderr, "%s: collision: %s move %zu removes %s\n", where(c.where).c_str(),
+                         c.kind.c_str(), c.move, volumeText(c.volumeMm3).c_str());
         }
         if (r.collisions.size() > kPrintedDiagnostics)
             std::cerr << "dexelmill: " << r.collisions.size() - kPrintedDiagnostics << " more collisions\n";
         shown = 0;
         for (const ReportGouge& g : r.gouges) {
             if (shown++ == kPrintedDiagnostics) break;
-            std::fprintf(stderr, "%s: gouge: %smove %zu (T%d) cuts %.4g mm into the design, %.4g mm^3, deepest at (%.4f, %.4f, %.4f)\n",
+            std::fprintf(stderr, "%s: gouge: %smove %zu (T%d) cuts %.4g mm into the design, %s, deepest at (%.4f, %.4f, %.4f)\n",
                          where(g.where).c_str(), g.rapid ? "rapid " : "", g.move, g.tool,
-                         g.depthMm, g.volumeMm3, g.point.x, g.point.y, g.point.z);
+                         g.depthMm, volumeText(g.volumeMm3).c_str(), g.point.x, g.point.y, g.point.z);
         }
         if (r.gouges.size() > kPrintedDiagnostics)
             std::cerr << "dexelmill: " << r.gouges.size() - kPrintedDiagnostics << " more gouges\n";
@@ -448,9 +448,9 @@ int runSimulate(const SimulateArgs& args) {
         for (const SimulateReport::ExcessRegion& e : r.excessRegions) {
             if (shown++ == kPrintedDiagnostics) break;
             std::fprintf(stderr,
-                         "dexelmill: excess: %.4g mm^3 up to %.4g mm thick (at %.4f, %.4f, %.4f) in x %.4g .. %.4g, "
+                         "dexelmill: excess: %s up to %.4g mm thick (at %.4f, %.4f, %.4f) in x %.4g .. %.4g, "
                          "y %.4g .. %.4g, z %.4g .. %.4g mm\n",
-                         e.volumeMm3, e.thicknessMm, e.point.x, e.point.y, e.point.z, e.box.lo.x, e.box.hi.x,
+                         volumeText(e.volumeMm3).c_str(), e.thicknessMm, e.point.x, e.point.y, e.point.z, e.box.lo.x, e.box.hi.x,
                          e.box.lo.y, e.box.hi.y, e.box.lo.z, e.box.hi.z);
         }
         if (r.surfaceDeviation) printDeviation(*r.surfaceDeviation);
@@ -465,18 +465,18 @@ int runSimulate(const SimulateArgs& args) {
     if (!r.designFile.empty()) {
         char text[320];
         std::snprintf(text, sizeof text,
-                      "%s (deepest %.4g mm, tolerance %.4g mm), excess %.4g mm^3 outside the design "
+                      "%s (deepest %.4g mm, tolerance %.4g mm), excess %s outside the design "
                       "(thickest %.4g mm, tolerance %.4g mm), ",
                       counted(r.gouges.size(), "gouge").c_str(),
                       r.gouges.empty() ? 0.0 : r.gouges.front().depthMm, r.gougeToleranceMm,
-                      r.excessVolumeMm3, r.excessThicknessMm, r.excessToleranceMm);
+                      volumeText(r.excessVolumeMm3).c_str(), r.excessThicknessMm, r.excessToleranceMm);
         gouges = text;
     }
     std::printf(
-        "dexelmill: %s, %s; removed %.6g mm^3 (%.1f %% of the stock), part %.6g mm^3; h %.4g mm; %s, %s%s; "
+        "dexelmill: %s, %s; removed %s (%.1f %% of the stock), part %s; h %.4g mm; %s, %s%s; "
         "mesh %s%s; %.2f s, %.0f MiB\n",
-        counted(r.moves, "move").c_str(), counted(r.toolChanges, "tool change").c_str(), r.removedVolumeMm3, pct,
-        r.finalVolumeMm3, r.resolutionMm, counted(r.collisions.size(), "collision").c_str(), gouges.c_str(),
+        counted(r.moves, "move").c_str(), counted(r.toolChanges, "tool change").c_str(), volumeText(r.removedVolumeMm3).c_str(), pct,
+        volumeText(r.finalVolumeMm3).c_str(), r.resolutionMm, counted(r.collisions.size(), "collision").c_str(), gouges.c_str(),
         counted(r.warnings.size(), "warning").c_str(), counted(r.meshTriangles, "triangle").c_str(),
         meshState.c_str(), r.timingS.total, r.peakMemoryMb);
     return 0;
