@@ -116,8 +116,15 @@ std::string reportJson(const SimulateReport& r) {
         if (r.surfaceDeviation) j["design"]["surface"] = deviationJson(*r.surfaceDeviation);
     }
     json warnings = json::array();
-    for (const ReportWarning& w : r.warnings)
-        warnings.push_back({{"file", w.where.file}, {"line", w.where.line}, {"message", w.message}});
+    // A warning about the whole run (the stock chosen, a tool not used) has no place: its file and
+    // line are left out rather than written as "" and 0.
+    for (const ReportWarning& w : r.warnings) {
+        json entry = json::object();
+        if (!w.where.file.empty()) entry["file"] = w.where.file;
+        if (w.where.line > 0) entry["line"] = w.where.line;
+        entry["message"] = w.message;
+        warnings.push_back(entry);
+    }
     j["warnings"] = warnings;
     j["mesh"] = {{"mesher", r.mesher},
                  {"vertices", r.meshVertices},

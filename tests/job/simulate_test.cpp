@@ -110,9 +110,29 @@ TEST_CASE("a slot removes its analytic volume and the report says so", "[job]") 
     for (const char* key : {"parse", "cut", "rebuild", "mesh", "write", "total"}) CHECK(j["timing_s"].contains(key));
     // The F word is reported, not dropped.
     bool feedWarned = false;
-    for (const auto& w : j["warnings"]) feedWarned = feedWarned || w["line"].get<int>() == 4;
+    for (const auto& w : j["warnings"]) feedWarned = feedWarned || w.value("line", 0) == 4;
     CHECK(feedWarned);
     CHECK(fs::file_size(dir / "part.stl") == 84 + 50 * r.meshTriangles);
+}
+
+TEST_CASE("the report gives a warning's file and line only where it has them", "[job]") {
+    SimulateReport r;
+    r.warnings = {ReportWarning{ReportLocation{"", 0}, "the stock is the program's extent"},
+                  ReportWarning{ReportLocation{"p.ngc", 0}, "the program makes no moves"},
+                  ReportWarning{ReportLocation{"p.ngc", 4}, "F100 is ignored"}};
+    const nlohmann::json j = nlohmann::json::parse(reportJson(r));
+    REQUIRE(j["warnings"].size() == 3);
+    const nlohmann::json& whole = j["warnings"][0];
+    CHECK_FALSE(whole.contains("file"));
+    CHECK_FALSE(whole.contains("line"));
+    CHECK(whole["message"] == "the stock is the program's extent");
+    const nlohmann::json& file = j["warnings"][1];
+    CHECK(file["file"] == "p.ngc");
+    CHECK_FALSE(file.contains("line"));
+    const nlohmann::json& line = j["warnings"][2];
+    CHECK(line["file"] == "p.ngc");
+    CHECK(line["line"] == 4);
+    CHECK(line["message"] == "F100 is ignored");
 }
 
 TEST_CASE("simulate: a wall thinner than the spacing is reported and meshed", "[job][fine]") {
