@@ -54,19 +54,36 @@ int main(int argc, char** argv) {
     dexelmill::cli::CompareArgs compare;
     CLI::App* compareCmd = dexelmill::cli::addCompare(app, compare);
 
+    const CLI::App* commands[] = {simulate, info, studyCmd, compareCmd};
     // Every usage error, CLI11's (an option's value out of range, an unknown option) as the
     // commands' own, names the tool and points at the help of the command it was given to.
     const auto usage = [&](const std::string& message) {
         std::string command;
-        for (const CLI::App* sub : {simulate, info, studyCmd, compareCmd})
+        for (const CLI::App* sub : commands)
             if (sub->parsed()) command = " " + sub->get_name();
         return "dexelmill: " + message + "\nRun 'dexelmill" + command + " --help' for usage.\n";
     };
-    app.failure_message([&](const CLI::App*, const CLI::Error& e) { return usage(e.what()); });
+    // An option that takes one value, given more often, CLI11 names with "At Most 1 required but
+    // received 2": it is said in the user's terms instead.
+    const auto repeated = [&]() -> std::string {
+        for (const CLI::App* sub : commands) {
+            if (!sub->parsed()) continue;
+            for (const CLI::Option* opt : sub->get_options())
+                if (opt->get_multi_option_policy() == CLI::MultiOptionPolicy::Throw && opt->get_items_expected_max() == 1 &&
+                    opt->count() > 1)
+                    return opt->get_name() + " is given " +
+                           (opt->count() == 2 ? std::string("twice") : std::to_string(opt->count()) + " times") +
+                           "; it takes one value";
+        }
+        return {};
+    };
+    app.failure_message([&](const CLI::App*, const CLI::Error& e) {
+        const std::string twice = dynamic_cast<const CLI::ArgumentMismatch*>(&e) ? repeated() : std::string();
+        return usage(twice.empty() ? std::string(e.what()) : twice);
+    });
 
     // A first word that is neither an option nor a command is a command mistyped: CLI11 would
     // only say that one is required.
-    const CLI::App* commands[] = {simulate, info, studyCmd, compareCmd};
     if (argc > 1 && argv[1][0] != '-' && std::none_of(std::begin(commands), std::end(commands), [&](const CLI::App* sub) {
             return sub->check_name(argv[1]);
         })) {

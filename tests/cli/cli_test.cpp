@@ -10,6 +10,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -241,6 +244,50 @@ std::string boxStl(double top) {
 }
 
 }  // namespace
+
+TEST_CASE("an option that takes one value, given twice, is named", "[cli][errors]") {
+    const Cli cli("twice");
+    // Every option of every command that takes one value, each with a value it accepts: the
+    // second is refused for being there, not for what it says.
+    const std::vector<std::pair<const char*, std::vector<std::pair<const char*, const char*>>>> commands = {
+        {"simulate ok.ngc",
+         {{"--stock", "box:0,0,-5,20,20,0"}, {"--chord-tolerance", "0.01"}, {"--turn-tolerance", "0.01"},
+          {"--machine", "xyza"}, {"--start", "0,0,0"}, {"--mesher", "vdb"}, {"--refine", "1"},
+          {"--refine-tolerance", "0.01"}, {"--threads", "1"}, {"--max-memory", "1G"}, {"--resolution", "1"},
+          {"--families", "xyz"}, {"--output", "a.stl"}, {"--vdb", "a.vdb"}, {"--png", "a.png"},
+          {"--report", "a.json"}, {"--design", "d.stl"}, {"--design-transform", "1,2,3"},
+          {"--gouge-tolerance", "0.1"}, {"--excess-tolerance", "0.1"}, {"--gouge-csv", "g.csv"},
+          {"--deviation-ply", "d.ply"}, {"--adaptivity", "0.1"}}},
+        {"study",
+         {{"--stock", "box:0,0,-5,20,20,0"}, {"--chord-tolerance", "0.01"}, {"--turn-tolerance", "0.01"},
+          {"--machine", "xyza"}, {"--start", "0,0,0"}, {"--mesher", "vdb"}, {"--refine", "1"},
+          {"--refine-tolerance", "0.01"}, {"--threads", "1"}, {"--max-memory", "1G"}, {"--case", "v-carve"},
+          {"--resolutions", "1"}, {"--families", "z"}, {"--csv", "a.csv"}, {"--plot", "a.png"},
+          {"--ply-deviation", "plies"}, {"--surface-points", "10"}, {"--samples", "10"}}},
+        {"compare a.stl b.stl",
+         {{"--design-transform", "1,2,3"}, {"--gouge-tolerance", "0.1"}, {"--excess-tolerance", "0.1"},
+          {"--ply", "a.ply"}, {"--png", "a.png"}, {"--report", "a.json"}, {"--threads", "1"}}},
+        {"info ok.ngc", {{"--machine", "xyza"}, {"--start", "0,0,0"}}}};
+    for (const auto& [command, options] : commands)
+        for (const auto& [option, value] : options) {
+            const std::string given = std::string(" ") + option + " " + value;
+            INFO(command << given << given);
+            const Run r = cli(command + given + given);
+            CHECK(r.code == 2);
+            const std::string name = std::string(command).substr(0, std::string(command).find(' '));
+            CHECK_THAT(r.err, StartsWith(std::string("dexelmill: ") + option + " is given twice; it takes one value\n") &&
+                                  Contains("Run 'dexelmill " + name + " --help' for usage."));
+        }
+    // Three times, and by its short name.
+    const Run r = cli("simulate ok.ngc -o a.stl -o b.stl --output c.stl");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, StartsWith("dexelmill: --output is given 3 times; it takes one value\n"));
+    // Repeatable options and flags are not refused.
+    cli.file("ok.ngc", "G21\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X5\n");
+    const Run repeated =
+        cli("simulate ok.ngc --tool flat:d=3 --tool 2=ball:d=2 --stock box:0,0,-5,20,20,0 --resolution 1 -q -q");
+    CHECK(repeated.code == 0);
+}
 
 TEST_CASE("compare measures a part against the design and writes its files", "[cli][compare]") {
     const Cli cli("compare");
