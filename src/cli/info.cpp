@@ -1,6 +1,7 @@
 // `dexelmill info FILE`: what a program, project or VDB file holds.
 #include <cstdio>
 #include <iostream>
+#include <set>
 
 #include "commands.h"
 #include "dexelmill/io/vdb_io.h"
@@ -59,7 +60,21 @@ void printProgram(const Program& p) {
     }
     printBox("extent", p.path.bounds());
     printBox("cutting", cutting);
-    for (const auto& [n, t] : p.tools) std::printf("%-14s T%d: %s\n", "tool", n, t.description().c_str());
+    // Every tool number the program calls (a tool change, or 0 for moves before any) or defines:
+    // simulate needs a --tool for those called that have no cutter.
+    std::set<int> numbers;
+    for (const auto& [n, t] : p.tools) numbers.insert(n);
+    for (const ToolChange& c : p.path.toolChanges) numbers.insert(c.tool);
+    for (const Move& m : p.path.moves) numbers.insert(m.tool);
+    for (int n : numbers) {
+        const auto defined = p.tools.find(n);
+        if (defined != p.tools.end())
+            std::printf("%-14s T%d: %s\n", "tool", n, defined->second.description().c_str());
+        else if (n == 0)
+            std::printf("%-14s T0 (no tool selected): no cutter defined; give one with --tool SPEC\n", "tool");
+        else
+            std::printf("%-14s T%d: no cutter defined; give one with --tool %d=SPEC\n", "tool", n, n);
+    }
     std::printf("%-14s %zu\n", "warnings", p.diagnostics.size());
     constexpr std::size_t kShown = 10;
     for (std::size_t i = 0; i < p.diagnostics.size() && i < kShown; ++i)

@@ -650,6 +650,34 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     CHECK_THAT(tooCoarse.err, Contains("--turn-tolerance: 1e+300 mm") && Contains("0.1 mm or less"));
 }
 
+TEST_CASE("info names every tool a program calls, and which need a --tool", "[cli][info]") {
+    const Cli cli("info_tools");
+    // No tool table: neither number has a cutter.
+    cli.file("two.ngc", "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\nT2 M6\nG1 X5\nM30\n");
+    Run r = cli("info two.ngc");
+    CHECK(r.code == 0);
+    CHECK_THAT(r.out, Contains("tool           T1: no cutter defined; give one with --tool 1=SPEC\n"
+                               "tool           T2: no cutter defined; give one with --tool 2=SPEC\n"));
+    // Moves before any tool change are made with none.
+    cli.file("none.ngc", "G21 G90\nG0 X0 Y0 Z5\nG1 Z-1 F100\n");
+    r = cli("info none.ngc");
+    CHECK(r.code == 0);
+    CHECK_THAT(r.out, Contains("tool           T0 (no tool selected): no cutter defined; give one with --tool SPEC\n"));
+    // A project defines tool 1; its program calls 2 as well.
+    cli.file("p.camotics", R"({"tools": {"1": {"units": "metric", "shape": "cylindrical", "length": 20, "diameter": 6}},
+                              "files": ["two.ngc"]})");
+    r = cli("info p.camotics");
+    CHECK(r.code == 0);
+    CHECK_THAT(r.out, Contains("tool           T1: flat D6") &&
+                          Contains("tool           T2: no cutter defined; give one with --tool 2=SPEC\n"));
+    CHECK_THAT(r.out, !Contains("T1: no cutter"));
+    // An APT program defines every tool it cuts with (CUTTER/), so none lacks one.
+    cli.file("p.apt", "CUTTER/6\nFROM/0,0,5\nGOTO/5,0,-1\nFINI\n");
+    r = cli("info p.apt");
+    CHECK(r.code == 0);
+    CHECK_THAT(r.out, Contains("tool           T1: ") && !Contains("no cutter"));
+}
+
 TEST_CASE("a gouge and a collision carry one move number on the console, in the CSV and the report", "[cli]") {
     const Cli cli("move_numbers");
     // The design is the stock's lower half, z -10 .. -5. Line 3 only sets the start position; the
