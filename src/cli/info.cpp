@@ -98,9 +98,11 @@ int runInfo(const InfoArgs& args) {
     const std::string& file = args.file;
     // Checked before anything is read, whatever the file: a malformed option is an error.
     const std::optional<Vec3> start = parseStart(args.start);
-    std::printf("%-14s %s\n", "file", file.c_str());
+    // Each kind of file is read whole (with the machine it needs) before its first line is
+    // printed: an error is not left after part of the summary.
     if (endsWith(file, ".vdb")) {
         const LevelSet ls = readVdb(file);
+        std::printf("%-14s %s\n", "file", file.c_str());
         std::printf("%-14s OpenVDB level set, voxel %.6g mm, half-width %.3g voxels\n", "kind", ls.voxelSize(),
                     ls.halfWidth());
         std::printf("%-14s %zu active voxels in %zu leaves, %.1f MiB\n", "grid", ls.activeVoxelCount(), ls.leafCount(),
@@ -115,15 +117,17 @@ int runInfo(const InfoArgs& args) {
     gcode.startPosition = start;
     if (endsWith(file, ".camotics")) {
         const Project project = readCamoticsProject(file);
+        const Program program = runProject(project, gcode);
+        // As the job takes it: fixed bounds where the project gives them, else the automatic box.
+        const bool automatic = project.workpiece.automatic || project.workpiece.bounds.isEmpty();
+        const Box workpiece = automatic ? automaticWorkpieceBounds(program, project.workpiece.marginPercent)
+                                        : project.workpiece.bounds;
+        std::printf("%-14s %s\n", "file", file.c_str());
         std::printf("%-14s CAMotics project, %s units\n", "kind", project.metric ? "metric" : "imperial");
         for (const std::string& f : project.files) std::printf("%-14s %s\n", "program", f.c_str());
-        const Program program = runProject(project, gcode);
-        Box workpiece = project.workpiece.bounds;
-        // As the job takes it: fixed bounds where the project gives them, else the automatic box.
-        if (project.workpiece.automatic || project.workpiece.bounds.isEmpty()) {
+        if (automatic) {
             std::printf("%-14s %sautomatic, margin %.3g %%\n", "workpiece",
                         project.workpiece.automatic ? "" : "no bounds given: ", project.workpiece.marginPercent);
-            workpiece = automaticWorkpieceBounds(program, project.workpiece.marginPercent);
             printBox("stock", workpiece);
         } else {
             printBox("workpiece", workpiece);
@@ -142,7 +146,9 @@ int runInfo(const InfoArgs& args) {
         printProgram(program);
         return 0;
     }
-    printProgram(readProgram(file, gcode, jobAptOptions(SimulateOptions().chordTolerance, budget)));
+    const Program program = readProgram(file, gcode, jobAptOptions(SimulateOptions().chordTolerance, budget));
+    std::printf("%-14s %s\n", "file", file.c_str());
+    printProgram(program);
     return 0;
 }
 

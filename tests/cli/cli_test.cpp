@@ -678,6 +678,25 @@ TEST_CASE("info names every tool a program calls, and which need a --tool", "[cl
     CHECK_THAT(r.out, Contains("tool           T1: ") && !Contains("no cutter"));
 }
 
+TEST_CASE("info prints nothing before an error in its inputs", "[cli][info][errors]") {
+    const Cli cli("info_errors");
+    cli.file("ok.ngc", "G21\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\n");
+    cli.file("bad.json", R"({"axes": [{"letter": "A", "on": "table", "direction": [0, 0, 0]}]})");
+    cli.file("bad.ngc", "G21\nG0 X0 Y0 Z5\nG1 X1.2.3 F100\n");
+    cli.file("lost.camotics", R"({"files": ["nowhere.ngc"]})");
+    for (const auto& [args, says] : {std::pair<const char*, const char*>{"info ok.ngc --machine bad.json", "bad.json"},
+                                     {"info lost.camotics --machine bad.json", "bad.json"},
+                                     {"info bad.ngc", "bad.ngc:3:"},
+                                     {"info lost.camotics", "nowhere.ngc"},
+                                     {"info nowhere.vdb", "nowhere.vdb"}}) {
+        INFO(args);
+        const Run r = cli(args);
+        CHECK(r.code == 1);
+        CHECK_THAT(r.err, Contains(says));
+        CHECK(r.out.empty());
+    }
+}
+
 TEST_CASE("a gouge and a collision carry one move number on the console, in the CSV and the report", "[cli]") {
     const Cli cli("move_numbers");
     // The design is the stock's lower half, z -10 .. -5. Line 3 only sets the start position; the
