@@ -64,13 +64,15 @@ int main(int argc, char** argv) {
         return "dexelmill: " + message + "\nRun 'dexelmill" + command + " --help' for usage.\n";
     };
     // An option that takes one value, given more often, CLI11 names with "At Most 1 required but
-    // received 2": it is said in the user's terms instead.
-    const auto repeated = [&]() -> std::string {
+    // received 2": it is said in the user's terms instead. Only the option the error names is
+    // meant: another's missing value is an ArgumentMismatch too.
+    const auto repeated = [&](const CLI::Error& e) -> std::string {
+        const std::string said = e.what();
         for (const CLI::App* sub : commands) {
             if (!sub->parsed()) continue;
             for (const CLI::Option* opt : sub->get_options())
                 if (opt->get_multi_option_policy() == CLI::MultiOptionPolicy::Throw && opt->get_items_expected_max() == 1 &&
-                    opt->count() > 1)
+                    opt->count() > 1 && said.rfind(opt->get_name() + ":", 0) == 0)
                     return opt->get_name() + " is given " +
                            (opt->count() == 2 ? std::string("twice") : std::to_string(opt->count()) + " times") +
                            "; it takes one value";
@@ -78,7 +80,7 @@ int main(int argc, char** argv) {
         return {};
     };
     app.failure_message([&](const CLI::App*, const CLI::Error& e) {
-        const std::string twice = dynamic_cast<const CLI::ArgumentMismatch*>(&e) ? repeated() : std::string();
+        const std::string twice = dynamic_cast<const CLI::ArgumentMismatch*>(&e) ? repeated(e) : std::string();
         return usage(twice.empty() ? std::string(e.what()) : twice);
     });
 

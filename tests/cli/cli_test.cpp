@@ -282,6 +282,10 @@ TEST_CASE("an option that takes one value, given twice, is named", "[cli][errors
     const Run r = cli("simulate ok.ngc -o a.stl -o b.stl --output c.stl");
     CHECK(r.code == 2);
     CHECK_THAT(r.err, StartsWith("dexelmill: --output is given 3 times; it takes one value\n"));
+    // Another option's missing value is named as CLI11 names it, not taken for the repetition.
+    const Run missing = cli("simulate ok.ngc --resolution 1 --resolution 2 --stock");
+    CHECK(missing.code == 2);
+    CHECK_THAT(missing.err, StartsWith("dexelmill: --stock") && !Contains("given twice"));
     // Repeatable options and flags are not refused.
     cli.file("ok.ngc", "G21\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X5\n");
     const Run repeated =
