@@ -52,5 +52,8 @@ TEST_CASE("decimal: a volume prints to a thousandth of a cubic millimetre, round
     CHECK(volumeText(12.3456) == "12.346 mm^3");
     CHECK(volumeText(0.0125) == "0.013 mm^3");
     CHECK(volumeText(-2.5) == "-2.500 mm^3");
-    CHECK(volumeText(612345.0) == "612345.000 mm^3");
+    CHECK(volumeText(612345.0) == "612345 mm^3");
+    CHECK(volumeText(1234.5678) == "1234.57 mm^3");
+    CHECK(volumeText(80707312.4) == "80707312 mm^3");
+    CHECK(volumeText(-1.5e30).find('e') == std::string::npos);
 }

@@ -3,6 +3,7 @@
 /// print them: one reading shared by every option, so that none takes a form another refuses.
 #pragma once
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -64,16 +65,24 @@ inline std::pair<std::string, std::string> decimalsApart(double a, double b) {
     }
 }
 
-/// The decimals a volume is printed with (mm^3): a thousandth of a cubic millimetre is a cube
+/// The most decimals a volume is printed with (mm^3): a thousandth of a cubic millimetre is a cube
 /// 0.1 mm across, finer than the lattice measures a volume at its usual spacings, and the rounding
 /// of a sum of volumes (1e-15 mm^3 where they cancel) prints as 0.
 constexpr int kVolumeDecimals = 3;
 
-/// @brief A volume as messages print it: kVolumeDecimals decimals and the unit, "12.346 mm^3";
+/// The significant digits a large volume keeps before its decimals go: a block's 8e7 mm^3 prints
+/// whole, not with decimals far below what its lattice measures, nor in exponent form.
+constexpr int kVolumeDigits = 6;
+
+/// @brief A volume as messages print it, with the unit and without an exponent: kVolumeDigits
+/// significant digits, but no more than kVolumeDecimals decimals ("12.346 mm^3", "80707312 mm^3");
 /// one that rounds to 0 prints "0.000 mm^3", whatever its sign.
 inline std::string volumeText(double mm3) {
-    char text[64];
-    std::snprintf(text, sizeof text, "%.*f", kVolumeDecimals, mm3);
+    int decimals = kVolumeDecimals;
+    if (std::abs(mm3) >= 1.0)
+        decimals = std::clamp(kVolumeDigits - 1 - int(std::floor(std::log10(std::abs(mm3)))), 0, kVolumeDecimals);
+    char text[400];
+    std::snprintf(text, sizeof text, "%.*f", decimals, mm3);
     std::string s = text;
     if (s.find_first_of("123456789") == std::string::npos && s.front() == '-') s.erase(0, 1);
     return s + " mm^3";
