@@ -730,11 +730,13 @@ TEST_CASE("a gouge and a collision carry one move number on the console, in the 
 
 TEST_CASE("a study writes its table, CSV, plot and deviation meshes", "[cli][study]") {
     const Cli cli("study");
-    const Run r = cli("study --case tilted-slot --resolutions 2,1,2 --families z,xyz --csv s.csv --plot s.png "
-                      "--ply-deviation dev --surface-points 500 --samples 2000 --quiet");
+    const Run r = cli("study --case tilted-slot --resolutions 2,1,2 --families z,xyz,zyx --csv s.csv --plot s.png "
+                      "--ply-deviation dev --surface-points 500 --samples 2000");
     REQUIRE(r.code == 0);
+    CHECK_THAT(r.err, Contains("--resolutions lists 2 mm more than once; it runs once") &&
+                          Contains("--families lists xyz more than once; it runs once"));
     CHECK_THAT(r.out, Contains("inner_max") && Contains("reference volume") && Contains("deviations in mm"));
-    // One header and one row per (spacing, family set): the repeated spacing counts once.
+    // One header and one row per (spacing, family set): the repeated spacing and set count once.
     const std::string csv = slurp(cli.dir() / "s.csv");
     CHECK(std::count(csv.begin(), csv.end(), '\n') == 5);
     CHECK_THAT(csv, Contains("h_mm,families") && Contains("\n2,z,") && Contains("\n1,xyz,"));
