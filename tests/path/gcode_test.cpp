@@ -333,6 +333,11 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
          "F word missing with inverse time G1 move", "X4"},
         {"inverse time arc without F", "G0 X0 Y0 Z5\nG93 G2 X10 I5 F1\nG3 X0 I-5\n", 3, 1,
          "F word missing with inverse time arc move", "G3"},
+        // LinuxCNC's convert_cycle: no canned cycle under G93, given in the block or modal.
+        {"inverse time cycle", "G0 X0 Y0 Z5\nG93 G81 X1 Y1 Z-2 R1 F1\n", 2, 5,
+         "cannot use inverse time feed with canned cycles", "G81"},
+        {"inverse time modal cycle", "G0 X0 Y0 Z5\nG81 X1 Y1 Z-2 R1 F100\nG93\nX3\n", 4, 1,
+         "cannot use inverse time feed with canned cycles: give G94 before G81", "X3"},
         {"G10 without L", "G90 G10 P1 X5\n", 1, 5, "G10 without L", "G10"},
         {"G53 in G91", "G91 G53 G0 X5\n", 1, 5, "G53 in incremental mode", "G53"},
         {"M98 without P", "G0 X1 M98\nM30\n", 1, 7, "M98 without P", "M98"},

@@ -376,6 +376,12 @@ void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
                  " move: after G93 each G1, G2 and G3 block needs its own F, as LinuxCNC requires",
              tokenAt(col));
     }
+    // LinuxCNC's convert_cycle: a canned cycle's feeds have no time to take from an F word.
+    if (inverseTime_ && (mode == 730 || (mode >= 810 && mode <= 890))) {
+        const int col = motionCol ? motionCol : b.col[firstAxisLetter(b) - 'A'];
+        fail(col, "cannot use inverse time feed with canned cycles: give G94 before G" + codeText(mode),
+             tokenAt(col));
+    }
     switch (mode) {
     case 0: case 10: {
         Vec3 target;
