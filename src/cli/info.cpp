@@ -101,6 +101,9 @@ int runInfo(const InfoArgs& args) {
     // Each kind of file is read whole (with the machine it needs) before its first line is
     // printed: an error is not left after part of the summary.
     if (endsWith(file, ".vdb")) {
+        // A level set has no moves for a machine to turn or a start to begin from.
+        for (const auto& [given, option] : {std::pair{!args.machine.empty(), "--machine"}, std::pair{bool(start), "--start"}})
+            if (given) throw UsageError(std::string("info: ") + option + " applies to a program; '" + file + "' is a level set");
         const LevelSet ls = readVdb(file);
         std::printf("%-14s %s\n", "file", file.c_str());
         std::printf("%-14s OpenVDB level set, voxel %.6g mm, half-width %.3g voxels\n", "kind", ls.voxelSize(),

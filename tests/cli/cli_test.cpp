@@ -701,6 +701,18 @@ TEST_CASE("info prints nothing before an error in its inputs", "[cli][info][erro
     }
 }
 
+TEST_CASE("info refuses a program's options for a level set, rather than ignore them", "[cli][info][errors]") {
+    const Cli cli("info_vdb_options");
+    for (const auto& [args, option] : {std::pair<const char*, const char*>{"info part.vdb --machine xyzac-trt", "--machine"},
+                                       {"info part.vdb --start 0,0,10", "--start"}}) {
+        INFO(args);
+        const Run r = cli(args);
+        CHECK(r.code == 2);
+        CHECK_THAT(r.err, Contains(std::string(option) + " applies to a program; 'part.vdb' is a level set"));
+        CHECK(r.out.empty());
+    }
+}
+
 TEST_CASE("a gouge and a collision carry one move number on the console, in the CSV and the report", "[cli]") {
     const Cli cli("move_numbers");
     // The design is the stock's lower half, z -10 .. -5. Line 3 only sets the start position; the
