@@ -60,20 +60,24 @@ void printProgram(const Program& p) {
     }
     printBox("extent", p.path.bounds());
     printBox("cutting", cutting);
-    // Every tool number the program calls (a tool change, or 0 for moves before any) or defines:
-    // simulate needs a --tool for those called that have no cutter.
+    // Every tool number the program defines or moves with (0 for moves before any tool change),
+    // and for those it moves with undefined, what simulate does (resolveTools): with one tool
+    // defined it cuts with that one, otherwise it needs a --tool.
     std::set<int> numbers;
     for (const auto& [n, t] : p.tools) numbers.insert(n);
-    for (const ToolChange& c : p.path.toolChanges) numbers.insert(c.tool);
     for (const Move& m : p.path.moves) numbers.insert(m.tool);
     for (int n : numbers) {
         const auto defined = p.tools.find(n);
+        const std::string name = n == 0 ? std::string("T0 (no tool selected)") : "T" + std::to_string(n);
+        const std::string option = n == 0 ? std::string("--tool SPEC") : "--tool " + std::to_string(n) + "=SPEC";
         if (defined != p.tools.end())
-            std::printf("%-14s T%d: %s\n", "tool", n, defined->second.description().c_str());
-        else if (n == 0)
-            std::printf("%-14s T0 (no tool selected): no cutter defined; give one with --tool SPEC\n", "tool");
+            std::printf("%-14s %s: %s\n", "tool", name.c_str(), defined->second.description().c_str());
+        else if (p.tools.size() == 1)
+            std::printf("%-14s %s: not defined; simulate cuts with the only tool defined, T%d (%s), unless given %s\n",
+                        "tool", name.c_str(), p.tools.begin()->first, p.tools.begin()->second.description().c_str(),
+                        option.c_str());
         else
-            std::printf("%-14s T%d: no cutter defined; give one with --tool %d=SPEC\n", "tool", n, n);
+            std::printf("%-14s %s: no cutter defined; give one with %s\n", "tool", name.c_str(), option.c_str());
     }
     std::printf("%-14s %zu\n", "warnings", p.diagnostics.size());
     constexpr std::size_t kShown = 10;

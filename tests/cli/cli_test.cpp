@@ -667,14 +667,23 @@ TEST_CASE("info names every tool a program calls, and which need a --tool", "[cl
     r = cli("info none.ngc");
     CHECK(r.code == 0);
     CHECK_THAT(r.out, Contains("tool           T0 (no tool selected): no cutter defined; give one with --tool SPEC\n"));
-    // A project defines tool 1; its program calls 2 as well.
+    // A tool changed to that makes no move needs no cutter, as simulate takes it.
+    cli.file("t5.ngc", "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\nT5 M6\nM30\n");
+    r = cli("info t5.ngc");
+    CHECK(r.code == 0);
+    CHECK_THAT(r.out, Contains("T1: no cutter defined") && !Contains("T5"));
+    // A project defines tool 1; its program calls 2 as well, which simulate cuts with tool 1.
     cli.file("p.camotics", R"({"tools": {"1": {"units": "metric", "shape": "cylindrical", "length": 20, "diameter": 6}},
                               "files": ["two.ngc"]})");
     r = cli("info p.camotics");
     CHECK(r.code == 0);
     CHECK_THAT(r.out, Contains("tool           T1: flat D6") &&
-                          Contains("tool           T2: no cutter defined; give one with --tool 2=SPEC\n"));
-    CHECK_THAT(r.out, !Contains("T1: no cutter"));
+                          Contains("tool           T2: not defined; simulate cuts with the only tool defined, T1 (flat "
+                                   "D6"));
+    CHECK_THAT(r.out, Contains("unless given --tool 2=SPEC\n") && !Contains("no cutter"));
+    const Run simulated = cli("simulate p.camotics -o p.obj");
+    CHECK(simulated.code == 0);
+    CHECK_THAT(simulated.err, Contains("using the only tool defined, T1"));
     // An APT program defines every tool it cuts with (CUTTER/), so none lacks one.
     cli.file("p.apt", "CUTTER/6\nFROM/0,0,5\nGOTO/5,0,-1\nFINI\n");
     r = cli("info p.apt");
