@@ -56,4 +56,5 @@ TEST_CASE("decimal: a volume prints to a thousandth of a cubic millimetre, round
     CHECK(volumeText(1234.5678) == "1234.57 mm^3");
     CHECK(volumeText(80707312.4) == "80707312 mm^3");
     CHECK(volumeText(-1.5e30).find('e') == std::string::npos);
+    CHECK(volumeText(INFINITY) == "inf mm^3");
 }

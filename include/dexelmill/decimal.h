@@ -79,7 +79,7 @@ constexpr int kVolumeDigits = 6;
 /// one that rounds to 0 prints "0.000 mm^3", whatever its sign.
 inline std::string volumeText(double mm3) {
     int decimals = kVolumeDecimals;
-    if (std::abs(mm3) >= 1.0)
+    if (std::isfinite(mm3) && std::abs(mm3) >= 1.0)
         decimals = std::clamp(kVolumeDigits - 1 - int(std::floor(std::log10(std::abs(mm3)))), 0, kVolumeDecimals);
     char text[400];
     std::snprintf(text, sizeof text, "%.*f", decimals, mm3);

@@ -227,7 +227,7 @@ void noteArcChords(const Program& program, double h, double chordTolerance, std:
     char text[400];
     std::snprintf(text, sizeof text,
                   "arcs are cut as chords that lie up to %.4g mm from their arcs (--chord-tolerance %g mm), more "
-                  "than the lattice spacing of %g mm: the part shows the chords' facets; a --chord-tolerance of "
+                  "than the lattice spacing of %g mm: where they cut, the part shows their facets; a --chord-tolerance of "
                   "%g mm or less keeps them within the spacing",
                   program.arcSag, chordTolerance, h, h);
     const SourceLocation at = program.path.where(program.arcSagSource);
