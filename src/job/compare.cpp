@@ -1,7 +1,9 @@
 // The compare job: a machined part read from a file, measured against the design.
 #include "dexelmill/job/compare.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 
 #include <tbb/task_arena.h>
@@ -83,6 +85,24 @@ CompareReport compareInArena(const CompareOptions& o) {
     OutputBatch outputs;
     std::vector<double> distance = std::move(deviation.distance);
     deviation.distance = {};
+    // The picture and the PLY colour the vertices; the figures count the points inside the
+    // triangles too. Where those alone leave the tolerance, the colours cannot show it.
+    if (!distance.empty() && (!o.pngPath.empty() || !o.plyPath.empty())) {
+        const auto [lowest, highest] = std::minmax_element(distance.begin(), distance.end());
+        const bool gougeHidden = deviation.deepest < -o.tolerance.gouge && *lowest >= -o.tolerance.gouge;
+        const bool excessHidden = deviation.farthest > o.tolerance.excess && *highest <= o.tolerance.excess;
+        const auto hidden = [&](const char* what, double mm) {
+            char text[400];
+            std::snprintf(text, sizeof text,
+                          "the %s found between the mesh's vertices (up to %.4g mm) does not show in the picture "
+                          "and the PLY, which colour the vertices: the mesh's triangles are larger than what "
+                          "they miss",
+                          what, mm);
+            r.warnings.push_back(text);
+        };
+        if (gougeHidden) hidden("gouge", -deviation.deepest);
+        if (excessHidden) hidden("excess", deviation.farthest);
+    }
     writeDeviationFiles(machined, deviation, std::move(distance), o.pngPath, o.plyPath, outputs);
     r.deviation = std::move(deviation);
     r.timingS.write = seconds(t);

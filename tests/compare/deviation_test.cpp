@@ -291,6 +291,31 @@ TEST_CASE("deviation: an uncut block against a slotted design finds the slot bet
     CHECK(d.deepest >= -1e-9);
 }
 
+TEST_CASE("compare: a slot only the points between the vertices find is named, since the colours cannot show it",
+          "[compare][deviation][job]") {
+    // The uncut block and the slotted design of the test above, as files.
+    const fs::path dir = scratch("hidden");
+    writeStl((dir / "block.stl").string(), prism({{0, 0}, {50, 0}, {50, 20}, {0, 20}}, {{0, 1, 2}, {0, 2, 3}}, 50.0));
+    writeStl((dir / "slotted.stl").string(),
+             prism({{0, 0}, {50, 0}, {50, 20}, {30, 20}, {30, 15}, {20, 15}, {20, 20}, {0, 20}},
+                   {{0, 1, 4}, {1, 2, 3}, {1, 3, 4}, {0, 4, 5}, {0, 5, 6}, {0, 6, 7}}, 50.0));
+    CompareOptions o;
+    o.machinedPath = (dir / "block.stl").string();
+    o.designPath = (dir / "slotted.stl").string();
+    o.tolerance = {0.01, 0.05};
+    const auto hiddenWarnings = [](const CompareReport& r) {
+        return std::count_if(r.warnings.begin(), r.warnings.end(), [](const std::string& w) {
+            return w.find("between the mesh's vertices") != std::string::npos;
+        });
+    };
+    // Without a picture or a PLY nothing is hidden.
+    CHECK(hiddenWarnings(compareParts(o)) == 0);
+    o.plyPath = (dir / "deviation.ply").string();
+    const CompareReport r = compareParts(o);
+    REQUIRE(hiddenWarnings(r) == 1);
+    CHECK_THAT(r.warnings.back(), Catch::Contains("the excess found between the mesh's vertices (up to 5 mm)"));
+}
+
 TEST_CASE("deviation: zero tolerances, a surface that matches, and the colours", "[compare][deviation][degenerate]") {
     // The cube against itself: every vertex on the design, one bin, all within tolerance.
     const Mesh c = cube(kHalf);
