@@ -93,7 +93,7 @@ int runStudy(const StudyArgs& a) {
     o.progress = [&bar](const char* stage, std::size_t done, std::size_t total) { bar.update(stage, done, total); };
     const StudyResult r = runStudy(o);
     bar.finish();
-    std::printf("study of %s; reference volume %.6g mm^3 (%s)\n", r.subject.c_str(), r.referenceVolumeMm3,
+    std::printf("study of %s; reference volume %s (%s)\n", r.subject.c_str(), volumeText(r.referenceVolumeMm3).c_str(),
                 r.reference.c_str());
     std::printf("deviations in mm at points over the mesh; 'inner': those at least one spacing from the stock's faces\n");
     std::printf("%8s %-8s %11s %11s %11s %11s %11s %11s %13s %10s %13s %8s\n", "h_mm", "families", "max", "rms",

@@ -12,6 +12,7 @@
 
 #include "dexelmill/compare/design.h"
 #include "dexelmill/compare/excess.h"
+#include "dexelmill/decimal.h"
 #include "dexelmill/error.h"
 #include "dexelmill/geometry/tolerance.h"
 #include "dexelmill/io/atomic_file.h"
@@ -158,11 +159,12 @@ void noteFineFeatures(const FineFeatures& f, double h, double part, Mesher meshe
         char text[800];
         std::snprintf(text, sizeof text,
                       "%s %zu dexel stretch%s with no lattice point in them (spacing %.4g mm), in %zu place%s, about "
-                      "%.3g mm^3 in all (%.2g %% of the part); the most, %.3g mm^3, within (%.3f, %.3f, %.3f)-(%.3f, "
+                      "%s in all (%.2g %% of the part); the most, %s, within (%.3f, %.3f, %.3f)-(%.3f, "
                       "%.3f, %.3f), up to %.3g mm across at (%.3f, %.3f, %.3f); the volumes count them, a finer "
                       "--resolution shows them",
                       what, s.count, s.count == 1 ? "" : "es", h, s.regionCount, s.regionCount == 1 ? "" : "s",
-                      s.volumeMm3, part > 0.0 ? 100.0 * s.volumeMm3 / part : 0.0, most.volumeMm3, most.box.lo.x,
+                      volumeText(s.volumeMm3).c_str(), part > 0.0 ? 100.0 * s.volumeMm3 / part : 0.0,
+                      volumeText(most.volumeMm3).c_str(), most.box.lo.x,
                       most.box.lo.y, most.box.lo.z, most.box.hi.x, most.box.hi.y, most.box.hi.z, most.widestMm,
                       most.widestAt.x, most.widestAt.y, most.widestAt.z);
         ReportWarning w;
