@@ -657,38 +657,36 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
 TEST_CASE("info names every tool a program calls, and which need a --tool", "[cli][info]") {
     const Cli cli("info_tools");
     // No tool table: neither number has a cutter.
-    cli.file("two.ngc", "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\nT2 M6\nG1 X5\nM30\n");
-    Run r = cli("info two.ngc");
-    CHECK(r.code == 0);
-    CHECK_THAT(r.out, Contains("tool           T1: no cutter defined; give one with --tool 1=SPEC\n"
-                               "tool           T2: no cutter defined; give one with --tool 2=SPEC\n"));
+    // What info prints of `text`, written as `name`.
+    const auto info = [&cli](const std::string& name, const std::string& text) {
+        cli.file(name, text);
+        const Run r = cli("info " + name);
+        CHECK(r.code == 0);
+        return r.out;
+    };
+    CHECK_THAT(info("two.ngc", "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\nT2 M6\nG1 X5\nM30\n"),
+               Contains("tool           T1: no cutter defined; give one with --tool 1=SPEC\n"
+                        "tool           T2: no cutter defined; give one with --tool 2=SPEC\n"));
     // Moves before any tool change are made with none.
-    cli.file("none.ngc", "G21 G90\nG0 X0 Y0 Z5\nG1 Z-1 F100\n");
-    r = cli("info none.ngc");
-    CHECK(r.code == 0);
-    CHECK_THAT(r.out, Contains("tool           T0 (no tool selected): no cutter defined; give one with --tool SPEC\n"));
+    CHECK_THAT(info("none.ngc", "G21 G90\nG0 X0 Y0 Z5\nG1 Z-1 F100\n"),
+               Contains("tool           T0 (no tool selected): no cutter defined; give one with --tool SPEC\n"));
     // A tool changed to that makes no move needs no cutter, as simulate takes it.
-    cli.file("t5.ngc", "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\nT5 M6\nM30\n");
-    r = cli("info t5.ngc");
-    CHECK(r.code == 0);
-    CHECK_THAT(r.out, Contains("T1: no cutter defined") && !Contains("T5"));
+    CHECK_THAT(info("t5.ngc", "G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\nT5 M6\nM30\n"),
+               Contains("T1: no cutter defined") && !Contains("T5"));
     // A project defines tool 1; its program calls 2 as well, which simulate cuts with tool 1.
-    cli.file("p.camotics", R"({"tools": {"1": {"units": "metric", "shape": "cylindrical", "length": 20, "diameter": 6}},
+    const std::string project =
+        info("p.camotics", R"({"tools": {"1": {"units": "metric", "shape": "cylindrical", "length": 20, "diameter": 6}},
                               "files": ["two.ngc"]})");
-    r = cli("info p.camotics");
-    CHECK(r.code == 0);
-    CHECK_THAT(r.out, Contains("tool           T1: flat D6") &&
-                          Contains("tool           T2: not defined; simulate cuts with the only tool defined, T1 (flat "
-                                   "D6"));
-    CHECK_THAT(r.out, Contains("unless given --tool 2=SPEC\n") && !Contains("no cutter"));
+    CHECK_THAT(project, Contains("tool           T1: flat D6") &&
+                            Contains("tool           T2: not defined; simulate cuts with the only tool defined, T1 "
+                                     "(flat D6"));
+    CHECK_THAT(project, Contains("unless given --tool 2=SPEC\n") && !Contains("no cutter"));
     const Run simulated = cli("simulate p.camotics -o p.obj");
     CHECK(simulated.code == 0);
     CHECK_THAT(simulated.err, Contains("using the only tool defined, T1"));
     // An APT program defines every tool it cuts with (CUTTER/), so none lacks one.
-    cli.file("p.apt", "CUTTER/6\nFROM/0,0,5\nGOTO/5,0,-1\nFINI\n");
-    r = cli("info p.apt");
-    CHECK(r.code == 0);
-    CHECK_THAT(r.out, Contains("tool           T1: ") && !Contains("no cutter"));
+    CHECK_THAT(info("p.apt", "CUTTER/6\nFROM/0,0,5\nGOTO/5,0,-1\nFINI\n"),
+               Contains("tool           T1: ") && !Contains("no cutter"));
 }
 
 TEST_CASE("info prints nothing before an error in its inputs", "[cli][info][errors]") {
