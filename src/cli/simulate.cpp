@@ -238,10 +238,7 @@ SimulateOptions toOptions(const SimulateArgs& a) {
 
 namespace {
 
-std::string where(const ReportLocation& l) {
-    if (l.file.empty()) return "dexelmill";
-    return l.line > 0 ? l.file + ":" + std::to_string(l.line) : l.file;
-}
+std::string where(const SourceLocation& l) { return l.file.empty() ? "dexelmill" : l.str(); }
 
 /// A count and its noun, plural unless the count is one: "1 move", "0 moves".
 std::string counted(std::size_t n, const char* noun) {

@@ -116,12 +116,14 @@ std::string reportJson(const SimulateReport& r) {
         if (r.surfaceDeviation) j["design"]["surface"] = deviationJson(*r.surfaceDeviation);
     }
     json warnings = json::array();
-    // A warning about the whole run (the stock chosen, a tool not used) has no place: its file and
-    // line are left out rather than written as "" and 0.
+    // A warning about the whole run (the stock chosen, a tool not used) has no place: its file,
+    // line and column are left out rather than written as "" and 0, and so is what is unknown of
+    // a place (a move has a line, a word its column too).
     for (const ReportWarning& w : r.warnings) {
         json entry = json::object();
         if (!w.where.file.empty()) entry["file"] = w.where.file;
         if (w.where.line > 0) entry["line"] = w.where.line;
+        if (w.where.line > 0 && w.where.column > 0) entry["column"] = w.where.column;
         entry["message"] = w.message;
         warnings.push_back(entry);
     }

@@ -234,7 +234,7 @@ void noteArcChords(const Program& program, double h, double chordTolerance, std:
                   program.arcSag, chordTolerance, h, h);
     const SourceLocation at = program.path.where(program.arcSagSource);
     ReportWarning w;
-    w.where = {at.file, at.line};
+    w.where = at;
     w.message = text;
     notes.push_back(w);
 }
@@ -258,7 +258,7 @@ void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& 
     }
     if (rapids == 0) return;
     ReportWarning w;
-    w.where = {firstRapid.file, firstRapid.line};
+    w.where = firstRapid;
     w.message = std::to_string(rapids) + (rapids == 1 ? " move turns" : " moves turn") +
                 " the tool axis at rapid within reach of the stock (the first here): each is swept with its end axis "
                 "throughout, while the machine's own path for the turn decides where the tool really goes";
@@ -675,7 +675,7 @@ Simulation runStages(const SimulateOptions& o) {
             const Move& mv = program.path.moves[g.move];
             const SourceLocation at = program.path.where(mv.source);
             report.gouges.push_back(
-                {ToolPath::moveNumber(g.move), {at.file, at.line}, mv.tool, mv.rapid, g.depth, g.volume, g.point});
+                {ToolPath::moveNumber(g.move), at, mv.tool, mv.rapid, g.depth, g.volume, g.point});
         }
         std::stable_sort(report.gouges.begin(), report.gouges.end(),
                          [](const ReportGouge& a, const ReportGouge& b) { return a.depthMm > b.depthMm; });
@@ -696,7 +696,7 @@ Simulation runStages(const SimulateOptions& o) {
     }
     for (const CutCollision& c : cut.collisions) {
         const SourceLocation at = program.path.where(c.source);
-        report.collisions.push_back({ToolPath::moveNumber(c.move), {at.file, at.line}, c.kind == CollisionKind::Rapid ? "rapid" : "shank",
+        report.collisions.push_back({ToolPath::moveNumber(c.move), at, c.kind == CollisionKind::Rapid ? "rapid" : "shank",
                                      c.volume});
     }
     for (int a = 0; a < 3; ++a)
@@ -709,7 +709,7 @@ Simulation runStages(const SimulateOptions& o) {
     // program's diagnostics would push them past what the summary prints.
     for (ReportWarning& n : notes) report.warnings.push_back(std::move(n));
     for (const Diagnostic& d : program.diagnostics)
-        report.warnings.push_back({{d.where.file, d.where.line}, d.message});
+        report.warnings.push_back({d.where, d.message});
     report.stockMemoryBytes = stock.memoryBytes();
     checkSurfaceFits(stock, budget);
 

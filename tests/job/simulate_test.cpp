@@ -115,13 +115,14 @@ TEST_CASE("a slot removes its analytic volume and the report says so", "[job]") 
     CHECK(fs::file_size(dir / "part.stl") == 84 + 50 * r.meshTriangles);
 }
 
-TEST_CASE("the report gives a warning's file and line only where it has them", "[job]") {
+TEST_CASE("the report gives a warning's file, line and column only where it has them", "[job]") {
     SimulateReport r;
-    r.warnings = {ReportWarning{ReportLocation{"", 0}, "the stock is the program's extent"},
-                  ReportWarning{ReportLocation{"p.ngc", 0}, "the program makes no moves"},
-                  ReportWarning{ReportLocation{"p.ngc", 4}, "F100 is ignored"}};
+    r.warnings = {ReportWarning{SourceLocation{"", 0, 0}, "the stock is the program's extent"},
+                  ReportWarning{SourceLocation{"p.ngc", 0, 0}, "the program makes no moves"},
+                  ReportWarning{SourceLocation{"p.ngc", 4, 0}, "F100 is ignored"},
+                  ReportWarning{SourceLocation{"p.ngc", 6, 9}, "M8 is ignored"}};
     const nlohmann::json j = nlohmann::json::parse(reportJson(r));
-    REQUIRE(j["warnings"].size() == 3);
+    REQUIRE(j["warnings"].size() == 4);
     const nlohmann::json& whole = j["warnings"][0];
     CHECK_FALSE(whole.contains("file"));
     CHECK_FALSE(whole.contains("line"));
@@ -132,7 +133,11 @@ TEST_CASE("the report gives a warning's file and line only where it has them", "
     const nlohmann::json& line = j["warnings"][2];
     CHECK(line["file"] == "p.ngc");
     CHECK(line["line"] == 4);
+    CHECK_FALSE(line.contains("column"));
     CHECK(line["message"] == "F100 is ignored");
+    const nlohmann::json& column = j["warnings"][3];
+    CHECK(column["line"] == 6);
+    CHECK(column["column"] == 9);
 }
 
 TEST_CASE("simulate: a wall thinner than the spacing is reported and meshed", "[job][fine]") {

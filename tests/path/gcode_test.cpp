@@ -626,10 +626,22 @@ TEST_CASE("gcode: tools, warnings and their aggregation", "[path][gcode]") {
             ++feed;
             CHECK(d.message.find("1000 occurrences") != std::string::npos);
             CHECK(d.where.line == 3);
+            CHECK(d.where.column == 7);  // "G1 X0 F100": the F word
         }
     CHECK(feed == 1);
     for (const char* w : {"spindle speed", "spindle M3", "coolant", "M88", "dwell", "cutter radius compensation"})
         CHECK(hasDiagnostic(p, w));
+    for (const Diagnostic& d : p.diagnostics)
+        if (d.message.find("spindle speed") != std::string::npos) CHECK(d.where.column == 1);  // "S1000 M3"
+    // The feed mode's warning names the G word's column.
+    const Program inverse = run("G21 G93 G1 X1 F2\n");
+    bool g93 = false;
+    for (const Diagnostic& d : inverse.diagnostics)
+        if (d.message.find("G93") != std::string::npos) {
+            g93 = true;
+            CHECK(d.where.column == 5);
+        }
+    CHECK(g93);
     // CAMotics: T alone changes the tool.
     GcodeOptions camotics;
     camotics.startPosition = Vec3(0.0);

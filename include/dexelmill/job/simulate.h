@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "dexelmill/compare/deviation.h"
+#include "dexelmill/error.h"
 #include "dexelmill/geometry/affine.h"
 #include "dexelmill/geometry/types.h"
 #include "dexelmill/io/atomic_file.h"
@@ -122,16 +123,10 @@ struct SimulateOptions {
     std::function<void(const char* stage, std::size_t done, std::size_t total)> progress;
 };
 
-/// @brief A place in a source file, as reported.
-struct ReportLocation {
-    std::string file;
-    int line = 0;
-};
-
 /// @brief A collision found while cutting.
 struct ReportCollision {
     std::size_t move = 0;  ///< the move's number: the program's moves counted from 1 (ToolPath::moveNumber)
-    ReportLocation where;
+    SourceLocation where;
     std::string kind;  ///< "rapid" (a rapid move removed material) or "shank" (above the flutes)
     double volumeMm3 = 0.0;
 };
@@ -139,7 +134,7 @@ struct ReportCollision {
 /// @brief A move that cut into the design (Gouge), with its place and tool.
 struct ReportGouge {
     std::size_t move = 0;  ///< the move's number: the program's moves counted from 1 (ToolPath::moveNumber)
-    ReportLocation where;
+    SourceLocation where;
     int tool = 0;
     bool rapid = false;
     double depthMm = 0.0;
@@ -149,7 +144,7 @@ struct ReportGouge {
 
 /// @brief A warning from a reader or the cutting loop.
 struct ReportWarning {
-    ReportLocation where;
+    SourceLocation where;
     std::string message;
 };
 

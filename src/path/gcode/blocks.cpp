@@ -151,8 +151,9 @@ int Interpreter::gGroup(int code) {
 
 int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
     // Modal group checks.
-    int groupCode[20];
+    int groupCode[20], groupCol[20];
     std::fill(std::begin(groupCode), std::end(groupCode), -1);
+    std::fill(std::begin(groupCol), std::end(groupCol), 0);
     int motion = -1, nonModal = -1, motionCol = 0, nonModalCol = 0;
     for (int k = 0; k < b.ng; ++k) {
         const int code = b.g[k];
@@ -174,6 +175,7 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
                      "): LinuxCNC allows one per block",
                  tokenAt(b.gcol[k]));
         groupCode[grp] = code;
+        groupCol[grp] = b.gcol[k];
         if (grp == 1) motion = code, motionCol = b.gcol[k];
         if (grp == 0 && code != 530) nonModal = code, nonModalCol = b.gcol[k];
     }
@@ -202,11 +204,11 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
     // 1. Feed mode, feed, speed.
     if (groupCode[5] >= 0) {
         inverseTime_ = groupCode[5] == 930;
-        if (groupCode[5] == 930) warn("G93 inverse-time feed: feeds are not simulated", "G93");
-        else if (groupCode[5] == 950) warn("G95 feed per revolution: feeds are not simulated", "G95");
+        if (groupCode[5] == 930) warn("G93 inverse-time feed: feeds are not simulated", "G93", groupCol[5]);
+        else if (groupCode[5] == 950) warn("G95 feed per revolution: feeds are not simulated", "G95", groupCol[5]);
     }
-    if (b.has('F')) { b.use('F'); hot(kHotFeed, "feed rate F is not simulated (ignored)"); }
-    if (b.has('S')) { b.use('S'); hot(kHotSpeed, "spindle speed S is not simulated (ignored)"); }
+    if (b.has('F')) { b.use('F'); hot(kHotFeed, "feed rate F is not simulated (ignored)", b.col['F' - 'A']); }
+    if (b.has('S')) { b.use('S'); hot(kHotSpeed, "spindle speed S is not simulated (ignored)", b.col['S' - 'A']); }
     // 2. Tool select and change.
     if (b.has('T')) {
         const double t = b.get('T');

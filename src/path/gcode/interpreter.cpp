@@ -116,9 +116,9 @@ void Interpreter::warn(const std::string& message, const std::string& key, int c
     diags_.warn(where(col), message, key);
 }
 
-void Interpreter::hot(HotKind kind, const char* message) {
+void Interpreter::hot(HotKind kind, const char* message, int col) {
     if (hot_[kind] == kNone)
-        hot_[kind] = diags_.warn(where(), message);
+        hot_[kind] = diags_.warn(where(col), message);
     else
         diags_.repeat(hot_[kind]);
 }

@@ -177,7 +177,7 @@ private:
     /// The text of a token starting at column col (1-based) of the current line.
     std::string tokenAt(int col, std::size_t maxLen = 24) const;
     void warn(const std::string& message, const std::string& key = {}, int col = 0);
-    void hot(HotKind kind, const char* message);
+    void hot(HotKind kind, const char* message, int col);
 
     // ---- structure ----
     [[noreturn]] void failAt(const SourceFile& f, int k, const std::string& message);
