@@ -72,10 +72,9 @@ void printProgram(const Program& p) {
         const std::string option = n == 0 ? std::string("--tool SPEC") : "--tool " + std::to_string(n) + "=SPEC";
         if (defined != p.tools.end())
             std::printf("%-14s %s: %s\n", "tool", name.c_str(), defined->second.description().c_str());
-        else if (p.tools.size() == 1)
+        else if (const std::optional<int> only = standInTool(p.tools))
             std::printf("%-14s %s: not defined; simulate cuts with the only tool defined, T%d (%s), unless given %s\n",
-                        "tool", name.c_str(), p.tools.begin()->first, p.tools.begin()->second.description().c_str(),
-                        option.c_str());
+                        "tool", name.c_str(), *only, p.tools.at(*only).description().c_str(), option.c_str());
         else
             std::printf("%-14s %s: no cutter defined; give one with %s\n", "tool", name.c_str(), option.c_str());
     }

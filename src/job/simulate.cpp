@@ -94,7 +94,7 @@ void checkOutputs(const SimulateOptions& o) {
 }
 
 /// The tools the cutting loop uses: the command line's over the program's; tool numbers nobody
-/// defines get the default tool, or the only tool there is (with a warning).
+/// defines get the default tool, or standInTool's (with a warning).
 ToolTable resolveTools(const SimulateOptions& o, Program& program) {
     ToolTable table = program.tools;
     std::set<int> used;
@@ -125,13 +125,13 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
             defaultUsed = true;
             continue;
         }
-        if (table.size() == 1) {
+        if (const std::optional<int> only = standInTool(table)) {
+            const Tool& stand = table.at(*only);
             std::ostringstream msg;
             msg << (n == 0 ? std::string("moves before any tool is selected") : "tool T" + std::to_string(n) + " is not defined")
-                << "; using the only tool defined, T" << table.begin()->first << " ("
-                << table.begin()->second.description() << ")";
+                << "; using the only tool defined, T" << *only << " (" << stand.description() << ")";
             program.diagnostics.push_back({Diagnostic::Severity::Warning, at, msg.str()});
-            table.insert_or_assign(n, table.begin()->second);
+            table.insert_or_assign(n, stand);
             continue;
         }
         throw ParseError(at,
@@ -484,6 +484,11 @@ std::vector<NamedFile> jobInputFiles(const SimulateOptions& o) {
     const std::vector<std::string> builtin = builtinMachineNames();
     if (std::find(builtin.begin(), builtin.end(), o.machine) == builtin.end()) files.push_back({"--machine", o.machine});
     return files;
+}
+
+std::optional<int> standInTool(const ToolTable& defined) {
+    if (defined.size() != 1) return std::nullopt;
+    return defined.begin()->first;
 }
 
 GcodeOptions jobGcodeOptions(double chordTolerance, const MemoryBudget& budget) {

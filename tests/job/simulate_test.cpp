@@ -261,6 +261,15 @@ TEST_CASE("the job names what is missing or malformed", "[job][errors]") {
     CHECK_THROWS_WITH(runSimulation(o), Catch::Matchers::Contains("missing.ngc"));
 }
 
+TEST_CASE("an undefined tool number takes the only tool defined, and no other", "[job][errors][degenerate]") {
+    ToolTable defined;
+    CHECK_FALSE(standInTool(defined).has_value());
+    defined.emplace(7, flatEndMill(3));
+    CHECK(standInTool(defined) == std::optional<int>(7));
+    defined.emplace(2, flatEndMill(4));
+    CHECK_FALSE(standInTool(defined).has_value());
+}
+
 TEST_CASE("a stock file keeps its solid: an open STL is refused, a VDB read back at its spacing keeps its dexels",
           "[job][errors][degenerate]") {
     const fs::path dir = scratch("stockfile");

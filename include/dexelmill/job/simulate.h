@@ -251,6 +251,12 @@ struct Simulation {
 /// @throw Error (ParseError with a location for bad programs) on any input or processing error.
 Simulation runSimulation(const SimulateOptions& options);
 
+/// @brief The tool a job cuts a tool number nothing defines with, when no --tool without a number
+/// (SimulateOptions::defaultTool) is given: the only tool of `defined` (the program's tools and
+/// the command line's) when it holds exactly one, with a warning; otherwise none, and the job
+/// stops with an error naming the number. `info` tells the same.
+std::optional<int> standInTool(const ToolTable& defined);
+
 /// @brief How a job reads G-code: the chord tolerance, the reader's own limits, and no more
 /// moves than `budget` holds. `simulate`, `info` and the fuzz targets all read with these.
 GcodeOptions jobGcodeOptions(double chordTolerance, const MemoryBudget& budget);
