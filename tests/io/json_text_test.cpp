@@ -59,3 +59,133 @@ TEST_CASE("JSON text: brackets and quotes inside strings and comments", "[io][js
     CHECK_FALSE(jsonTextFault("{\"a\": \"[[[", false));
     CHECK_FALSE(jsonTextFault("{/* [[[", true));
 }
+
+// JsonPositions: where each value and key begins, by JSON pointer. The expected offsets are
+// counted by hand on the texts below (0 is the first character).
+namespace {
+
+/// The offset of the value at `pointer`, -1 when there is none.
+long at(const JsonPositions& p, const std::string& pointer) {
+    const auto b = p.byteOf(pointer);
+    return b ? long(*b) : -1;
+}
+
+/// The offset of the key naming `pointer`, -1 when there is none.
+long keyAt(const JsonPositions& p, const std::string& pointer) {
+    const auto b = p.keyByteOf(pointer);
+    return b ? long(*b) : -1;
+}
+
+}  // namespace
+
+TEST_CASE("JSON positions: nested objects and arrays", "[io][json]") {
+    //                       0         1         2         3
+    //                       0123456789012345678901234567890
+    const JsonPositions p(R"({"a": [1, {"b": "x"}], "c": {}})", false);
+    CHECK(at(p, "") == 0);
+    CHECK(keyAt(p, "/a") == 1);
+    CHECK(at(p, "/a") == 6);
+    CHECK(at(p, "/a/0") == 7);
+    CHECK(at(p, "/a/1") == 10);
+    CHECK(keyAt(p, "/a/1/b") == 11);
+    CHECK(at(p, "/a/1/b") == 16);
+    CHECK(keyAt(p, "/c") == 23);
+    CHECK(at(p, "/c") == 28);
+    // What the text does not hold, and array elements and the root, which have no key.
+    CHECK(at(p, "/a/2") == -1);
+    CHECK(at(p, "/b") == -1);
+    CHECK(at(p, "/a/1/b/0") == -1);
+    CHECK(at(p, "a") == -1);
+    CHECK(keyAt(p, "/a/0") == -1);
+    CHECK(keyAt(p, "") == -1);
+    // Arrays in arrays, empty ones included, and a root that is no object.
+    const JsonPositions q("[[],[[7]]]", false);
+    CHECK(at(q, "/0") == 1);
+    CHECK(at(q, "/1") == 4);
+    CHECK(at(q, "/1/0") == 5);
+    CHECK(at(q, "/1/0/0") == 6);
+    CHECK(at(q, "/0/0") == -1);
+    CHECK(at(JsonPositions(" 42 ", false), "") == 1);
+}
+
+TEST_CASE("JSON positions: quotes and brackets inside strings", "[io][json]") {
+    // An escaped quote and brackets inside a string, then true and null.
+    //                       0         1         2         3
+    //                       01234567890123456789012345678901234
+    const JsonPositions p(R"({"s": "a\"]}[{", "t": [true, null]})", false);
+    CHECK(at(p, "/s") == 6);
+    CHECK(keyAt(p, "/t") == 17);
+    CHECK(at(p, "/t") == 22);
+    CHECK(at(p, "/t/0") == 23);
+    CHECK(at(p, "/t/1") == 29);
+    // A string ending in an escaped backslash.
+    const JsonPositions b(R"({"u": "\\", "v": 1})", false);
+    CHECK(at(b, "/u") == 6);
+    CHECK(keyAt(b, "/v") == 12);
+    CHECK(at(b, "/v") == 17);
+}
+
+TEST_CASE("JSON positions: comments, CRLF and a byte order mark", "[io][json]") {
+    // A key inside a line comment and a brace inside a block comment between a key and its colon.
+    const std::string text = "{\r\n  // \"x\": [\r\n  \"x\" /* { */ : 5\r\n}";
+    const JsonPositions p(text, true);
+    CHECK(at(p, "") == 0);
+    CHECK(keyAt(p, "/x") == 18);
+    CHECK(at(p, "/x") == 32);
+    // Without comments the text is no JSON: what stands before the comment is kept.
+    const JsonPositions strict(text, false);
+    CHECK(at(strict, "") == 0);
+    CHECK(at(strict, "/x") == -1);
+    // A comment before the root, and between a number and its comma.
+    const JsonPositions before("/* c */ [1]", true);
+    CHECK(at(before, "") == 8);
+    CHECK(at(before, "/0") == 9);
+    const JsonPositions after("[1/*c*/,2]", true);
+    CHECK(at(after, "/0") == 1);
+    CHECK(at(after, "/1") == 8);
+    // Tabs and newlines as blanks, and a UTF-8 byte order mark, which the JSON library skips.
+    const JsonPositions blanks("\t[\n\t1\n]", false);
+    CHECK(at(blanks, "") == 1);
+    CHECK(at(blanks, "/0") == 4);
+    const JsonPositions bom("\xef\xbb\xbf{\"a\": 1}", false);
+    CHECK(at(bom, "") == 3);
+    CHECK(at(bom, "/a") == 9);
+}
+
+TEST_CASE("JSON positions: keys as pointer tokens, escapes decoded", "[io][json]") {
+    CHECK(jsonPointerToken("a/b") == "a~1b");
+    CHECK(jsonPointerToken("m~n") == "m~0n");
+    CHECK(jsonPointerToken("~1") == "~01");  // "~" first: "~1" read back is "~1", not "/"
+    CHECK(jsonPointerToken("") == "");
+    //                       0         1         2         3         4
+    //                       01234567890123456789012345678901234567890
+    const JsonPositions p(R"({"a/b": 1, "m~n": 2, "": 3, "\u0061~": 4})", false);
+    CHECK(keyAt(p, "/a~1b") == 1);
+    CHECK(at(p, "/a~1b") == 8);
+    CHECK(keyAt(p, "/m~0n") == 11);
+    CHECK(at(p, "/m~0n") == 18);
+    CHECK(keyAt(p, "/") == 21);  // the empty key
+    CHECK(at(p, "/") == 25);
+    CHECK(keyAt(p, "/a~0") == 28);
+    CHECK(at(p, "/a~0") == 39);
+    CHECK(at(p, "/a/b") == -1);
+    // A surrogate pair is one character (U+1F600 in UTF-8), and \n a newline.
+    CHECK(at(JsonPositions(R"({"\ud83d\ude00": 0})", false), "/\xf0\x9f\x98\x80") == 17);
+    CHECK(at(JsonPositions(R"({"a\nb": 0})", false), "/a\nb") == 9);
+    // A key given twice: the last counts, as in the JSON library.
+    const JsonPositions twice(R"({"k": 1, "k": 2})", false);
+    CHECK(keyAt(twice, "/k") == 9);
+    CHECK(at(twice, "/k") == 14);
+}
+
+TEST_CASE("JSON positions: text that is no JSON keeps what stands before the fault", "[io][json]") {
+    const JsonPositions missingComma(R"({"a": 1 "b": 2})", false);
+    CHECK(at(missingComma, "/a") == 6);
+    CHECK(at(missingComma, "/b") == -1);
+    CHECK(at(JsonPositions(R"({"a": "xx)", false), "/a") == 6);
+    CHECK(at(JsonPositions("[1,", false), "/0") == 1);
+    CHECK(at(JsonPositions("{\"a\" 1}", false), "/a") == -1);
+    CHECK(at(JsonPositions("[,]", false), "/0") == -1);
+    CHECK(at(JsonPositions("", false), "") == -1);
+    CHECK(at(JsonPositions("/* open", true), "") == -1);
+}

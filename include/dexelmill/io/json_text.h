@@ -1,9 +1,11 @@
 /// @file json_text.h
-/// @brief What a JSON file a user gives (a machine description, a CAMotics project) must not hold,
-/// which the JSON library takes without a word or cannot take safely.
+/// @brief JSON text as written, for what the JSON library does not keep: what a file a user gives
+/// (a machine description, a CAMotics project) must not hold, which the library takes without a
+/// word or cannot take safely, and where each of its values stands, for errors about their meaning.
 #pragma once
 
 #include <cstddef>
+#include <map>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -27,5 +29,32 @@ struct JsonTextFault {
 /// `comments` so are // and /* */ comments, as the library's parser skips them. Text that is not
 /// JSON is the library's to refuse: this only reads brackets, strings and commas.
 std::optional<JsonTextFault> jsonTextFault(std::string_view text, bool comments);
+
+/// @brief `key` as one reference token of a JSON pointer (RFC 6901): "~" written "~0", "/" "~1".
+std::string jsonPointerToken(std::string_view key);
+
+/// @brief Where each value and each object key of JSON text begins, as a byte offset into the
+/// text, named by JSON pointer (RFC 6901): "" is the root, "/axes/0/direction" the member
+/// "direction" of the first element of the root's member "axes". A value's offset is that of its
+/// first character (the quote, bracket, brace, digit, sign or letter); a key's that of its opening
+/// quote. Keys are named as the library reads them, escapes decoded ("\u0061" is "a"), and of a
+/// key given twice the last counts, as in the library. With `comments`, // and /* */ comments are
+/// skipped as blanks, as the library's parser skips them; a UTF-8 byte order mark before the root
+/// is skipped too. Meant for text the library has accepted: of other text it holds what stands
+/// before the first fault.
+class JsonPositions {
+public:
+    JsonPositions(std::string_view text, bool comments);
+
+    /// @brief The offset of the value at `pointer`; none when the text has no such value.
+    std::optional<std::size_t> byteOf(const std::string& pointer) const;
+    /// @brief The offset of the key that names the object member at `pointer`; none when
+    /// `pointer` names no object member.
+    std::optional<std::size_t> keyByteOf(const std::string& pointer) const;
+
+private:
+    std::map<std::string, std::size_t> values_;
+    std::map<std::string, std::size_t> keys_;
+};
 
 }  // namespace dexelmill
