@@ -80,32 +80,66 @@ Machine builtin(const std::string& name) {
     return m;
 }
 
-Vec3 readVector(const nlohmann::json& j, const std::string& what, const SourceLocation& at) {
+/// The line and column of byte `byte` of `text`.
+SourceLocation locate(const std::string& text, const std::string& file, std::size_t byte) {
+    SourceLocation at{file, 1, 1};
+    for (std::size_t i = 0; i < byte && i < text.size(); ++i) {
+        if (text[i] == '\n') ++at.line, at.column = 1;
+        else ++at.column;
+    }
+    return at;
+}
+
+/// Where the values and keys of a machine file stand, by JSON pointer: errors about what a value
+/// means name its line and column, though the JSON library keeps no positions.
+class Places {
+public:
+    Places(const std::string& text, const std::string& file) : text_(text), file_(file), positions_(text, false) {}
+
+    /// The place of the value at `pointer`.
+    SourceLocation value(const std::string& pointer) const { return place(positions_.byteOf(pointer)); }
+    /// The place of the key naming the object member at `pointer`.
+    SourceLocation key(const std::string& pointer) const { return place(positions_.keyByteOf(pointer)); }
+
+private:
+    SourceLocation place(std::optional<std::size_t> byte) const {
+        return byte ? locate(text_, file_, *byte) : SourceLocation{file_, 0, 0};
+    }
+
+    const std::string& text_;
+    const std::string& file_;
+    JsonPositions positions_;
+};
+
+/// The three numbers of j, the value at `pointer`.
+Vec3 readVector(const nlohmann::json& j, const std::string& what, const Places& places, const std::string& pointer) {
     if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
-        throw ParseError(at, what + " must be an array of three numbers", j.dump());
+        throw ParseError(places.value(pointer), what + " must be an array of three numbers", j.dump());
     const Vec3 v(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
-        throw ParseError(at, what + " must be finite", j.dump());
+        throw ParseError(places.value(pointer), what + " must be finite", j.dump());
     return v;
 }
 
-/// A string field of object j, `fallback` where it is absent.
+/// A string field of object j (at `pointer`), `fallback` where it is absent.
 std::string readString(const nlohmann::json& j, const char* key, const std::string& fallback, const std::string& what,
-                       const SourceLocation& at) {
+                       const Places& places, const std::string& pointer) {
     if (!j.contains(key)) return fallback;
-    if (!j[key].is_string()) throw ParseError(at, what + "\"" + key + "\" must be a string", j[key].dump());
+    if (!j[key].is_string())
+        throw ParseError(places.value(pointer + "/" + key), what + "\"" + key + "\" must be a string", j[key].dump());
     return j[key].get<std::string>();
 }
 
-/// Refuses a key of object j outside `known`: a misspelt "pivot" would leave the pivot at the
-/// origin unnoticed.
+/// Refuses a key of object j (at `pointer`) outside `known`: a misspelt "pivot" would leave the
+/// pivot at the origin unnoticed.
 void onlyKnownKeys(const nlohmann::json& j, std::initializer_list<const char*> known, const std::string& what,
-                   const SourceLocation& at) {
+                   const Places& places, const std::string& pointer) {
     for (auto it = j.begin(); it != j.end(); ++it)
         if (std::none_of(known.begin(), known.end(), [&](const char* k) { return it.key() == k; })) {
             std::string names;
             for (const char* k : known) names += std::string(names.empty() ? "" : ", ") + "\"" + k + "\"";
-            throw ParseError(at, what + "unknown key \"" + it.key() + "\" (known: " + names + ")", it.key());
+            throw ParseError(places.key(pointer + "/" + jsonPointerToken(it.key())),
+                             what + "unknown key \"" + it.key() + "\" (known: " + names + ")", it.key());
         }
 }
 
@@ -166,59 +200,62 @@ RotaryMotion Machine::motion(const RotaryAngles& from, const RotaryAngles& to, b
 std::vector<std::string> builtinMachineNames() { return {"xyzac-trt", "xyzbc-trt", "xyza"}; }
 
 Machine parseMachine(const std::string& text, const std::string& fileName) {
-    // A fault's line and column, from the byte offset of its first character.
-    const auto locate = [&](std::size_t byte) {
-        SourceLocation at{fileName, 1, 1};
-        for (std::size_t i = 0; i < byte && i < text.size(); ++i) {
-            if (text[i] == '\n') ++at.line, at.column = 1;
-            else ++at.column;
-        }
-        return at;
-    };
     if (const std::optional<JsonTextFault> fault = jsonTextFault(text, /*comments=*/false))
-        throw ParseError(locate(fault->byte), "machine description: " + fault->message);
+        throw ParseError(locate(text, fileName, fault->byte), "machine description: " + fault->message);
     nlohmann::json j;
     try {
         j = nlohmann::json::parse(text);
     } catch (const nlohmann::json::parse_error& e) {
         // The library's offset counts the faulty character as read.
-        throw ParseError(locate(e.byte > 0 ? e.byte - 1 : 0), "not valid JSON for a machine description");
+        throw ParseError(locate(text, fileName, e.byte > 0 ? e.byte - 1 : 0),
+                         "not valid JSON for a machine description");
     } catch (const nlohmann::json::exception&) {  // a number beyond double's range, as 1e999
         throw ParseError(SourceLocation{fileName, 0, 0}, "not valid JSON for a machine description: a number "
                                                           "beyond the range of a double");
     }
-    const SourceLocation at{fileName, 0, 0};
-    if (!j.is_object()) throw ParseError(at, "a machine description must be a JSON object");
-    onlyKnownKeys(j, {"name", "tcp_at_start", "axes"}, "", at);
+    const Places places(text, fileName);
+    if (!j.is_object()) throw ParseError(places.value(""), "a machine description must be a JSON object");
+    onlyKnownKeys(j, {"name", "tcp_at_start", "axes"}, "", places, "");
     Machine m;
-    m.name = readString(j, "name", fileName, "", at);
+    m.name = readString(j, "name", fileName, "", places, "");
     if (j.contains("tcp_at_start")) {
-        if (!j["tcp_at_start"].is_boolean()) throw ParseError(at, "\"tcp_at_start\" must be true or false");
+        if (!j["tcp_at_start"].is_boolean())
+            throw ParseError(places.value("/tcp_at_start"), "\"tcp_at_start\" must be true or false");
         m.tcpAtStart = j["tcp_at_start"].get<bool>();
     }
     if (!j.contains("axes") || !j["axes"].is_array() || j["axes"].empty())
-        throw ParseError(at, "a machine description needs \"axes\": a non-empty array of rotary axes");
-    for (const auto& a : j["axes"]) {
+        throw ParseError(places.value(j.contains("axes") ? "/axes" : ""),
+                         "a machine description needs \"axes\": a non-empty array of rotary axes");
+    for (std::size_t i = 0; i < j["axes"].size(); ++i) {
+        const nlohmann::json& a = j["axes"][i];
+        const std::string axis = "/axes/" + std::to_string(i);
         RotaryAxisSpec s;
-        if (!a.is_object()) throw ParseError(at, "each axis must be a JSON object", a.dump());
-        const std::string letter = readString(a, "letter", std::string(), "an axis's ", at);
+        if (!a.is_object()) throw ParseError(places.value(axis), "each axis must be a JSON object", a.dump());
+        const std::string letter = readString(a, "letter", std::string(), "an axis's ", places, axis);
         if (letter != "A" && letter != "B" && letter != "C")
-            throw ParseError(at, "each axis needs \"letter\": \"A\", \"B\" or \"C\"", a.dump());
+            throw ParseError(places.value(a.contains("letter") ? axis + "/letter" : axis),
+                             "each axis needs \"letter\": \"A\", \"B\" or \"C\"", a.dump());
         s.letter = letter[0];
-        if (m.has(s.letter)) throw ParseError(at, "rotary axis " + letter + " is described twice");
-        onlyKnownKeys(a, {"letter", "on", "direction", "pivot"}, "axis " + letter + ": ", at);
-        const std::string on = readString(a, "on", "table", "axis " + letter + ": ", at);
-        if (on != "table" && on != "head") throw ParseError(at, "axis " + letter + ": \"on\" must be \"table\" or \"head\"", on);
+        if (m.has(s.letter))
+            throw ParseError(places.value(axis + "/letter"), "rotary axis " + letter + " is described twice");
+        onlyKnownKeys(a, {"letter", "on", "direction", "pivot"}, "axis " + letter + ": ", places, axis);
+        const std::string on = readString(a, "on", "table", "axis " + letter + ": ", places, axis);
+        if (on != "table" && on != "head")
+            throw ParseError(places.value(axis + "/on"),
+                             "axis " + letter + ": \"on\" must be \"table\" or \"head\"", on);
         s.onTable = on == "table";
-        if (!a.contains("direction")) throw ParseError(at, "axis " + letter + " needs a \"direction\"");
-        const Vec3 d = readVector(a["direction"], "axis " + letter + "'s direction", at);
-        if (glm::length(d) <= tol::kLength) throw ParseError(at, "axis " + letter + "'s direction is zero");
+        if (!a.contains("direction")) throw ParseError(places.value(axis), "axis " + letter + " needs a \"direction\"");
+        const Vec3 d = readVector(a["direction"], "axis " + letter + "'s direction", places, axis + "/direction");
+        if (glm::length(d) <= tol::kLength)
+            throw ParseError(places.value(axis + "/direction"), "axis " + letter + "'s direction is zero");
         // Scaled by its largest component first: the length of (1e300, 0, 0) overflows.
         s.direction = glm::normalize(d / std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)}));
-        if (a.contains("pivot")) s.pivot = readVector(a["pivot"], "axis " + letter + "'s pivot", at);
+        if (a.contains("pivot"))
+            s.pivot = readVector(a["pivot"], "axis " + letter + "'s pivot", places, axis + "/pivot");
         // A pivot far out rounds away the positions it turns (1e300 - x is 1e300).
         if (std::max({std::abs(s.pivot.x), std::abs(s.pivot.y), std::abs(s.pivot.z)}) > kMaxPivotMm)
-            throw ParseError(at, "axis " + letter + "'s pivot lies beyond the 1e9 mm a machine may reach",
+            throw ParseError(places.value(axis + "/pivot"),
+                             "axis " + letter + "'s pivot lies beyond the 1e9 mm a machine may reach",
                              a["pivot"].dump());
         m.axes.push_back(s);
     }

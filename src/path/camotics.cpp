@@ -39,17 +39,40 @@ SourceLocation locate(std::string_view text, std::size_t offset, const std::stri
     return loc;
 }
 
-double number(const Json& j, const char* key, const std::string& where, const std::string& file,
-              double fallback, bool required = false) {
+/// Where the values and keys of a project stand, by JSON pointer: errors about what a value means
+/// name its line and column, though the JSON library keeps no positions.
+class Places {
+public:
+    Places(std::string_view text, const std::string& file) : text_(text), file_(file), positions_(text, true) {}
+
+    /// The place of the value at `pointer`.
+    SourceLocation value(const std::string& pointer) const { return place(positions_.byteOf(pointer)); }
+    /// The place of the key naming the object member at `pointer`.
+    SourceLocation key(const std::string& pointer) const { return place(positions_.keyByteOf(pointer)); }
+
+private:
+    SourceLocation place(std::optional<std::size_t> byte) const {
+        return byte ? locate(text_, *byte, file_) : SourceLocation{file_, 0, 0};
+    }
+
+    std::string_view text_;
+    const std::string& file_;
+    JsonPositions positions_;
+};
+
+/// The number `key` of object j (at `pointer`), or `fallback` when j has none; a `required` one
+/// missing is an error at j.
+double number(const Json& j, const char* key, const std::string& where, const Places& places,
+              const std::string& pointer, double fallback, bool required = false) {
     if (!j.contains(key)) {
-        if (required) throw ParseError({file, 0, 0}, where + ": missing \"" + key + "\"");
+        if (required) throw ParseError(places.value(pointer), where + ": missing \"" + key + "\"");
         return fallback;
     }
     const Json& v = j.at(key);
-    if (!v.is_number())
-        throw ParseError({file, 0, 0}, where + ": \"" + key + "\" must be a number", v.dump());
+    const SourceLocation at = places.value(pointer + "/" + key);
+    if (!v.is_number()) throw ParseError(at, where + ": \"" + key + "\" must be a number", v.dump());
     const double d = v.get<double>();
-    if (!std::isfinite(d)) throw ParseError({file, 0, 0}, where + ": \"" + key + "\" is not finite", v.dump());
+    if (!std::isfinite(d)) throw ParseError(at, where + ": \"" + key + "\" is not finite", v.dump());
     return d;
 }
 
@@ -61,21 +84,24 @@ Diagnostic warning(SourceLocation where, std::string message) {
     return d;
 }
 
-/// The string `key` of object j, or `fallback` when j has none.
-std::string text(const Json& j, const char* key, const std::string& where, const std::string& file,
-                 const std::string& fallback) {
+/// The string `key` of object j (at `pointer`), or `fallback` when j has none.
+std::string text(const Json& j, const char* key, const std::string& where, const Places& places,
+                 const std::string& pointer, const std::string& fallback) {
     if (!j.contains(key)) return fallback;
     const Json& v = j.at(key);
-    if (!v.is_string()) throw ParseError({file, 0, 0}, where + ": \"" + key + "\" must be a string", v.dump());
+    if (!v.is_string())
+        throw ParseError(places.value(pointer + "/" + key), where + ": \"" + key + "\" must be a string", v.dump());
     return v.get<std::string>();
 }
 
-/// The boolean `key` of object j, or `fallback` when j has none.
-bool boolean(const Json& j, const char* key, const std::string& where, const std::string& file, bool fallback) {
+/// The boolean `key` of object j (at `pointer`), or `fallback` when j has none.
+bool boolean(const Json& j, const char* key, const std::string& where, const Places& places,
+             const std::string& pointer, bool fallback) {
     if (!j.contains(key)) return fallback;
     const Json& v = j.at(key);
     if (!v.is_boolean())
-        throw ParseError({file, 0, 0}, where + ": \"" + key + "\" must be true or false", v.dump());
+        throw ParseError(places.value(pointer + "/" + key), where + ": \"" + key + "\" must be true or false",
+                         v.dump());
     return v.get<bool>();
 }
 
@@ -85,16 +111,17 @@ std::string lower(std::string s) {
     return s;
 }
 
-/// The units a tool's or the project's "units" names: true for metric.
-bool metricUnits(const Json& j, const std::string& where, const std::string& file) {
-    const std::string units = lower(text(j, "units", where, file, "metric"));
+/// The units a tool's or the project's "units" names (j at `pointer`): true for metric.
+bool metricUnits(const Json& j, const std::string& where, const Places& places, const std::string& pointer) {
+    const std::string units = lower(text(j, "units", where, places, pointer, "metric"));
     if (units != "metric" && units != "imperial")
-        throw ParseError({file, 0, 0}, where + ": units must be \"metric\" or \"imperial\"", units);
+        throw ParseError(places.value(pointer + "/units"), where + ": units must be \"metric\" or \"imperial\"",
+                         units);
     return units == "metric";
 }
 
-ResolutionMode resolutionMode(const Json& j, const std::string& file) {
-    std::string mode = lower(text(j, "resolution-mode", "project", file, "medium"));
+ResolutionMode resolutionMode(const Json& j, const Places& places) {
+    std::string mode = lower(text(j, "resolution-mode", "project", places, "", "medium"));
     for (char& c : mode)
         if (c == ' ' || c == '-') c = '_';
     if (mode == "manual") return ResolutionMode::Manual;
@@ -102,32 +129,37 @@ ResolutionMode resolutionMode(const Json& j, const std::string& file) {
     if (mode == "medium") return ResolutionMode::Medium;
     if (mode == "high") return ResolutionMode::High;
     if (mode == "very_high") return ResolutionMode::VeryHigh;
-    throw ParseError({file, 0, 0}, "project: \"resolution-mode\" must be manual, low, medium, high or very_high",
+    throw ParseError(places.value("/resolution-mode"),
+                     "project: \"resolution-mode\" must be manual, low, medium, high or very_high",
                      j.at("resolution-mode").dump());
 }
 
-/// The tool CAMotics makes of `t`; none for a shape dexelmill has no cutter for, which a warning
-/// in `diags` names.
-std::optional<Tool> camoticsTool(const Json& t, const std::string& where, const std::string& file,
-                                 std::vector<Diagnostic>& diags) {
-    if (!t.is_object()) throw ParseError({file, 0, 0}, where + ": a tool must be an object", t.dump());
-    const double s = metricUnits(t, where, file) ? 1.0 : kInch;
-    std::string shape = lower(text(t, "shape", where, file, "cylindrical"));
+/// The tool CAMotics makes of `t` (at `pointer`); none for a shape dexelmill has no cutter for,
+/// which a warning in `diags` names.
+std::optional<Tool> camoticsTool(const Json& t, const std::string& where, const Places& places,
+                                 const std::string& pointer, std::vector<Diagnostic>& diags) {
+    if (!t.is_object()) throw ParseError(places.value(pointer), where + ": a tool must be an object", t.dump());
+    const double s = metricUnits(t, where, places, pointer) ? 1.0 : kInch;
+    std::string shape = lower(text(t, "shape", where, places, pointer, "cylindrical"));
     // CAMotics' other names for two of its shapes.
     if (shape == "cylinder") shape = "cylindrical";
     if (shape == "cone") shape = "conical";
-    const double d = number(t, "diameter", where, file, 0.0, true) * s;
-    const double length = number(t, "length", where, file, 0.0, true) * s;
+    // Where the shape is (or would be) given: the tool itself when it names none.
+    const SourceLocation shapeAt = places.value(t.contains("shape") ? pointer + "/shape" : pointer);
+    const double d = number(t, "diameter", where, places, pointer, 0.0, true) * s;
+    const double length = number(t, "length", where, places, pointer, 0.0, true) * s;
     if (!(d > 0) || !(length > 0))
-        throw ParseError({file, 0, 0}, where + ": diameter and length must be positive", t.dump());
+        throw ParseError(places.value(pointer + (d > 0 ? "/length" : "/diameter")),
+                         where + ": diameter and length must be positive", t.dump());
     ToolLengths lengths{length, 0.0};
     try {
         if (shape == "snubnose") {
             // CAMotics sweeps a cone from the snub at the tip to the diameter at the tool's length:
             // a snub as wide as the tool is a cylinder, and none (or none given) a point.
-            const double snub = number(t, "snub_diameter", where, file, 0.0) * s;
+            const double snub = number(t, "snub_diameter", where, places, pointer, 0.0) * s;
             if (!(snub >= 0) || snub > d)
-                throw ParseError({file, 0, 0}, where + ": snub_diameter must be in [0, diameter]", t.dump());
+                throw ParseError(places.value(pointer + "/snub_diameter"),
+                                 where + ": snub_diameter must be in [0, diameter]", t.dump());
             if (snub == d) shape = "cylindrical";
             else if (snub == 0.0) shape = "conical";
             else return taperEndMill(snub, std::atan2((d - snub) / 2, length), lengths);
@@ -141,24 +173,25 @@ std::optional<Tool> camoticsTool(const Json& t, const std::string& where, const 
     } catch (const ParseError&) {
         throw;
     } catch (const Error& e) {
-        throw ParseError({file, 0, 0}, where + ": no real tool: " + e.what(), t.dump());
+        throw ParseError(places.value(pointer), where + ": no real tool: " + e.what(), t.dump());
     }
     if (shape == "spheroid" || shape == "sphere") {
-        diags.push_back(warning({file, 0, 0}, where + ": CAMotics' spheroid tool (an ellipse turned about the axis) "
-                                                      "is not supported, as dexelmill's cutters are made of straight "
-                                                      "and circular-arc profiles: the project leaves this number "
-                                                      "undefined, for a --tool N=SPEC"));
+        diags.push_back(warning(shapeAt, where + ": CAMotics' spheroid tool (an ellipse turned about the axis) "
+                                                 "is not supported, as dexelmill's cutters are made of straight "
+                                                 "and circular-arc profiles: the project leaves this number "
+                                                 "undefined, for a --tool N=SPEC"));
         return std::nullopt;
     }
-    throw ParseError({file, 0, 0},
+    throw ParseError(shapeAt,
                      where + ": unknown tool shape (CAMotics' are cylindrical, ballnose, conical, snubnose "
                              "and spheroid)",
                      shape);
 }
 
-Vec3 vec3(const Json& j, const std::string& where, const std::string& file) {
+/// The three numbers of j, the value at `pointer`.
+Vec3 vec3(const Json& j, const std::string& where, const Places& places, const std::string& pointer) {
     if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
-        throw ParseError({file, 0, 0}, where + " must be an array of 3 numbers", j.dump());
+        throw ParseError(places.value(pointer), where + " must be an array of 3 numbers", j.dump());
     return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
 }
 
@@ -192,61 +225,72 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
         // Valid syntax the library still refuses, e.g. a number out of range.
         throw ParseError({fileName, 0, 0}, std::string("unreadable JSON in CAMotics project: ") + e.what());
     }
-    if (!j.is_object()) throw ParseError({fileName, 1, 1}, "a CAMotics project must be a JSON object");
+    const Places places(text, fileName);
+    if (!j.is_object()) throw ParseError(places.value(""), "a CAMotics project must be a JSON object");
     Project p;
     p.file = fileName;
     try {
-        p.metric = metricUnits(j, "project", fileName);
+        p.metric = metricUnits(j, "project", places, "");
         if (!p.metric)
             p.diagnostics.push_back(warning(
-                {fileName, 0, 0}, "project units are imperial: as in CAMotics, they only choose how lengths are "
-                                  "shown; the workpiece and resolution are in mm, and G-code starts in mm until "
-                                  "it says G20"));
-        p.resolutionMode = resolutionMode(j, fileName);
-        p.resolution = number(j, "resolution", "project", fileName, 0.0);
+                places.value("/units"), "project units are imperial: as in CAMotics, they only choose how lengths "
+                                        "are shown; the workpiece and resolution are in mm, and G-code starts in mm "
+                                        "until it says G20"));
+        p.resolutionMode = resolutionMode(j, places);
+        p.resolution = number(j, "resolution", "project", places, "", 0.0);
         if (j.contains("resolution") && !(p.resolution > 0)) {
             p.unusableResolution = p.resolution;
             p.resolution = 0.0;
         }
         if (j.contains("tools")) {
             const Json& tools = j.at("tools");
-            if (!tools.is_object()) throw ParseError({fileName, 0, 0}, "\"tools\" must be an object", tools.dump().substr(0, 40));
+            if (!tools.is_object())
+                throw ParseError(places.value("/tools"), "\"tools\" must be an object", tools.dump().substr(0, 40));
             for (const auto& [key, t] : tools.items()) {
+                const std::string pointer = "/tools/" + jsonPointerToken(key);
                 int n = 0;
                 try {
                     std::size_t used = 0;
                     n = std::stoi(key, &used);
                     if (used != key.size() || n < 0) throw std::invalid_argument(key);
                 } catch (const std::exception&) {
-                    throw ParseError({fileName, 0, 0}, "tool numbers must be integers", key);
+                    throw ParseError(places.key(pointer), "tool numbers must be integers", key);
                 }
-                if (auto tool = camoticsTool(t, "tool " + key, fileName, p.diagnostics))
+                if (auto tool = camoticsTool(t, "tool " + key, places, pointer, p.diagnostics))
                     p.tools.insert_or_assign(n, std::move(*tool));
             }
         }
         if (j.contains("workpiece")) {
             const Json& w = j.at("workpiece");
-            if (!w.is_object()) throw ParseError({fileName, 0, 0}, "\"workpiece\" must be an object", w.dump().substr(0, 40));
-            p.workpiece.automatic = boolean(w, "automatic", "workpiece", fileName, p.workpiece.automatic);
-            p.workpiece.marginPercent = number(w, "margin", "workpiece", fileName, p.workpiece.marginPercent);
+            if (!w.is_object())
+                throw ParseError(places.value("/workpiece"), "\"workpiece\" must be an object",
+                                 w.dump().substr(0, 40));
+            p.workpiece.automatic = boolean(w, "automatic", "workpiece", places, "/workpiece", p.workpiece.automatic);
+            p.workpiece.marginPercent = number(w, "margin", "workpiece", places, "/workpiece", p.workpiece.marginPercent);
             if (w.contains("bounds")) {
                 const Json& b = w.at("bounds");
                 if (!b.is_object() || !b.contains("min") || !b.contains("max"))
-                    throw ParseError({fileName, 0, 0}, "workpiece bounds need min and max", b.dump().substr(0, 40));
-                p.workpiece.bounds.lo = vec3(b.at("min"), "workpiece bounds min", fileName);
-                p.workpiece.bounds.hi = vec3(b.at("max"), "workpiece bounds max", fileName);
+                    throw ParseError(places.value("/workpiece/bounds"), "workpiece bounds need min and max",
+                                     b.dump().substr(0, 40));
+                p.workpiece.bounds.lo = vec3(b.at("min"), "workpiece bounds min", places, "/workpiece/bounds/min");
+                p.workpiece.bounds.hi = vec3(b.at("max"), "workpiece bounds max", places, "/workpiece/bounds/max");
                 if (!p.workpiece.automatic && p.workpiece.bounds.isEmpty())
-                    throw ParseError({fileName, 0, 0}, "workpiece bounds are empty (min > max)", b.dump().substr(0, 60));
+                    throw ParseError(places.value("/workpiece/bounds"), "workpiece bounds are empty (min > max)",
+                                     b.dump().substr(0, 60));
             }
         }
         if (j.contains("files")) {
             const Json& files = j.at("files");
-            if (!files.is_array()) throw ParseError({fileName, 0, 0}, "\"files\" must be an array", files.dump().substr(0, 40));
-            for (const Json& f : files) {
+            if (!files.is_array())
+                throw ParseError(places.value("/files"), "\"files\" must be an array", files.dump().substr(0, 40));
+            for (std::size_t i = 0; i < files.size(); ++i) {
+                const Json& f = files.at(i);
                 std::string name;
                 if (f.is_string()) name = f.get<std::string>();
                 else if (f.is_object() && f.contains("path") && f.at("path").is_string()) name = f.at("path").get<std::string>();
-                else throw ParseError({fileName, 0, 0}, "a file entry must be a string", f.dump().substr(0, 40));
+                else
+                    throw ParseError(places.value("/files/" + std::to_string(i)), "a file entry must be a string",
+                                     f.dump().substr(0, 40));
                 p.files.push_back(detail::joinPath(directory, name));
             }
         }
@@ -254,7 +298,8 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
         for (const auto& [key, v] : j.items()) {
             (void)v;
             if (!known.count(key))
-                p.diagnostics.push_back(warning({fileName, 0, 0}, "project entry \"" + key + "\" ignored"));
+                p.diagnostics.push_back(
+                    warning(places.key("/" + jsonPointerToken(key)), "project entry \"" + key + "\" ignored"));
         }
     } catch (const Json::exception& e) {
         throw ParseError({fileName, 0, 0}, std::string("CAMotics project field of the wrong type: ") + e.what());

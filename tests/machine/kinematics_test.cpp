@@ -4,8 +4,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "dexelmill/error.h"
@@ -15,6 +18,7 @@
 #include "dexelmill/path/camotics.h"
 #include "dexelmill/path/gcode.h"
 #include "dexelmill/path/motion.h"
+#include "support/scratch.h"
 #include "support/trt_kinematics.h"
 
 using namespace dexelmill;
@@ -637,26 +641,32 @@ TEST_CASE("machine: description files and their errors", "[machine]") {
     CHECK_THROWS_WITH(loadMachine("in/ht.json", [](const std::string&) -> std::optional<std::string> {
                           return std::string("{\"axes\": 5}");
                       }),
-                      Contains("in/ht.json: error"));
-    // Wrong types, unknown keys and numbers beyond a double's range: each a located error of this
-    // reader's own, never the JSON library's.
+                      Contains("in/ht.json:1:10: error"));
+    // Wrong types, unknown keys and numbers beyond a double's range: each an error of this reader's
+    // own, never the JSON library's, at the value or key at fault (columns counted by hand; the
+    // number beyond range has no place).
     const struct {
         const char* text;
         const char* message;
+        const char* place;
     } bad[] = {
-        {R"({"name": 5, "axes": [{"letter": "A", "direction": [1, 0, 0]}]})", "\"name\" must be a string"},
-        {R"({"axes": [{"letter": 5, "direction": [1, 0, 0]}]})", "\"letter\" must be a string"},
-        {R"({"axes": [{"letter": "A", "on": 5, "direction": [1, 0, 0]}]})", "axis A: \"on\" must be a string"},
-        {R"({"axes": [5]})", "each axis must be a JSON object"},
-        {R"({"axes": [{"letter": "A", "direction": [1, 0, 0], "pivto": [0, 0, 5]}]})", "axis A: unknown key \"pivto\""},
+        {R"({"name": 5, "axes": [{"letter": "A", "direction": [1, 0, 0]}]})", "\"name\" must be a string",
+         "m.json:1:10: error"},
+        {R"({"axes": [{"letter": 5, "direction": [1, 0, 0]}]})", "\"letter\" must be a string", "m.json:1:22: error"},
+        {R"({"axes": [{"letter": "A", "on": 5, "direction": [1, 0, 0]}]})", "axis A: \"on\" must be a string",
+         "m.json:1:33: error"},
+        {R"({"axes": [5]})", "each axis must be a JSON object", "m.json:1:11: error"},
+        {R"({"axes": [{"letter": "A", "direction": [1, 0, 0], "pivto": [0, 0, 5]}]})", "axis A: unknown key \"pivto\"",
+         "m.json:1:51: error"},
         {R"({"axis": [{"letter": "A", "direction": [1, 0, 0]}], "axes": [{"letter": "A", "direction": [1, 0, 0]}]})",
-         "unknown key \"axis\""},
-        {R"({"axes": [{"letter": "A", "direction": [1e999, 0, 0]}]})", "beyond the range of a double"},
-        {R"({"axes": [{"letter": "A", "direction": [1, 0, 0], "pivot": [1e300, 0, 0]}]})", "pivot lies beyond"},
+         "unknown key \"axis\"", "m.json:1:2: error"},
+        {R"({"axes": [{"letter": "A", "direction": [1e999, 0, 0]}]})", "beyond the range of a double", "m.json: error"},
+        {R"({"axes": [{"letter": "A", "direction": [1, 0, 0], "pivot": [1e300, 0, 0]}]})", "pivot lies beyond",
+         "m.json:1:60: error"},
     };
     for (const auto& b : bad) {
         INFO(b.text);
-        CHECK_THROWS_WITH(parseMachine(b.text, "m.json"), Contains("m.json: error") && Contains(b.message));
+        CHECK_THROWS_WITH(parseMachine(b.text, "m.json"), Contains(b.place) && Contains(b.message));
     }
     // A direction so long that its length overflows is still a direction.
     const Machine h = parseMachine(R"({"axes": [{"letter": "A", "direction": [1e300, 0, 0]},
@@ -665,6 +675,65 @@ TEST_CASE("machine: description files and their errors", "[machine]") {
     REQUIRE(h.axes.size() == 2);
     CHECK(h.axes[0].direction == Vec3(1, 0, 0));
     CHECK(distance(h.axes[1].direction, -Vec3(0, 1, 1) / std::sqrt(2.0)) < 1e-15);
+}
+
+TEST_CASE("machine: an error about what a value means names the value's line and column", "[machine]") {
+    // Each file is written to disk and read as `--machine FILE` reads it; the place of the value (or
+    // key) at fault is counted by hand on the lines as written.
+    const std::filesystem::path folder = testing::scratchFolder("dexelmill_machine_", "places");
+    const struct {
+        std::vector<std::string> lines;
+        int line;
+        int column;
+        const char* message;
+    } cases[] = {
+        // The direction's opening bracket: line 5, after five blanks and `"direction": `.
+        {{"{", "  \"name\": \"m\",", "  \"axes\": [", "    {\"letter\": \"A\",", "     \"direction\": [0, 0, 0]}", "  ]",
+          "}"},
+         5, 19, "axis A's direction is zero"},
+        {{"{\"axes\": [", "  {\"letter\": \"C\", \"on\": \"tabel\", \"direction\": [0, 0, 1]}", "]}"},
+         2, 25, "axis C: \"on\" must be \"table\" or \"head\""},
+        // A missing key: the brace of the object that lacks it.
+        {{"{", "  \"axes\": [", "    {\"on\": \"head\", \"direction\": [1, 0, 0]}", "  ]", "}"},
+         3, 5, "each axis needs \"letter\""},
+        {{"{\"axes\": [{\"letter\": \"B\"}]}"}, 1, 11, "axis B needs a \"direction\""},
+        {{"", "  {\"name\": \"n\"}"}, 2, 3, "needs \"axes\""},
+        // An unknown key: the key, its quote. One that needs escaping in a JSON pointer.
+        {{"{\"axes\": [{\"letter\": \"B\", \"direction\": [0, 1, 0],", "           \"pivto\": [0, 0, 5]}]}"},
+         2, 12, "axis B: unknown key \"pivto\""},
+        {{"{\"name\": \"n\",", "\t\"a/b~\": 1, \"axes\": [{\"letter\": \"A\", \"direction\": [1, 0, 0]}]}"},
+         2, 2, "unknown key \"a/b~\""},
+        {{"{\"axes\": [{\"letter\": \"A\", \"direction\": [1, 0, 0],", "  \"pivot\": [0, 2e9, 0]}]}"},
+         2, 12, "axis A's pivot lies beyond the 1e9 mm"},
+        {{"{\"axes\": [", "", "  {\"letter\": \"A\", \"direction\": [1, 0]}]}"}, 3, 32,
+         "axis A's direction must be an array of three numbers"},
+        {{"{\"tcp_at_start\": \"yes\", \"axes\": [{\"letter\": \"A\", \"direction\": [1, 0, 0]}]}"}, 1, 18,
+         "\"tcp_at_start\" must be true or false"},
+        {{"{\"axes\": [{\"letter\": \"A\", \"direction\": [1, 0, 0]},", "          {\"letter\": \"A\", \"direction\": [0, 1, 0]}]}"},
+         2, 22, "rotary axis A is described twice"},
+        {{"", "", "  [1]"}, 3, 3, "must be a JSON object"},
+        {{"{\"axes\": {}}"}, 1, 10, "needs \"axes\""},
+    };
+    for (const bool crlf : {false, true}) {
+        for (const auto& c : cases) {
+            std::string text;
+            for (const std::string& l : c.lines) text += l + (crlf ? "\r\n" : "\n");
+            const std::string file = (folder / "m.json").string();
+            std::ofstream(file, std::ios::binary) << text;
+            INFO(text);
+            try {
+                loadMachine(file);
+                FAIL("no error");
+            } catch (const ParseError& e) {
+                CHECK(e.where().line == c.line);
+                CHECK(e.where().column == c.column);
+                CHECK_THAT(e.message(), Contains(c.message));
+                // Printed as every located input error is.
+                CHECK_THAT(e.what(), Contains(file + ":" + std::to_string(c.line) + ":" + std::to_string(c.column) +
+                                              ": error: "));
+            }
+        }
+    }
 }
 
 TEST_CASE("G-code: rotary words need a machine, and M428 / M429 switch the kinematics", "[machine][gcode]") {

@@ -268,3 +268,37 @@ TEST_CASE("camotics: a number JSON cannot hold is a ParseError, not a library ex
     CHECK_THROWS_AS(parseCamoticsProject(text, "big.camotics", "."), ParseError);
     CHECK_THROWS_WITH(parseCamoticsProject(text, "big.camotics", "."), Catch::Matchers::Contains("big.camotics"));
 }
+
+TEST_CASE("camotics: an error about what a value means names the value's line and column",
+          "[path][camotics][errors]") {
+    // The place of the value (or key) at fault, counted by hand; a comment before it hides a key.
+    const struct {
+        const char* text;
+        const char* place;
+        const char* message;
+    } cases[] = {
+        {"{\n  // \"units\": 5\n  \"units\": \"furlongs\"\n}", "p.camotics:3:12: error", "units must be"},
+        {R"({"tools": {"1": {"length": 10, "diameter": -1}}})", "p.camotics:1:44: error",
+         "tool 1: diameter and length must be positive"},
+        {"{\"tools\": {\n  \"x1\": {\"length\": 1, \"diameter\": 1}}}", "p.camotics:2:3: error",
+         "tool numbers must be integers"},
+        // A missing key: the brace of the object that lacks it.
+        {R"({"tools": {"2": {"diameter": 3}}})", "p.camotics:1:17: error", "tool 2: missing \"length\""},
+        {"{\"workpiece\": {\"automatic\": false,\n \"bounds\": {\"min\": [0, 0], \"max\": [1, 1, 1]}}}",
+         "p.camotics:2:20: error", "workpiece bounds min must be an array of 3 numbers"},
+        {R"({"files": ["a.ngc", 7]})", "p.camotics:1:21: error", "a file entry must be a string"},
+        {R"({"tools": {"1": {"shape": "oval", "length": 1, "diameter": 1}}})", "p.camotics:1:27: error",
+         "unknown tool shape"},
+    };
+    for (const auto& c : cases) {
+        INFO(c.text);
+        CHECK_THROWS_WITH(parseCamoticsProject(c.text, "p.camotics", ""),
+                          Catch::Contains(c.place) && Catch::Contains(c.message));
+    }
+    // A warning about a key names the key.
+    const Project p = parseCamoticsProject("{\"units\": \"metric\",\r\n \"colour\": 1}", "p.camotics", "");
+    REQUIRE(p.diagnostics.size() == 1);
+    CHECK(p.diagnostics[0].message == "project entry \"colour\" ignored");
+    CHECK(p.diagnostics[0].where.line == 2);
+    CHECK(p.diagnostics[0].where.column == 2);
+}
