@@ -1,6 +1,9 @@
 #include "dexelmill/io/json_text.h"
 
+#include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <set>
 #include <vector>
 
@@ -115,6 +118,15 @@ std::optional<JsonTextFault> jsonTextFault(std::string_view text, bool comments)
                 open.back().keyNext = false;
             }
             i = end;
+            continue;
+        }
+        if (c == '-' || (c >= '0' && c <= '9')) {
+            // A number: the library refuses one beyond double's range but cannot say where it is.
+            const std::size_t end = std::min(text.find_first_not_of("0123456789+-.eE", i), text.size());
+            const std::string number(text.substr(i, end - i));
+            if (std::isinf(std::strtod(number.c_str(), nullptr)))
+                return JsonTextFault{i, "the number " + number + " is beyond the range of a double"};
+            i = end - 1;
             continue;
         }
         if (c == '[' || c == '{') {

@@ -209,9 +209,10 @@ Machine parseMachine(const std::string& text, const std::string& fileName) {
         // The library's offset counts the faulty character as read.
         throw ParseError(locate(text, fileName, e.byte > 0 ? e.byte - 1 : 0),
                          "not valid JSON for a machine description");
-    } catch (const nlohmann::json::exception&) {  // a number beyond double's range, as 1e999
-        throw ParseError(SourceLocation{fileName, 0, 0}, "not valid JSON for a machine description: a number "
-                                                          "beyond the range of a double");
+    } catch (const nlohmann::json::exception& e) {
+        // Valid syntax the library still refuses; a number beyond double's range is found above.
+        throw ParseError(SourceLocation{fileName, 0, 0},
+                         std::string("not valid JSON for a machine description: ") + e.what());
     }
     const Places places(text, fileName);
     if (!j.is_object()) throw ParseError(places.value(""), "a machine description must be a JSON object");

@@ -222,7 +222,7 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
         const std::size_t at = std::min(text.size(), e.byte > 0 ? e.byte - 1 : 0);
         throw ParseError(loc, "invalid JSON in CAMotics project", std::string(text.substr(at, 20)));
     } catch (const Json::exception& e) {
-        // Valid syntax the library still refuses, e.g. a number out of range.
+        // Valid syntax the library still refuses; a number beyond double's range is found above.
         throw ParseError({fileName, 0, 0}, std::string("unreadable JSON in CAMotics project: ") + e.what());
     }
     const Places places(text, fileName);

@@ -60,6 +60,26 @@ TEST_CASE("JSON text: brackets and quotes inside strings and comments", "[io][js
     CHECK_FALSE(jsonTextFault("{/* [[[", true));
 }
 
+TEST_CASE("JSON text: a number beyond the range of a double", "[io][json]") {
+    const auto big = jsonTextFault("[1, 1e999]", false);
+    REQUIRE(big);
+    CHECK(big->byte == 4);
+    CHECK(big->message == "the number 1e999 is beyond the range of a double");
+    const auto negative = jsonTextFault("{\"a\": -2.5E+400}", false);
+    REQUIRE(negative);
+    CHECK(negative->byte == 6);
+    CHECK(negative->message == "the number -2.5E+400 is beyond the range of a double");
+    // The largest double, one that rounds to zero (as the library takes it), and numbers in
+    // strings, keys and comments.
+    CHECK_FALSE(jsonTextFault("[1.7976931348623157e308, -1e-999, 0, -0.5e-3]", false));
+    CHECK_FALSE(jsonTextFault(R"({"1e999": "1e999"})", false));
+    CHECK_FALSE(jsonTextFault("[1 /* 1e999 */, 2 // 1e999\n]", true));
+    // The first fault in reading order.
+    const auto first = jsonTextFault(R"({"a": 1e999, "a": 1})", false);
+    REQUIRE(first);
+    CHECK(first->byte == 6);
+}
+
 // JsonPositions: where each value and key begins, by JSON pointer. The expected offsets are
 // counted by hand on the texts below (0 is the first character).
 namespace {

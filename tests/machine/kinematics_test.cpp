@@ -643,8 +643,7 @@ TEST_CASE("machine: description files and their errors", "[machine]") {
                       }),
                       Contains("in/ht.json:1:10: error"));
     // Wrong types, unknown keys and numbers beyond a double's range: each an error of this reader's
-    // own, never the JSON library's, at the value or key at fault (columns counted by hand; the
-    // number beyond range has no place).
+    // own, never the JSON library's, at the value or key at fault (columns counted by hand).
     const struct {
         const char* text;
         const char* message;
@@ -660,7 +659,8 @@ TEST_CASE("machine: description files and their errors", "[machine]") {
          "m.json:1:51: error"},
         {R"({"axis": [{"letter": "A", "direction": [1, 0, 0]}], "axes": [{"letter": "A", "direction": [1, 0, 0]}]})",
          "unknown key \"axis\"", "m.json:1:2: error"},
-        {R"({"axes": [{"letter": "A", "direction": [1e999, 0, 0]}]})", "beyond the range of a double", "m.json: error"},
+        {R"({"axes": [{"letter": "A", "direction": [1e999, 0, 0]}]})", "beyond the range of a double",
+         "m.json:1:41: error"},
         {R"({"axes": [{"letter": "A", "direction": [1, 0, 0], "pivot": [1e300, 0, 0]}]})", "pivot lies beyond",
          "m.json:1:60: error"},
     };

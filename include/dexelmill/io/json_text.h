@@ -24,10 +24,11 @@ struct JsonTextFault {
 };
 
 /// @brief The first of these in `text`, in reading order: an array or object nested deeper than
-/// kMaxJsonDepth, or a key given twice in one object (the library keeps the last silently). Keys
-/// are compared as written, so "a" and "\u0061" count as two. Strings are skipped, and with
+/// kMaxJsonDepth, a key given twice in one object (the library keeps the last silently), or a
+/// number beyond the range of a double, as 1e999 (which the library refuses without saying where).
+/// Keys are compared as written, so "a" and "\u0061" count as two. Strings are skipped, and with
 /// `comments` so are // and /* */ comments, as the library's parser skips them. Text that is not
-/// JSON is the library's to refuse: this only reads brackets, strings and commas.
+/// JSON is the library's to refuse: this only reads brackets, strings, commas and numbers.
 std::optional<JsonTextFault> jsonTextFault(std::string_view text, bool comments);
 
 /// @brief `key` as one reference token of a JSON pointer (RFC 6901): "~" written "~0", "/" "~1".
