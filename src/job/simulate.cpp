@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -111,12 +112,10 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
                                                defined->second.description() + ")"});
         table.insert_or_assign(n, t);
     }
-    for (const auto& [n, t] : o.tools)
-        if (!used.count(n) && !program.path.moves.empty())
-            program.diagnostics.push_back({Diagnostic::Severity::Warning, {},
-                                           "--tool " + std::to_string(n) + "=... (" + t.description() +
-                                               ") is not used: no move cuts with tool " + std::to_string(n)});
     bool defaultUsed = false;
+    // The stand-in is chosen among the tools defined, before any undefined number takes it.
+    const std::optional<int> only = standInTool(table);
+    std::optional<int> standInUsed;  // the tool that cut the undefined numbers, if one did
     for (int n : used) {
         if (table.count(n)) continue;
         const SourceLocation at = program.path.where(firstUse[n]);
@@ -125,13 +124,14 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
             defaultUsed = true;
             continue;
         }
-        if (const std::optional<int> only = standInTool(table)) {
-            const Tool& stand = table.at(*only);
+        if (only) {
+            const Tool stand = table.at(*only);
             std::ostringstream msg;
             msg << (n == 0 ? std::string("moves before any tool is selected") : "tool T" + std::to_string(n) + " is not defined")
                 << "; using the only tool defined, T" << *only << " (" << stand.description() << ")";
             program.diagnostics.push_back({Diagnostic::Severity::Warning, at, msg.str()});
             table.insert_or_assign(n, stand);
+            standInUsed = only;
             continue;
         }
         throw ParseError(at,
@@ -141,6 +141,12 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
                                       " but no tool of that number is defined; use --tool " + std::to_string(n) +
                                       "=SPEC");
     }
+    // A --tool N that cut in place of the undefined numbers is used, under another number.
+    for (const auto& [n, t] : o.tools)
+        if (!used.count(n) && standInUsed != n && !program.path.moves.empty())
+            program.diagnostics.push_back({Diagnostic::Severity::Warning, {},
+                                           "--tool " + std::to_string(n) + "=... (" + t.description() +
+                                               ") is not used: no move cuts with tool " + std::to_string(n)});
     if (o.defaultTool && !defaultUsed && !program.path.moves.empty())
         program.diagnostics.push_back({Diagnostic::Severity::Warning, {},
                                        "--tool without a number (" + o.defaultTool->description() +
@@ -276,15 +282,17 @@ struct LoadedStock {
 /// with its margin. For a program, its cutting moves' extent, topped at z = 0 where the cuts go
 /// below it, grown by kGuessMarginPercent of each size (not above the top). Else every move's
 /// extent; an axis the program never moves along gets a thickness of 5 % of the largest extent (at
-/// least 1 mm) on both sides.
-Box guessStock(const ToolPath& path, const ToolTable& tools, const Project* project) {
+/// least 1 mm) on both sides. `cutTop` is the cuts' own top where the box was topped at z = 0 below
+/// it, else NaN.
+Box guessStock(const ToolPath& path, const ToolTable& tools, const Project* project, double& cutTop) {
+    cutTop = std::numeric_limits<double>::quiet_NaN();
     Box box;
     if (project) {
         box = automaticWorkpieceBounds(path, tools, project->workpiece.marginPercent);
     } else {
         box = cuttingBounds(path, tools);
         if (!box.isEmpty()) {
-            if (box.lo.z < 0.0 && box.hi.z > 0.0) box.hi.z = 0.0;
+            if (box.lo.z < 0.0 && box.hi.z > 0.0) cutTop = box.hi.z, box.hi.z = 0.0;
             const Vec3 margin = box.size() * (kGuessMarginPercent / 100.0);
             box.lo -= margin;
             box.hi.x += margin.x;
@@ -341,13 +349,21 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
         aroundDesign = true;
         notes.push_back(w);
     } else {
-        box = guessStock(program.path, tools, project);
+        double cutTop = 0.0;
+        box = guessStock(program.path, tools, project, cutTop);
         if (!project) {
             ReportWarning w;
-            char extent[120];
+            char extent[300];
             std::snprintf(extent, sizeof extent, "no --stock given: using the program's cutting extent plus %g %%",
                           kGuessMarginPercent);
             w.message = extent;
+            if (std::isfinite(cutTop)) {
+                std::snprintf(extent, sizeof extent,
+                              ", its top at z = 0 mm, where the program's cuts go down from: the cuts above it, up "
+                              "to z = %.4g mm, meet no stock; --stock gives a taller one",
+                              cutTop);
+                w.message += extent;
+            }
             if (program.statedStock) {
                 const StatedStock& st = *program.statedStock;
                 char text[200];

@@ -435,6 +435,46 @@ TEST_CASE("a tool option the job cannot use, or that replaces the program's tool
     CHECK(said(runSimulation(apt).report, "--start is not used: an APT CL file places the tool itself"));
 }
 
+TEST_CASE("the only tool defined cuts every undefined number, and is not called unused", "[job][degenerate]") {
+    const fs::path dir = scratch("stand_in");
+    auto said = [](const SimulateReport& r, const char* text) {
+        for (const ReportWarning& w : r.warnings)
+            if (w.message.find(text) != std::string::npos) return true;
+        return false;
+    };
+    // Moves before any tool is selected (tool 0), then tool 5, which nobody defines: --tool 1 cuts
+    // both. The slot is 1 mm deep, 10 mm long and 6 wide with round ends.
+    SimulateOptions o;
+    o.inputs = {write(dir / "p.ngc", "G21 G90\nG0 X5 Y5 Z5\nG1 Z-1 F100\nT5 M6\nG1 X15\n")};
+    o.stockBox = Box{Vec3(0, 0, -5), Vec3(40, 30, 0)};
+    o.resolution = 0.5;
+    o.tools.emplace(1, flatEndMill(6.0, {20.0, 30.0}));
+    const SimulateReport r = runSimulation(o).report;
+    CHECK(said(r, "moves before any tool is selected; using the only tool defined, T1"));
+    CHECK(said(r, "tool T5 is not defined; using the only tool defined, T1"));
+    CHECK_FALSE(said(r, "is not used"));
+    CHECK(r.removedVolumeMm3 == Approx(10 * 6 + kPi * 9).epsilon(0.02));
+}
+
+TEST_CASE("a stock guessed below z = 0 says where the cuts above it go", "[job]") {
+    const fs::path dir = scratch("guessed_top");
+    // Feed moves from z = 3 down to z = -2 and back: the stock's top is z = 0, the cuts' is z = 3.
+    SimulateOptions o;
+    o.inputs = {write(dir / "p.ngc", "G21 G90\nG0 X0 Y0 Z3\nG1 Z-2 F100\nG1 X20\nG1 Z3\nM30\n")};
+    o.defaultTool = flatEndMill(4.0, {20.0, 30.0});
+    o.resolution = 0.5;
+    const SimulateReport r = runSimulation(o).report;
+    CHECK(r.stockBox.hi.z == 0.0);
+    bool said = false;
+    for (const ReportWarning& w : r.warnings)
+        said = said || w.message.find("its top at z = 0 mm, where the program's cuts go down from: the cuts above it, "
+                                      "up to z = 3 mm, meet no stock") != std::string::npos;
+    CHECK(said);
+    // Cuts that stay below z = 0 leave no such words.
+    o.inputs = {write(dir / "q.ngc", "G21 G90\nG0 X0 Y0 Z-1\nG1 Z-2 F100\nG1 X20\nM30\n")};
+    for (const ReportWarning& w : runSimulation(o).report.warnings) CHECK(w.message.find("its top at") == std::string::npos);
+}
+
 TEST_CASE("a program without moves says so", "[job][errors]") {
     const fs::path dir = scratch("no_moves");
     for (const char* text : {"", "(only a comment)\n\n%\n", "G21 G90 M3 S1000\n"}) {
