@@ -230,8 +230,16 @@ DesignPart loadDesign(Mesh mesh, const std::string& path, const Lattice& lattice
     d.cast = cast;
     d.file = path;
     d.bounds = bounds;
-    if (d.dexels.volume(d.dexels.measuringFamily()) <= 0.0)
+    if (d.dexels.volume(d.dexels.measuringFamily()) <= 0.0) {
+        // An open mesh's inside is guessed from the crossings that pair up; where none do, the
+        // guess is empty, which says nothing of where the design is.
+        if (cast.unpairedDexels > 0)
+            throw Error("'" + path + "': the design is not closed (" + std::to_string(cast.unpairedDexels) +
+                        " dexel lines meet an odd number of its faces), so what it holds cannot be told: cast on the "
+                        "lattice it holds no material; close the mesh, or measure a part against its surface with "
+                        "'dexelmill compare', which needs no inside");
         throw Error("'" + path + "': the design holds no material inside the stock's box");
+    }
     return d;
 }
 

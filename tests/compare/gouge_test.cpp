@@ -254,6 +254,23 @@ TEST_CASE("design: one within the stock, one past a single face, and one not clo
     r = simulate(job(program, open, 10.0));
     CHECK_FALSE(r.designClosed);
     CHECK(warningsWith(r, "the design is not closed") == 1);
+    // A box without its bottom face: every z dexel through it meets one face, and the z family
+    // casts nothing. Said as such, not as a design outside the stock.
+    const std::string box = tiledBoxFacets({5, 5, -9}, {35, 35, -1}, 1);
+    std::vector<std::string> facet;
+    for (std::size_t at = box.find(" facet"); at != std::string::npos;) {
+        const std::size_t next = box.find(" facet", at + 1);
+        facet.push_back(box.substr(at, next == std::string::npos ? std::string::npos : next - at));
+        at = next;
+    }
+    REQUIRE(facet.size() == 12);
+    std::string bottomless;
+    for (std::size_t i = 0; i < facet.size(); ++i)
+        if (i != 8 && i != 9) bottomless += facet[i];  // the faces along z come last, the low one first
+    const std::string noBottom = writeStl(dir / "no_bottom.stl", bottomless);
+    CHECK_THROWS_WITH(simulate(job(program, noBottom, 10.0)),
+                      Catch::Matchers::Contains("no_bottom.stl': the design is not closed") &&
+                          Catch::Matchers::Contains("'dexelmill compare'"));
     fs::remove_all(dir);
 }
 
