@@ -46,6 +46,11 @@ int runStudy(const StudyArgs& a) {
         throw UsageError("study: give either a program (or project) or --case NAME");
     o.job = toOptions(a.job);
     if (!a.caseName.empty()) {
+        // The case's exact part is its own program's with its own tools: another tool would be
+        // dropped without a word.
+        if (o.job.defaultTool || !o.job.tools.empty())
+            throw UsageError("--tool: a --case cuts with its own tools; to study another tool, write the program "
+                             "and give it with --tool");
         StudyCase c;
         try {
             c = studyCase(a.caseName);

@@ -33,6 +33,9 @@ namespace {
 constexpr double kSearchSpacings = 4.0;
 /// Bisection steps along the normal: the distance is then known to 2^-40 of the range.
 constexpr int kBisections = 40;
+/// A distance along the normal longer than this fraction of the search range (a quarter of a
+/// spacing) is checked along the six axis directions as well.
+constexpr double kAxisCheckFraction = 1.0 / 16.0;
 
 /// Vertex normals: the sum of the adjacent triangles' area vectors, normalised.
 std::vector<Vec3> vertexNormals(const Mesh& mesh) {
@@ -75,14 +78,18 @@ std::optional<double> signedDistanceAlong(const MachinedSolidOracle& oracle, con
     return in ? -d : d;
 }
 
-/// The signed distance of p to the exact surface along its normal n. Near the stock box's faces
-/// the normal may leave the box before it meets the part (a point just outside the part, on a
-/// rim where a cut meets a face, whose normal leans out of the face), and then the shortest of
-/// the distances along the six axis directions is taken: a surface point lies there, so it bounds
-/// the true distance from above. Clamped to +-range where neither finds the surface.
+/// The signed distance of p to the exact surface, from above: the distance along any direction to
+/// where membership flips is a surface point's, so it bounds the distance to the nearest. Along
+/// the normal n first. Where that is long, or finds nothing, the shortest of it and the distances
+/// along the six axis directions is taken: a normal may leave the stock box before it meets the
+/// part (a point just outside the part on a rim where a cut meets a face, its normal leaning out
+/// of the face), or run along a floor past a wall that is nearer (a floor point just beyond a
+/// slot's round end, whose normal meets the stock's top a depth away). Clamped to +-range where
+/// none finds the surface.
 double signedDistance(const MachinedSolidOracle& oracle, const Vec3& p, const Vec3& n, double range) {
-    if (const std::optional<double> along = signedDistanceAlong(oracle, p, n, range)) return *along;
-    std::optional<double> shortest;
+    const std::optional<double> along = signedDistanceAlong(oracle, p, n, range);
+    if (along && std::abs(*along) <= kAxisCheckFraction * range) return *along;
+    std::optional<double> shortest = along;
     for (int a = 0; a < 3; ++a) {
         for (const double sign : {-1.0, 1.0}) {
             Vec3 axis(0.0);

@@ -138,6 +138,11 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
     CHECK(r.code == 2);
     r = cli("study --case tilted-slot --resolutions 1,zero");
     CHECK(r.code == 2);
+    r = cli("study --case tilted-slot --tool flat:d=20");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("--tool: a --case cuts with its own tools"));
+    r = cli("study --case tilted-slot --tool 1=flat:d=20");
+    CHECK(r.code == 2);
     r = cli("study --case nope");
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Contains("bull-undercut") && Contains("dexelmill study --help"));

@@ -157,6 +157,30 @@ TEST_CASE("a point whose normal leaves the stock is measured along the axes, not
     CHECK(res.runs[0].devMaxMm < 2.0 * res.runs[0].h);
 }
 
+TEST_CASE("a floor point beyond a slot's round end is measured to the wall, not along its normal to the top",
+          "[study]") {
+    // A flat D6 slot 2 mm deep from x = 10 to 50 at y = 20. The mesh's floor reaches a little past
+    // the exact round ends, where a floor point lies in material: along its normal (+z) the part's
+    // surface is the stock's top, 2 mm away, and the study's max read 2 mm. The nearest surface is
+    // the end's wall, within the mesh's own error: checked on a dense sampling against the exact
+    // part, the mesh lies within 0.06 mm of it at h = 1.
+    Program p;
+    p.path.files = {"slot"};
+    p.tools.emplace(1, flatEndMill(6, {20, 30}));
+    p.path.moves.push_back({Vec3(10, 20, -2), Vec3(50, 20, -2), Vec3(0, 0, 1), 1, false, {0, 1}, {}, {}});
+    StudyOptions o;
+    o.job.program = p;
+    o.job.stockBox = Box{Vec3(0, 0, -10), Vec3(60, 40, 0)};
+    o.resolutions = {1.0};
+    o.familySets = {FamilySet::all()};
+    o.surfacePoints = 20000;
+    o.samplePoints = 1000;
+    o.exactVolumeMm3 = 0.0;  // not measured here
+    const StudyResult res = runStudy(o);
+    REQUIRE(res.runs.size() == 1);
+    CHECK(res.runs[0].devMaxMm < 0.25 * res.runs[0].h);
+}
+
 TEST_CASE("z-only dexels lose undercut wall material that three families keep", "[study]") {
     // z dexels hold several segments, so the overhang itself survives; what one direction lacks
     // is the crossings across z. Its level set places the steep, overhanging walls midway between
