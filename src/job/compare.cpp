@@ -15,6 +15,7 @@
 #include "dexelmill/io/mesh_io.h"
 #include "dexelmill/io/vdb_io.h"
 #include "dexelmill/job/memory.h"
+#include "dexelmill/job/report_format.h"
 #include "dexelmill/surface/levelset.h"
 #include "job/detail/deviation_files.h"
 #include "job/detail/deviation_json.h"
@@ -125,6 +126,7 @@ CompareReport compareParts(const CompareOptions& o) {
 
 std::string compareJson(const CompareReport& r) {
     nlohmann::json j;
+    j["format"] = kReportFormat;
     j["version"] = r.version;
     j["units"] = "mm";
     j["machined"] = {{"file", r.machinedFile},

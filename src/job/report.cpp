@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "dexelmill/job/report_format.h"
 #include "dexelmill/job/simulate.h"
 #include "dexelmill/stock/lattice.h"
 #include "job/detail/deviation_json.h"
@@ -54,6 +55,7 @@ nlohmann::json stretchesJson(const FineStretches& s) {
 std::string reportJson(const SimulateReport& r) {
     using nlohmann::json;
     json j;
+    j["format"] = kReportFormat;
     j["version"] = r.version;
     j["inputs"] = r.inputs;
     j["units"] = "mm";

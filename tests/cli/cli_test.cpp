@@ -318,6 +318,8 @@ TEST_CASE("compare measures a part against the design and writes its files", "[c
     const double area = std::stod(r.out.substr(row + 13));
     CHECK(area == Approx(101.0).margin(2.0 * spacing * 40.0));
     for (const char* f : {"dev.ply", "dev.png", "dev.json"}) CHECK(fs::file_size(cli.dir() / f) > 100);
+    // The format number of the report's keys, as the README gives it.
+    CHECK(nlohmann::json::parse(slurp(cli.dir() / "dev.json"))["format"] == 1);
     CHECK(cli("compare part.stl").code == 2);
     r = cli("compare part.stl missing.stl");
     CHECK(r.code == 1);

@@ -122,6 +122,8 @@ TEST_CASE("the report gives a warning's file, line and column only where it has 
                   ReportWarning{SourceLocation{"p.ngc", 4, 0}, "F100 is ignored"},
                   ReportWarning{SourceLocation{"p.ngc", 6, 9}, "M8 is ignored"}};
     const nlohmann::json j = nlohmann::json::parse(reportJson(r));
+    // The format number of the report's keys, as the README gives it.
+    CHECK(j["format"] == 1);
     REQUIRE(j["warnings"].size() == 4);
     const nlohmann::json& whole = j["warnings"][0];
     CHECK_FALSE(whole.contains("file"));
