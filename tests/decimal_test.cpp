@@ -58,3 +58,33 @@ TEST_CASE("decimal: a volume prints to a thousandth of a cubic millimetre, round
     CHECK(volumeText(-1.5e30).find('e') == std::string::npos);
     CHECK(volumeText(INFINITY) == "inf mm^3");
 }
+
+TEST_CASE("decimal: a length prints with four significant digits to a nanometre, never with an exponent",
+          "[decimal]") {
+    CHECK(lengthText(0.125) == "0.125");
+    CHECK(lengthText(5.0) == "5");
+    CHECK(lengthText(0.0514545) == "0.05145");
+    CHECK(lengthText(-1.5) == "-1.5");
+    CHECK(lengthText(12345.6) == "12346");
+    CHECK(lengthText(0.0001) == "0.0001");
+    CHECK(lengthText(9.99999) == "10");
+    // Rounding noise and what lies below a nanometre print as 0, whatever the sign.
+    CHECK(lengthText(2.344e-13) == "0");
+    CHECK(lengthText(-2.344e-13) == "0");
+    CHECK(lengthText(-0.0) == "0");
+    CHECK(lengthText(4e-7) == "0");
+    CHECK(lengthText(6e-7) == "0.000001");
+    for (const double mm : {1e-300, 1e-9, 1.5e30, -7.25e12, 3.0e-5})
+        CHECK(lengthText(mm).find_first_of("eE") == std::string::npos);
+}
+
+TEST_CASE("decimal: an area prints with six significant digits to a square micrometre, never with an exponent",
+          "[decimal]") {
+    CHECK(areaText(8397.98405) == "8397.98");
+    CHECK(areaText(1000000.0) == "1000000");
+    CHECK(areaText(4.123494) == "4.12349");
+    CHECK(areaText(0.0) == "0");
+    CHECK(areaText(1.2e-5) == "0.000012");
+    CHECK(areaText(3e-8) == "0");
+    CHECK(areaText(2.5e21).find_first_of("eE") == std::string::npos);
+}

@@ -65,6 +65,28 @@ inline std::pair<std::string, std::string> decimalsApart(double a, double b) {
     }
 }
 
+namespace detail {
+
+/// `value` in fixed notation, never with an exponent: `digits` significant digits, but no more than
+/// `maxDecimals` decimals (a large value prints whole); one that rounds to 0 prints without a sign.
+/// With `trim`, the zeros that end the decimals go, and the point with them ("0.125", "5").
+inline std::string fixedText(double value, int digits, int maxDecimals, bool trim) {
+    int decimals = maxDecimals;
+    if (std::isfinite(value) && value != 0.0)
+        decimals = std::clamp(digits - 1 - int(std::floor(std::log10(std::abs(value)))), 0, maxDecimals);
+    char text[400];  // a double below 1e309 has at most 309 digits before the point
+    std::snprintf(text, sizeof text, "%.*f", decimals, value);
+    std::string s = text;
+    if (s.find_first_of("123456789") == std::string::npos && s.front() == '-') s.erase(0, 1);
+    if (trim && s.find('.') != std::string::npos) {
+        s.erase(s.find_last_not_of('0') + 1);
+        if (s.back() == '.') s.pop_back();
+    }
+    return s;
+}
+
+}  // namespace detail
+
 /// The most decimals a volume is printed with (mm^3): a thousandth of a cubic millimetre is a cube
 /// 0.1 mm across, finer than the lattice measures a volume at its usual spacings, and the rounding
 /// of a sum of volumes (1e-15 mm^3 where they cancel) prints as 0.
@@ -77,15 +99,29 @@ constexpr int kVolumeDigits = 6;
 /// @brief A volume as messages print it, with the unit and without an exponent: kVolumeDigits
 /// significant digits, but no more than kVolumeDecimals decimals ("12.346 mm^3", "80707312 mm^3");
 /// one that rounds to 0 prints "0.000 mm^3", whatever its sign.
-inline std::string volumeText(double mm3) {
-    int decimals = kVolumeDecimals;
-    if (std::isfinite(mm3) && std::abs(mm3) >= 1.0)
-        decimals = std::clamp(kVolumeDigits - 1 - int(std::floor(std::log10(std::abs(mm3)))), 0, kVolumeDecimals);
-    char text[400];
-    std::snprintf(text, sizeof text, "%.*f", decimals, mm3);
-    std::string s = text;
-    if (s.find_first_of("123456789") == std::string::npos && s.front() == '-') s.erase(0, 1);
-    return s + " mm^3";
-}
+inline std::string volumeText(double mm3) { return detail::fixedText(mm3, kVolumeDigits, kVolumeDecimals, false) + " mm^3"; }
+
+/// The significant digits a length is printed with, as "%.4g" printed them: enough to tell a
+/// deviation of 0.125 mm from one of 0.1251 mm.
+constexpr int kLengthDigits = 4;
+
+/// The most decimals a length is printed with (mm): a nanometre. An STL stores single-precision
+/// coordinates, which round by 6e-8 of their size (0.6 nm at 10 mm), so figures below a nanometre
+/// say nothing about a part; a length that rounds to 0 at that is rounding, and prints as 0.
+constexpr int kLengthDecimals = 6;
+
+/// @brief A length (mm) as messages print it, without the unit and never with an exponent:
+/// kLengthDigits significant digits, at most kLengthDecimals decimals, no trailing zeros ("0.125",
+/// "5", "0.05145", "12346"); one that rounds to 0 prints "0", whatever its sign.
+inline std::string lengthText(double mm) { return detail::fixedText(mm, kLengthDigits, kLengthDecimals, true); }
+
+/// The significant digits and the most decimals an area is printed with (mm^2): six digits, as
+/// "%.6g" printed them, down to a square micrometre.
+constexpr int kAreaDigits = 6;
+constexpr int kAreaDecimals = 6;
+
+/// @brief An area (mm^2) as tables print it, without the unit and never with an exponent:
+/// kAreaDigits significant digits, at most kAreaDecimals decimals, no trailing zeros.
+inline std::string areaText(double mm2) { return detail::fixedText(mm2, kAreaDigits, kAreaDecimals, true); }
 
 }  // namespace dexelmill
