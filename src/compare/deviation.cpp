@@ -13,6 +13,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include "compare/detail/surface_samples.h"
 #include "dexelmill/error.h"
 #include "dexelmill/span.h"
 
@@ -37,16 +38,15 @@ constexpr double kCellEdges = 8.0;
 constexpr std::uint64_t kCellsPerAxis = std::uint64_t(1) << 21;
 constexpr std::size_t kMaxCandidates = 16;
 constexpr std::size_t kEdgeSample = 4096;
-/// The sampling inside the triangles (see measureDeviation): its spacing is never finer than this
-/// fraction of the part's longest side, nor than sqrt(3) times the smaller tolerance (every point
-/// is then within that tolerance of a measured point); it grows by kSpacingStep until the points
-/// it adds number at most the mesh's vertices or kMinSampleBudget, whichever is more, so that a
-/// fine mesh costs at most twice its vertices' measure. On an uncut 12-triangle block of
-/// 50 x 50 x 20 mm the budget gives a spacing of 0.16 mm; on a simulated mesh (hood.ngc at
-/// h = 2 mm, 2.3 million vertices) it rises above every edge, and only the vertices are measured.
+/// The sampling inside the triangles (compare/detail/surface_samples.h): its spacing is never finer
+/// than this fraction of the part's longest side; it is the finest whose points inside the
+/// triangles number at most the mesh's vertices or kMinSampleBudget, whichever is more, so that a
+/// fine mesh costs at most twice its vertices' measure and a coarse one about kMinSampleBudget
+/// points (a few hundredths of a second). On an uncut 12-triangle block of 50 x 50 x 20 mm the
+/// budget gives a spacing of about 0.6 mm; on a simulated mesh (hood.ngc at h = 2 mm, 2.3 million
+/// vertices) it rises above every edge, and only the vertices are measured.
 constexpr double kFinestSpacing = 1e-4;
-constexpr double kSpacingStep = 1.25;
-constexpr double kMinSampleBudget = double(1 << 20);
+constexpr std::uint64_t kMinSampleBudget = std::uint64_t(1) << 16;
 /// An inner point, a + u (b - a) + w (c - a), lies off its triangle by a few units in the last
 /// place of the mesh's largest coordinate; a distance within this fraction of that coordinate is
 /// that rounding, and is taken as 0.
@@ -148,27 +148,6 @@ std::vector<double> signedDistances(Span<Vec3> points, double cell, const MeshDi
     return distance;
 }
 
-/// The pieces a triangle whose longest edge is `longest` is cut into along each edge so that no
-/// piece's edge is longer than `spacing`.
-std::uint64_t piecesAlong(double longest, double spacing) {
-    return longest <= spacing ? 1 : std::uint64_t(std::ceil(longest / spacing));
-}
-
-/// The points a triangle cut k times along each edge adds to its corners.
-double addedPoints(std::uint64_t k) { return double(k + 1) * double(k + 2) / 2.0 - 3.0; }
-
-/// The sampling's spacing: the finest from `finest` up, in steps of kSpacingStep, whose points
-/// inside the triangles number at most `budget`.
-double sampleSpacing(const std::vector<double>& longest, double finest, double budget) {
-    double spacing = finest;
-    for (;;) {
-        double added = 0.0;
-        for (double l : longest) added += addedPoints(piecesAlong(l, spacing));
-        if (added <= budget) return spacing;
-        spacing *= kSpacingStep;
-    }
-}
-
 }  // namespace
 
 Deviation measureDeviation(const Mesh& machined, const MeshDistance& design, const DeviationTolerance& tolerance) {
@@ -202,50 +181,13 @@ Deviation measureDeviation(const Mesh& machined, const MeshDistance& design, con
     dev.distance = signedDistances({machined.vertices.data(), n}, sampled == 0 ? size : kCellEdges * edges / (3.0 * double(sampled)),
                                    design);
 
-    // The points inside the triangles. A triangle whose longest edge is longer than the spacing s
-    // is cut into k^2 copies of itself scaled by 1 / k (k = ceil(longest / s)), and the corners of
-    // the copies are measured too. Every copy (or uncut triangle) then has edges of at most s, and
-    // every point of a triangle with edges of at most s lies within s / sqrt(3) of one of its
-    // corners (the circumradius of the equilateral triangle, the worst case). The distance to the
-    // design changes by at most as much as the point moves, so no point of the machined surface
-    // is farther than s / sqrt(3) from a measured point, nor its distance to the design farther
-    // from that point's. A point stands for a third of the copies around it.
-    std::vector<double> longest(nt);
-    tbb::parallel_for(std::size_t(0), nt, [&](std::size_t t) {
-        const auto& c = machined.triangles[t];
-        const Vec3 &a = machined.vertices[c[0]], &b = machined.vertices[c[1]], &d = machined.vertices[c[2]];
-        longest[t] = std::max({glm::length(b - a), glm::length(d - b), glm::length(a - d)});
-    });
-    const double finest = std::max({kFinestSpacing * size, std::sqrt(3.0) * std::min(tolerance.gouge, tolerance.excess),
-                                    std::numeric_limits<double>::min()});
-    dev.spacing = sampleSpacing(longest, finest, std::max(kMinSampleBudget, double(n)));
-    std::vector<std::size_t> first(nt + 1, 0);
-    for (std::size_t t = 0; t < nt; ++t)
-        first[t + 1] = first[t] + std::size_t(addedPoints(piecesAlong(longest[t], dev.spacing)));
-    std::vector<Vec3> inner(first[nt]);
-    std::vector<double> innerArea(first[nt]);
-    std::vector<double> area(n, 0.0);
-    for (std::size_t t = 0; t < nt; ++t) {
-        const double k = double(piecesAlong(longest[t], dev.spacing));
-        const double third = glm::length(machined.areaVector(t)) / (6.0 * k * k);
-        for (std::uint32_t v : machined.triangles[t]) area[v] += third;
-    }
-    tbb::parallel_for(std::size_t(0), nt, [&](std::size_t t) {
-        const std::uint64_t k = piecesAlong(longest[t], dev.spacing);
-        if (k == 1) return;
-        const auto& c = machined.triangles[t];
-        const Vec3 &a = machined.vertices[c[0]], &b = machined.vertices[c[1]], &d = machined.vertices[c[2]];
-        const double third = glm::length(machined.areaVector(t)) / (6.0 * double(k) * double(k));
-        std::size_t at = first[t];
-        for (std::uint64_t i = 0; i <= k; ++i)
-            for (std::uint64_t j = 0; i + j <= k; ++j) {
-                const bool onEdge = i == 0 || j == 0 || i + j == k;
-                if (onEdge && (i == k || j == k || i + j == 0)) continue;  // a corner: a vertex
-                const double u = double(i) / double(k), w = double(j) / double(k);
-                inner[at] = a + u * (b - a) + w * (d - a);
-                innerArea[at++] = (onEdge ? 3.0 : 6.0) * third;
-            }
-    });
+    // The points inside the triangles: every point of the surface lies within spacing / sqrt(3) of
+    // a measured point, and the distance to the design changes by at most as much as the point
+    // moves, so its distance lies as near that point's.
+    const SurfaceSamples samples = sampleSurface(machined, std::max(kFinestSpacing * size, std::numeric_limits<double>::min()),
+                                                 std::max<std::uint64_t>(kMinSampleBudget, n));
+    dev.spacing = samples.spacing;
+    const std::vector<Vec3>& inner = samples.points;
     std::vector<double> innerDistance = signedDistances({inner.data(), inner.size()}, kCellEdges * dev.spacing, design);
     // An inner point lies off its triangle by the rounding of its coordinates: a point of a face
     // that lies on the design is measured on it.
@@ -256,8 +198,8 @@ Deviation measureDeviation(const Mesh& machined, const MeshDistance& design, con
 
     // Every measured point with its distance and the area it stands for.
     const auto forEachPoint = [&](auto&& visit) {
-        for (std::size_t i = 0; i < n; ++i) visit(dev.distance[i], area[i], machined.vertices[i]);
-        for (std::size_t i = 0; i < inner.size(); ++i) visit(innerDistance[i], innerArea[i], inner[i]);
+        for (std::size_t i = 0; i < n; ++i) visit(dev.distance[i], samples.vertexArea[i], machined.vertices[i]);
+        for (std::size_t i = 0; i < inner.size(); ++i) visit(innerDistance[i], samples.pointArea[i], inner[i]);
     };
     double sum2 = 0.0;
     forEachPoint([&](double d, double a, const Vec3& p) {

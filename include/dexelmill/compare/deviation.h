@@ -57,14 +57,16 @@ struct Deviation {
 };
 
 /// @brief Measures `machined` against the design (MeshDistance::signedDistance) at every vertex
-/// and, where a triangle's edges are longer than the sampling's spacing (Deviation::spacing), at
-/// the corners of the k^2 smaller copies it is cut into, so that a slot between a coarse mesh's
-/// vertices is not missed. Each point stands for a third of the area of the triangles (or copies)
-/// around it, so the areas are exact where the distance is the same over a point's triangles, and
-/// err only along the lines where the class changes, by about the spacing. The spacing is the
-/// finest the point budget allows (see deviation.cpp): a mesh as fine as the simulate job's is
-/// mostly measured at its vertices. Runs in parallel on the calling
-/// arena.
+/// and at points inside the triangles, so that a slot between a coarse mesh's vertices is not
+/// missed: a triangle whose edges are longer than the sampling's spacing (Deviation::spacing) is
+/// cut into k^2 smaller copies of itself whose corners are measured, or, where that takes fewer
+/// points (a long thin triangle), measured along rows parallel to its longest edge. Each point
+/// stands for the surface nearest it of its triangle (a third of the copies around it, or the
+/// stretch of its row's strip whose foot on the row is nearest it), all within the spacing of it:
+/// the areas are exact where the distance is the same over a point's share, and err only along the
+/// lines where the class changes, by about the spacing. The spacing is the finest the point budget
+/// allows (see deviation.cpp), whatever the tolerances: a mesh as fine as the simulate job's is
+/// mostly measured at its vertices. Runs in parallel on the calling arena.
 /// @throw Error for an empty design, a tolerance that is negative or not finite, or a vertex that
 /// is not a finite point.
 Deviation measureDeviation(const Mesh& machined, const MeshDistance& design, const DeviationTolerance& tolerance);
