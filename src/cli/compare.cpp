@@ -1,8 +1,10 @@
 // `dexelmill compare`: a machined part read from a file against the design.
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "commands.h"
+#include "dexelmill/decimal.h"
 #include "dexelmill/job/compare.h"
 
 namespace dexelmill::cli {
@@ -54,24 +56,30 @@ int runCompare(const CompareArgs& a) {
     const CompareReport r = compareParts(o);
     for (const std::string& w : r.warnings) std::fprintf(stderr, "dexelmill: warning: %s\n", printable(w).c_str());
     const Deviation& d = r.deviation;
-    std::printf("dexelmill: %s (%zu triangles%s) against %s (%zu triangles%s), tolerances -%g / +%g mm\n",
+    // Lengths and areas print without exponents (decimal.h); a range's ends carry their sign.
+    const auto signedLength = [](double mm) {
+        const std::string text = lengthText(mm);
+        return mm > 0.0 && text != "0" ? "+" + text : text;
+    };
+    std::printf("dexelmill: %s (%zu triangles%s) against %s (%zu triangles%s), tolerances -%s / +%s mm\n",
                 r.machinedFile.c_str(), r.machinedTriangles, r.machinedClosed ? "" : ", NOT closed",
-                r.designFile.c_str(), r.designTriangles, r.designClosed ? "" : ", NOT closed", d.tolerance.gouge,
-                d.tolerance.excess);
+                r.designFile.c_str(), r.designTriangles, r.designClosed ? "" : ", NOT closed",
+                lengthText(d.tolerance.gouge).c_str(), lengthText(d.tolerance.excess).c_str());
     std::printf("  measured at the vertices and at points inside the triangles: every point of the surface lies\n"
-                "  within %.4g mm of a measured one\n",
-                d.spacing / std::sqrt(3.0));
+                "  within %s mm of a measured one\n",
+                lengthText(d.spacing / std::sqrt(3.0)).c_str());
     std::printf("  %-22s %14s %8s %10s\n", "deviation (mm)", "area (mm^2)", "area %", "points");
     for (const DeviationBin& b : d.histogram) {
-        char range[64];
-        std::snprintf(range, sizeof range, "%+.4g .. %+.4g", b.lo, b.hi);
-        std::printf("  %-22s %14.6g %8.2f %10zu%s\n", range, b.area, d.area > 0 ? 100.0 * b.area / d.area : 0.0,
-                    b.points, b.lo == -d.tolerance.gouge && b.hi == d.tolerance.excess ? "  within tolerance" : "");
+        const std::string range = signedLength(b.lo) + " .. " + signedLength(b.hi);
+        std::printf("  %-22s %14s %8.2f %10zu%s\n", range.c_str(), areaText(b.area).c_str(),
+                    d.area > 0 ? 100.0 * b.area / d.area : 0.0, b.points,
+                    b.lo == -d.tolerance.gouge && b.hi == d.tolerance.excess ? "  within tolerance" : "");
     }
-    std::printf("  deepest %.4g mm into the design at (%.4f, %.4f, %.4f); farthest %.4g mm outside at "
-                "(%.4f, %.4f, %.4f); RMS %.4g mm; %.2f s, %.0f MiB\n",
-                d.deepest < 0.0 ? -d.deepest : 0.0, d.deepestPoint.x, d.deepestPoint.y, d.deepestPoint.z, d.farthest, d.farthestPoint.x,
-                d.farthestPoint.y, d.farthestPoint.z, d.rms, r.timingS.total, r.peakMemoryMb);
+    std::printf("  deepest %s mm into the design at (%.4f, %.4f, %.4f); farthest %s mm outside at "
+                "(%.4f, %.4f, %.4f); RMS %s mm; %.2f s, %.0f MiB\n",
+                lengthText(d.deepest < 0.0 ? -d.deepest : 0.0).c_str(), d.deepestPoint.x, d.deepestPoint.y, d.deepestPoint.z,
+                lengthText(d.farthest).c_str(), d.farthestPoint.x, d.farthestPoint.y, d.farthestPoint.z, lengthText(d.rms).c_str(),
+                r.timingS.total, r.peakMemoryMb);
     return 0;
 }
 

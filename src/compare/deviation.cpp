@@ -47,10 +47,13 @@ constexpr std::size_t kEdgeSample = 4096;
 /// vertices) it rises above every edge, and only the vertices are measured.
 constexpr double kFinestSpacing = 1e-4;
 constexpr std::uint64_t kMinSampleBudget = std::uint64_t(1) << 16;
-/// An inner point, a + u (b - a) + w (c - a), lies off its triangle by a few units in the last
-/// place of the mesh's largest coordinate; a distance within this fraction of that coordinate is
-/// that rounding, and is taken as 0.
-constexpr double kInnerRounding = 1e-12;
+/// A distance within this fraction of the part's scale (the larger of its longest side and its
+/// largest coordinate, the size the rounding of its coordinates follows) is rounding, and is taken
+/// as 0. A point lying on a design face gets a distance of a few units in the last place of its
+/// coordinates (1.1e-14 mm on a 40 mm block, where that unit is 7e-15 mm); this is about 4,500
+/// such units (2^-52 = 2.2e-16 of the scale), and 60,000 times below the rounding of an STL's
+/// single-precision coordinates (6e-8 of the scale), the least deviation a mesh file can carry.
+constexpr double kRounding = 1e-12;
 /// Rounding of the cell a vertex falls in may put it this fraction of the cell's size outside it;
 /// the cell's reach covers that.
 constexpr double kCellMargin = 1e-9;
@@ -189,12 +192,14 @@ Deviation measureDeviation(const Mesh& machined, const MeshDistance& design, con
     dev.spacing = samples.spacing;
     const std::vector<Vec3>& inner = samples.points;
     std::vector<double> innerDistance = signedDistances({inner.data(), inner.size()}, kCellEdges * dev.spacing, design);
-    // An inner point lies off its triangle by the rounding of its coordinates: a point of a face
-    // that lies on the design is measured on it.
-    const double far = std::max({std::abs(box.lo.x), std::abs(box.lo.y), std::abs(box.lo.z), std::abs(box.hi.x),
-                                 std::abs(box.hi.y), std::abs(box.hi.z)});
-    for (double& d : innerDistance)
-        if (std::abs(d) <= kInnerRounding * far) d = 0.0;
+    // A point's coordinates, an inner point's too (it lies off its triangle by a few units in their
+    // last place), round: a distance as small as that is 0, and a face that lies on the design is
+    // measured on it.
+    const double scale = std::max({size, std::abs(box.lo.x), std::abs(box.lo.y), std::abs(box.lo.z), std::abs(box.hi.x),
+                                   std::abs(box.hi.y), std::abs(box.hi.z)});
+    for (std::vector<double>* distances : {&dev.distance, &innerDistance})
+        for (double& d : *distances)
+            if (std::abs(d) <= kRounding * scale) d = 0.0;
 
     // Every measured point with its distance and the area it stands for.
     const auto forEachPoint = [&](auto&& visit) {

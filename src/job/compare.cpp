@@ -3,12 +3,13 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <string>
 
 #include <tbb/task_arena.h>
 
 #include "dexelmill/compare/design.h"
+#include "dexelmill/decimal.h"
 #include "dexelmill/error.h"
 #include "dexelmill/io/atomic_file.h"
 #include "dexelmill/io/file_name.h"
@@ -92,14 +93,10 @@ CompareReport compareInArena(const CompareOptions& o) {
         const auto [lowest, highest] = std::minmax_element(distance.begin(), distance.end());
         const bool gougeHidden = deviation.deepest < -o.tolerance.gouge && *lowest >= -o.tolerance.gouge;
         const bool excessHidden = deviation.farthest > o.tolerance.excess && *highest <= o.tolerance.excess;
-        const auto hidden = [&](const char* what, double mm) {
-            char text[400];
-            std::snprintf(text, sizeof text,
-                          "the %s found between the mesh's vertices (up to %.4g mm) does not show in the picture "
-                          "and the PLY, which colour the vertices: the mesh's triangles are larger than what "
-                          "they miss",
-                          what, mm);
-            r.warnings.push_back(text);
+        const auto hidden = [&](const std::string& what, double mm) {
+            r.warnings.push_back("the " + what + " found between the mesh's vertices (up to " + lengthText(mm) +
+                                 " mm) does not show in the picture and the PLY, which colour the vertices: the "
+                                 "mesh's triangles are larger than what they miss");
         };
         if (gougeHidden) hidden("gouge", -deviation.deepest);
         if (excessHidden) hidden("excess", deviation.farthest);

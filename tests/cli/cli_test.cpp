@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -329,6 +330,30 @@ TEST_CASE("compare measures a part against the design and writes its files", "[c
     r = cli("compare part.stl design.stl --excess-tolerance -1");
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Contains("--excess-tolerance: must be 0 or more, got -1"));
+}
+
+TEST_CASE("compare prints a part that matches its design as 0 mm off and no number with an exponent",
+          "[cli][compare]") {
+    const Cli cli("compare_match");
+    // An uncut block meshed at 0.7 mm: its vertices lie on the box's faces, between its corners,
+    // where their distances come out as rounding (1e-14 mm) unless taken as 0.
+    cli.file("none.ngc", "G21 G90\nG0 X0 Y0 Z50\nM30\n");
+    cli.file("box.stl", boxStl({0, 0, 0}, {40, 30, 10}));
+    Run r = cli("simulate none.ngc --stock box:0,0,0,40,30,10 --tool flat:d=6 --resolution 0.7 -q -o uncut.stl");
+    REQUIRE(r.code == 0);
+    r = cli("compare uncut.stl box.stl --gouge-tolerance 0 --excess-tolerance 0");
+    INFO(r.out);
+    CHECK(r.code == 0);
+    CHECK_THAT(r.out, Contains("deepest 0 mm") && Contains("farthest 0 mm outside") && Contains("RMS 0 mm"));
+    // All of it lies within the tolerances of 0: no bin of rounding beside it.
+    CHECK_THAT(r.out, Contains("tolerances -0 / +0 mm") && Contains("  0 .. 0  ") && Contains("100.00"));
+    CHECK_THAT(r.out, !Contains("0 .. +0.001") && !Contains("-0.001 .. 0"));
+    const auto exponent = [](const std::string& text) { return std::regex_search(text, std::regex("[0-9][eE][-+]?[0-9]")); };
+    CHECK_FALSE(exponent(r.out));
+    // Tolerances below a nanometre print as 0 too, not as 1e-300.
+    r = cli("compare uncut.stl box.stl --gouge-tolerance 1e-300 --excess-tolerance 1e-300");
+    CHECK(r.code == 0);
+    CHECK_FALSE(exponent(r.out));
 }
 
 TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {

@@ -328,6 +328,43 @@ TEST_CASE("deviation: the RMS of a box 0.125 mm low, worked out by hand, whateve
     CHECK(highest < 1.01 * exact);
 }
 
+TEST_CASE("deviation: a part that lies on the design measures 0 everywhere, not rounding",
+          "[compare][deviation][degenerate]") {
+    // The cube turned about a skew axis and moved far from the origin, its faces cut into 16
+    // triangles each: the new vertices lie on the design's faces but not at its corners, and
+    // their distances come out as rounding (a few units in the last place of 2000 mm) unless
+    // taken as 0.
+    const Vec3 axis = glm::normalize(Vec3(1, 2, 3)), offset(1000.1, -2000.3, 500.7);
+    const double angle = 0.7;
+    Mesh design = cube(kHalf);
+    for (Vec3& v : design.vertices)  // Rodrigues' rotation, then the offset
+        v = v * std::cos(angle) + glm::cross(axis, v) * std::sin(angle) + axis * glm::dot(axis, v) * (1.0 - std::cos(angle)) + offset;
+    Mesh part = design;
+    for (int level = 0; level < 2; ++level) {
+        Mesh finer;
+        finer.vertices = part.vertices;
+        for (const auto& t : part.triangles) {
+            std::uint32_t mid[3];
+            for (std::size_t k = 0; k < 3; ++k) {
+                finer.vertices.push_back(0.5 * (part.vertices[t[k]] + part.vertices[t[(k + 1) % 3]]));
+                mid[k] = std::uint32_t(finer.vertices.size() - 1);
+            }
+            finer.triangles.push_back({t[0], mid[0], mid[2]});
+            finer.triangles.push_back({mid[0], t[1], mid[1]});
+            finer.triangles.push_back({mid[2], mid[1], t[2]});
+            finer.triangles.push_back({mid[0], mid[1], mid[2]});
+        }
+        part = finer;
+    }
+    const Deviation d = measureDeviation(part, MeshDistance(design), {0.0, 0.0});
+    for (double v : d.distance) CHECK(v == 0.0);
+    CHECK(d.deepest == 0.0);
+    CHECK(d.farthest == 0.0);
+    CHECK(d.rms == 0.0);
+    REQUIRE(d.histogram.size() == 1);
+    CHECK(d.withinArea == Approx(600.0));
+}
+
 TEST_CASE("compare: a slot only the points between the vertices find is named, since the colours cannot show it",
           "[compare][deviation][job]") {
     // The uncut block and the slotted design of the test above, as files.

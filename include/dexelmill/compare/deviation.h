@@ -36,7 +36,8 @@ struct DeviationBin {
 struct Deviation {
     /// Per vertex of the machined mesh: the distance to the design's surface (mm), negative where
     /// the vertex lies inside the design; exact, except that a vertex within 1e-6 mm of the surface
-    /// may be given a distance up to 1e-6 mm off, or the other sign.
+    /// may be given a distance up to 1e-6 mm off, or the other sign, and that a distance within
+    /// 1e-12 of the part's scale (its longest side or largest coordinate) is rounding, and 0.
     std::vector<double> distance;
     DeviationTolerance tolerance;
     /// The sampling's spacing (mm): every point of the machined surface lies within spacing /
