@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <string>
 #include <utility>
@@ -14,6 +13,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "compare/detail/surface_samples.h"
+#include "dexelmill/decimal.h"
 #include "dexelmill/error.h"
 #include "dexelmill/span.h"
 
@@ -86,10 +86,11 @@ Rgb mix(const Rgb& a, const Rgb& b, double t) {
     return c;
 }
 
+/// A legend's length: signed where it is not 0, never with an exponent (a tolerance of 1e-5 mm
+/// would otherwise read "+1e-05").
 std::string number(double mm) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%+.3g", mm);
-    return text;
+    const std::string text = lengthText(mm);
+    return mm > 0.0 && text != "0" ? "+" + text : text;
 }
 
 /// Colours per third of the legend's bar.

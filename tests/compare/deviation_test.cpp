@@ -446,6 +446,10 @@ TEST_CASE("deviation: zero tolerances, a surface that matches, and the colours",
     std::vector<std::string> texts;
     for (const auto& l : legend.labels) texts.push_back(l.text);
     CHECK(texts == std::vector<std::string>{"-0.828", "gouge", "-0.01", "within", "+0.05", "excess", "+0.9"});
+    // Tolerances of a few micrometres and zero print as decimals, never with an exponent.
+    texts.clear();
+    for (const auto& l : deviationLegend({{0.0, 0.00001}, 0.0002, 12345.6}).labels) texts.push_back(l.text);
+    CHECK(texts == std::vector<std::string>{"-0.0002", "gouge", "0", "within", "+0.00001", "excess", "+12346"});
 }
 
 TEST_CASE("compare: a sphere's STL against a cube's, with report, PLY and picture", "[compare][deviation][job]") {
