@@ -1,5 +1,12 @@
 #include "dexelmill/io/vdb_io.h"
 
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <new>
+
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 
 #include "dexelmill/error.h"
@@ -20,6 +27,22 @@ public:
     }
 };
 
+/// The most of an OpenVDB message a reader's error repeats: a damaged file's grid or map name
+/// may be any length.
+constexpr std::size_t kMostMessageBytes = 200;
+
+std::string clipped(const std::string& message) {
+    return printable(message.size() <= kMostMessageBytes ? message : message.substr(0, kMostMessageBytes) + "...");
+}
+
+/// The first grid of `grids` that `wanted` takes; none when no grid does.
+template <typename Wanted>
+openvdb::GridBase::Ptr findGrid(const openvdb::GridPtrVec& grids, Wanted wanted) {
+    for (const openvdb::GridBase::Ptr& g : grids)
+        if (g && wanted(*g)) return g;
+    return nullptr;
+}
+
 }  // namespace
 
 void writeVdb(const std::string& path, const LevelSet& levelSet, OutputBatch* batch) {
@@ -37,39 +60,54 @@ void writeVdb(const std::string& path, const LevelSet& levelSet, OutputBatch* ba
 
 LevelSet readVdb(const std::string& path, const std::string& gridName) {
     ensureOpenVdbInitialized();
+    // Only regular files: a folder reads as nothing, and /dev/zero or a FIFO never ends.
+    std::error_code ec;
+    const std::filesystem::file_status st = std::filesystem::status(path, ec);
+    if (ec || !std::filesystem::exists(st)) throw Error("cannot open '" + path + "': no such file");
+    if (!std::filesystem::is_regular_file(st))
+        throw Error("'" + path + "' is not a regular file (a folder, device, pipe or socket); a level set is read "
+                    "from a .vdb file");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error("cannot open '" + path + "': " + std::strerror(errno));
+    // A read short of what the file's own counts promise throws at once: OpenVDB's parser does not
+    // look at the stream's state, and went on with the sizes and names it had not read (a file cut
+    // at 3000 of its 45410 bytes allocated 2 GB and printed a 540 MB map name in its error).
+    in.exceptions(std::ios::failbit | std::ios::badbit);
+    openvdb::GridPtrVecPtr grids;
     try {
-        openvdb::io::File file(path);
-        file.open();
-        openvdb::GridBase::Ptr base;
-        if (!gridName.empty()) {
-            if (!file.hasGrid(gridName))
-                throw Error("'" + path + "' has no grid named '" + gridName + "'");
-            base = file.readGrid(gridName);
-        } else if (file.hasGrid("stock") &&
-                   file.readGridMetadata("stock")->isType<openvdb::FloatGrid>()) {
-            base = file.readGrid("stock");
-        } else {
-            openvdb::GridPtrVecPtr metas = file.readAllGridMetadata();
-            for (const openvdb::GridBase::Ptr& m : *metas) {
-                if (m->isType<openvdb::FloatGrid>() &&
-                    (m->getGridClass() == openvdb::GRID_LEVEL_SET ||
-                     m->getGridClass() == openvdb::GRID_UNKNOWN)) {
-                    base = file.readGrid(m->getName());
-                    break;
-                }
-            }
-        }
-        file.close();
-        if (!base) throw Error("'" + path + "' holds no float level-set grid");
-        openvdb::FloatGrid::Ptr grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
-        if (!grid) throw Error("grid '" + base->getName() + "' in '" + path + "' is not a float grid");
-        try {
-            return levelSetFromGrid(grid);
-        } catch (const Error& e) {
-            throw Error("'" + path + "': " + e.what());
-        }
+        openvdb::io::Stream stream(in, /*delayLoad=*/false);
+        grids = stream.getGrids();
+    } catch (const std::ios_base::failure&) {
+        throw Error("'" + path + "': not a complete OpenVDB file (it ends, or cannot be read, before the grids "
+                    "its header announces)");
+    } catch (const std::bad_alloc&) {
+        // A size read from damaged bytes: not the job's memory running out.
+        throw Error("'" + path + "': not a readable OpenVDB file (a size in it asks for more memory than there is: "
+                    "the file is damaged)");
     } catch (const openvdb::Exception& e) {
-        throw Error("cannot read '" + path + "': " + e.what());
+        throw Error("cannot read '" + path + "': " + clipped(e.what()));
+    }
+    openvdb::GridBase::Ptr base;
+    if (!gridName.empty()) {
+        base = findGrid(*grids, [&](const openvdb::GridBase& g) { return g.getName() == gridName; });
+        if (!base) throw Error("'" + path + "' has no grid named '" + gridName + "'");
+    } else {
+        base = findGrid(*grids, [](const openvdb::GridBase& g) {
+            return g.getName() == "stock" && g.isType<openvdb::FloatGrid>();
+        });
+        if (!base)
+            base = findGrid(*grids, [](const openvdb::GridBase& g) {
+                return g.isType<openvdb::FloatGrid>() &&
+                       (g.getGridClass() == openvdb::GRID_LEVEL_SET || g.getGridClass() == openvdb::GRID_UNKNOWN);
+            });
+    }
+    if (!base) throw Error("'" + path + "' holds no float level-set grid");
+    openvdb::FloatGrid::Ptr grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
+    if (!grid) throw Error("grid '" + base->getName() + "' in '" + path + "' is not a float grid");
+    try {
+        return levelSetFromGrid(grid);
+    } catch (const Error& e) {
+        throw Error("'" + path + "': " + e.what());
     }
 }
 

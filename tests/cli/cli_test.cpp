@@ -628,6 +628,30 @@ TEST_CASE("under an address-space limit a program's moves stop at the reader's l
 #endif
 }
 
+TEST_CASE("a VDB cut short is refused at its first short read wherever a level set is read", "[cli][errors]") {
+#if defined(__SANITIZE_ADDRESS__)
+    SUCCEED("skipped: an AddressSanitizer build cannot start under ulimit -v");
+#else
+    const Cli cli("truncated_vdb");
+    cli.file("slot.ngc", "G21 G90\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10\nG0 Z5\n");
+    cli.file("box.stl", boxStl({-5, -5, -3}, {15, 5, 0}));
+    REQUIRE(cli("simulate slot.ngc --stock box:-5,-5,-3,15,5,0 --tool flat:d=2 --resolution 0.5 --vdb part.vdb -q")
+                .code == 0);
+    REQUIRE(fs::file_size(cli.dir() / "part.vdb") > 3000);
+    // Cut there, OpenVDB's own reader took 2 GB and printed a 540 MB map name in its error.
+    REQUIRE(cli.runIn("head -c 3000 part.vdb > cut.vdb").code == 0);
+    for (const char* args : {"info cut.vdb", "compare cut.vdb box.stl", "compare box.stl cut.vdb",
+                             "simulate slot.ngc --tool flat:d=2 --stock cut.vdb",
+                             "simulate slot.ngc --tool flat:d=2 --design cut.vdb"}) {
+        INFO(args);
+        const Run r = cli.runIn(std::string("ulimit -v 1500000 && '") + DEXELMILL_CLI_PATH + "' " + args);
+        CHECK(r.code == 1);
+        CHECK_THAT(r.err, StartsWith("dexelmill: error: 'cut.vdb': not a complete OpenVDB file"));
+        CHECK(r.err.size() < 200);
+    }
+#endif
+}
+
 TEST_CASE("a successful run writes every output and a one-line summary in mm", "[cli]") {
     const Cli cli("success");
     cli.file("slot.ngc", "G21 G90\nT1 M6\nG0 X5 Y15 Z15\nG1 Z7 F100\nG1 X35\nG0 Z15\nM30\n");

@@ -674,6 +674,26 @@ TEST_CASE("VDB: a level set written and read back is identical", "[io]") {
     CHECK_THROWS_AS(readVdb(dir.file("missing.vdb")), Error);
 }
 
+TEST_CASE("VDB: a file cut short anywhere is refused as incomplete, naming it", "[io][errors]") {
+    TempDir dir;
+    const LevelSet ls = rebuildLevelSet(dentedBox(), {3, FamilySet::all(), "dented box", std::nullopt});
+    writeVdb(dir.file("part.vdb"), ls);
+    std::ifstream in(dir.file("part.vdb"), std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    REQUIRE(bytes.size() > 4000);
+    // Cuts in the header, the metadata, the topology and the voxel buffers, and one byte short.
+    std::vector<std::size_t> cuts = {1, 8, 100, 3000, bytes.size() - 1};
+    for (std::size_t k = 1; k < 16; ++k) cuts.push_back(bytes.size() * k / 16);
+    for (const std::size_t cut : cuts) {
+        INFO("the first " << cut << " of " << bytes.size() << " bytes");
+        const std::string path = dir.file("cut.vdb");
+        std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(cut));
+        CHECK_THROWS_WITH(readVdb(path), "'" + path + "': not a complete OpenVDB file (it ends, or cannot be read, "
+                                                       "before the grids its header announces)");
+    }
+    CHECK_THROWS_WITH(readVdb(dir.path.string()), Catch::Matchers::Contains("is not a regular file"));
+}
+
 namespace {
 
 /// While alive, writes past `bytes` in any file fail (EFBIG) as on a full disk: a file-size limit,

@@ -17,8 +17,11 @@ void writeVdb(const std::string& path, const LevelSet& levelSet, OutputBatch* ba
 
 /// @brief Reads a float level-set grid from a .vdb file: the grid named `gridName`, or when that
 /// is empty the grid named "stock" if there is one, else the first float grid of class level set
-/// (or of unknown class).
-/// @throw Error if the file cannot be read or holds no such grid.
+/// (or of unknown class). Every grid of the file is read (as openvdb::io::Stream reads), through a
+/// stream that fails at the first read past the file's end, so that a file cut short is refused
+/// there rather than parsed on from bytes never read.
+/// @throw Error if the file is not a regular file, cannot be read, is not a complete OpenVDB file,
+/// or holds no such grid.
 LevelSet readVdb(const std::string& path, const std::string& gridName = "");
 
 }  // namespace dexelmill
