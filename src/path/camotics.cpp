@@ -188,6 +188,28 @@ std::optional<Tool> camoticsTool(const Json& t, const std::string& where, const 
                      shape);
 }
 
+/// The extension of a path's last component, without its dot and in lower case ("" for none).
+std::string extensionOf(const std::string& path) {
+    const auto dot = path.find_last_of('.');
+    const auto slash = path.find_last_of('/');
+    if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
+    return lower(path.substr(dot + 1));
+}
+
+/// Refuses a file whose name says it holds a solid (a mesh or a level set): read as G-code, it
+/// failed at a word of its header ("olid" of an ASCII STL's "solid"), which did not say what it is.
+void refuseSolid(const std::string& path) {
+    const std::string ext = extensionOf(path);
+    std::string kind;
+    if (ext == "stl") kind = "an STL mesh";
+    else if (ext == "obj") kind = "an OBJ mesh";
+    else if (ext == "ply") kind = "a PLY mesh";
+    else if (ext == "vdb") kind = "an OpenVDB level set";
+    else return;
+    throw Error("'" + path + "' is " + kind + ", not a program: a program is G-code, an APT CL file or a CAMotics "
+                "project; a solid is given with --stock or --design (.stl or .vdb)");
+}
+
 /// The three numbers of j, the value at `pointer`.
 Vec3 vec3(const Json& j, const std::string& where, const Places& places, const std::string& pointer) {
     if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
@@ -325,6 +347,7 @@ Program runProject(const Project& project, const GcodeOptions& options) {
         program.append(std::move(part));
     };
     for (const std::string& f : project.files) {
+        refuseSolid(f);
         std::string text = detail::readFile(o.files, f);
         if (detectProgramKind(f, text) == ProgramKind::Apt) {
             flush();
@@ -404,10 +427,7 @@ Box cuttingBounds(const ToolPath& path, const ToolTable& tools) {
 }
 
 ProgramKind detectProgramKind(const std::string& path, std::string_view text) {
-    std::string ext;
-    const auto dot = path.find_last_of('.');
-    const auto slash = path.find_last_of('/');
-    if (dot != std::string::npos && (slash == std::string::npos || dot > slash)) ext = lower(path.substr(dot + 1));
+    const std::string ext = extensionOf(path);
     if (ext == "camotics") return ProgramKind::Camotics;
     if (ext == "apt" || ext == "cl" || ext == "cls" || ext == "aptsource") return ProgramKind::Apt;
     static const std::set<std::string> gcode = {"nc", "ngc", "gcode", "gc", "tap", "cnc", "g", "txt", "eia", "mpf", "iso"};
@@ -424,6 +444,7 @@ ProgramKind detectProgramKind(const std::string& path, std::string_view text) {
 }
 
 Program readProgram(const std::string& path, const GcodeOptions& gcode, const AptOptions& apt) {
+    refuseSolid(path);
     const std::string text = detail::readFile(gcode.files, path);
     switch (detectProgramKind(path, text)) {
     case ProgramKind::Camotics: {

@@ -368,6 +368,14 @@ TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
     CHECK_THAT(r.err, Contains("nowhere.ngc"));
     r = cli("info nowhere.apt");
     CHECK(r.code == 1);
+    // A solid where a program belongs is named as what it is, not read as G-code.
+    cli.file("design.stl", boxStl({0, 0, 0}, {10, 10, 10}));
+    for (const char* args : {"simulate design.stl --tool flat:d=3", "info design.stl"}) {
+        INFO(args);
+        r = cli(args);
+        CHECK(r.code == 1);
+        CHECK_THAT(r.err, StartsWith("dexelmill: error: 'design.stl' is an STL mesh, not a program"));
+    }
     // An output in a folder that is not there fails before the cut, naming it; the other outputs
     // are not written.
     cli.file("ok.ngc", "G21\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X5\n");

@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "dexelmill/error.h"
@@ -116,6 +117,29 @@ TEST_CASE("files: what is not a regular file is refused before it is read", "[pa
     // A project that lists a folder says so, rather than running no moves.
     dir.write("p.camotics", "{\"files\": [\"folder.ngc\"]}");
     CHECK_THAT(errorOf(dir.path("p.camotics")), Catch::Matchers::Contains("is a directory"));
+}
+
+TEST_CASE("files: a mesh or a level set is refused as a program, naming the file and what a program is",
+          "[path][files][errors]") {
+    const Folder dir("solids");
+    // A binary STL's header and count, and an ASCII one: read as G-code, a mesh failed at a word of
+    // its header ("olid" of an ASCII STL's "solid"), which did not say what the file is.
+    const std::string binary = std::string(80, ' ') + std::string("\x0c\x00\x00\x00", 4) + std::string(600, '\x01');
+    for (const auto& [name, bytes, kind] :
+         {std::tuple<const char*, std::string, const char*>{"part.stl", binary, "an STL mesh"},
+          {"part.STL", "solid part\nendsolid part\n", "an STL mesh"},
+          {"part.obj", "v 0 0 0\n", "an OBJ mesh"},
+          {"part.ply", "ply\n", "a PLY mesh"},
+          {"part.vdb", std::string("\x20\x42\x44\x56\x00\x00\x00\x00", 8), "an OpenVDB level set"}}) {
+        INFO(name);
+        const std::string path = dir.write(name, bytes);
+        CHECK(errorOf(path) == "'" + path + "' is " + kind +
+                                   ", not a program: a program is G-code, an APT CL file or a CAMotics project; a "
+                                   "solid is given with --stock or --design (.stl or .vdb)");
+    }
+    // A project that lists one says so too.
+    dir.write("p.camotics", "{\"files\": [\"part.stl\"]}");
+    CHECK_THAT(errorOf(dir.path("p.camotics")), Catch::Matchers::Contains("part.stl' is an STL mesh, not a program"));
 }
 
 TEST_CASE("files: control bytes in a message are escaped, and NUL does not cut it", "[path][files]") {

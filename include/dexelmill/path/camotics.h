@@ -74,6 +74,8 @@ Project readCamoticsProject(const std::string& path, const FileSource& files = {
 /// `options.files`, and returns
 /// them as one program whose tools are the project's tools. Tools the programs call but the
 /// project does not define give a warning.
+/// @throw Error for a program that cannot be read or whose name says it holds a solid (as
+/// readProgram); ParseError for malformed input.
 Program runProject(const Project& project, const GcodeOptions& options = {});
 
 /// @brief CAMotics' automatic workpiece: the box of the cutting moves, widened by the cutting
@@ -103,7 +105,8 @@ ProgramKind detectProgramKind(const std::string& path, std::string_view text);
 
 /// @brief Reads any program file: G-code, APT CL, or a CAMotics project (whose programs run in
 /// order with the project's tools). Files are read from `gcode.files`.
-/// @throw Error if the file cannot be read; ParseError for malformed input.
+/// @throw Error if the file cannot be read, or its name says it holds a solid (.stl, .obj, .ply or
+/// .vdb, any case), which is not read; ParseError for malformed input.
 Program readProgram(const std::string& path, const GcodeOptions& gcode = {},
                     const AptOptions& apt = {});
 
