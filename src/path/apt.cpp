@@ -65,7 +65,10 @@ struct CutterSpec {
     std::vector<double> params;  ///< mm (angles in degrees)
     double unit = 1.0;           ///< the length unit the values were printed in (mm)
     double cuttingLength = 0.0;
-    SourceLocation where;
+    SourceLocation where;  ///< the CUTTER statement, which every note and error about its values names
+    /// The statement that gave the tool this description: the CUTTER, or a CSI_SET_FLUTE_LENGTH
+    /// that changed its cutting length.
+    SourceLocation describedAt;
     bool cut = false;  ///< some move was made with it
 
     /// Whether `later` states this tool again: the same numbers, and the same cutting length
@@ -311,7 +314,7 @@ private:
         if (!loaded_ || !cutters_.count(key_)) return;
         CutterSpec spec = cutters_.at(key_);
         spec.cuttingLength = v[0] * scale_;
-        if (spec.cut) spec.where = loc(s);
+        if (spec.cut) spec.describedAt = loc(s);
         spec.cut = false;
         define(spec, s);
     }
@@ -446,6 +449,7 @@ private:
             spec.params.push_back((k == 4 || k == 5) ? v[k] : v[k] * scale_);
         spec.unit = scale_;
         spec.where = loc(s);
+        spec.describedAt = spec.where;
         if (!(spec.params[0] > 0)) fail(s.args[0], "CUTTER diameter must be positive");
         if (v.size() >= 2 && !(v[1] >= 0)) fail(s.args[1], "CUTTER corner radius must not be negative");
         if (v.size() == 2 && !roundsTo(v[1], 0.5 * v[0], 1.0) && v[1] > 0.5 * v[0]) {
@@ -507,7 +511,7 @@ private:
         }
         if (it->second.restatedBy(spec)) return;
         const int key = -int(newTools_.size()) - 1;
-        newTools_.push_back({tool_, spec.where, it->second.where.line});
+        newTools_.push_back({tool_, spec.describedAt, it->second.where.line});
         cutters_[key] = spec;
         keyOf_[tool_] = key;
         selectKey(key, s);
@@ -520,7 +524,7 @@ private:
             const CutterSpec spec = *pending_;
             pending_.reset();
             if (!loaded_) {
-                diags_.note(loc(s), "CUTTER without LOAD/TOOL: taken as tool 1");
+                diags_.note(spec.where, "CUTTER without LOAD/TOOL: taken as tool 1");
                 tool_ = 1;
                 largestNumber_ = std::max(largestNumber_, tool_);
                 keyOf_[tool_] = tool_;
@@ -902,12 +906,12 @@ private:
     enum class Multax { Unstated, On, Off };
     Multax multax_ = Multax::Unstated;
     bool finished_ = false;
-    /// A tool-table entry the reader made for a CUTTER that changed tool `number` after it had
-    /// cut (define()).
+    /// A tool-table entry the reader made for a CUTTER (or a CSI_SET_FLUTE_LENGTH) that changed
+    /// tool `number` after it had cut (define()).
     struct NewTool {
         int number = 0;
-        SourceLocation where;
-        int replacedLine = 0;
+        SourceLocation where;  ///< the statement that changed it
+        int replacedLine = 0;  ///< the CUTTER statement of the description it replaced
     };
 
     bool loaded_ = false;  ///< a tool is in the spindle: tool_ and key_ say which

@@ -491,6 +491,30 @@ Program cutterProgram(const std::string& cutter) {
 
 }  // namespace
 
+TEST_CASE("apt: a note about a CUTTER names its own line, not the statement that takes it up", "[path][apt]") {
+    const auto noteAt = [](const Program& p, const std::string& fragment) -> SourceLocation {
+        for (const Diagnostic& d : p.diagnostics)
+            if (d.message.find(fragment) != std::string::npos) return d.where;
+        FAIL_CHECK("no note with '" << fragment << "'");
+        return {};
+    };
+    // A CUTTER no LOAD/TOOL claims is tool 1 from the first GOTO (line 4) on; the note is about
+    // the CUTTER of line 2.
+    const Program p = parseApt("UNITS/MM\nCUTTER/3.96875,1.98438\nFROM/0,0,10\nGOTO/0,0,5\nGOTO/10,0,5\n", "c.apt");
+    const SourceLocation claimed = noteAt(p, "CUTTER without LOAD/TOOL: taken as tool 1");
+    CHECK(claimed.line == 2);
+    CHECK(claimed.column == 1);
+    CHECK(noteAt(p, "taken as that ball").line == 2);
+    // Cutting lengths stated anew (lines 5 and 7) after the tool has cut make new tools; the moves
+    // before each keep the CUTTER of line 1, not a CSI_SET_FLUTE_LENGTH.
+    const Program f = parseApt("CUTTER/10\nLOAD/TOOL,1\nGOTO/0,0,10\nGOTO/10,0,10\nCSI_SET_FLUTE_LENGTH/30\n"
+                               "GOTO/20,0,10\nCSI_SET_FLUTE_LENGTH/40\nGOTO/30,0,10\n",
+                               "f.apt");
+    REQUIRE(f.tools.size() == 3);
+    CHECK(noteAt(f, "(its moves before keep the CUTTER of line 1): the moves from here are tool T2").line == 5);
+    CHECK(noteAt(f, "(its moves before keep the CUTTER of line 1): the moves from here are tool T3").line == 7);
+}
+
 TEST_CASE("apt: a ball CUTTER printed to six digits or four decimals is the ball of its diameter, with a note",
           "[path][apt]") {
     // A 5/32 inch ball in mm: d = 3.96875, r = 1.984375, printed 1.98438. r - d/2 = 5e-6 mm.
