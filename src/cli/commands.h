@@ -1,6 +1,7 @@
 // The subcommands of the dexelmill tool: option declarations and the code that runs them.
 #pragma once
 
+#include <cstdio>
 #include <optional>
 #include <set>
 #include <string>
@@ -105,6 +106,12 @@ Affine parseTransform(const std::string& text);
 /// job's arena is cut to that (job/memory.h, arenaThreads). Simulate's report carries the same
 /// warning; compare and study call this.
 void warnThreads(int requested);
+
+/// @brief Where a command prints its summary: stdout, unless one of `outputs` is the file or pipe
+/// stdout writes (`--report /dev/stdout | jq`, `-o part.stl > part.stl`), where it would follow or
+/// cut into that output: then stderr. A terminal or /dev/null keeps it. Called before the run,
+/// while the outputs are as the command found them.
+std::FILE* summaryStream(const std::vector<std::string>& outputs);
 
 /// @brief Prints a deviation's summary line on stderr.
 void printDeviation(const Deviation& deviation);

@@ -53,6 +53,7 @@ int runCompare(const CompareArgs& a) {
     o.reportPath = a.report;
     o.threads = a.threads;
     warnThreads(a.threads);
+    std::FILE* const out = summaryStream({a.ply, a.png, a.report});
     const CompareReport r = compareParts(o);
     for (const std::string& w : r.warnings) std::fprintf(stderr, "dexelmill: warning: %s\n", printable(w).c_str());
     const Deviation& d = r.deviation;
@@ -61,21 +62,21 @@ int runCompare(const CompareArgs& a) {
         const std::string text = lengthText(mm);
         return mm > 0.0 && text != "0" ? "+" + text : text;
     };
-    std::printf("dexelmill: %s (%zu triangles%s) against %s (%zu triangles%s), tolerances -%s / +%s mm\n",
+    std::fprintf(out, "dexelmill: %s (%zu triangles%s) against %s (%zu triangles%s), tolerances -%s / +%s mm\n",
                 r.machinedFile.c_str(), r.machinedTriangles, r.machinedClosed ? "" : ", NOT closed",
                 r.designFile.c_str(), r.designTriangles, r.designClosed ? "" : ", NOT closed",
                 lengthText(d.tolerance.gouge).c_str(), lengthText(d.tolerance.excess).c_str());
-    std::printf("  measured at the vertices and at points inside the triangles: every point of the surface lies\n"
+    std::fprintf(out, "  measured at the vertices and at points inside the triangles: every point of the surface lies\n"
                 "  within %s mm of a measured one\n",
                 lengthText(d.spacing / std::sqrt(3.0)).c_str());
-    std::printf("  %-22s %14s %8s %10s\n", "deviation (mm)", "area (mm^2)", "area %", "points");
+    std::fprintf(out, "  %-22s %14s %8s %10s\n", "deviation (mm)", "area (mm^2)", "area %", "points");
     for (const DeviationBin& b : d.histogram) {
         const std::string range = signedLength(b.lo) + " .. " + signedLength(b.hi);
-        std::printf("  %-22s %14s %8.2f %10zu%s\n", range.c_str(), areaText(b.area).c_str(),
+        std::fprintf(out, "  %-22s %14s %8.2f %10zu%s\n", range.c_str(), areaText(b.area).c_str(),
                     d.area > 0 ? 100.0 * b.area / d.area : 0.0, b.points,
                     b.lo == -d.tolerance.gouge && b.hi == d.tolerance.excess ? "  within tolerance" : "");
     }
-    std::printf("  deepest %s mm into the design at (%.4f, %.4f, %.4f); farthest %s mm outside at "
+    std::fprintf(out, "  deepest %s mm into the design at (%.4f, %.4f, %.4f); farthest %s mm outside at "
                 "(%.4f, %.4f, %.4f); RMS %s mm; %.2f s, %.0f MiB\n",
                 lengthText(d.deepest < 0.0 ? -d.deepest : 0.0).c_str(), d.deepestPoint.x, d.deepestPoint.y, d.deepestPoint.z,
                 lengthText(d.farthest).c_str(), d.farthestPoint.x, d.farthestPoint.y, d.farthestPoint.z, lengthText(d.rms).c_str(),

@@ -5,6 +5,9 @@
 #include <iostream>
 #include <string>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include "commands.h"
 #include "dexelmill/decimal.h"
 #include "dexelmill/error.h"
@@ -247,6 +250,18 @@ std::string counted(std::size_t n, const char* noun) {
 
 }  // namespace
 
+std::FILE* summaryStream(const std::vector<std::string>& outputs) {
+    struct stat out {};
+    // A terminal or /dev/null takes the summary after an output as well as stderr would.
+    if (::fstat(STDOUT_FILENO, &out) != 0 || S_ISCHR(out.st_mode)) return stdout;
+    for (const std::string& path : outputs) {
+        struct stat st {};
+        if (!path.empty() && ::stat(path.c_str(), &st) == 0 && st.st_dev == out.st_dev && st.st_ino == out.st_ino)
+            return stderr;
+    }
+    return stdout;
+}
+
 void warnThreads(int requested) {
     const std::string cut = threadsCutNote(requested);
     if (!cut.empty()) std::fprintf(stderr, "dexelmill: warning: %s\n", cut.c_str());
@@ -361,7 +376,9 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
         ->check(numberCheck(false));
     c->add_option("--families", a.families, "Dexel families to keep: xyz, z, x, y, xy, xz or yz")
         ->capture_default_str();
-    c->add_option("-o,--output", a.output, "Mesh of the part: PART.obj, PART.stl or PART.ply");
+    c->add_option("-o,--output", a.output,
+                  "Mesh of the part: PART.obj, PART.stl or PART.ply (binary STL to a device or pipe\n"
+                  "otherwise named, as /dev/stdout)");
     c->add_option("--vdb", a.vdb, "The part as an OpenVDB level set, PART.vdb");
     c->add_option("--png", a.png,
                   "A shaded isometric picture of the part, PART.png; with --design, coloured by the\n"
@@ -406,6 +423,8 @@ CLI::App* addSimulate(CLI::App& app, SimulateArgs& a) {
 
 int runSimulate(const SimulateArgs& args) {
     SimulateOptions options = toOptions(args);
+    std::FILE* const summary =
+        summaryStream({args.output, args.vdb, args.png, args.report, args.gougeCsv, args.deviationPly});
     ProgressBar bar(!args.quiet && ProgressBar::stderrIsTerminal());
     options.progress = [&bar](const char* stage, std::size_t done, std::size_t total) {
         bar.update(stage, done, total);
@@ -469,8 +488,8 @@ int runSimulate(const SimulateArgs& args) {
                       volumeText(r.excessVolumeMm3).c_str(), r.excessThicknessMm, r.excessToleranceMm);
         gouges = text;
     }
-    std::printf(
-        "dexelmill: %s, %s; removed %s (%.1f %% of the stock), part %s; h %.4g mm; %s, %s%s; "
+    std::fprintf(
+        summary, "dexelmill: %s, %s; removed %s (%.1f %% of the stock), part %s; h %.4g mm; %s, %s%s; "
         "mesh %s%s; %.2f s, %.0f MiB\n",
         counted(r.moves, "move").c_str(), counted(r.toolChanges, "tool change").c_str(), volumeText(r.removedVolumeMm3).c_str(), pct,
         volumeText(r.finalVolumeMm3).c_str(), r.resolutionMm, counted(r.collisions.size(), "collision").c_str(), gouges.c_str(),

@@ -96,15 +96,16 @@ int runStudy(const StudyArgs& a) {
     if (!a.job.quiet) warnThreads(a.job.threads);
     ProgressBar bar(!a.job.quiet && ProgressBar::stderrIsTerminal());
     o.progress = [&bar](const char* stage, std::size_t done, std::size_t total) { bar.update(stage, done, total); };
+    std::FILE* const out = summaryStream({a.csv, a.plot});
     const StudyResult r = runStudy(o);
     bar.finish();
-    std::printf("study of %s; reference volume %s (%s)\n", r.subject.c_str(), volumeText(r.referenceVolumeMm3).c_str(),
+    std::fprintf(out, "study of %s; reference volume %s (%s)\n", r.subject.c_str(), volumeText(r.referenceVolumeMm3).c_str(),
                 r.reference.c_str());
-    std::printf("deviations in mm at points over the mesh; 'inner': those at least one spacing from the stock's faces\n");
-    std::printf("%8s %-8s %11s %11s %11s %11s %11s %11s %13s %10s %13s %8s\n", "h_mm", "families", "max", "rms",
+    std::fprintf(out, "deviations in mm at points over the mesh; 'inner': those at least one spacing from the stock's faces\n");
+    std::fprintf(out, "%8s %-8s %11s %11s %11s %11s %11s %11s %13s %10s %13s %8s\n", "h_mm", "families", "max", "rms",
                 "p95", "inner_max", "inner_rms", "inner_p95", "vol_err_mm3", "lost_mm3", "invented_mm3", "time_s");
     for (const StudyRun& x : r.runs)
-        std::printf("%8.4g %-8s %11.4g %11.4g %11.4g %11.4g %11.4g %11.4g %13.5g %10.4g %13.4g %8.3f\n", x.h,
+        std::fprintf(out, "%8.4g %-8s %11.4g %11.4g %11.4g %11.4g %11.4g %11.4g %13.5g %10.4g %13.4g %8.3f\n", x.h,
                     x.families.c_str(), x.devMaxMm, x.devRmsMm, x.devP95Mm, x.innerMaxMm, x.innerRmsMm,
                     x.innerP95Mm, x.volumeErrorMm3, x.lostMm3, x.inventedMm3, x.seconds);
     return 0;

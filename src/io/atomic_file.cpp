@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "dexelmill/error.h"
+#include "dexelmill/io/file_name.h"
 
 namespace dexelmill {
 
@@ -73,15 +74,28 @@ std::string temporaryName(const std::string& name, const std::string& suffix, st
     return "." + name.substr(0, keep) + suffix;
 }
 
+/// Whether `link` is an entry of a process's table of open files (/proc/PID/fd/N, which
+/// /dev/stdout and /dev/fd/N lead to): its text names what the descriptor holds ("pipe:[N]" for
+/// a pipe), not always a path.
+bool isDescriptorLink(const std::filesystem::path& link) {
+    std::error_code ec;
+    const std::filesystem::path folder = std::filesystem::canonical(link.parent_path(), ec);
+    return !ec && folder.filename() == "fd" && folder.parent_path().parent_path() == "/proc";
+}
+
 /// The file `target` ends at: `target` itself, or the file its chain of symbolic links leads to
 /// (which need not exist). Each link's text is taken from the link's folder, as the system reads it.
+/// `throughDescriptor`, if given, says whether the chain passes through an open file's entry
+/// (isDescriptorLink).
 /// @throw Error for a link that cannot be read, or a chain as long as the system refuses (ELOOP).
-std::filesystem::path followLinks(const std::string& target) {
+std::filesystem::path followLinks(const std::string& target, bool* throughDescriptor = nullptr) {
     constexpr int kMostLinks = 40;  // Linux's MAXSYMLINKS
     std::filesystem::path file = target;
+    if (throughDescriptor) *throughDescriptor = false;
     for (int links = 0;; ++links) {
         std::error_code ec;
         if (!std::filesystem::is_symlink(std::filesystem::symlink_status(file, ec))) return file;
+        if (throughDescriptor && isDescriptorLink(file)) *throughDescriptor = true;
         if (links == kMostLinks) throw Error("cannot write '" + target + "': too many levels of symbolic links");
         const std::filesystem::path to = std::filesystem::read_symlink(file, ec);
         if (ec) throw Error("cannot read the link '" + file.string() + "': " + ec.message());
@@ -91,8 +105,9 @@ std::filesystem::path followLinks(const std::string& target) {
 
 /// Where and how a target is written (see atomic_file.h).
 struct Destination {
-    std::filesystem::path file;  ///< the target with its symbolic links followed
-    bool inPlace = false;        ///< a device or FIFO: opened and written as it is
+    /// The target with its symbolic links followed; the target itself where it is written in place.
+    std::filesystem::path file;
+    bool inPlace = false;  ///< a device, a FIFO or an open descriptor: opened and written as it is
     /// The regular file the new one replaces, whose owner, group and mode it takes.
     std::optional<struct stat> replaces;
 };
@@ -100,17 +115,24 @@ struct Destination {
 Destination destinationOf(const std::string& target) {
     if (target.empty()) throw Error("cannot write a file with an empty name");
     Destination d;
-    d.file = followLinks(target);
+    bool descriptor = false;
+    d.file = followLinks(target, &descriptor);
+    // What the target is, as the system resolves it: a descriptor's link (/dev/stdout on a pipe)
+    // names no path that followLinks could reach.
     struct stat st {};
-    if (::stat(d.file.c_str(), &st) != 0) {
+    if (::stat(target.c_str(), &st) != 0) {
         // A new file; where its folder is missing, the temporary file's creation says so.
-        if (errno == ENOENT) return d;
+        if (errno == ENOENT && !descriptor) return d;
         throw Error(systemError("cannot write", target));
     }
     if (S_ISDIR(st.st_mode)) throw Error("cannot write '" + target + "': it is a folder");
     if (S_ISSOCK(st.st_mode)) throw Error("cannot write '" + target + "': it is a socket");
-    if (S_ISREG(st.st_mode)) d.replaces = st;
-    else d.inPlace = true;
+    if (S_ISREG(st.st_mode) && !descriptor) {
+        d.replaces = st;
+        return d;
+    }
+    d.inPlace = true;
+    d.file = target;
     return d;
 }
 
@@ -180,7 +202,23 @@ bool sameFile(const std::string& a, const std::string& b) {
 
 }  // namespace
 
+bool writtenInPlace(const std::string& target) {
+    try {
+        return destinationOf(target).inPlace;
+    } catch (const Error&) {
+        return false;
+    }
+}
+
+bool takesFormat(const std::string& target, const std::string& extension) {
+    return lowerExtension(target) == extension || writtenInPlace(target);
+}
+
 void checkSeparateFiles(const std::vector<NamedFile>& inputs, const std::vector<NamedFile>& outputs) {
+    // Outputs written in place (/dev/null for several) take what they are given, one after another.
+    std::vector<bool> inPlace(outputs.size());
+    for (std::size_t i = 0; i < outputs.size(); ++i)
+        inPlace[i] = !outputs[i].path.empty() && writtenInPlace(outputs[i].path);
     for (std::size_t i = 0; i < outputs.size(); ++i) {
         const NamedFile& out = outputs[i];
         if (out.path.empty()) continue;
@@ -189,7 +227,7 @@ void checkSeparateFiles(const std::vector<NamedFile>& inputs, const std::vector<
                 throw Error(out.option + " '" + out.path + "' is the same file as " + in.option + " '" + in.path +
                             "', which the job reads: give the output another name");
         for (std::size_t j = 0; j < i; ++j)
-            if (!outputs[j].path.empty() && sameFile(out.path, outputs[j].path))
+            if (!outputs[j].path.empty() && !(inPlace[i] && inPlace[j]) && sameFile(out.path, outputs[j].path))
                 throw Error(outputs[j].option + " '" + outputs[j].path + "' and " + out.option + " '" + out.path +
                             "' are the same file: give each output a name of its own");
     }

@@ -19,11 +19,12 @@ namespace {
 
 /// Writes grids as openvdb::io::File::write does (a random-access file: the grids' offsets in its
 /// header), but to a stream of ours: File::write opens its own and never looks at its state, so a
-/// full disk left a truncated file that was then renamed over the target.
-class RandomAccessWriter : public openvdb::io::Archive {
+/// full disk left a truncated file that was then renamed over the target. Without `seekable`, as
+/// io::Stream writes (no offsets: a pipe cannot go back to write them).
+class GridWriter : public openvdb::io::Archive {
 public:
-    void writeTo(std::ostream& out, const openvdb::GridCPtrVec& grids) const {
-        Archive::write(out, grids, /*seekable=*/true);
+    void writeTo(std::ostream& out, const openvdb::GridCPtrVec& grids, bool seekable) const {
+        Archive::write(out, grids, seekable);
     }
 };
 
@@ -49,9 +50,10 @@ void writeVdb(const std::string& path, const LevelSet& levelSet, OutputBatch* ba
     openvdb::FloatGrid::ConstPtr grid = gridOf(levelSet);
     if (!grid) throw Error("cannot write '" + path + "': the level set holds no grid");
     ensureOpenVdbInitialized();
+    const bool seekable = !writtenInPlace(path);
     writeStreamAtomically(path, [&](std::ostream& out) {
         try {
-            RandomAccessWriter().writeTo(out, openvdb::GridCPtrVec{grid});
+            GridWriter().writeTo(out, openvdb::GridCPtrVec{grid}, seekable);
         } catch (const openvdb::Exception& e) {
             throw Error("cannot write '" + path + "': " + e.what());
         }

@@ -35,11 +35,11 @@ void validate(const CompareOptions& o) {
         throw Error("'" + o.machinedPath + "': the machined part must be an STL file (.stl) or a level set (.vdb)");
     for (double t : {o.tolerance.gouge, o.tolerance.excess})
         if (!(t >= 0.0) || !std::isfinite(t)) throw Error("the tolerances must be finite distances of 0 mm or more");
-    if (!o.plyPath.empty() && lowerExtension(o.plyPath) != ".ply")
+    if (!o.plyPath.empty() && !takesFormat(o.plyPath, ".ply"))
         throw Error("output '" + o.plyPath + "': the deviation mesh is written as .ply");
-    if (!o.pngPath.empty() && lowerExtension(o.pngPath) != ".png")
+    if (!o.pngPath.empty() && !takesFormat(o.pngPath, ".png"))
         throw Error("output '" + o.pngPath + "': a picture is written as .png");
-    if (!o.reportPath.empty() && lowerExtension(o.reportPath) != ".json")
+    if (!o.reportPath.empty() && !takesFormat(o.reportPath, ".json"))
         throw Error("output '" + o.reportPath + "': the report is written as .json");
     checkSeparateFiles({{"MACHINED", o.machinedPath}, {"DESIGN", o.designPath}},
                        {{"--ply", o.plyPath}, {"--png", o.pngPath}, {"--report", o.reportPath}});

@@ -57,27 +57,34 @@ bool measuresSurface(const SimulateOptions& o) {
     return o.measureSurface || !o.pngPath.empty() || !o.deviationPlyPath.empty() || !o.reportPath.empty();
 }
 
+/// The format the mesh is written in: its name's extension, or binary STL for a target written in
+/// place (a device, a FIFO, /dev/stdout) whose name is not .obj or .ply.
+std::string meshFormat(const std::string& path) {
+    const std::string e = lowerExtension(path);
+    return e != ".obj" && e != ".ply" && writtenInPlace(path) ? ".stl" : e;
+}
+
 /// Fails before any work when an output names a format we cannot write, cannot be written, or would
 /// overwrite an input or another output.
 void checkOutputs(const SimulateOptions& o) {
     if (!o.meshPath.empty()) {
-        const std::string e = lowerExtension(o.meshPath);
+        const std::string e = meshFormat(o.meshPath);
         if (e != ".obj" && e != ".stl" && e != ".ply")
             throw Error("output '" + o.meshPath + "': the mesh format follows the extension: .obj, .stl or .ply");
     }
-    if (!o.vdbPath.empty() && lowerExtension(o.vdbPath) != ".vdb")
+    if (!o.vdbPath.empty() && !takesFormat(o.vdbPath, ".vdb"))
         throw Error("output '" + o.vdbPath + "': a level set is written as .vdb");
-    if (!o.pngPath.empty() && lowerExtension(o.pngPath) != ".png")
+    if (!o.pngPath.empty() && !takesFormat(o.pngPath, ".png"))
         throw Error("output '" + o.pngPath + "': a picture is written as .png");
-    if (!o.reportPath.empty() && lowerExtension(o.reportPath) != ".json")
+    if (!o.reportPath.empty() && !takesFormat(o.reportPath, ".json"))
         throw Error("output '" + o.reportPath + "': the report is written as .json");
     if (!o.gougeCsvPath.empty() && o.designPath.empty())
         throw Error("output '" + o.gougeCsvPath + "': gouges are found against a design: give --design PART.stl");
     if (!o.deviationPlyPath.empty() && o.designPath.empty())
         throw Error("output '" + o.deviationPlyPath + "': the deviation is measured against a design: give --design PART.stl");
-    if (!o.deviationPlyPath.empty() && lowerExtension(o.deviationPlyPath) != ".ply")
+    if (!o.deviationPlyPath.empty() && !takesFormat(o.deviationPlyPath, ".ply"))
         throw Error("output '" + o.deviationPlyPath + "': the deviation mesh is written as .ply");
-    if (!o.gougeCsvPath.empty() && lowerExtension(o.gougeCsvPath) != ".csv")
+    if (!o.gougeCsvPath.empty() && !takesFormat(o.gougeCsvPath, ".csv"))
         throw Error("output '" + o.gougeCsvPath + "': the gouges are written as .csv");
     if (!(o.gougeTolerance >= 0.0) || !std::isfinite(o.gougeTolerance))
         throw Error("the gouge tolerance must be a finite distance of 0 mm or more");
@@ -876,7 +883,7 @@ SimulateReport simulateInArena(const SimulateOptions& o) {
     if (o.progress) o.progress("write", 0, 1);
     OutputBatch outputs;
     if (!o.meshPath.empty()) {
-        const std::string e = lowerExtension(o.meshPath);
+        const std::string e = meshFormat(o.meshPath);
         if (e == ".obj") writeObj(o.meshPath, mesh, &outputs);
         else if (e == ".stl") writeStl(o.meshPath, mesh, &outputs);
         else writePly(o.meshPath, mesh, {}, &outputs);

@@ -202,9 +202,9 @@ std::vector<SurfacePoint> surfacePoints(const Mesh& mesh, std::size_t count) {
 /// Fails before any run where an output names a format it is not written in, cannot be written,
 /// or would overwrite an input or another output.
 void checkOutputs(const StudyOptions& o) {
-    if (!o.csvPath.empty() && lowerExtension(o.csvPath) != ".csv")
+    if (!o.csvPath.empty() && !takesFormat(o.csvPath, ".csv"))
         throw Error("output '" + o.csvPath + "': the table is written as .csv");
-    if (!o.plotPath.empty() && lowerExtension(o.plotPath) != ".png")
+    if (!o.plotPath.empty() && !takesFormat(o.plotPath, ".png"))
         throw Error("output '" + o.plotPath + "': the plot is written as .png");
     checkSeparateFiles(jobInputFiles(o.job),
                        {{"--csv", o.csvPath}, {"--plot", o.plotPath}, {"--ply-deviation", o.plyDeviationDir}});

@@ -720,6 +720,41 @@ TEST_CASE("a successful run writes every output and a one-line summary in mm", "
     CHECK_THAT(tooCoarse.err, Contains("--turn-tolerance: 1e+300 mm") && Contains("0.1 mm or less"));
 }
 
+TEST_CASE("outputs on /dev/null, /dev/stdout or a pipe are written there whatever their names", "[cli]") {
+    const Cli cli("device_outputs");
+    cli.file("slot.ngc", "G21 G90\nT1 M6\nG0 X5 Y15 Z15\nG1 Z7 F100\nG1 X35\nG0 Z15\nM30\n");
+    cli.file("design.stl", boxStl({0, 0, 0}, {40, 30, 7}));
+    const std::string job = std::string("'") + DEXELMILL_CLI_PATH +
+                            "' simulate slot.ngc --stock box:0,0,0,40,30,10 --tool 1=flat:d=6 --resolution 0.5 --quiet";
+    // Every output of a run on /dev/null: none is refused for its name, nor as the same file as another.
+    Run r = cli.runIn(job + " --design design.stl -o /dev/null --vdb /dev/null --png /dev/null --report /dev/null "
+                            "--gouge-csv /dev/null --deviation-ply /dev/null");
+    CHECK(r.code == 0);
+    CHECK_THAT(r.out, StartsWith("dexelmill: 3 moves"));
+    // The mesh down a pipe (binary STL where the name has no mesh extension) is the file -o writes.
+    REQUIRE(cli.runIn(job + " -o part.stl").code == 0);
+    r = cli.runIn("{ " + job + " -o /dev/stdout | cat > piped.stl; }");
+    CHECK(slurp(cli.dir() / "piped.stl") == slurp(cli.dir() / "part.stl"));
+    // The summary leaves a pipe or a file that stdout shares with an output to it: it goes to stderr.
+    CHECK_THAT(r.err, StartsWith("dexelmill: 3 moves"));
+    r = cli.runIn("{ " + job + " --report /dev/stdout | cat > piped.json; }");
+    CHECK(nlohmann::json::parse(slurp(cli.dir() / "piped.json"))["moves"] == 3);
+    CHECK_THAT(r.err, StartsWith("dexelmill: 3 moves"));
+    r = cli.runIn(job + " --report /dev/stdout");  // stdout is out.txt, a regular file
+    CHECK(r.code == 0);
+    CHECK(nlohmann::json::parse(r.out)["moves"] == 3);
+    // A level set down a pipe, where no offsets can be written back, reads back.
+    r = cli.runIn("{ " + job + " --vdb /dev/stdout | cat > piped.vdb; }");
+    const Run info = cli("info piped.vdb");
+    CHECK(info.code == 0);
+    CHECK_THAT(info.out, Contains("level set") && Contains("0.5 mm"));
+    // compare's report and table likewise.
+    r = cli.runIn("{ '" + std::string(DEXELMILL_CLI_PATH) + "' compare part.stl design.stl --report /dev/stdout | cat > "
+                  "compare.json; }");
+    CHECK(nlohmann::json::parse(slurp(cli.dir() / "compare.json")).contains("surface"));
+    CHECK_THAT(r.err, Contains("deviation (mm)"));
+}
+
 TEST_CASE("info names every tool a program calls, and which need a --tool", "[cli][info]") {
     const Cli cli("info_tools");
     // No tool table: neither number has a cutter.

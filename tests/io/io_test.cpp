@@ -315,6 +315,58 @@ TEST_CASE("atomic write: a FIFO or a device is written in place, a socket refuse
     CHECK(fs::is_socket(socketPath));
 }
 
+TEST_CASE("atomic write: an open descriptor is written in place, whatever it holds and whatever its name",
+          "[io]") {
+    TempDir dir;
+    // A pipe's entry in /proc/self/fd reads "pipe:[N]", a name no path reaches: the target is
+    // what the system opens, as /dev/stdout on a pipe is.
+    int ends[2];
+    REQUIRE(::pipe(ends) == 0);
+    for (const std::string& target : {"/proc/self/fd/" + std::to_string(ends[1]), "/dev/fd/" + std::to_string(ends[1])}) {
+        INFO(target);
+        CHECK(writtenInPlace(target));
+        CHECK(takesFormat(target, ".json"));
+        checkWritable(target);
+        writeStreamAtomically(target, [](std::ostream& out) { out << "down the pipe"; });
+        char got[64] = {};
+        const ::ssize_t n = ::read(ends[0], got, sizeof got);
+        CHECK(std::string(got, std::size_t(std::max<::ssize_t>(n, 0))) == "down the pipe");
+    }
+    ::close(ends[0]);
+    ::close(ends[1]);
+    // A regular file the descriptor holds (`> report.json`) stays that file: no temporary file, no
+    // rename, and the descriptor's file is the one written.
+    const std::string file = dir.file("report.json");
+    const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    REQUIRE(fd >= 0);
+    struct stat before {};
+    REQUIRE(::stat(file.c_str(), &before) == 0);
+    const std::string target = "/proc/self/fd/" + std::to_string(fd);
+    CHECK(writtenInPlace(target));
+    writeStreamAtomically(target, [](std::ostream& out) { out << "{}"; });
+    struct stat after {};
+    REQUIRE(::fstat(fd, &after) == 0);
+    ::close(fd);
+    CHECK(after.st_ino == before.st_ino);
+    CHECK(after.st_nlink == 1);
+    CHECK(after.st_size == 2);
+    CHECK(dir.entries() == 1);
+    // Named files are not: a FIFO is, a regular file or a missing one is not, by any name.
+    const std::string fifo = dir.file("pipe");
+    REQUIRE(::mkfifo(fifo.c_str(), 0644) == 0);
+    CHECK(writtenInPlace(fifo));
+    CHECK(takesFormat(fifo, ".png"));
+    CHECK_FALSE(writtenInPlace(file));
+    CHECK_FALSE(takesFormat(file, ".png"));
+    CHECK(takesFormat(dir.file("PART.PNG"), ".png"));
+    CHECK_FALSE(writtenInPlace(dir.file("missing.json")));
+    CHECK_FALSE(writtenInPlace(dir.file("missing/r.json")));
+    // Two outputs in one FIFO, or in one device, follow each other; in one regular file they clash.
+    CHECK_NOTHROW(checkSeparateFiles({}, {{"-o", fifo}, {"--report", fifo}}));
+    CHECK_THROWS_WITH(checkSeparateFiles({}, {{"-o", file}, {"--report", file}}),
+                      Catch::Matchers::Contains("are the same file"));
+}
+
 TEST_CASE("atomic write: a name as long as the folder takes gets a temporary file within the limit", "[io]") {
     // Linux file systems take names of up to 255 bytes; the temporary file's name adds a dot and
     // ".tmpPID_N" to the target's, and is cut to fit.

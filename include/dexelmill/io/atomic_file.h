@@ -15,7 +15,10 @@
 ///    other hard links to it keep the old content;
 ///  - a device or a FIFO (named pipe) is opened and written in place, with no temporary file and
 ///    no flush to disk: renaming over it would replace `/dev/null` or a pipe's reader's end with
-///    a regular file. A write that fails may leave part of the content in it;
+///    a regular file. A write that fails may leave part of the content in it. So is an open
+///    descriptor, a path through /proc/PID/fd (`/dev/stdout`, `/dev/fd/N`), whatever it holds: the
+///    file, pipe or terminal the shell's redirection set up is written from its start, and stays
+///    the descriptor's;
 ///  - a folder or a socket is refused.
 #pragma once
 
@@ -76,6 +79,16 @@ void writeFileAtomically(const std::string& target,
 /// @throw Error naming `target` and the reason.
 void checkWritable(const std::string& target);
 
+/// @brief Whether `target` is written in place (see the file comment): a device, a FIFO or an open
+/// descriptor, whatever its name; such a target takes any content, whatever its extension says.
+/// False for any other target, and for one that cannot be examined (which writing then names).
+bool writtenInPlace(const std::string& target);
+
+/// @brief Whether the output `target` may be written in the format of `extension` (".json", dot
+/// included, lower case): its name ends so, in any case, or it is written in place, which takes
+/// any content whatever its name.
+bool takesFormat(const std::string& target, const std::string& extension);
+
 /// @brief A file a job reads or writes, and the option (or argument) that names it.
 struct NamedFile {
     std::string option;  ///< as the user gives it: "-o", "--report", "INPUTS", "DESIGN", ...
@@ -101,7 +114,8 @@ void removeTemporariesOnSignals();
 /// of its outputs. Two paths name the same file when they reach the same file (the same device
 /// and inode, through any links, hard ones too) or, where neither exists yet, the same path once
 /// their symbolic links are followed and the path is made absolute (weakly_canonical). Empty
-/// paths are not compared.
+/// paths are not compared, nor two outputs written in place (writtenInPlace): `/dev/null` takes
+/// several, one after another.
 /// @throw Error naming both options and paths.
 void checkSeparateFiles(const std::vector<NamedFile>& inputs, const std::vector<NamedFile>& outputs);
 

@@ -11,7 +11,9 @@
 namespace dexelmill {
 
 /// @brief Writes the level set's grid, with its metadata, to a .vdb file (through
-/// writeFileAtomically; staged in `batch` when given).
+/// writeFileAtomically; staged in `batch` when given): with the grids' offsets, as
+/// openvdb::io::File writes, or without them where the target is written in place (a pipe cannot
+/// go back to write them), as openvdb::io::Stream writes. Both read back.
 /// @throw Error if the handle is null or the file cannot be written.
 void writeVdb(const std::string& path, const LevelSet& levelSet, OutputBatch* batch = nullptr);
 
