@@ -130,7 +130,7 @@ int runInfo(const InfoArgs& args) {
                                         : project.workpiece.bounds;
         std::printf("%-14s %s\n", "file", file.c_str());
         std::printf("%-14s CAMotics project, %s units\n", "kind", project.metric ? "metric" : "imperial");
-        for (const std::string& f : project.files) std::printf("%-14s %s\n", "program", f.c_str());
+        for (const ProjectFile& f : project.files) std::printf("%-14s %s\n", "program", f.path.c_str());
         if (automatic) {
             std::printf("%-14s %sautomatic, margin %.3g %%\n", "workpiece",
                         project.workpiece.automatic ? "" : "no bounds given: ", project.workpiece.marginPercent);

@@ -583,15 +583,17 @@ Simulation runStages(const SimulateOptions& o) {
         project = readCamoticsProject(o.inputs[0], o.files);
         if (o.inputs.size() > 1) {
             std::string own;
-            for (const std::string& f : project->files) own += (own.empty() ? "" : ", ") + f;
+            for (const ProjectFile& f : project->files) own += (own.empty() ? "" : ", ") + f.path;
             project->diagnostics.push_back({Diagnostic::Severity::Note, {project->file, 0, 0},
                                             "the programs given after the project replace its own (" +
                                                 (own.empty() ? std::string("none") : own) +
                                                 "); its tools, workpiece and resolution still apply"});
-            project->files.assign(o.inputs.begin() + 1, o.inputs.end());
+            project->files.clear();
+            for (auto in = o.inputs.begin() + 1; in != o.inputs.end(); ++in) project->files.push_back({*in, {}});
         }
-        for (const std::string& f : project->files)
-            if (lowerExtension(f) == ".camotics") throw Error("'" + f + "': only the first input may be a project");
+        for (const ProjectFile& f : project->files)
+            if (lowerExtension(f.path) == ".camotics")
+                throw Error("'" + f.path + "': only the first input may be a project");
         program = runProject(*project, gcode);
     } else {
         for (const std::string& in : o.inputs) {

@@ -307,13 +307,14 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
                 throw ParseError(places.value("/files"), "\"files\" must be an array", files.dump().substr(0, 40));
             for (std::size_t i = 0; i < files.size(); ++i) {
                 const Json& f = files.at(i);
-                std::string name;
-                if (f.is_string()) name = f.get<std::string>();
-                else if (f.is_object() && f.contains("path") && f.at("path").is_string()) name = f.at("path").get<std::string>();
+                const std::string pointer = "/files/" + std::to_string(i);
+                if (f.is_string())
+                    p.files.push_back({detail::joinPath(directory, f.get<std::string>()), places.value(pointer)});
+                else if (f.is_object() && f.contains("path") && f.at("path").is_string())
+                    p.files.push_back({detail::joinPath(directory, f.at("path").get<std::string>()),
+                                       places.value(pointer + "/path")});
                 else
-                    throw ParseError(places.value("/files/" + std::to_string(i)), "a file entry must be a string",
-                                     f.dump().substr(0, 40));
-                p.files.push_back(detail::joinPath(directory, name));
+                    throw ParseError(places.value(pointer), "a file entry must be a string", f.dump().substr(0, 40));
             }
         }
         static const std::set<std::string> known = {"units", "resolution", "resolution-mode", "tools", "workpiece", "files"};
@@ -346,9 +347,17 @@ Program runProject(const Project& project, const GcodeOptions& options) {
         gcodeFiles.clear();
         program.append(std::move(part));
     };
-    for (const std::string& f : project.files) {
-        refuseSolid(f);
-        std::string text = detail::readFile(o.files, f);
+    for (const ProjectFile& file : project.files) {
+        const std::string& f = file.path;
+        std::string text;
+        try {
+            refuseSolid(f);
+            text = detail::readFile(o.files, f);
+        } catch (const Error& e) {
+            // A program the project names, missing or no program: said at its entry.
+            if (file.entry.line > 0) throw ParseError(file.entry, e.what());
+            throw;
+        }
         if (detectProgramKind(f, text) == ProgramKind::Apt) {
             flush();
             AptOptions a;

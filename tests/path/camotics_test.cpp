@@ -39,7 +39,7 @@ TEST_CASE("camotics: tools, units and workpiece are read", "[path][camotics]") {
     CHECK_FALSE(bear.workpiece.automatic);
     CHECK(bear.workpiece.bounds.hi.x == Approx(80));
     CHECK(bear.workpiece.bounds.lo.z == Approx(-20));
-    CHECK(bear.files.at(0) == base + "bear/bear.nc");
+    CHECK(bear.files.at(0).path == base + "bear/bear.nc");
 
     const Project heart = readCamoticsProject(base + "heart/heart.camotics");
     CHECK(heart.files.size() == 2);
@@ -79,7 +79,7 @@ TEST_CASE("camotics: comments are allowed, errors carry their place", "[path][ca
     const Project p = parseCamoticsProject(text, "p.camotics", "/tmp");
     CHECK_FALSE(p.metric);
     CHECK(p.tools.at(2).cuttingRadius() == Approx(1.5));
-    CHECK(p.files.at(0) == "/tmp/a.nc");
+    CHECK(p.files.at(0).path == "/tmp/a.nc");
 
     try {
         parseCamoticsProject("{\n  \"units\": \"metric\",\n  \"tools\": ,\n}", "bad.camotics", "");
@@ -302,4 +302,41 @@ TEST_CASE("camotics: an error about what a value means names the value's line an
     CHECK(p.diagnostics[0].message == "project entry \"colour\" ignored");
     CHECK(p.diagnostics[0].where.line == 2);
     CHECK(p.diagnostics[0].where.column == 2);
+}
+
+TEST_CASE("camotics: a program the project names that is missing or no program is an error at its entry",
+          "[path][camotics][errors]") {
+    // The entries' places, counted by hand: "gone.ngc" opens at 3:13, the object's "path" value at
+    // 4:22, "part.stl" at 5:3.
+    const std::string text = "{\"units\": \"metric\",\n"
+                             " \"files\": [\"a.ngc\",\n"
+                             "            \"gone.ngc\",\n"
+                             "            {\"path\": \"sub/lost.ngc\"},\n"
+                             "  \"part.stl\"]}";
+    const Project p = parseCamoticsProject(text, "dir/p.camotics", "dir");
+    REQUIRE(p.files.size() == 4);
+    GcodeOptions options;
+    options.files = [](const std::string& path) -> std::optional<std::string> {
+        if (path == "dir/a.ngc" || path == "dir/part.stl") return std::string("G21\nG0 X0 Y0 Z5\n");
+        return std::nullopt;
+    };
+    const auto errorAt = [&](std::size_t keep) -> std::string {
+        Project q = p;
+        q.files.erase(q.files.begin() + 1, q.files.begin() + std::ptrdiff_t(keep));
+        try {
+            runProject(q, options);
+        } catch (const ParseError& e) {
+            return e.what();
+        } catch (const Error& e) {
+            return std::string("not at an entry: ") + e.what();
+        }
+        return "no error";
+    };
+    CHECK(errorAt(1) == "dir/p.camotics:3:13: error: cannot open 'dir/gone.ngc': no such file");
+    CHECK(errorAt(2) == "dir/p.camotics:4:22: error: cannot open 'dir/sub/lost.ngc': no such file");
+    CHECK_THAT(errorAt(3), Catch::StartsWith("dir/p.camotics:5:3: error: 'dir/part.stl' is an STL mesh, not a program"));
+    // A program given in the project's place has no entry: its error names the file alone.
+    Project given = p;
+    given.files = {{"elsewhere.ngc", {}}};
+    CHECK_THROWS_WITH(runProject(given, options), "cannot open 'elsewhere.ngc': no such file");
 }

@@ -35,6 +35,12 @@ enum class ResolutionMode { Manual, Low, Medium, High, VeryHigh };
 /// (80 x 80 x 20 mm, high) gets 0.294723 mm, the number CAMotics saved in it.
 double projectResolution(ResolutionMode mode, const Box& workpiece);
 
+/// @brief A program a project runs.
+struct ProjectFile {
+    std::string path;      ///< resolved relative to the project
+    SourceLocation entry;  ///< the project's entry that names it; no line for a program given in its place
+};
+
 /// @brief A CAMotics project.
 struct Project {
     std::string file;              ///< the project file
@@ -44,7 +50,7 @@ struct Project {
     bool metric = true;
     ToolTable tools;               ///< tools by number, mm
     ProjectWorkpiece workpiece;
-    std::vector<std::string> files;  ///< program files, resolved relative to the project
+    std::vector<ProjectFile> files;  ///< the programs, in the order they run
     /// CAMotics' default when the project names none: medium.
     ResolutionMode resolutionMode = ResolutionMode::Medium;
     /// The resolution as written (mm), which only the manual mode uses; 0 when absent or not
@@ -74,8 +80,9 @@ Project readCamoticsProject(const std::string& path, const FileSource& files = {
 /// `options.files`, and returns
 /// them as one program whose tools are the project's tools. Tools the programs call but the
 /// project does not define give a warning.
-/// @throw Error for a program that cannot be read or whose name says it holds a solid (as
-/// readProgram); ParseError for malformed input.
+/// @throw ParseError at a program's entry in the project (Error for a program given in its place)
+/// when the program is missing, cannot be read or its name says it holds a solid (as readProgram);
+/// ParseError for malformed input.
 Program runProject(const Project& project, const GcodeOptions& options = {});
 
 /// @brief CAMotics' automatic workpiece: the box of the cutting moves, widened by the cutting
