@@ -105,6 +105,20 @@ bool boolean(const Json& j, const char* key, const std::string& where, const Pla
     return v.get<bool>();
 }
 
+/// Warns, at the key, of each key of object j (at `pointer`) that is not in `known`: CAMotics reads
+/// none of them, and a misspelt one ("snub_diametre", "margn") would otherwise leave its value's
+/// default in force unsaid.
+/// `what` names the object in the message.
+void warnUnknownKeys(const Json& j, std::initializer_list<const char*> known, const std::string& what,
+                     const Places& places, const std::string& pointer, std::vector<Diagnostic>& diags) {
+    for (const auto& [key, value] : j.items()) {
+        (void)value;
+        if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; }))
+            diags.push_back(warning(places.key(pointer + "/" + jsonPointerToken(key)),
+                                    what + " entry \"" + key + "\" ignored"));
+    }
+}
+
 /// CAMotics reads its enumerations' names in any case of letters.
 std::string lower(std::string s) {
     for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
@@ -139,6 +153,9 @@ ResolutionMode resolutionMode(const Json& j, const Places& places) {
 std::optional<Tool> camoticsTool(const Json& t, const std::string& where, const Places& places,
                                  const std::string& pointer, std::vector<Diagnostic>& diags) {
     if (!t.is_object()) throw ParseError(places.value(pointer), where + ": a tool must be an object", t.dump());
+    // "number" is CAMotics' too (its tool tables write it); a project's tool takes its key's.
+    warnUnknownKeys(t, {"units", "shape", "length", "diameter", "snub_diameter", "description", "number"}, where,
+                    places, pointer, diags);
     const double s = metricUnits(t, where, places, pointer) ? 1.0 : kInch;
     std::string shape = lower(text(t, "shape", where, places, pointer, "cylindrical"));
     // CAMotics' other names for two of its shapes.
@@ -280,6 +297,11 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
                 }
                 if (auto tool = camoticsTool(t, "tool " + key, places, pointer, p.diagnostics))
                     p.tools.insert_or_assign(n, std::move(*tool));
+                if (t.contains("number") && !(t.at("number").is_number() && t.at("number").get<double>() == double(n)))
+                    p.diagnostics.push_back(warning(places.value(pointer + "/number"),
+                                                    "tool " + key + ": \"number\" " + t.at("number").dump() +
+                                                        " ignored: dexelmill numbers a project's tool by its key, " +
+                                                        key + " (CAMotics by \"number\")"));
             }
         }
         if (j.contains("workpiece")) {
@@ -287,6 +309,7 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
             if (!w.is_object())
                 throw ParseError(places.value("/workpiece"), "\"workpiece\" must be an object",
                                  w.dump().substr(0, 40));
+            warnUnknownKeys(w, {"automatic", "margin", "bounds"}, "workpiece", places, "/workpiece", p.diagnostics);
             p.workpiece.automatic = boolean(w, "automatic", "workpiece", places, "/workpiece", p.workpiece.automatic);
             p.workpiece.marginPercent = number(w, "margin", "workpiece", places, "/workpiece", p.workpiece.marginPercent);
             if (w.contains("bounds")) {
@@ -294,6 +317,7 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
                 if (!b.is_object() || !b.contains("min") || !b.contains("max"))
                     throw ParseError(places.value("/workpiece/bounds"), "workpiece bounds need min and max",
                                      b.dump().substr(0, 40));
+                warnUnknownKeys(b, {"min", "max"}, "workpiece bounds", places, "/workpiece/bounds", p.diagnostics);
                 p.workpiece.bounds.lo = vec3(b.at("min"), "workpiece bounds min", places, "/workpiece/bounds/min");
                 p.workpiece.bounds.hi = vec3(b.at("max"), "workpiece bounds max", places, "/workpiece/bounds/max");
                 if (!p.workpiece.automatic && p.workpiece.bounds.isEmpty())
@@ -310,9 +334,11 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
                 const std::string pointer = "/files/" + std::to_string(i);
                 if (f.is_string())
                     p.files.push_back({detail::joinPath(directory, f.get<std::string>()), places.value(pointer)});
-                else if (f.is_object() && f.contains("path") && f.at("path").is_string())
+                else if (f.is_object() && f.contains("path") && f.at("path").is_string()) {
+                    warnUnknownKeys(f, {"path"}, "program " + std::to_string(i + 1), places, pointer, p.diagnostics);
                     p.files.push_back({detail::joinPath(directory, f.at("path").get<std::string>()),
                                        places.value(pointer + "/path")});
+                }
                 else
                     throw ParseError(places.value(pointer), "a file entry must be a string", f.dump().substr(0, 40));
             }

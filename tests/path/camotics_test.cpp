@@ -2,6 +2,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <iterator>
 #include <map>
 #include <optional>
 #include <string>
@@ -339,4 +340,41 @@ TEST_CASE("camotics: a program the project names that is missing or no program i
     Project given = p;
     given.files = {{"elsewhere.ngc", {}}};
     CHECK_THROWS_WITH(runProject(given, options), "cannot open 'elsewhere.ngc': no such file");
+}
+
+TEST_CASE("camotics: a key CAMotics does not read, in a tool, the workpiece, its bounds or a program entry, is "
+          "named at its place",
+          "[path][camotics]") {
+    // Places of the keys (and of the value of "number") found with Python's str.index, 1-based.
+    const std::string text = "{\"tools\": {\"1\": {\"shape\": \"ballnose\", \"length\": 10, \"diametre\": 6,\n"
+                             "                  \"diameter\": 6, \"description\": \"\", \"number\": 1},\n"
+                             "           \"2\": {\"length\": 10, \"diameter\": 2, \"number\": 5}},\n"
+                             " \"workpiece\": {\"automatic\": false, \"colour\": \"oak\",\n"
+                             "   \"bounds\": {\"min\": [0, 0, -5], \"max\": [10, 10, 0], \"centre\": [5, 5, 0]}},\n"
+                             " \"files\": [\"a.ngc\", {\"path\": \"b.ngc\", \"open\": true}]}";
+    const Project p = parseCamoticsProject(text, "p.camotics", "");
+    const struct {
+        const char* message;
+        int line, column;
+    } expected[] = {
+        {"tool 1 entry \"diametre\" ignored", 1, 53},
+        {"tool 2: \"number\" 5 ignored: dexelmill numbers a project's tool by its key, 2 (CAMotics by \"number\")", 3, 57},
+        {"workpiece entry \"colour\" ignored", 4, 36},
+        {"workpiece bounds entry \"centre\" ignored", 5, 54},
+        {"program 2 entry \"open\" ignored", 6, 39},
+    };
+    REQUIRE(p.diagnostics.size() == std::size(expected));
+    for (std::size_t i = 0; i < std::size(expected); ++i) {
+        INFO(expected[i].message);
+        CHECK(p.diagnostics[i].severity == Diagnostic::Severity::Warning);
+        CHECK(p.diagnostics[i].message == expected[i].message);
+        CHECK(p.diagnostics[i].where.line == expected[i].line);
+        CHECK(p.diagnostics[i].where.column == expected[i].column);
+    }
+    // What the keys CAMotics reads say still holds.
+    CHECK(p.tools.at(1).cuttingRadius() == 3.0);
+    CHECK(p.tools.at(2).cuttingRadius() == 1.0);
+    CHECK(p.workpiece.bounds.hi.x == 10.0);
+    REQUIRE(p.files.size() == 2);
+    CHECK(p.files[1].path == "b.ngc");
 }
