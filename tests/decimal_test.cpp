@@ -76,6 +76,11 @@ TEST_CASE("decimal: a length prints with four significant digits to a nanometre,
     CHECK(lengthText(6e-7) == "0.000001");
     for (const double mm : {1e-300, 1e-9, 1.5e30, -7.25e12, 3.0e-5})
         CHECK(lengthText(mm).find_first_of("eE") == std::string::npos);
+    // Signed: a "+" only before a length that does not print as 0.
+    CHECK(signedLengthText(0.05) == "+0.05");
+    CHECK(signedLengthText(-0.01) == "-0.01");
+    CHECK(signedLengthText(4e-7) == "0");
+    CHECK(signedLengthText(0.0) == "0");
 }
 
 TEST_CASE("decimal: an area prints with six significant digits to a square micrometre, never with an exponent",

@@ -115,6 +115,13 @@ constexpr int kLengthDecimals = 6;
 /// "5", "0.05145", "12346"); one that rounds to 0 prints "0", whatever its sign.
 inline std::string lengthText(double mm) { return detail::fixedText(mm, kLengthDigits, kLengthDecimals, true); }
 
+/// @brief lengthText with a "+" before a positive length that does not round to 0 ("+0.05",
+/// "-0.01", "0"), for a range's ends and a legend's labels.
+inline std::string signedLengthText(double mm) {
+    const std::string text = lengthText(mm);
+    return mm > 0.0 && text != "0" ? "+" + text : text;
+}
+
 /// The significant digits and the most decimals an area is printed with (mm^2): six digits, as
 /// "%.6g" printed them, down to a square micrometre.
 constexpr int kAreaDigits = 6;

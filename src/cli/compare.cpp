@@ -58,10 +58,6 @@ int runCompare(const CompareArgs& a) {
     for (const std::string& w : r.warnings) std::fprintf(stderr, "dexelmill: warning: %s\n", printable(w).c_str());
     const Deviation& d = r.deviation;
     // Lengths and areas print without exponents (decimal.h); a range's ends carry their sign.
-    const auto signedLength = [](double mm) {
-        const std::string text = lengthText(mm);
-        return mm > 0.0 && text != "0" ? "+" + text : text;
-    };
     std::fprintf(out, "dexelmill: %s (%zu triangles%s) against %s (%zu triangles%s), tolerances -%s / +%s mm\n",
                 r.machinedFile.c_str(), r.machinedTriangles, r.machinedClosed ? "" : ", NOT closed",
                 r.designFile.c_str(), r.designTriangles, r.designClosed ? "" : ", NOT closed",
@@ -71,7 +67,7 @@ int runCompare(const CompareArgs& a) {
                 lengthText(d.spacing / std::sqrt(3.0)).c_str());
     std::fprintf(out, "  %-22s %14s %8s %10s\n", "deviation (mm)", "area (mm^2)", "area %", "points");
     for (const DeviationBin& b : d.histogram) {
-        const std::string range = signedLength(b.lo) + " .. " + signedLength(b.hi);
+        const std::string range = signedLengthText(b.lo) + " .. " + signedLengthText(b.hi);
         std::fprintf(out, "  %-22s %14s %8.2f %10zu%s\n", range.c_str(), areaText(b.area).c_str(),
                     d.area > 0 ? 100.0 * b.area / d.area : 0.0, b.points,
                     b.lo == -d.tolerance.gouge && b.hi == d.tolerance.excess ? "  within tolerance" : "");

@@ -86,13 +86,6 @@ Rgb mix(const Rgb& a, const Rgb& b, double t) {
     return c;
 }
 
-/// A legend's length: signed where it is not 0, never with an exponent (a tolerance of 1e-5 mm
-/// would otherwise read "+1e-05").
-std::string number(double mm) {
-    const std::string text = lengthText(mm);
-    return mm > 0.0 && text != "0" ? "+" + text : text;
-}
-
 /// Colours per third of the legend's bar.
 constexpr int kBarSteps = 64;
 
@@ -276,13 +269,13 @@ PictureLegend deviationLegend(const DeviationScale& s) {
     for (int k = 0; k < kBarSteps; ++k) legend.bar.push_back(kWithin);
     for (int k = 0; k < kBarSteps; ++k)
         legend.bar.push_back(mix(kExcessLight, kExcessDark, (k + 0.5) / kBarSteps));
-    legend.labels = {{0.0, number(-s.gougeFull), true},
+    legend.labels = {{0.0, signedLengthText(-s.gougeFull), true},
                      {1.0 / 6.0, "gouge", false},
-                     {1.0 / 3.0, number(-s.tolerance.gouge), true},
+                     {1.0 / 3.0, signedLengthText(-s.tolerance.gouge), true},
                      {0.5, "within", false},
-                     {2.0 / 3.0, number(s.tolerance.excess), true},
+                     {2.0 / 3.0, signedLengthText(s.tolerance.excess), true},
                      {5.0 / 6.0, "excess", false},
-                     {1.0, number(s.excessFull), true}};
+                     {1.0, signedLengthText(s.excessFull), true}};
     return legend;
 }
 
