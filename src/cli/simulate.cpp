@@ -270,12 +270,12 @@ void warnThreads(int requested) {
 void printDeviation(const Deviation& d) {
     const double pct = d.area > 0.0 ? 100.0 / d.area : 0.0;
     std::fprintf(stderr,
-                 "dexelmill: surface against the design: %.1f %% within tolerance, %.1f %% gouged (deepest %.4g mm "
-                 "at %.4f, %.4f, %.4f), %.1f %% excess (farthest %.4g mm at %.4f, %.4f, %.4f); RMS %.4g mm over "
-                 "%.6g mm^2\n",
-                 d.withinArea * pct, d.gougeArea * pct, d.deepest < 0.0 ? -d.deepest : 0.0, d.deepestPoint.x, d.deepestPoint.y,
-                 d.deepestPoint.z, d.excessArea * pct, d.farthest, d.farthestPoint.x, d.farthestPoint.y,
-                 d.farthestPoint.z, d.rms, d.area);
+                 "dexelmill: surface against the design: %.1f %% within tolerance, %.1f %% gouged (deepest %s mm "
+                 "at %.4f, %.4f, %.4f), %.1f %% excess (farthest %s mm at %.4f, %.4f, %.4f); RMS %s mm over "
+                 "%s mm^2\n",
+                 d.withinArea * pct, d.gougeArea * pct, lengthText(d.deepest < 0.0 ? -d.deepest : 0.0).c_str(),
+                 d.deepestPoint.x, d.deepestPoint.y, d.deepestPoint.z, d.excessArea * pct, lengthText(d.farthest).c_str(),
+                 d.farthestPoint.x, d.farthestPoint.y, d.farthestPoint.z, lengthText(d.rms).c_str(), areaText(d.area).c_str());
 }
 
 /// A number the option must have, checked as CLI11 reads it: the message names the value and what
@@ -454,9 +454,9 @@ int runSimulate(const SimulateArgs& args) {
         shown = 0;
         for (const ReportGouge& g : r.gouges) {
             if (shown++ == kPrintedDiagnostics) break;
-            std::fprintf(stderr, "%s: gouge: %smove %zu (T%d) cuts %.4g mm into the design, %s, deepest at (%.4f, %.4f, %.4f)\n",
+            std::fprintf(stderr, "%s: gouge: %smove %zu (T%d) cuts %s mm into the design, %s, deepest at (%.4f, %.4f, %.4f)\n",
                          where(g.where).c_str(), g.rapid ? "rapid " : "", g.move, g.tool,
-                         g.depthMm, volumeText(g.volumeMm3).c_str(), g.point.x, g.point.y, g.point.z);
+                         lengthText(g.depthMm).c_str(), volumeText(g.volumeMm3).c_str(), g.point.x, g.point.y, g.point.z);
         }
         if (r.gouges.size() > kPrintedDiagnostics)
             std::cerr << "dexelmill: " << r.gouges.size() - kPrintedDiagnostics << " more gouges\n";
@@ -464,10 +464,11 @@ int runSimulate(const SimulateArgs& args) {
         for (const SimulateReport::ExcessRegion& e : r.excessRegions) {
             if (shown++ == kPrintedDiagnostics) break;
             std::fprintf(stderr,
-                         "dexelmill: excess: %s up to %.4g mm thick (at %.4f, %.4f, %.4f) in x %.4g .. %.4g, "
-                         "y %.4g .. %.4g, z %.4g .. %.4g mm\n",
-                         volumeText(e.volumeMm3).c_str(), e.thicknessMm, e.point.x, e.point.y, e.point.z, e.box.lo.x, e.box.hi.x,
-                         e.box.lo.y, e.box.hi.y, e.box.lo.z, e.box.hi.z);
+                         "dexelmill: excess: %s up to %s mm thick (at %.4f, %.4f, %.4f) in x %s .. %s, "
+                         "y %s .. %s, z %s .. %s mm\n",
+                         volumeText(e.volumeMm3).c_str(), lengthText(e.thicknessMm).c_str(), e.point.x, e.point.y, e.point.z,
+                         lengthText(e.box.lo.x).c_str(), lengthText(e.box.hi.x).c_str(), lengthText(e.box.lo.y).c_str(),
+                         lengthText(e.box.hi.y).c_str(), lengthText(e.box.lo.z).c_str(), lengthText(e.box.hi.z).c_str());
         }
         if (r.surfaceDeviation) printDeviation(*r.surfaceDeviation);
     }
@@ -481,11 +482,12 @@ int runSimulate(const SimulateArgs& args) {
     if (!r.designFile.empty()) {
         char text[320];
         std::snprintf(text, sizeof text,
-                      "%s (deepest %.4g mm, tolerance %.4g mm), excess %s outside the design "
-                      "(thickest %.4g mm, tolerance %.4g mm), ",
+                      "%s (deepest %s mm, tolerance %s mm), excess %s outside the design "
+                      "(thickest %s mm, tolerance %s mm), ",
                       counted(r.gouges.size(), "gouge").c_str(),
-                      r.gouges.empty() ? 0.0 : r.gouges.front().depthMm, r.gougeToleranceMm,
-                      volumeText(r.excessVolumeMm3).c_str(), r.excessThicknessMm, r.excessToleranceMm);
+                      lengthText(r.gouges.empty() ? 0.0 : r.gouges.front().depthMm).c_str(),
+                      lengthText(r.gougeToleranceMm).c_str(), volumeText(r.excessVolumeMm3).c_str(),
+                      lengthText(r.excessThicknessMm).c_str(), lengthText(r.excessToleranceMm).c_str());
         gouges = text;
     }
     std::fprintf(

@@ -846,6 +846,13 @@ TEST_CASE("a gouge and a collision carry one move number on the console, in the 
             CHECK(c["line"] == 7);
         }
     CHECK(rapid);
+    // Tolerances of a hundredth of a micrometre print as decimals, in the summary as in the lines
+    // above it, never with an exponent ("1e-05").
+    const Run fine = cli("simulate slot.ngc --stock box:0,0,-10,40,30,0 --tool 1=flat:d=6 --resolution 0.5 "
+                         "--design design.stl --gouge-tolerance 0.00001 --excess-tolerance 0.00001");
+    REQUIRE(fine.code == 0);
+    CHECK_THAT(fine.out + fine.err, Contains("tolerance 0.00001 mm"));
+    CHECK_FALSE(std::regex_search(fine.out + fine.err, std::regex("[0-9]e[-+]?[0-9]")));
 }
 
 TEST_CASE("a study writes its table, CSV, plot and deviation meshes", "[cli][study]") {
