@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <set>
+#include <utility>
 #include <vector>
 
 namespace dexelmill {
@@ -239,6 +240,30 @@ std::optional<std::size_t> JsonPositions::keyByteOf(const std::string& pointer) 
     const auto it = keys_.find(pointer);
     if (it == keys_.end()) return std::nullopt;
     return it->second;
+}
+
+SourceLocation locateByte(std::string_view text, std::size_t byte, const std::string& file) {
+    SourceLocation at{file, 1, 1};
+    for (std::size_t i = 0; i < byte && i < text.size(); ++i) {
+        if (text[i] == '\n') {
+            ++at.line;
+            at.column = 1;
+        } else {
+            ++at.column;
+        }
+    }
+    return at;
+}
+
+JsonPlaces::JsonPlaces(std::string_view text, std::string file, bool comments)
+    : text_(text), file_(std::move(file)), positions_(text, comments) {}
+
+SourceLocation JsonPlaces::value(const std::string& pointer) const { return place(positions_.byteOf(pointer)); }
+
+SourceLocation JsonPlaces::key(const std::string& pointer) const { return place(positions_.keyByteOf(pointer)); }
+
+SourceLocation JsonPlaces::place(std::optional<std::size_t> byte) const {
+    return byte ? locateByte(text_, *byte, file_) : SourceLocation{file_, 0, 0};
 }
 
 }  // namespace dexelmill

@@ -80,39 +80,8 @@ Machine builtin(const std::string& name) {
     return m;
 }
 
-/// The line and column of byte `byte` of `text`.
-SourceLocation locate(const std::string& text, const std::string& file, std::size_t byte) {
-    SourceLocation at{file, 1, 1};
-    for (std::size_t i = 0; i < byte && i < text.size(); ++i) {
-        if (text[i] == '\n') ++at.line, at.column = 1;
-        else ++at.column;
-    }
-    return at;
-}
-
-/// Where the values and keys of a machine file stand, by JSON pointer: errors about what a value
-/// means name its line and column, though the JSON library keeps no positions.
-class Places {
-public:
-    Places(const std::string& text, const std::string& file) : text_(text), file_(file), positions_(text, false) {}
-
-    /// The place of the value at `pointer`.
-    SourceLocation value(const std::string& pointer) const { return place(positions_.byteOf(pointer)); }
-    /// The place of the key naming the object member at `pointer`.
-    SourceLocation key(const std::string& pointer) const { return place(positions_.keyByteOf(pointer)); }
-
-private:
-    SourceLocation place(std::optional<std::size_t> byte) const {
-        return byte ? locate(text_, file_, *byte) : SourceLocation{file_, 0, 0};
-    }
-
-    const std::string& text_;
-    const std::string& file_;
-    JsonPositions positions_;
-};
-
 /// The three numbers of j, the value at `pointer`.
-Vec3 readVector(const nlohmann::json& j, const std::string& what, const Places& places, const std::string& pointer) {
+Vec3 readVector(const nlohmann::json& j, const std::string& what, const JsonPlaces& places, const std::string& pointer) {
     if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
         throw ParseError(places.value(pointer), what + " must be an array of three numbers", j.dump());
     const Vec3 v(j[0].get<double>(), j[1].get<double>(), j[2].get<double>());
@@ -123,7 +92,7 @@ Vec3 readVector(const nlohmann::json& j, const std::string& what, const Places& 
 
 /// A string field of object j (at `pointer`), `fallback` where it is absent.
 std::string readString(const nlohmann::json& j, const char* key, const std::string& fallback, const std::string& what,
-                       const Places& places, const std::string& pointer) {
+                       const JsonPlaces& places, const std::string& pointer) {
     if (!j.contains(key)) return fallback;
     if (!j[key].is_string())
         throw ParseError(places.value(pointer + "/" + key), what + "\"" + key + "\" must be a string", j[key].dump());
@@ -133,7 +102,7 @@ std::string readString(const nlohmann::json& j, const char* key, const std::stri
 /// Refuses a key of object j (at `pointer`) outside `known`: a misspelt "pivot" would leave the
 /// pivot at the origin unnoticed.
 void onlyKnownKeys(const nlohmann::json& j, std::initializer_list<const char*> known, const std::string& what,
-                   const Places& places, const std::string& pointer) {
+                   const JsonPlaces& places, const std::string& pointer) {
     for (auto it = j.begin(); it != j.end(); ++it)
         if (std::none_of(known.begin(), known.end(), [&](const char* k) { return it.key() == k; })) {
             std::string names;
@@ -201,20 +170,20 @@ std::vector<std::string> builtinMachineNames() { return {"xyzac-trt", "xyzbc-trt
 
 Machine parseMachine(const std::string& text, const std::string& fileName) {
     if (const std::optional<JsonTextFault> fault = jsonTextFault(text, /*comments=*/false))
-        throw ParseError(locate(text, fileName, fault->byte), "machine description: " + fault->message);
+        throw ParseError(locateByte(text, fault->byte, fileName), "machine description: " + fault->message);
     nlohmann::json j;
     try {
         j = nlohmann::json::parse(text);
     } catch (const nlohmann::json::parse_error& e) {
         // The library's offset counts the faulty character as read.
-        throw ParseError(locate(text, fileName, e.byte > 0 ? e.byte - 1 : 0),
+        throw ParseError(locateByte(text, e.byte > 0 ? e.byte - 1 : 0, fileName),
                          "not valid JSON for a machine description");
     } catch (const nlohmann::json::exception& e) {
         // Valid syntax the library still refuses; a number beyond double's range is found above.
         throw ParseError(SourceLocation{fileName, 0, 0},
                          std::string("not valid JSON for a machine description: ") + e.what());
     }
-    const Places places(text, fileName);
+    const JsonPlaces places(text, fileName, false);
     if (!j.is_object()) throw ParseError(places.value(""), "a machine description must be a JSON object");
     onlyKnownKeys(j, {"name", "tcp_at_start", "axes"}, "", places, "");
     Machine m;

@@ -25,44 +25,9 @@ constexpr double kInch = 25.4;
 
 using Json = nlohmann::json;
 
-/// The line and column of a byte offset, for JSON errors.
-SourceLocation locate(std::string_view text, std::size_t offset, const std::string& file) {
-    SourceLocation loc{file, 1, 1};
-    for (std::size_t i = 0; i < offset && i < text.size(); ++i) {
-        if (text[i] == '\n') {
-            ++loc.line;
-            loc.column = 1;
-        } else {
-            ++loc.column;
-        }
-    }
-    return loc;
-}
-
-/// Where the values and keys of a project stand, by JSON pointer: errors about what a value means
-/// name its line and column, though the JSON library keeps no positions.
-class Places {
-public:
-    Places(std::string_view text, const std::string& file) : text_(text), file_(file), positions_(text, true) {}
-
-    /// The place of the value at `pointer`.
-    SourceLocation value(const std::string& pointer) const { return place(positions_.byteOf(pointer)); }
-    /// The place of the key naming the object member at `pointer`.
-    SourceLocation key(const std::string& pointer) const { return place(positions_.keyByteOf(pointer)); }
-
-private:
-    SourceLocation place(std::optional<std::size_t> byte) const {
-        return byte ? locate(text_, *byte, file_) : SourceLocation{file_, 0, 0};
-    }
-
-    std::string_view text_;
-    const std::string& file_;
-    JsonPositions positions_;
-};
-
 /// The number `key` of object j (at `pointer`), or `fallback` when j has none; a `required` one
 /// missing is an error at j.
-double number(const Json& j, const char* key, const std::string& where, const Places& places,
+double number(const Json& j, const char* key, const std::string& where, const JsonPlaces& places,
               const std::string& pointer, double fallback, bool required = false) {
     if (!j.contains(key)) {
         if (required) throw ParseError(places.value(pointer), where + ": missing \"" + key + "\"");
@@ -85,7 +50,7 @@ Diagnostic warning(SourceLocation where, std::string message) {
 }
 
 /// The string `key` of object j (at `pointer`), or `fallback` when j has none.
-std::string text(const Json& j, const char* key, const std::string& where, const Places& places,
+std::string text(const Json& j, const char* key, const std::string& where, const JsonPlaces& places,
                  const std::string& pointer, const std::string& fallback) {
     if (!j.contains(key)) return fallback;
     const Json& v = j.at(key);
@@ -95,7 +60,7 @@ std::string text(const Json& j, const char* key, const std::string& where, const
 }
 
 /// The boolean `key` of object j (at `pointer`), or `fallback` when j has none.
-bool boolean(const Json& j, const char* key, const std::string& where, const Places& places,
+bool boolean(const Json& j, const char* key, const std::string& where, const JsonPlaces& places,
              const std::string& pointer, bool fallback) {
     if (!j.contains(key)) return fallback;
     const Json& v = j.at(key);
@@ -110,7 +75,7 @@ bool boolean(const Json& j, const char* key, const std::string& where, const Pla
 /// default in force unsaid.
 /// `what` names the object in the message.
 void warnUnknownKeys(const Json& j, std::initializer_list<const char*> known, const std::string& what,
-                     const Places& places, const std::string& pointer, std::vector<Diagnostic>& diags) {
+                     const JsonPlaces& places, const std::string& pointer, std::vector<Diagnostic>& diags) {
     for (const auto& [key, value] : j.items()) {
         (void)value;
         if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; }))
@@ -126,7 +91,7 @@ std::string lower(std::string s) {
 }
 
 /// The units a tool's or the project's "units" names (j at `pointer`): true for metric.
-bool metricUnits(const Json& j, const std::string& where, const Places& places, const std::string& pointer) {
+bool metricUnits(const Json& j, const std::string& where, const JsonPlaces& places, const std::string& pointer) {
     const std::string units = lower(text(j, "units", where, places, pointer, "metric"));
     if (units != "metric" && units != "imperial")
         throw ParseError(places.value(pointer + "/units"), where + ": units must be \"metric\" or \"imperial\"",
@@ -134,7 +99,7 @@ bool metricUnits(const Json& j, const std::string& where, const Places& places, 
     return units == "metric";
 }
 
-ResolutionMode resolutionMode(const Json& j, const Places& places) {
+ResolutionMode resolutionMode(const Json& j, const JsonPlaces& places) {
     std::string mode = lower(text(j, "resolution-mode", "project", places, "", "medium"));
     for (char& c : mode)
         if (c == ' ' || c == '-') c = '_';
@@ -150,7 +115,7 @@ ResolutionMode resolutionMode(const Json& j, const Places& places) {
 
 /// The tool CAMotics makes of `t` (at `pointer`); none for a shape dexelmill has no cutter for,
 /// which a warning in `diags` names.
-std::optional<Tool> camoticsTool(const Json& t, const std::string& where, const Places& places,
+std::optional<Tool> camoticsTool(const Json& t, const std::string& where, const JsonPlaces& places,
                                  const std::string& pointer, std::vector<Diagnostic>& diags) {
     if (!t.is_object()) throw ParseError(places.value(pointer), where + ": a tool must be an object", t.dump());
     // "number" is CAMotics' too (its tool tables write it); a project's tool takes its key's.
@@ -228,7 +193,7 @@ void refuseSolid(const std::string& path) {
 }
 
 /// The three numbers of j, the value at `pointer`.
-Vec3 vec3(const Json& j, const std::string& where, const Places& places, const std::string& pointer) {
+Vec3 vec3(const Json& j, const std::string& where, const JsonPlaces& places, const std::string& pointer) {
     if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() || !j[2].is_number())
         throw ParseError(places.value(pointer), where + " must be an array of 3 numbers", j.dump());
     return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
@@ -252,19 +217,19 @@ double projectResolution(ResolutionMode mode, const Box& workpiece) {
 Project parseCamoticsProject(std::string_view text, const std::string& fileName,
                              const std::string& directory) {
     if (const std::optional<JsonTextFault> fault = jsonTextFault(text, /*comments=*/true))
-        throw ParseError(locate(text, fault->byte, fileName), "CAMotics project: " + fault->message);
+        throw ParseError(locateByte(text, fault->byte, fileName), "CAMotics project: " + fault->message);
     Json j;
     try {
         j = Json::parse(text.begin(), text.end(), nullptr, true, /*ignore_comments=*/true);
     } catch (const Json::parse_error& e) {
-        const SourceLocation loc = locate(text, e.byte > 0 ? e.byte - 1 : 0, fileName);
+        const SourceLocation loc = locateByte(text, e.byte > 0 ? e.byte - 1 : 0, fileName);
         const std::size_t at = std::min(text.size(), e.byte > 0 ? e.byte - 1 : 0);
         throw ParseError(loc, "invalid JSON in CAMotics project", std::string(text.substr(at, 20)));
     } catch (const Json::exception& e) {
         // Valid syntax the library still refuses; a number beyond double's range is found above.
         throw ParseError({fileName, 0, 0}, std::string("unreadable JSON in CAMotics project: ") + e.what());
     }
-    const Places places(text, fileName);
+    const JsonPlaces places(text, fileName, true);
     if (!j.is_object()) throw ParseError(places.value(""), "a CAMotics project must be a JSON object");
     Project p;
     p.file = fileName;

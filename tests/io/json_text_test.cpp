@@ -209,3 +209,24 @@ TEST_CASE("JSON positions: text that is no JSON keeps what stands before the fau
     CHECK(at(JsonPositions("", false), "") == -1);
     CHECK(at(JsonPositions("/* open", true), "") == -1);
 }
+
+TEST_CASE("JSON places: lines and columns of values and keys, counted by hand", "[io][json]") {
+    // Line 1 "{", line 2 two blanks then "a": 1, line 3 a tab then "b": [true].
+    const std::string text = "{\n  \"a\": 1,\n\t\"b\": [true]\n}";
+    const JsonPlaces places(text, "m.json", false);
+    const auto place = [](const SourceLocation& at) { return at.str(); };
+    CHECK(place(places.value("")) == "m.json:1:1");
+    CHECK(place(places.key("/a")) == "m.json:2:3");
+    CHECK(place(places.value("/a")) == "m.json:2:8");
+    CHECK(place(places.key("/b")) == "m.json:3:2");
+    CHECK(place(places.value("/b/0")) == "m.json:3:8");
+    // What the text does not hold: the file alone.
+    CHECK(place(places.value("/c")) == "m.json");
+    CHECK(place(places.key("")) == "m.json");
+    // Offsets: the first byte, a newline (the end of its line), and past the end.
+    CHECK(place(locateByte(text, 0, "m.json")) == "m.json:1:1");
+    CHECK(place(locateByte(text, 1, "m.json")) == "m.json:1:2");
+    CHECK(place(locateByte(text, 2, "m.json")) == "m.json:2:1");
+    CHECK(place(locateByte("ab", 99, "m.json")) == "m.json:1:3");
+    CHECK(place(locateByte("", 0, "")) == "<input>:1:1");
+}

@@ -10,6 +10,8 @@
 #include <string>
 #include <string_view>
 
+#include "dexelmill/error.h"
+
 namespace dexelmill {
 
 /// The deepest nesting of arrays and objects a user's JSON may have. Our files need 5. The JSON
@@ -56,6 +58,31 @@ public:
 private:
     std::map<std::string, std::size_t> values_;
     std::map<std::string, std::size_t> keys_;
+};
+
+/// @brief The place of byte `byte` of `text`, read from `file`: lines and columns from 1, a
+/// column a byte; an offset past the end is the place after the last byte.
+SourceLocation locateByte(std::string_view text, std::size_t byte, const std::string& file);
+
+/// @brief Where the values and keys of a user's JSON file stand, as places in that file, by JSON
+/// pointer (JsonPositions): errors about what a value means name its line and column, though the
+/// JSON library keeps no positions. Holds a view of `text`, which must outlive it.
+class JsonPlaces {
+public:
+    JsonPlaces(std::string_view text, std::string file, bool comments);
+
+    /// @brief The place of the value at `pointer`; the file alone where the text has none.
+    SourceLocation value(const std::string& pointer) const;
+    /// @brief The place of the key naming the object member at `pointer`; the file alone where
+    /// `pointer` names no object member.
+    SourceLocation key(const std::string& pointer) const;
+
+private:
+    SourceLocation place(std::optional<std::size_t> byte) const;
+
+    std::string_view text_;
+    std::string file_;
+    JsonPositions positions_;
 };
 
 }  // namespace dexelmill
