@@ -311,7 +311,13 @@ private:
 
     void changeTool(int tool);
 
+    /// Moves to `target`, whose coordinates known_ says are known (the callers set it first). A move
+    /// from or to a position not wholly known is not simulated: it only sets the position.
     void emit(const Vec3& target, bool rapid);
+
+    /// Sets which machine axes of the next target are known. Under a tilted work plane each
+    /// program coordinate mixes all three machine axes: there a target is known wholly or not.
+    void setMachineKnown(const std::array<bool, 3>& known);
 
     /// The program-frame target of the axis words (unspecified axes keep their place).
     Vec3 targetOf(Block& b, const Vec3& from, bool incremental);
@@ -387,7 +393,9 @@ private:
     std::array<std::array<double, 3>, 9> g5xRotary_{};
     Vec3 g92_{0.0};
     Vec3 mpos_{0.0};
-    /// Which coordinates of the position the program has set, and whether all three are.
+    /// Which coordinates of the position (of the target, while a block computes one) the program
+    /// has stated, and whether all three of the position are. A coordinate is unknown before the
+    /// program gives it.
     bool known_[3] = {false, false, false};
     bool positionKnown_ = false;
     /// The rotary angles now, and those the current G0/G1 block moves to (emit).

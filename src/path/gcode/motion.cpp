@@ -47,16 +47,17 @@ void Interpreter::emit(const Vec3& target, bool rapid) {
              std::string(line_.substr(0, 40)));
     if (out_.path.moves.size() >= opt_.maxMoves)
         fail(0, detail::tooManyMoves(opt_.maxMoves, opt_.maxMovesReason), std::string(line_.substr(0, 40)));
-    for (int a = 0; a < 3; ++a) known_[a] = known_[a] || target[a] != mpos_[a];
     if (twp_ && opt_.machine)
         fail(0, "a tilted work plane (G68.2) together with --machine is not supported", std::string(line_.substr(0, 40)));
-    if (!positionKnown_) {
-        // Where the machine starts is not in the program: moves until X, Y and Z have all
-        // been given only establish the position, rather than sweep from a guessed origin.
-        positionKnown_ = known_[0] && known_[1] && known_[2];
-        warn("the start position is unknown until X, Y and Z are all programmed: this move only sets "
-             "the position and is not simulated",
-             "unknown start");
+    const bool targetKnown = known_[0] && known_[1] && known_[2];
+    if (!positionKnown_ || !targetKnown) {
+        // A move from or to a place the program does not state only sets the position: swept, it
+        // would run from or to a guessed one, through the stock.
+        if (!positionKnown_)
+            warn("the start position is unknown until X, Y and Z are all programmed: this move only sets "
+                 "the position and is not simulated",
+                 "unknown start");
+        positionKnown_ = targetKnown;
         mpos_ = target;
         angles_ = nextAngles_;
         return;
@@ -93,6 +94,11 @@ void Interpreter::emit(const Vec3& target, bool rapid) {
     out_.path.moves.push_back(m);
     mpos_ = target;
     angles_ = nextAngles_;
+}
+
+void Interpreter::setMachineKnown(const std::array<bool, 3>& known) {
+    const bool all = known[0] && known[1] && known[2];
+    for (int a = 0; a < 3; ++a) known_[a] = twp_ ? all : known[std::size_t(a)];
 }
 
 Vec3 Interpreter::targetOf(Block& b, const Vec3& from, bool incremental) {
@@ -250,18 +256,21 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         const Vec3 home(params_[std::size_t(base)], params_[std::size_t(base + 1)],
                         params_[std::size_t(base + 2)]);
         const Vec3 pp = toProgram(mpos_);
+        checkRotary(b, !absolute_);
+        Vec3 end = home;
         if (anyXYZ) {
-            checkRotary(b, !absolute_);
             const Vec3 via = targetOf(b, pp, !absolute_);
             emit(toMachine(via), true);
-            Vec3 end = mpos_;
-            for (int a = 0; a < 3; ++a)
-                if (b.has(char('X' + a))) end[a] = home[a];
-            emit(end, true);
-        } else {
-            checkRotary(b, !absolute_);
-            emit(home, true);
+            end = mpos_;
         }
+        std::array<bool, 3> known{known_[0], known_[1], known_[2]};
+        for (int a = 0; a < 3; ++a)
+            if (!anyXYZ || b.has(char('X' + a))) {
+                end[a] = home[a];
+                known[std::size_t(a)] = true;
+            }
+        setMachineKnown(known);
+        emit(end, true);
         return true;
     }
     case 281: case 301: {
@@ -389,10 +398,15 @@ void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
             if (!absolute_ && (b.has('X') || b.has('Y') || b.has('Z')))
                 fail(b.gColumn(530), "G53 in incremental mode (G91)", "G53");
             target = mpos_;
+            std::array<bool, 3> known{known_[0], known_[1], known_[2]};
             static const char letters[3] = {'X', 'Y', 'Z'};
             for (int a = 0; a < 3; ++a)
-                if (b.has(letters[a])) target[a] = b.get(letters[a]) * units_;
+                if (b.has(letters[a])) {
+                    target[a] = b.get(letters[a]) * units_;
+                    known[std::size_t(a)] = true;
+                }
             nextAngles_ = rotaryTarget(b, false);
+            setMachineKnown(known);
         } else {
             target = toMachine(targetOf(b, toProgram(mpos_), !absolute_));
             nextAngles_ = rotaryTarget(b, !absolute_);
@@ -599,6 +613,14 @@ void Interpreter::cycle(int mode, Block& b) {
         p[ic] = c;
         return toMachine(p);
     };
+    // The holes' places are known where the block or the position states them.
+    const bool aKnown = b.has(al) || known_[ia], bKnown = b.has(bl) || known_[ib];
+    auto go = [&](double a, double bv, double c, bool rapid) {
+        known_[ia] = aKnown;
+        known_[ib] = bKnown;
+        known_[ic] = true;
+        emit(at(a, bv, c), rapid);
+    };
     // The whole depth is known before the first move: a bottom out of reach, or more pecks
     // than an arc may have chords, stops here rather than after filling memory with pecks.
     const Vec3 bottom = at(aa + double(repeats) * da, bb + double(repeats) * db, cc);
@@ -615,6 +637,7 @@ void Interpreter::cycle(int mode, Block& b) {
                  b.has('Q') ? tokenAt(b.col['Q' - 'A']) : "Q");
     }
     if (oldcc < r) {
+        known_[ic] = true;
         emit(at(pp[ia], pp[ib], r), true);
         oldcc = r;
         currentCc = r;
@@ -626,29 +649,29 @@ void Interpreter::cycle(int mode, Block& b) {
         // LinuxCNC's CYCLE_MACRO: the first hole is reached at the block's starting level when
         // that is above R, every other at the clearance level, where the previous hole left it.
         const double travel = rep == 0 && currentCc > r ? currentCc : clear;
-        emit(at(aa, bb, travel), true);
-        if (travel > r) emit(at(aa, bb, r), true);
+        go(aa, bb, travel, true);
+        if (travel > r) go(aa, bb, r, true);
         switch (mode) {
         case 810: case 820:
-            emit(at(aa, bb, cc), false);
-            emit(at(aa, bb, clear), true);
+            go(aa, bb, cc, false);
+            go(aa, bb, clear, true);
             break;
         case 850: case 890:
-            emit(at(aa, bb, cc), false);
-            emit(at(aa, bb, r), false);
-            if (clear != r) emit(at(aa, bb, clear), true);
+            go(aa, bb, cc, false);
+            go(aa, bb, r, false);
+            if (clear != r) go(aa, bb, clear, true);
             break;
         case 830: {
             double depth = r - q;
             std::size_t guard = 0;
             for (; depth > cc; depth -= q) {
                 if (++guard > opt_.maxArcSegments) fail(0, "too many pecks", "Q");
-                emit(at(aa, bb, depth), false);
-                emit(at(aa, bb, r), true);
-                emit(at(aa, bb, depth + kG83RapidDelta), true);
+                go(aa, bb, depth, false);
+                go(aa, bb, r, true);
+                go(aa, bb, depth + kG83RapidDelta, true);
             }
-            emit(at(aa, bb, cc), false);
-            emit(at(aa, bb, clear), true);
+            go(aa, bb, cc, false);
+            go(aa, bb, clear, true);
             break;
         }
         case 730: {
@@ -656,11 +679,11 @@ void Interpreter::cycle(int mode, Block& b) {
             std::size_t guard = 0;
             for (; depth > cc; depth -= q) {
                 if (++guard > opt_.maxArcSegments) fail(0, "too many pecks", "Q");
-                emit(at(aa, bb, depth), false);
-                emit(at(aa, bb, depth + kG73Clearance), true);
+                go(aa, bb, depth, false);
+                go(aa, bb, depth + kG73Clearance, true);
             }
-            emit(at(aa, bb, cc), false);
-            emit(at(aa, bb, clear), true);
+            go(aa, bb, cc, false);
+            go(aa, bb, clear, true);
             break;
         }
         }
