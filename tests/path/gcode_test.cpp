@@ -43,6 +43,13 @@ bool hasDiagnostic(const Program& p, const std::string& fragment) {
     return false;
 }
 
+/// The first diagnostic whose message holds `fragment`; nullptr if none does.
+const Diagnostic* findDiagnostic(const Program& p, const std::string& fragment) {
+    for (const Diagnostic& d : p.diagnostics)
+        if (d.message.find(fragment) != std::string::npos) return &d;
+    return nullptr;
+}
+
 }  // namespace
 
 TEST_CASE("gcode: every G-code program of the shared testdata parses", "[path][gcode]") {
@@ -793,4 +800,75 @@ TEST_CASE("gcode: a file of subroutines alone names each one it never calls", "[
     CHECK_FALSE(hasDiagnostic(called, "never called"));
     // A called subroutine that makes no moves is not one left uncalled.
     CHECK_FALSE(hasDiagnostic(run("o<none> sub\n#1 = 2\no<none> endsub\no<none> call\nM2\n"), "never called"));
+}
+
+TEST_CASE("gcode: G28, G30 and G53 to a machine position the program does not state are not swept",
+          "[path][gcode]") {
+    SECTION("G28 with #5161..#5163 never set: Z goes to the machine's own home, unknown here") {
+        const Program p = run("G0 X1 Y2 Z10\nG1 Z-1 F100\nG28 Z20\nG0 X5\nG0 Y6 Z7\nG1 X8\n");
+        // Line 3 moves to the intermediate point (1, 2, 20), which the program states, and then
+        // Z home, which it does not: neither that move nor line 4 is swept, and line 5 gives Z
+        // again and only places the tool, at (5, 6, 7).
+        const auto& m = p.path.moves;
+        REQUIRE(m.size() == 4);
+        CHECK(near(m[2].start, Vec3(1, 2, -1)));
+        CHECK(near(m[2].end, Vec3(1, 2, 20)));
+        CHECK(m[2].source.line == 3);
+        CHECK(near(m[3].start, Vec3(5, 6, 7)));
+        CHECK(near(m[3].end, Vec3(8, 6, 7)));
+        CHECK(m[3].source.line == 6);
+        const Diagnostic* d = findDiagnostic(p, "G28 moves Z to the stored position (#5163)");
+        REQUIRE(d);
+        CHECK(d->where.file == "test.ngc");
+        CHECK(d->where.line == 3);
+        CHECK(d->where.column == 1);
+        const Diagnostic* lost = findDiagnostic(p, "position is unknown since a move");
+        REQUIRE(lost);
+        CHECK(lost->where.line == 4);
+    }
+    SECTION("G28 and G30 to positions the program states go through the intermediate point") {
+        const Program p = run("#5161 = 1 #5162 = 2 #5163 = 3\nG0 X4 Y5 Z6\nG30.1\nG0 X0 Y0 Z9\n"
+                              "G30 Z20\nG28\nG91 G28 X0\n");
+        const auto& m = p.path.moves;
+        REQUIRE(m.size() == 7);
+        CHECK(near(m[2].end, Vec3(0, 0, 20)));  // G30's intermediate point
+        CHECK(near(m[3].end, Vec3(0, 0, 6)));   // then Z alone to the stored Z
+        CHECK(near(m[4].end, Vec3(1, 2, 3)));   // G28 without axes: straight to #5161..#5163
+        CHECK(near(m[5].end, Vec3(1, 2, 3)));   // G91: the intermediate point is here
+        CHECK(near(m[6].end, Vec3(1, 2, 3)));
+        for (const Move& mv : m) CHECK(mv.rapid);
+        CHECK_FALSE(hasDiagnostic(p, "stored position"));
+    }
+    SECTION("G28.1 stores only the coordinates known where it stands") {
+        const Program p = parseGcode("G0 X1 Y2\nG28.1\nG0 Z5\nG1 X3 F100\nG28\nG1 X4\n", "home.ngc");
+        // Line 3 makes the position known at (1, 2, 5); line 4 cuts; G28 sends Z to an unknown place.
+        const auto& m = p.path.moves;
+        REQUIRE(m.size() == 1);
+        CHECK(near(m[0].end, Vec3(3, 2, 5)));
+        const Diagnostic* d = findDiagnostic(p, "G28 moves Z to the stored position (#5163)");
+        REQUIRE(d);
+        CHECK(d->where.line == 5);
+    }
+    SECTION("G53 without the active work offset stated") {
+        const Program p = run("G10 L2 P1 X100\nG55 G0 X0 Y0 Z10\nG53 G0 Z0\nG0 X5 Y5\nG0 Z5\nG1 X6 F100\n");
+        const auto& m = p.path.moves;
+        REQUIRE(m.size() == 2);
+        CHECK(near(m[0].end, Vec3(0, 0, 10)));
+        CHECK(near(m[1].start, Vec3(5, 5, 5)));
+        CHECK(near(m[1].end, Vec3(6, 5, 5)));
+        const Diagnostic* d = findDiagnostic(p, "G53 moves Z in machine coordinates");
+        REQUIRE(d);
+        CHECK(d->message.find("G55 work offset") != std::string::npos);
+        CHECK(d->where.line == 3);
+        CHECK(d->where.column == 1);
+    }
+    SECTION("G53 with the work offset stated (G10 L2) is swept") {
+        const Program p = run("G10 L2 P1 X-100 Y0 Z-50\nG54 G0 X0 Y0 Z10\nG53 G0 Z0\nG53 X-50\n");
+        const auto& m = p.path.moves;
+        REQUIRE(m.size() == 3);
+        CHECK(near(m[0].end, Vec3(-100, 0, -40)));
+        CHECK(near(m[1].end, Vec3(-100, 0, 0)));
+        CHECK(near(m[2].end, Vec3(-50, 0, 0)));
+        CHECK_FALSE(hasDiagnostic(p, "G53 moves"));
+    }
 }

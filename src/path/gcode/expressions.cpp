@@ -40,6 +40,10 @@ void Interpreter::setParam(const ParamRef& r, double v) {
     if (r.index == 3000)
         fail(r.col, "the program raises alarm #3000 = " + std::to_string(v), "#3000");
     store(params_[std::size_t(r.index)], v);
+    for (int k = 0; k < 2; ++k) {
+        const int base = k == 0 ? 5161 : 5181;  // G28's and G30's X, Y, Z
+        if (r.index >= base && r.index < base + 3) homeStated_[std::size_t(k)][std::size_t(r.index - base)] = true;
+    }
 }
 
 ParamRef Interpreter::readParamRef(std::size_t& i) {

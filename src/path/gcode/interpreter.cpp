@@ -28,7 +28,7 @@ Interpreter::Interpreter(const GcodeOptions& options, Program& out) : opt_(optio
     if (options.machine) tcp_ = options.machine->tcpAtStart;
     if (options.startPosition) {
         mpos_ = *options.startPosition;
-        known_[0] = known_[1] = known_[2] = positionKnown_ = true;
+        known_[0] = known_[1] = known_[2] = positionKnown_ = everKnown_ = true;
     }
 }
 

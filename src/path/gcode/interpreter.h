@@ -308,6 +308,8 @@ private:
     Vec3 toProgram(const Vec3& m) const;
 
     void setCoordSystem(int code);
+    /// The active work coordinate system's code, G54 to G59.3.
+    std::string coordSystemName() const;
 
     void changeTool(int tool);
 
@@ -395,9 +397,21 @@ private:
     Vec3 mpos_{0.0};
     /// Which coordinates of the position (of the target, while a block computes one) the program
     /// has stated, and whether all three of the position are. A coordinate is unknown before the
-    /// program gives it.
+    /// program gives it, and after a move to a machine position the program does not state (G28,
+    /// G30, G53).
     bool known_[3] = {false, false, false};
     bool positionKnown_ = false;
+    /// The position has been wholly known: an unknown one was lost on the way, not at the start.
+    bool everKnown_ = false;
+    /// Which of G54..G59.3's X, Y, Z offsets the program has stated (G10 L2, or L20 where the
+    /// position was known in machine coordinates). A machine coordinate (G53) is a known place in
+    /// the frame the moves are simulated in only where the active system's offset is stated: the
+    /// offsets set at the machine are not in the program.
+    std::array<std::array<bool, 3>, 9> g5xStated_{};
+    /// Which X, Y, Z of the G28 (#5161..) and G30 (#5181..) positions the program has stated, by
+    /// assignment or by G28.1 / G30.1 at a known position: the ones kept in the machine's
+    /// parameter file are not in the program.
+    std::array<std::array<bool, 3>, 2> homeStated_{};
     /// The rotary angles now, and those the current G0/G1 block moves to (emit).
     RotaryAngles angles_, nextAngles_;
     /// Tool centre point control: positions are the tip in the part frame, not joints.

@@ -21,10 +21,16 @@ Vec3 Interpreter::toProgram(const Vec3& m) const {
     return twp_ ? twpRot_.transposeTimes(w - twpOrigin_) : w;
 }
 
+namespace {
+/// G54..G59.3 in tenths, in the order of their offsets (g5x_, #5221 + 20 k).
+constexpr int kCoordSystemCodes[9] = {540, 550, 560, 570, 580, 590, 591, 592, 593};
+}  // namespace
+
+std::string Interpreter::coordSystemName() const { return "G" + codeText(kCoordSystemCodes[coordSys_]); }
+
 void Interpreter::setCoordSystem(int code) {
-    static const int codes[] = {540, 550, 560, 570, 580, 590, 591, 592, 593};
     for (int k = 0; k < 9; ++k)
-        if (codes[k] == code) coordSys_ = k;
+        if (kCoordSystemCodes[k] == code) coordSys_ = k;
     store(params_[5220], coordSys_ + 1);
 }
 
@@ -53,11 +59,17 @@ void Interpreter::emit(const Vec3& target, bool rapid) {
     if (!positionKnown_ || !targetKnown) {
         // A move from or to a place the program does not state only sets the position: swept, it
         // would run from or to a guessed one, through the stock.
-        if (!positionKnown_)
+        if (!positionKnown_ && everKnown_)
+            warn("the position is unknown since a move to a place the program does not state (a warning "
+                 "there says which): this move only sets the position and is not simulated until X, Y and Z "
+                 "are all programmed again",
+                 "position lost");
+        else if (!positionKnown_)
             warn("the start position is unknown until X, Y and Z are all programmed: this move only sets "
                  "the position and is not simulated",
                  "unknown start");
         positionKnown_ = targetKnown;
+        everKnown_ = everKnown_ || targetKnown;
         mpos_ = target;
         angles_ = nextAngles_;
         return;
@@ -242,16 +254,21 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         for (int a = 0; a < 3; ++a) {
             if (!b.has(letters[a])) continue;
             const double v = b.get(letters[a]) * units_;
-            if (l == 2)
+            bool& stated = g5xStated_[std::size_t(cs)][std::size_t(a)];
+            if (l == 2) {
                 g5x_[std::size_t(cs)][a] = v;
-            else
+                stated = true;
+            } else {
                 g5x_[std::size_t(cs)][a] = mpos_[a] - g92_[a] - v;
+                stated = known_[a] && g5xStated_[std::size_t(coordSys_)][std::size_t(a)];
+            }
             store(params_[std::size_t(5221 + 20 * cs + a)], g5x_[std::size_t(cs)][a]);
         }
         return true;
     }
     case 280: case 300: {  // G28, G30: via the given point to the stored position
         axisConflict();
+        const std::size_t which = code == 280 ? 0 : 1;
         const int base = code == 280 ? 5161 : 5181;
         const Vec3 home(params_[std::size_t(base)], params_[std::size_t(base + 1)],
                         params_[std::size_t(base + 2)]);
@@ -263,19 +280,35 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
             emit(toMachine(via), true);
             end = mpos_;
         }
+        // The stored position the program never states is the machine's own (LinuxCNC keeps it in
+        // its parameter file): the axes that go there become unknown, as at the start.
         std::array<bool, 3> known{known_[0], known_[1], known_[2]};
+        std::string axes, params;
         for (int a = 0; a < 3; ++a)
             if (!anyXYZ || b.has(char('X' + a))) {
                 end[a] = home[a];
-                known[std::size_t(a)] = true;
+                known[std::size_t(a)] = homeStated_[which][std::size_t(a)];
+                if (known[std::size_t(a)]) continue;
+                axes += (axes.empty() ? "" : ", ") + std::string(1, char('X' + a));
+                params += (params.empty() ? "#" : ", #") + std::to_string(base + a);
             }
+        if (!axes.empty())
+            warn("G" + codeText(code) + " moves " + axes + " to the stored position (" + params +
+                     "), which the program never sets (by assignment or G" + codeText(code + 1) +
+                     "): where the machine goes is unknown, so " + axes + (axes.size() == 1 ? " stays" : " stay") +
+                     " unknown and the moves are not simulated until X, Y and Z are all programmed again",
+                 "G" + codeText(code) + " unknown", b.gColumn(code));
         setMachineKnown(known);
         emit(end, true);
         return true;
     }
     case 281: case 301: {
+        const std::size_t which = code == 281 ? 0 : 1;
         const int base = code == 281 ? 5161 : 5181;
-        for (int a = 0; a < 3; ++a) store(params_[std::size_t(base + a)], mpos_[a]);
+        for (int a = 0; a < 3; ++a) {
+            store(params_[std::size_t(base + a)], mpos_[a]);
+            homeStated_[which][std::size_t(a)] = known_[a];
+        }
         return false;
     }
     case 520: case 920: {  // G52, G92
@@ -398,14 +431,24 @@ void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
             if (!absolute_ && (b.has('X') || b.has('Y') || b.has('Z')))
                 fail(b.gColumn(530), "G53 in incremental mode (G91)", "G53");
             target = mpos_;
+            // A machine coordinate is a known place only where the program states the active
+            // work offset; the ones set at the machine are not in the program.
             std::array<bool, 3> known{known_[0], known_[1], known_[2]};
+            std::string axes;
             static const char letters[3] = {'X', 'Y', 'Z'};
             for (int a = 0; a < 3; ++a)
                 if (b.has(letters[a])) {
                     target[a] = b.get(letters[a]) * units_;
-                    known[std::size_t(a)] = true;
+                    known[std::size_t(a)] = g5xStated_[std::size_t(coordSys_)][std::size_t(a)];
+                    if (!known[std::size_t(a)]) axes += (axes.empty() ? "" : ", ") + std::string(1, letters[a]);
                 }
             nextAngles_ = rotaryTarget(b, false);
+            if (!axes.empty())
+                warn("G53 moves " + axes + " in machine coordinates, and the program never states the " +
+                         coordSystemName() + " work offset (G10 L2) that places them: where the machine goes is "
+                         "unknown, so " + axes + (axes.size() == 1 ? " stays" : " stay") +
+                         " unknown and the moves are not simulated until X, Y and Z are all programmed again",
+                     "G53 unknown", b.gColumn(530));
             setMachineKnown(known);
         } else {
             target = toMachine(targetOf(b, toProgram(mpos_), !absolute_));
