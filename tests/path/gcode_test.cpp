@@ -872,3 +872,50 @@ TEST_CASE("gcode: G28, G30 and G53 to a machine position the program does not st
         CHECK_FALSE(hasDiagnostic(p, "G53 moves"));
     }
 }
+
+TEST_CASE("gcode: G91 moves from an unknown position leave it unknown", "[path][gcode]") {
+    SECTION("no sweep from a guessed origin") {
+        // Line 2 would reach (5, 5, 5) from a guessed origin: no coordinate becomes known until
+        // line 5 states Z and line 6 X and Y in G90; line 7 is the first move swept.
+        const Program p = parseGcode("G21 G91\nG0 X5 Y5 Z5\nG1 Z-10 F100\nG1 X20\nG90 G0 Z3\nG0 X1 Y2\nG1 Z-1\n",
+                                     "inc.ngc");
+        REQUIRE(p.path.moves.size() == 1);
+        CHECK(near(p.path.moves[0].start, Vec3(1, 2, 3)));
+        CHECK(near(p.path.moves[0].end, Vec3(1, 2, -1)));
+        CHECK(p.path.moves[0].source.line == 7);
+        const Diagnostic* d = findDiagnostic(p, "incremental (G91) X from a position where X is unknown");
+        REQUIRE(d);
+        CHECK(d->where.line == 2);
+        CHECK(d->where.column == 4);
+    }
+    SECTION("a known axis stays known in G91, an unknown one does not become known") {
+        const Program p = parseGcode("G0 X1 Y2\nG91 G0 X1 Z1\nG90 G0 Z4\nG91 G1 X1 Y1 F100\n", "inc.ngc");
+        // X and Y are known from line 1 (X moves on to 2 in G91); Z only from line 3.
+        REQUIRE(p.path.moves.size() == 1);
+        CHECK(near(p.path.moves[0].start, Vec3(2, 2, 4)));
+        CHECK(near(p.path.moves[0].end, Vec3(3, 3, 4)));
+    }
+    SECTION("G92 names the present point: an old-style program's start") {
+        const Program p = parseGcode("G92 X0 Y0 Z0\nG91 G1 Z-1 F100\nG1 X10\n", "g92.ngc");
+        REQUIRE(p.path.moves.size() == 2);
+        CHECK(near(p.path.moves[0].start, Vec3(0, 0, 0)));
+        CHECK(near(p.path.moves[0].end, Vec3(0, 0, -1)));
+        CHECK(near(p.path.moves[1].end, Vec3(10, 0, -1)));
+        CHECK_FALSE(hasDiagnostic(p, "unknown"));
+        // Under a work offset the program states, the present point is named in its frame.
+        const Program q = parseGcode("G10 L2 P1 X100\nG92 X5 Y0 Z0\nG1 X6 F100\n", "g92.ngc");
+        REQUIRE(q.path.moves.size() == 1);
+        CHECK(near(q.path.moves[0].start, Vec3(105, 0, 0)));
+        CHECK(near(q.path.moves[0].end, Vec3(106, 0, 0)));
+    }
+    SECTION("an arc from an unknown start only places the tool at its end") {
+        // Its centre and radius hang on the start, which is unknown: the radius check is not made
+        // against a guessed start (from (0, 0) the radii would be 3 and 7; from (4, 0), say, the
+        // arc is good), and no chord is swept.
+        const Program p = parseGcode("G0 Z5\nG2 X10 Y0 I3 J0\nG1 X11 F100\n", "arc.ngc");
+        REQUIRE(p.path.moves.size() == 1);
+        CHECK(near(p.path.moves[0].start, Vec3(10, 0, 5)));
+        CHECK(near(p.path.moves[0].end, Vec3(11, 0, 5)));
+        CHECK_FALSE(hasDiagnostic(p, "has no effect"));
+    }
+}

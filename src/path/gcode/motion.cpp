@@ -120,7 +120,13 @@ Vec3 Interpreter::targetOf(Block& b, const Vec3& from, bool incremental) {
         if (b.has(letters[a])) {
             const double v = b.get(letters[a]) * units_;
             t[a] = incremental ? from[a] + v : v;
-            known_[a] = true;
+            // A distance from an unknown place leads to an unknown one.
+            if (!incremental)
+                known_[a] = true;
+            else if (!known_[a])
+                warn(std::string("incremental (G91) ") + letters[a] + " from a position where " + letters[a] +
+                         " is unknown: it stays unknown until it is programmed in G90 (or the start position is given)",
+                     "incremental from unknown", b.col[letters[a] - 'A']);
         }
     return t;
 }
@@ -332,12 +338,22 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         for (int a = 0; a < 3; ++a) {
             if (!b.has(letters[a])) continue;
             const double v = b.get(letters[a]) * units_;
+            if (code == 920 && !known_[a] && !twp_) {
+                // G92 names the present point, which is where the program says it is: an old-style
+                // program's start (G92 X0 Y0 Z0 where the operator put the tool). Where that is on
+                // the machine is unknown, so it is taken where the offset stays as it was: the moves
+                // after it stay in the program's frame.
+                mpos_[a] = g5x_[std::size_t(coordSys_)][a] + g92_[a] + v;
+                known_[a] = true;
+            }
             if (code == 920)
                 g92_[a] = mpos_[a] - g5x_[std::size_t(coordSys_)][a] - v;
             else
                 g92_[a] = v;
             store(params_[std::size_t(5211 + a)], g92_[a]);
         }
+        positionKnown_ = known_[0] && known_[1] && known_[2];
+        everKnown_ = everKnown_ || positionKnown_;
         // Offsets that change under a tilted plane would need the plane's frame.
         if (twp_ && g92_ != before)
             fail(b.gColumn(code),
@@ -493,8 +509,28 @@ void Interpreter::arc(bool clockwise, Block& b, int motionCol) {
         if (turns < 1 || std::abs(turns - std::nearbyint(turns)) > 1e-6 || turns > 1e6)
             fail(b.col['P' - 'A'], "arc P (turns) must be a positive integer", tokenAt(b.col['P' - 'A']));
     }
+    if (rForm && (b.has(o0) || b.has(o1)))
+        fail(b.col['R' - 'A'], "arc with both R and I/J/K", tokenAt(b.col['R' - 'A']));
+    if (!rForm && !b.has(o0) && !b.has(o1))
+        fail(arcCol, std::string("arc without ") + o0 + "/" + o1 + " or R", tokenAt(motionCol));
+    if (!rForm && arcAbsolute_ && !(b.has(o0) && b.has(o1))) {
+        // LinuxCNC's convert_arc: an absolute centre has no default for a word left out.
+        const char given = b.has(o0) ? o0 : o1, missing = b.has(o0) ? o1 : o0;
+        fail(b.col[given - 'A'],
+             std::string(1, missing) +
+                 " word missing in absolute center arc (G90.1): LinuxCNC needs both " + o0 +
+                 " and " + o1 + " in the G" + std::to_string(plane_) + " plane",
+             tokenAt(b.col[given - 'A']));
+    }
+    if (!positionKnown_) {
+        // The arc's way hangs on its start (its centre, or its radius's side): from an unknown
+        // start only its end is known, and the move places the tool there.
+        for (char c : {'R', o0, o1})
+            if (b.has(c)) b.use(c);
+        emit(toMachine(e), false);
+        return;
+    }
     if (rForm) {
-        if (b.has(o0) || b.has(o1)) fail(b.col['R' - 'A'], "arc with both R and I/J/K", tokenAt(b.col['R' - 'A']));
         const double r = b.get('R') * units_;
         const double dx = e[p0] - s[p0], dy = e[p1] - s[p1];
         const double d = std::hypot(dx, dy);
@@ -515,17 +551,6 @@ void Interpreter::arc(bool clockwise, Block& b, int motionCol) {
         c0 = s[p0] + dx / 2 + sign * h * nx;
         c1 = s[p1] + dy / 2 + sign * h * ny;
     } else {
-        if (!b.has(o0) && !b.has(o1))
-            fail(arcCol, std::string("arc without ") + o0 + "/" + o1 + " or R", tokenAt(motionCol));
-        if (arcAbsolute_ && !(b.has(o0) && b.has(o1))) {
-            // LinuxCNC's convert_arc: an absolute centre has no default for a word left out.
-            const char given = b.has(o0) ? o0 : o1, missing = b.has(o0) ? o1 : o0;
-            fail(b.col[given - 'A'],
-                 std::string(1, missing) +
-                     " word missing in absolute center arc (G90.1): LinuxCNC needs both " + o0 +
-                     " and " + o1 + " in the G" + std::to_string(plane_) + " plane",
-                 tokenAt(b.col[given - 'A']));
-        }
         const double i0 = b.has(o0) ? b.get(o0) * units_ : 0.0;
         const double i1 = b.has(o1) ? b.get(o1) * units_ : 0.0;
         if (arcAbsolute_) {
@@ -656,8 +681,8 @@ void Interpreter::cycle(int mode, Block& b) {
         p[ic] = c;
         return toMachine(p);
     };
-    // The holes' places are known where the block or the position states them.
-    const bool aKnown = b.has(al) || known_[ia], bKnown = b.has(bl) || known_[ib];
+    // The holes' places are known where the position or the block's absolute words state them.
+    const bool aKnown = known_[ia] || (absolute_ && b.has(al)), bKnown = known_[ib] || (absolute_ && b.has(bl));
     auto go = [&](double a, double bv, double c, bool rapid) {
         known_[ia] = aKnown;
         known_[ib] = bKnown;
