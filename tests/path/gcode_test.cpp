@@ -919,3 +919,48 @@ TEST_CASE("gcode: G91 moves from an unknown position leave it unknown", "[path][
         CHECK_FALSE(hasDiagnostic(p, "has no effect"));
     }
 }
+
+TEST_CASE("gcode: canned cycles from an unknown level sweep only what they state", "[path][gcode]") {
+    SECTION("G98 retracts to an unknown level: the holes are swept, the retracts and travels are not") {
+        const Program p = parseGcode("G0 X0 Y0\nG98 G81 X10 Y0 Z-5 R2 F100\nX20\nG80\nG0 Z10\nG1 X30\n", "g98.ngc");
+        const auto& m = p.path.moves;
+        REQUIRE(m.size() == 3);
+        CHECK(near(m[0].start, Vec3(10, 0, 2)));
+        CHECK(near(m[0].end, Vec3(10, 0, -5)));
+        CHECK_FALSE(m[0].rapid);
+        CHECK(near(m[1].start, Vec3(20, 0, 2)));
+        CHECK(near(m[1].end, Vec3(20, 0, -5)));
+        CHECK(m[1].source.line == 3);
+        CHECK(near(m[2].start, Vec3(20, 0, 10)));
+        CHECK(near(m[2].end, Vec3(30, 0, 10)));
+        const Diagnostic* d = findDiagnostic(p, "G98 retracts to the Z where the cycle began, which is unknown");
+        REQUIRE(d);
+        CHECK(d->where.line == 2);
+        CHECK(d->where.column == 5);
+    }
+    SECTION("G99 retracts to R, which is known: only the way to the first hole is not swept") {
+        const Program p = parseGcode("G0 X0 Y0\nG99 G81 X10 Y0 Z-5 R2 F100\nX20\n", "g99.ngc");
+        const std::vector<std::pair<Vec3, Vec3>> expected = {{{10, 0, 2}, {10, 0, -5}}, {{10, 0, -5}, {10, 0, 2}},
+                                                            {{10, 0, 2}, {20, 0, 2}},  {{20, 0, 2}, {20, 0, -5}},
+                                                            {{20, 0, -5}, {20, 0, 2}}};
+        const auto& m = p.path.moves;
+        REQUIRE(m.size() == expected.size());
+        for (std::size_t k = 0; k < m.size(); ++k) {
+            INFO("move " << k);
+            CHECK(near(m[k].start, expected[k].first));
+            CHECK(near(m[k].end, expected[k].second));
+        }
+        CHECK_FALSE(hasDiagnostic(p, "G98 retracts"));
+    }
+    SECTION("in G91 the R plane and the depth count from the unknown level: nothing is swept") {
+        const Program p = parseGcode("G0 X0 Y0\nG91 G81 X10 Z-5 R-2 F100\nX10\nG90 G80 G0 Z5\nG1 X25\n", "g91.ngc");
+        // X stays known through the cycle (0 + 10 + 10); Z is known again at line 4.
+        REQUIRE(p.path.moves.size() == 1);
+        CHECK(near(p.path.moves[0].start, Vec3(20, 0, 5)));
+        CHECK(near(p.path.moves[0].end, Vec3(25, 0, 5)));
+        const Diagnostic* d = findDiagnostic(p, "canned cycle in G91 from an unknown Z");
+        REQUIRE(d);
+        CHECK(d->where.line == 2);
+        CHECK(d->where.column == 5);
+    }
+}

@@ -438,6 +438,9 @@ private:
     bool cycleIlFlag_ = false;
     bool cycleActive_ = false;
     double cycleIl_ = 0, cycleCc_ = 0, cycleR_ = 0, cycleQ_ = 0;
+    /// The level the series of cycles began at (cycleIl_) is known: G98 retracts there, and in
+    /// G91 the R plane counts from it.
+    bool cycleIlKnown_ = false;
 };
 
 }  // namespace dexelmill::detail::gcode

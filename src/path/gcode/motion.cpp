@@ -653,12 +653,14 @@ void Interpreter::cycle(int mode, Block& b) {
     Vec3 pp = toProgram(mpos_);
     if (!cycleIlFlag_) {
         cycleIl_ = pp[ic];
+        cycleIlKnown_ = known_[ic];
         cycleIlFlag_ = true;
     }
     // LinuxCNC's convert_cycle_xy: old_cc, the level the series of cycles began at, and
-    // current_cc, where this block begins (the R plane after a G99 hole).
+    // current_cc, where this block begins (the R plane after a G99 hole). Either may be unknown.
     double oldcc = cycleIl_;
     double currentCc = pp[ic];
+    bool currentKnown = known_[ic];
     double r, cc, aa, bb, da = 0, db = 0;
     if (absolute_) {
         r = rWord;
@@ -681,14 +683,27 @@ void Interpreter::cycle(int mode, Block& b) {
         p[ic] = c;
         return toMachine(p);
     };
-    // The holes' places are known where the position or the block's absolute words state them.
+    // The holes' places are known where the position or the block's absolute words state them;
+    // in G91 the R plane and the depth count from the level the series began at.
     const bool aKnown = known_[ia] || (absolute_ && b.has(al)), bKnown = known_[ib] || (absolute_ && b.has(bl));
-    auto go = [&](double a, double bv, double c, bool rapid) {
+    const bool rKnown = absolute_ || cycleIlKnown_;
+    auto go = [&](double a, double bv, double c, bool cKnown, bool rapid) {
         known_[ia] = aKnown;
         known_[ib] = bKnown;
-        known_[ic] = true;
+        known_[ic] = cKnown;
         emit(at(a, bv, c), rapid);
     };
+    if (!cycleIlKnown_) {
+        const int col = b.gColumn(mode) ? b.gColumn(mode) : b.col[firstAxisLetter(b) - 'A'];
+        if (!absolute_)
+            warn(std::string("canned cycle in G91 from an unknown ") + cl + ": its R plane and depth count from the " +
+                     cl + " where the cycle began, so the cycle is not simulated",
+                 "G91 cycle from unknown", col);
+        else if (retract_ == 980)
+            warn(std::string("G98 retracts to the ") + cl + " where the cycle began, which is unknown: the "
+                     "retracts and the moves between the holes are not simulated, the holes are",
+                 "G98 to unknown", col);
+    }
     // The whole depth is known before the first move: a bottom out of reach, or more pecks
     // than an arc may have chords, stops here rather than after filling memory with pecks.
     const Vec3 bottom = at(aa + double(repeats) * da, bb + double(repeats) * db, cc);
@@ -704,42 +719,49 @@ void Interpreter::cycle(int mode, Block& b) {
                      std::to_string(opt_.maxArcSegments) + " a cycle may make",
                  b.has('Q') ? tokenAt(b.col['Q' - 'A']) : "Q");
     }
-    if (oldcc < r) {
+    // Below R, the tool first rises to it. From an unknown level it is unknown whether it does:
+    // the level it then stands at, and G98 retracts to, is max(level, R), unknown too.
+    if (cycleIlKnown_ && oldcc < r) {
         known_[ic] = true;
         emit(at(pp[ia], pp[ib], r), true);
         oldcc = r;
         currentCc = r;
+        currentKnown = true;
     }
+    if (!cycleIlKnown_) oldcc = std::max(oldcc, r);
     const double clear = retract_ == 990 ? r : oldcc;
+    const bool clearKnown = retract_ == 990 ? rKnown : cycleIlKnown_;
     for (long rep = 0; rep < repeats; ++rep) {
         aa += da;
         bb += db;
         // LinuxCNC's CYCLE_MACRO: the first hole is reached at the block's starting level when
         // that is above R, every other at the clearance level, where the previous hole left it.
-        const double travel = rep == 0 && currentCc > r ? currentCc : clear;
-        go(aa, bb, travel, true);
-        if (travel > r) go(aa, bb, r, true);
+        const bool fromCurrent = rep == 0 && (currentCc > r || !currentKnown);
+        const double travel = fromCurrent ? currentCc : clear;
+        const bool travelKnown = fromCurrent ? currentKnown : clearKnown;
+        go(aa, bb, travel, travelKnown, true);
+        if (travel > r || !travelKnown) go(aa, bb, r, rKnown, true);
         switch (mode) {
         case 810: case 820:
-            go(aa, bb, cc, false);
-            go(aa, bb, clear, true);
+            go(aa, bb, cc, rKnown, false);
+            go(aa, bb, clear, clearKnown, true);
             break;
         case 850: case 890:
-            go(aa, bb, cc, false);
-            go(aa, bb, r, false);
-            if (clear != r) go(aa, bb, clear, true);
+            go(aa, bb, cc, rKnown, false);
+            go(aa, bb, r, rKnown, false);
+            if (clear != r || !clearKnown) go(aa, bb, clear, clearKnown, true);
             break;
         case 830: {
             double depth = r - q;
             std::size_t guard = 0;
             for (; depth > cc; depth -= q) {
                 if (++guard > opt_.maxArcSegments) fail(0, "too many pecks", "Q");
-                go(aa, bb, depth, false);
-                go(aa, bb, r, true);
-                go(aa, bb, depth + kG83RapidDelta, true);
+                go(aa, bb, depth, rKnown, false);
+                go(aa, bb, r, rKnown, true);
+                go(aa, bb, depth + kG83RapidDelta, rKnown, true);
             }
-            go(aa, bb, cc, false);
-            go(aa, bb, clear, true);
+            go(aa, bb, cc, rKnown, false);
+            go(aa, bb, clear, clearKnown, true);
             break;
         }
         case 730: {
@@ -747,11 +769,11 @@ void Interpreter::cycle(int mode, Block& b) {
             std::size_t guard = 0;
             for (; depth > cc; depth -= q) {
                 if (++guard > opt_.maxArcSegments) fail(0, "too many pecks", "Q");
-                go(aa, bb, depth, false);
-                go(aa, bb, depth + kG73Clearance, true);
+                go(aa, bb, depth, rKnown, false);
+                go(aa, bb, depth + kG73Clearance, rKnown, true);
             }
-            go(aa, bb, cc, false);
-            go(aa, bb, clear, true);
+            go(aa, bb, cc, rKnown, false);
+            go(aa, bb, clear, clearKnown, true);
             break;
         }
         }
