@@ -347,6 +347,8 @@ TEST_CASE("gcode: malformed programs give a parse error with file:line:col and t
          "cannot use inverse time feed with canned cycles: give G94 before G81", "X3"},
         {"G10 without L", "G90 G10 P1 X5\n", 1, 5, "G10 without L", "G10"},
         {"G53 in G91", "G91 G53 G0 X5\n", 1, 5, "G53 in incremental mode", "G53"},
+        {"negative feed rate", "G0 X0 Y0 Z0\nG1 X5 F-100\n", 2, 7, "negative feed rate F", "F-100"},
+        {"negative feed rate from an expression", "G1 X5 F[2 - 3]\n", 1, 7, "negative feed rate F", "F[2"},
         {"M98 without P", "G0 X1 M98\nM30\n", 1, 7, "M98 without P", "M98"},
         {"cycle bottom beyond reach", "G0 Z5\nG81 X1 Y1 Z-2000000000 R1\n", 2, 11, "beyond the 1e9 mm", "Z-2000000000"},
         {"too many pecks", "G0 Z10\nG83 X1 Y1 Z-2000 R2 Q0.0001\n", 2, 21, "20020000 pecks, more than the 1000000",
@@ -963,4 +965,31 @@ TEST_CASE("gcode: canned cycles from an unknown level sweep only what they state
         CHECK(d->where.line == 2);
         CHECK(d->where.column == 5);
     }
+}
+
+TEST_CASE("gcode: a feed move at a zero feed rate is one warning, G94 and G95 reset the feed rate",
+          "[path][gcode]") {
+    const std::string zeroFeed = "feed move with a zero feed rate";
+    auto warnings = [&](const Program& p) {
+        std::vector<std::pair<int, int>> at;
+        for (const Diagnostic& d : p.diagnostics)
+            if (d.message.find(zeroFeed) != std::string::npos) at.emplace_back(d.where.line, d.where.column);
+        return at;
+    };
+    using At = std::vector<std::pair<int, int>>;
+    // No F yet: the G1, the modal G1 and the arc are three such moves, told once, at the first.
+    const Program none = run("G0 X0 Y0 Z5\nG1 Z-1\nX10\nG2 X20 I5\n");
+    CHECK(warnings(none) == At{{2, 1}});
+    CHECK(hasDiagnostic(none, "(3 occurrences, first shown)"));
+    CHECK(none.path.moves.size() > 3);  // the moves are simulated as programmed
+    CHECK(warnings(run("G0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10\nG2 X20 I5\n")).empty());
+    // LinuxCNC's convert_feed_mode: G94 and G95 set the feed rate to 0; an F in the same block
+    // comes after the mode and holds.
+    CHECK(warnings(run("G1 X1 F100\nG94\nX2 Y1\n")) == At{{3, 1}});
+    CHECK(warnings(run("G1 X1 F100\nG95\nG1 X2\n")) == At{{3, 1}});
+    CHECK(warnings(run("G1 X1 F100\nG94 F200\nG1 X2\n")).empty());
+    CHECK(warnings(run("G1 X1 F0\n")) == At{{1, 1}});
+    // A canned cycle feeds too; a rapid does not; in G93 each feed move carries its own F.
+    CHECK(warnings(run("G0 X0 Y0 Z5\nG81 X1 Z-1 R1\n")) == At{{2, 1}});
+    CHECK(warnings(run("G0 X1 Y1 Z1\nG93 G1 X2 F2\n")).empty());
 }

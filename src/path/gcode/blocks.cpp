@@ -96,6 +96,8 @@ bool Interpreter::parseBlock(Block& b, int& fanucJump, SourceFile& f, int pc) {
         if (c == 'E') fail(col, "unknown word", tokenAt(col));
         const double v = readRealValue(i);
         if (!std::isfinite(v)) fail(col, "value is not finite", tokenAt(col));
+        // LinuxCNC's read_f: a feed rate is a speed, never negative.
+        if (c == 'F' && v < 0.0) fail(col, "negative feed rate F: a feed rate is a speed, at least 0", tokenAt(col));
         if (c == 'G') {
             const double t = v * 10.0;
             const double r = std::nearbyint(t);
@@ -204,10 +206,14 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
     // 1. Feed mode, feed, speed.
     if (groupCode[5] >= 0) {
         inverseTime_ = groupCode[5] == 930;
+        if (groupCode[5] != 930) feedRate_ = 0.0;
         if (groupCode[5] == 930) warn("G93 inverse-time feed: feeds are not simulated", "G93", groupCol[5]);
         else if (groupCode[5] == 950) warn("G95 feed per revolution: feeds are not simulated", "G95", groupCol[5]);
     }
-    if (b.has('F')) { b.use('F'); hot(kHotFeed, "feed rate F is not simulated (ignored)", b.col['F' - 'A']); }
+    if (b.has('F')) {
+        feedRate_ = b.get('F');
+        hot(kHotFeed, "feed rate F is not simulated (ignored)", b.col['F' - 'A']);
+    }
     if (b.has('S')) { b.use('S'); hot(kHotSpeed, "spindle speed S is not simulated (ignored)", b.col['S' - 'A']); }
     // 2. Tool select and change.
     if (b.has('T')) {

@@ -60,7 +60,7 @@ inline constexpr double kG73Clearance = 0.002 * kInch;
 inline constexpr int kMaxExpressionDepth = 500;
 
 /// Hot warning kinds, counted without building strings.
-enum HotKind { kHotFeed, kHotSpeed, kHotCount };
+enum HotKind { kHotFeed, kHotSpeed, kHotZeroFeed, kHotCount };
 
 /// A subroutine (O-word sub) or a Fanuc program (O number).
 struct Sub {
@@ -419,6 +419,9 @@ private:
     bool tcpByG434_ = false;
     /// G93 inverse-time feed is on: every G1, G2 and G3 move needs its own F word.
     bool inverseTime_ = false;
+    /// The feed rate the last F set (program units per minute or per revolution); 0 before any
+    /// F and after G94 or G95, which reset it, as LinuxCNC's convert_feed_mode does.
+    double feedRate_ = 0.0;
     /// G92 / G52 offsets of the rotary axes (degrees): machine angle = programmed + this offset +
     /// the coordinate system's (g5xRotary_).
     std::array<double, 3> rotaryOffset_{0.0, 0.0, 0.0};  ///< TCP came from G43.4, so G49 ends it

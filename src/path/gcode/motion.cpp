@@ -434,6 +434,15 @@ void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
                  " move: after G93 each G1, G2 and G3 block needs its own F, as LinuxCNC requires",
              tokenAt(col));
     }
+    // LinuxCNC's convert_straight, convert_arc and convert_cycle refuse to feed at a zero feed
+    // rate. Feeds are not simulated, so the move is, as programmed; the user learns that a
+    // controller would stop there.
+    const bool feeds = mode == 10 || mode == 20 || mode == 30 || mode == 730 || (mode >= 810 && mode <= 890);
+    if (feeds && !inverseTime_ && feedRate_ == 0.0)
+        hot(kHotZeroFeed,
+            "feed move with a zero feed rate (no F yet, F0, or G94/G95 since the last F, which reset it): a "
+            "controller refuses it; feeds are not simulated, so it is simulated as programmed",
+            motionCol ? motionCol : b.col[firstAxisLetter(b) - 'A']);
     // LinuxCNC's convert_cycle: a canned cycle's feeds have no time to take from an F word.
     if (inverseTime_ && (mode == 730 || (mode >= 810 && mode <= 890))) {
         const int col = motionCol ? motionCol : b.col[firstAxisLetter(b) - 'A'];
