@@ -290,7 +290,7 @@ struct LoadedStock {
 /// below it, grown by kGuessMarginPercent of each size (not above the top). Else every move's
 /// extent; an axis the program never moves along gets a thickness of 5 % of the largest extent (at
 /// least 1 mm) on both sides. `cutTop` is the cuts' own top where the box was topped at z = 0 below
-/// it, else NaN.
+/// it, else NaN. Empty when the program makes no moves.
 Box guessStock(const ToolPath& path, const ToolTable& tools, const Project* project, double& cutTop) {
     cutTop = std::numeric_limits<double>::quiet_NaN();
     Box box;
@@ -312,7 +312,7 @@ Box guessStock(const ToolPath& path, const ToolTable& tools, const Project* proj
         for (const auto& [n, t] : tools) widest = std::max(widest, t.cuttingRadius());
         box = box.padded(widest);
     }
-    if (box.isEmpty()) throw Error("no stock given and the program has no moves to guess one from; use --stock");
+    if (box.isEmpty()) return box;
     const Vec3 size = box.size();
     const double pad = std::max(1.0, 0.05 * std::max({size.x, size.y, size.z}));
     for (int a = 0; a < 3; ++a) {
@@ -358,6 +358,23 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
     } else {
         double cutTop = 0.0;
         box = guessStock(program.path, tools, project, cutTop);
+        if (box.isEmpty()) {
+            // The job ends here, before the report that would carry the reader's warnings. The
+            // first about a position the reader does not know says why no move was made (moves
+            // from an unknown start only set the position); else the first warning is given.
+            const Diagnostic* why = nullptr;
+            for (const Diagnostic& d : program.diagnostics) {
+                if (d.severity != Diagnostic::Severity::Warning) continue;
+                if (!why) why = &d;
+                if (d.message.find("unknown") != std::string::npos) {
+                    why = &d;
+                    break;
+                }
+            }
+            std::string message = "no stock given and the program has no moves to guess one from; use --stock";
+            if (why) message += " (the program's warning: " + why->where.str() + ": " + why->message + ")";
+            throw Error(message);
+        }
         if (!project) {
             ReportWarning w;
             char extent[300];

@@ -910,3 +910,17 @@ TEST_CASE("a study refuses a stock it cannot measure against", "[cli][study][err
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Contains("wedge.stl") && Contains("box"));
 }
+
+TEST_CASE("a program with no known move and no stock says why it made none", "[cli][errors]") {
+    const Cli cli("no_moves");
+    // Wholly incremental from an unknown start: no move is known, so no stock can be guessed, and
+    // the error carries the reader's warning, which says what is missing.
+    cli.file("g91.ngc", "G21 G91\nG1 X5 Y5 Z-1 F100\nG1 X10\nM30\n");
+    const Run r = cli("simulate g91.ngc --tool flat:d=6 -o part.stl");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("no moves to guess one from; use --stock (the program's warning: g91.ngc:2:") &&
+                          Contains("unknown"));
+    // Not the F word's warning, which comes first but says nothing of why no move was made.
+    CHECK_THAT(r.err, !Contains("feed rate"));
+    CHECK_FALSE(fs::exists(cli.dir() / "part.stl"));
+}
