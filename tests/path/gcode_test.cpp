@@ -910,6 +910,31 @@ TEST_CASE("gcode: G91 moves from an unknown position leave it unknown", "[path][
         CHECK(near(q.path.moves[0].start, Vec3(105, 0, 0)));
         CHECK(near(q.path.moves[0].end, Vec3(106, 0, 0)));
     }
+    SECTION("G10 L20 on the active system names the present point, as G92 does") {
+        // Touched off where the operator put the tool: the incremental moves after it are cut.
+        const Program p = parseGcode("G10 L20 P0 X0 Y0 Z0\nG91 G1 Z-1 F100\nX20\n", "l20.ngc");
+        REQUIRE(p.path.moves.size() == 2);
+        CHECK(near(p.path.moves[0].start, Vec3(0, 0, 0)));
+        CHECK(near(p.path.moves[0].end, Vec3(0, 0, -1)));
+        CHECK(near(p.path.moves[1].end, Vec3(20, 0, -1)));
+        CHECK_FALSE(hasDiagnostic(p, "unknown"));
+        // On another system than the active one it names nothing here: Z stays unknown.
+        const Program q = parseGcode("G0 X0 Y0\nG10 L20 P2 Z0\nG91 G1 Z-1 F100\nG90 X5\n", "l20.ngc");
+        CHECK(q.path.moves.empty());
+        CHECK(hasDiagnostic(q, "incremental (G91) Z from a position where Z is unknown"));
+    }
+    SECTION("G28 G91 Z0 at the start warns of the stored position, not of a G91 move") {
+        // The point on the way is never reached as a place of its own: Z goes on home. The one
+        // warning is G28's; a later incremental move from an unknown Z still gets its own.
+        const Program p = parseGcode("G28 G91 Z0\nG90 G0 X0 Y0\nG91 G1 Z-1 F100\n", "home.ngc");
+        CHECK(p.path.moves.empty());
+        const Diagnostic* g28 = findDiagnostic(p, "G28 moves Z to the stored position");
+        REQUIRE(g28);
+        CHECK(g28->where.line == 1);
+        const Diagnostic* inc = findDiagnostic(p, "incremental (G91) Z from a position where Z is unknown");
+        REQUIRE(inc);
+        CHECK(inc->where.line == 3);
+    }
     SECTION("an arc from an unknown start only places the tool at its end") {
         // Its centre and radius hang on the start, which is unknown: the radius check is not made
         // against a guessed start (from (0, 0) the radii would be 3 and 7; from (4, 0), say, the

@@ -321,8 +321,11 @@ private:
     /// program coordinate mixes all three machine axes: there a target is known wholly or not.
     void setMachineKnown(const std::array<bool, 3>& known);
 
-    /// The program-frame target of the axis words (unspecified axes keep their place).
-    Vec3 targetOf(Block& b, const Vec3& from, bool incremental);
+    /// The program-frame target of the axis words (unspecified axes keep their place). An
+    /// incremental word from an unknown coordinate is warned of, but for G28's and G30's point
+    /// on the way (`warnUnknown` false), whose axes go on to the stored position: "G28 G91 Z0",
+    /// the first line of many programs, would warn of a G91 move that is never made.
+    Vec3 targetOf(Block& b, const Vec3& from, bool incremental, bool warnUnknown = true);
 
     /// The rotary angles the block's A, B, C words ask for (letters it lacks keep theirs).
     /// Without a machine, or for a letter the machine lacks, a word that turns an axis fails.

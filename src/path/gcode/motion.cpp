@@ -113,7 +113,7 @@ void Interpreter::setMachineKnown(const std::array<bool, 3>& known) {
     for (int a = 0; a < 3; ++a) known_[a] = twp_ ? all : known[std::size_t(a)];
 }
 
-Vec3 Interpreter::targetOf(Block& b, const Vec3& from, bool incremental) {
+Vec3 Interpreter::targetOf(Block& b, const Vec3& from, bool incremental, bool warnUnknown) {
     Vec3 t = from;
     static const char letters[3] = {'X', 'Y', 'Z'};
     for (int a = 0; a < 3; ++a)
@@ -123,7 +123,7 @@ Vec3 Interpreter::targetOf(Block& b, const Vec3& from, bool incremental) {
             // A distance from an unknown place leads to an unknown one.
             if (!incremental)
                 known_[a] = true;
-            else if (!known_[a])
+            else if (!known_[a] && warnUnknown)
                 warn(std::string("incremental (G91) ") + letters[a] + " from a position where " + letters[a] +
                          " is unknown: it stays unknown until it is programmed in G90 (or the start position is given)",
                      "incremental from unknown", b.col[letters[a] - 'A']);
@@ -265,11 +265,20 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
                 g5x_[std::size_t(cs)][a] = v;
                 stated = true;
             } else {
-                g5x_[std::size_t(cs)][a] = mpos_[a] - g92_[a] - v;
                 stated = known_[a] && g5xStated_[std::size_t(coordSys_)][std::size_t(a)];
+                if (cs == coordSys_ && !known_[a]) {
+                    // Touching off the active system names the present point, as G92 does (the
+                    // operator's "here is X0"): where that is on the machine is unknown, so it is
+                    // taken where the offset stays as it was, and the moves after it follow.
+                    mpos_[a] = g5x_[std::size_t(cs)][a] + g92_[a] + v;
+                    known_[a] = true;
+                }
+                g5x_[std::size_t(cs)][a] = mpos_[a] - g92_[a] - v;
             }
             store(params_[std::size_t(5221 + 20 * cs + a)], g5x_[std::size_t(cs)][a]);
         }
+        positionKnown_ = known_[0] && known_[1] && known_[2];
+        everKnown_ = everKnown_ || positionKnown_;
         return true;
     }
     case 280: case 300: {  // G28, G30: via the given point to the stored position
@@ -282,7 +291,7 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         checkRotary(b, !absolute_);
         Vec3 end = home;
         if (anyXYZ) {
-            const Vec3 via = targetOf(b, pp, !absolute_);
+            const Vec3 via = targetOf(b, pp, !absolute_, false);
             emit(toMachine(via), true);
             end = mpos_;
         }
