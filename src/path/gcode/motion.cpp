@@ -449,8 +449,8 @@ void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
     const bool feeds = mode == 10 || mode == 20 || mode == 30 || mode == 730 || (mode >= 810 && mode <= 890);
     if (feeds && !inverseTime_ && feedRate_ == 0.0)
         hot(kHotZeroFeed,
-            "feed move with a zero feed rate (no F yet, F0, or G94/G95 since the last F, which reset it): a "
-            "controller refuses it; feeds are not simulated, so it is simulated as programmed",
+            "feed move with a zero feed rate (no F yet, F0, or G94/G95 since the last F, which reset it in LinuxCNC): "
+            "LinuxCNC refuses it; feeds are not simulated, so it is simulated as programmed",
             motionCol ? motionCol : b.col[firstAxisLetter(b) - 'A']);
     // LinuxCNC's convert_cycle: a canned cycle's feeds have no time to take from an F word.
     if (inverseTime_ && (mode == 730 || (mode >= 810 && mode <= 890))) {
