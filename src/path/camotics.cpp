@@ -76,8 +76,10 @@ bool boolean(const Json& j, const char* key, const std::string& where, const Jso
 /// `what` names the object in the message.
 void warnUnknownKeys(const Json& j, std::initializer_list<const char*> known, const std::string& what,
                      const JsonPlaces& places, const std::string& pointer, std::vector<Diagnostic>& diags) {
-    for (const auto& [key, value] : j.items()) {
-        (void)value;
+    for (const auto& item : j.items()) {
+        // A named string, not a structured binding: C++17 lets no lambda capture one (clang
+        // refuses it).
+        const std::string& key = item.key();
         if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; }))
             diags.push_back(warning(places.key(pointer + "/" + jsonPointerToken(key)),
                                     what + " entry \"" + key + "\" ignored"));
