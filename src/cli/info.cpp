@@ -50,6 +50,9 @@ void printProgram(const Program& p) {
     }
     std::printf("%-14s %zu (%zu rapid), feed %.6g mm, rapid %.6g mm\n", "moves", p.path.moves.size(), rapids,
                 feedLength, rapidLength);
+    if (p.movesNotSimulated > 0)
+        std::printf("%-14s %zu more, from or to a position the program does not state (the warnings say where)\n",
+                    "not simulated", p.movesNotSimulated);
     std::printf("%-14s %zu\n", "tool changes", p.path.toolChanges.size());
     std::printf("%-14s %zu 3-axis (+z), %zu 3+2 (fixed, tilted), %zu simultaneous multi-axis (the axis or a "
                 "rotary table turns)\n",

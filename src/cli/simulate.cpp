@@ -490,10 +490,14 @@ int runSimulate(const SimulateArgs& args) {
                       lengthText(r.excessThicknessMm).c_str(), lengthText(r.excessToleranceMm).c_str());
         gouges = text;
     }
+    const std::string moves = counted(r.moves, "move") +
+                              (r.movesNotSimulated > 0 ? " (" + std::to_string(r.movesNotSimulated) +
+                                                             " more not simulated: unknown position)"
+                                                       : "");
     std::fprintf(
         summary, "dexelmill: %s, %s; removed %s (%.1f %% of the stock), part %s; h %.4g mm; %s, %s%s; "
         "mesh %s%s; %.2f s, %.0f MiB\n",
-        counted(r.moves, "move").c_str(), counted(r.toolChanges, "tool change").c_str(), volumeText(r.removedVolumeMm3).c_str(), pct,
+        moves.c_str(), counted(r.toolChanges, "tool change").c_str(), volumeText(r.removedVolumeMm3).c_str(), pct,
         volumeText(r.finalVolumeMm3).c_str(), r.resolutionMm, counted(r.collisions.size(), "collision").c_str(), gouges.c_str(),
         counted(r.warnings.size(), "warning").c_str(), counted(r.meshTriangles, "triangle").c_str(),
         meshState.c_str(), r.timingS.total, r.peakMemoryMb);

@@ -66,6 +66,7 @@ std::string reportJson(const SimulateReport& r) {
                          {"max", {r.stockBox.hi.x, r.stockBox.hi.y, r.stockBox.hi.z}}};
     j["moves"] = r.moves;
     j["rapids"] = r.rapids;
+    j["moves_not_simulated"] = r.movesNotSimulated;
     j["tool_changes"] = r.toolChanges;
     j["lattice"] = {{"nx", r.lattice[0]}, {"ny", r.lattice[1]}, {"nz", r.lattice[2]}};
     j["dexels"] = {{"x", r.dexels[0]}, {"y", r.dexels[1]}, {"z", r.dexels[2]}};

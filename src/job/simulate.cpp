@@ -627,6 +627,7 @@ Simulation runStages(const SimulateOptions& o) {
     report.rapids = std::size_t(std::count_if(program.path.moves.begin(), program.path.moves.end(),
                                               [](const Move& m) { return m.rapid; }));
     report.toolChanges = program.path.toolChanges.size();
+    report.movesNotSimulated = program.movesNotSimulated;
     std::vector<ReportWarning> notes;
     if (!budget.note.empty()) {
         ReportWarning w;

@@ -67,6 +67,7 @@ void Program::append(Program&& next) {
     for (Diagnostic& d : next.diagnostics) diagnostics.push_back(std::move(d));
     if (next.statedStock) statedStock = std::move(next.statedStock);
     for (std::size_t a = 0; a < 3; ++a) rotaryRanges[a] = rotaryRanges[a].hull(next.rotaryRanges[a]);
+    movesNotSimulated += next.movesNotSimulated;
 }
 
 }  // namespace dexelmill

@@ -827,6 +827,14 @@ TEST_CASE("gcode: G28, G30 and G53 to a machine position the program does not st
         const Diagnostic* lost = findDiagnostic(p, "position is unknown since a move");
         REQUIRE(lost);
         CHECK(lost->where.line == 4);
+        // Left out, and counted: line 3's move to Z home, and lines 4 and 5.
+        CHECK(p.movesNotSimulated == 3);
+        // Without a start, the first move only places the tool too; a second program's count adds.
+        Program unstarted = run("G0 X1 Y2 Z10\nG1 Z-1 F100\n", GcodeOptions{});
+        CHECK(unstarted.path.moves.size() == 1);
+        CHECK(unstarted.movesNotSimulated == 1);
+        unstarted.append(run("G0 X1 Y2 Z10\nG1 Z-1 F100\nG28 Z20\nG0 X5\nG0 Y6 Z7\nG1 X8\n"));
+        CHECK(unstarted.movesNotSimulated == 4);
     }
     SECTION("G28 and G30 to positions the program states go through the intermediate point") {
         const Program p = run("#5161 = 1 #5162 = 2 #5163 = 3\nG0 X4 Y5 Z6\nG30.1\nG0 X0 Y0 Z9\n"

@@ -158,6 +158,8 @@ struct SimulateReport {
     Box stockBox;
 
     std::size_t moves = 0, rapids = 0, toolChanges = 0;
+    /// Moves from or to a position the program does not state, which only set it (Program).
+    std::size_t movesNotSimulated = 0;
     std::array<int, 3> lattice{0, 0, 0};
     std::array<std::size_t, 3> dexels{0, 0, 0};  ///< per family, 0 when not kept
 

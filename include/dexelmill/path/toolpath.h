@@ -152,6 +152,10 @@ struct Program {
     /// most (mm), and the arc whose chords do; 0 without arcs.
     double arcSag = 0.0;
     SourceRef arcSagSource;
+    /// Moves the reader did not put in the path because they run from or to a position the
+    /// program does not state (G-code before X, Y and Z are all known, or after a move to an
+    /// unstated place): each only sets the position, and a warning says why.
+    std::size_t movesNotSimulated = 0;
 
     /// @brief Runs `next` after this program: its files, moves and tool changes are renumbered
     /// onto the end of these, its tools join these, its diagnostics follow. A number both define

@@ -68,6 +68,7 @@ void Interpreter::emit(const Vec3& target, bool rapid) {
             warn("the start position is unknown until X, Y and Z are all programmed: this move only sets "
                  "the position and is not simulated",
                  "unknown start");
+        ++out_.movesNotSimulated;
         positionKnown_ = targetKnown;
         everKnown_ = everKnown_ || targetKnown;
         mpos_ = target;
