@@ -4,6 +4,7 @@
 #include <set>
 
 #include "commands.h"
+#include "dexelmill/error.h"
 #include "dexelmill/io/vdb_io.h"
 #include "dexelmill/job/memory.h"
 #include "dexelmill/job/simulate.h"
@@ -117,7 +118,7 @@ int runInfo(const InfoArgs& args) {
         std::printf("%-14s %zu active voxels in %zu leaves, %.1f MiB\n", "grid", ls.activeVoxelCount(), ls.leafCount(),
                     double(ls.memoryBytes()) / (1 << 20));
         printBox("active", ls.activeBounds());
-        if (!ls.source().empty()) std::printf("%-14s %s\n", "source", ls.source().c_str());
+        if (!ls.source().empty()) std::printf("%-14s %s\n", "source", printable(ls.source()).c_str());
         return 0;
     }
     const MemoryBudget budget = memoryBudget();

@@ -105,7 +105,7 @@ LevelSet readVdb(const std::string& path, const std::string& gridName) {
     }
     if (!base) throw Error("'" + path + "' holds no float level-set grid");
     openvdb::FloatGrid::Ptr grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
-    if (!grid) throw Error("grid '" + base->getName() + "' in '" + path + "' is not a float grid");
+    if (!grid) throw Error("grid '" + clipped(base->getName()) + "' in '" + path + "' is not a float grid");
     try {
         return levelSetFromGrid(grid);
     } catch (const Error& e) {

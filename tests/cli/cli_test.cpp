@@ -636,6 +636,20 @@ TEST_CASE("under an address-space limit a program's moves stop at the reader's l
 #endif
 }
 
+TEST_CASE("info prints a VDB's source with its control bytes escaped", "[cli][errors]") {
+    // The source is the program's name, stored in the file: a damaged or crafted file may hold an
+    // escape sequence there, which printed raw would drive the terminal.
+    const Cli cli("vdb_source");
+    cli.file("a\x1b[31mb.ngc", "G21 G90\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10\nG0 Z5\n");
+    REQUIRE(cli("simulate 'a\x1b[31mb.ngc' --stock box:-5,-5,-3,15,5,0 --tool flat:d=2 --resolution 0.5 "
+                "--vdb part.vdb -q")
+                .code == 0);
+    const Run info = cli("info part.vdb");
+    CHECK(info.code == 0);
+    CHECK_THAT(info.out, Contains("a\\x1b[31mb.ngc"));
+    CHECK(info.out.find('\x1b') == std::string::npos);
+}
+
 TEST_CASE("a VDB cut short is refused at its first short read wherever a level set is read", "[cli][errors]") {
 #if defined(__SANITIZE_ADDRESS__)
     SUCCEED("skipped: an AddressSanitizer build cannot start under ulimit -v");
