@@ -1,6 +1,7 @@
 #include "dexelmill/io/vdb_io.h"
 
 #include <cerrno>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +13,7 @@
 #include "dexelmill/error.h"
 #include "dexelmill/io/atomic_file.h"
 #include "dexelmill/surface/levelset_vdb.h"
+#include "detail/child_probe.h"
 
 namespace dexelmill {
 
@@ -75,6 +77,23 @@ LevelSet readVdb(const std::string& path, const std::string& gridName) {
     // look at the stream's state, and went on with the sizes and names it had not read (a file cut
     // at 3000 of its 45410 bytes allocated 2 GB and printed a 540 MB map name in its error).
     in.exceptions(std::ios::failbit | std::ios::badbit);
+    // OpenVDB's reader trusts a leaf's compressed data: some damaged bytes there make it write
+    // past a buffer and abort the process ("double free or corruption"). So the file is read
+    // first in a child process, where such a crash ends only the child; the read below then meets
+    // only files the reader survives, and every other error with its own message.
+    // The child opens the file itself: `in` shares its offset with the child's copy.
+    const detail::ChildEnd probe = detail::runInChild([&] {
+        std::ifstream own(path, std::ios::binary);
+        own.exceptions(std::ios::failbit | std::ios::badbit);
+        openvdb::io::Stream(own, /*delayLoad=*/false);
+    });
+    if (probe.crashed) {
+        const std::string how = probe.signal == SIGKILL ? "was killed, perhaps for want of memory"
+                                : probe.signal != 0    ? std::string("crashed (") + strsignal(probe.signal) + ")"
+                                                       : "crashed";
+        throw Error("'" + path + "': not a readable OpenVDB file (OpenVDB's reader " + how +
+                    " on it: the file is damaged)");
+    }
     openvdb::GridPtrVecPtr grids;
     try {
         openvdb::io::Stream stream(in, /*delayLoad=*/false);

@@ -67,6 +67,8 @@ std::string slurp(const std::string& path) {
 
 const Box kBox{Vec3(0.0), Vec3(24.0, 20.0, 16.0)};
 constexpr double kH = 0.5;
+/// How many of a VDB's compressed blocks have their size damaged, spread over the file.
+constexpr std::size_t kDamagedVdbSizes = 12;
 
 /// A box with a spherical dent in its top: small (48 x 40 x 32 lattice) and closed.
 TriDexelStock dentedBox() {
@@ -744,6 +746,36 @@ TEST_CASE("VDB: a file cut short anywhere is refused as incomplete, naming it", 
                                                        "before the grids its header announces)");
     }
     CHECK_THROWS_WITH(readVdb(dir.path.string()), Catch::Matchers::Contains("is not a regular file"));
+}
+
+TEST_CASE("VDB: a damaged size of compressed data is refused and never crashes", "[io][errors]") {
+    // Each block of voxel values OpenVDB compresses (Blosc, the default) is stored as its size in
+    // an int64 and then the block, whose header begins with Blosc's format versions 2 and 1. A
+    // negative size marks a block stored raw, of minus that many bytes, and OpenVDB 10 reads it
+    // into a buffer of the node's size whatever it says: made -65536, each size wrote past the
+    // buffer and aborted the process ("double free or corruption", "free(): invalid pointer").
+    TempDir dir;
+    const LevelSet ls = rebuildLevelSet(dentedBox(), {3, FamilySet::all(), "dented box", std::nullopt});
+    writeVdb(dir.file("part.vdb"), ls);
+    const std::string bytes = slurp(dir.file("part.vdb"));
+    std::vector<std::size_t> sizes;
+    for (std::size_t at = 0; at + 10 <= bytes.size(); ++at) {
+        std::int64_t size = 0;
+        std::memcpy(&size, bytes.data() + at, sizeof size);  // little-endian, as OpenVDB writes on x86
+        if (size > 0 && std::uint64_t(size) <= bytes.size() - at - 8 && bytes[at + 8] == 2 && bytes[at + 9] == 1)
+            sizes.push_back(at);
+    }
+    REQUIRE(sizes.size() >= kDamagedVdbSizes);
+    for (std::size_t k = 0; k < kDamagedVdbSizes; ++k) {
+        const std::size_t at = sizes[k * sizes.size() / kDamagedVdbSizes];
+        INFO("the size at byte " << at << " of " << bytes.size() << " made -65536");
+        std::string damaged = bytes;
+        const std::int64_t raw = -65536;
+        std::memcpy(&damaged[at], &raw, sizeof raw);
+        const std::string path = dir.file("damaged.vdb");
+        std::ofstream(path, std::ios::binary | std::ios::trunc).write(damaged.data(), std::streamsize(damaged.size()));
+        CHECK_THROWS_WITH(readVdb(path), Catch::Matchers::StartsWith("'" + path + "': not a readable OpenVDB file"));
+    }
 }
 
 namespace {
