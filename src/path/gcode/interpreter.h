@@ -2,8 +2,9 @@
 /// @brief The RS274/NGC interpreter behind parseGcode: its state and the blocks, parameters and
 /// frames it works on. Its parts are defined by job: interpreter.cpp (set-up, errors), flow.cpp
 /// (O-word structure, the execution loop, subroutines, endless loops), expressions.cpp
-/// (parameters and expressions), blocks.cpp (block parsing, modal groups, Fanuc calls) and
-/// motion.cpp (coordinates, non-modal codes, the tilted work plane, motion, canned cycles).
+/// (parameters and expressions), blocks.cpp (block parsing, modal groups, Fanuc calls),
+/// offsets.cpp (coordinates, work offsets, G92, G10, G28 and G30) and motion.cpp (the tilted work
+/// plane, motion, canned cycles).
 /// Semantics follow LinuxCNC's interpreter (the RS274/NGC interpreter of NIST, Kramer et al.
 /// 2000, and LinuxCNC's G-code documentation); Fanuc macro forms (IF ... THEN/GOTO, WHILE ...
 /// DOn/ENDn, M98/M99) follow the Fanuc programming manuals.

@@ -1,0 +1,205 @@
+/// @file offsets.cpp
+/// @brief Coordinates and offsets: the work coordinate systems, G92 and G52, G10, the stored
+/// positions of G28 and G30, and which of them the program states.
+#include "path/gcode/interpreter.h"
+
+#include <cmath>
+#include <string>
+
+#include "path/detail/text.h"
+
+namespace dexelmill::detail::gcode {
+
+Vec3 Interpreter::toMachine(const Vec3& p) const {
+    return offset() + (twp_ ? twpOrigin_ + twpRot_ * p : p);
+}
+
+Vec3 Interpreter::toProgram(const Vec3& m) const {
+    const Vec3 w = m - offset();
+    return twp_ ? twpRot_.transposeTimes(w - twpOrigin_) : w;
+}
+
+namespace {
+/// G54..G59.3 in tenths, in the order of their offsets (g5x_, #5221 + 20 k).
+constexpr int kCoordSystemCodes[9] = {540, 550, 560, 570, 580, 590, 591, 592, 593};
+}  // namespace
+
+std::string Interpreter::coordSystemName() const { return "G" + codeText(kCoordSystemCodes[coordSys_]); }
+
+void Interpreter::setCoordSystem(int code) {
+    for (int k = 0; k < 9; ++k)
+        if (kCoordSystemCodes[k] == code) coordSys_ = k;
+    store(params_[5220], coordSys_ + 1);
+}
+
+bool Interpreter::executeNonModal(int code, Block& b, int motion) {
+    const bool anyXYZ = b.has('X') || b.has('Y') || b.has('Z');
+    auto axisConflict = [&]() {
+        if (motion >= 0 && motion != 800 && anyXYZ)
+            fail(b.col[firstAxisLetter(b) - 'A'],
+                 "axis words used by both G" + codeText(code) + " and a motion",
+                 tokenAt(b.col[firstAxisLetter(b) - 'A']));
+    };
+    switch (code) {
+    case 100: {  // G10
+        axisConflict();
+        if (!b.has('L')) fail(b.gColumn(100), "G10 without L", "G10");
+        const int l = int(std::lround(b.get('L')));
+        if (l == 1 || l == 10 || l == 11) {
+            for (char c : {'P', 'X', 'Y', 'Z', 'R', 'I', 'J', 'Q', 'D'})
+                if (b.has(c)) b.use(c);
+            warn("G10 L" + std::to_string(l) + " (tool table edit) ignored", "G10 L1");
+            return true;
+        }
+        if (l != 2 && l != 20) fail(b.col['L' - 'A'], "unsupported G10 L" + std::to_string(l), tokenAt(b.col['L' - 'A']));
+        if (!b.has('P')) fail(b.gColumn(100), "G10 L" + std::to_string(l) + " without P", "G10");
+        const int p = int(std::lround(b.get('P')));
+        if (p < 0 || p > 9) fail(b.col['P' - 'A'], "G10 P out of range 0..9", tokenAt(b.col['P' - 'A']));
+        const int cs = p == 0 ? coordSys_ : p - 1;
+        if (b.has('R') && b.get('R') != 0.0)
+            fail(b.col['R' - 'A'], "G10 R (XY rotation of a coordinate system) is not supported", tokenAt(b.col['R' - 'A']));
+        // A rotary axis's offset in that system: L2 sets it, L20 makes the current angle read as
+        // the value given there (LinuxCNC's parameters 5224 to 5226, A to C, for G54).
+        for (int a = 0; a < 3; ++a) {
+            const char c = char('A' + a);
+            if (!b.has(c)) continue;
+            if (opt_.machine && !opt_.machine->has(c))
+                fail(b.col[a], "the machine '" + opt_.machine->name + "' has no " + std::string(1, c) + " axis", tokenAt(b.col[a]));
+            const double v = b.get(c);
+            double& offset = g5xRotary_[std::size_t(cs)][std::size_t(a)];
+            offset = l == 2 ? v : angles_.deg[a] - rotaryOffset_[std::size_t(a)] - v;
+            if (!std::isfinite(offset)) fail(b.col[a], "G10: a non-finite rotary offset", tokenAt(b.col[a]));
+            store(params_[std::size_t(5224 + 20 * cs + a)], offset);
+        }
+        refuseUvw(b);
+        static const char letters[3] = {'X', 'Y', 'Z'};
+        if (l == 20 && twp_)
+            fail(b.gColumn(100), "G10 L20 with an active G68.2 is not supported", "G10");
+        for (int a = 0; a < 3; ++a) {
+            if (!b.has(letters[a])) continue;
+            const double v = b.get(letters[a]) * units_;
+            bool& stated = g5xStated_[std::size_t(cs)][std::size_t(a)];
+            if (l == 2) {
+                g5x_[std::size_t(cs)][a] = v;
+                stated = true;
+            } else {
+                stated = known_[a] && g5xStated_[std::size_t(coordSys_)][std::size_t(a)];
+                if (cs == coordSys_ && !known_[a]) {
+                    // Touching off the active system names the present point, as G92 does (the
+                    // operator's "here is X0"): where that is on the machine is unknown, so it is
+                    // taken where the offset stays as it was, and the moves after it follow.
+                    mpos_[a] = g5x_[std::size_t(cs)][a] + g92_[a] + v;
+                    known_[a] = true;
+                }
+                g5x_[std::size_t(cs)][a] = mpos_[a] - g92_[a] - v;
+            }
+            store(params_[std::size_t(5221 + 20 * cs + a)], g5x_[std::size_t(cs)][a]);
+        }
+        positionKnown_ = known_[0] && known_[1] && known_[2];
+        everKnown_ = everKnown_ || positionKnown_;
+        return true;
+    }
+    case 280: case 300: {  // G28, G30: via the given point to the stored position
+        axisConflict();
+        const std::size_t which = code == 280 ? 0 : 1;
+        const int base = code == 280 ? 5161 : 5181;
+        const Vec3 home(params_[std::size_t(base)], params_[std::size_t(base + 1)],
+                        params_[std::size_t(base + 2)]);
+        const Vec3 pp = toProgram(mpos_);
+        checkRotary(b, !absolute_);
+        Vec3 end = home;
+        if (anyXYZ) {
+            const Vec3 via = targetOf(b, pp, !absolute_, false);
+            emit(toMachine(via), true);
+            end = mpos_;
+        }
+        // The stored position the program never states is the machine's own (LinuxCNC keeps it in
+        // its parameter file): the axes that go there become unknown, as at the start.
+        std::array<bool, 3> known{known_[0], known_[1], known_[2]};
+        std::string axes, params;
+        for (int a = 0; a < 3; ++a)
+            if (!anyXYZ || b.has(char('X' + a))) {
+                end[a] = home[a];
+                known[std::size_t(a)] = homeStated_[which][std::size_t(a)];
+                if (known[std::size_t(a)]) continue;
+                axes += (axes.empty() ? "" : ", ") + std::string(1, char('X' + a));
+                params += (params.empty() ? "#" : ", #") + std::to_string(base + a);
+            }
+        if (!axes.empty())
+            warn("G" + codeText(code) + " moves " + axes + " to the stored position (" + params +
+                     "), which the program never sets (by assignment or G" + codeText(code + 1) +
+                     "): where the machine goes is unknown, so " + axes + (axes.size() == 1 ? " stays" : " stay") +
+                     " unknown and the moves are not simulated until X, Y and Z are all programmed again",
+                 "G" + codeText(code) + " unknown", b.gColumn(code));
+        setMachineKnown(known);
+        emit(end, true);
+        return true;
+    }
+    case 281: case 301: {
+        const std::size_t which = code == 281 ? 0 : 1;
+        const int base = code == 281 ? 5161 : 5181;
+        for (int a = 0; a < 3; ++a) {
+            store(params_[std::size_t(base + a)], mpos_[a]);
+            homeStated_[which][std::size_t(a)] = known_[a];
+        }
+        return false;
+    }
+    case 520: case 920: {  // G52, G92
+        axisConflict();
+        if (opt_.machine) {
+            // A rotary axis's offset: G92 makes its current angle read as the value given.
+            for (int a = 0; a < 3; ++a) {
+                const char c = char('A' + a);
+                if (!b.has(c)) continue;
+                if (!opt_.machine->has(c))
+                    fail(b.col[a], "the machine '" + opt_.machine->name + "' has no " + std::string(1, c) + " axis", tokenAt(b.col[a]));
+                const double v = b.get(c);
+                rotaryOffset_[std::size_t(a)] =
+                    code == 920 ? angles_.deg[a] - g5xRotary_[std::size_t(coordSys_)][std::size_t(a)] - v : v;
+            }
+        } else {
+            checkRotary(b, false);
+        }
+        static const char letters[3] = {'X', 'Y', 'Z'};
+        const Vec3 before = g92_;
+        for (int a = 0; a < 3; ++a) {
+            if (!b.has(letters[a])) continue;
+            const double v = b.get(letters[a]) * units_;
+            if (code == 920 && !known_[a] && !twp_) {
+                // G92 names the present point, which is where the program says it is: an old-style
+                // program's start (G92 X0 Y0 Z0 where the operator put the tool). Where that is on
+                // the machine is unknown, so it is taken where the offset stays as it was: the moves
+                // after it stay in the program's frame.
+                mpos_[a] = g5x_[std::size_t(coordSys_)][a] + g92_[a] + v;
+                known_[a] = true;
+            }
+            if (code == 920)
+                g92_[a] = mpos_[a] - g5x_[std::size_t(coordSys_)][a] - v;
+            else
+                g92_[a] = v;
+            store(params_[std::size_t(5211 + a)], g92_[a]);
+        }
+        positionKnown_ = known_[0] && known_[1] && known_[2];
+        everKnown_ = everKnown_ || positionKnown_;
+        // Offsets that change under a tilted plane would need the plane's frame.
+        if (twp_ && g92_ != before)
+            fail(b.gColumn(code),
+                 "G52/G92 changing the offset under an active G68.2 is not supported",
+                 "G" + codeText(code));
+        return true;
+    }
+    case 921: case 922:
+        g92_ = Vec3(0.0);
+        rotaryOffset_ = {0.0, 0.0, 0.0};
+        if (code == 921)
+            for (int a = 0; a < 3; ++a) store(params_[std::size_t(5211 + a)], 0.0);
+        return false;
+    case 923:
+        for (int a = 0; a < 3; ++a) g92_[a] = params_[std::size_t(5211 + a)];
+        return false;
+    default:
+        return false;
+    }
+}
+
+}  // namespace dexelmill::detail::gcode
