@@ -330,7 +330,8 @@ private:
 
     /// The rotary angles the block's A, B, C words ask for (letters it lacks keep theirs).
     /// Without a machine, or for a letter the machine lacks, a word that turns an axis fails.
-    RotaryAngles rotaryTarget(Block& b, bool incremental);
+    /// In machine coordinates (G53) an angle is the axis's own, without the work offsets.
+    RotaryAngles rotaryTarget(Block& b, bool incremental, bool machineCoords = false);
     /// For blocks whose motion cannot turn a rotary axis (arcs, cycles, G28, offsets): fails if
     /// an A, B or C word would turn one.
     void checkRotary(Block& b, bool incremental);

@@ -109,14 +109,14 @@ Vec3 Interpreter::targetOf(Block& b, const Vec3& from, bool incremental, bool wa
     return t;
 }
 
-RotaryAngles Interpreter::rotaryTarget(Block& b, bool incremental) {
+RotaryAngles Interpreter::rotaryTarget(Block& b, bool incremental, bool machineCoords) {
     RotaryAngles next = angles_;
     for (int a = 0; a < 3; ++a) {
         const char c = char('A' + a);
         if (!b.has(c)) continue;
         const double v = b.get(c);  // degrees, whatever the length units
-        const double target =
-            incremental ? angles_.deg[a] + v : v + rotaryOffset_[std::size_t(a)] + g5xRotary_[std::size_t(coordSys_)][std::size_t(a)];
+        const double offset = machineCoords ? 0.0 : rotaryOffset_[std::size_t(a)] + g5xRotary_[std::size_t(coordSys_)][std::size_t(a)];
+        const double target = incremental ? angles_.deg[a] + v : v + offset;
         if (!std::isfinite(target)) fail(b.col[a], "rotary axis " + std::string(1, c) + " to a non-finite angle", tokenAt(b.col[a]));
         if (std::abs(target) > kMaxRotaryDegrees)
             fail(b.col[a],
@@ -284,7 +284,7 @@ void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
                     known[std::size_t(a)] = g5xStated_[std::size_t(coordSys_)][std::size_t(a)];
                     if (!known[std::size_t(a)]) axes += (axes.empty() ? "" : ", ") + std::string(1, letters[a]);
                 }
-            nextAngles_ = rotaryTarget(b, false);
+            nextAngles_ = rotaryTarget(b, false, true);
             if (!axes.empty())
                 warn("G53 moves " + axes + " in machine coordinates, and the program never states the " +
                          coordSystemName() + " work offset (G10 L2) that places them: where the machine goes is "
