@@ -606,7 +606,7 @@ TEST_CASE("gcode: G43.1's axis words set the offset and move nothing, G43.2's fe
 TEST_CASE("gcode: stored positions and offsets keep their machine position across G20/G21", "[path][gcode]") {
     // LinuxCNC stores #5161.. (G28.1), #5211.. (G92) and #5221.. (G10 L2) in the machine's units
     // (mm here) and converts them to the program's units on use.
-    const Program home = run("G21 G0 X10 Y0 Z5\nG28.1\nG0 X0 Y0 Z5\nG20\nG28\n");
+    const Program home = run("G10 L2 P1 X0 Y0 Z0\nG21 G0 X10 Y0 Z5\nG28.1\nG0 X0 Y0 Z5\nG20\nG28\n");
     REQUIRE(home.path.moves.size() == 3);
     CHECK(near(home.path.moves[2].end, Vec3(10, 0, 5)));
     const Program g92 = run("G21 G0 X0 Y0 Z0\nG0 X10\nG92 X0\nG92.2\nG20\nG92.3\nG0 X0\n");
@@ -837,8 +837,9 @@ TEST_CASE("gcode: G28, G30 and G53 to a machine position the program does not st
         CHECK(unstarted.movesNotSimulated == 4);
     }
     SECTION("G28 and G30 to positions the program states go through the intermediate point") {
-        const Program p = run("#5161 = 1 #5162 = 2 #5163 = 3\nG0 X4 Y5 Z6\nG30.1\nG0 X0 Y0 Z9\n"
-                              "G30 Z20\nG28\nG91 G28 X0\n");
+        // Under a work offset the program states, as a machine position needs (G53 too).
+        const Program p = run("G10 L2 P1 X0 Y0 Z0\n#5161 = 1 #5162 = 2 #5163 = 3\nG0 X4 Y5 Z6\nG30.1\n"
+                              "G0 X0 Y0 Z9\nG30 Z20\nG28\nG91 G28 X0\n");
         const auto& m = p.path.moves;
         REQUIRE(m.size() == 7);
         CHECK(near(m[2].end, Vec3(0, 0, 20)));  // G30's intermediate point
@@ -850,14 +851,15 @@ TEST_CASE("gcode: G28, G30 and G53 to a machine position the program does not st
         CHECK_FALSE(hasDiagnostic(p, "stored position"));
     }
     SECTION("G28.1 stores only the coordinates known where it stands") {
-        const Program p = parseGcode("G0 X1 Y2\nG28.1\nG0 Z5\nG1 X3 F100\nG28\nG1 X4\n", "home.ngc");
-        // Line 3 makes the position known at (1, 2, 5); line 4 cuts; G28 sends Z to an unknown place.
+        const Program p = parseGcode("G10 L2 P1 X0 Y0 Z0\nG0 X1 Y2\nG28.1\nG0 Z5\nG1 X3 F100\nG28\nG1 X4\n",
+                                     "home.ngc");
+        // Line 4 makes the position known at (1, 2, 5); line 5 cuts; G28 sends Z to an unknown place.
         const auto& m = p.path.moves;
         REQUIRE(m.size() == 1);
         CHECK(near(m[0].end, Vec3(3, 2, 5)));
         const Diagnostic* d = findDiagnostic(p, "G28 moves Z to the stored position (#5163)");
         REQUIRE(d);
-        CHECK(d->where.line == 5);
+        CHECK(d->where.line == 6);
     }
     SECTION("G53 without the active work offset stated") {
         const Program p = run("G10 L2 P1 X100\nG55 G0 X0 Y0 Z10\nG53 G0 Z0\nG0 X5 Y5\nG0 Z5\nG1 X6 F100\n");

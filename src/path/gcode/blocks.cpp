@@ -293,6 +293,7 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
         // LinuxCNC's enhance_block gives the axis words of a block with G43.1 and no motion code
         // to the offset alone: the modal motion does not run. G43.2's words still feed it there.
         if (groupCode[8] == 431 && motion < 0) axisConsumed = true;
+        if (groupCode[8] != 434) tlo_ = groupCode[8] != 490;
         if (groupCode[8] == 434) {
             setTcp(true, 0, "G43.4");
             tcpByG434_ = true;
@@ -306,7 +307,7 @@ int Interpreter::executeBlock(Block& b, SourceFile& f, int pc) {
                         "tlo");
     }
     // 6. Coordinate system, path control, distance modes, retract mode.
-    if (groupCode[12] >= 0) setCoordSystem(groupCode[12]);
+    if (groupCode[12] >= 0) setCoordSystem(groupCode[12], b.gColumn(groupCode[12]));
     if (groupCode[13] >= 0) {
         if (b.has('P')) b.use('P');
         if (b.has('Q')) b.use('Q');

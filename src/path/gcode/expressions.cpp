@@ -44,6 +44,8 @@ void Interpreter::setParam(const ParamRef& r, double v) {
         const int base = k == 0 ? 5161 : 5181;  // G28's and G30's X, Y, Z
         if (r.index >= base && r.index < base + 3) homeStated_[std::size_t(k)][std::size_t(r.index - base)] = true;
     }
+    // A G92 offset kept for G92.3 (#5211..) and stated here is no guess.
+    if (r.index >= 5211 && r.index < 5214) g92StoredGuessed_[std::size_t(r.index - 5211)] = false;
 }
 
 ParamRef Interpreter::readParamRef(std::size_t& i) {

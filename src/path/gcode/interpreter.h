@@ -308,9 +308,26 @@ private:
     Vec3 toMachine(const Vec3& p) const;
     Vec3 toProgram(const Vec3& m) const;
 
-    void setCoordSystem(int code);
+    /// Selects G54..G59.3 (`code` in tenths) at column col.
+    void setCoordSystem(int code, int col);
     /// The active work coordinate system's code, G54 to G59.3.
     std::string coordSystemName() const;
+
+    /// A guessed machine position enters the active offset of axis a: G92 or G10 L20 named the
+    /// present point where it was unknown, and the offset was taken as it stood.
+    bool offsetGuessed(int a) const { return g92Guessed_[std::size_t(a)] || g5xGuessed_[std::size_t(coordSys_)][std::size_t(a)]; }
+    /// A machine coordinate of axis a (G53, G28, G30) is a known place in the part frame: the
+    /// active work offset is stated and not guessed, and for Z no tool length offset is active
+    /// (a machine Z is then the spindle's gauge line, a tool length above the tip).
+    bool machineCoordKnown(int a) const {
+        return g5xStated_[std::size_t(coordSys_)][std::size_t(a)] && !offsetGuessed(a) && !(a == 2 && tlo_);
+    }
+    /// Warns that `what` (e.g. "G53 moves X, Z in machine coordinates") goes where machine
+    /// coordinates do not place the tool on the part, saying why for the axes `axes`.
+    void warnMachineUnknown(const std::string& what, const std::array<bool, 3>& axes, const std::string& key, int col);
+    /// An offset change that a guess enters (`axes`): the position was known only against the
+    /// guessed offset, so the known axes among them become unknown, with a warning at col.
+    void loseGuessedAxes(const std::array<bool, 3>& axes, const std::string& code, int col);
 
     void changeTool(int tool);
 
@@ -413,6 +430,14 @@ private:
     /// the frame the moves are simulated in only where the active system's offset is stated: the
     /// offsets set at the machine are not in the program.
     std::array<std::array<bool, 3>, 9> g5xStated_{};
+    /// Which of them were taken from a guessed machine position (G10 L20 where the position was
+    /// unknown, or rested on a guess).
+    std::array<std::array<bool, 3>, 9> g5xGuessed_{};
+    /// The G92 offset's X, Y, Z, and those kept in #5211.. for G92.3, were taken from a guessed
+    /// machine position (G92 where the position was unknown, or rested on a guess).
+    std::array<bool, 3> g92Guessed_{}, g92StoredGuessed_{};
+    /// A tool length offset is active (G43, G43.1, G43.2 until G49).
+    bool tlo_ = false;
     /// Which X, Y, Z of the G28 (#5161..) and G30 (#5181..) positions the program has stated, by
     /// assignment or by G28.1 / G30.1 at a known position: the ones kept in the machine's
     /// parameter file are not in the program.

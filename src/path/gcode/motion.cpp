@@ -273,24 +273,23 @@ void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
             if (!absolute_ && (b.has('X') || b.has('Y') || b.has('Z')))
                 fail(b.gColumn(530), "G53 in incremental mode (G91)", "G53");
             target = mpos_;
-            // A machine coordinate is a known place only where the program states the active
-            // work offset; the ones set at the machine are not in the program.
+            // A machine coordinate is a known place on the part only where the program states the
+            // active work offset (the ones set at the machine are not in the program), no guess
+            // enters it, and, for Z, no tool length offset lifts the point G53 names off the tip.
             std::array<bool, 3> known{known_[0], known_[1], known_[2]};
+            std::array<bool, 3> lost{};
             std::string axes;
             static const char letters[3] = {'X', 'Y', 'Z'};
             for (int a = 0; a < 3; ++a)
                 if (b.has(letters[a])) {
                     target[a] = b.get(letters[a]) * units_;
-                    known[std::size_t(a)] = g5xStated_[std::size_t(coordSys_)][std::size_t(a)];
+                    known[std::size_t(a)] = machineCoordKnown(a);
+                    lost[std::size_t(a)] = !known[std::size_t(a)];
                     if (!known[std::size_t(a)]) axes += (axes.empty() ? "" : ", ") + std::string(1, letters[a]);
                 }
             nextAngles_ = rotaryTarget(b, false, true);
             if (!axes.empty())
-                warn("G53 moves " + axes + " in machine coordinates, and the program never states the " +
-                         coordSystemName() + " work offset (G10 L2) that places them: where the machine goes is "
-                         "unknown, so " + axes + (axes.size() == 1 ? " stays" : " stay") +
-                         " unknown and the moves are not simulated until X, Y and Z are all programmed again",
-                     "G53 unknown", b.gColumn(530));
+                warnMachineUnknown("G53 moves " + axes + " in machine coordinates", lost, "G53 unknown", b.gColumn(530));
             setMachineKnown(known);
         } else {
             target = toMachine(targetOf(b, toProgram(mpos_), !absolute_));

@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "path/detail/text.h"
 
@@ -26,10 +28,65 @@ constexpr int kCoordSystemCodes[9] = {540, 550, 560, 570, 580, 590, 591, 592, 59
 
 std::string Interpreter::coordSystemName() const { return "G" + codeText(kCoordSystemCodes[coordSys_]); }
 
-void Interpreter::setCoordSystem(int code) {
-    for (int k = 0; k < 9; ++k)
-        if (kCoordSystemCodes[k] == code) coordSys_ = k;
+void Interpreter::setCoordSystem(int code, int col) {
+    int k = coordSys_;
+    for (int c = 0; c < 9; ++c)
+        if (kCoordSystemCodes[c] == code) k = c;
+    if (k == coordSys_) return;
+    std::array<bool, 3> guessed{};
+    for (int a = 0; a < 3; ++a) {
+        const std::size_t i = std::size_t(a);
+        guessed[i] = g5xGuessed_[std::size_t(coordSys_)][i] || g5xGuessed_[std::size_t(k)][i];
+    }
+    coordSys_ = k;
     store(params_[5220], coordSys_ + 1);
+    loseGuessedAxes(guessed, "G" + codeText(code), col);
+}
+
+void Interpreter::loseGuessedAxes(const std::array<bool, 3>& axes, const std::string& code, int col) {
+    std::string names;
+    for (int a = 0; a < 3; ++a)
+        if (axes[std::size_t(a)] && known_[a]) names += (names.empty() ? "" : ", ") + std::string(1, char('X' + a));
+    if (names.empty()) return;
+    // Under a tilted plane each program coordinate mixes all three: one lost loses them all.
+    for (int a = 0; a < 3; ++a)
+        if (axes[std::size_t(a)] || twp_) known_[a] = false;
+    positionKnown_ = false;
+    warn(code + " changes the offset of " + names + ", which was taken from a guessed machine position (G92 or " +
+             "G10 L20 named the present point where it was unknown): where the tool stands on the part is unknown, so " +
+             names + (names.size() == 1 ? " becomes" : " become") +
+             " unknown and the moves are not simulated until X, Y and Z are all programmed again",
+         code + " after a guessed position", col);
+}
+
+void Interpreter::warnMachineUnknown(const std::string& what, const std::array<bool, 3>& axes, const std::string& key,
+                                     int col) {
+    std::string unstated, guessed, names;
+    for (int a = 0; a < 3; ++a) {
+        if (!axes[std::size_t(a)]) continue;
+        const std::string c(1, char('X' + a));
+        names += (names.empty() ? "" : ", ") + c;
+        if (!g5xStated_[std::size_t(coordSys_)][std::size_t(a)])
+            unstated += (unstated.empty() ? "" : ", ") + c;
+        else if (offsetGuessed(a))
+            guessed += (guessed.empty() ? "" : ", ") + c;
+    }
+    std::vector<std::string> why;
+    if (!unstated.empty())
+        why.push_back("the program never states the " + coordSystemName() + " work offset (G10 L2) of " + unstated +
+                      " that places machine coordinates on the part");
+    if (!guessed.empty())
+        why.push_back("the offset of " + guessed + " was taken from a guessed machine position (G92 or G10 L20 named " +
+                      "the present point where it was unknown)");
+    if (axes[2] && tlo_)
+        why.push_back("with a tool length offset active (G43) a machine Z is the spindle's gauge line, and the tip "
+                      "stands a tool length below it, which the program does not state");
+    std::string reasons;
+    for (std::size_t i = 0; i < why.size(); ++i) reasons += (i == 0 ? "" : "; and ") + why[i];
+    warn(what + ", and " + reasons + ": where the tool goes on the part is unknown, so " + names +
+             (names.size() == 1 ? " stays" : " stay") +
+             " unknown and the moves are not simulated until X, Y and Z are all programmed again",
+         key, col);
 }
 
 bool Interpreter::executeNonModal(int code, Block& b, int motion) {
@@ -75,15 +132,24 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         static const char letters[3] = {'X', 'Y', 'Z'};
         if (l == 20 && twp_)
             fail(b.gColumn(100), "G10 L20 with an active G68.2 is not supported", "G10");
+        std::array<bool, 3> changed{};
         for (int a = 0; a < 3; ++a) {
             if (!b.has(letters[a])) continue;
             const double v = b.get(letters[a]) * units_;
-            bool& stated = g5xStated_[std::size_t(cs)][std::size_t(a)];
+            const std::size_t i = std::size_t(a);
+            bool& stated = g5xStated_[std::size_t(cs)][i];
+            bool& guessed = g5xGuessed_[std::size_t(cs)][i];
             if (l == 2) {
+                // A new offset for the active system moves the part frame: a guess in the old one
+                // leaves the position unknown in the new.
+                changed[i] = cs == coordSys_ && guessed;
                 g5x_[std::size_t(cs)][a] = v;
                 stated = true;
+                guessed = false;
             } else {
-                stated = known_[a] && g5xStated_[std::size_t(coordSys_)][std::size_t(a)];
+                // Taken from where the tool stands: as good as that position and the active offset.
+                stated = known_[a] && g5xStated_[std::size_t(coordSys_)][i] && !offsetGuessed(a);
+                guessed = !known_[a] || offsetGuessed(a);
                 if (cs == coordSys_ && !known_[a]) {
                     // Touching off the active system names the present point, as G92 does (the
                     // operator's "here is X0"): where that is on the machine is unknown, so it is
@@ -97,6 +163,7 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         }
         positionKnown_ = known_[0] && known_[1] && known_[2];
         everKnown_ = everKnown_ || positionKnown_;
+        loseGuessedAxes(changed, "G10 L2", b.gColumn(100));
         return true;
     }
     case 280: case 300: {  // G28, G30: via the given point to the stored position
@@ -115,15 +182,22 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         }
         // The stored position the program never states is the machine's own (LinuxCNC keeps it in
         // its parameter file): the axes that go there become unknown, as at the start.
+        // A stored position the program states is a machine position: it is a place on the part
+        // only where machine coordinates are (machineCoordKnown), as for G53.
         std::array<bool, 3> known{known_[0], known_[1], known_[2]};
-        std::string axes, params;
+        std::array<bool, 3> offPart{};
+        std::string axes, params, placed, placedParams;
         for (int a = 0; a < 3; ++a)
             if (!anyXYZ || b.has(char('X' + a))) {
+                const std::size_t i = std::size_t(a);
                 end[a] = home[a];
-                known[std::size_t(a)] = homeStated_[which][std::size_t(a)];
-                if (known[std::size_t(a)]) continue;
-                axes += (axes.empty() ? "" : ", ") + std::string(1, char('X' + a));
-                params += (params.empty() ? "#" : ", #") + std::to_string(base + a);
+                known[i] = homeStated_[which][i] && machineCoordKnown(a);
+                if (known[i]) continue;
+                std::string& list = homeStated_[which][i] ? placed : axes;
+                std::string& nums = homeStated_[which][i] ? placedParams : params;
+                offPart[i] = homeStated_[which][i];
+                list += (list.empty() ? "" : ", ") + std::string(1, char('X' + a));
+                nums += (nums.empty() ? "#" : ", #") + std::to_string(base + a);
             }
         if (!axes.empty())
             warn("G" + codeText(code) + " moves " + axes + " to the stored position (" + params +
@@ -131,6 +205,10 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
                      "): where the machine goes is unknown, so " + axes + (axes.size() == 1 ? " stays" : " stay") +
                      " unknown and the moves are not simulated until X, Y and Z are all programmed again",
                  "G" + codeText(code) + " unknown", b.gColumn(code));
+        if (!placed.empty())
+            warnMachineUnknown("G" + codeText(code) + " moves " + placed + " to the stored position (" + placedParams +
+                                   "), a machine position",
+                               offPart, "G" + codeText(code) + " off the part", b.gColumn(code));
         setMachineKnown(known);
         emit(end, true);
         return true;
@@ -140,7 +218,8 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         const int base = code == 281 ? 5161 : 5181;
         for (int a = 0; a < 3; ++a) {
             store(params_[std::size_t(base + a)], mpos_[a]);
-            homeStated_[which][std::size_t(a)] = known_[a];
+            // The machine position is known where the tool's place and the offsets are.
+            homeStated_[which][std::size_t(a)] = known_[a] && machineCoordKnown(a);
         }
         return false;
     }
@@ -162,9 +241,18 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
         }
         static const char letters[3] = {'X', 'Y', 'Z'};
         const Vec3 before = g92_;
+        std::array<bool, 3> changed{};
         for (int a = 0; a < 3; ++a) {
             if (!b.has(letters[a])) continue;
             const double v = b.get(letters[a]) * units_;
+            const std::size_t i = std::size_t(a);
+            // G92 takes its offset from where the tool stands, guessed there if that is unknown;
+            // G52 sets it outright, moving the part frame away from any guess in the old one.
+            if (code == 920)
+                g92Guessed_[i] = g92Guessed_[i] || !known_[a];
+            else
+                changed[i] = std::exchange(g92Guessed_[i], false);
+            g92StoredGuessed_[i] = g92Guessed_[i];
             if (code == 920 && !known_[a] && !twp_) {
                 // G92 names the present point, which is where the program says it is: an old-style
                 // program's start (G92 X0 Y0 Z0 where the operator put the tool). Where that is on
@@ -186,17 +274,33 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
             fail(b.gColumn(code),
                  "G52/G92 changing the offset under an active G68.2 is not supported",
                  "G" + codeText(code));
+        loseGuessedAxes(changed, "G52", b.gColumn(code));
         return true;
     }
-    case 921: case 922:
+    case 921: case 922: {
+        // Cleared, a guessed offset no longer keeps the part frame where the guess put it.
+        const std::array<bool, 3> changed = g92Guessed_;
         g92_ = Vec3(0.0);
+        g92Guessed_ = {false, false, false};
         rotaryOffset_ = {0.0, 0.0, 0.0};
-        if (code == 921)
+        if (code == 921) {
             for (int a = 0; a < 3; ++a) store(params_[std::size_t(5211 + a)], 0.0);
+            g92StoredGuessed_ = {false, false, false};
+        }
+        loseGuessedAxes(changed, "G" + codeText(code), b.gColumn(code));
         return false;
-    case 923:
-        for (int a = 0; a < 3; ++a) g92_[a] = params_[std::size_t(5211 + a)];
+    }
+    case 923: {
+        std::array<bool, 3> changed{};
+        for (int a = 0; a < 3; ++a) {
+            const std::size_t i = std::size_t(a);
+            g92_[a] = params_[std::size_t(5211 + a)];
+            changed[i] = g92Guessed_[i] || g92StoredGuessed_[i];
+        }
+        g92Guessed_ = g92StoredGuessed_;
+        loseGuessedAxes(changed, "G92.3", b.gColumn(code));
         return false;
+    }
     default:
         return false;
     }
