@@ -1,6 +1,6 @@
 // Tests of the G-code reader's offsets: which machine positions and offset changes leave the
-// position known on the part, G53 under a tool length offset and with rotary words. The expected
-// places are worked out by hand from LinuxCNC's rules.
+// position known on the part, G53 under a tool length offset and with rotary words, and the work
+// offsets' parameters. The expected places are worked out by hand from LinuxCNC's rules.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -149,4 +149,25 @@ TEST_CASE("gcode offsets: G53's rotary words are machine angles, without the wor
     CHECK(c.lo == Approx(0.0).margin(kTol));
     CHECK(c.hi == Approx(30.0).margin(kTol));
     REQUIRE(p.path.moves.size() == 2);
+}
+
+TEST_CASE("gcode offsets: a work offset's parameters take effect when the system is selected",
+          "[path][gcode]") {
+    // LinuxCNC loads a system's offsets from #5221 + 20 k .. when the program selects it; the
+    // active system is not reloaded by selecting it again.
+    const Program p = run("#5241 = 100 #5242 = 0 #5243 = -20\nG55\nG0 X0 Y0 Z0\nG53 G0 Z0\n");
+    const auto& m = p.path.moves;
+    REQUIRE(m.size() == 2);
+    CHECK(near(m[0].end, Vec3(100, 0, -20)));
+    CHECK(near(m[1].end, Vec3(100, 0, 0)));  // the parameters state the offset: G53 is swept
+    CHECK_FALSE(findDiagnostic(p, "G53 moves"));
+    const Program q = run("#5221 = 100\nG54 G0 X0 Y0 Z0\nG55\nG54\nG0 X0\n");
+    REQUIRE(q.path.moves.size() == 2);
+    CHECK(near(q.path.moves[0].end, Vec3(0, 0, 0)));
+    CHECK(near(q.path.moves[1].end, Vec3(100, 0, 0)));
+    // The rotary offsets too (#5246, G55's C): C0 there is machine C30.
+    GcodeOptions o = linuxcnc();
+    o.machine = loadMachine("xyzac-trt");
+    const Program r = run("#5246 = 30\nG55\nG0 X0 Y0 Z50 C0\n", o);
+    CHECK(r.rotaryRanges[2].hi == Approx(30.0).margin(kTol));
 }

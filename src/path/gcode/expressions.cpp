@@ -44,7 +44,13 @@ void Interpreter::setParam(const ParamRef& r, double v) {
         const int base = k == 0 ? 5161 : 5181;  // G28's and G30's X, Y, Z
         if (r.index >= base && r.index < base + 3) homeStated_[std::size_t(k)][std::size_t(r.index - base)] = true;
     }
-    // A G92 offset kept for G92.3 (#5211..) and stated here is no guess.
+    // A work offset's X, Y or Z (#5221 + 20 k ..), stated here, takes effect when its system is
+    // next selected (setCoordSystem); a G92 offset kept for G92.3 (#5211..) is stated too.
+    if (r.index >= 5221 && r.index < 5221 + 20 * 9 && (r.index - 5221) % 20 < 3) {
+        const std::size_t k = std::size_t((r.index - 5221) / 20), a = std::size_t((r.index - 5221) % 20);
+        g5xParamStated_[k][a] = true;
+        g5xParamGuessed_[k][a] = false;
+    }
     if (r.index >= 5211 && r.index < 5214) g92StoredGuessed_[std::size_t(r.index - 5211)] = false;
 }
 

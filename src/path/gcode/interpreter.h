@@ -308,7 +308,9 @@ private:
     Vec3 toMachine(const Vec3& p) const;
     Vec3 toProgram(const Vec3& m) const;
 
-    /// Selects G54..G59.3 (`code` in tenths) at column col.
+    /// Selects G54..G59.3 (`code` in tenths) at column col. A system selected anew takes its
+    /// offsets from its parameters (#5221 + 20 k ..), which an assignment may have changed: as in
+    /// LinuxCNC, reselecting the active system changes nothing.
     void setCoordSystem(int code, int col);
     /// The active work coordinate system's code, G54 to G59.3.
     std::string coordSystemName() const;
@@ -433,6 +435,9 @@ private:
     /// Which of them were taken from a guessed machine position (G10 L20 where the position was
     /// unknown, or rested on a guess).
     std::array<std::array<bool, 3>, 9> g5xGuessed_{};
+    /// The same two for the parameters #5221 + 20 k ..: an assignment states one, and the system
+    /// takes it when next selected.
+    std::array<std::array<bool, 3>, 9> g5xParamStated_{}, g5xParamGuessed_{};
     /// The G92 offset's X, Y, Z, and those kept in #5211.. for G92.3, were taken from a guessed
     /// machine position (G92 where the position was unknown, or rested on a guess).
     std::array<bool, 3> g92Guessed_{}, g92StoredGuessed_{};

@@ -36,6 +36,10 @@ void Interpreter::setCoordSystem(int code, int col) {
     std::array<bool, 3> guessed{};
     for (int a = 0; a < 3; ++a) {
         const std::size_t i = std::size_t(a);
+        g5x_[std::size_t(k)][a] = params_[std::size_t(5221 + 20 * k + a)];
+        g5xRotary_[std::size_t(k)][i] = params_[std::size_t(5224 + 20 * k + a)];
+        g5xStated_[std::size_t(k)][i] = g5xParamStated_[std::size_t(k)][i];
+        g5xGuessed_[std::size_t(k)][i] = g5xParamGuessed_[std::size_t(k)][i];
         guessed[i] = g5xGuessed_[std::size_t(coordSys_)][i] || g5xGuessed_[std::size_t(k)][i];
     }
     coordSys_ = k;
@@ -160,6 +164,8 @@ bool Interpreter::executeNonModal(int code, Block& b, int motion) {
                 g5x_[std::size_t(cs)][a] = mpos_[a] - g92_[a] - v;
             }
             store(params_[std::size_t(5221 + 20 * cs + a)], g5x_[std::size_t(cs)][a]);
+            g5xParamStated_[std::size_t(cs)][i] = stated;
+            g5xParamGuessed_[std::size_t(cs)][i] = guessed;
         }
         positionKnown_ = known_[0] && known_[1] && known_[2];
         everKnown_ = everKnown_ || positionKnown_;
