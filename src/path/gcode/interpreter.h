@@ -427,10 +427,11 @@ private:
     bool positionKnown_ = false;
     /// The position has been wholly known: an unknown one was lost on the way, not at the start.
     bool everKnown_ = false;
-    /// Which of G54..G59.3's X, Y, Z offsets the program has stated (G10 L2, or L20 where the
-    /// position was known in machine coordinates). A machine coordinate (G53) is a known place in
-    /// the frame the moves are simulated in only where the active system's offset is stated: the
-    /// offsets set at the machine are not in the program.
+    /// Which of G54..G59.3's X, Y, Z offsets the program has stated (G10 L2, L20 where the
+    /// position was known in machine coordinates, or its parameters when the system was selected).
+    /// A machine coordinate (G53, G28, G30) is a known place in the frame the moves are simulated
+    /// in only where the active system's offset is stated: the offsets set at the machine are not
+    /// in the program.
     std::array<std::array<bool, 3>, 9> g5xStated_{};
     /// Which of them were taken from a guessed machine position (G10 L20 where the position was
     /// unknown, or rested on a guess).
