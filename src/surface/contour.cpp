@@ -667,7 +667,7 @@ private:
                 const int len = loopOf(near, p, patches, k, loop);
                 int qefRank = 0;
                 const detail::PatchVertexRule::Loop crossings{mesh_.vertices.data(), crossingNormal_.data(), loop, len};
-                mesh_.vertices[at] = vertexRule_.place(crossings, latticePoint(p), qefRank);
+                mesh_.vertices[at] = vertexRule_.place(crossings, latticePoint(p), patches.count > 1, qefRank);
                 feature_[at - patchVertexBase_] = std::uint8_t(qefRank >= 2);
                 edges += qefRank == 2;
                 corners += qefRank == 3;
@@ -685,31 +685,38 @@ private:
     /// vertices lie. Their fans are never flipped.
     void splitPatchPass(std::uint32_t crossings, std::atomic<std::size_t>& edgeCount, std::atomic<std::size_t>& cornerCount) {
         std::vector<std::uint32_t> loop;
-        for (std::size_t k = 0; k < split_.patches(); ++k) {
-            std::uint32_t tri = splitPatchTriangle_[k];
-            loop.clear();
-            for (std::uint32_t i = split_.loopStart[k]; i < split_.loopStart[k + 1]; ++i) {
-                const std::uint32_t id = split_.loopIds[i];
-                if (id & detail::SplitCells::kOrdinary) {
-                    const auto& [g, a] = split_.ordinary[id & ~detail::SplitCells::kOrdinary];
-                    const Coord lower(g[0], g[1], g[2]);
-                    const Block* b = index_.blockAt(lower);
-                    if (!b) throwOutsideBand(Coord(split_.patchCell[k][0], split_.patchCell[k][1], split_.patchCell[k][2]));
-                    loop.push_back(ownedIndex(*b, lower, a));
-                } else {
-                    loop.push_back(crossings + id);
-                }
-            }
-            const std::uint32_t at = splitPatchVertex_[k];
-            const detail::GridPoint& g = split_.patchCell[k];
-            int qefRank = 0;
-            const int len = int(loop.size());
-            const detail::PatchVertexRule::Loop crossingsOf{mesh_.vertices.data(), crossingNormal_.data(), loop.data(), len};
-            mesh_.vertices[at] = vertexRule_.place(crossingsOf, latticePoint(Coord(g[0], g[1], g[2])), qefRank);
-            edgeCount += qefRank == 2;
-            cornerCount += qefRank == 3;
-            for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[std::size_t(i)], loop[std::size_t(i + 1 == len ? 0 : i + 1)]};
+        for (std::size_t c = 0; c < split_.cells.size(); ++c) {
+            const std::uint32_t p0 = split_.cellPatchStart[c], p1 = split_.cellPatchStart[c + 1];
+            for (std::uint32_t k = p0; k < p1; ++k) placeSplitPatch(k, crossings, p1 - p0 > 1, loop, edgeCount, cornerCount);
         }
+    }
+
+    /// Split patch k's vertex and fan (splitPatchPass); `sharesCell`: its cell holds others.
+    void placeSplitPatch(std::uint32_t k, std::uint32_t crossings, bool sharesCell, std::vector<std::uint32_t>& loop,
+                         std::atomic<std::size_t>& edgeCount, std::atomic<std::size_t>& cornerCount) {
+        std::uint32_t tri = splitPatchTriangle_[k];
+        loop.clear();
+        for (std::uint32_t i = split_.loopStart[k]; i < split_.loopStart[k + 1]; ++i) {
+            const std::uint32_t id = split_.loopIds[i];
+            if (id & detail::SplitCells::kOrdinary) {
+                const auto& [g, a] = split_.ordinary[id & ~detail::SplitCells::kOrdinary];
+                const Coord lower(g[0], g[1], g[2]);
+                const Block* b = index_.blockAt(lower);
+                if (!b) throwOutsideBand(Coord(split_.patchCell[k][0], split_.patchCell[k][1], split_.patchCell[k][2]));
+                loop.push_back(ownedIndex(*b, lower, a));
+            } else {
+                loop.push_back(crossings + id);
+            }
+        }
+        const std::uint32_t at = splitPatchVertex_[k];
+        const detail::GridPoint& g = split_.patchCell[k];
+        int qefRank = 0;
+        const int len = int(loop.size());
+        const detail::PatchVertexRule::Loop crossingsOf{mesh_.vertices.data(), crossingNormal_.data(), loop.data(), len};
+        mesh_.vertices[at] = vertexRule_.place(crossingsOf, latticePoint(Coord(g[0], g[1], g[2])), sharesCell, qefRank);
+        edgeCount += qefRank == 2;
+        cornerCount += qefRank == 3;
+        for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[std::size_t(i)], loop[std::size_t(i + 1 == len ? 0 : i + 1)]};
     }
 
     /// The edges with several crossings of the split cells whose triangles still fold or have no

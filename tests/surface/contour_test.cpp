@@ -207,6 +207,27 @@ TEST_CASE("contour: a slot narrower than a cell between two lattice planes is me
     CHECK(r.check.signedVolume == Approx(kBox.volume() - slot).margin(0.4 * (y1 - y0) * h));
 }
 
+TEST_CASE("contour: a fin thinner than a cell that crosses cells slantwise keeps its patches apart",
+          "[surface][contour][fine]") {
+    // Two plunges of a flat end mill of radius 15 h whose walls pass 0.05 h apart, their centres
+    // on a line 0.9 rad from x: the fin left between them is thinner than a cell and crosses the
+    // corners of the cells' z faces slantwise. The face rule reads the fin's two ends in a cell as
+    // two patches; one's vertex, fitted across the fin and bounded by the cell alone, sat on the
+    // face below the other, and 16 pairs of fan triangles passed through each other (the bore's
+    // wall of helical-thread-milling.gcode at h = 0.1 mm showed 3388). contourPart checks the
+    // crossings.
+    const double h = 1.0, r = 15.0, gap = 0.05, turn = 0.9;
+    const Vec3 neck(10.13, 10.64, 0.0), apart(std::cos(turn), std::sin(turn), 0.0), up(0.0, 0.0, 1.0);
+    const Part part{Box{Vec3(5.0, 5.0, 0.0), Vec3(15.0, 15.0, 3.0)},
+                    {testing::cylinder(neck - (r + 0.5 * gap) * apart, up, r),
+                     testing::cylinder(neck + (r + 0.5 * gap) * apart, up, r)}};
+    const Result res = contourPart(part, h);
+    INFO(summary("slanting fin", res) << "; " << res.stats.splitEdges << " split edges");
+    CHECK(res.check.ok());
+    CHECK(res.stats.splitEdges > 0);  // the fin is meshed from its dexels
+    CHECK(res.stats.splitEdgesDropped == 0);
+}
+
 TEST_CASE("contour: ball passes closer than a cell", "[surface][contour]") {
     // Parallel passes of a ball of radius 3 mm at a stepover of 0.3 h: the cusps between them,
     // s^2 / (8 R) = 0.0009 mm high, are finer than the lattice can show.

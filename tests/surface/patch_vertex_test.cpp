@@ -115,7 +115,7 @@ TEST_CASE("patch vertex: a concave corner is where its three planes meet, within
                 patch.add(corner + h * (along(rng) * axis[(i + 1) % 3] + along(rng) * axis[(i + 2) % 3]), n);
         }
         int rank = -1;
-        const Vec3 v = rule.place(patch.loop(), cellLo, rank);
+        const Vec3 v = rule.place(patch.loop(), cellLo, false, rank);
         // The packed planes' least-squares point: sum_i u_i u_i^T x = sum_i u_i (u_i . p_i).
         Vec3 col[3] = {Vec3(0.0), Vec3(0.0), Vec3(0.0)};
         Vec3 rhs(0.0);
@@ -183,7 +183,7 @@ TEST_CASE("patch vertex: a concave crease puts the vertex on it, nearest the cro
     for (int trial = 0; trial < 300; ++trial) {
         const Wedge w = makeWedge(rng, true, inward, where, {0, 0, 0, 1, 1}, h);
         int rank = -1;
-        const Vec3 v = rule.place(w.patch.loop(), Vec3(0.0), rank);
+        const Vec3 v = rule.place(w.patch.loop(), Vec3(0.0), false, rank);
         const Vec3 want = insideCell(w.line, Vec3(0.0), h);
         INFO("trial " << trial << " beta " << w.beta);
         CHECK(rank == 2);
@@ -200,7 +200,7 @@ TEST_CASE("patch vertex: a convex ridge stays within its crossings' box", "[surf
     for (int trial = 0; trial < 300; ++trial) {
         const Wedge w = makeWedge(rng, false, down, where, {0, 1, 0, 1}, h);
         int rank = -1;
-        const Vec3 v = rule.place(w.patch.loop(), Vec3(0.0), rank);
+        const Vec3 v = rule.place(w.patch.loop(), Vec3(0.0), false, rank);
         const Vec3 want = insideCell(glm::clamp(w.line, w.patch.boxLo(), w.patch.boxHi()), Vec3(0.0), h);
         clamped += glm::length(want - w.line) > 1e-6 * h;
         INFO("trial " << trial << " beta " << w.beta);
@@ -209,6 +209,32 @@ TEST_CASE("patch vertex: a convex ridge stays within its crossings' box", "[surf
     }
     // The box binds in some cases (the ridge lies beyond the crossings), or the test shows nothing.
     CHECK(clamped > 30);
+}
+
+TEST_CASE("patch vertex: a patch that shares its cell stays within its crossings' box", "[surface][contour]") {
+    // One end of a fin 0.05 h thick, slanting across the cell's z faces: its two sides cross the
+    // y edges at x = 1 (normals +-n, no z part), and the face rule's face vertices lie far across
+    // the faces at x = 0.001 (no normal). The least-squares point lies on the fin's middle plane
+    // n . x = n . (1, 0.15665, 0), straight along n from the crossings' mean (0.667, 0.148, 0.5):
+    // 0.19 along n = (0.591, -0.806, 0) / |.|, at y = -0.005, below the cell. Bounded by the cell
+    // alone it sits on the face y = 0, where the fin's other end has its patch in the same cell.
+    const double h = 1.0;
+    const PatchVertexRule rule(h, kFeatureAngle);
+    const Vec3 n = glm::normalize(Vec3(0.591, -0.806, 0.0));
+    Patch stub;
+    stub.add(Vec3(1.0, 0.1308, 0.0), PackedNormal::pack(n));
+    stub.add(Vec3(1.0, 0.1308, 1.0), PackedNormal::pack(n));
+    stub.add(Vec3(0.001, 0.1308, 1.0), PackedNormal());
+    stub.add(Vec3(1.0, 0.1825, 1.0), PackedNormal::pack(-n));
+    stub.add(Vec3(1.0, 0.1825, 0.0), PackedNormal::pack(-n));
+    stub.add(Vec3(0.001, 0.1308, 0.0), PackedNormal());
+    int rank = -1;
+    const Vec3 alone = rule.place(stub.loop(), Vec3(0.0), false, rank);
+    CHECK(alone.y < 0.1308);  // the case this guards: the cell's bound leaves the fin
+    const Vec3 shared = rule.place(stub.loop(), Vec3(0.0), true, rank);
+    CHECK(rank == 1);
+    CHECK(shared == glm::clamp(shared, stub.boxLo(), stub.boxHi()));
+    CHECK(shared.y == Approx(0.1308));  // the fit point's y clamped to the box's
 }
 
 TEST_CASE("patch vertex: a ridge beyond a cell face leaves the vertex a thousandth of a spacing inside it",
@@ -227,7 +253,7 @@ TEST_CASE("patch vertex: a ridge beyond a cell face leaves the vertex a thousand
     roof.add(cellLo + h * Vec3(0.2, 0.8, 0.1), slope);
     roof.add(cellLo + h * Vec3(0.0, 0.3, 0.3), slope);
     int rank = -1;
-    const Vec3 v = rule.place(roof.loop(), cellLo, rank);
+    const Vec3 v = rule.place(roof.loop(), cellLo, false, rank);
     CHECK(rank == 2);
     // The ridge line runs along y, so the vertex takes the crossings' mean y.
     const Vec3 want = cellLo + h * Vec3(1e-3, 0.5, 0.5);
@@ -257,7 +283,7 @@ TEST_CASE("patch vertex: a smooth patch moves along its mean normal to the plane
             patch.add(centre + r * dir, PackedNormal::pack(-dir));
         }
         int rank = -1;
-        const Vec3 v = rule.place(patch.loop(), Vec3(0.0), rank);
+        const Vec3 v = rule.place(patch.loop(), Vec3(0.0), false, rank);
         // The mean normal, and the offset along it minimising the sum of squared plane distances,
         // by a ternary search (the sum is a convex quadratic in the offset).
         const Vec3 m = patch.mass();
@@ -294,7 +320,7 @@ TEST_CASE("patch vertex: without a plane the vertex is the crossings' mean", "[s
     }
     for (const Patch* patch : {&none, &sharp}) {
         int rank = -1;
-        const Vec3 v = rule.place(patch->loop(), Vec3(0.0), rank);
+        const Vec3 v = rule.place(patch->loop(), Vec3(0.0), false, rank);
         CHECK(rank == 0);
         CHECK(glm::length(v - Vec3(0.45, 0.5, 0.5)) <= 1e-12);
     }

@@ -113,7 +113,18 @@ Vec3 PatchVertexRule::massPoint(const Loop& loop) {
 /// saw (a cusp next to a wall's top, say): there the vertex is kept within the box of its
 /// crossings rather than extrapolated past them. A crease is convex when a crossing lies on
 /// the material side of another's tangent plane (by more than kConvexGap h).
-Vec3 PatchVertexRule::place(const Loop& loop, const Vec3& cellLo, int& rank) const {
+///
+/// A patch that shares its cell with others keeps its vertex within the box of its crossings
+/// too, whatever its rank: the fan then stays in that box, and fans whose boxes are apart cannot
+/// pass through each other. Bounded by the whole cell, a vertex can land in another patch's part
+/// of it. (helical-thread-milling.gcode from (0, 0, 0) at h = 0.1 mm, the cell at (-0.99, 1.20,
+/// -0.97): a fin 0.06 h thick crosses the corner of the cell's z faces slantwise, and the face
+/// rule saw its two ends as two stubs, two patches. The stub on the x = 1 edges, its crossings
+/// 0.13 to 0.18 h up y, has a face vertex far across the face, off the fin; its least-squares
+/// point, along the fin's slanting normal from that biased mass point, lay below y = 0 and was
+/// clamped onto the y = 0 face, under the other stub, whose fan its own then crossed: 3388 pairs
+/// of triangles in 154 such cells up the bore's wall.)
+Vec3 PatchVertexRule::place(const Loop& loop, const Vec3& cellLo, bool sharesCell, int& rank) const {
     const Vec3 mass = massPoint(loop);
     rank = 0;
     if (loop.len > kMaxPlanes) return glm::clamp(mass, cellLo, cellLo + h_);
@@ -171,8 +182,8 @@ Vec3 PatchVertexRule::place(const Loop& loop, const Vec3& cellLo, int& rank) con
     }
     Vec3 lo = cellLo;
     Vec3 hi = lo + h_;
-    if (rank >= 2 && convexCrease(loop, h_)) {
-        // The box of the crossings (they lie on the cell's edges, so inside the cell).
+    if (sharesCell || (rank >= 2 && convexCrease(loop, h_))) {
+        // The box of the crossings (they lie on the cell's edges and faces, so inside the cell).
         lo = hi = loop.points[loop.index[0]];
         for (int i = 1; i < loop.len; ++i) {
             lo = glm::min(lo, loop.points[loop.index[i]]);

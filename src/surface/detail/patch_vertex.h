@@ -39,8 +39,9 @@ public:
 
     /// @brief The patch's vertex in the cell whose lowest corner is `cellLo`; `rank` is the rank
     /// the truncated SVD kept: 0 (no plane: the mass point), 1 (a smooth patch), 2 (a crease,
-    /// the vertex on it) or 3 (a corner).
-    Vec3 place(const Loop& loop, const Vec3& cellLo, int& rank) const;
+    /// the vertex on it) or 3 (a corner). `sharesCell`: the cell holds other patches, and the
+    /// vertex stays within the box of the loop's crossings (see the definition).
+    Vec3 place(const Loop& loop, const Vec3& cellLo, bool sharesCell, int& rank) const;
 
 private:
     double h_;
