@@ -37,6 +37,14 @@ inline constexpr double kPi = 3.14159265358979323846;
 inline constexpr double kDeg = kPi / 180.0;
 /// LinuxCNC parameters #1..#5602 (and Fanuc system variables below #10000).
 inline constexpr int kNumParams = 10000;
+
+/// The letters of the axes X, Y, Z that `axes` marks, for messages: "X, Z".
+inline std::string axisNames(const std::array<bool, 3>& axes) {
+    std::string names;
+    for (std::size_t a = 0; a < 3; ++a)
+        if (axes[a]) names += (names.empty() ? "" : ", ") + std::string(1, char('X' + a));
+    return names;
+}
 /// How far a centre-format arc's radius to its end may differ from its radius to its start: the
 /// rule of LinuxCNC's arc_data_ijk (interp_arc.cc) with its default tolerances
 /// (interp_internal.hh). With t the absolute tolerance of the program's units

@@ -182,9 +182,7 @@ void Interpreter::setTcp(bool on, int col, const char* code) {
     if (positionKnown_ || !(known_[0] || known_[1] || known_[2])) return;
     // Each coordinate in the new frame may mix all three of the old: with one of them never
     // programmed, none of the converted ones is known, and the program must give X, Y and Z anew.
-    std::string unknown;
-    for (int a = 0; a < 3; ++a)
-        if (!known_[a]) unknown += (unknown.empty() ? "" : ", ") + std::string(1, char('X' + a));
+    const std::string unknown = axisNames({!known_[0], !known_[1], !known_[2]});
     std::fill(std::begin(known_), std::end(known_), false);
     warn(std::string(code) + " before X, Y and Z are all known (" + unknown +
              " not yet programmed): the position stays unknown until X, Y and Z are all programmed "
@@ -278,17 +276,15 @@ void Interpreter::executeMotion(int mode, Block& b, bool g53, int motionCol) {
             // enters it, and, for Z, no tool length offset lifts the point G53 names off the tip.
             std::array<bool, 3> known{known_[0], known_[1], known_[2]};
             std::array<bool, 3> lost{};
-            std::string axes;
             static const char letters[3] = {'X', 'Y', 'Z'};
             for (int a = 0; a < 3; ++a)
                 if (b.has(letters[a])) {
                     target[a] = b.get(letters[a]) * units_;
                     known[std::size_t(a)] = machineCoordKnown(a);
                     lost[std::size_t(a)] = !known[std::size_t(a)];
-                    if (!known[std::size_t(a)]) axes += (axes.empty() ? "" : ", ") + std::string(1, letters[a]);
                 }
             nextAngles_ = rotaryTarget(b, false, true);
-            if (!axes.empty())
+            if (const std::string axes = axisNames(lost); !axes.empty())
                 warnMachineUnknown("G53 moves " + axes + " in machine coordinates", lost, "G53 unknown", b.gColumn(530));
             setMachineKnown(known);
         } else {

@@ -48,9 +48,7 @@ void Interpreter::setCoordSystem(int code, int col) {
 }
 
 void Interpreter::loseGuessedAxes(const std::array<bool, 3>& axes, const std::string& code, int col) {
-    std::string names;
-    for (int a = 0; a < 3; ++a)
-        if (axes[std::size_t(a)] && known_[a]) names += (names.empty() ? "" : ", ") + std::string(1, char('X' + a));
+    const std::string names = axisNames({axes[0] && known_[0], axes[1] && known_[1], axes[2] && known_[2]});
     if (names.empty()) return;
     // Under a tilted plane each program coordinate mixes all three: one lost loses them all.
     for (int a = 0; a < 3; ++a)
@@ -65,16 +63,13 @@ void Interpreter::loseGuessedAxes(const std::array<bool, 3>& axes, const std::st
 
 void Interpreter::warnMachineUnknown(const std::string& what, const std::array<bool, 3>& axes, const std::string& key,
                                      int col) {
-    std::string unstated, guessed, names;
+    std::array<bool, 3> unstatedAxes{}, guessedAxes{};
     for (int a = 0; a < 3; ++a) {
-        if (!axes[std::size_t(a)]) continue;
-        const std::string c(1, char('X' + a));
-        names += (names.empty() ? "" : ", ") + c;
-        if (!g5xStated_[std::size_t(coordSys_)][std::size_t(a)])
-            unstated += (unstated.empty() ? "" : ", ") + c;
-        else if (offsetGuessed(a))
-            guessed += (guessed.empty() ? "" : ", ") + c;
+        const std::size_t i = std::size_t(a);
+        unstatedAxes[i] = axes[i] && !g5xStated_[std::size_t(coordSys_)][i];
+        guessedAxes[i] = axes[i] && !unstatedAxes[i] && offsetGuessed(a);
     }
+    const std::string names = axisNames(axes), unstated = axisNames(unstatedAxes), guessed = axisNames(guessedAxes);
     std::vector<std::string> why;
     if (!unstated.empty())
         why.push_back("the program never states the " + coordSystemName() + " work offset (G10 L2) of " + unstated +
