@@ -180,6 +180,22 @@ Tool drill(double d, double pointAngle, ToolLengths lengths) {
     return Tool(name("drill D" + num(d) + " P" + deg(pointAngle), l), std::move(pieces), l.cutting);
 }
 
+Tool withHolder(const Tool& tool, double d, double length) {
+    const std::string who = "holder of " + tool.description();
+    requirePositiveLength(who, "diameter", d);
+    requirePositiveLength(who, "length", length);
+    const double top = tool.totalLength(), rTop = tool.radiusAt(top);
+    if (d / 2 < rTop - tol::kLength) {
+        const auto [dText, topText] = decimalsApart(d, 2 * rTop);
+        bad(who, "diameter " + dText + " mm is narrower than the tool it holds, " + topText + " mm at its top");
+    }
+    std::vector<ProfilePiece> pieces = tool.pieces();
+    pieces.push_back(ConePiece{top, top + length, d / 2, d / 2});
+    Tool held(tool.description() + " holder D" + num(d) + " L" + num(length), std::move(pieces), tool.cuttingLength());
+    held.holderBottom_ = top;
+    return held;
+}
+
 double cutterRounding(double value, double unit) {
     // Half a unit in the sixth significant digit is at most this fraction of the value (1.00000
     // to 9.99999: 5e-6 to 5e-7).

@@ -81,10 +81,15 @@ Tool parseToolSpec(const std::string& spec) {
     ToolLengths lengths;
     lengths.cutting = take("length", 0.0);
     lengths.total = take("total", 0.0);
+    // A holder needs both its sizes: neither has a default a machine would share.
+    const bool holder = named.count("holder") > 0;
+    if (holder != (named.count("holderlength") > 0))
+        throw Error("tool '" + spec + "': a holder takes both holder=D and holderlength=L");
+    const double holderD = holder ? take("holder") : 0.0, holderLength = holder ? take("holderlength") : 0.0;
 
     auto finish = [&](Tool t) {
         if (!named.empty()) throw Error("tool '" + spec + "': unknown parameter '" + named.begin()->first + "' for " + kind);
-        return t;
+        return holder ? withHolder(t, holderD, holderLength) : t;
     };
     if (kind == "ball") return finish(ballEndMill(take("d"), lengths));
     if (kind == "flat") return finish(flatEndMill(take("d"), lengths));

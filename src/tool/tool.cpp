@@ -419,8 +419,9 @@ Tool Tool::region(double z0, double z1) const {
     if (!(z1 > z0 + tol::kLength))
         throw Error("tool '" + description_ + "': region " + num(z0) + " .. " + num(z1) +
                     " has no height");
-    return Tool(description_ + " [z " + num(z0) + ".." + num(z1) + "]", clipChain(pieces_, 0, pieces_.size(), z0, z1),
-                z1);
+    Tool out(description_ + " [z " + num(z0) + ".." + num(z1) + "]", clipChain(pieces_, 0, pieces_.size(), z0, z1), z1);
+    if (holderBottom_ < z1 - tol::kLength) out.holderBottom_ = holderBottom_;
+    return out;
 }
 
 }  // namespace dexelmill

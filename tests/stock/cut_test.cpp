@@ -369,6 +369,36 @@ TEST_CASE("cut: material met by the shank is reported, and removed unless asked 
     }
 }
 
+TEST_CASE("cut: material met by a holder is a collision of the region above the flutes", "[stock][cut]") {
+    // Flat D10, 15 mm of flute, 20 mm stick-out, in a D30 holder, plunged from above to 22 mm
+    // below the stock's top face: the flutes and the shank go down a hole of radius 5 that the
+    // flutes cut, and the holder's last 2 mm meet the ring between radii 5 and 15, 400 pi mm^3.
+    const Box box{Vec3(-20, -20, -30), Vec3(20, 20, 0)};
+    ToolTable tools;
+    tools.emplace(1, withHolder(flatEndMill(10.0, {15.0, 20.0}), 30.0, 20.0));
+    tools.emplace(2, flatEndMill(10.0, {15.0, 20.0}));
+    for (int tool : {1, 2}) {
+        ToolPath path;
+        path.files.push_back("plunge.nc");
+        Move down;
+        down.start = Vec3(0.5, 0.25, 5), down.end = Vec3(0.5, 0.25, -22), down.tool = tool, down.source = {0, 3};
+        path.moves = {down};
+        TriDexelStock stock = TriDexelStock::fromBox(box, 0.25);
+        const CutResult res = cutStock(stock, path, tools);
+        const double hole = M_PI * 25.0 * 22.0, ring = M_PI * (225.0 - 25.0) * 2.0;
+        INFO("tool " << tool);
+        if (tool == 2) {
+            CHECK(res.collisions.empty());
+            CHECK(res.removedVolume == Approx(hole).epsilon(0.01));
+            continue;
+        }
+        REQUIRE(res.collisions.size() == 1);
+        CHECK(res.collisions[0].kind == CollisionKind::Shank);
+        CHECK(res.collisions[0].volume == Approx(ring).epsilon(0.01));
+        CHECK(res.removedVolume == Approx(hole + ring).epsilon(0.01));
+    }
+}
+
 TEST_CASE("cut: a move whose tool is not in the table throws", "[stock][cut]") {
     TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 1.0);
     ToolPath path;

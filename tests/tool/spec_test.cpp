@@ -79,3 +79,30 @@ TEST_CASE("a tool spec larger than a tool may be is refused, naming the paramete
     CHECK_THAT(errorOf("flat:d=6,total=1e300"), Contains("total length = 1e+300 mm is beyond the 10000 mm"));
     CHECK_THAT(errorOf("apt:10,0,5,0,0,0,2e4"), Contains("h = 20000 mm is beyond the 10000 mm"));
 }
+
+TEST_CASE("a holder sits above the stick-out and needs both its sizes", "[tool]") {
+    const Tool t = parseToolSpec("flat:d=10,length=15,total=20,holder=32,holderlength=40");
+    CHECK(t.cuttingLength() == 15);
+    CHECK(t.totalLength() == 60);
+    CHECK(t.radiusAt(19.5) == 5);
+    CHECK(t.radiusAt(20.5) == 16);
+    CHECK(t.radiusAt(59.5) == 16);
+    CHECK(t.hasHolder());
+    CHECK_FALSE(parseToolSpec("flat:d=10,length=15,total=20").hasHolder());
+    // The shank region holds the holder; a region below it does not.
+    CHECK(t.region(15, 60).hasHolder());
+    CHECK_FALSE(t.region(15, 20).hasHolder());
+    CHECK_THAT(t.description(), Contains("holder D32 L40"));
+    // A holder as wide as the shank lengthens it.
+    CHECK(parseToolSpec("ball:d=6,total=20,holder=6,holderlength=5").radiusAt(24) == 3);
+
+    CHECK_THAT(errorOf("flat:d=10,holder=32"), Contains("both holder=D and holderlength=L"));
+    CHECK_THAT(errorOf("flat:d=10,holderlength=32"), Contains("both holder=D and holderlength=L"));
+    CHECK_THAT(errorOf("flat:d=10,holder=8,holderlength=30"),
+               Contains("diameter 8 mm is narrower than the tool it holds, 10 mm at its top"));
+    // A taper's shank keeps its top radius: 1 + 10 tan 15 deg = 3.68 mm, 7.36 across.
+    CHECK_THAT(errorOf("taper:d=2,angle=15,length=10,holder=7,holderlength=30"), Contains("7.35898 mm at its top"));
+    CHECK_THAT(errorOf("flat:d=10,holder=0,holderlength=30"), Contains("diameter must be positive, got 0"));
+    CHECK_THAT(errorOf("flat:d=10,holder=30,holderlength=-1"), Contains("length must be positive, got -1"));
+    CHECK_THAT(errorOf("flat:d=10,holder=30,holderlength=9990"), Contains("10000"));
+}

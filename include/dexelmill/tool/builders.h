@@ -35,6 +35,14 @@ Tool taperBallMill(double ballD, double halfAngle, ToolLengths lengths = {});
 /// @brief Twist drill of diameter d with included point angle (e.g. 118 degrees, in radians).
 Tool drill(double d, double pointAngle, ToolLengths lengths = {});
 
+/// @brief `tool` in a cylindrical holder of diameter d, from its stick-out (totalLength()) up for
+/// `length`: part of the tool above the cutting length, so material it meets is a collision, as the
+/// shank's is. The holder is one cylinder: d should be that of its widest part within `length` of
+/// the stick-out (a collet nut's, or a shrink-fit chuck's body), so that the cylinder holds it.
+/// @throw Error if d is narrower than the tool at its top or a value is not a positive length, or
+/// if the tool with its holder is longer than kMaxToolSizeMm.
+Tool withHolder(const Tool& tool, double d, double length);
+
 /// @brief How far a CUTTER value may lie from the one meant, as CL files print it: to six
 /// significant digits or four decimal places of its unit, whichever is coarser (1.984375 mm is
 /// printed 1.98438; Autodesk's short APT format prints four decimals).

@@ -6,7 +6,8 @@
 ///     taperball:d=3,angle=5                   drill:d=6[,angle=118]
 ///     apt:D,R,E,F,ALPHA,BETA,H
 ///
-/// followed by optional `,length=L` (cutting length) and `,total=T` (stick-out). Lengths in mm,
+/// followed by optional `,length=L` (cutting length), `,total=T` (stick-out) and
+/// `,holder=D,holderlength=L` (a cylindrical holder above the stick-out, withHolder). Lengths in mm,
 /// angles in degrees: for taper, chamfer, vbit and taperball the half angle from the axis, for
 /// drill the included point angle. d is the tip's diameter for taper (which widens over the
 /// cutting length), the largest for chamfer and vbit (whose tip is `tip=`, 0 unless given), the

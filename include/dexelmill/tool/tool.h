@@ -2,6 +2,7 @@
 /// @brief A milling cutter: a validated profile, its lengths, and exact point and line queries.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,9 @@ class Tool {
     bool isConvex() const { return parts_.size() == 1; }
 
     double totalLength() const { return totalLength_; }
+    /// @brief Whether the solid holds a holder above the stick-out (withHolder), so that what its
+    /// part above the cutting length meets may be the holder's rather than the shank's.
+    bool hasHolder() const { return holderBottom_ < totalLength_; }
     double cuttingLength() const { return cuttingLength_; }
     double maxRadius() const { return maxRadius_; }
     /// @brief The largest radius at or below the cutting length (half the cutting diameter).
@@ -84,6 +88,9 @@ class Tool {
     double cuttingLength_ = 0.0;
     double maxRadius_ = 0.0;
     double cuttingRadius_ = 0.0;
+    double holderBottom_ = std::numeric_limits<double>::infinity();  ///< where a holder starts
+
+    friend Tool withHolder(const Tool& tool, double d, double length);
 };
 
 }  // namespace dexelmill
