@@ -744,8 +744,11 @@ Simulation runStages(const SimulateOptions& o) {
     }
     for (const CutCollision& c : cut.collisions) {
         const SourceLocation at = program.path.where(c.source);
-        report.collisions.push_back({ToolPath::moveNumber(c.move), at, c.kind == CollisionKind::Rapid ? "rapid" : "shank",
-                                     c.volume});
+        // One sweep holds the shank and the holder, so what either met is counted together.
+        const char* kind = c.kind == CollisionKind::Rapid                                 ? "rapid"
+                           : sim.tools.at(program.path.moves[c.move].tool).hasHolder() ? "shank or holder"
+                                                                                         : "shank";
+        report.collisions.push_back({ToolPath::moveNumber(c.move), at, kind, c.volume});
     }
     for (int a = 0; a < 3; ++a)
         if (stock.has(axisFromIndex(a))) report.familyVolumesMm3[a] = stock.volume(axisFromIndex(a));

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -65,6 +66,27 @@ std::string blockProject(const fs::path& dir, const std::string& resolution) {
 }
 
 }  // namespace
+
+TEST_CASE("a collision above the flutes names the holder where the tool has one", "[job]") {
+    // kSlot feeds at a tip height of 7 in a block 10 high: flutes 2 mm long leave the top 1 mm to
+    // what is above them, a shank alone or a shank of 0.5 mm under a holder D20. The plunge's
+    // flutes clear a hole as wide as the shank before the shank gets there, but not the holder's.
+    const fs::path dir = scratch("holder");
+    for (const bool holder : {false, true}) {
+        SimulateOptions o = slotJob(dir);
+        const Tool tool = flatEndMill(6, {2, holder ? 2.5 : 40.0});
+        o.defaultTool = holder ? withHolder(tool, 20, 30) : tool;
+        o.resolution = 0.5;
+        const SimulateReport r = simulate(o);
+        INFO("holder " << holder);
+        std::vector<int> lines;
+        for (const ReportCollision& c : r.collisions) {
+            lines.push_back(c.where.line);
+            CHECK(c.kind == (holder ? "shank or holder" : "shank"));
+        }
+        CHECK(lines == (holder ? std::vector<int>{4, 5} : std::vector<int>{5}));
+    }
+}
 
 TEST_CASE("a slot removes its analytic volume and the report says so", "[job]") {
     const fs::path dir = scratch("slot");

@@ -127,7 +127,9 @@ struct SimulateOptions {
 struct ReportCollision {
     std::size_t move = 0;  ///< the move's number: the program's moves counted from 1 (ToolPath::moveNumber)
     SourceLocation where;
-    std::string kind;  ///< "rapid" (a rapid move removed material) or "shank" (above the flutes)
+    /// "rapid" (a rapid move removed material), "shank" (the tool above its cutting length met
+    /// material) or "shank or holder" (the same, for a tool with a holder, withHolder)
+    std::string kind;
     double volumeMm3 = 0.0;
 };
 
