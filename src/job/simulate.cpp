@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <sstream>
 
 #include <glm/trigonometric.hpp>
 #include <tbb/task_arena.h>
