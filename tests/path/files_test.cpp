@@ -162,14 +162,13 @@ TEST_CASE("files: control bytes in a message are escaped, and NUL does not cut i
     CHECK(printable("\xe2\x82") == "\\xe2\\x82");
 }
 
-TEST_CASE("files: a FileSource serves a project's programs, subroutine files and tool tables", "[path][files]") {
+TEST_CASE("files: a FileSource serves a project's programs and subroutine files", "[path][files]") {
     // The same project read from disk and from a map gives the same moves.
     const std::map<std::string, std::string> files = {
         {"p.camotics", "{\"units\": \"metric\", \"files\": [\"a.ngc\", \"b.apt\"]}"},
         {"a.ngc", "G21 G90\nG0 X0 Y0 Z5\no<step> call [3]\nM2\n"},
         {"step.ngc", "o<step> sub\nG1 X#1 Z-1 F100\no<step> endsub\n"},
         {"b.apt", "\xEF\xBB\xBF" "CUTTER/6\rFROM/0,0,5\rGOTO/4,0,-1\r"},
-        {"tools.tbl", "T1 P1 D6 Z0 ;six\n"},
     };
     const Folder dir("source");
     for (const auto& [name, text] : files) dir.write(name, text);
@@ -190,12 +189,7 @@ TEST_CASE("files: a FileSource serves a project's programs, subroutine files and
     // file were normalised as on disk.
     CHECK(std::count(asked.begin(), asked.end(), "step.ngc") == 1);
 
-    options.toolTableFile = "tools.tbl";
-    CHECK(parseGcode("T1 M6\n", "t.ngc", options).tools.count(1) == 1);
-    options.toolTableFile = "none.tbl";
-    CHECK_THROWS_WITH(parseGcode("T1 M6\n", "t.ngc", options), Catch::Matchers::Contains("'none.tbl': no such file"));
     // A program that names a missing file says which.
-    options.toolTableFile.clear();
     CHECK_THROWS_WITH(readGcodeFiles({"a.ngc", "gone.ngc"}, options), Catch::Matchers::Contains("'gone.ngc'"));
 }
 

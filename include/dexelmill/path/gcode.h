@@ -26,11 +26,6 @@ struct GcodeOptions {
     double chordTolerance = 0.001;
     /// Units before the program says G20/G21: false = mm (G21), true = inch (G20).
     bool initialInches = false;
-    /// A LinuxCNC tool table (`T1 P1 D6 Z..`) to read; empty for none. Its tools are flat end
-    /// mills of the table's diameter and go into Program::tools.
-    std::string toolTableFile;
-    /// Units of the tool table's lengths: false = mm, true = inch.
-    bool toolTableInches = false;
     /// Tool axis of the moves while no tilted work plane is active (normalised by the reader).
     Vec3 initialToolAxis{0.0, 0.0, 1.0};
     /// A `T` word changes the tool at once, without M6 (CAMotics behaviour). Off: T only selects,
@@ -78,21 +73,5 @@ Program readGcode(const std::string& path, const GcodeOptions& options = {});
 /// tool and offsets carries over), as CAMotics does with a project's file list.
 /// @throw Error if a file cannot be read; ParseError as parseGcode.
 Program readGcodeFiles(const std::vector<std::string>& paths, const GcodeOptions& options = {});
-
-/// @brief One entry of a LinuxCNC tool table.
-struct ToolTableEntry {
-    int tool = 0;
-    int pocket = 0;
-    double diameter = 0.0;     ///< mm
-    double zOffset = 0.0;      ///< tool length offset, mm
-    std::string comment;
-    int line = 0;
-};
-
-/// @brief Parses a LinuxCNC tool table (`T<n> P<n> [X Y Z A B C U V W D I J Q]... ;comment`).
-/// @param inches the table's lengths are inches (converted to mm)
-/// @throw ParseError for malformed entries.
-std::vector<ToolTableEntry> parseLinuxCncToolTable(std::string_view text,
-                                                   const std::string& fileName, bool inches);
 
 }  // namespace dexelmill

@@ -9,8 +9,6 @@
 #include <vector>
 
 #include "dexelmill/error.h"
-#include "dexelmill/tool/builders.h"
-#include "path/detail/text.h"
 
 namespace dexelmill::detail::gcode {
 
@@ -29,23 +27,6 @@ Interpreter::Interpreter(const GcodeOptions& options, Program& out) : opt_(optio
     if (options.startPosition) {
         mpos_ = *options.startPosition;
         known_[0] = known_[1] = known_[2] = positionKnown_ = everKnown_ = true;
-    }
-}
-
-void Interpreter::loadToolTable(const std::string& path) {
-    const std::string text = detail::readFile(opt_.files, path);
-    for (const ToolTableEntry& e : parseLinuxCncToolTable(text, path, opt_.toolTableInches)) {
-        SourceLocation where{path, e.line, 0};
-        if (e.diameter > 0.0) {
-            out_.tools.insert_or_assign(e.tool, flatEndMill(e.diameter));
-            diags_.note(where,
-                        "tool table: T" + std::to_string(e.tool) +
-                            " taken as a flat end mill of its diameter",
-                        "tool table shape");
-        } else {
-            diags_.warn(where, "tool table: T" + std::to_string(e.tool) +
-                                   " has no diameter; no tool shape defined");
-        }
     }
 }
 

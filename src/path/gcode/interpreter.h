@@ -169,8 +169,6 @@ class Interpreter {
 public:
     Interpreter(const GcodeOptions& options, Program& out);
 
-    void loadToolTable(const std::string& path);
-
     void run(std::string name, std::string text);
 
     /// Hands the diagnostics to the program; one that made no moves first learns of each
