@@ -31,6 +31,7 @@ struct SimulateArgs {
     std::vector<std::string> inputs;
     std::string stock;
     std::vector<std::string> tools;
+    std::string toolTable, toolTableUnits = "mm";
     double resolution = 0.0;
     std::string families = "xyz";
     std::string output, vdb, png, report;

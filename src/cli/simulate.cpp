@@ -190,6 +190,11 @@ SimulateOptions toOptions(const SimulateArgs& a) {
         throw UsageError(text);
     }
     o.turnTolerance = a.turnTolerance;
+    o.toolTable = a.toolTable;
+    if (a.toolTableUnits == "inch") o.toolTableUnit = 25.4;
+    else if (a.toolTableUnits != "mm") throw UsageError("--tool-table-units must be mm or inch, got '" + a.toolTableUnits + "'");
+    if (a.given.count("--tool-table-units") && a.toolTable.empty())
+        throw UsageError("--tool-table-units needs --tool-table FILE.tbl");
     o.machine = a.machine;
     o.startPosition = parseStart(a.start);
     if (!(a.adaptivity >= 0.0 && a.adaptivity <= 1.0)) throw UsageError("--adaptivity must lie in [0, 1]");
@@ -212,7 +217,7 @@ SimulateOptions toOptions(const SimulateArgs& a) {
                                      {"--vdb", a.vdb}, {"--png", a.png}, {"--report", a.report},
                                      {"--design", a.design}, {"--gouge-csv", a.gougeCsv},
                                      {"--deviation-ply", a.deviationPly}, {"--stock", a.stock},
-                                     {"--machine", a.machine}})
+                                     {"--machine", a.machine}, {"--tool-table", a.toolTable}})
         if (a.given.count(name) && path.empty()) throw UsageError(std::string(name) + ": the path is empty");
     o.designPath = a.design;
     if (!a.designTransform.empty()) {
@@ -322,6 +327,13 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
                   "      cutting length), the LARGEST for chamfer and vbit (the cone runs from tip=T,\n"
                   "      default 0, up to d), the ball's for taperball.\n"
                   "A bare SPEC serves every tool number nothing else defines.");
+    c->add_option("--tool-table", a.toolTable,
+                  "FILE.tbl: a LinuxCNC tool table (T P Z D ... ;comment lines) for the tool numbers the\n"
+                  "program and --tool N=SPEC leave undefined. It gives no shape: each is cut as a flat\n"
+                  "end mill of its diameter D, with a warning; --tool N=SPEC gives a shape");
+    c->add_option("--tool-table-units", a.toolTableUnits,
+                  "mm or inch: the units of the tool table (LinuxCNC's LINEAR_UNITS of the machine)")
+        ->capture_default_str();
     c->add_option("--chord-tolerance", a.chordTolerance, "Largest arc-to-chord distance when arcs are linearised (mm)")
         ->check(numberCheck(false))
         ->capture_default_str();

@@ -48,8 +48,9 @@ int runStudy(const StudyArgs& a) {
     if (!a.caseName.empty()) {
         // The case's exact part is its own program's with its own tools: another tool would be
         // dropped without a word.
-        if (o.job.defaultTool || !o.job.tools.empty())
-            throw UsageError("--tool: a --case cuts with its own tools; to study another tool, write the program "
+        if (o.job.defaultTool || !o.job.tools.empty() || !o.job.toolTable.empty())
+            throw UsageError(std::string(o.job.toolTable.empty() ? "--tool" : "--tool-table") +
+                             ": a --case cuts with its own tools; to study another tool, write the program "
                              "and give it with --tool");
         StudyCase c;
         try {

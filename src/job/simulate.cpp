@@ -458,6 +458,7 @@ std::vector<NamedFile> jobInputFiles(const SimulateOptions& o) {
     if (!o.program)
         for (const std::string& in : o.inputs) files.push_back({"INPUTS", in});
     files.push_back({"--stock", o.stockFile});
+    files.push_back({"--tool-table", o.toolTable});
     files.push_back({"--design", o.designPath});
     const std::vector<std::string> builtin = builtinMachineNames();
     if (std::find(builtin.begin(), builtin.end(), o.machine) == builtin.end()) files.push_back({"--machine", o.machine});

@@ -5,8 +5,44 @@
 #include <sstream>
 
 #include "dexelmill/error.h"
+#include "dexelmill/path/tool_table.h"
+#include "dexelmill/tool/builders.h"
 
 namespace dexelmill {
+
+namespace {
+
+/// A tool table's entry as a tool: a flat end mill of its diameter (`unit` mm per table unit),
+/// with warnings for what the table says that the job does not honour.
+Tool tableTool(const ToolTableEntry& e, double unit, std::vector<Diagnostic>& notes) {
+    const std::string t = "T" + std::to_string(e.number), spec = "--tool " + std::to_string(e.number) + "=SPEC";
+    if (!e.diameter) throw ParseError(e.where, t + " has no diameter (D) in the tool table; give one, or " + spec);
+    if (*e.diameter == 0.0)
+        throw ParseError(e.where, t + " has diameter 0 in the tool table, so it cannot cut; give one, or " + spec);
+    std::optional<Tool> tool;
+    try {
+        tool.emplace(flatEndMill(*e.diameter * unit));
+    } catch (const Error& err) {
+        throw ParseError(e.where, t + " in the tool table: " + err.what());
+    }
+    notes.push_back({Diagnostic::Severity::Warning, e.where,
+                     t + " is cut as a " + tool->description() + ": a tool table gives no shape; " + spec +
+                         " gives it"});
+    const auto words = [](const char* what, const std::string& letters) {
+        const bool one = letters.size() == 1;
+        return std::string(what) + (one ? " " : "s ") + letters + (one ? " is" : " are");
+    };
+    if (!e.offsets.empty())
+        notes.push_back({Diagnostic::Severity::Warning, e.where,
+                         t + "'s " + words("offset", e.offsets) +
+                             " not simulated: the program's positions are taken as the tool tip's"});
+    if (!e.latheWords.empty())
+        notes.push_back({Diagnostic::Severity::Warning, e.where,
+                         t + "'s " + words("lathe word", e.latheWords) + " not simulated (a milling tool has none)"});
+    return *tool;
+}
+
+}  // namespace
 
 std::optional<int> standInTool(const ToolTable& defined) {
     if (defined.size() != 1) return std::nullopt;
@@ -35,9 +71,19 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
     // The stand-in is chosen among the tools defined, before any undefined number takes it.
     const std::optional<int> only = standInTool(table);
     std::optional<int> standInUsed;  // the tool that cut the undefined numbers, if one did
+    std::map<int, ToolTableEntry> fromTable;
+    if (!o.toolTable.empty())
+        for (ToolTableEntry& e : readToolTable(o.toolTable)) fromTable.emplace(e.number, std::move(e));
+    bool tableUsed = false;
     for (int n : used) {
         if (table.count(n)) continue;
         const SourceLocation at = program.path.where(firstUse[n]);
+        // T0 selects no tool, so a table does not serve the moves before a tool is selected.
+        if (const auto entry = fromTable.find(n); n != 0 && entry != fromTable.end()) {
+            table.insert_or_assign(n, tableTool(entry->second, o.toolTableUnit, program.diagnostics));
+            tableUsed = true;
+            continue;
+        }
         if (o.defaultTool) {
             table.insert_or_assign(n, *o.defaultTool);
             defaultUsed = true;
@@ -66,6 +112,10 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
             program.diagnostics.push_back({Diagnostic::Severity::Warning, {},
                                            "--tool " + std::to_string(n) + "=... (" + t.description() +
                                                ") is not used: no move cuts with tool " + std::to_string(n)});
+    if (!o.toolTable.empty() && !tableUsed && !program.path.moves.empty())
+        program.diagnostics.push_back({Diagnostic::Severity::Warning, {},
+                                       "--tool-table " + o.toolTable +
+                                           " is not used: no tool the program calls is taken from it"});
     if (o.defaultTool && !defaultUsed && !program.path.moves.empty())
         program.diagnostics.push_back({Diagnostic::Severity::Warning, {},
                                        "--tool without a number (" + o.defaultTool->description() +

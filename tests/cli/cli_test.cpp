@@ -115,6 +115,12 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
     r = cli("simulate ok.ngc --tool ball:d=x");
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Contains("'x' is not a number"));
+    r = cli("simulate ok.ngc --tool-table-units inch --tool flat:d=3");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("--tool-table-units needs --tool-table FILE.tbl"));
+    r = cli("simulate ok.ngc --tool-table t.tbl --tool-table-units cm");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("--tool-table-units must be mm or inch, got 'cm'"));
     r = cli("simulate ok.ngc --tool bull:d=10,r=7");
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Contains("corner radius r = 7"));
@@ -142,6 +148,9 @@ TEST_CASE("malformed invocations exit 2 with a helpful message", "[cli][errors]"
     r = cli("study --case tilted-slot --tool flat:d=20");
     CHECK(r.code == 2);
     CHECK_THAT(r.err, Contains("--tool: a --case cuts with its own tools"));
+    r = cli("study --case tilted-slot --tool-table t.tbl");
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, Contains("--tool-table: a --case cuts with its own tools"));
     r = cli("study --case tilted-slot --tool 1=flat:d=20");
     CHECK(r.code == 2);
     r = cli("study --case nope");
@@ -366,6 +375,14 @@ TEST_CASE("input errors exit 1 with file:line:col", "[cli][errors]") {
     r = cli("simulate nowhere.ngc --tool flat:d=3");
     CHECK(r.code == 1);
     CHECK_THAT(r.err, Contains("nowhere.ngc"));
+    cli.file("ok.ngc", "G21\nT1 M6\nG0 X0 Y0 Z5\nG1 X5 F100\n");
+    cli.file("bad.tbl", "T1 P1 D3\nT2 P2 D-4\n");
+    r = cli("simulate ok.ngc --tool-table bad.tbl --stock box:0,0,0,10,10,10");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("bad.tbl:2:7: error: the tool table's diameter D must not be negative"));
+    r = cli("simulate ok.ngc --tool-table nowhere.tbl --stock box:0,0,0,10,10,10");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("nowhere.tbl"));
     r = cli("info nowhere.apt");
     CHECK(r.code == 1);
     // A solid where a program belongs is named as what it is, not read as G-code.

@@ -58,6 +58,11 @@ struct SimulateOptions {
     /// every tool number nobody defines (and programs that never select a tool).
     std::map<int, Tool> tools;
     std::optional<Tool> defaultTool;
+    /// A LinuxCNC tool table (readToolTable) for the tool numbers that `tools` and the program
+    /// leave undefined, before `defaultTool`: each a flat end mill of the table's diameter D, with
+    /// a warning, as the table gives no shape. `toolTableUnit`: mm per table unit (25.4 in inches).
+    std::string toolTable;
+    double toolTableUnit = 1.0;
 
     /// Lattice spacing; 0 chooses one from the stock (see chooseResolution).
     double resolution = 0.0;
