@@ -361,3 +361,51 @@ TEST_CASE("cell loops: lenses on two edges near their corner do not cross in the
     for (std::size_t i = 0; i < 2; ++i)
         for (std::size_t j = 0; j < 2; ++j) CHECK_FALSE(cross(first[i], first[i + 1], second[j], second[j + 1]));
 }
+
+TEST_CASE("cell loops: a slab that cuts a corner of the cell closer than its lenses reach runs across it",
+          "[surface][contour]") {
+    // From the contour tests' fin 0.004 h from a lattice point (contour_test.cpp): the cell from
+    // (9.5, 8.5) to (10.5, 9.5) in x and y, all of its corners empty. The upright fin cuts the
+    // corner of its z faces at x = y = 1: its near side crosses the x edges at y = 1 (1 and 3)
+    // 0.0042 h from x = 1 and the y edges at x = 1 (6 and 7) 0.0081 h from y = 1, its far side
+    // 0.071 h and 0.178 h from that corner. Each side crosses the cell as one sheet through four
+    // crossings, and on the z faces its path runs from the x edge to the y edge. The face rule's
+    // samples missed the slab across the corner and read two stubs, whose lenses, a fifth of their
+    // chords deep at least (0.013 and 0.034 h), reached past each other's near end and crossed.
+    REQUIRE(edgeAxis(1) == 0);
+    REQUIRE(edgeCorner(1, 0) == 2);  // x edge at y = 1, z = 0
+    REQUIRE(edgeCorner(3, 0) == 6);  // x edge at y = 1, z = 1
+    REQUIRE(edgeAxis(6) == 1);
+    REQUIRE(edgeCorner(6, 0) == 1);  // y edge at x = 1, z = 0
+    REQUIRE(edgeCorner(7, 0) == 5);  // y edge at x = 1, z = 1
+    CellCrossings c;
+    for (const int e : {1, 3}) {
+        const std::uint32_t id = e == 1 ? 0 : 2;
+        c.edges[std::size_t(e)].ids = {id, id + 1};
+        c.edges[std::size_t(e)].at = {0.92933750152587891, 0.99576425552368164};
+        c.edges[std::size_t(e)].normals = {Vec3(-0.92700603109977653, -0.37504642153290857, 0.0),
+                                           Vec3(0.88689440657284835, 0.46197219785371829, 0.0)};
+    }
+    for (const int e : {6, 7}) {
+        const std::uint32_t id = e == 6 ? 4 : 6;
+        c.edges[std::size_t(e)].ids = {id, id + 1};
+        c.edges[std::size_t(e)].at = {0.8220820426940918, 0.99187421798706055};
+        c.edges[std::size_t(e)].normals = {Vec3(-0.93171661499612679, -0.36318610840746535, 0.0),
+                                           Vec3(0.88658631452194903, 0.46256319233418047, 0.0)};
+    }
+    int zFaceVertices = 0;
+    const auto loops = cellLoops(c, [&](int face, std::uint32_t from, std::uint32_t to, double, double) {
+        zFaceVertices += face >= 4;
+        return std::uint32_t(10 + face * 16 + std::min(from, to));
+    });
+    CHECK(zFaceVertices == 0);
+    std::vector<std::vector<std::uint32_t>> sorted;
+    for (auto loop : loops) {
+        std::sort(loop.begin(), loop.end());
+        sorted.push_back(loop);
+    }
+    std::sort(sorted.begin(), sorted.end());
+    // The far side through crossings 0, 2, 4 and 6, the near side through 1, 3, 5 and 7.
+    const std::vector<std::vector<std::uint32_t>> want{{0, 2, 4, 6}, {1, 3, 5, 7}};
+    CHECK(sorted == want);
+}

@@ -228,6 +228,26 @@ TEST_CASE("contour: a fin thinner than a cell that crosses cells slantwise keeps
     CHECK(res.stats.splitEdgesDropped == 0);
 }
 
+TEST_CASE("contour: a slanting fin that passes a lattice point closer than its lenses reach keeps its patches apart",
+          "[surface][contour][fine]") {
+    // As above, but the plunges' centres on a line 0.431412 rad from x and their walls 0.0259 h
+    // apart at the neck: the fin passes 0.004 h from the lattice point (10.5, 9.5) and cuts the
+    // corner of the z faces there, its sides crossing the x edge 0.004 and 0.071 h from it and the
+    // y edge 0.008 and 0.178 h from it. The face rule read the two ends as two stubs, whose
+    // lenses, at least a fifth of their chords deep (0.013 and 0.034 h), crossed each other near
+    // the corner: 12 pairs of fan triangles passed through each other.
+    const double h = 1.0, r = 15.0, gap = 0.025918, turn = 0.431412;
+    const Vec3 neck(10.161619, 10.152137, 0.0), apart(std::cos(turn), std::sin(turn), 0.0), up(0.0, 0.0, 1.0);
+    const Part part{Box{Vec3(5.0, 5.0, 0.0), Vec3(15.0, 15.0, 3.0)},
+                    {testing::cylinder(neck - (r + 0.5 * gap) * apart, up, r),
+                     testing::cylinder(neck + (r + 0.5 * gap) * apart, up, r)}};
+    const Result res = contourPart(part, h);
+    INFO(summary("fin by a lattice point", res) << "; " << res.stats.splitEdges << " split edges");
+    CHECK(res.check.ok());
+    CHECK(res.stats.splitEdges > 0);
+    CHECK(res.stats.splitEdgesDropped == 0);
+}
+
 TEST_CASE("contour: ball passes closer than a cell", "[surface][contour]") {
     // Parallel passes of a ball of radius 3 mm at a stepover of 0.3 h: the cusps between them,
     // s^2 / (8 R) = 0.0009 mm high, are finer than the lattice can show.

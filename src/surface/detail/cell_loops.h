@@ -26,8 +26,11 @@
 /// wall or slot runs on along its sides), or, where that has no normal in the face, a
 /// transfinite (Coons) blend of the four edges' signed distances to their nearest crossings. The
 /// samples on the boundary are the edges' own membership, so every arc holds one. Material
-/// samples that touch along a grid line are one region. The rule reads only the face's edges,
-/// so both cells sharing the face see the same regions.
+/// samples that touch along a grid line are one region. A strip thinner than the grid's steps
+/// that cuts a corner of the face slantwise falls between its samples, and its two ends read as
+/// two regions; two regions whose paths across the face still cross when their lenses are at
+/// their least depth are one. The rule reads only the face's edges, so both cells sharing the
+/// face see the same regions.
 #pragma once
 
 #include <array>
