@@ -447,6 +447,62 @@ TEST_CASE("refine: a midpoint whose window slides along the part is split along 
     CHECK(stats.check.ok());
 }
 
+TEST_CASE("refine: a triangle cut under a ridge gives up a flank's split, not the ridge's", "[refine]") {
+    // Two grooves along x, a ball D4 at y = 4 and y = 6 whose centre runs down the line
+    // z = 5 + s (x - 5), s = 0.3, leave a ridge at y = 5 where both cylinders of radius 2 about
+    // those lines meet: a point (x, 5, z) lies 1 off each line across and (z - 5 - s (x - 5)) /
+    // sqrt(1 + s^2) along, so the ridge is z = 5 + s (x - 5) - sqrt(3 (1 + s^2)), and a flank
+    // point at distance d from its groove's line across is z = 5 + s (x - 5) - sqrt((4 - d^2)
+    // (1 + s^2)). The triangle A B C has A on the ridge at x = 5.25 and B, C on the flanks at
+    // (5, 5 +- 0.6): its edge B C passes 0.238 mm under the ridge, its edges A B and A C 0.029 mm
+    // above the flanks. Split at all three crossings along z, its middle piece faces away from it
+    // (cos -0.05, worked out from the six points); without the split of B C the pieces are good,
+    // and they are good without A B's (or A C's) too. Refusing a flank's split, 0.029 mm off,
+    // puts a vertex on the ridge over B C; refusing the ridge's left B C 0.238 mm under it. The
+    // other triangle of B C, with its corner E on the ridge at x = 4.5, takes every split.
+    const double s = 0.3, k = std::sqrt(1.0 + s * s);
+    const auto ridge = [&](double x) { return 5.0 + s * (x - 5.0) - std::sqrt(3.0) * k; };
+    const double flank = 5.0 - std::sqrt(4.0 - 0.4 * 0.4) * k;  // at x = 5, 0.4 from either line
+    std::ostringstream g;
+    g << "G21 G90\nT1 M6\n";
+    for (const double y : {4.0, 6.0})
+        g << "G0 X-3 Y" << y << " Z12\nG1 Z" << 3.0 + s * (-3.0 - 5.0) << " F500\nG1 X13 Z" << 3.0 + s * (13.0 - 5.0)
+          << "\nG0 Z12\n";
+    g << "M30\n";
+    SimulateOptions o = job(g.str(), 0);
+    o.stockBox = Box{Vec3(0.0), Vec3(10.0)};
+    o.tools.clear();
+    o.tools.emplace(1, ballEndMill(4.0, {20.0, 40.0}));
+    const Simulation sim = runSimulation(o);
+
+    // A, B, C, E inside a ring of six points on the part round them, whose outline runs down to
+    // D, so that the four have only the part's side of the mesh round them.
+    const auto onPart = [&](double x, double y) {
+        const double d = std::min(std::abs(y - 4.0), std::abs(y - 6.0));  // across, to the nearer line
+        return Vec3(x, y, 5.0 + s * (x - 5.0) - std::sqrt(4.0 - d * d) * k);
+    };
+    Mesh mesh;
+    mesh.vertices = {Vec3(5.25, 5.0, ridge(5.25)), Vec3(5.0, 5.6, flank), Vec3(5.0, 4.4, flank),
+                     Vec3(4.5, 5.0, ridge(4.5)),   onPart(6.2, 5.0),       onPart(5.6, 6.3),
+                     onPart(4.4, 6.3),             onPart(3.6, 5.0),       onPart(4.4, 3.7),
+                     onPart(5.6, 3.7),             Vec3(4.9, 5.0, 1.5)};
+    // Anticlockwise seen from above: the two triangles of B C, the ring, and the outline to D.
+    mesh.triangles = {{0, 1, 2}, {3, 2, 1}, {0, 4, 5}, {0, 5, 1}, {1, 5, 6}, {1, 6, 3},  {3, 6, 7},
+                      {3, 7, 8}, {3, 8, 2}, {2, 8, 9}, {2, 9, 0}, {0, 9, 4}};
+    for (std::uint32_t r = 0; r < 6; ++r) mesh.triangles.push_back({4 + (r + 1) % 6, 4 + r, 10});
+    REQUIRE(checkMesh(mesh).ok());
+    REQUIRE(meshVolume(mesh) > 0.0);
+
+    const RefineStats stats = refineAgainst(sim, mesh);
+    INFO("snapped " << stats.snapped << " split " << stats.split << " refused " << stats.refused);
+    const Vec3 onRidge(5.0, 5.0, ridge(5.0));
+    const bool split = std::any_of(mesh.vertices.begin(), mesh.vertices.end(),
+                                   [&](const Vec3& v) { return glm::length(v - onRidge) < 1e-5; });
+    CHECK(split);
+    CHECK(stats.check.ok());
+    CHECK(testing::countSelfIntersections(mesh).pairs == 0);
+}
+
 TEST_CASE("refine: a vertex whose window slides along the part is moved along a nearer axis", "[refine]") {
     // A ball D10 plunged to z = 8 at (10, 10) leaves a spherical dimple, centred at (10, 10, 13),
     // in the block [0, 20]^3. The apex of the tetrahedron lies 0.05 mm off its side where the side
