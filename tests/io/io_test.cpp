@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <csignal>
 #include <cstdint>
@@ -13,6 +14,7 @@
 #include <map>
 #include <random>
 #include <sstream>
+#include <thread>
 #include <vector>
 
 #include <fcntl.h>
@@ -69,6 +71,9 @@ const Box kBox{Vec3(0.0), Vec3(24.0, 20.0, 16.0)};
 constexpr double kH = 0.5;
 /// How many of a VDB's compressed blocks have their size damaged, spread over the file.
 constexpr std::size_t kDamagedVdbSizes = 12;
+
+/// Reads of a level set in each of two threads at once: each starts a probe process.
+constexpr int kConcurrentReads = 30;
 
 /// A box with a spherical dent in its top: small (48 x 40 x 32 lattice) and closed.
 TriDexelStock dentedBox() {
@@ -746,6 +751,35 @@ TEST_CASE("VDB: a file cut short anywhere is refused as incomplete, naming it", 
                                                        "before the grids its header announces)");
     }
     CHECK_THROWS_WITH(readVdb(dir.path.string()), Catch::Matchers::Contains("is not a regular file"));
+}
+
+TEST_CASE("VDB: level sets are read in two threads at once", "[io][errors]") {
+    // readVdb reads a file first in a process of its own. As a fork of this one, that process held
+    // every lock another thread held at the fork, and waited for ever on the first it needed:
+    // OpenVDB's registry of grid types, which the other thread's read takes, say. (1 run in some
+    // 40 of the test above hung so, where TBB's workers, which OpenVDB uses to free a tree, were
+    // still busy.) A new program inherits no lock.
+    TempDir dir;
+    const LevelSet ls = rebuildLevelSet(dentedBox(), {3, FamilySet::all(), "dented box", std::nullopt});
+    writeVdb(dir.file("part.vdb"), ls);
+    const std::string bytes = slurp(dir.file("part.vdb"));
+    const std::string cut = dir.file("cut.vdb");
+    std::ofstream(cut, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size() * 3 / 4));
+    std::atomic<int> read{0}, refused{0};
+    const auto reads = [&](const std::string& path) {
+        for (int k = 0; k < kConcurrentReads; ++k) {
+            try {
+                if (readVdb(path).activeVoxelCount() > 0) ++read;
+            } catch (const Error&) {
+                ++refused;
+            }
+        }
+    };
+    std::thread other(reads, dir.file("part.vdb"));
+    reads(cut);
+    other.join();
+    CHECK(read == kConcurrentReads);
+    CHECK(refused == kConcurrentReads);
 }
 
 TEST_CASE("VDB: a damaged size of compressed data is refused and never crashes", "[io][errors]") {
