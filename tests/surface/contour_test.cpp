@@ -71,6 +71,18 @@ std::string summary(const char* name, const Result& r) {
 
 const Box kBox{Vec3(0.0), Vec3(32.0, 32.0, 24.0)};
 
+/// Contoured at h = 1: the part that two plunges of a flat end mill of radius 15 leave in the box
+/// (5, 5, 0)-(15, 15, 3), their walls `gap` apart at `neck`, their centres on a line `turn` rad
+/// from x.
+Result finOfTwoPlunges(double gap, double turn, const Vec3& neck) {
+    const double h = 1.0, r = 15.0;
+    const Vec3 apart(std::cos(turn), std::sin(turn), 0.0), up(0.0, 0.0, 1.0);
+    const Part part{Box{Vec3(5.0, 5.0, 0.0), Vec3(15.0, 15.0, 3.0)},
+                    {testing::cylinder(neck - (r + 0.5 * gap) * apart, up, r),
+                     testing::cylinder(neck + (r + 0.5 * gap) * apart, up, r)}};
+    return contourPart(part, h);
+}
+
 }  // namespace
 
 TEST_CASE("contour: a spherical dimple", "[surface][contour]") {
@@ -216,12 +228,7 @@ TEST_CASE("contour: a fin thinner than a cell that crosses cells slantwise keeps
     // face below the other, and 16 pairs of fan triangles passed through each other (the bore's
     // wall of helical-thread-milling.gcode at h = 0.1 mm showed 3388). contourPart checks the
     // crossings.
-    const double h = 1.0, r = 15.0, gap = 0.05, turn = 0.9;
-    const Vec3 neck(10.13, 10.64, 0.0), apart(std::cos(turn), std::sin(turn), 0.0), up(0.0, 0.0, 1.0);
-    const Part part{Box{Vec3(5.0, 5.0, 0.0), Vec3(15.0, 15.0, 3.0)},
-                    {testing::cylinder(neck - (r + 0.5 * gap) * apart, up, r),
-                     testing::cylinder(neck + (r + 0.5 * gap) * apart, up, r)}};
-    const Result res = contourPart(part, h);
+    const Result res = finOfTwoPlunges(0.05, 0.9, Vec3(10.13, 10.64, 0.0));
     INFO(summary("slanting fin", res) << "; " << res.stats.splitEdges << " split edges");
     CHECK(res.check.ok());
     CHECK(res.stats.splitEdges > 0);  // the fin is meshed from its dexels
@@ -236,12 +243,7 @@ TEST_CASE("contour: a slanting fin that passes a lattice point closer than its l
     // y edge 0.008 and 0.178 h from it. The face rule read the two ends as two stubs, whose
     // lenses, at least a fifth of their chords deep (0.013 and 0.034 h), crossed each other near
     // the corner: 12 pairs of fan triangles passed through each other.
-    const double h = 1.0, r = 15.0, gap = 0.025918, turn = 0.431412;
-    const Vec3 neck(10.161619, 10.152137, 0.0), apart(std::cos(turn), std::sin(turn), 0.0), up(0.0, 0.0, 1.0);
-    const Part part{Box{Vec3(5.0, 5.0, 0.0), Vec3(15.0, 15.0, 3.0)},
-                    {testing::cylinder(neck - (r + 0.5 * gap) * apart, up, r),
-                     testing::cylinder(neck + (r + 0.5 * gap) * apart, up, r)}};
-    const Result res = contourPart(part, h);
+    const Result res = finOfTwoPlunges(0.025918, 0.431412, Vec3(10.161619, 10.152137, 0.0));
     INFO(summary("fin by a lattice point", res) << "; " << res.stats.splitEdges << " split edges");
     CHECK(res.check.ok());
     CHECK(res.stats.splitEdges > 0);
