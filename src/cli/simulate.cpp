@@ -320,7 +320,7 @@ void addJobOptions(CLI::App& cmd, SimulateArgs& a, bool inputsRequired) {
                   "      drill:d=6[,angle=118] | apt:D,R,E,F,ALPHA,BETA,H\n"
                   "      optional ,length=L (cutting length) ,total=T (stick-out from the holder)\n"
                   "      ,holder=D,holderlength=L (the holder above the stick-out, as one cylinder\n"
-                  "      of its widest diameter; material it meets is a shank collision); mm, degrees.\n"
+                  "      of its widest diameter; what it meets is a collision); mm, degrees.\n"
                   "      angle= is the HALF angle from the axis for taper, chamfer, vbit and taperball\n"
                   "      (a 60 degree V-bit is vbit:d=6,angle=30), the INCLUDED point angle for drill\n"
                   "      (118, not 59). d= is the TIP diameter for taper (it widens upward over the\n"
