@@ -300,16 +300,22 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
             // The job ends here, before the report that would carry the reader's warnings. The
             // first about a position the reader does not know says why no move was made (moves
             // from an unknown start only set the position); else the first warning is given.
+            // Where the start position is what the program never gives, --start gives it, and the
+            // stock can then be guessed.
+            const auto says = [](const Diagnostic& d, const char* what) {
+                return d.severity == Diagnostic::Severity::Warning && d.message.find(what) != std::string::npos;
+            };
             const Diagnostic* why = nullptr;
-            for (const Diagnostic& d : program.diagnostics) {
-                if (d.severity != Diagnostic::Severity::Warning) continue;
-                if (!why) why = &d;
-                if (d.message.find("unknown") != std::string::npos) {
-                    why = &d;
-                    break;
-                }
+            for (const char* what : {"start position", "unknown", ""}) {
+                for (const Diagnostic& d : program.diagnostics)
+                    if (!why && says(d, what)) why = &d;
             }
+            const bool unknownStart = why && says(*why, "start position");
             std::string message = "no stock given and the program has no moves to guess one from; use --stock";
+            if (unknownStart)
+                message = "no stock given and the program has no moves to guess one from, as it never gives the "
+                          "position it starts from; use --start X,Y,Z (where the machine stands at its start), or "
+                          "--stock";
             if (why) message += " (the program's warning: " + why->where.str() + ": " + why->message + ")";
             throw Error(message);
         }

@@ -952,9 +952,25 @@ TEST_CASE("a program with no known move and no stock says why it made none", "[c
     cli.file("g91.ngc", "G21 G91\nG1 X5 Y5 Z-1 F100\nG1 X10\nM30\n");
     const Run r = cli("simulate g91.ngc --tool flat:d=6 -o part.stl");
     CHECK(r.code == 1);
-    CHECK_THAT(r.err, Contains("no moves to guess one from; use --stock (the program's warning: g91.ngc:2:") &&
-                          Contains("unknown"));
+    CHECK_THAT(r.err, Contains("no moves to guess one from, as it never gives the position it starts from; use "
+                               "--start X,Y,Z") &&
+                          Contains("--stock (the program's warning: g91.ngc:2:") && Contains("unknown"));
     // Not the F word's warning, which comes first but says nothing of why no move was made.
     CHECK_THAT(r.err, !Contains("feed rate"));
     CHECK_FALSE(fs::exists(cli.dir() / "part.stl"));
+    // Given the start, the same program's moves are known and make the stock's guess.
+    const Run started = cli("simulate g91.ngc --tool flat:d=6 --start 0,0,0 -o part.stl");
+    CHECK(started.code == 0);
+    CHECK(fs::exists(cli.dir() / "part.stl"));
+}
+
+TEST_CASE("a program with no move for another reason is not told to give a start", "[cli][errors]") {
+    const Cli cli("no_moves_other");
+    // An unknown M-code comes first and says "unknown", but the moves are missing because the
+    // program makes none: --start would not help.
+    cli.file("empty.ngc", "G21 G90\nM77\nM30\n");
+    const Run r = cli("simulate empty.ngc --tool flat:d=6 -o part.stl");
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Contains("no moves to guess one from; use --stock"));
+    CHECK_THAT(r.err, !Contains("--start"));
 }
