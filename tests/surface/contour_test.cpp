@@ -250,6 +250,19 @@ TEST_CASE("contour: a slanting fin that passes a lattice point closer than its l
     CHECK(res.stats.splitEdgesDropped == 0);
 }
 
+TEST_CASE("contour: a fin thinner than its walls' tangent planes overshoot keeps its sides apart",
+          "[surface][contour][fine]") {
+    // Plunges of radius 15 h whose walls pass 0.0136 h apart, their centres on a line 2.133 rad
+    // from x: each side's crossings span a cell of a wall curved 1/15 per h, so their tangent
+    // planes meet about h^2 / (8 * 15 h) = 0.008 h beyond it, in the fin, and the two sides'
+    // vertices passed each other at the neck: 16 pairs of fan triangles passed through each other.
+    const Result res = finOfTwoPlunges(0.013583, 2.133333, Vec3(10.219907, 9.883026, 0.0));
+    INFO(summary("fin thinner than the overshoot", res) << "; " << res.stats.splitEdges << " split edges");
+    CHECK(res.check.ok());
+    CHECK(res.stats.splitEdges > 0);
+    CHECK(res.stats.splitEdgesDropped == 0);
+}
+
 TEST_CASE("contour: ball passes closer than a cell", "[surface][contour]") {
     // Parallel passes of a ball of radius 3 mm at a stepover of 0.3 h: the cusps between them,
     // s^2 / (8 R) = 0.0009 mm high, are finer than the lattice can show.

@@ -50,6 +50,10 @@ struct SplitCells {
     std::vector<Vec3> points;
     std::vector<PackedNormal> normals;
     std::size_t edgeEnds = 0;  ///< how many of `points` are ends (the rest are face vertices)
+    /// Per end (points[k], k < edgeEnds): the end across the stretch of material it bounds on its
+    /// edge, or kNoPartner where that stretch runs on to a lattice point.
+    std::vector<std::uint32_t> partner;
+    static constexpr std::uint32_t kNoPartner = ~0u;
     /// Per face vertex (points[edgeEnds + k]): the two ends (indices into `points`) it lies between.
     std::vector<std::array<std::uint32_t, 2>> faceVertexEnds;
     /// The contourer's crossings the loops use: edges by lower grid point and axis.
@@ -68,6 +72,12 @@ struct SplitCells {
 
     std::size_t patches() const { return patchCell.size(); }
 };
+
+/// @brief Split patch k's vertex `v` (PatchVertexRule::place), kept on its own side of the middle
+/// of each stretch of material that an end of its loop bounds and another patch's end closes (a
+/// fin thinner than the spacing, its sides within `featureAngle` of parallel), a quarter of that
+/// end's distance from it: see the definition.
+Vec3 keepOffFinMiddle(const SplitCells& cells, std::uint32_t k, double featureAngle, Vec3 v);
 
 /// @brief Finds the edges of `stock`'s lattice whose dexel has two or more ends strictly between
 /// its lattice points and agrees with the level set at both, the cells round them, and those

@@ -1,0 +1,56 @@
+// The dexel mesher's split cells (surface/detail/split_cells.h): a patch vertex kept on its own
+// side of a thin fin's middle, against a position worked out by hand.
+#include <catch2/catch.hpp>
+
+#include "surface/detail/split_cells.h"
+
+using namespace dexelmill;
+using detail::SplitCells;
+
+namespace {
+
+constexpr double kFeatureAngle = 0.6;  // ContourOptions' default
+
+/// Two ends on the y edge through (0.5, 0, 0.5), bounding 0.02 of material from y = 0.40 to 0.42,
+/// each in a patch of its own; `joined`: one patch holds both. The upper end's normal is `upper`
+/// (+y by default: normals along y, exact when packed).
+SplitCells finEdge(bool joined, const Vec3& upper = Vec3(0.0, 1.0, 0.0)) {
+    SplitCells cells;
+    cells.points = {Vec3(0.5, 0.40, 0.5), Vec3(0.5, 0.42, 0.5)};
+    cells.normals = {PackedNormal::pack(Vec3(0.0, -1.0, 0.0)), PackedNormal::pack(upper)};
+    cells.edgeEnds = 2;
+    cells.partner = {1, 0};
+    cells.loopIds = {0, 1};
+    cells.loopStart = joined ? std::vector<std::uint32_t>{0, 2} : std::vector<std::uint32_t>{0, 1, 2};
+    return cells;
+}
+
+}  // namespace
+
+TEST_CASE("split cells: a vertex past a fin's middle is brought back to its own side", "[surface][split]") {
+    const SplitCells cells = finEdge(false);
+    // The middle is y = 0.41; each side's vertex keeps a quarter of its end's distance from it,
+    // 0.0025: the lower side's at y <= 0.4075, the upper side's at y >= 0.4125. Only y moves.
+    const Vec3 lower = detail::keepOffFinMiddle(cells, 0, kFeatureAngle, Vec3(0.3, 0.415, 0.7));
+    CHECK(lower.x == Approx(0.3));
+    CHECK(lower.y == Approx(0.4075).epsilon(1e-9));
+    CHECK(lower.z == Approx(0.7));
+    const Vec3 upper = detail::keepOffFinMiddle(cells, 1, kFeatureAngle, Vec3(0.6, 0.409, 0.2));
+    CHECK(upper.y == Approx(0.4125).epsilon(1e-9));
+    CHECK(upper.x == Approx(0.6));
+    // A vertex on its own side, on or off its wall, stays where it is.
+    CHECK(detail::keepOffFinMiddle(cells, 0, kFeatureAngle, Vec3(0.3, 0.401, 0.7)) == Vec3(0.3, 0.401, 0.7));
+    CHECK(detail::keepOffFinMiddle(cells, 1, kFeatureAngle, Vec3(0.3, 0.43, 0.7)) == Vec3(0.3, 0.43, 0.7));
+}
+
+TEST_CASE("split cells: a patch that holds both sides of a fin is left alone", "[surface][split]") {
+    const SplitCells cells = finEdge(true);
+    CHECK(detail::keepOffFinMiddle(cells, 0, kFeatureAngle, Vec3(0.3, 0.415, 0.7)) == Vec3(0.3, 0.415, 0.7));
+}
+
+TEST_CASE("split cells: a wedge's vertex is left alone", "[surface][split]") {
+    // The upper side leans 53 degrees from the lower's opposite, past the feature angle (34
+    // degrees): a wedge, whose middle the stretch's bisector does not follow.
+    const SplitCells cells = finEdge(false, Vec3(0.8, 0.6, 0.0));
+    CHECK(detail::keepOffFinMiddle(cells, 0, kFeatureAngle, Vec3(0.3, 0.415, 0.7)) == Vec3(0.3, 0.415, 0.7));
+}
