@@ -277,7 +277,7 @@ public:
         decltype(split_.normals)().swap(split_.normals);
         decltype(split_.loopIds)().swap(split_.loopIds);
         stats.check = repairAndCheck(stats.pulledBack);
-        if (stats.check.foldedTriangles + stats.check.degenerateTriangles > 0 && unflip(unrepaired_) > 0) {
+        if (stats.check.facingAgainstTriangles + stats.check.degenerateTriangles > 0 && unflip(unrepaired_) > 0) {
             std::size_t more = 0;
             stats.check = repairAndCheck(more);
             stats.pulledBack += more;

@@ -233,7 +233,8 @@ struct Facing {
     double facing = 0.0;     ///< the area vector's dot product with `sum`
     Vec3 sum{0.0};           ///< the sum of the vertices' unit normals
 
-    /// Facing its vertices' normals at a cosine below minCosine (folded when minCosine is 0).
+    /// Facing its vertices' area-weighted normals at a cosine below minCosine (at 0, a triangle
+    /// to repair, and folded if foldedByAngleToo finds it so).
     bool below(double minCosine) const { return facing < minCosine * twiceArea * glm::length(sum); }
 };
 
@@ -276,7 +277,8 @@ inline void addTriangle(const Mesh& mesh, const Normals& normal, const Vec3& cen
 }
 
 /// One pass over the triangles: degenerate ones, area, six times the enclosed volume (about
-/// `centre`), the folded ones (facing against the sum of their vertices' unit normals), and the
+/// `centre`), those facing against the sum of their vertices' unit normals (foldedByAngleToo tells
+/// which fold), and the
 /// suspects (folded, degenerate, or with minCosine > 0 facing their vertices' normals at a cosine
 /// below it). Ranges are reduced in a fixed order, so the sums do not depend on the thread count.
 TriangleCounts trianglePass(const Mesh& mesh, const Normals& normal, const Vec3& centre,
@@ -447,6 +449,61 @@ void pullBack(Mesh& mesh, const StarChunks& stars, Normals& normal, std::vector<
     if (!suspects.empty() && repair.candidates) tryCandidates(mesh, stars, normal, suspects, repair, log);
 }
 
+/// The folded triangles: those facing against their vertices' area-weighted normals (the repair's
+/// test) that face against their angle-weighted normals too. On a ridge sharper than a right
+/// angle the two weightings disagree: by area a vertex takes the normal of the ridge's larger
+/// side, and the small triangles of the other side face against it though the surface does not
+/// fold (on boat-xyzac.ngc with a D1 at h = 0.25, where a sheet thinner than the spacing only just
+/// holds a lattice point, the corner triangle round it, 0.007 h across, against its crossings'
+/// normals, which the sheet's far side, a thousand times larger, set); by angle (Thurmer and
+/// Wuthrich, "Computing vertex normals from polygonal facets", 1998) the small triangles count as
+/// much as the large ones. Only triangles the area test flags are tried, so the angle weights
+/// are summed at their vertices alone, from their stars: a mesh with no such triangle costs
+/// nothing more.
+std::size_t foldedByAngleToo(const Mesh& mesh, const StarChunks& stars, const Normals& normal) {
+    std::vector<std::uint32_t> facingAgainst = tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 8192), std::vector<std::uint32_t>{},
+        [&](const tbb::blocked_range<std::size_t>& rt, std::vector<std::uint32_t> found) {
+            for (std::size_t t = rt.begin(); t < rt.end(); ++t) {
+                const Mesh::Triangle& tri = mesh.triangles[t];
+                const Facing f =
+                    facingOf(tri, mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]], normal);
+                if (!f.degenerate && f.facing < 0.0) found.push_back(std::uint32_t(t));
+            }
+            return found;
+        },
+        [](std::vector<std::uint32_t> a, const std::vector<std::uint32_t>& b) {
+            a.insert(a.end(), b.begin(), b.end());
+            return a;
+        });
+    const std::vector<std::uint32_t> vertices = verticesOf(mesh, facingAgainst);
+    std::vector<Vec3> byAngle(vertices.size(), Vec3(0.0));
+    // Corner `corner`'s triangle's unit normal times its angle there, added to its vertex's sum k.
+    const auto addCorner = [&](std::size_t k, std::uint32_t corner) {
+        const CornerSides c = cornerSides(mesh, corner);
+        const Vec3& pv = mesh.vertices[vertices[k]];
+        const Vec3 out = mesh.vertices[c.out] - pv, in = mesh.vertices[c.in] - pv;
+        const Vec3 area = glm::cross(out, in);
+        const double twiceArea = glm::length(area);
+        if (twiceArea > 0.0) byAngle[k] += area * (std::atan2(twiceArea, glm::dot(out, in)) / twiceArea);
+    };
+    for (std::size_t k = 0; k < vertices.size(); ++k)
+        for (const std::uint32_t* c = stars.begin(vertices[k]); c != stars.end(vertices[k]); ++c) addCorner(k, *c);
+    const auto unitAt = [&](std::uint32_t v) {
+        const Vec3& sum = byAngle[std::size_t(std::lower_bound(vertices.begin(), vertices.end(), v) - vertices.begin())];
+        const double l = glm::length(sum);
+        return l > 0.0 ? sum / l : Vec3(0.0);
+    };
+    std::size_t folded = 0;
+    for (const std::uint32_t t : facingAgainst) {
+        const Mesh::Triangle& tri = mesh.triangles[t];
+        const Vec3 area = glm::cross(mesh.vertices[tri[1]] - mesh.vertices[tri[0]],
+                                     mesh.vertices[tri[2]] - mesh.vertices[tri[0]]);
+        folded += glm::dot(area, unitAt(tri[0]) + unitAt(tri[1]) + unitAt(tri[2])) < 0.0;
+    }
+    return folded;
+}
+
 MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, std::size_t* moved,
                 std::vector<std::uint32_t>* unrepaired) {
     MeshCheck r;
@@ -498,7 +555,8 @@ MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, st
         t.volume6 = t.volume6 - before.volume6 + now.volume6;
     }
     r.degenerateTriangles = t.degenerate;
-    r.foldedTriangles = t.folded;
+    r.facingAgainstTriangles = t.folded;
+    r.foldedTriangles = t.folded == 0 ? 0 : foldedByAngleToo(mesh, stars, normal);
     r.area = t.area;
     r.signedVolume = t.volume6 / 6.0;
     return r;

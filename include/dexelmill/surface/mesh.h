@@ -90,10 +90,14 @@ struct MeshCheck {
     std::size_t invalidIndices = 0;       ///< triangles with an index past the vertex list
     std::size_t unusedVertices = 0;       ///< vertices no triangle uses (allowed, reported)
     /// Triangles facing against their own vertices: (b - a) x (c - a) has a negative dot product
-    /// with the sum of the three vertex normals, each the area-weighted mean direction of the
-    /// triangles around the vertex, of unit length. A fold shows as a dark crease in a picture and turns the
-    /// surface inside out locally.
+    /// with the sum of the three vertex normals, each the mean direction of the triangles around
+    /// the vertex, of unit length, both when they are weighted by their areas and when by their
+    /// angles at the vertex (on a ridge sharper than a right angle the two disagree). A fold
+    /// shows as a dark crease in a picture and turns the surface inside out locally.
     std::size_t foldedTriangles = 0;
+    /// Triangles facing against their vertices' area-weighted normals alone: the repair's test,
+    /// which holds every folded triangle and those only a ridge's larger side turns over.
+    std::size_t facingAgainstTriangles = 0;
     double signedVolume = 0.0;            ///< mm^3, positive for outward-facing triangles
     double area = 0.0;                    ///< mm^2
 
@@ -113,7 +117,9 @@ struct MeshCheck {
 /// volume, area.
 /// A triangle is degenerate when two of its indices are equal or when |(b-a) x (c-a)| is at most
 /// tol::kDegenerateTriangle times its longest squared edge (a needle or a sliver of zero area).
-/// `folded`, when given, receives the folded and degenerate triangles (in increasing order).
+/// `folded`, when given, receives the triangles to repair (in increasing order): the degenerate
+/// ones and those facing against their vertices' area-weighted normals, every folded one among
+/// them.
 MeshCheck checkMesh(const Mesh& mesh, std::vector<std::uint32_t>* folded = nullptr);
 
 /// @brief checkMesh's `folded` list kept up to date while vertices move and the triangles stay.
@@ -133,8 +139,8 @@ public:
     /// @brief Takes into account that these vertices have moved since the watch was made or last
     /// told (any order; repeats allowed).
     void moved(const std::vector<std::uint32_t>& vertices);
-    /// @brief The folded and degenerate triangles, in increasing order: what checkMesh's `folded`
-    /// would receive now.
+    /// @brief The triangles to repair, in increasing order: what checkMesh's `folded` would
+    /// receive now.
     std::vector<std::uint32_t> folded() const;
 
 private:
