@@ -83,6 +83,16 @@ Result finOfTwoPlunges(double gap, double turn, const Vec3& neck) {
     return contourPart(part, h);
 }
 
+/// A fin of finOfTwoPlunges, meshed from its dexels with its patches apart: no fold, no crossing
+/// pair (contourPart checks them), no split edge dropped.
+void checkFinApart(const char* name, double gap, double turn, const Vec3& neck) {
+    const Result res = finOfTwoPlunges(gap, turn, neck);
+    INFO(summary(name, res) << "; " << res.stats.splitEdges << " split edges");
+    CHECK(res.check.ok());
+    CHECK(res.stats.splitEdges > 0);  // the fin is meshed from its dexels
+    CHECK(res.stats.splitEdgesDropped == 0);
+}
+
 }  // namespace
 
 TEST_CASE("contour: a spherical dimple", "[surface][contour]") {
@@ -228,11 +238,7 @@ TEST_CASE("contour: a fin thinner than a cell that crosses cells slantwise keeps
     // face below the other, and 16 pairs of fan triangles passed through each other (the bore's
     // wall of helical-thread-milling.gcode at h = 0.1 mm showed 3388). contourPart checks the
     // crossings.
-    const Result res = finOfTwoPlunges(0.05, 0.9, Vec3(10.13, 10.64, 0.0));
-    INFO(summary("slanting fin", res) << "; " << res.stats.splitEdges << " split edges");
-    CHECK(res.check.ok());
-    CHECK(res.stats.splitEdges > 0);  // the fin is meshed from its dexels
-    CHECK(res.stats.splitEdgesDropped == 0);
+    checkFinApart("slanting fin", 0.05, 0.9, Vec3(10.13, 10.64, 0.0));
 }
 
 TEST_CASE("contour: a slanting fin that passes a lattice point closer than its lenses reach keeps its patches apart",
@@ -243,11 +249,7 @@ TEST_CASE("contour: a slanting fin that passes a lattice point closer than its l
     // y edge 0.008 and 0.178 h from it. The face rule read the two ends as two stubs, whose
     // lenses, at least a fifth of their chords deep (0.013 and 0.034 h), crossed each other near
     // the corner: 12 pairs of fan triangles passed through each other.
-    const Result res = finOfTwoPlunges(0.025918, 0.431412, Vec3(10.161619, 10.152137, 0.0));
-    INFO(summary("fin by a lattice point", res) << "; " << res.stats.splitEdges << " split edges");
-    CHECK(res.check.ok());
-    CHECK(res.stats.splitEdges > 0);
-    CHECK(res.stats.splitEdgesDropped == 0);
+    checkFinApart("fin by a lattice point", 0.025918, 0.431412, Vec3(10.161619, 10.152137, 0.0));
 }
 
 TEST_CASE("contour: a fin thinner than its walls' tangent planes overshoot keeps its sides apart",
@@ -256,11 +258,7 @@ TEST_CASE("contour: a fin thinner than its walls' tangent planes overshoot keeps
     // from x: each side's crossings span a cell of a wall curved 1/15 per h, so their tangent
     // planes meet about h^2 / (8 * 15 h) = 0.008 h beyond it, in the fin, and the two sides'
     // vertices passed each other at the neck: 16 pairs of fan triangles passed through each other.
-    const Result res = finOfTwoPlunges(0.013583, 2.133333, Vec3(10.219907, 9.883026, 0.0));
-    INFO(summary("fin thinner than the overshoot", res) << "; " << res.stats.splitEdges << " split edges");
-    CHECK(res.check.ok());
-    CHECK(res.stats.splitEdges > 0);
-    CHECK(res.stats.splitEdgesDropped == 0);
+    checkFinApart("fin thinner than the overshoot", 0.013583, 2.133333, Vec3(10.219907, 9.883026, 0.0));
 }
 
 TEST_CASE("contour: ball passes closer than a cell", "[surface][contour]") {
