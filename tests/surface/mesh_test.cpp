@@ -245,6 +245,7 @@ TEST_CASE("FoldWatch follows the folds checkMesh finds while vertices move", "[s
                 CHECK(watch.folded().size() >= brute.foldedTriangles + brute.degenerateTriangles);
                 CHECK(watch.folded().size() <= areaFacingCount() + brute.degenerateTriangles);
                 CHECK(c.foldedTriangles + c.degenerateTriangles <= want.size());
+                CHECK(c.facingAgainstTriangles + c.degenerateTriangles == want.size());
             }
         });
     }
