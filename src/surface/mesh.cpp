@@ -278,9 +278,9 @@ inline void addTriangle(const Mesh& mesh, const Normals& normal, const Vec3& cen
 
 /// One pass over the triangles: degenerate ones, area, six times the enclosed volume (about
 /// `centre`), those facing against the sum of their vertices' unit normals (foldedByAngleToo tells
-/// which fold), and the
-/// suspects (folded, degenerate, or with minCosine > 0 facing their vertices' normals at a cosine
-/// below it). Ranges are reduced in a fixed order, so the sums do not depend on the thread count.
+/// which of them fold), and the suspects (those, degenerate ones, and with minCosine > 0 those
+/// facing their vertices' normals at a cosine below it). Ranges are reduced in a fixed order, so
+/// the sums do not depend on the thread count.
 TriangleCounts trianglePass(const Mesh& mesh, const Normals& normal, const Vec3& centre,
                             double minCosine = 0.0) {
     return tbb::parallel_deterministic_reduce(
