@@ -449,6 +449,37 @@ void pullBack(Mesh& mesh, const StarChunks& stars, Normals& normal, std::vector<
     if (!suspects.empty() && repair.candidates) tryCandidates(mesh, stars, normal, suspects, repair, log);
 }
 
+/// Whether triangle t faces against its vertices' area-weighted normals and is not degenerate.
+bool facesAgainst(const Mesh& mesh, const Normals& normal, std::uint32_t t) {
+    const Mesh::Triangle& tri = mesh.triangles[t];
+    const Facing f = facingOf(tri, mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]], normal);
+    return !f.degenerate && f.facing < 0.0;
+}
+
+/// The triangles of `triangles` that face against their vertices' area-weighted normals.
+std::vector<std::uint32_t> facingAgainstAmong(const Mesh& mesh, const Normals& normal,
+                                              const std::vector<std::uint32_t>& triangles) {
+    std::vector<std::uint32_t> out;
+    for (std::uint32_t t : triangles)
+        if (facesAgainst(mesh, normal, t)) out.push_back(t);
+    return out;
+}
+
+/// Every triangle of the mesh that faces against its vertices' area-weighted normals, in order.
+std::vector<std::uint32_t> facingAgainstAll(const Mesh& mesh, const Normals& normal) {
+    return tbb::parallel_deterministic_reduce(
+        tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 8192), std::vector<std::uint32_t>{},
+        [&](const tbb::blocked_range<std::size_t>& rt, std::vector<std::uint32_t> found) {
+            for (std::size_t t = rt.begin(); t < rt.end(); ++t)
+                if (facesAgainst(mesh, normal, std::uint32_t(t))) found.push_back(std::uint32_t(t));
+            return found;
+        },
+        [](std::vector<std::uint32_t> a, const std::vector<std::uint32_t>& b) {
+            a.insert(a.end(), b.begin(), b.end());
+            return a;
+        });
+}
+
 /// The folded triangles: those facing against their vertices' area-weighted normals (the repair's
 /// test) that face against their angle-weighted normals too. On a ridge sharper than a right
 /// angle the two weightings disagree: by area a vertex takes the normal of the ridge's larger
@@ -459,23 +490,12 @@ void pullBack(Mesh& mesh, const StarChunks& stars, Normals& normal, std::vector<
 /// Wuthrich, "Computing vertex normals from polygonal facets", 1998) the small triangles count as
 /// much as the large ones. Only triangles the area test flags are tried, so the angle weights
 /// are summed at their vertices alone, from their stars: a mesh with no such triangle costs
-/// nothing more.
-std::size_t foldedByAngleToo(const Mesh& mesh, const StarChunks& stars, const Normals& normal) {
-    std::vector<std::uint32_t> facingAgainst = tbb::parallel_deterministic_reduce(
-        tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 8192), std::vector<std::uint32_t>{},
-        [&](const tbb::blocked_range<std::size_t>& rt, std::vector<std::uint32_t> found) {
-            for (std::size_t t = rt.begin(); t < rt.end(); ++t) {
-                const Mesh::Triangle& tri = mesh.triangles[t];
-                const Facing f =
-                    facingOf(tri, mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]], normal);
-                if (!f.degenerate && f.facing < 0.0) found.push_back(std::uint32_t(t));
-            }
-            return found;
-        },
-        [](std::vector<std::uint32_t> a, const std::vector<std::uint32_t>& b) {
-            a.insert(a.end(), b.begin(), b.end());
-            return a;
-        });
+/// nothing more. `suspects` holds every triangle the area test flags (with others) when
+/// `flagged`, the count of those, matches; the whole mesh is scanned for them otherwise.
+std::size_t foldedByAngleToo(const Mesh& mesh, const StarChunks& stars, const Normals& normal,
+                             const std::vector<std::uint32_t>& suspects, std::size_t flagged) {
+    std::vector<std::uint32_t> facingAgainst = facingAgainstAmong(mesh, normal, suspects);
+    if (facingAgainst.size() != flagged) facingAgainst = facingAgainstAll(mesh, normal);
     const std::vector<std::uint32_t> vertices = verticesOf(mesh, facingAgainst);
     std::vector<Vec3> byAngle(vertices.size(), Vec3(0.0));
     // Corner `corner`'s triangle's unit normal times its angle there, added to its vertex's sum k.
@@ -556,7 +576,7 @@ MeshCheck check(Mesh* repairable, const Mesh& mesh, const FoldRepair* repair, st
     }
     r.degenerateTriangles = t.degenerate;
     r.facingAgainstTriangles = t.folded;
-    r.foldedTriangles = t.folded == 0 ? 0 : foldedByAngleToo(mesh, stars, normal);
+    r.foldedTriangles = t.folded == 0 ? 0 : foldedByAngleToo(mesh, stars, normal, t.suspects, t.folded);
     r.area = t.area;
     r.signedVolume = t.volume6 / 6.0;
     return r;
