@@ -2,10 +2,12 @@
 
 #include <cerrno>
 #include <csignal>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <new>
+#include <optional>
 
 #include <sys/resource.h>
 #include <unistd.h>
@@ -17,6 +19,7 @@
 #include "dexelmill/io/atomic_file.h"
 #include "dexelmill/surface/levelset_vdb.h"
 #include "detail/child_probe.h"
+#include "detail/vdb_frame.h"
 
 namespace dexelmill {
 
@@ -101,6 +104,19 @@ LevelSet readVdb(const std::string& path, const std::string& gridName) {
     // look at the stream's state, and went on with the sizes and names it had not read (a file cut
     // at 3000 of its 45410 bytes allocated 2 GB and printed a 540 MB map name in its error).
     in.exceptions(std::ios::failbit | std::ios::badbit);
+    // OpenVDB's reader allocates and fills a name, string or metadata value of whatever length the
+    // file gives before it meets the file's end: a damaged length cost up to 4 GB, in the probe and
+    // again below. So every length and offset that frames the file is checked against its size first.
+    {
+        std::ifstream frame(path, std::ios::binary | std::ios::ate);
+        const std::streamoff size = frame ? std::streamoff(frame.tellg()) : std::streamoff(-1);
+        if (size >= 0)
+            if (const std::optional<detail::VdbFramingProblem> problem =
+                    detail::vdbFramingProblem(frame, std::uint64_t(size)))
+                throw Error(problem->cutShort ? "'" + path + "': not a complete OpenVDB file (" + problem->what + ")"
+                                              : "'" + path + "': not a readable OpenVDB file (" + problem->what +
+                                                    ": the file is damaged or cut short)");
+    }
     // OpenVDB's reader trusts a leaf's compressed data: some damaged bytes there make it write
     // past a buffer and abort the process ("double free or corruption"). So the file is read
     // first by this program started anew as a probe (vdbProbe), where such a crash ends only the

@@ -747,8 +747,8 @@ TEST_CASE("VDB: a file cut short anywhere is refused as incomplete, naming it", 
         INFO("the first " << cut << " of " << bytes.size() << " bytes");
         const std::string path = dir.file("cut.vdb");
         std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(cut));
-        CHECK_THROWS_WITH(readVdb(path), "'" + path + "': not a complete OpenVDB file (it ends, or cannot be read, "
-                                                       "before the grids its header announces)");
+        // Refused by OpenVDB's stream where the file ends, or before it by the grid's end offset.
+        CHECK_THROWS_WITH(readVdb(path), Catch::Matchers::StartsWith("'" + path + "': not a complete OpenVDB file ("));
     }
     CHECK_THROWS_WITH(readVdb(dir.path.string()), Catch::Matchers::Contains("is not a regular file"));
 }
