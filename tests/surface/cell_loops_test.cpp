@@ -245,6 +245,31 @@ TEST_CASE("cell loops: a lens's face vertex follows its ends' tangents", "[surfa
     }
 }
 
+TEST_CASE("cell loops: a fin's two sides whose tangents meet past the face close it inside the face",
+          "[surface][contour]") {
+    // A fin 0.1 thick on edge 0 (along x at y = z = 0), from 0.45 to 0.55, its sides turned 0.02
+    // rad toward each other into face 4 (u = x, v = y): normals (-cos 0.02, sin 0.02, 0) and
+    // (cos 0.02, sin 0.02, 0), 0.04 rad from opposite, well within the feature angle. Their tangent
+    // lines meet 0.05 / tan 0.02 = 2.5 into the face, past its far edge; taken for a wedge's tip,
+    // the face vertex went to that edge (0.999 in). A fin's sides run alike, and nothing on the
+    // face's edges says where its stub ends: the lens stays within the near half of the face.
+    const double a = 0.02;
+    CellCrossings c;
+    c.edges[0].ids = {0, 1};
+    c.edges[0].at = {0.45, 0.55};
+    c.edges[0].normals = {Vec3(-std::cos(a), std::sin(a), 0.0), Vec3(std::cos(a), std::sin(a), 0.0)};
+    REQUIRE(glm::dot(c.edges[0].normals[0], c.edges[0].normals[1]) < -c.creaseCosine);  // a fin
+    double u = -1.0, v = -1.0;
+    cellLoops(c, [&](int face, std::uint32_t, std::uint32_t, double fu, double fv) {
+        if (face == 4) u = fu, v = fv;
+        return std::uint32_t(10 + face);
+    });
+    INFO("face vertex at (" << u << ", " << v << ")");
+    CHECK(u == Approx(0.5).margin(1e-9));
+    CHECK(v > 0.0);
+    CHECK(v <= 0.5);
+}
+
 TEST_CASE("cell loops: a wedge whose side lies nearly in the face gets its face vertex near the tip",
           "[surface][contour]") {
     // Material inside two balls: A, centred 0.6 below the face z = 0 at (0.5, 0), whose slice is

@@ -83,10 +83,20 @@ Result finOfTwoPlunges(double gap, double turn, const Vec3& neck) {
     return contourPart(part, h);
 }
 
-/// A fin of finOfTwoPlunges, meshed from its dexels with its patches apart: no fold, no crossing
-/// pair (contourPart checks them), no split edge dropped.
-void checkFinApart(const char* name, double gap, double turn, const Vec3& neck) {
-    const Result res = finOfTwoPlunges(gap, turn, neck);
+/// Contoured at h = 1: the part that two ball plunges of radius 15 leave in the box (5, 5, 0)-(15,
+/// 15, 3), their surfaces `gap` apart at `neck`, their centres on a line `turn` rad from x about z
+/// and `elevation` rad above the xy plane.
+Result finOfTwoBalls(double gap, double turn, double elevation, const Vec3& neck) {
+    const double h = 1.0, r = 15.0;
+    const Vec3 apart(std::cos(turn) * std::cos(elevation), std::sin(turn) * std::cos(elevation), std::sin(elevation));
+    const Part part{Box{Vec3(5.0, 5.0, 0.0), Vec3(15.0, 15.0, 3.0)},
+                    {testing::sphere(neck - (r + 0.5 * gap) * apart, r), testing::sphere(neck + (r + 0.5 * gap) * apart, r)}};
+    return contourPart(part, h);
+}
+
+/// A fin meshed from its dexels with its patches apart: no fold, no crossing pair (contourPart
+/// checks them), no split edge dropped.
+void checkFinApart(const char* name, const Result& res) {
     INFO(summary(name, res) << "; " << res.stats.splitEdges << " split edges");
     CHECK(res.check.ok());
     CHECK(res.stats.splitEdges > 0);  // the fin is meshed from its dexels
@@ -238,7 +248,7 @@ TEST_CASE("contour: a fin thinner than a cell that crosses cells slantwise keeps
     // face below the other, and 16 pairs of fan triangles passed through each other (the bore's
     // wall of helical-thread-milling.gcode at h = 0.1 mm showed 3388). contourPart checks the
     // crossings.
-    checkFinApart("slanting fin", 0.05, 0.9, Vec3(10.13, 10.64, 0.0));
+    checkFinApart("slanting fin", finOfTwoPlunges(0.05, 0.9, Vec3(10.13, 10.64, 0.0)));
 }
 
 TEST_CASE("contour: a slanting fin that passes a lattice point closer than its lenses reach keeps its patches apart",
@@ -249,7 +259,7 @@ TEST_CASE("contour: a slanting fin that passes a lattice point closer than its l
     // y edge 0.008 and 0.178 h from it. The face rule read the two ends as two stubs, whose
     // lenses, at least a fifth of their chords deep (0.013 and 0.034 h), crossed each other near
     // the corner: 12 pairs of fan triangles passed through each other.
-    checkFinApart("fin by a lattice point", 0.025918, 0.431412, Vec3(10.161619, 10.152137, 0.0));
+    checkFinApart("fin by a lattice point", finOfTwoPlunges(0.025918, 0.431412, Vec3(10.161619, 10.152137, 0.0)));
 }
 
 TEST_CASE("contour: a fin thinner than its walls' tangent planes overshoot keeps its sides apart",
@@ -258,7 +268,19 @@ TEST_CASE("contour: a fin thinner than its walls' tangent planes overshoot keeps
     // from x: each side's crossings span a cell of a wall curved 1/15 per h, so their tangent
     // planes meet about h^2 / (8 * 15 h) = 0.008 h beyond it, in the fin, and the two sides'
     // vertices passed each other at the neck: 16 pairs of fan triangles passed through each other.
-    checkFinApart("fin thinner than the overshoot", 0.013583, 2.133333, Vec3(10.219907, 9.883026, 0.0));
+    checkFinApart("fin thinner than the overshoot", finOfTwoPlunges(0.013583, 2.133333, Vec3(10.219907, 9.883026, 0.0)));
+}
+
+TEST_CASE("contour: a fin between two ball plunges slanting across a cell keeps its lenses in their faces",
+          "[surface][contour][fine]") {
+    // Two ball plunges of radius 15 h whose surfaces pass 0.053 h apart at (9.74, 9.38, 1.35),
+    // their centres on a line 0.873 rad from x and 0.158 rad below the xy plane: the fin between
+    // them slants across the faces of the cell at (9.5, 8.5, 0.5). The two ends of its slice on an
+    // edge of a face have normals within the feature angle of opposite, and their tangent lines,
+    // turned toward each other by the walls' curvature, met past the face: taken for a wedge's
+    // tip, the face vertex went to the far edge of the face z = 1.5, 0.999 h in, and 4 pairs of
+    // fan triangles passed through each other (contourPart checks them).
+    checkFinApart("fin between balls", finOfTwoBalls(0.053403, 0.872833, -0.157715, Vec3(9.737141, 9.380631, 1.345158)));
 }
 
 TEST_CASE("contour: ball passes closer than a cell", "[surface][contour]") {

@@ -300,7 +300,8 @@ std::vector<Path> regionPaths(const std::vector<WalkCrossing>& walk, const std::
 /// The face vertices of the lenses among the face's paths.
 void placeFaceVertices(const CellCrossings& cell, const Frame& f, std::vector<Path>& paths) {
     // Face vertices: from the ends' tangent lines (cell_loops.h), else where the blend, on the
-    // line into the face from the lens's middle, first leaves the membership the edge has there;
+    // line into the face from the lens's middle (a fin's: below where its sides' tangents meet,
+    // within the lens), first leaves the membership the edge has there;
     // a lens round others on its edge goes deeper. Worked in the lens's edge frame: along the
     // edge (its lattice offset) and into the face.
     const FaceField field(cell, f);
@@ -323,15 +324,24 @@ void placeFaceVertices(const CellCrossings& cell, const Frame& f, std::vector<Pa
             const double det = a1 * b2 - b1 * a2;
             const double turn = std::acos(std::clamp((a1 * a2 + b1 * b2) / (l1 * l2), -1.0, 1.0));
             const double y = std::abs(det) > kParallelSine * l1 * l2 ? a1 * a2 * (p.toAt - p.fromAt) / det : 0.0;
-            const bool smooth =
-                glm::dot(p.fromNormal, p.toNormal) >= cell.creaseCosine || std::min(l1, l2) < kGrazingInFace;
+            const double cosine = glm::dot(p.fromNormal, p.toNormal);
+            const bool smooth = cosine >= cell.creaseCosine || std::min(l1, l2) < kGrazingInFace;
+            // Ends whose normals are within the feature angle of opposite are a fin's two sides,
+            // which run alike: no wedge's tip lies where their tangent lines meet, far off or past
+            // the face. The face vertex keeps that point's place along the edge, within the lens
+            // (the way the fin leans into the face), and takes the field's depth there. (Two ball plunges of radius 15 h whose
+            // walls pass 0.053 h apart, the fin slanting across the faces of a cell: on the face
+            // z = 1.5 its sides' tangents met past the face, the face vertex went to its far edge,
+            // 0.999 h in, and its fan passed through another patch's, over a lens 0.93 h deep in
+            // the face x = 9.5.)
+            const bool fin = cosine <= -cell.creaseCosine;
             if (smooth) {
                 // A circular arc over the chord c that turns by theta rises c/2 tan(theta/4).
                 const double theta = y >= 0.0 ? turn : 2.0 * kPi - turn;
                 depth = 0.5 * (p.hi - p.lo) * std::tan(0.25 * theta);
             } else if (y > 0.0) {
                 along = std::clamp((a1 * p.fromAt * b2 - b1 * a2 * p.toAt) / det, p.lo, p.hi);
-                depth = y;
+                if (!fin) depth = y;
             }
         }
         if (depth < 0.0) {

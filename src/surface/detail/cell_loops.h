@@ -11,8 +11,10 @@
 /// face whose two ends lie on one edge (the face's slice of a thin wall's end, say) gets a face
 /// vertex in between, so that no two triangles share that edge's chord from four sides. The face
 /// vertex lies where the surface's slice through the face is expected, from the two ends'
-/// normals: at their tangent lines' meeting point across a sharp edge (a wedge's tip), on the
-/// circular arc the normals turn by on a smooth surface or where one end's sheet meets the face
+/// normals: at their tangent lines' meeting point across a sharp edge (a wedge's tip; where the
+/// normals are within the feature angle of opposite, a thin fin's sides, which run alike, on the
+/// face rule's zero below that point's place along the edge), on the circular arc the normals
+/// turn by on a smooth surface or where one end's sheet meets the face
 /// at a grazing angle (its slice curls round too fast for its tangent), and otherwise on the face
 /// rule's zero below the edge; at least a fifth of its chord into the face. The cell's paths, oriented as
 /// cell_table.h orients its segments, chain into loops.
