@@ -713,9 +713,10 @@ private:
         int qefRank = 0;
         const int len = int(loop.size());
         const detail::PatchVertexRule::Loop crossingsOf{mesh_.vertices.data(), crossingNormal_.data(), loop.data(), len};
-        mesh_.vertices[at] = detail::keepOffFinMiddle(
-            split_, k, featureAngle_,
-            vertexRule_.place(crossingsOf, latticePoint(Coord(g[0], g[1], g[2])), sharesCell, qefRank));
+        const Vec3 cellLo = latticePoint(Coord(g[0], g[1], g[2]));
+        const Vec3 fitted = vertexRule_.place(crossingsOf, cellLo, sharesCell, qefRank);
+        mesh_.vertices[at] =
+            detail::keepOffLensFaces(split_, k, cellLo, h_, detail::keepOffFinMiddle(split_, k, featureAngle_, fitted));
         edgeCount += qefRank == 2;
         cornerCount += qefRank == 3;
         for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[std::size_t(i)], loop[std::size_t(i + 1 == len ? 0 : i + 1)]};

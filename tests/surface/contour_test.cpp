@@ -283,6 +283,17 @@ TEST_CASE("contour: a fin between two ball plunges slanting across a cell keeps 
     checkFinApart("fin between balls", finOfTwoBalls(0.053403, 0.872833, -0.157715, Vec3(9.737141, 9.380631, 1.345158)));
 }
 
+TEST_CASE("contour: a fin between two ball plunges that slants through a cell's face keeps its vertex off that face",
+          "[surface][contour][fine]") {
+    // Two ball plunges of radius 15 h whose surfaces pass 0.017 h apart at (9.06, 9.48, 1.37),
+    // their centres on a line 1.389 rad from x and 0.565 rad below the xy plane: the fin between
+    // them slants through the lattice plane z = 1.5 near the lattice point (9.5, 9.5, 1.5). Its
+    // slice there ends on the y edge at x = 9.5 as a lens 0.5 h deep. A patch's vertex, clamped
+    // onto that face, sat 0.004 h outside the lens; its fan over the lens lay in the face and
+    // overlapped itself, and 3 pairs of triangles met (contourPart checks them).
+    checkFinApart("fin through a face", finOfTwoBalls(0.016657, 1.389212, -0.564792, Vec3(9.058680, 9.477962, 1.369491)));
+}
+
 TEST_CASE("contour: ball passes closer than a cell", "[surface][contour]") {
     // Parallel passes of a ball of radius 3 mm at a stepover of 0.3 h: the cusps between them,
     // s^2 / (8 R) = 0.0009 mm high, are finer than the lattice can show.

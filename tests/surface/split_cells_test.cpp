@@ -54,3 +54,27 @@ TEST_CASE("split cells: a wedge's vertex is left alone", "[surface][split]") {
     const SplitCells cells = finEdge(false, Vec3(0.8, 0.6, 0.0));
     CHECK(detail::keepOffFinMiddle(cells, 0, kFeatureAngle, Vec3(0.3, 0.415, 0.7)) == Vec3(0.3, 0.415, 0.7));
 }
+
+TEST_CASE("split cells: a vertex on a face its loop crosses by a lens is kept off that face", "[surface][split]") {
+    // The cell from (0, 0, 0) to (2, 2, 2) (h = 2). One patch: two ends on the x edge at y = 0,
+    // z = 2 and a face vertex between them on the top face (z = 2); another: an end on the y edge
+    // at x = z = 0 and a face vertex on the low x face (x = 0). kFaceInset is 1e-3 h: 0.002.
+    SplitCells cells;
+    cells.points = {Vec3(0.8, 0.0, 2.0), Vec3(1.0, 0.0, 2.0), Vec3(0.0, 0.7, 0.0), Vec3(0.9, 0.6, 2.0), Vec3(0.0, 0.7, 0.5)};
+    cells.normals.resize(cells.points.size());
+    cells.edgeEnds = 3;
+    cells.faceVertexEnds = {{0, 1}, {2, 2}};
+    cells.faceVertexAxis = {2, 0};
+    cells.loopIds = {0, 3, 1, 2, 4};
+    cells.loopStart = {0, 3, 5};
+    const Vec3 lo(0.0);
+    // On the top face, and past it: brought 0.002 under it; x and y stay.
+    CHECK(detail::keepOffLensFaces(cells, 0, lo, 2.0, Vec3(0.85, 0.3, 2.0)) == Vec3(0.85, 0.3, 1.998));
+    CHECK(detail::keepOffLensFaces(cells, 0, lo, 2.0, Vec3(0.85, 0.3, 2.1)) == Vec3(0.85, 0.3, 1.998));
+    // On the low x face: brought 0.002 in; on the top face, which its loop does not cross by a
+    // lens, it stays.
+    CHECK(detail::keepOffLensFaces(cells, 1, lo, 2.0, Vec3(0.0, 0.5, 2.0)) == Vec3(0.002, 0.5, 2.0));
+    // Off those faces by more than that, a vertex stays where it is.
+    CHECK(detail::keepOffLensFaces(cells, 0, lo, 2.0, Vec3(0.0, 0.3, 1.5)) == Vec3(0.0, 0.3, 1.5));
+    CHECK(detail::keepOffLensFaces(cells, 1, lo, 2.0, Vec3(0.01, 0.5, 0.0)) == Vec3(0.01, 0.5, 0.0));
+}

@@ -16,18 +16,6 @@ namespace {
 /// a smooth concave patch never shows one.
 constexpr double kConvexGap = 1e-3;
 
-/// A crease's or corner's vertex (rank 2 or 3) stays this far (in h) inside its cell's faces. On a
-/// face, its fan over a path of the loop across that face (a lens, cell_loops.h) would lie in the
-/// face, where it overlaps itself if the lens rises past the vertex. (Heart, the lattice plane
-/// x = 1.1647 at (19.50, -4.67): a convex crease's vertex, kept within its crossings' box, sat on
-/// the face 0.04 mm above a lens's face vertex, and three fan triangles overlapped.) Off the face,
-/// two fan triangles that share an edge meet only along it. It moves a vertex by at most 1e-3 h,
-/// as kCornerGap moves a crossing off a lattice point. A smooth patch's vertex keeps the whole
-/// cell: where its loop is a sliver kCornerGap from a lattice point, the inset would stand the fan
-/// over the sliver on edge, past fanOffset's bound (62 triangles of the contour tests' grazing
-/// spheres).
-constexpr double kFaceInset = 1e-3;
-
 /// A smooth patch's vertex leaves the loop's mass point along the mean normal only as far as keeps
 /// each fan triangle within this angle of that normal. Its crossing normals lie within half the
 /// feature angle of the mean, so a fan triangle steeper than this cannot follow the surface; where

@@ -8,6 +8,7 @@
 #include "dexelmill/stock/fine_features.h"
 #include "surface/detail/cell_loops.h"
 #include "surface/detail/cell_table.h"
+#include "surface/detail/patch_vertex.h"
 
 namespace dexelmill::detail {
 
@@ -92,6 +93,32 @@ Vec3 keepOffFinMiddle(const SplitCells& cells, std::uint32_t k, double featureAn
         const Vec3 m = 0.5 * (cells.points[p] + cells.points[q]);
         const double shortBy = kOwnSide * glm::dot(n, cells.points[p] - m) - glm::dot(n, v - m);
         if (shortBy > 0.0) v += shortBy * n;
+    }
+    return v;
+}
+
+/// A smooth patch's vertex (rank 0 or 1) keeps its whole cell, or the box of its crossings where
+/// it shares the cell (PatchVertexRule::place), and either may put it on a face its loop crosses
+/// by a lens: on a thin fin slanting across that face its crossings there bound the box, and the
+/// least-squares point may lie past them (a wall concave seen from the fin puts it in the fin).
+/// Its fan over the lens then lies in the face, where it overlaps itself if the lens rises past
+/// the vertex, and meets the fan of the cell across the face. (Two ball plunges of radius 15 h
+/// whose walls pass 0.017 h apart, the fin slanting through the lattice plane z = 1.5 at (9.62,
+/// 9.46): the vertex, clamped onto that face, sat 0.004 h outside a lens 0.5 h deep; three pairs
+/// of triangles met.) Kept kFaceInset h off such a face, as a crease's or corner's vertex is off
+/// every face, two fan triangles that share an edge meet only along it.
+Vec3 keepOffLensFaces(const SplitCells& cells, std::uint32_t k, const Vec3& cellLo, double h, Vec3 v) {
+    const double inset = PatchVertexRule::kFaceInset * h;
+    for (std::uint32_t i = cells.loopStart[k]; i < cells.loopStart[k + 1]; ++i) {
+        const std::uint32_t id = cells.loopIds[i];
+        if (id & SplitCells::kOrdinary || id < cells.edgeEnds) continue;
+        const int a = cells.faceVertexAxis[id - cells.edgeEnds];
+        const double face = cells.points[id][a];
+        if (face < cellLo[a] + 0.5 * h) {
+            v[a] = std::max(v[a], face + inset);
+        } else {
+            v[a] = std::min(v[a], face - inset);
+        }
     }
     return v;
 }
@@ -251,6 +278,7 @@ SplitCells findSplitCells(const TriDexelStock& stock, const SplitInputs& in) {
                 out.points.push_back(p);
                 out.normals.push_back(PackedNormal{});
                 out.faceVertexEnds.push_back({from, to});
+                out.faceVertexAxis.push_back(std::uint8_t(a));
             }
             return it->second;
         };

@@ -56,6 +56,8 @@ struct SplitCells {
     static constexpr std::uint32_t kNoPartner = ~0u;
     /// Per face vertex (points[edgeEnds + k]): the two ends (indices into `points`) it lies between.
     std::vector<std::array<std::uint32_t, 2>> faceVertexEnds;
+    /// Per face vertex: the axis its face lies across.
+    std::vector<std::uint8_t> faceVertexAxis;
     /// The contourer's crossings the loops use: edges by lower grid point and axis.
     std::vector<std::pair<GridPoint, int>> ordinary;
     /// Edges with several crossings, by lower grid point and axis, sorted: the contourer makes no
@@ -78,6 +80,11 @@ struct SplitCells {
 /// fin thinner than the spacing, its sides within `featureAngle` of parallel), a quarter of that
 /// end's distance from it: see the definition.
 Vec3 keepOffFinMiddle(const SplitCells& cells, std::uint32_t k, double featureAngle, Vec3 v);
+
+/// @brief Split patch k's vertex `v`, in the cell whose lowest corner is `cellLo` (spacing h),
+/// kept PatchVertexRule::kFaceInset h inside each face its loop crosses by a lens (a face
+/// vertex's face): see the definition.
+Vec3 keepOffLensFaces(const SplitCells& cells, std::uint32_t k, const Vec3& cellLo, double h, Vec3 v);
 
 /// @brief Finds the edges of `stock`'s lattice whose dexel has two or more ends strictly between
 /// its lattice points and agrees with the level set at both, the cells round them, and those
