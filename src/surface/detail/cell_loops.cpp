@@ -329,11 +329,11 @@ void placeFaceVertices(const CellCrossings& cell, const Frame& f, std::vector<Pa
             // Ends whose normals are within the feature angle of opposite are a fin's two sides,
             // which run alike: no wedge's tip lies where their tangent lines meet, far off or past
             // the face. The face vertex keeps that point's place along the edge, within the lens
-            // (the way the fin leans into the face), and takes the field's depth there. (Two ball plunges of radius 15 h whose
-            // walls pass 0.053 h apart, the fin slanting across the faces of a cell: on the face
-            // z = 1.5 its sides' tangents met past the face, the face vertex went to its far edge,
-            // 0.999 h in, and its fan passed through another patch's, over a lens 0.93 h deep in
-            // the face x = 9.5.)
+            // (the way the fin leans into the face), and takes the field's depth there. (Two ball
+            // plunges of radius 15 h whose walls pass 0.053 h apart, the fin slanting across the
+            // faces of a cell: on the face z = 1.5 its sides' tangents met past the face, the face
+            // vertex went to its far edge, 0.999 h in, and its fan passed through another patch's,
+            // over a lens 0.93 h deep in the face x = 9.5.)
             const bool fin = cosine <= -cell.creaseCosine;
             if (smooth) {
                 // A circular arc over the chord c that turns by theta rises c/2 tan(theta/4).
