@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -21,6 +22,7 @@
 #include "dexelmill/surface/levelset.h"
 #include "dexelmill/surface/levelset_vdb.h"
 #include "dexelmill/surface/voxelize.h"
+#include "io/detail/vdb_frame.h"
 #include "support/analytic_parts.h"
 #include "support/scratch.h"
 
@@ -169,6 +171,33 @@ TEST_CASE("VDB: files OpenVDB writes with file metadata, two grids or no offsets
         const LevelSet back = readVdb((dir / name).string());
         CHECK(back.activeVoxelCount() == ls.activeVoxelCount());
         CHECK(back.source() == "dented box");
+    }
+}
+
+TEST_CASE("VDB: grids of few leaves, whose delayed-load arrays OpenVDB stores raw or pads, pass the check", "[io]") {
+    // OpenVDB stores an array of 48 bytes or fewer raw and pads a longer one under 128 bytes to
+    // 128 before Blosc compresses it; the mask takes a byte a leaf and the compressed sizes 8. So
+    // the sizes are raw up to 6 leaves and padded from 7 to 15, the mask raw up to 48 and padded
+    // from 49 to 127. (A level set of 8 leaves that dexelmill wrote was refused before.)
+    openvdb::initialize();
+    const fs::path dir = testing::scratchFolder("dexelmill_vdb_frame_", "few");
+    for (const int leaves : {1, 6, 7, 8, 15, 16, 48, 49, 100, 127, 128, 300}) {
+        INFO(leaves << " leaves");
+        openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(0.0f);
+        for (int i = 0; i < leaves; ++i) grid->tree().setValue(openvdb::Coord(8 * i, 0, 0), 1.0f);
+        REQUIRE(grid->tree().leafCount() == openvdb::Index32(leaves));
+        const fs::path path = dir / ("leaves" + std::to_string(leaves) + ".vdb");
+        openvdb::io::File(path.string()).write({grid});
+        const std::string bytes = slurp(path);
+        REQUIRE(bytes.find("__delayedload") != std::string::npos);  // the arrays are there
+        // OpenVDB reads the file back whole: it is good.
+        openvdb::io::File back(path.string());
+        back.open();
+        CHECK(back.readGrid(grid->getName())->baseTree().leafCount() == openvdb::Index32(leaves));
+        back.close();
+        std::ifstream in(path, std::ios::binary);
+        const std::optional<detail::VdbFramingProblem> problem = detail::vdbFramingProblem(in, bytes.size());
+        CHECK((problem ? problem->what : std::string()).empty());
     }
 }
 

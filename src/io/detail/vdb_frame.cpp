@@ -45,6 +45,10 @@ constexpr std::uint32_t kNoCompressedSizes = 0xffffffffu;
 constexpr std::uint64_t kBloscHeaderBytes = 16;
 constexpr std::uint64_t kBloscUncompressedAt = 4;
 constexpr std::uint64_t kBloscCompressedAt = 12;
+/// OpenVDB pads an array shorter than this with zeros to this many bytes before Blosc compresses
+/// it (arrays of 48 bytes or fewer it stores raw): the header then gives the padded size. (A grid
+/// of 8 leaves: its 64 bytes of compressed sizes are compressed as 128.)
+constexpr std::uint64_t kBloscPadBytes = 128;
 
 /// The most bytes the check reads past rather than seeking over: about a stream buffer's worth.
 constexpr std::uint64_t kMostBytesSkippedByReading = 4096;
@@ -148,7 +152,7 @@ std::uint32_t length(Cursor& c, const char* field, const Owner& owner) {
 /// then a byte each (a mask) and an int64 each (compressed sizes; none where the block's uint32 size
 /// is all ones), each block a uint32 size and that many bytes of Blosc, or 0 and the values raw.
 /// OpenVDB sizes its arrays by the count and by the Blosc header's uncompressed size, not by the
-/// value's length: each must agree with the others.
+/// value's length: each must agree with the others, the header's size padded as kBloscPadBytes says.
 void checkDelayedLoad(Cursor& c, std::uint32_t valueBytes, const Owner& owner) {
     if (valueBytes == 0) return;
     const std::uint64_t end = c.at() + valueBytes;
@@ -162,16 +166,17 @@ void checkDelayedLoad(Cursor& c, std::uint32_t valueBytes, const Owner& owner) {
     const std::uint64_t leaves = c.u32();
     for (const std::uint64_t elementBytes : {kMaskBytes, kCompressedSizeBytes}) {
         const std::string array = elementBytes == kMaskBytes ? "the mask" : "the list of compressed sizes";
+        const std::uint64_t arrayBytes = leaves * elementBytes;
         const std::uint64_t at = c.at();
         if (past(sizeof(std::uint32_t))) throw damaged("the size of " + array, at);
         const std::uint32_t bytes = c.u32();
         if (elementBytes == kCompressedSizeBytes && bytes == kNoCompressedSizes) break;
         if (bytes == 0) {
-            if (past(leaves * elementBytes))
-                throw damaged(array + " of " + str(leaves) + " leaves stored raw (" + str(leaves * elementBytes) +
+            if (past(arrayBytes))
+                throw damaged(array + " of " + str(leaves) + " leaves stored raw (" + str(arrayBytes) +
                                   " bytes)",
                               at);
-            c.skip(leaves * elementBytes);
+            c.skip(arrayBytes);
             continue;
         }
         if (bytes < kBloscHeaderBytes || past(bytes)) throw damaged("the size " + str(bytes) + " of " + array, at);
@@ -180,10 +185,11 @@ void checkDelayedLoad(Cursor& c, std::uint32_t valueBytes, const Owner& owner) {
         const std::uint64_t uncompressed = c.u32();
         c.skip(kBloscCompressedAt - kBloscUncompressedAt - sizeof(std::uint32_t));
         const std::uint64_t compressed = c.u32();
-        if (uncompressed != leaves * elementBytes || compressed != bytes)
+        const bool padded = arrayBytes < kBloscPadBytes && uncompressed == kBloscPadBytes;
+        if ((uncompressed != arrayBytes && !padded) || compressed != bytes)
             throw Damaged{"the Blosc header of " + array + " in the value of " + owner.name() + ", at byte " +
                               str(header) + ", holds " + str(uncompressed) + " bytes compressed to " + str(compressed) +
-                              ", not the " + str(leaves * elementBytes) + " of " + str(leaves) +
+                              ", not the " + str(arrayBytes) + " of " + str(leaves) +
                               " leaves compressed to " + str(bytes),
                           false};
         c.seek(header + bytes);
