@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
-# Short libFuzzer run of every target (the readers, and the whole pipeline on a small block), for CI.
+# Short libFuzzer run of every target (the readers, the whole pipeline on a small block, and the
+# check of a VDB file's framing), for CI.
 # Usage: tests/fuzz/smoke.sh BUILD_DIR   (a build configured with clang and -DDEXELMILL_BUILD_FUZZ=ON)
 # Each target runs at most ~15 s, from the checked-in seed corpus tests/fuzz/corpus/NAME (programs
-# from tests/data and from the reader tests; a G-code or project seed may carry the files it names
-# after "//@file NAME" lines, see harness.h), copied so that the run does not write into the tree.
+# from tests/data and from the reader tests, and small VDB files dexelmill wrote; a G-code or
+# project seed may carry the files it names after "//@file NAME" lines, see harness.h), copied so
+# that the run does not write into the tree.
 set -euo pipefail
 build=${1:?usage: smoke.sh BUILD_DIR}
 here=$(cd "$(dirname "$0")" && pwd)
@@ -11,7 +13,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
 status=0
-for name in gcode apt camotics pipeline; do
+for name in gcode apt camotics pipeline vdb_frame; do
     target=${name}_fuzz
     exe="$build/$target"
     mkdir -p "$work/$target"
