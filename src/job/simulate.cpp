@@ -541,7 +541,10 @@ Simulation runStages(const SimulateOptions& o) {
         if (o.inputs.size() > 1) {
             std::string own;
             for (const ProjectFile& f : project->files) own += (own.empty() ? "" : ", ") + f.path;
-            project->diagnostics.push_back({Diagnostic::Severity::Note, {project->file, 0, 0},
+            // Named, not braced in place: GCC 12 warns falsely of its string otherwise.
+            SourceLocation projectFile;
+            projectFile.file = project->file;
+            project->diagnostics.push_back({Diagnostic::Severity::Note, projectFile,
                                             "the programs given after the project replace its own (" +
                                                 (own.empty() ? std::string("none") : own) +
                                                 "); its tools, workpiece and resolution still apply"});

@@ -106,18 +106,21 @@ ToolTable resolveTools(const SimulateOptions& o, Program& program) {
                                       " but no tool of that number is defined; use --tool " + std::to_string(n) +
                                       "=SPEC");
     }
+    // These warnings are about options, not a place in a file. (A named location rather than a
+    // braced temporary also keeps GCC 12 from a false -Wmaybe-uninitialized on its string.)
+    const SourceLocation options;
     // A --tool N that cut in place of the undefined numbers is used, under another number.
     for (const auto& [n, t] : o.tools)
         if (!used.count(n) && standInUsed != n && !program.path.moves.empty())
-            program.diagnostics.push_back({Diagnostic::Severity::Warning, {},
+            program.diagnostics.push_back({Diagnostic::Severity::Warning, options,
                                            "--tool " + std::to_string(n) + "=... (" + t.description() +
                                                ") is not used: no move cuts with tool " + std::to_string(n)});
     if (!o.toolTable.empty() && !tableUsed && !program.path.moves.empty())
-        program.diagnostics.push_back({Diagnostic::Severity::Warning, {},
+        program.diagnostics.push_back({Diagnostic::Severity::Warning, options,
                                        "--tool-table " + o.toolTable +
                                            " is not used: no tool the program calls is taken from it"});
     if (o.defaultTool && !defaultUsed && !program.path.moves.empty())
-        program.diagnostics.push_back({Diagnostic::Severity::Warning, {},
+        program.diagnostics.push_back({Diagnostic::Severity::Warning, options,
                                        "--tool without a number (" + o.defaultTool->description() +
                                            ") is not used: it serves only tool numbers nothing else defines, and "
                                            "the program defines every tool it calls; --tool N=SPEC replaces tool N"});
