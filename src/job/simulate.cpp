@@ -687,10 +687,9 @@ Simulation runStages(const SimulateOptions& o) {
     }
     for (const CutCollision& c : cut.collisions) {
         const SourceLocation at = program.path.where(c.source);
-        // One sweep holds the shank and the holder, so what either met is counted together.
-        const char* kind = c.kind == CollisionKind::Rapid                                 ? "rapid"
-                           : sim.tools.at(program.path.moves[c.move].tool).hasHolder() ? "shank or holder"
-                                                                                         : "shank";
+        const char* kind = c.kind == CollisionKind::Rapid   ? "rapid"
+                           : c.kind == CollisionKind::Shank ? "shank"
+                                                            : "holder";
         report.collisions.push_back({ToolPath::moveNumber(c.move), at, kind, c.volume});
     }
     for (int a = 0; a < 3; ++a)

@@ -33,7 +33,7 @@ struct TileSlot {
 struct TileMoveStats {
     std::uint32_t move = 0;  ///< index within the batch
     std::uint32_t bounded = 0, visited = 0, changed = 0;
-    double removed = 0.0, shank = 0.0, design = 0.0;
+    double removed = 0.0, shank = 0.0, holder = 0.0, design = 0.0;
 };
 
 /// What a tile needs to watch the design: its dexels' design material, the depth below which
@@ -216,6 +216,8 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
             g.cutting ? SweepWindow(lattice, axB, axC, ia, originA, g.cutting.bounds()) : SweepWindow();
         const SweepWindow shankWin =
             g.shank ? SweepWindow(lattice, axB, axC, ia, originA, g.shank.bounds()) : SweepWindow();
+        const SweepWindow holderWin =
+            g.holder ? SweepWindow(lattice, axB, axC, ia, originA, g.holder.bounds()) : SweepWindow();
         TileMoveStats st;
         st.move = m;
         for (int ic = c0; ic <= c1; ++ic) {
@@ -231,11 +233,13 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                 // (most dexels under a finishing pass were cut down by the moves before).
                 const bool cuts = g.cutting && cutWin.meets(ib, ic, segs);
                 const bool shank = g.shank && shankWin.meets(ib, ic, segs);
+                const bool holder = shank && g.holder && holderWin.meets(ib, ic, segs);
                 const auto boundOf = [&](const RegionSweep& sweep) {
                     return sweep.fixed ? sweep.fixed->bound(line) : sweep.turning->bound(line);
                 };
                 const Interval cutReach = cuts ? boundOf(g.cutting) : Interval::empty();
                 const Interval shankReach = shank ? boundOf(g.shank) : Interval::empty();
+                const Interval holderReach = holder ? boundOf(g.holder) : Interval::empty();
                 if (!reachesMaterial(segs, cutReach.hull(shankReach))) continue;
                 // A fixed-axis sweep's line in its frame, for its hits: made only here, as the
                 // bounds take the boxes in world coordinates and reject most lines of the window.
@@ -243,6 +247,8 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                     cuts && g.cutting.fixed ? g.cutting.fixed->toLocal(line) : MoveSweep::LocalLine{};
                 const MoveSweep::LocalLine shankLine =
                     shank && g.shank.fixed ? g.shank.fixed->toLocal(line) : MoveSweep::LocalLine{};
+                const MoveSweep::LocalLine holderLine =
+                    holder && g.holder.fixed ? g.holder.fixed->toLocal(line) : MoveSweep::LocalLine{};
                 ++st.visited;
                 // The share of a cell's cross-section this dexel stands for (Lattice::share).
                 const double share = lattice.dexelShare(a, ib, ic);
@@ -291,6 +297,16 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                         removed += subtractHit(tile, local, hit);
                     });
                 }
+                // The holder's share of what the shank region meets, measured on the material it
+                // is about to meet: the holder is one cylinder, whose sweep's intervals along a
+                // line do not overlap (one part, or a turning sweep's union), so none is counted
+                // twice.
+                if (holder) {
+                    forEachHit(g.holder, holderLine, holderReach, [&](const LineHit& hit) {
+                        st.holder += share * overlapLength(tile.segments(local), toFloat(hit.range.lo),
+                                                           toFloat(hit.range.hi));
+                    });
+                }
                 if (shank) {
                     forEachHit(g.shank, shankLine, shankReach, [&](const LineHit& hit) {
                         if (removeShank) {
@@ -331,6 +347,8 @@ std::map<int, ToolRegions> toolRegions(const ToolPath& path, const ToolTable& to
         const bool hasShank = t.cuttingLength() < t.totalLength() - tol::kLength;
         r.cutting.emplace(hasShank ? t.region(t.bottom(), t.cuttingLength()) : t);
         if (hasShank) r.shank.emplace(t.region(t.cuttingLength(), t.totalLength()));
+        // withHolder puts the holder at the stick-out's top, at or above the cutting length.
+        if (t.hasHolder()) r.holder.emplace(t.region(std::max(t.holderBottom(), t.cuttingLength()), t.totalLength()));
         if (r.cutting->convexParts().size() > MoveSweep::kMaxParts ||
             (r.shank && r.shank->convexParts().size() > MoveSweep::kMaxParts))
             throw Error("tool " + std::to_string(mv.tool) + " ('" + t.description() + "') has more than " +
@@ -400,11 +418,12 @@ MoveGeometry::MoveGeometry(const ToolRegions& regions, const Move& move, double 
     };
     if (which != Regions::Shank) sweep(*regions.cutting, cutting);
     if (regions.shank && which != Regions::Cutting) sweep(*regions.shank, shank);
+    if (regions.holder && which != Regions::Cutting) sweep(*regions.holder, holder);
 }
 
 std::size_t MoveGeometry::linearNodeBound() const {
     std::size_t nodes = 0;
-    for (const RegionSweep* r : {&cutting, &shank})
+    for (const RegionSweep* r : {&cutting, &shank, &holder})
         if (r->turning) nodes += r->turning->linearNodeBound();
     return nodes;
 }
@@ -535,6 +554,7 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
                 ms.changed += s.changed;
                 ms.removed += s.removed * cell;
                 ms.shankVolume += s.shank * cell;
+                ms.holderVolume += s.holder * cell;
                 ms.designRemoved[std::size_t(slots[t].family)] += s.design * lattice.h * lattice.h;
             }
             for (DesignStretch& d : tileStretches[t]) {
@@ -565,10 +585,15 @@ CutResult cutStock(TriDexelStock& stock, const ToolPath& path, const ToolTable& 
         result.changed += ms.changed;
         result.removedVolume += ms.removed;
         result.shankVolume += ms.shankVolume;
+        result.holderVolume += ms.holderVolume;
         if (mv.rapid && ms.removed > options.collisionVolume)
             result.collisions.push_back({i, mv.source, CollisionKind::Rapid, ms.removed});
-        if (ms.shankVolume > options.collisionVolume)
-            result.collisions.push_back({i, mv.source, CollisionKind::Shank, ms.shankVolume});
+        // The holder's share is measured within the shank region's (ToolRegions::holder).
+        const double shankAlone = ms.shankVolume - ms.holderVolume;
+        if (shankAlone > options.collisionVolume)
+            result.collisions.push_back({i, mv.source, CollisionKind::Shank, shankAlone});
+        if (ms.holderVolume > options.collisionVolume)
+            result.collisions.push_back({i, mv.source, CollisionKind::Holder, ms.holderVolume});
     }
     return result;
 }

@@ -369,7 +369,43 @@ TEST_CASE("cut: material met by the shank is reported, and removed unless asked 
     }
 }
 
-TEST_CASE("cut: material met by a holder is a collision of the region above the flutes", "[stock][cut]") {
+TEST_CASE("cut: the holder's share of what the region above the flutes meets is its own collision", "[stock][cut]") {
+    // Flat D4 with 1 mm of flute and a 2 mm stick-out in a D8 holder, fed along x at a tip height
+    // of 4 from outside the stock to x = 15: the flutes cut heights 4..5, the shank meets 5..6
+    // over the footprint 15 x 4 plus the half disk at the end (60 + 2 pi mm^2), and the holder
+    // 6..10 over 15 x 8 plus its half disk (120 + 8 pi). The x and y dexels lie half a spacing
+    // off those heights, so that no dexel runs along a face the shank and the holder share; the
+    // footprints' edges leave the families within 0.1 % of these.
+    ToolTable tools;
+    tools.emplace(3, withHolder(flatEndMill(4.0, {1.0, 2.0}), 8.0, 10.0));
+    ToolPath path;
+    path.files.push_back("held.nc");
+    Move feed;
+    feed.start = Vec3(-5, 10, 4), feed.end = Vec3(15, 10, 4), feed.tool = 3, feed.source = {0, 9};
+    path.moves = {feed};
+    const double narrow = 60.0 + 2.0 * M_PI, wide = 120.0 + 8.0 * M_PI;
+    const double flutes = narrow, shank = narrow, holder = 4.0 * wide;
+    for (bool remove : {false, true}) {
+        INFO("remove " << remove);
+        TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.2);
+        CutOptions opt;
+        opt.removeShankMaterial = remove;
+        const CutResult res = cutStock(stock, path, tools, opt);
+        REQUIRE(res.collisions.size() == 2);
+        CHECK(res.collisions[0].kind == CollisionKind::Shank);
+        CHECK(res.collisions[0].volume == Approx(shank).epsilon(0.005));
+        CHECK(res.collisions[1].kind == CollisionKind::Holder);
+        CHECK(res.collisions[1].source.line == 9);
+        CHECK(res.collisions[1].volume == Approx(holder).epsilon(0.005));
+        CHECK(res.holderVolume == Approx(holder).epsilon(0.005));
+        CHECK(res.shankVolume == Approx(shank + holder).epsilon(0.005));
+        const double lost =
+            kStockBox.volume() - (stock.volume(Axis::X) + stock.volume(Axis::Y) + stock.volume(Axis::Z)) / 3;
+        CHECK(lost == Approx(remove ? flutes + shank + holder : flutes).epsilon(0.005));
+    }
+}
+
+TEST_CASE("cut: material met by a holder is a collision of the holder", "[stock][cut]") {
     // Flat D10, 15 mm of flute, 20 mm stick-out, in a D30 holder, plunged from above to 22 mm
     // below the stock's top face: the flutes and the shank go down a hole of radius 5 that the
     // flutes cut, and the holder's last 2 mm meet the ring between radii 5 and 15, 400 pi mm^3.
@@ -392,8 +428,9 @@ TEST_CASE("cut: material met by a holder is a collision of the region above the 
             CHECK(res.removedVolume == Approx(hole).epsilon(0.01));
             continue;
         }
+        // The shank goes down the flutes' hole and meets nothing.
         REQUIRE(res.collisions.size() == 1);
-        CHECK(res.collisions[0].kind == CollisionKind::Shank);
+        CHECK(res.collisions[0].kind == CollisionKind::Holder);
         CHECK(res.collisions[0].volume == Approx(ring).epsilon(0.01));
         CHECK(res.removedVolume == Approx(hole + ring).epsilon(0.01));
     }

@@ -132,8 +132,9 @@ struct SimulateOptions {
 struct ReportCollision {
     std::size_t move = 0;  ///< the move's number: the program's moves counted from 1 (ToolPath::moveNumber)
     SourceLocation where;
-    /// "rapid" (a rapid move removed material), "shank" (the tool above its cutting length met
-    /// material) or "shank or holder" (the same, for a tool with a holder, withHolder)
+    /// "rapid" (a rapid move removed material), "shank" (the tool above its cutting length, up to
+    /// its holder where it has one, met material) or "holder" (the holder did, withHolder); a move
+    /// may have a collision of each kind
     std::string kind;
     double volumeMm3 = 0.0;
 };

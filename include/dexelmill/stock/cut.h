@@ -82,6 +82,7 @@ struct MoveStats {
     std::uint64_t changed = 0;   ///< dexels that lost material
     double removed = 0.0;        ///< material removed (mm^3), mean over the stock's families
     double shankVolume = 0.0;    ///< material met by the shank region (mm^3), mean over families
+    double holderVolume = 0.0;   ///< of shankVolume, what the holder met (ToolRegions::holder)
     /// Design material removed (mm^3) as each family measures it (CutOptions::design); 0 for
     /// families the stock does not keep. A layer thinner than the spacing is measured exactly only
     /// by the family across it, so the families are not averaged.
@@ -107,7 +108,8 @@ struct DesignStretch {
 /// @brief The kinds of collision the cutting loop reports.
 enum class CollisionKind {
     Rapid,  ///< a rapid (G0) move removed material
-    Shank   ///< the shank or holder region met material
+    Shank,  ///< the shank region met material, the holder's share left out (a tool with a holder)
+    Holder  ///< the holder met material (ToolRegions::holder)
 };
 
 /// @brief A collision: which move, where it came from, what and how much (mm^3).
@@ -127,15 +129,19 @@ struct CutResult {
     std::uint64_t changed = 0;
     double removedVolume = 0.0;
     double shankVolume = 0.0;
+    double holderVolume = 0.0;
     /// With CutOptions::design: the stretches that may gouge, by move, then family, then dexel.
     std::vector<DesignStretch> designStretches;
 };
 
 /// @brief A tool split at its cutting length: the part that cuts (heights [bottom, cutting length])
-/// and the shank above it, if there is one.
+/// and the shank above it, if there is one. Where the tool has a holder (withHolder), the shank
+/// region holds it, and `holder` is the holder alone (from the stick-out's top up), swept only to
+/// tell what the holder met from what the shank did.
 struct ToolRegions {
     std::optional<Tool> cutting;
     std::optional<Tool> shank;
+    std::optional<Tool> holder;
 };
 
 /// @brief The regions of every tool `path` uses, by tool number.
@@ -163,16 +169,18 @@ struct RegionSweep {
 bool sweptTurning(const ToolRegions& regions, const Move& move, double turnTolerance);
 
 /// @brief Which regions of its tool a move's sweeps take: both, or for a move swept in pieces
-/// (MovePieces) one of them, its cutting part's pieces coming before its shank's.
+/// (MovePieces) one of them, its cutting part's pieces coming before its shank's (a shank's sweep
+/// takes its holder's with it).
 enum class Regions { Both, Cutting, Shank };
 
-/// @brief One move's sweeps: its cutting part's, its shank's if the tool has one, and the box
-/// that holds both (of `which` regions). Both are turning when either region's turn exceeds the
-/// tolerance; a rapid that turns is swept with its end axis (its path is the machine's, not the
-/// program's).
+/// @brief One move's sweeps: its cutting part's, its shank's if the tool has one (with its
+/// holder's, where it has one, ToolRegions::holder), and the box that holds them (of `which`
+/// regions). All are turning when the cutting or shank region's turn exceeds the tolerance; a
+/// rapid that turns is swept with its end axis (its path is the machine's, not the program's).
 struct MoveGeometry {
     RegionSweep cutting;
     RegionSweep shank;
+    RegionSweep holder;  ///< within the shank's sweep: measured apart, never subtracted on its own
     Box box;
 
     MoveGeometry() = default;

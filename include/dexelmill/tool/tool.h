@@ -50,6 +50,8 @@ class Tool {
     /// @brief Whether the solid holds a holder above the stick-out (withHolder), so that what its
     /// part above the cutting length meets may be the holder's rather than the shank's.
     bool hasHolder() const { return holderBottom_ < totalLength_; }
+    /// @brief Where the holder starts (the stick-out's top); infinity without one (hasHolder).
+    double holderBottom() const { return holderBottom_; }
     double cuttingLength() const { return cuttingLength_; }
     double maxRadius() const { return maxRadius_; }
     /// @brief The largest radius at or below the cutting length (half the cutting diameter).
