@@ -267,7 +267,10 @@ std::vector<double> exactCrossings(const std::vector<Window>& windows, double re
     out.assign(windows.size(), std::numeric_limits<double>::quiet_NaN());
     if (windows.empty()) return out;
     const float freach = float(reach);
-    const std::map<int, ToolRegions> regions = toolRegions(path, tools);
+    // A holder's own sweep only measures what it meets, for the cutting loop's collisions; the
+    // shank region that holds it subtracts here.
+    std::map<int, ToolRegions> regions = toolRegions(path, tools);
+    for (auto& [number, r] : regions) r.holder.reset();
     // Pieces of moves, as the cutting loop sweeps them (MovePieces).
     const MovePieces pieces(path, regions, turnTolerance);
     std::vector<Material> material;
