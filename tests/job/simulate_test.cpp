@@ -86,6 +86,17 @@ TEST_CASE("a collision above the flutes names the holder where the tool has one"
         for (const ReportCollision& c : r.collisions) seen.emplace_back(c.where.line, c.kind);
         using Seen = std::vector<std::pair<int, std::string>>;
         CHECK(seen == (holder ? Seen{{4, "holder"}, {5, "shank"}, {5, "holder"}} : Seen{{5, "shank"}}));
+        if (!holder || seen.size() != 3) continue;
+        // By hand, layers 0.5 mm thick. The plunge at x = 5: the holder's disk (radius 10) within
+        // the block, less the circular segment past x = 0 (100 acos(1/2) - 5 sqrt(75)), less the
+        // flutes' hole (radius 3). The slot to x = 35: the shank's strip 30 x 6 (its end's half
+        // disk makes up for the start's, which the plunge took); the holder's strip 30 x 20 and its
+        // end's half disk within x <= 40 (the half disk less the same segment), less the start's
+        // half disk, which the plunge took: the strip less the segment.
+        const double segment = 100.0 * std::acos(0.5) - 5.0 * std::sqrt(75.0), half = kPi * 50.0;
+        CHECK(r.collisions[0].volumeMm3 == Approx(0.5 * (2.0 * half - segment - kPi * 9.0)).epsilon(0.01));
+        CHECK(r.collisions[1].volumeMm3 == Approx(0.5 * 30.0 * 6.0).epsilon(0.01));
+        CHECK(r.collisions[2].volumeMm3 == Approx(0.5 * (30.0 * 20.0 - segment)).epsilon(0.01));
     }
 }
 
