@@ -6,6 +6,8 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -121,6 +123,19 @@ double overlapLength(const SegmentSpan& segs, float lo, float hi) {
     return sum;
 }
 
+/// Length of material of a dexel inside the union of `ranges` (as dexel endpoints), which may
+/// overlap: sorted and merged in place first, so that none is counted twice.
+double unionOverlapLength(const SegmentSpan& segs, std::vector<std::pair<float, float>>& ranges) {
+    std::sort(ranges.begin(), ranges.end());
+    double sum = 0.0;
+    for (std::size_t i = 0; i < ranges.size();) {
+        float lo = ranges[i].first, hi = ranges[i].second;
+        for (++i; i < ranges.size() && ranges[i].first <= hi; ++i) hi = std::max(hi, ranges[i].second);
+        sum += overlapLength(segs, lo, hi);
+    }
+    return sum;
+}
+
 /// A line parameter as a dexel endpoint (float), kept finite.
 float toFloat(double v) {
     constexpr double big = 1e30;
@@ -197,6 +212,7 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
     LineHit parts[MoveSweep::kMaxParts];
     std::vector<Interval> material;  // a dexel's segments, for a turning sweep's care
     std::vector<LineHit> turned;     // a turning sweep's intervals along a dexel
+    std::vector<std::pair<float, float>> met;  // the shank's intervals, where it does not subtract
 
     for (std::uint32_t m : moves) {
         if (slot.lo > slot.hi) break;  // no material left in the tile
@@ -308,17 +324,21 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                     });
                 }
                 if (shank) {
+                    // Its parts' intervals overlap where the move runs along their axis, or where
+                    // the dexel lies on a face two parts share: without subtracting, what they
+                    // meet is measured on their union.
+                    met.clear();
                     forEachHit(g.shank, shankLine, shankReach, [&](const LineHit& hit) {
                         if (removeShank) {
                             watch(hit);
-                            const double met = subtractHit(tile, local, hit);
-                            st.shank += share * met;
-                            removed += met;
+                            const double length = subtractHit(tile, local, hit);
+                            st.shank += share * length;
+                            removed += length;
                         } else {
-                            st.shank += share * overlapLength(tile.segments(local), toFloat(hit.range.lo),
-                                                              toFloat(hit.range.hi));
+                            met.emplace_back(toFloat(hit.range.lo), toFloat(hit.range.hi));
                         }
                     });
+                    if (!met.empty()) st.shank += share * unionOverlapLength(tile.segments(local), met);
                 }
                 if (removed > 0.0) {
                     ++st.changed;

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numeric>
 #include <random>
@@ -403,6 +404,27 @@ TEST_CASE("cut: the holder's share of what the region above the flutes meets is 
             kStockBox.volume() - (stock.volume(Axis::X) + stock.volume(Axis::Y) + stock.volume(Axis::Z)) / 3;
         CHECK(lost == Approx(remove ? flutes + shank + holder : flutes).epsilon(0.005));
     }
+}
+
+TEST_CASE("cut: the region above the flutes measures what it meets once, whether or not it removes it", "[stock][cut]") {
+    // The tool of the case above, its tip at 4.1: the face the shank and the holder share lies on
+    // a row of x and y dexels, which both parts' sweeps reach. Subtracted part by part, that row
+    // is removed once; measured without subtracting it was counted twice (12 mm^3 more in y).
+    ToolTable tools;
+    tools.emplace(3, withHolder(flatEndMill(4.0, {1.0, 2.0}), 8.0, 10.0));
+    ToolPath path;
+    path.files.push_back("held.nc");
+    Move feed;
+    feed.start = Vec3(-5, 10, 4.1), feed.end = Vec3(15, 10, 4.1), feed.tool = 3, feed.source = {0, 9};
+    path.moves = {feed};
+    std::array<double, 2> shank{};
+    for (bool remove : {false, true}) {
+        TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.2);
+        CutOptions opt;
+        opt.removeShankMaterial = remove;
+        shank[remove] = cutStock(stock, path, tools, opt).shankVolume;
+    }
+    CHECK(shank[0] == Approx(shank[1]).epsilon(1e-9));
 }
 
 TEST_CASE("cut: material met by a holder is a collision of the holder", "[stock][cut]") {
