@@ -434,3 +434,42 @@ TEST_CASE("cell loops: a slab that cuts a corner of the cell closer than its len
     const std::vector<std::vector<std::uint32_t>> want{{0, 2, 4, 6}, {1, 3, 5, 7}};
     CHECK(sorted == want);
 }
+
+TEST_CASE("cell loops: a notch through a sheet thinner than its lens's least depth opens the sheet",
+          "[surface][contour]") {
+    // From boat-xyzac.ngc at h = 0.25 mm: the material of the cell lies below a sheet's face at
+    // y = 0.0256 (corners with y = 0 in, edges 4 to 7 along y crossed there), and a notch cuts
+    // through that thin sheet on edge 9 (along z at x = 1, y = 0) from z = 0.468 to 0.804. On the
+    // face x = 1 (face 1) the notch's lens is at least a fifth of its chord deep (0.067), past the
+    // sheet's path at 0.026, and the two paths of the one region crossed: the notch's loop and
+    // the sheet's were two, and their fans passed through each other. The region is split there:
+    // the sheet's path runs into the notch from either side, with no face vertex on face 1, and
+    // one loop goes round the sheet's face and the notch.
+    REQUIRE(edgeAxis(9) == 2);
+    REQUIRE(edgeCorner(9, 0) == 1);  // z edge at x = 1, y = 0
+    for (const int e : {4, 5, 6, 7}) REQUIRE(edgeAxis(e) == 1);
+    CellCrossings c;
+    c.inside = 0x33;  // corners 0, 1, 4 and 5: y = 0
+    c.joined = 4;
+    for (const int e : {4, 5, 6, 7}) {
+        c.edges[std::size_t(e)].ids = {std::uint32_t(e)};
+        c.edges[std::size_t(e)].at = {0.025604248046875};
+        c.edges[std::size_t(e)].normals = {Vec3(0.0, 1.0, 0.0)};
+    }
+    c.edges[9].ids = {0, 1};
+    c.edges[9].at = {0.46807098388671875, 0.80362319946289062};
+    c.edges[9].normals = {Vec3(0.15225046246208002, -0.20929374376772381, 0.96592749494968477),
+                          Vec3(0.57388480258685037, -0.77696987140161133, -0.25879345489021821)};
+    int face1Vertices = 0;
+    const auto loops = cellLoops(c, [&](int face, std::uint32_t from, std::uint32_t to, double, double) {
+        face1Vertices += face == 1;
+        return std::uint32_t(10 + face * 16 + std::min(from, to));
+    });
+    CHECK(face1Vertices == 0);
+    REQUIRE(loops.size() == 1);
+    std::vector<std::uint32_t> crossings;
+    for (std::uint32_t id : loops[0])
+        if (id < 10) crossings.push_back(id);
+    std::sort(crossings.begin(), crossings.end());
+    CHECK(crossings == std::vector<std::uint32_t>{0, 1, 4, 5, 6, 7});
+}

@@ -31,8 +31,9 @@
 /// samples that touch along a grid line are one region. A strip thinner than the grid's steps
 /// that cuts a corner of the face slantwise falls between its samples, and its two ends read as
 /// two regions; two regions whose paths across the face still cross when their lenses are at
-/// their least depth are one. The rule reads only the face's edges, so both cells sharing the
-/// face see the same regions.
+/// their least depth are one. Then a region whose own paths still cross (a notch through a sheet
+/// thinner than its lens's least depth) is split there in two. The rule reads only the face's
+/// edges, so both cells sharing the face see the same regions.
 #pragma once
 
 #include <array>
