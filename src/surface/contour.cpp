@@ -715,8 +715,11 @@ private:
         const detail::PatchVertexRule::Loop crossingsOf{mesh_.vertices.data(), crossingNormal_.data(), loop.data(), len};
         const Vec3 cellLo = latticePoint(Coord(g[0], g[1], g[2]));
         const Vec3 fitted = vertexRule_.place(crossingsOf, cellLo, sharesCell, qefRank);
-        mesh_.vertices[at] =
-            detail::keepOffLensFaces(split_, k, cellLo, h_, detail::keepOffFinMiddle(split_, k, featureAngle_, fitted));
+        // The bounds place kept the vertex in: its cell, a crease's or corner's kFaceInset inside.
+        const double inset = qefRank >= 2 ? detail::PatchVertexRule::kFaceInset * h_ : 0.0;
+        const Vec3 ownSide =
+            detail::keepOffFinMiddle(split_, k, featureAngle_, cellLo + inset, cellLo + (h_ - inset), fitted);
+        mesh_.vertices[at] = detail::keepOffLensFaces(split_, k, cellLo, h_, ownSide);
         edgeCount += qefRank == 2;
         cornerCount += qefRank == 3;
         for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[std::size_t(i)], loop[std::size_t(i + 1 == len ? 0 : i + 1)]};

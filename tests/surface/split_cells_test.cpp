@@ -2,6 +2,8 @@
 // side of a thin fin's middle, against a position worked out by hand.
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
 #include "surface/detail/split_cells.h"
 
 using namespace dexelmill;
@@ -10,6 +12,8 @@ using detail::SplitCells;
 namespace {
 
 constexpr double kFeatureAngle = 0.6;  // ContourOptions' default
+/// The cell finEdge's edge bounds, from (0, 0, 0) to (1, 1, 1).
+const Vec3 kCellLo(0.0), kCellHi(1.0);
 
 /// Two ends on the y edge through (0.5, 0, 0.5), bounding 0.02 of material from y = 0.40 to 0.42,
 /// each in a patch of its own; `joined`: one patch holds both. The upper end's normal is `upper`
@@ -31,28 +35,46 @@ TEST_CASE("split cells: a vertex past a fin's middle is brought back to its own 
     const SplitCells cells = finEdge(false);
     // The middle is y = 0.41; each side's vertex keeps a quarter of its end's distance from it,
     // 0.0025: the lower side's at y <= 0.4075, the upper side's at y >= 0.4125. Only y moves.
-    const Vec3 lower = detail::keepOffFinMiddle(cells, 0, kFeatureAngle, Vec3(0.3, 0.415, 0.7));
+    const Vec3 lower = detail::keepOffFinMiddle(cells, 0, kFeatureAngle, kCellLo, kCellHi, Vec3(0.3, 0.415, 0.7));
     CHECK(lower.x == Approx(0.3));
     CHECK(lower.y == Approx(0.4075).epsilon(1e-9));
     CHECK(lower.z == Approx(0.7));
-    const Vec3 upper = detail::keepOffFinMiddle(cells, 1, kFeatureAngle, Vec3(0.6, 0.409, 0.2));
+    const Vec3 upper = detail::keepOffFinMiddle(cells, 1, kFeatureAngle, kCellLo, kCellHi, Vec3(0.6, 0.409, 0.2));
     CHECK(upper.y == Approx(0.4125).epsilon(1e-9));
     CHECK(upper.x == Approx(0.6));
     // A vertex on its own side, on or off its wall, stays where it is.
-    CHECK(detail::keepOffFinMiddle(cells, 0, kFeatureAngle, Vec3(0.3, 0.401, 0.7)) == Vec3(0.3, 0.401, 0.7));
-    CHECK(detail::keepOffFinMiddle(cells, 1, kFeatureAngle, Vec3(0.3, 0.43, 0.7)) == Vec3(0.3, 0.43, 0.7));
+    CHECK(detail::keepOffFinMiddle(cells, 0, kFeatureAngle, kCellLo, kCellHi, Vec3(0.3, 0.401, 0.7)) == Vec3(0.3, 0.401, 0.7));
+    CHECK(detail::keepOffFinMiddle(cells, 1, kFeatureAngle, kCellLo, kCellHi, Vec3(0.3, 0.43, 0.7)) == Vec3(0.3, 0.43, 0.7));
 }
 
 TEST_CASE("split cells: a patch that holds both sides of a fin is left alone", "[surface][split]") {
     const SplitCells cells = finEdge(true);
-    CHECK(detail::keepOffFinMiddle(cells, 0, kFeatureAngle, Vec3(0.3, 0.415, 0.7)) == Vec3(0.3, 0.415, 0.7));
+    CHECK(detail::keepOffFinMiddle(cells, 0, kFeatureAngle, kCellLo, kCellHi, Vec3(0.3, 0.415, 0.7)) == Vec3(0.3, 0.415, 0.7));
 }
 
 TEST_CASE("split cells: a wedge's vertex is left alone", "[surface][split]") {
     // The upper side leans 53 degrees from the lower's opposite, past the feature angle (34
     // degrees): a wedge, whose middle the stretch's bisector does not follow.
     const SplitCells cells = finEdge(false, Vec3(0.8, 0.6, 0.0));
-    CHECK(detail::keepOffFinMiddle(cells, 0, kFeatureAngle, Vec3(0.3, 0.415, 0.7)) == Vec3(0.3, 0.415, 0.7));
+    CHECK(detail::keepOffFinMiddle(cells, 0, kFeatureAngle, kCellLo, kCellHi, Vec3(0.3, 0.415, 0.7)) == Vec3(0.3, 0.415, 0.7));
+}
+
+TEST_CASE("split cells: a vertex brought back from a fin's middle stays in its cell", "[surface][split]") {
+    // The upper side's normal leans 0.45 rad from +y toward +z (within the feature angle of the
+    // lower side's opposite), so the fin's bisector n, about (0, -0.975, -0.224) for the lower
+    // side, slants down: the lower side's vertex near the cell's floor, behind the middle's plane,
+    // is moved along it below the floor (the boat-xyzac.ngc vertex 0.099 h below its cell), and
+    // its fan would reach into the cell beneath. It stays in the cell, on its floor; x and y keep
+    // the move.
+    const SplitCells cells = finEdge(false, Vec3(0.0, std::cos(0.45), std::sin(0.45)));
+    const Vec3 v(0.3, 0.6, 0.01);
+    const Vec3 free = detail::keepOffFinMiddle(cells, 0, kFeatureAngle, Vec3(-10.0), Vec3(10.0), v);
+    REQUIRE(free.z < 0.0);
+    const Vec3 kept = detail::keepOffFinMiddle(cells, 0, kFeatureAngle, kCellLo, kCellHi, v);
+    CHECK(kept.x == Approx(0.3));
+    CHECK(kept.y == Approx(free.y));
+    CHECK(kept.y < 0.55);
+    CHECK(kept.z == 0.0);
 }
 
 TEST_CASE("split cells: a vertex on a face its loop crosses by a lens is kept off that face", "[surface][split]") {

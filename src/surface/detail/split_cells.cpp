@@ -76,7 +76,16 @@ constexpr double kOwnSide = 0.25;
 /// q's, the two at least kOwnSide n . (p - q) apart along n. A vertex moves only by as much as it
 /// stood past that. A loop that holds both p and q (the fin's end wrapping round, at its top or
 /// bottom) meshes both sides and is left alone.
-Vec3 keepOffFinMiddle(const SplitCells& cells, std::uint32_t k, double featureAngle, Vec3 v) {
+///
+/// The plane through m across n stands for the fin's middle near its edge only: across the cell,
+/// where the fin curves away from it, the move took vertices up to 0.1 h out of their cells, and
+/// their fans through the fans of the cells beyond (boat-xyzac.ngc at h = 0.25 mm: 0.099 h below
+/// the cell at (-3.71, 14.82, -5.54), a crease's vertex fitted onto the cell's floor, which its
+/// loop meets; 15 of the 35 cells where the boat's triangles still crossed). The vertex is then
+/// brought back within the box it was fitted in, its cell (lo to hi): a fan within its cell meets
+/// another cell's only on their common face.
+Vec3 keepOffFinMiddle(const SplitCells& cells, std::uint32_t k, double featureAngle, const Vec3& lo, const Vec3& hi,
+                      Vec3 v) {
     const double cosFeature = std::cos(featureAngle);
     const auto begin = cells.loopIds.begin() + std::ptrdiff_t(cells.loopStart[k]);
     const auto end = cells.loopIds.begin() + std::ptrdiff_t(cells.loopStart[k + 1]);
@@ -94,7 +103,7 @@ Vec3 keepOffFinMiddle(const SplitCells& cells, std::uint32_t k, double featureAn
         const double shortBy = kOwnSide * glm::dot(n, cells.points[p] - m) - glm::dot(n, v - m);
         if (shortBy > 0.0) v += shortBy * n;
     }
-    return v;
+    return glm::clamp(v, lo, hi);
 }
 
 /// A smooth patch's vertex (rank 0 or 1) keeps its whole cell, or the box of its crossings where

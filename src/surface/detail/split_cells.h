@@ -78,8 +78,10 @@ struct SplitCells {
 /// @brief Split patch k's vertex `v` (PatchVertexRule::place), kept on its own side of the middle
 /// of each stretch of material that an end of its loop bounds and another patch's end closes (a
 /// fin thinner than the spacing, its sides within `featureAngle` of parallel), a quarter of that
-/// end's distance from it: see the definition.
-Vec3 keepOffFinMiddle(const SplitCells& cells, std::uint32_t k, double featureAngle, Vec3 v);
+/// end's distance from it, and within the box `lo` to `hi` (its cell, as place bounds it): see
+/// the definition.
+Vec3 keepOffFinMiddle(const SplitCells& cells, std::uint32_t k, double featureAngle, const Vec3& lo, const Vec3& hi,
+                      Vec3 v);
 
 /// @brief Split patch k's vertex `v`, in the cell whose lowest corner is `cellLo` (spacing h),
 /// kept PatchVertexRule::kFaceInset h inside each face its loop crosses by a lens (a face
