@@ -370,20 +370,27 @@ TEST_CASE("cut: material met by the shank is reported, and removed unless asked 
     }
 }
 
-TEST_CASE("cut: the holder's share of what the region above the flutes meets is its own collision", "[stock][cut]") {
-    // Flat D4 with 1 mm of flute and a 2 mm stick-out in a D8 holder, fed along x at a tip height
-    // of 4 from outside the stock to x = 15: the flutes cut heights 4..5, the shank meets 5..6
-    // over the footprint 15 x 4 plus the half disk at the end (60 + 2 pi mm^2), and the holder
-    // 6..10 over 15 x 8 plus its half disk (120 + 8 pi). The x and y dexels lie half a spacing
-    // off those heights, so that no dexel runs along a face the shank and the holder share; the
-    // footprints' edges leave the families within 0.1 % of these.
+/// Flat D4 with 1 mm of flute and a 2 mm stick-out in a D8 holder (tool 3), fed along x at tip
+/// height z from outside kStockBox to x = 15, on line 9 of held.nc.
+struct HeldFeed {
     ToolTable tools;
-    tools.emplace(3, withHolder(flatEndMill(4.0, {1.0, 2.0}), 8.0, 10.0));
     ToolPath path;
-    path.files.push_back("held.nc");
-    Move feed;
-    feed.start = Vec3(-5, 10, 4), feed.end = Vec3(15, 10, 4), feed.tool = 3, feed.source = {0, 9};
-    path.moves = {feed};
+    explicit HeldFeed(double z) {
+        tools.emplace(3, withHolder(flatEndMill(4.0, {1.0, 2.0}), 8.0, 10.0));
+        path.files.push_back("held.nc");
+        Move feed;
+        feed.start = Vec3(-5, 10, z), feed.end = Vec3(15, 10, z), feed.tool = 3, feed.source = {0, 9};
+        path.moves = {feed};
+    }
+};
+
+TEST_CASE("cut: the holder's share of what the region above the flutes meets is its own collision", "[stock][cut]") {
+    // HeldFeed at a tip height of 4: the flutes cut heights 4..5, the shank meets 5..6 over the
+    // footprint 15 x 4 plus the half disk at the end (60 + 2 pi mm^2), and the holder 6..10 over
+    // 15 x 8 plus its half disk (120 + 8 pi). The x and y dexels lie half a spacing off those
+    // heights, so that no dexel runs along a face the shank and the holder share; the footprints'
+    // edges leave the families within 0.1 % of these.
+    const HeldFeed held(4.0);
     const double narrow = 60.0 + 2.0 * M_PI, wide = 120.0 + 8.0 * M_PI;
     const double flutes = narrow, shank = narrow, holder = 4.0 * wide;
     for (bool remove : {false, true}) {
@@ -391,7 +398,7 @@ TEST_CASE("cut: the holder's share of what the region above the flutes meets is 
         TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.2);
         CutOptions opt;
         opt.removeShankMaterial = remove;
-        const CutResult res = cutStock(stock, path, tools, opt);
+        const CutResult res = cutStock(stock, held.path, held.tools, opt);
         REQUIRE(res.collisions.size() == 2);
         CHECK(res.collisions[0].kind == CollisionKind::Shank);
         CHECK(res.collisions[0].volume == Approx(shank).epsilon(0.005));
@@ -407,22 +414,16 @@ TEST_CASE("cut: the holder's share of what the region above the flutes meets is 
 }
 
 TEST_CASE("cut: the region above the flutes measures what it meets once, whether or not it removes it", "[stock][cut]") {
-    // The tool of the case above, its tip at 4.1: the face the shank and the holder share lies on
-    // a row of x and y dexels, which both parts' sweeps reach. Subtracted part by part, that row
-    // is removed once; measured without subtracting it was counted twice (12 mm^3 more in y).
-    ToolTable tools;
-    tools.emplace(3, withHolder(flatEndMill(4.0, {1.0, 2.0}), 8.0, 10.0));
-    ToolPath path;
-    path.files.push_back("held.nc");
-    Move feed;
-    feed.start = Vec3(-5, 10, 4.1), feed.end = Vec3(15, 10, 4.1), feed.tool = 3, feed.source = {0, 9};
-    path.moves = {feed};
+    // HeldFeed with its tip at 4.1: the face the shank and the holder share lies on a row of x and
+    // y dexels, which both parts' sweeps reach. Subtracted part by part, that row is removed once;
+    // measured without subtracting it was counted twice (12 mm^3 more in y).
+    const HeldFeed held(4.1);
     std::array<double, 2> shank{};
     for (bool remove : {false, true}) {
         TriDexelStock stock = TriDexelStock::fromBox(kStockBox, 0.2);
         CutOptions opt;
         opt.removeShankMaterial = remove;
-        shank[remove] = cutStock(stock, path, tools, opt).shankVolume;
+        shank[remove] = cutStock(stock, held.path, held.tools, opt).shankVolume;
     }
     CHECK(shank[0] == Approx(shank[1]).epsilon(1e-9));
 }
