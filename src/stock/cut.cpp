@@ -213,6 +213,8 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
     std::vector<Interval> material;  // a dexel's segments, for a turning sweep's care
     std::vector<LineHit> turned;     // a turning sweep's intervals along a dexel
     std::vector<std::pair<float, float>> met;  // the shank's intervals, where it does not subtract
+    // For the sweeps that only measure: no interval end becomes a segment end.
+    const MoveSweep::EndFilter noEnds = [](std::size_t, const Interval&) { return 0u; };
 
     for (std::uint32_t m : moves) {
         if (slot.lo > slot.hi) break;  // no material left in the tile
@@ -250,12 +252,9 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                 const bool cuts = g.cutting && cutWin.meets(ib, ic, segs);
                 const bool shank = g.shank && shankWin.meets(ib, ic, segs);
                 const bool holder = shank && g.holder && holderWin.meets(ib, ic, segs);
-                const auto boundOf = [&](const RegionSweep& sweep) {
-                    return sweep.fixed ? sweep.fixed->bound(line) : sweep.turning->bound(line);
-                };
-                const Interval cutReach = cuts ? boundOf(g.cutting) : Interval::empty();
-                const Interval shankReach = shank ? boundOf(g.shank) : Interval::empty();
-                const Interval holderReach = holder ? boundOf(g.holder) : Interval::empty();
+                const Interval cutReach = cuts ? g.cutting.bound(line) : Interval::empty();
+                const Interval shankReach = shank ? g.shank.bound(line) : Interval::empty();
+                const Interval holderReach = holder ? g.holder.bound(line) : Interval::empty();
                 if (!reachesMaterial(segs, cutReach.hull(shankReach))) continue;
                 // A fixed-axis sweep's line in its frame, for its hits: made only here, as the
                 // bounds take the boxes in world coordinates and reject most lines of the window.
@@ -290,10 +289,11 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                 // Applies `apply` to the swept intervals of one region: a fixed-axis sweep's parts,
                 // or a turning sweep's intervals, solved to its tolerance where the dexel has
                 // material within the sweep's bound `reach`.
+                // A fixed-axis sweep makes the Hermite data of the ends `ends` asks for.
                 auto forEachHit = [&](const RegionSweep& sweep, const MoveSweep::LocalLine& frameLine,
-                                      const Interval& reach, auto&& apply) {
+                                      const Interval& reach, const MoveSweep::EndFilter& ends, auto&& apply) {
                     if (sweep.fixed) {
-                        const std::size_t n = sweep.fixed->intersectParts(frameLine, parts, makesEnds);
+                        const std::size_t n = sweep.fixed->intersectParts(frameLine, parts, ends);
                         for (std::size_t k = 0; k < n; ++k)
                             if (!parts[k].isEmpty()) apply(parts[k]);
                         return;
@@ -308,7 +308,7 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                     for (const LineHit& hit : turned) apply(hit);
                 };
                 if (cuts) {
-                    forEachHit(g.cutting, cutLine, cutReach, [&](const LineHit& hit) {
+                    forEachHit(g.cutting, cutLine, cutReach, makesEnds, [&](const LineHit& hit) {
                         watch(hit);
                         removed += subtractHit(tile, local, hit);
                     });
@@ -318,7 +318,7 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                 // line do not overlap (one part, or a turning sweep's union), so none is counted
                 // twice.
                 if (holder) {
-                    forEachHit(g.holder, holderLine, holderReach, [&](const LineHit& hit) {
+                    forEachHit(g.holder, holderLine, holderReach, noEnds, [&](const LineHit& hit) {
                         st.holder += share * overlapLength(tile.segments(local), toFloat(hit.range.lo),
                                                            toFloat(hit.range.hi));
                     });
@@ -328,7 +328,8 @@ void processTile(TriDexelStock& stock, TileSlot& slot, const BuiltSweeps& geoms,
                     // the dexel lies on a face two parts share: without subtracting, what they
                     // meet is measured on their union.
                     met.clear();
-                    forEachHit(g.shank, shankLine, shankReach, [&](const LineHit& hit) {
+                    const MoveSweep::EndFilter& shankEnds = removeShank ? makesEnds : noEnds;
+                    forEachHit(g.shank, shankLine, shankReach, shankEnds, [&](const LineHit& hit) {
                         if (removeShank) {
                             watch(hit);
                             const double length = subtractHit(tile, local, hit);
@@ -368,7 +369,8 @@ std::map<int, ToolRegions> toolRegions(const ToolPath& path, const ToolTable& to
         r.cutting.emplace(hasShank ? t.region(t.bottom(), t.cuttingLength()) : t);
         if (hasShank) r.shank.emplace(t.region(t.cuttingLength(), t.totalLength()));
         // withHolder puts the holder at the stick-out's top, at or above the cutting length.
-        if (t.hasHolder()) r.holder.emplace(t.region(std::max(t.holderBottom(), t.cuttingLength()), t.totalLength()));
+        if (t.hasHolder())
+            r.holder.emplace(t.region(std::max(t.holderBottom(), t.cuttingLength()), t.totalLength()));
         if (r.cutting->convexParts().size() > MoveSweep::kMaxParts ||
             (r.shank && r.shank->convexParts().size() > MoveSweep::kMaxParts))
             throw Error("tool " + std::to_string(mv.tool) + " ('" + t.description() + "') has more than " +
