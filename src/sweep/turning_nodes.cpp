@@ -33,9 +33,9 @@ constexpr int kMaxKeptLevel = 16;
 /// must lie for a move to take them. A node costs a one-part MoveSweep, about 1 us to make and
 /// 2 kB to keep, against a static pose's solve. Before note j's anchored nodes the linear search
 /// walked down to its leaves near every graze, and paid only 2 levels up (3 with a ball end swept
-/// as capsules, README, Performance, row h). With them it stops about where C w^2 reaches
-/// epsilon, and pays wherever its leaves lie no deeper than the closing level. Cut time at
-/// h = 0.5 mm, one thread, this rule against 2 and 3 levels: boat-xyzac 1.57 s against 2.6 s,
+/// as capsules; docs/turning-search-history.md, change (h)). With them it stops about where
+/// C w^2 reaches epsilon, and pays wherever its leaves lie no deeper than the closing level. Cut
+/// time at h = 0.5 mm, one thread, this rule against 2 and 3 levels: boat-xyzac 1.57 s against 2.6 s,
 /// boat-xyzbc 3.0 s against 4.6 s, the impeller (ball end) 16.1 s against 16.3 s; taking linear
 /// nodes also where their leaves lie 3 or 8 levels deeper gained nothing more.
 constexpr int kLinearLevelsSaved = 0;
