@@ -24,9 +24,11 @@
 #include <nlohmann/json.hpp>
 
 #include "support/scratch.h"
+#include "support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;
+using dexelmill::testing::slurp;
 namespace fs = std::filesystem;
 
 namespace {
@@ -35,11 +37,6 @@ struct Run {
     int code = -1;
     std::string out, err;
 };
-
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-}
 
 /// Runs the CLI in a folder of its own (ctest runs test cases in parallel).
 class Cli {

@@ -25,10 +25,12 @@
 #include "io/detail/vdb_frame.h"
 #include "support/analytic_parts.h"
 #include "support/scratch.h"
+#include "support/temp_dir.h"
 
 extern char** environ;
 
 using namespace dexelmill;
+using testing::slurp;
 using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;
 namespace fs = std::filesystem;
@@ -42,11 +44,6 @@ constexpr std::int64_t kHugeOffset = std::int64_t(1) << 62;
 /// The most resident memory `dexelmill info` may take on a damaged file: it takes some 40 MB on
 /// a good one; a damaged length filled would take 4 GB.
 constexpr long kMostPeakKiB = 256 * 1024;
-
-std::string slurp(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
 
 void spill(const fs::path& path, const std::string& bytes) {
     std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
