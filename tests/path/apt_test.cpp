@@ -8,17 +8,14 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/path/apt.h"
+#include "support/gcode_run.h"
 #include "testdata.h"
 
 using namespace dexelmill;
 
 namespace {
 
-bool hasDiagnostic(const Program& p, const std::string& fragment) {
-    for (const Diagnostic& d : p.diagnostics)
-        if (d.message.find(fragment) != std::string::npos) return true;
-    return false;
-}
+using testing::hasDiagnostic;
 
 /// The error parseApt raises on `text` read as `file`; none (and a failed check) when it reads it.
 std::optional<ParseError> errorOf(const std::string& text, const std::string& file) {

@@ -13,6 +13,7 @@
 
 #include "dexelmill/error.h"
 #include "dexelmill/path/gcode.h"
+#include "support/gcode_run.h"
 #include "testdata.h"
 
 using namespace dexelmill;
@@ -21,34 +22,10 @@ namespace {
 
 using test::haveSharedData;
 using test::sharedData;
-
-/// Options as LinuxCNC runs a program: the machine starts at the origin.
-GcodeOptions linuxcnc() {
-    GcodeOptions o;
-    o.startPosition = Vec3(0.0);
-    return o;
-}
-
-Program run(const std::string& text, GcodeOptions options = linuxcnc()) {
-    return parseGcode(text, "test.ngc", options);
-}
-
-bool near(const Vec3& a, const Vec3& b, double tol = 1e-9) {
-    return std::abs(a.x - b.x) <= tol && std::abs(a.y - b.y) <= tol && std::abs(a.z - b.z) <= tol;
-}
-
-bool hasDiagnostic(const Program& p, const std::string& fragment) {
-    for (const Diagnostic& d : p.diagnostics)
-        if (d.message.find(fragment) != std::string::npos) return true;
-    return false;
-}
-
-/// The first diagnostic whose message holds `fragment`; nullptr if none does.
-const Diagnostic* findDiagnostic(const Program& p, const std::string& fragment) {
-    for (const Diagnostic& d : p.diagnostics)
-        if (d.message.find(fragment) != std::string::npos) return &d;
-    return nullptr;
-}
+using testing::hasDiagnostic;
+using testing::linuxcnc;
+using testing::near;
+using testing::runGcode;
 
 }  // namespace
 
@@ -464,7 +441,7 @@ TEST_CASE("gcode: arcs are split within the chord tolerance and end exactly", "[
         o.startPosition = Vec3(0.0);
         o.chordTolerance = tol;
         // Full circle, a half circle by R, and a helix of 2 turns.
-        const Program p = run("G0 X10 Y0 Z0\nG3 I-10 J0 X10 Y0\nG2 X-10 Y0 R10\nG17 G3 X-10 Y0 Z-4 I10 J0 P2\n", o);
+        const Program p = runGcode("G0 X10 Y0 Z0\nG3 I-10 J0 X10 Y0\nG2 X-10 Y0 R10\nG17 G3 X-10 Y0 Z-4 I10 J0 P2\n", o);
         REQUIRE(p.path.moves.size() > 4);
         std::size_t full = 0;
         for (const Move& m : p.path.moves) {
@@ -487,7 +464,7 @@ TEST_CASE("gcode: an arc without axis words is a full circle, and centre words a
           "[path][gcode]") {
     // LinuxCNC's enhance_block lets G2/G3 go without axis words (the arc ends where it starts)
     // and gives a block of I/J/K alone to the active arc motion.
-    const Program p = run("G0 X10 Y0 Z-1\nG2 I-10\nG3 J5 P2\nI-10\n");
+    const Program p = runGcode("G0 X10 Y0 Z-1\nG2 I-10\nG3 J5 P2\nI-10\n");
     for (int line : {2, 3, 4}) {
         Vec3 first(0.0), last(0.0);
         bool seen = false;
@@ -527,7 +504,7 @@ TEST_CASE("gcode: an arc without axis words is a full circle, and centre words a
 }
 
 TEST_CASE("gcode: G4 X is Fanuc's dwell time, not a move", "[path][gcode]") {
-    const Program p = run("G0 X0 Y0 Z5\nG1 Z-1\nG04 X1.5\nG4 P1 \nG1 Y3\n");
+    const Program p = runGcode("G0 X0 Y0 Z5\nG1 Z-1\nG04 X1.5\nG4 P1 \nG1 Y3\n");
     for (const Move& m : p.path.moves) CHECK(m.end.x == 0.0);
     CHECK(p.path.moves.back().end.y == 3.0);
     CHECK(hasDiagnostic(p, "dwell G4 X: the time in seconds, as Fanuc writes it"));
@@ -537,10 +514,10 @@ TEST_CASE("gcode: an arc's end may be off its circle by LinuxCNC's tolerance of 
           "[path][gcode]") {
     // LinuxCNC's arc_data_ijk refuses only e > 0.0283 mm (G21) or 0.00283 inch (G20) when e is
     // also past 0.1 % of the radius: 0.025 mm of 10 mm and 0.0015 inch of 1 inch pass.
-    const Program mm = run("G21 G0 X0 Y0\nG2 X20.025 Y0 I10 J0\n");
+    const Program mm = runGcode("G21 G0 X0 Y0\nG2 X20.025 Y0 I10 J0\n");
     REQUIRE(mm.path.moves.size() > 2);
     CHECK(near(mm.path.moves.back().end, Vec3(20.025, 0, 0), 1e-12));
-    const Program inch = run("G20 G0 X0 Y0\nG2 X2.0015 Y0 I1 J0\n");
+    const Program inch = runGcode("G20 G0 X0 Y0\nG2 X2.0015 Y0 I1 J0\n");
     REQUIRE(inch.path.moves.size() > 2);
     CHECK(near(inch.path.moves.back().end, Vec3(2.0015 * 25.4, 0, 0), 1e-9));
 }
@@ -548,19 +525,19 @@ TEST_CASE("gcode: an arc's end may be off its circle by LinuxCNC's tolerance of 
 TEST_CASE("gcode: arcs in G18 and G19 turn the right way (UGS fixtures)", "[path][gcode]") {
     // G18 G2 from (-1.5,0,0) to (1.5,0,0) around the origin: clockwise seen from +Y, through
     // -Z, as UGS's own expansion beside the input shows.
-    const Program a = run("G18\nG0 X-1.5 Y0 Z0\nG2 X1.5 Z0 I1.5 K0\n");
+    const Program a = runGcode("G18\nG0 X-1.5 Y0 Z0\nG2 X1.5 Z0 I1.5 K0\n");
     double zmax = -1, zmin2 = 1;
     for (const Move& m : a.path.moves) zmax = std::max(zmax, m.end.z), zmin2 = std::min(zmin2, m.end.z);
     CHECK(zmax == Approx(0).margin(1e-12));
     CHECK(zmin2 == Approx(-1.5).margin(1e-3));
-    const Program b = run("G19\nG0 Y-1.5 Z0 X0\nG3 Y1.5 Z0 J1.5 K0\n");
+    const Program b = runGcode("G19\nG0 Y-1.5 Z0 X0\nG3 Y1.5 Z0 J1.5 K0\n");
     double zmin = 1;
     for (const Move& m : b.path.moves) zmin = std::min(zmin, m.end.z);
     CHECK(zmin == Approx(-1.5).margin(1e-3));
 }
 
 TEST_CASE("gcode: units, distance modes, offsets and homes", "[path][gcode]") {
-    const Program p = run(
+    const Program p = runGcode(
         "G20 G0 X1 Y2 Z3\n"          // inch
         "G21 G91 G0 X1\n"            // incremental mm
         "G90 G10 L2 P2 X100 Y0 Z0\n"
@@ -589,7 +566,7 @@ TEST_CASE("gcode: G43.1's axis words set the offset and move nothing, G43.2's fe
           "[path][gcode]") {
     // LinuxCNC's enhance_block takes no motion for a block with G43.1 and no motion code, even
     // with G80 active; a G43.2 block's axis words go to the modal motion as any others do.
-    const Program p = run("G0 X0 Y0 Z10\nG1 X5 F100\nG43.1 Z5\nG1 X6\nG80\nG43.1 Z7\nG1 X7\nG43.2 Z-5\n");
+    const Program p = runGcode("G0 X0 Y0 Z10\nG1 X5 F100\nG43.1 Z5\nG1 X6\nG80\nG43.1 Z7\nG1 X7\nG43.2 Z-5\n");
     const auto& m = p.path.moves;
     REQUIRE(m.size() == 5);
     CHECK(near(m[1].end, Vec3(5, 0, 10)));
@@ -603,13 +580,13 @@ TEST_CASE("gcode: G43.1's axis words set the offset and move nothing, G43.2's fe
 TEST_CASE("gcode: stored positions and offsets keep their machine position across G20/G21", "[path][gcode]") {
     // LinuxCNC stores #5161.. (G28.1), #5211.. (G92) and #5221.. (G10 L2) in the machine's units
     // (mm here) and converts them to the program's units on use.
-    const Program home = run("G10 L2 P1 X0 Y0 Z0\nG21 G0 X10 Y0 Z5\nG28.1\nG0 X0 Y0 Z5\nG20\nG28\n");
+    const Program home = runGcode("G10 L2 P1 X0 Y0 Z0\nG21 G0 X10 Y0 Z5\nG28.1\nG0 X0 Y0 Z5\nG20\nG28\n");
     REQUIRE(home.path.moves.size() == 3);
     CHECK(near(home.path.moves[2].end, Vec3(10, 0, 5)));
-    const Program g92 = run("G21 G0 X0 Y0 Z0\nG0 X10\nG92 X0\nG92.2\nG20\nG92.3\nG0 X0\n");
+    const Program g92 = runGcode("G21 G0 X0 Y0 Z0\nG0 X10\nG92 X0\nG92.2\nG20\nG92.3\nG0 X0\n");
     REQUIRE(g92.path.moves.size() == 3);
     CHECK(near(g92.path.moves[2].end, Vec3(10, 0, 0)));
-    const Program g10 = run("G20 G10 L2 P1 X1\nG21 G0 X#5221 Y0 Z0\n");
+    const Program g10 = runGcode("G20 G10 L2 P1 X1\nG21 G0 X#5221 Y0 Z0\n");
     REQUIRE(g10.path.moves.size() == 1);
     CHECK(near(g10.path.moves[0].end, Vec3(50.8, 0, 0), 1e-12));
 }
@@ -618,7 +595,7 @@ TEST_CASE("gcode: tools, warnings and their aggregation", "[path][gcode]") {
     std::string text = "T1 M6\nS1000 M3\n";
     for (int i = 0; i < 1000; ++i) text += "G1 X" + std::to_string(i) + " F100\n";
     text += "T2\nG0 Z5\nM6\nG0 Z6\nM5 M9 M88\nG4 P1\nG41 D1\nG1 X0\nG40\nM2\n";
-    const Program p = run(text);
+    const Program p = runGcode(text);
     REQUIRE(p.path.toolChanges.size() == 2);
     CHECK(p.path.toolChanges[0].tool == 1);
     CHECK(p.path.toolChanges[1].tool == 2);
@@ -640,7 +617,7 @@ TEST_CASE("gcode: tools, warnings and their aggregation", "[path][gcode]") {
     for (const Diagnostic& d : p.diagnostics)
         if (d.message.find("spindle speed") != std::string::npos) CHECK(d.where.column == 1);  // "S1000 M3"
     // The feed mode's warning names the G word's column.
-    const Program inverse = run("G21 G93 G1 X1 F2\n");
+    const Program inverse = runGcode("G21 G93 G1 X1 F2\n");
     bool g93 = false;
     for (const Diagnostic& d : inverse.diagnostics)
         if (d.message.find("G93") != std::string::npos) {
@@ -652,13 +629,13 @@ TEST_CASE("gcode: tools, warnings and their aggregation", "[path][gcode]") {
     GcodeOptions camotics;
     camotics.startPosition = Vec3(0.0);
     camotics.toolChangeOnT = true;
-    const Program q = run("T3 G0 X1\n", camotics);
+    const Program q = runGcode("T3 G0 X1\n", camotics);
     REQUIRE(q.path.toolChanges.size() == 1);
     CHECK(q.path.moves[0].tool == 3);
 }
 
 TEST_CASE("gcode: parameters, expressions and O-word flow", "[path][gcode]") {
-    const Program p = run(
+    const Program p = runGcode(
         "#1 = 2 #2 = [#1 * 3]\n"  // #2 reads the old #1 (0): assignments happen after the line
         "#<_r> = [ATAN[1]/[1] + SQRT[16] ** 2 - 10 MOD 3]\n"  // 45 + 16 - 1
         "G0 X#1 Y#2 Z#<_r>\n"
@@ -694,7 +671,7 @@ TEST_CASE("gcode: parameters, expressions and O-word flow", "[path][gcode]") {
 }
 
 TEST_CASE("gcode: G68.2 tilts coordinates and, after G53.1, the tool axis", "[path][gcode]") {
-    const Program p = run("G68.2 X10 Y0 Z0 Q121 I0 J90 K0\nG53.1\nG0 X0 Y0 Z5\nG69\nG0 X0 Y0 Z5\n");
+    const Program p = runGcode("G68.2 X10 Y0 Z0 Q121 I0 J90 K0\nG53.1\nG0 X0 Y0 Z5\nG69\nG0 X0 Y0 Z5\n");
     REQUIRE(p.path.moves.size() == 2);
     // Rotation about Y by 90 degrees: the plane's +Z is the part's +X.
     CHECK(near(p.path.moves[0].axis, Vec3(1, 0, 0), 1e-12));
@@ -706,7 +683,7 @@ TEST_CASE("gcode: G68.2 tilts coordinates and, after G53.1, the tool axis", "[pa
 TEST_CASE("gcode: G69 cancels the tilted plane and keeps the coordinate system", "[path][gcode]") {
     // LinuxCNC's G69 (work_plane_cancel in interp_workplane.cc) clears only the plane: G55 and
     // #5220 stay as they were.
-    const Program p = run("G10 L2 P2 X100\nG55\nG0 X0 Y0 Z10\nG68.2 X0 Y0 Z0 I0 J0 K0\nG69\nG0 X0 Y0 Z10\n"
+    const Program p = runGcode("G10 L2 P2 X100\nG55\nG0 X0 Y0 Z10\nG68.2 X0 Y0 Z0 I0 J0 K0\nG69\nG0 X0 Y0 Z10\n"
                           "G0 X1\nG0 X#5220\n");
     const auto& m = p.path.moves;
     REQUIRE(m.size() == 4);
@@ -717,7 +694,7 @@ TEST_CASE("gcode: G69 cancels the tilted plane and keeps the coordinate system",
 }
 
 TEST_CASE("gcode: canned cycles G73 G83 G85 G89 and G99", "[path][gcode]") {
-    const Program p = run("G0 X0 Y0 Z10\nG99 G83 X1 Y1 Z-3 R2 Q2\nG85 X2 Z-1 R2\nG80\nG98 G73 X3 Z-1 R1 Q0.5\nG89 X4 Z-1 R1 P1\nM2\n");
+    const Program p = runGcode("G0 X0 Y0 Z10\nG99 G83 X1 Y1 Z-3 R2 Q2\nG85 X2 Z-1 R2\nG80\nG98 G73 X3 Z-1 R1 Q0.5\nG89 X4 Z-1 R1 P1\nM2\n");
     const auto& m = p.path.moves;
     REQUIRE(m.size() > 10);
     double zmin = 0;
@@ -731,7 +708,7 @@ TEST_CASE("gcode: after a G99 hole the next block travels at the R plane", "[pat
     // LinuxCNC's CYCLE_MACRO traverses to a block's first hole at the level the block starts
     // from (current_cc) when it is above R: after a G99 hole that is R itself, not the level
     // the series began at; G98 then climbs back to that level (old_cc).
-    const Program p = run("G17 G99\nG0 X0 Y0 Z10\nG81 X0 Y0 Z-5 R2\nX20\nG98 X40\nG80\nM2\n");
+    const Program p = runGcode("G17 G99\nG0 X0 Y0 Z10\nG81 X0 Y0 Z-5 R2\nX20\nG98 X40\nG80\nM2\n");
     const std::vector<Vec3> expected = {{0, 0, 10}, {0, 0, 10}, {0, 0, 2},   {0, 0, -5},  {0, 0, 2},
                                         {20, 0, 2}, {20, 0, -5}, {20, 0, 2}, {40, 0, 10}, {40, 0, 2},
                                         {40, 0, -5}, {40, 0, 10}};
@@ -746,26 +723,15 @@ TEST_CASE("gcode: after a G99 hole the next block travels at the R plane", "[pat
     CHECK_FALSE(m[6].rapid);
 }
 
-TEST_CASE("gcode: with no start position, moves only place the tool until X, Y and Z are known", "[path]") {
-    const Program p = parseGcode("G21 G90\nG0 Z15\nG0 X5 Y15\nG1 Z7 F100\nG1 X35\n", "start.ngc");
-    REQUIRE(p.path.moves.size() == 2);
-    CHECK(near(p.path.moves[0].start, Vec3(5, 15, 15)));
-    CHECK(near(p.path.moves[0].end, Vec3(5, 15, 7)));
-    CHECK(p.path.moves[0].source.line == 4);
-    bool warned = false;
-    for (const Diagnostic& d : p.diagnostics) warned = warned || d.message.find("start position is unknown") != std::string::npos;
-    CHECK(warned);
-}
-
 TEST_CASE("gcode: inverse time needs F on each feed move until G94 ends it", "[path][gcode]") {
-    const Program p = run("G0 X0 Y0 Z5\nG93 G1 Z-1 F2\nG2 X10 I5 F1\nG0 Z5\nG94\nG1 Z-1\nM2\n");
+    const Program p = runGcode("G0 X0 Y0 Z5\nG93 G1 Z-1 F2\nG2 X10 I5 F1\nG0 Z5\nG94\nG1 Z-1\nM2\n");
     CHECK(p.path.moves.size() > 4);
     CHECK(p.path.moves.back().end.z == -1.0);
 }
 
 TEST_CASE("gcode: a rotary word that turns nothing is a warning without --machine, not dropped silently",
           "[path][gcode]") {
-    const Program p = run("G0 X0 Y0 Z20 A0\nG1 Z-8 F100\nG1 X5 C0\nM2\n");
+    const Program p = runGcode("G0 X0 Y0 Z20 A0\nG1 Z-8 F100\nG1 X5 C0\nM2\n");
     CHECK(p.path.moves.size() == 3);
     std::vector<std::pair<int, int>> at;
     for (const Diagnostic& d : p.diagnostics)
@@ -781,7 +747,7 @@ TEST_CASE("gcode: a rotary word that turns nothing is a warning without --machin
 TEST_CASE("gcode: a file of subroutines alone names each one it never calls", "[path][gcode]") {
     const std::string subs = "(pockets)\no<pocket> sub\nG1 X#1 F100\no<pocket> endsub\n"
                              "o<slot> sub\nG1 Y#1 F100\no<slot> endsub\n";
-    const Program alone = run(subs + "M2\n");
+    const Program alone = runGcode(subs + "M2\n");
     CHECK(alone.path.moves.empty());
     std::vector<std::pair<std::string, int>> named;
     for (const Diagnostic& d : alone.diagnostics)
@@ -791,212 +757,14 @@ TEST_CASE("gcode: a file of subroutines alone names each one it never calls", "[
         }
     CHECK(named == std::vector<std::pair<std::string, int>>{{"subroutine o<pocket>", 2}, {"subroutine o<slot>", 5}});
     // A program that moves is not told of the subroutines it leaves unused, nor of those it calls.
-    const Program moving = run(subs + "G0 X1 Y2 Z3\nM2\n");
+    const Program moving = runGcode(subs + "G0 X1 Y2 Z3\nM2\n");
     CHECK(moving.path.moves.size() == 1);
     CHECK_FALSE(hasDiagnostic(moving, "never called"));
-    const Program called = run("o<pocket> sub\nG1 X#1 F100\no<pocket> endsub\nG0 X0 Y0 Z5\no<pocket> call [4]\nM2\n");
+    const Program called = runGcode("o<pocket> sub\nG1 X#1 F100\no<pocket> endsub\nG0 X0 Y0 Z5\no<pocket> call [4]\nM2\n");
     CHECK(called.path.moves.size() == 2);
     CHECK_FALSE(hasDiagnostic(called, "never called"));
     // A called subroutine that makes no moves is not one left uncalled.
-    CHECK_FALSE(hasDiagnostic(run("o<none> sub\n#1 = 2\no<none> endsub\no<none> call\nM2\n"), "never called"));
-}
-
-TEST_CASE("gcode: G28, G30 and G53 to a machine position the program does not state are not swept",
-          "[path][gcode]") {
-    SECTION("G28 with #5161..#5163 never set: Z goes to the machine's own home, unknown here") {
-        const Program p = run("G0 X1 Y2 Z10\nG1 Z-1 F100\nG28 Z20\nG0 X5\nG0 Y6 Z7\nG1 X8\n");
-        // Line 3 moves to the intermediate point (1, 2, 20), which the program states, and then
-        // Z home, which it does not: neither that move nor line 4 is swept, and line 5 gives Z
-        // again and only places the tool, at (5, 6, 7).
-        const auto& m = p.path.moves;
-        REQUIRE(m.size() == 4);
-        CHECK(near(m[2].start, Vec3(1, 2, -1)));
-        CHECK(near(m[2].end, Vec3(1, 2, 20)));
-        CHECK(m[2].source.line == 3);
-        CHECK(near(m[3].start, Vec3(5, 6, 7)));
-        CHECK(near(m[3].end, Vec3(8, 6, 7)));
-        CHECK(m[3].source.line == 6);
-        const Diagnostic* d = findDiagnostic(p, "G28 moves Z to the stored position (#5163)");
-        REQUIRE(d);
-        CHECK(d->where.file == "test.ngc");
-        CHECK(d->where.line == 3);
-        CHECK(d->where.column == 1);
-        const Diagnostic* lost = findDiagnostic(p, "position is unknown since a move");
-        REQUIRE(lost);
-        CHECK(lost->where.line == 4);
-        // Left out, and counted: line 3's move to Z home, and lines 4 and 5.
-        CHECK(p.movesNotSimulated == 3);
-        // Without a start, the first move only places the tool too; a second program's count adds.
-        Program unstarted = run("G0 X1 Y2 Z10\nG1 Z-1 F100\n", GcodeOptions{});
-        CHECK(unstarted.path.moves.size() == 1);
-        CHECK(unstarted.movesNotSimulated == 1);
-        unstarted.append(run("G0 X1 Y2 Z10\nG1 Z-1 F100\nG28 Z20\nG0 X5\nG0 Y6 Z7\nG1 X8\n"));
-        CHECK(unstarted.movesNotSimulated == 4);
-    }
-    SECTION("G28 and G30 to positions the program states go through the intermediate point") {
-        // Under a work offset the program states, as a machine position needs (G53 too).
-        const Program p = run("G10 L2 P1 X0 Y0 Z0\n#5161 = 1 #5162 = 2 #5163 = 3\nG0 X4 Y5 Z6\nG30.1\n"
-                              "G0 X0 Y0 Z9\nG30 Z20\nG28\nG91 G28 X0\n");
-        const auto& m = p.path.moves;
-        REQUIRE(m.size() == 7);
-        CHECK(near(m[2].end, Vec3(0, 0, 20)));  // G30's intermediate point
-        CHECK(near(m[3].end, Vec3(0, 0, 6)));   // then Z alone to the stored Z
-        CHECK(near(m[4].end, Vec3(1, 2, 3)));   // G28 without axes: straight to #5161..#5163
-        CHECK(near(m[5].end, Vec3(1, 2, 3)));   // G91: the intermediate point is here
-        CHECK(near(m[6].end, Vec3(1, 2, 3)));
-        for (const Move& mv : m) CHECK(mv.rapid);
-        CHECK_FALSE(hasDiagnostic(p, "stored position"));
-    }
-    SECTION("G28.1 stores only the coordinates known where it stands") {
-        const Program p = parseGcode("G10 L2 P1 X0 Y0 Z0\nG0 X1 Y2\nG28.1\nG0 Z5\nG1 X3 F100\nG28\nG1 X4\n",
-                                     "home.ngc");
-        // Line 4 makes the position known at (1, 2, 5); line 5 cuts; G28 sends Z to an unknown place.
-        const auto& m = p.path.moves;
-        REQUIRE(m.size() == 1);
-        CHECK(near(m[0].end, Vec3(3, 2, 5)));
-        const Diagnostic* d = findDiagnostic(p, "G28 moves Z to the stored position (#5163)");
-        REQUIRE(d);
-        CHECK(d->where.line == 6);
-    }
-    SECTION("G53 without the active work offset stated") {
-        const Program p = run("G10 L2 P1 X100\nG55 G0 X0 Y0 Z10\nG53 G0 Z0\nG0 X5 Y5\nG0 Z5\nG1 X6 F100\n");
-        const auto& m = p.path.moves;
-        REQUIRE(m.size() == 2);
-        CHECK(near(m[0].end, Vec3(0, 0, 10)));
-        CHECK(near(m[1].start, Vec3(5, 5, 5)));
-        CHECK(near(m[1].end, Vec3(6, 5, 5)));
-        const Diagnostic* d = findDiagnostic(p, "G53 moves Z in machine coordinates");
-        REQUIRE(d);
-        CHECK(d->message.find("G55 work offset") != std::string::npos);
-        CHECK(d->where.line == 3);
-        CHECK(d->where.column == 1);
-    }
-    SECTION("G53 with the work offset stated (G10 L2) is swept") {
-        const Program p = run("G10 L2 P1 X-100 Y0 Z-50\nG54 G0 X0 Y0 Z10\nG53 G0 Z0\nG53 X-50\n");
-        const auto& m = p.path.moves;
-        REQUIRE(m.size() == 3);
-        CHECK(near(m[0].end, Vec3(-100, 0, -40)));
-        CHECK(near(m[1].end, Vec3(-100, 0, 0)));
-        CHECK(near(m[2].end, Vec3(-50, 0, 0)));
-        CHECK_FALSE(hasDiagnostic(p, "G53 moves"));
-    }
-}
-
-TEST_CASE("gcode: G91 moves from an unknown position leave it unknown", "[path][gcode]") {
-    SECTION("no sweep from a guessed origin") {
-        // Line 2 would reach (5, 5, 5) from a guessed origin: no coordinate becomes known until
-        // line 5 states Z and line 6 X and Y in G90; line 7 is the first move swept.
-        const Program p = parseGcode("G21 G91\nG0 X5 Y5 Z5\nG1 Z-10 F100\nG1 X20\nG90 G0 Z3\nG0 X1 Y2\nG1 Z-1\n",
-                                     "inc.ngc");
-        REQUIRE(p.path.moves.size() == 1);
-        CHECK(near(p.path.moves[0].start, Vec3(1, 2, 3)));
-        CHECK(near(p.path.moves[0].end, Vec3(1, 2, -1)));
-        CHECK(p.path.moves[0].source.line == 7);
-        const Diagnostic* d = findDiagnostic(p, "incremental (G91) X from a position where X is unknown");
-        REQUIRE(d);
-        CHECK(d->where.line == 2);
-        CHECK(d->where.column == 4);
-    }
-    SECTION("a known axis stays known in G91, an unknown one does not become known") {
-        const Program p = parseGcode("G0 X1 Y2\nG91 G0 X1 Z1\nG90 G0 Z4\nG91 G1 X1 Y1 F100\n", "inc.ngc");
-        // X and Y are known from line 1 (X moves on to 2 in G91); Z only from line 3.
-        REQUIRE(p.path.moves.size() == 1);
-        CHECK(near(p.path.moves[0].start, Vec3(2, 2, 4)));
-        CHECK(near(p.path.moves[0].end, Vec3(3, 3, 4)));
-    }
-    SECTION("G92 names the present point: an old-style program's start") {
-        const Program p = parseGcode("G92 X0 Y0 Z0\nG91 G1 Z-1 F100\nG1 X10\n", "g92.ngc");
-        REQUIRE(p.path.moves.size() == 2);
-        CHECK(near(p.path.moves[0].start, Vec3(0, 0, 0)));
-        CHECK(near(p.path.moves[0].end, Vec3(0, 0, -1)));
-        CHECK(near(p.path.moves[1].end, Vec3(10, 0, -1)));
-        CHECK_FALSE(hasDiagnostic(p, "unknown"));
-        // Under a work offset the program states, the present point is named in its frame.
-        const Program q = parseGcode("G10 L2 P1 X100\nG92 X5 Y0 Z0\nG1 X6 F100\n", "g92.ngc");
-        REQUIRE(q.path.moves.size() == 1);
-        CHECK(near(q.path.moves[0].start, Vec3(105, 0, 0)));
-        CHECK(near(q.path.moves[0].end, Vec3(106, 0, 0)));
-    }
-    SECTION("G10 L20 on the active system names the present point, as G92 does") {
-        // Touched off where the operator put the tool: the incremental moves after it are cut.
-        const Program p = parseGcode("G10 L20 P0 X0 Y0 Z0\nG91 G1 Z-1 F100\nX20\n", "l20.ngc");
-        REQUIRE(p.path.moves.size() == 2);
-        CHECK(near(p.path.moves[0].start, Vec3(0, 0, 0)));
-        CHECK(near(p.path.moves[0].end, Vec3(0, 0, -1)));
-        CHECK(near(p.path.moves[1].end, Vec3(20, 0, -1)));
-        CHECK_FALSE(hasDiagnostic(p, "unknown"));
-        // On another system than the active one it names nothing here: Z stays unknown.
-        const Program q = parseGcode("G0 X0 Y0\nG10 L20 P2 Z0\nG91 G1 Z-1 F100\nG90 X5\n", "l20.ngc");
-        CHECK(q.path.moves.empty());
-        CHECK(hasDiagnostic(q, "incremental (G91) Z from a position where Z is unknown"));
-    }
-    SECTION("G28 G91 Z0 at the start warns of the stored position, not of a G91 move") {
-        // The point on the way is never reached as a place of its own: Z goes on home. The one
-        // warning is G28's; a later incremental move from an unknown Z still gets its own.
-        const Program p = parseGcode("G28 G91 Z0\nG90 G0 X0 Y0\nG91 G1 Z-1 F100\n", "home.ngc");
-        CHECK(p.path.moves.empty());
-        const Diagnostic* g28 = findDiagnostic(p, "G28 moves Z to the stored position");
-        REQUIRE(g28);
-        CHECK(g28->where.line == 1);
-        const Diagnostic* inc = findDiagnostic(p, "incremental (G91) Z from a position where Z is unknown");
-        REQUIRE(inc);
-        CHECK(inc->where.line == 3);
-    }
-    SECTION("an arc from an unknown start only places the tool at its end") {
-        // Its centre and radius hang on the start, which is unknown: the radius check is not made
-        // against a guessed start (from (0, 0) the radii would be 3 and 7; from (4, 0), say, the
-        // arc is good), and no chord is swept.
-        const Program p = parseGcode("G0 Z5\nG2 X10 Y0 I3 J0\nG1 X11 F100\n", "arc.ngc");
-        REQUIRE(p.path.moves.size() == 1);
-        CHECK(near(p.path.moves[0].start, Vec3(10, 0, 5)));
-        CHECK(near(p.path.moves[0].end, Vec3(11, 0, 5)));
-        CHECK_FALSE(hasDiagnostic(p, "has no effect"));
-    }
-}
-
-TEST_CASE("gcode: canned cycles from an unknown level sweep only what they state", "[path][gcode]") {
-    SECTION("G98 retracts to an unknown level: the holes are swept, the retracts and travels are not") {
-        const Program p = parseGcode("G0 X0 Y0\nG98 G81 X10 Y0 Z-5 R2 F100\nX20\nG80\nG0 Z10\nG1 X30\n", "g98.ngc");
-        const auto& m = p.path.moves;
-        REQUIRE(m.size() == 3);
-        CHECK(near(m[0].start, Vec3(10, 0, 2)));
-        CHECK(near(m[0].end, Vec3(10, 0, -5)));
-        CHECK_FALSE(m[0].rapid);
-        CHECK(near(m[1].start, Vec3(20, 0, 2)));
-        CHECK(near(m[1].end, Vec3(20, 0, -5)));
-        CHECK(m[1].source.line == 3);
-        CHECK(near(m[2].start, Vec3(20, 0, 10)));
-        CHECK(near(m[2].end, Vec3(30, 0, 10)));
-        const Diagnostic* d = findDiagnostic(p, "G98 retracts to the Z where the cycle began, which is unknown");
-        REQUIRE(d);
-        CHECK(d->where.line == 2);
-        CHECK(d->where.column == 5);
-    }
-    SECTION("G99 retracts to R, which is known: only the way to the first hole is not swept") {
-        const Program p = parseGcode("G0 X0 Y0\nG99 G81 X10 Y0 Z-5 R2 F100\nX20\n", "g99.ngc");
-        const std::vector<std::pair<Vec3, Vec3>> expected = {{{10, 0, 2}, {10, 0, -5}}, {{10, 0, -5}, {10, 0, 2}},
-                                                            {{10, 0, 2}, {20, 0, 2}},  {{20, 0, 2}, {20, 0, -5}},
-                                                            {{20, 0, -5}, {20, 0, 2}}};
-        const auto& m = p.path.moves;
-        REQUIRE(m.size() == expected.size());
-        for (std::size_t k = 0; k < m.size(); ++k) {
-            INFO("move " << k);
-            CHECK(near(m[k].start, expected[k].first));
-            CHECK(near(m[k].end, expected[k].second));
-        }
-        CHECK_FALSE(hasDiagnostic(p, "G98 retracts"));
-    }
-    SECTION("in G91 the R plane and the depth count from the unknown level: nothing is swept") {
-        const Program p = parseGcode("G0 X0 Y0\nG91 G81 X10 Z-5 R-2 F100\nX10\nG90 G80 G0 Z5\nG1 X25\n", "g91.ngc");
-        // X stays known through the cycle (0 + 10 + 10); Z is known again at line 4.
-        REQUIRE(p.path.moves.size() == 1);
-        CHECK(near(p.path.moves[0].start, Vec3(20, 0, 5)));
-        CHECK(near(p.path.moves[0].end, Vec3(25, 0, 5)));
-        const Diagnostic* d = findDiagnostic(p, "canned cycle in G91 from an unknown Z");
-        REQUIRE(d);
-        CHECK(d->where.line == 2);
-        CHECK(d->where.column == 5);
-    }
+    CHECK_FALSE(hasDiagnostic(runGcode("o<none> sub\n#1 = 2\no<none> endsub\no<none> call\nM2\n"), "never called"));
 }
 
 TEST_CASE("gcode: a feed move at a zero feed rate is one warning, G94 and G95 reset the feed rate",
@@ -1010,18 +778,19 @@ TEST_CASE("gcode: a feed move at a zero feed rate is one warning, G94 and G95 re
     };
     using At = std::vector<std::pair<int, int>>;
     // No F yet: the G1, the modal G1 and the arc are three such moves, told once, at the first.
-    const Program none = run("G0 X0 Y0 Z5\nG1 Z-1\nX10\nG2 X20 I5\n");
+    const Program none = runGcode("G0 X0 Y0 Z5\nG1 Z-1\nX10\nG2 X20 I5\n");
     CHECK(warnings(none) == At{{2, 1}});
     CHECK(hasDiagnostic(none, "(3 occurrences, first shown)"));
     CHECK(none.path.moves.size() > 3);  // the moves are simulated as programmed
-    CHECK(warnings(run("G0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10\nG2 X20 I5\n")).empty());
+    CHECK(warnings(runGcode("G0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10\nG2 X20 I5\n")).empty());
     // LinuxCNC's convert_feed_mode: G94 and G95 set the feed rate to 0; an F in the same block
     // comes after the mode and holds.
-    CHECK(warnings(run("G1 X1 F100\nG94\nX2 Y1\n")) == At{{3, 1}});
-    CHECK(warnings(run("G1 X1 F100\nG95\nG1 X2\n")) == At{{3, 1}});
-    CHECK(warnings(run("G1 X1 F100\nG94 F200\nG1 X2\n")).empty());
-    CHECK(warnings(run("G1 X1 F0\n")) == At{{1, 1}});
+    CHECK(warnings(runGcode("G1 X1 F100\nG94\nX2 Y1\n")) == At{{3, 1}});
+    CHECK(warnings(runGcode("G1 X1 F100\nG95\nG1 X2\n")) == At{{3, 1}});
+    CHECK(warnings(runGcode("G1 X1 F100\nG94 F200\nG1 X2\n")).empty());
+    CHECK(warnings(runGcode("G1 X1 F0\n")) == At{{1, 1}});
     // A canned cycle feeds too; a rapid does not; in G93 each feed move carries its own F.
-    CHECK(warnings(run("G0 X0 Y0 Z5\nG81 X1 Z-1 R1\n")) == At{{2, 1}});
-    CHECK(warnings(run("G0 X1 Y1 Z1\nG93 G1 X2 F2\n")).empty());
+    CHECK(warnings(runGcode("G0 X0 Y0 Z5\nG81 X1 Z-1 R1\n")) == At{{2, 1}});
+    CHECK(warnings(runGcode("G0 X1 Y1 Z1\nG93 G1 X2 F2\n")).empty());
 }
+
