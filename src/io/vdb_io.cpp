@@ -65,6 +65,16 @@ std::string clipped(const std::string& message) {
     return printable(message.size() <= kMostMessageBytes ? message : message.substr(0, kMostMessageBytes) + "...");
 }
 
+/// An OpenVDB exception's message, clipped, without the name of its type ("RuntimeError: "),
+/// which tells a user nothing.
+std::string openvdbMessage(const openvdb::Exception& e) {
+    const std::string message = e.what();
+    const std::size_t colon = message.find(": ");
+    const bool typed = colon != std::string::npos && colon >= 5 && message.compare(colon - 5, 5, "Error") == 0 &&
+                       message.find(' ') > colon;
+    return clipped(typed ? message.substr(colon + 2) : message);
+}
+
 /// The first grid of `grids` that `wanted` takes; none when no grid does.
 template <typename Wanted>
 openvdb::GridBase::Ptr findGrid(const openvdb::GridPtrVec& grids, Wanted wanted) {
@@ -84,7 +94,7 @@ void writeVdb(const std::string& path, const LevelSet& levelSet, OutputBatch* ba
         try {
             GridWriter().writeTo(out, openvdb::GridCPtrVec{grid}, seekable);
         } catch (const openvdb::Exception& e) {
-            throw Error("cannot write '" + path + "': " + e.what());
+            throw Error("cannot write '" + path + "': " + openvdbMessage(e));
         }
     }, batch);
 }
@@ -142,7 +152,10 @@ LevelSet readVdb(const std::string& path, const std::string& gridName) {
         throw Error("'" + path + "': not a readable OpenVDB file (a size in it asks for more memory than there is: "
                     "the file is damaged)");
     } catch (const openvdb::Exception& e) {
-        throw Error("cannot read '" + path + "': " + clipped(e.what()));
+        // Damaged voxel data (a compressed block Blosc cannot expand, say), or a grid this
+        // OpenVDB has no reader for.
+        throw Error("'" + path + "': not a readable OpenVDB file (OpenVDB: " + openvdbMessage(e) +
+                    "; the file is damaged, or holds what this OpenVDB cannot read)");
     }
     openvdb::GridBase::Ptr base;
     if (!gridName.empty()) {

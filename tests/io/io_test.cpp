@@ -435,6 +435,32 @@ TEST_CASE("VDB: a damaged size of compressed data is refused and never crashes",
     }
 }
 
+TEST_CASE("VDB: a compressed block Blosc cannot expand is refused in a user's words", "[io][errors]") {
+    // A block's Blosc header starts with its format version, 2; made 3, Blosc refuses the block
+    // and OpenVDB throws "RuntimeError: Expected to decompress 1568 bytes, got -1 bytes".
+    TempDir dir;
+    const LevelSet ls = rebuildLevelSet(dentedBox(), {3, FamilySet::all(), "dented box", std::nullopt});
+    writeVdb(dir.file("part.vdb"), ls);
+    std::string bytes = slurp(dir.file("part.vdb"));
+    std::vector<std::size_t> blocks;
+    for (std::size_t at = 0; at + 10 <= bytes.size(); ++at) {
+        std::int64_t size = 0;
+        std::memcpy(&size, bytes.data() + at, sizeof size);  // little-endian, as OpenVDB writes on x86
+        if (size > 0 && std::uint64_t(size) <= bytes.size() - at - 8 && bytes[at + 8] == 2 && bytes[at + 9] == 1)
+            blocks.push_back(at);
+    }
+    REQUIRE(blocks.size() >= 2);
+    const std::size_t block = blocks[blocks.size() / 2];
+    INFO("the Blosc block whose size is at byte " << block << " of " << bytes.size());
+    bytes[block + 8] = 3;
+    const std::string path = dir.file("damaged.vdb");
+    std::ofstream(path, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
+    CHECK_THROWS_WITH(readVdb(path), Catch::Matchers::StartsWith("'" + path + "': not a readable OpenVDB file (OpenVDB: ") &&
+                                         Catch::Matchers::Contains("decompress") &&
+                                         !Catch::Matchers::Contains("RuntimeError") &&
+                                         Catch::Matchers::EndsWith("the file is damaged, or holds what this OpenVDB cannot read)"));
+}
+
 namespace {
 
 /// While alive, writes past `bytes` in any file fail (EFBIG) as on a full disk: a file-size limit,
