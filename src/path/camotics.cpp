@@ -6,7 +6,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
+#include <optional>
 #include <set>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -120,7 +125,7 @@ ResolutionMode resolutionMode(const Json& j, const JsonPlaces& places) {
 std::optional<Tool> camoticsTool(const Json& t, const std::string& where, const JsonPlaces& places,
                                  const std::string& pointer, std::vector<Diagnostic>& diags) {
     if (!t.is_object()) throw ParseError(places.value(pointer), where + ": a tool must be an object", t.dump());
-    // "number" is CAMotics' too (its tool tables write it); a project's tool takes its key's.
+    // "number" is CAMotics' too: the project's reader numbers the tool by it.
     warnUnknownKeys(t, {"units", "shape", "length", "diameter", "snub_diameter", "description", "number"}, where,
                     places, pointer, diags);
     const double s = metricUnits(t, where, places, pointer) ? 1.0 : kInch;
@@ -252,6 +257,15 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
             const Json& tools = j.at("tools");
             if (!tools.is_object())
                 throw ParseError(places.value("/tools"), "\"tools\" must be an object", tools.dump().substr(0, 40));
+            // CAMotics numbers a tool by its "number", by its key where it has none, and of two
+            // tools with one number keeps the later in the file.
+            struct Defined {
+                int number = 0;
+                SourceLocation at;  ///< its key's place
+                std::string key;
+                std::optional<Tool> tool;
+            };
+            std::vector<Defined> defined;
             for (const auto& [key, t] : tools.items()) {
                 const std::string pointer = "/tools/" + jsonPointerToken(key);
                 int n = 0;
@@ -262,13 +276,42 @@ Project parseCamoticsProject(std::string_view text, const std::string& fileName,
                 } catch (const std::exception&) {
                     throw ParseError(places.key(pointer), "tool numbers must be integers", key);
                 }
-                if (auto tool = camoticsTool(t, "tool " + key, places, pointer, p.diagnostics))
-                    p.tools.insert_or_assign(n, std::move(*tool));
-                if (t.contains("number") && !(t.at("number").is_number() && t.at("number").get<double>() == double(n)))
-                    p.diagnostics.push_back(warning(places.value(pointer + "/number"),
-                                                    "tool " + key + ": \"number\" " + t.at("number").dump() +
-                                                        " ignored: dexelmill numbers a project's tool by its key, " +
-                                                        key + " (CAMotics by \"number\")"));
+                std::optional<Tool> tool = camoticsTool(t, "tool " + key, places, pointer, p.diagnostics);
+                if (t.contains("number")) {
+                    const Json& v = t.at("number");
+                    const double number = v.is_number() ? v.get<double>() : -1.0;
+                    if (!(number >= 0.0 && number <= double(std::numeric_limits<int>::max()) &&
+                          number == std::floor(number)))
+                        throw ParseError(places.value(pointer + "/number"),
+                                         "tool " + key + ": \"number\" must be a whole number from 0", v.dump());
+                    if (int(number) != n) {
+                        Diagnostic d = warning(places.value(pointer + "/number"),
+                                               "tool " + key + " is tool " + std::to_string(int(number)) +
+                                                   ": CAMotics numbers a project's tool by its \"number\", not by "
+                                                   "its key");
+                        d.severity = Diagnostic::Severity::Note;
+                        p.diagnostics.push_back(std::move(d));
+                        n = int(number);
+                    }
+                }
+                defined.push_back({n, places.key(pointer), key, std::move(tool)});
+            }
+            std::stable_sort(defined.begin(), defined.end(), [](const Defined& x, const Defined& y) {
+                return std::pair(x.at.line, x.at.column) < std::pair(y.at.line, y.at.column);
+            });
+            std::map<int, const Defined*> first;
+            for (const Defined& d : defined) {
+                const auto [earlier, fresh] = first.emplace(d.number, &d);
+                if (!fresh) {
+                    p.diagnostics.push_back(warning(
+                        earlier->second->at, "tool " + earlier->second->key + " (tool " + std::to_string(d.number) +
+                                                 ") is replaced by tool " + d.key + " at line " +
+                                                 std::to_string(d.at.line) +
+                                                 ", which has its number: CAMotics keeps the later"));
+                    earlier->second = &d;
+                }
+                if (d.tool) p.tools.insert_or_assign(d.number, *d.tool);
+                else p.tools.erase(d.number);
             }
         }
         if (j.contains("workpiece")) {

@@ -345,10 +345,10 @@ TEST_CASE("camotics: a program the project names that is missing or no program i
 TEST_CASE("camotics: a key CAMotics does not read, in a tool, the workpiece, its bounds or a program entry, is "
           "named at its place",
           "[path][camotics]") {
-    // Places of the keys (and of the value of "number") found with Python's str.index, 1-based.
+    // Places of the keys found with Python's str.index, 1-based.
     const std::string text = "{\"tools\": {\"1\": {\"shape\": \"ballnose\", \"length\": 10, \"diametre\": 6,\n"
                              "                  \"diameter\": 6, \"description\": \"\", \"number\": 1},\n"
-                             "           \"2\": {\"length\": 10, \"diameter\": 2, \"number\": 5}},\n"
+                             "           \"2\": {\"length\": 10, \"diameter\": 2}},\n"
                              " \"workpiece\": {\"automatic\": false, \"colour\": \"oak\",\n"
                              "   \"bounds\": {\"min\": [0, 0, -5], \"max\": [10, 10, 0], \"centre\": [5, 5, 0]}},\n"
                              " \"files\": [\"a.ngc\", {\"path\": \"b.ngc\", \"open\": true}]}";
@@ -358,7 +358,6 @@ TEST_CASE("camotics: a key CAMotics does not read, in a tool, the workpiece, its
         int line, column;
     } expected[] = {
         {"tool 1 entry \"diametre\" ignored", 1, 53},
-        {"tool 2: \"number\" 5 ignored: dexelmill numbers a project's tool by its key, 2 (CAMotics by \"number\")", 3, 57},
         {"workpiece entry \"colour\" ignored", 4, 36},
         {"workpiece bounds entry \"centre\" ignored", 5, 54},
         {"program 2 entry \"open\" ignored", 6, 39},
@@ -377,4 +376,51 @@ TEST_CASE("camotics: a key CAMotics does not read, in a tool, the workpiece, its
     CHECK(p.workpiece.bounds.hi.x == 10.0);
     REQUIRE(p.files.size() == 2);
     CHECK(p.files[1].path == "b.ngc");
+}
+
+TEST_CASE("camotics: a tool is numbered by its \"number\", and of two with one number the later is kept, as in "
+          "CAMotics",
+          "[path][camotics]") {
+    // CAMotics' Tool::read sets the tool's number from "number", its key's by default, and its
+    // ToolTable keeps the later of two with one number. Places found with Python's str.index.
+    const std::string text = "{\"tools\": {\"2\": {\"length\": 9, \"diameter\": 4, \"number\": 7},\n"
+                             "           \"10\": {\"length\": 9, \"diameter\": 6, \"number\": 3},\n"
+                             "           \"3\": {\"length\": 9, \"diameter\": 8}}}";
+    const Project p = parseCamoticsProject(text, "p.camotics", "");
+    // Key 2 is tool 7; key 10 is tool 3, which key 3, later in the file, replaces. No tool 2 or 10.
+    REQUIRE(p.tools.size() == 2);
+    CHECK(p.tools.at(7).cuttingRadius() == 2.0);
+    CHECK(p.tools.at(3).cuttingRadius() == 4.0);
+    CHECK(p.tools.count(2) == 0);
+    CHECK(p.tools.count(10) == 0);
+    const auto said = [&](const std::string& fragment) -> const Diagnostic* {
+        for (const Diagnostic& d : p.diagnostics)
+            if (d.message.find(fragment) != std::string::npos) return &d;
+        return nullptr;
+    };
+    const Diagnostic* renumbered = said("tool 2 is tool 7: CAMotics numbers a project's tool by its \"number\"");
+    REQUIRE(renumbered);
+    CHECK(renumbered->severity == Diagnostic::Severity::Note);
+    CHECK(renumbered->where.line == 1);
+    CHECK(renumbered->where.column == 56);
+    const Diagnostic* replaced =
+        said("tool 10 (tool 3) is replaced by tool 3 at line 3, which has its number: CAMotics keeps the later");
+    REQUIRE(replaced);
+    CHECK(replaced->severity == Diagnostic::Severity::Warning);
+    CHECK(replaced->where.line == 2);
+    CHECK(replaced->where.column == 12);
+    // A "number" that is no tool number is an error at its value.
+    for (const char* bad : {"-1", "2.5", "\"4\"", "1e12"}) {
+        INFO(bad);
+        const std::string t =
+            std::string("{\"tools\": {\"1\": {\"length\": 9, \"diameter\": 4, \"number\": ") + bad + "}}}";
+        try {
+            parseCamoticsProject(t, "p.camotics", "");
+            FAIL("no error");
+        } catch (const ParseError& e) {
+            CHECK_THAT(e.what(), Catch::Matchers::Contains("tool 1: \"number\" must be a whole number from 0"));
+            CHECK(e.where().line == 1);
+            CHECK(e.where().column == 56);
+        }
+    }
 }
