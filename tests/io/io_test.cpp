@@ -54,6 +54,20 @@ TriDexelStock dentedBox() {
     return stock;
 }
 
+/// Where a VDB file's Blosc-compressed blocks of voxel values start: each is stored as its size in
+/// an int64 (little-endian, as OpenVDB writes on x86) and then the block, whose header begins
+/// with Blosc's format versions 2 and 1.
+std::vector<std::size_t> bloscBlocks(const std::string& bytes) {
+    std::vector<std::size_t> at;
+    for (std::size_t k = 0; k + 10 <= bytes.size(); ++k) {
+        std::int64_t size = 0;
+        std::memcpy(&size, bytes.data() + k, sizeof size);
+        if (size > 0 && std::uint64_t(size) <= bytes.size() - k - 8 && bytes[k + 8] == 2 && bytes[k + 9] == 1)
+            at.push_back(k);
+    }
+    return at;
+}
+
 /// A cube [lo, hi]^3 as 12 triangles, outward.
 Mesh cubeMesh(double lo, double hi) {
     Mesh m;
@@ -406,22 +420,15 @@ TEST_CASE("VDB: level sets are read in two threads at once", "[io][errors]") {
 }
 
 TEST_CASE("VDB: a damaged size of compressed data is refused and never crashes", "[io][errors]") {
-    // Each block of voxel values OpenVDB compresses (Blosc, the default) is stored as its size in
-    // an int64 and then the block, whose header begins with Blosc's format versions 2 and 1. A
-    // negative size marks a block stored raw, of minus that many bytes, and OpenVDB 10 reads it
+    // Each block of voxel values OpenVDB compresses (Blosc, the default) is stored as its size
+    // and then the block (bloscBlocks). A negative size marks a block stored raw, of minus that many bytes, and OpenVDB 10 reads it
     // into a buffer of the node's size whatever it says: made -65536, each size wrote past the
     // buffer and aborted the process ("double free or corruption", "free(): invalid pointer").
     TempDir dir;
     const LevelSet ls = rebuildLevelSet(dentedBox(), {3, FamilySet::all(), "dented box", std::nullopt});
     writeVdb(dir.file("part.vdb"), ls);
     const std::string bytes = slurp(dir.file("part.vdb"));
-    std::vector<std::size_t> sizes;
-    for (std::size_t at = 0; at + 10 <= bytes.size(); ++at) {
-        std::int64_t size = 0;
-        std::memcpy(&size, bytes.data() + at, sizeof size);  // little-endian, as OpenVDB writes on x86
-        if (size > 0 && std::uint64_t(size) <= bytes.size() - at - 8 && bytes[at + 8] == 2 && bytes[at + 9] == 1)
-            sizes.push_back(at);
-    }
+    const std::vector<std::size_t> sizes = bloscBlocks(bytes);
     REQUIRE(sizes.size() >= kDamagedVdbSizes);
     for (std::size_t k = 0; k < kDamagedVdbSizes; ++k) {
         const std::size_t at = sizes[k * sizes.size() / kDamagedVdbSizes];
@@ -442,13 +449,7 @@ TEST_CASE("VDB: a compressed block Blosc cannot expand is refused in a user's wo
     const LevelSet ls = rebuildLevelSet(dentedBox(), {3, FamilySet::all(), "dented box", std::nullopt});
     writeVdb(dir.file("part.vdb"), ls);
     std::string bytes = slurp(dir.file("part.vdb"));
-    std::vector<std::size_t> blocks;
-    for (std::size_t at = 0; at + 10 <= bytes.size(); ++at) {
-        std::int64_t size = 0;
-        std::memcpy(&size, bytes.data() + at, sizeof size);  // little-endian, as OpenVDB writes on x86
-        if (size > 0 && std::uint64_t(size) <= bytes.size() - at - 8 && bytes[at + 8] == 2 && bytes[at + 9] == 1)
-            blocks.push_back(at);
-    }
+    const std::vector<std::size_t> blocks = bloscBlocks(bytes);
     REQUIRE(blocks.size() >= 2);
     const std::size_t block = blocks[blocks.size() / 2];
     INFO("the Blosc block whose size is at byte " << block << " of " << bytes.size());
