@@ -14,9 +14,11 @@
 
 namespace dexelmill {
 
-/// @brief The closest point of triangle (a, b, c) to p, found by the Voronoi region of the
-/// triangle that holds p's projection (a vertex, an edge or the face). A degenerate triangle
-/// (a segment or a point) gives the closest point of that segment or point.
+/// @brief The closest point of triangle (a, b, c) to p: a corner whose edges both lead away from
+/// p, else p's foot on the plane where it lies within every edge, else the nearest point of the
+/// edges p is beyond. Within some rounding units of |p - a| of the exact point, however thin the
+/// triangle. A degenerate triangle (a segment or a point) gives the closest point of that segment
+/// or point.
 Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 
 /// @brief A mesh prepared for distance queries. Queries are const and may run on many threads.
