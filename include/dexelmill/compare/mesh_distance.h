@@ -16,8 +16,8 @@ namespace dexelmill {
 
 /// @brief The closest point of triangle (a, b, c) to p: a corner whose edges both lead away from
 /// p, else p's foot on the plane where it lies within every edge, else the nearest point of the
-/// edges p is beyond. Within some rounding units of |p - a| of the exact point, however thin the
-/// triangle. A degenerate triangle (a segment or a point) gives the closest point of that segment
+/// edges p is beyond. Within about eps |p - a| L / h of the exact point for a triangle L long and
+/// h high (eps the rounding unit): 1e-9 mm 100 mm out with h / L = 1e-5. A degenerate triangle (a segment or a point) gives the closest point of that segment
 /// or point.
 Vec3 closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
 
