@@ -473,3 +473,60 @@ TEST_CASE("cell loops: a notch through a sheet thinner than its lens's least dep
     std::sort(crossings.begin(), crossings.end());
     CHECK(crossings == std::vector<std::uint32_t>{0, 1, 4, 5, 6, 7});
 }
+
+TEST_CASE("cell loops: a notch whose lens reaches past a crease's corner opens the crease",
+          "[surface][contour]") {
+    // From boat-xyzac.ngc at h = 0.25 mm, the cell from (0.7943, 12.3186, -4.2875): a pocket's
+    // floor (edges 8 and 9, along z at y = 0, crossed at z = 0.51 and 0.47, normals up) meets its
+    // wall (edges 5 and 7, along y at z = 1, crossed at y = 0.97 and 0.98, normals along -y) in a
+    // crease whose tangent lines meet at y = 0.92, z = 0.43 on the faces x = 0 and 1. A notch cuts
+    // the corners' material at y = 1 (edges 10 and 11) from z = 0.40 to 0.88, and its lens on those
+    // faces, a wedge whose sides' tangents meet at y = 0.85, holds that corner: the notch opens
+    // into the pocket. The chord from the floor's crossing to the wall's missed the lens, so the
+    // face rule kept one region, and the pocket's loop and the notch's were two, the crease's
+    // vertex inside the notch: their fans passed through each other (42 of the boat's 88 pairs of
+    // crossing triangles, in ten such cells along x). The region is split there: the floor runs
+    // into the notch's lower side and the wall into its upper side, with no face vertex on x = 0
+    // or x = 1.
+    REQUIRE(edgeAxis(5) == 1);
+    REQUIRE(edgeCorner(5, 0) == 4);  // y edge at x = 0, z = 1
+    REQUIRE(edgeCorner(7, 0) == 5);  // y edge at x = 1, z = 1
+    REQUIRE(edgeAxis(8) == 2);
+    REQUIRE(edgeCorner(8, 0) == 0);   // z edge at x = 0, y = 0
+    REQUIRE(edgeCorner(9, 0) == 1);   // z edge at x = 1, y = 0
+    REQUIRE(edgeCorner(10, 0) == 2);  // z edge at x = 0, y = 1
+    REQUIRE(edgeCorner(11, 0) == 3);  // z edge at x = 1, y = 1
+    CellCrossings c;
+    c.inside = 0xcf;  // all but corners 4 and 5 (y = 0, z = 1)
+    const auto set = [&](int e, std::vector<std::uint32_t> ids, std::vector<double> at, std::vector<Vec3> normals) {
+        c.edges[std::size_t(e)].ids = std::move(ids);
+        c.edges[std::size_t(e)].at = std::move(at);
+        c.edges[std::size_t(e)].normals = std::move(normals);
+    };
+    set(5, {0}, {0.9729156494140625}, {Vec3(-0.0043828313740830373, -0.99616444610030452, 0.087391001337777593)});
+    set(7, {1}, {0.977996826171875}, {Vec3(-0.10468685966349131, -0.99032610880836591, 0.091076119956204682)});
+    set(8, {2}, {0.51436233520507812}, {Vec3(0.041791827970313687, 0.087152087885547361, 0.99531801786770113)});
+    set(9, {3}, {0.47240447998046875}, {Vec3(0.041791827970313687, 0.087152087885547361, 0.99531801786770113)});
+    set(10, {4, 5}, {0.3959503173828125, 0.87920761108398438},
+        {Vec3(0.039748950055823622, 0.32598937711778103, 0.94453742486776082),
+         Vec3(-0.010168291480337949, 0.94533823716434529, -0.32593285075821832)});
+    set(11, {6, 7}, {0.35362625122070312, 0.84596633911132812},
+        {Vec3(0.040161379647410768, 0.3260111993290824, 0.94451244644887011),
+         Vec3(-0.010404218962383189, 0.94537583579249551, -0.32581633066410792)});
+    int xFaceVertices = 0;
+    const auto loops = cellLoops(c, [&](int face, std::uint32_t from, std::uint32_t to, double, double) {
+        xFaceVertices += face < 2;
+        return std::uint32_t(10 + face * 16 + std::min(from, to));
+    });
+    CHECK(xFaceVertices == 0);
+    std::vector<std::vector<std::uint32_t>> sorted;
+    for (auto loop : loops) {
+        std::sort(loop.begin(), loop.end());
+        sorted.push_back(loop);
+    }
+    std::sort(sorted.begin(), sorted.end());
+    // The wall and the notch's upper side through 0, 1, 5 and 7; the floor and its lower side
+    // through 2, 3, 4 and 6.
+    const std::vector<std::vector<std::uint32_t>> want{{0, 1, 5, 7}, {2, 3, 4, 6}};
+    CHECK(sorted == want);
+}

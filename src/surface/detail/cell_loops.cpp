@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 #include <glm/geometric.hpp>
@@ -214,13 +215,42 @@ std::vector<std::array<double, 2>> pathPoints(const Path& p) {
     return out;
 }
 
-/// Whether two paths of a face cross: a segment of one passes strictly through a segment of the
-/// other (they share no end: every crossing ends one path).
-bool pathsCross(const Path& p, const Path& q) {
-    const auto orient = [](const std::array<double, 2>& a, const std::array<double, 2>& b, const std::array<double, 2>& c) {
-        return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+/// Where a path that is no lens crosses a sharp crease, the point of the face at which its ends'
+/// tangent lines meet: its ends' normals make a cosine below creaseCosine and above its negative
+/// (a fin's sides run alike and meet nowhere near), each meets the face at more than
+/// kGrazingInFace (a grazing sheet's slice curls round before its tangent reaches a corner), and
+/// the point lies strictly inside the face. There the surface's slice bends, and the cell's vertex
+/// of a crease lies on the crease line through it (patch_vertex.h); the chord cuts the corner off.
+std::optional<std::array<double, 2>> creaseCorner(const CellCrossings& cell, const Frame& f, const Path& p) {
+    if (p.lens) return std::nullopt;
+    const double cosine = glm::dot(p.fromNormal, p.toNormal);
+    if (cosine >= cell.creaseCosine || cosine <= -cell.creaseCosine) return std::nullopt;
+    const double a1 = p.fromNormal[f.u], b1 = p.fromNormal[f.v], a2 = p.toNormal[f.u], b2 = p.toNormal[f.v];
+    const double l1 = std::hypot(a1, b1), l2 = std::hypot(a2, b2);
+    if (l1 < kGrazingInFace || l2 < kGrazingInFace) return std::nullopt;
+    const double det = a1 * b2 - b1 * a2;
+    if (std::abs(det) <= kParallelSine * l1 * l2) return std::nullopt;
+    const std::array<double, 2> x1 = lensPoint(p.fromSide, p.fromAt, 0.0), x2 = lensPoint(p.toSide, p.toAt, 0.0);
+    const double c1 = a1 * x1[0] + b1 * x1[1], c2 = a2 * x2[0] + b2 * x2[1];
+    const std::array<double, 2> corner{(c1 * b2 - b1 * c2) / det, (a1 * c2 - c1 * a2) / det};
+    if (!(corner[0] > 0.0 && corner[0] < 1.0 && corner[1] > 0.0 && corner[1] < 1.0)) return std::nullopt;
+    return corner;
+}
+
+/// A path's slice through the face as the self-crossing test reads it: pathPoints, through the
+/// corner of a crease it crosses (creaseCorner) between its ends.
+std::vector<std::array<double, 2>> slicePoints(const CellCrossings& cell, const Frame& f, const Path& p) {
+    std::vector<std::array<double, 2>> out = pathPoints(p);
+    if (const auto corner = creaseCorner(cell, f, p)) out.insert(out.begin() + 1, *corner);
+    return out;
+}
+
+/// Whether two polylines in a face cross: a segment of one passes strictly through a segment of
+/// the other.
+bool polylinesCross(const std::vector<std::array<double, 2>>& a, const std::vector<std::array<double, 2>>& b) {
+    const auto orient = [](const std::array<double, 2>& p, const std::array<double, 2>& q, const std::array<double, 2>& r) {
+        return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]);
     };
-    const std::vector<std::array<double, 2>> a = pathPoints(p), b = pathPoints(q);
     for (std::size_t i = 0; i + 1 < a.size(); ++i)
         for (std::size_t j = 0; j + 1 < b.size(); ++j) {
             const double o1 = orient(a[i], a[i + 1], b[j]), o2 = orient(a[i], a[i + 1], b[j + 1]);
@@ -230,6 +260,9 @@ bool pathsCross(const Path& p, const Path& q) {
         }
     return false;
 }
+
+/// Whether two paths of a face cross (they share no end: every crossing ends one path).
+bool pathsCross(const Path& p, const Path& q) { return polylinesCross(pathPoints(p), pathPoints(q)); }
 
 /// Lenses on two edges of a face that meet at a corner are placed each on its own, and one's face
 /// vertex may reach past the other's path: the slices of the surface cannot cross, but the chords
@@ -413,19 +446,27 @@ bool uniteCrossing(const std::vector<Path>& paths, std::vector<int>& region) {
 /// ends do. The region's boundary then passes through itself in the face, and the fans over the
 /// loops through the two paths pass through each other. (boat-xyzac.ngc at h = 0.25 mm: a notch
 /// 0.34 h long through a sheet 0.026 h thick, whose lens is at least 0.067 h deep, crossed the
-/// sheet's path; 50 of the 196 pairs of triangles were such.) Path i leaves arc i for the region's
+/// sheet's path; 50 of the 196 pairs of triangles were such.) The other path is read as the
+/// surface's slice, through the corner of a crease it crosses (slicePoints), not as its chord: the
+/// crease's vertex in the cell lies on that corner's line, and a lens round the corner held it.
+/// (boat-xyzac.ngc, the cells from (0.0443, 12.3186, -4.2875) along x: a notch 0.48 h long,
+/// 0.15 h deep, opens into a pocket whose floor meets its wall 0.08 h from the notch's edge, and
+/// the chord passed 0.49 h from the notch's tip; 42 of the 88 pairs.) Path i leaves arc i for the region's
 /// next arc; where paths i and j cross (i < j, one region), the region's arcs after arc i through
 /// arc j take a new region: path i then runs to the arc path j ran to, and path j to the one path i
 /// ran to, the other pairing of their ends, and each part gets its own paths and its own patch.
 /// Each part's arcs lie in one stretch of the walk that holds none of the other's, so no two
 /// regions interleave. Every crossing still starts one path and ends one, so the cell's paths
 /// still close into loops. Splits one region and says whether it did.
-bool splitSelfCrossing(const std::vector<Path>& paths, std::vector<int>& region) {
+bool splitSelfCrossing(const CellCrossings& cell, const Frame& f, const std::vector<Path>& paths,
+                       std::vector<int>& region) {
     for (std::size_t i = 0; i < paths.size(); ++i)
         for (std::size_t j = i + 1; j < paths.size(); ++j) {
             const Path& p = paths[i];
             const Path& q = paths[j];
-            if (p.region != q.region || (!p.lens && !q.lens) || !pathsCross(p, q)) continue;
+            if (p.region != q.region || (!p.lens && !q.lens) ||
+                !polylinesCross(slicePoints(cell, f, p), slicePoints(cell, f, q)))
+                continue;
             const int fresh = *std::max_element(region.begin(), region.end()) + 1;
             for (std::size_t r = i + 1; r <= j; ++r)
                 if (region[r] == p.region) region[r] = fresh;
@@ -520,7 +561,7 @@ std::vector<Path> facePaths(const CellCrossings& cell, const Frame& f, bool seve
         placeFaceVertices(cell, f, paths);
         uncross(paths);
         if (!split && uniteCrossing(paths, region)) continue;
-        if (!splitSelfCrossing(paths, region)) return paths;
+        if (!splitSelfCrossing(cell, f, paths, region)) return paths;
         split = true;
     }
 }

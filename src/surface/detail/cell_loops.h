@@ -32,8 +32,9 @@
 /// that cuts a corner of the face slantwise falls between its samples, and its two ends read as
 /// two regions; two regions whose paths across the face still cross when their lenses are at
 /// their least depth are one. Then a region whose own paths still cross (a notch through a sheet
-/// thinner than its lens's least depth) is split there in two. The rule reads only the face's
-/// edges, so both cells sharing the face see the same regions.
+/// thinner than its lens's least depth, or round the corner where a crease's tangent lines meet,
+/// which its path's chord cuts off) is split there in two. The rule reads only the face's edges,
+/// so both cells sharing the face see the same regions.
 #pragma once
 
 #include <array>
