@@ -1,4 +1,5 @@
 // `dexelmill info FILE`: what a program, project or VDB file holds.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <set>
@@ -82,10 +83,14 @@ void printProgram(const Program& p) {
         else
             std::printf("%-14s %s: no cutter defined; give one with %s\n", "tool", name.c_str(), option.c_str());
     }
-    std::printf("%-14s %zu\n", "warnings", p.diagnostics.size());
+    const auto isNote = [](const Diagnostic& d) { return d.severity == Diagnostic::Severity::Note; };
+    const std::size_t notes = std::size_t(std::count_if(p.diagnostics.begin(), p.diagnostics.end(), isNote));
+    std::printf("%-14s %zu\n", "warnings", p.diagnostics.size() - notes);
+    if (notes > 0) std::printf("%-14s %zu\n", "notes", notes);
     constexpr std::size_t kShown = 10;
     for (std::size_t i = 0; i < p.diagnostics.size() && i < kShown; ++i)
-        std::printf("  %s: %s\n", p.diagnostics[i].where.str().c_str(), p.diagnostics[i].message.c_str());
+        std::printf("  %s: %s: %s\n", p.diagnostics[i].where.str().c_str(), isNote(p.diagnostics[i]) ? "note" : "warning",
+                    p.diagnostics[i].message.c_str());
     if (p.diagnostics.size() > kShown)
         std::printf("  ... and %zu more ('simulate' prints them all)\n", p.diagnostics.size() - kShown);
 }

@@ -1,4 +1,5 @@
 // `dexelmill simulate`: options to SimulateOptions, run the job, print warnings and a summary.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -449,14 +450,21 @@ int runSimulate(const SimulateArgs& args) {
     if (!args.quiet) {
         if (r.resolutionChosen)
             std::cerr << "dexelmill: lattice spacing " << r.resolutionMm << " mm (chosen from the stock; set --resolution)\n";
-        std::size_t shown = 0;
+        std::size_t shown = 0, notes = 0;
         for (const ReportWarning& w : r.warnings) {
-            if (shown++ == kPrintedDiagnostics) break;
-            std::cerr << where(w.where) << ": warning: " << printable(w.message) << "\n";
+            const bool note = w.severity == Diagnostic::Severity::Note;
+            if (shown++ >= kPrintedDiagnostics) {
+                notes += note;
+                continue;
+            }
+            std::cerr << where(w.where) << (note ? ": note: " : ": warning: ") << printable(w.message) << "\n";
         }
-        if (r.warnings.size() > kPrintedDiagnostics)
-            std::cerr << "dexelmill: " << r.warnings.size() - kPrintedDiagnostics << " more warnings"
-                      << (args.report.empty() ? "" : " in " + args.report) << "\n";
+        if (r.warnings.size() > kPrintedDiagnostics) {
+            const std::size_t more = r.warnings.size() - kPrintedDiagnostics;
+            std::cerr << "dexelmill: " << counted(more - notes, "more warning");
+            if (notes > 0) std::cerr << " and " << counted(notes, "more note");
+            std::cerr << (args.report.empty() ? "" : " in " + args.report) << "\n";
+        }
         shown = 0;
         for (const ReportCollision& c : r.collisions) {
             if (shown++ == kPrintedDiagnostics) break;
@@ -508,12 +516,17 @@ int runSimulate(const SimulateArgs& args) {
                               (r.movesNotSimulated > 0 ? " (" + std::to_string(r.movesNotSimulated) +
                                                              " more not simulated: unknown position)"
                                                        : "");
+    const std::size_t notes = std::size_t(std::count_if(r.warnings.begin(), r.warnings.end(), [](const ReportWarning& w) {
+        return w.severity == Diagnostic::Severity::Note;
+    }));
+    const std::string said =
+        counted(r.warnings.size() - notes, "warning") + (notes > 0 ? ", " + counted(notes, "note") : std::string());
     std::fprintf(
         summary, "dexelmill: %s, %s; removed %s (%.1f %% of the stock), part %s; h %.4g mm; %s, %s%s; "
         "mesh %s%s; %.2f s, %.0f MiB\n",
         moves.c_str(), counted(r.toolChanges, "tool change").c_str(), volumeText(r.removedVolumeMm3).c_str(), pct,
         volumeText(r.finalVolumeMm3).c_str(), r.resolutionMm, counted(r.collisions.size(), "collision").c_str(), gouges.c_str(),
-        counted(r.warnings.size(), "warning").c_str(), counted(r.meshTriangles, "triangle").c_str(),
+        said.c_str(), counted(r.meshTriangles, "triangle").c_str(),
         meshState.c_str(), r.timingS.total, r.peakMemoryMb);
     return 0;
 }

@@ -128,6 +128,7 @@ std::string reportJson(const SimulateReport& r) {
         if (w.where.line > 0) entry["line"] = w.where.line;
         if (w.where.line > 0 && w.where.column > 0) entry["column"] = w.where.column;
         entry["message"] = w.message;
+        entry["severity"] = w.severity == Diagnostic::Severity::Note ? "note" : "warning";
         warnings.push_back(entry);
     }
     j["warnings"] = warnings;

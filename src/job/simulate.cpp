@@ -702,7 +702,7 @@ Simulation runStages(const SimulateOptions& o) {
     // program's diagnostics would push them past what the summary prints.
     for (ReportWarning& n : notes) report.warnings.push_back(std::move(n));
     for (const Diagnostic& d : program.diagnostics)
-        report.warnings.push_back({d.where, d.message});
+        report.warnings.push_back({d.where, d.message, d.severity});
     report.stockMemoryBytes = stock.memoryBytes();
     checkSurfaceFits(stock, budget);
 

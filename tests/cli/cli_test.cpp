@@ -971,3 +971,34 @@ TEST_CASE("a program with no move for another reason is not told to give a start
     CHECK_THAT(r.err, Contains("no moves to guess one from; use --stock"));
     CHECK_THAT(r.err, !Contains("--start"));
 }
+
+TEST_CASE("a note is printed and counted as a note, a warning as a warning", "[cli]") {
+    const Cli cli("notes");
+    // The first move's unknown start, 24 M-codes the interpreter does not know, each a warning of
+    // its own place, the feed rate missing, and an M99 in the main program, a note: the console
+    // prints 20 and counts the rest by kind.
+    std::string program = "G21 G90\nG0 X5 Y15 Z15\n";
+    for (int k = 0; k < 24; ++k) program += "G1 X" + std::to_string(5 + k) + " Z7 M" + std::to_string(110 + k) + "\n";
+    program += "M99\n";
+    cli.file("p.ngc", program);
+    const Run r = cli("simulate p.ngc --stock box:0,0,0,40,30,10 --tool flat:d=6 --resolution 1 --report r.json");
+    CHECK(r.code == 0);
+    CHECK_THAT(r.err, Contains("p.ngc:3:10: warning: unknown M-code M110 ignored\n"));
+    CHECK_THAT(r.err, Contains("\ndexelmill: 6 more warnings and 1 more note in r.json\n"));
+    CHECK_THAT(r.out, Contains(" 26 warnings, 1 note; "));
+    const nlohmann::json report = nlohmann::json::parse(slurp(cli.dir() / "r.json"));
+    REQUIRE(report["warnings"].size() == 27);
+    CHECK(report["warnings"][0]["severity"] == "warning");
+    CHECK(report["warnings"][26]["message"] == "M99 in the main program ends it");
+    CHECK(report["warnings"][26]["severity"] == "note");
+    // Within the first 20, the note is printed as one.
+    cli.file("short.ngc", "G21 G90\nG0 X5 Y15 Z15\nG1 Z7 F100\nM99\n");
+    const Run shortRun = cli("simulate short.ngc --stock box:0,0,0,40,30,10 --tool flat:d=6 --resolution 1");
+    CHECK(shortRun.code == 0);
+    CHECK_THAT(shortRun.err, Contains("short.ngc:4: note: M99 in the main program ends it\n"));
+    CHECK_THAT(shortRun.out, Contains(" 2 warnings, 1 note; "));
+    const Run info = cli("info short.ngc");
+    CHECK(info.code == 0);
+    CHECK_THAT(info.out, Contains("warnings       2\nnotes          1\n") &&
+                             Contains("short.ngc:4: note: M99 in the main program ends it"));
+}

@@ -154,11 +154,13 @@ TEST_CASE("the report gives a warning's file, line and column only where it has 
     r.warnings = {ReportWarning{SourceLocation{"", 0, 0}, "the stock is the program's extent"},
                   ReportWarning{SourceLocation{"p.ngc", 0, 0}, "the program makes no moves"},
                   ReportWarning{SourceLocation{"p.ngc", 4, 0}, "F100 is ignored"},
-                  ReportWarning{SourceLocation{"p.ngc", 6, 9}, "M8 is ignored"}};
+                  ReportWarning{SourceLocation{"p.ngc", 6, 9}, "M8 is ignored"},
+                  ReportWarning{SourceLocation{"p.ngc", 7, 0}, "M99 in the main program ends it",
+                                Diagnostic::Severity::Note}};
     const nlohmann::json j = nlohmann::json::parse(reportJson(r));
     // The format number of the report's keys, as the README gives it.
     CHECK(j["format"] == 1);
-    REQUIRE(j["warnings"].size() == 4);
+    REQUIRE(j["warnings"].size() == 5);
     const nlohmann::json& whole = j["warnings"][0];
     CHECK_FALSE(whole.contains("file"));
     CHECK_FALSE(whole.contains("line"));
@@ -174,6 +176,8 @@ TEST_CASE("the report gives a warning's file, line and column only where it has 
     const nlohmann::json& column = j["warnings"][3];
     CHECK(column["line"] == 6);
     CHECK(column["column"] == 9);
+    CHECK(column["severity"] == "warning");
+    CHECK(j["warnings"][4]["severity"] == "note");
 }
 
 TEST_CASE("simulate: a wall thinner than the spacing is reported and meshed", "[job][fine]") {
@@ -448,6 +452,10 @@ TEST_CASE("a tool option the job cannot use, or that replaces the program's tool
     numbered.tools.insert_or_assign(1, flatEndMill(10.0, {20.0, 30.0}));
     const SimulateReport replaced = runSimulation(numbered).report;
     CHECK(said(replaced, "replaces the program's tool 1 (flat D6"));
+    // What the run did in the program's stead: a note, not a warning.
+    for (const ReportWarning& w : replaced.warnings)
+        if (w.message.find("replaces the program's tool") != std::string::npos)
+            CHECK(w.severity == Diagnostic::Severity::Note);
     CHECK(replaced.removedVolumeMm3 == Approx(10 * 10 + kPi * 25).epsilon(0.02));
 
     SimulateOptions after;

@@ -150,10 +150,13 @@ struct ReportGouge {
     Vec3 point{0.0};
 };
 
-/// @brief A warning from a reader or the cutting loop.
+/// @brief A warning or a note from a reader, the job or the cutting loop.
 struct ReportWarning {
     SourceLocation where;
     std::string message;
+    /// A note tells what the run did in the program's stead (a tool replaced, a subroutine read);
+    /// a warning, what it could not honour or what may be wrong.
+    Diagnostic::Severity severity = Diagnostic::Severity::Warning;
 };
 
 /// @brief Everything the job found; also written as the JSON report.
