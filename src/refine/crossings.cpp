@@ -8,7 +8,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
-#include "refine/detail/windows.h"
+#include "geometry/detail/coarse_grid.h"
 
 namespace dexelmill::detail {
 
