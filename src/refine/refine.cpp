@@ -14,7 +14,7 @@
 
 #include "dexelmill/surface/simplify.h"
 #include "memory/pages.h"
-#include "refine/detail/crossings.h"
+#include "surface/detail/crossings.h"
 #include "refine/detail/edge_table.h"
 #include "refine/detail/pieces.h"
 #include "refine/detail/windows.h"

@@ -1,4 +1,4 @@
-#include "refine/detail/crossings.h"
+#include "surface/detail/crossings.h"
 
 #include <algorithm>
 #include <atomic>

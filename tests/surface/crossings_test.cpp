@@ -1,4 +1,4 @@
-// The refinement's crossing test (refine/detail/crossings.h) against the tests' own
+// The mesh's crossing test (surface/detail/crossings.h) against the tests' own
 // self-intersection count (support/self_intersection.h), which shares no code with it.
 #include <catch2/catch.hpp>
 
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "refine/detail/crossings.h"
+#include "surface/detail/crossings.h"
 #include "support/self_intersection.h"
 #include "support/uv_sphere.h"
 
@@ -36,7 +36,7 @@ bool libraryCross(const Mesh& m) {
 
 }  // namespace
 
-TEST_CASE("crossings: pairs of triangles agree with the brute-force count", "[refine][oracle]") {
+TEST_CASE("crossings: pairs of triangles agree with the brute-force count", "[surface][oracle]") {
     // Random pairs in a unit cube, sharing no corner, one or two, and pairs in one plane (z = 0.5
     // with a tilt of 0 or a hair): every answer must be the oracle's.
     std::mt19937 rng(11);
@@ -61,7 +61,7 @@ TEST_CASE("crossings: pairs of triangles agree with the brute-force count", "[re
 }
 
 TEST_CASE("crossings: the pieces that pass through the mesh are found, each once",
-          "[refine][oracle]") {
+          "[surface][oracle]") {
     // Two triangles far apart and a third through the first: the list holds the crossing pair
     // alone, whichever of them is a piece.
     Mesh m;
@@ -80,7 +80,7 @@ TEST_CASE("crossings: the pieces that pass through the mesh are found, each once
 }
 
 TEST_CASE("crossings: on a jittered sphere, the list is the brute-force count's",
-          "[refine][oracle]") {
+          "[surface][oracle]") {
     // A UV sphere whose vertices are pushed in and out along their rays stays embedded; pushing
     // some through the centre and out past the far side makes crossings. The library must list
     // every triangle of the pairs the oracle lists, and nothing else when the oracle lists all.

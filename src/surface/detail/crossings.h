@@ -1,6 +1,6 @@
 /// @file crossings.h
-/// @brief Triangles of a mesh that pass through one another (the refinement's guard against the
-/// splits it makes).
+/// @brief Triangles of a mesh that pass through one another: the refinement's guard against the
+/// splits it makes.
 #pragma once
 
 #include <array>
