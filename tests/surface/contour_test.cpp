@@ -294,6 +294,22 @@ TEST_CASE("contour: a fin between two ball plunges that slants through a cell's 
     checkFinApart("fin through a face", finOfTwoBalls(0.016657, 1.389212, -0.564792, Vec3(9.058680, 9.477962, 1.369491)));
 }
 
+TEST_CASE("contour: split patches of one cell whose fans pass through each other are left to the table path",
+          "[surface][contour][fine]") {
+    // Two ball plunges of radius 15 h whose surfaces pass 0.024 h apart at (9.95, 9.41, 1.37),
+    // their centres on a line 0.292 rad from x and 0.055 rad above the xy plane: the fin between
+    // them meets the face y = 9.5 of the cell at (9.5, 8.5, 1.5) at x = 9.8 to 9.93. Of the two
+    // patches the cell's loops make there, one's vertex sat at (10.07, 8.88, 2.00), the other's
+    // at (9.93, 9.38, 1.63), and 4 pairs of their fan triangles passed through each other with
+    // none folded. Such a cell's edges are now left to the table path, as a fold's are; no pair
+    // is left (contourPart checks them).
+    const Result res = finOfTwoBalls(0.023918, 0.292086, 0.055150, Vec3(9.952384, 9.406522, 1.372112));
+    INFO(summary("fin between balls, fans crossing", res) << "; " << res.stats.splitEdges << " split edges");
+    CHECK(res.check.ok());
+    CHECK(res.stats.splitEdges > 0);  // the rest of the fin is meshed from its dexels
+    CHECK(res.stats.splitEdgesDropped > 0);
+}
+
 TEST_CASE("contour: ball passes closer than a cell", "[surface][contour]") {
     // Parallel passes of a ball of radius 3 mm at a stepover of 0.3 h: the cusps between them,
     // s^2 / (8 R) = 0.0009 mm high, are finer than the lattice can show.
