@@ -97,7 +97,8 @@ constexpr int kPullRounds = 8;
 /// Runs of the contourer that leave the split cells with folds to the table path, before a last
 /// run without split cells. An edge left to the table path changes the cells round it, and those
 /// may fold in turn: boat-xyzac.ngc at h = 0.25 mm, its split regions opened round crease corners
-/// (cell_loops.cpp), left 196 edges, then 3 and 3 more, and none at the fourth run; after three
+/// (cell_loops.cpp), left 199 edges (3 round cells whose fans crossed, crossingSplitPatches),
+/// then 3 and 3 more, and none at the fourth run; after three
 /// the whole boat lost its 13,487 edges with several crossings to the last run.
 constexpr int kSplitRetries = 3;
 

@@ -1,6 +1,6 @@
 /// @file crossings.h
 /// @brief Triangles of a mesh that pass through one another: the refinement's guard against the
-/// splits it makes.
+/// splits it makes, and the contourer's against split patches of one cell whose fans cross.
 #pragma once
 
 #include <array>
