@@ -61,6 +61,10 @@ namespace {
 
 using detail::Block;
 using detail::CellPatches;
+using detail::EdgeStart;
+using detail::edgeStarts;
+using detail::EdgeTables;
+using detail::edgeTables;
 using detail::forEachSetBit;
 using detail::kCells;
 using detail::kDim;
@@ -122,69 +126,6 @@ struct Crossing {
     PackedNormal n;  ///< the material's outward normal; absent when unknown
     bool exact = false;
 };
-
-/// The face of a cell holding both of two of its edges (they are two edges of one face).
-int faceOfEdges(int e0, int e1) {
-    for (int face = 0; face < detail::kCellFaces; ++face) {
-        const std::array<int, 4> k = detail::faceCorners(face);
-        int found = 0;
-        for (int i = 0; i < 4; ++i) {
-            const int c0 = k[i], c1 = k[(i + 1) % 4];
-            for (int e : {e0, e1}) {
-                const int a = detail::edgeCorner(e, 0), b = detail::edgeCorner(e, 1);
-                if ((a == c0 && b == c1) || (a == c1 && b == c0)) ++found;
-            }
-        }
-        if (found == 2) return face;
-    }
-    return -1;
-}
-
-/// The same physical edge seen from the neighbour across `face`: the edge's index there.
-int edgeAcross(int edge, int face) {
-    const int a = face >> 1;
-    int c0 = detail::edgeCorner(edge, 0), c1 = detail::edgeCorner(edge, 1);
-    c0 ^= 1 << a;
-    c1 ^= 1 << a;
-    for (int e = 0; e < detail::kCellEdges; ++e) {
-        const int x = detail::edgeCorner(e, 0), y = detail::edgeCorner(e, 1);
-        if ((x == c0 && y == c1) || (x == c1 && y == c0)) return e;
-    }
-    return -1;
-}
-
-struct EdgeTables {
-    std::int8_t face[detail::kCellEdges][detail::kCellEdges];
-    std::int8_t across[detail::kCellEdges][detail::kCellFaces];
-    EdgeTables() {
-        for (int i = 0; i < detail::kCellEdges; ++i) {
-            for (int j = 0; j < detail::kCellEdges; ++j) face[i][j] = std::int8_t(i == j ? -1 : faceOfEdges(i, j));
-            for (int f = 0; f < detail::kCellFaces; ++f) across[i][f] = std::int8_t(edgeAcross(i, f));
-        }
-    }
-};
-
-const EdgeTables& edgeTables() {
-    static const EdgeTables t;
-    return t;
-}
-
-/// Where each edge of a cell starts (offset of its lower corner) and which axis it runs along.
-struct EdgeStart {
-    int dx, dy, dz, axis;
-};
-
-const std::array<EdgeStart, detail::kCellEdges>& edgeStarts() {
-    static const std::array<EdgeStart, detail::kCellEdges> t = [] {
-        std::array<EdgeStart, detail::kCellEdges> out{};
-        for (int e = 0; e < detail::kCellEdges; ++e) {
-            const int c = detail::edgeCorner(e, 0);
-            out[std::size_t(e)] = {c & 1, (c >> 1) & 1, (c >> 2) & 1, detail::edgeAxis(e)};
-        }
-        return out;
-    }();
-    return t;
-}
 
 class Contourer {
 public:

@@ -2,6 +2,7 @@
 // fields whatever the face rule picks, as long as neighbours see the same faces.
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <map>
 #include <random>
 
@@ -100,5 +101,51 @@ TEST_CASE("cell tables: random sign fields give closed oriented manifolds", "[su
         REQUIRE(check.closedManifold());
         // Outward: the enclosed volume is positive when anything is inside.
         if (!mesh.empty()) CHECK(check.signedVolume > 0.0);
+    }
+}
+
+TEST_CASE("cell tables: the edge tables agree with the numbering the header states", "[surface][contour]") {
+    // The header's numbering, read afresh: edge 4 a + j starts at offset 0 on axis a, j & 1 on
+    // (a + 1) % 3 and j >> 1 on (a + 2) % 3, and runs one step along a; face 2 a + s is where
+    // coordinate a is s.
+    const auto ends = [](int e) {
+        const int a = e / 4, j = e % 4;
+        std::array<int, 3> p{0, 0, 0};
+        p[std::size_t((a + 1) % 3)] = j & 1;
+        p[std::size_t((a + 2) % 3)] = j >> 1;
+        std::array<int, 3> q = p;
+        ++q[std::size_t(a)];
+        return std::array<std::array<int, 3>, 2>{p, q};
+    };
+    const auto onFace = [&](int e, int f) {
+        for (const auto& p : ends(e))
+            if (p[std::size_t(f / 2)] != f % 2) return false;
+        return true;
+    };
+    const EdgeTables& t = edgeTables();
+    for (int i = 0; i < kCellEdges; ++i) {
+        INFO("edge " << i);
+        const EdgeStart& s = edgeStarts()[std::size_t(i)];
+        CHECK(std::array<int, 3>{s.dx, s.dy, s.dz} == ends(i)[0]);
+        CHECK(s.axis == i / 4);
+        for (int j = 0; j < kCellEdges; ++j) {
+            INFO("with edge " << j);
+            int holding = -1;
+            for (int f = 0; f < kCellFaces; ++f)
+                if (i != j && onFace(i, f) && onFace(j, f)) holding = f;
+            CHECK(int(t.face[i][j]) == holding);
+        }
+        for (int f = 0; f < kCellFaces; ++f) {
+            if (!onFace(i, f)) continue;
+            INFO("across face " << f);
+            // In the neighbour's cell the same lattice edge lies one step back along the face's axis.
+            auto shifted = ends(i);
+            for (auto& p : shifted) p[std::size_t(f / 2)] -= 2 * (f % 2) - 1;
+            int same = -1;
+            for (int k = 0; k < kCellEdges; ++k)
+                if (ends(k) == shifted) same = k;
+            CHECK(same >= 0);
+            CHECK(int(t.across[i][f]) == same);
+        }
     }
 }

@@ -143,6 +143,36 @@ const Tables& tables() {
     return t;
 }
 
+/// The face of a cell holding both of two of its edges (they are two edges of one face).
+int faceOfEdges(int e0, int e1) {
+    for (int face = 0; face < kCellFaces; ++face) {
+        const std::array<int, 4> k = faceCorners(face);
+        int found = 0;
+        for (int i = 0; i < 4; ++i) {
+            const int c0 = k[i], c1 = k[(i + 1) % 4];
+            for (int e : {e0, e1}) {
+                const int a = edgeCorner(e, 0), b = edgeCorner(e, 1);
+                if ((a == c0 && b == c1) || (a == c1 && b == c0)) ++found;
+            }
+        }
+        if (found == 2) return face;
+    }
+    return -1;
+}
+
+/// The same physical edge seen from the neighbour across `face`: the edge's index there.
+int edgeAcross(int edge, int face) {
+    const int a = face >> 1;
+    int c0 = edgeCorner(edge, 0), c1 = edgeCorner(edge, 1);
+    c0 ^= 1 << a;
+    c1 ^= 1 << a;
+    for (int e = 0; e < kCellEdges; ++e) {
+        const int x = edgeCorner(e, 0), y = edgeCorner(e, 1);
+        if ((x == c0 && y == c1) || (x == c1 && y == c0)) return e;
+    }
+    return -1;
+}
+
 }  // namespace
 
 int edgeCorner(int edge, int end) {
@@ -183,6 +213,30 @@ bool insideJoinedAcrossFace(float f00, float f10, float f11, float f01) {
     const double num = double(f00) * f11 - double(f10) * f01;
     const double den = double(f00) + f11 - f10 - f01;
     return num / den < 0.0;
+}
+
+EdgeTables::EdgeTables() {
+    for (int i = 0; i < kCellEdges; ++i) {
+        for (int j = 0; j < kCellEdges; ++j) face[i][j] = std::int8_t(i == j ? -1 : faceOfEdges(i, j));
+        for (int f = 0; f < kCellFaces; ++f) across[i][f] = std::int8_t(edgeAcross(i, f));
+    }
+}
+
+const EdgeTables& edgeTables() {
+    static const EdgeTables t;
+    return t;
+}
+
+const std::array<EdgeStart, kCellEdges>& edgeStarts() {
+    static const std::array<EdgeStart, kCellEdges> t = [] {
+        std::array<EdgeStart, kCellEdges> out{};
+        for (int e = 0; e < kCellEdges; ++e) {
+            const int c = edgeCorner(e, 0);
+            out[std::size_t(e)] = {c & 1, (c >> 1) & 1, (c >> 2) & 1, edgeAxis(e)};
+        }
+        return out;
+    }();
+    return t;
 }
 
 }  // namespace dexelmill::detail

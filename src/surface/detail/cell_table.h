@@ -55,4 +55,20 @@ bool insideJoinedAcrossFace(float f00, float f10, float f11, float f01);
 /// @brief The corners of face f in cyclic order (the order insideJoinedAcrossFace expects).
 std::array<int, 4> faceCorners(int face);
 
+/// @brief Tables of a cell's edges: `face[i][j]`, the face holding both edges i and j (-1 where
+/// none does, or i = j); `across[i][f]`, the index of edge i in the neighbour across face f (for
+/// an edge on f, the same edge of the lattice).
+struct EdgeTables {
+    std::int8_t face[kCellEdges][kCellEdges];
+    std::int8_t across[kCellEdges][kCellFaces];
+    EdgeTables();
+};
+const EdgeTables& edgeTables();
+
+/// @brief Where an edge of a cell starts (the offset of its lower corner) and the axis it runs along.
+struct EdgeStart {
+    int dx, dy, dz, axis;
+};
+const std::array<EdgeStart, kCellEdges>& edgeStarts();
+
 }  // namespace dexelmill::detail
