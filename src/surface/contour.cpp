@@ -50,7 +50,6 @@
 #include "memory/pages.h"
 #include "surface/detail/cell_table.h"
 #include "surface/detail/contour_blocks.h"
-#include "surface/detail/crossings.h"
 #include "surface/detail/grid_meta.h"
 #include "surface/detail/patch_vertex.h"
 #include "surface/detail/split_cells.h"
@@ -101,14 +100,14 @@ constexpr int kPullRounds = 8;
 /// Runs of the contourer that leave the split cells with folds to the table path, before a last
 /// run without split cells. An edge left to the table path changes the cells round it, and those
 /// may fold in turn: boat-xyzac.ngc at h = 0.25 mm, its split regions opened round crease corners
-/// (cell_loops.cpp), left 199 edges (3 round cells whose fans crossed, crossingSplitPatches),
-/// then 3 and 3 more, and none at the fourth run; after three
-/// the whole boat lost its 13,487 edges with several crossings to the last run.
+/// (cell_loops.cpp), left 199 edges (3 round cells whose fans crossed, crossingPatchTriangles),
+/// then 3 and 3 more, and none at the fourth run; after three the whole boat lost its 13,487
+/// edges with several crossings to the last run.
 constexpr int kSplitRetries = 3;
 
 /// Split patches of one cell whose triangles pass through each other by more than this (in h) are
-/// left to the table path as folds are (crossingSplitPatches): far below the dexel ends' float
-/// precision, far above the rounding of the vertices' doubles.
+/// left to the table path as folds are (detail::crossingPatchTriangles): far below the dexel ends'
+/// float precision, far above the rounding of the vertices' doubles.
 constexpr double kFanCrossing = 1e-9;
 
 /// How far towards the middle of its lens's chord the last resort of fold repair tries a split
@@ -676,44 +675,6 @@ private:
         for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[std::size_t(i)], loop[std::size_t(i + 1 == len ? 0 : i + 1)]};
     }
 
-    /// The triangles of split patches that pass through a triangle of another patch of their cell
-    /// (detail::trianglesCross). Each patch's vertex is placed from its own loop alone, kept off
-    /// the others' only by the middle of a fin's stretch at its edge (keepOffFinMiddle), and two
-    /// vertices can still change places across the cell. In boat-xyzac.ngc at h = 0.25 mm (cells
-    /// at (-9.13, 12.80, -4.03) and (34.97, -13.15, -5.52), 11 pairs) a fin 0.02 to 0.035 h thick
-    /// leans over a floor; its sides' normals at the edge are 14 degrees from opposite, their
-    /// tangent planes cross 0.17 h along the cell's face (in the first), and the crease where the
-    /// upper side meets the floor was fitted 0.018 h under the lower side, in the air below the
-    /// fin that the other patch bounds. A fold would go unseen there: each fan is whole and faces
-    /// its way.
-    std::vector<std::uint32_t> crossingSplitPatches() const {
-        std::vector<std::uint32_t> out;
-        const double tol = kFanCrossing * h_;
-        const auto corners = [&](std::uint32_t t) {
-            const Mesh::Triangle& tri = mesh_.triangles[t];
-            return std::make_pair(std::array<std::uint32_t, 3>{tri[0], tri[1], tri[2]},
-                                  std::array<Vec3, 3>{mesh_.vertices[tri[0]], mesh_.vertices[tri[1]],
-                                                      mesh_.vertices[tri[2]]});
-        };
-        const auto fan = [&](std::uint32_t k) {
-            return std::make_pair(splitPatchTriangle_[k],
-                                  splitPatchTriangle_[k] + split_.loopStart[k + 1] - split_.loopStart[k]);
-        };
-        for (std::size_t c = 0; c < split_.cells.size(); ++c)
-            for (std::uint32_t k = split_.cellPatchStart[c]; k < split_.cellPatchStart[c + 1]; ++k)
-                for (std::uint32_t l = k + 1; l < split_.cellPatchStart[c + 1]; ++l) {
-                    const auto [k0, k1] = fan(k);
-                    const auto [l0, l1] = fan(l);
-                    for (std::uint32_t a = k0; a < k1; ++a)
-                        for (std::uint32_t b = l0; b < l1; ++b) {
-                            const auto [ia, pa] = corners(a);
-                            const auto [ib, pb] = corners(b);
-                            if (detail::trianglesCross(ia, pa, ib, pb, tol)) out.insert(out.end(), {a, b});
-                        }
-                }
-        return out;
-    }
-
     /// The edges with several crossings of the split cells whose triangles still fold or have no
     /// area after repair, or pass through another patch's of their cell (foldedSplitEdges).
     void findFoldedSplitEdges() {
@@ -722,7 +683,8 @@ private:
         std::vector<std::pair<std::uint32_t, std::uint32_t>> byTriangle;
         for (std::uint32_t k = 0; k < split_.patches(); ++k) byTriangle.push_back({splitPatchTriangle_[k], k});
         std::sort(byTriangle.begin(), byTriangle.end());
-        std::vector<std::uint32_t> faulty = crossingSplitPatches();
+        std::vector<std::uint32_t> faulty =
+            detail::crossingPatchTriangles(split_, mesh_, splitPatchTriangle_, kFanCrossing * h_);
         faulty.insert(faulty.end(), unrepaired_.begin(), unrepaired_.end());
         for (std::uint32_t t : faulty) {
             auto it = std::upper_bound(byTriangle.begin(), byTriangle.end(),

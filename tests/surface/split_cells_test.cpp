@@ -1,8 +1,13 @@
 // The dexel mesher's split cells (surface/detail/split_cells.h): a patch vertex kept on its own
-// side of a thin fin's middle, against a position worked out by hand.
+// side of a thin fin's middle, against a position worked out by hand, and the fans of one cell's
+// patches that pass through each other.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <utility>
+#include <vector>
 
 #include "surface/detail/split_cells.h"
 
@@ -99,4 +104,42 @@ TEST_CASE("split cells: a vertex on a face its loop crosses by a lens is kept of
     // Off those faces by more than that, a vertex stays where it is.
     CHECK(detail::keepOffLensFaces(cells, 0, lo, 2.0, Vec3(0.0, 0.3, 1.5)) == Vec3(0.0, 0.3, 1.5));
     CHECK(detail::keepOffLensFaces(cells, 1, lo, 2.0, Vec3(0.01, 0.5, 0.0)) == Vec3(0.01, 0.5, 0.0));
+}
+
+TEST_CASE("split cells: fans of one cell's patches that pass through each other are named, others not",
+          "[surface][split]") {
+    // Two patches of one cell, each a fan of three triangles round its vertex: the first a flat
+    // fan at z = 0.5, the second a fan round (0.5, 0.5, 0.3) whose spokes rise to z = 0.7. The
+    // second's triangles pass through the first's plane inside it where `through`; lifted by 0.4
+    // they lie wholly above it. A third patch, in another cell, crosses the first but is not its
+    // cell's: only patches of one cell are compared.
+    const auto make = [](bool through) {
+        Mesh mesh;
+        const double lift = through ? 0.0 : 0.4;
+        mesh.vertices = {Vec3(0.5, 0.5, 0.5), Vec3(0.1, 0.1, 0.5), Vec3(0.9, 0.2, 0.5), Vec3(0.4, 0.9, 0.5),
+                         Vec3(0.5, 0.5, 0.3 + lift), Vec3(0.2, 0.3, 0.7 + lift), Vec3(0.8, 0.3, 0.7 + lift),
+                         Vec3(0.5, 0.8, 0.7 + lift), Vec3(0.5, 0.5, 0.2), Vec3(0.3, 0.3, 0.8), Vec3(0.7, 0.4, 0.8)};
+        mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 1}, {4, 5, 6}, {4, 6, 7}, {4, 7, 5}, {8, 9, 10}};
+        SplitCells cells;
+        cells.cells = {detail::GridPoint{0, 0, 0}, detail::GridPoint{5, 0, 0}};
+        cells.cellPatchStart = {0, 2, 3};
+        cells.loopStart = {0, 3, 6, 7};  // loops of 3, 3 and 1 ends: fans of as many triangles
+        cells.patchCell = {cells.cells[0], cells.cells[0], cells.cells[1]};
+        return std::make_pair(mesh, cells);
+    };
+    const std::vector<std::uint32_t> first{0, 3, 6};
+    const auto [crossed, crossedCells] = make(true);
+    const std::vector<std::uint32_t> found = detail::crossingPatchTriangles(crossedCells, crossed, first, 1e-9);
+    // Each of the second fan's triangles runs from below the plane (its vertex) to above it (its
+    // far edge) over the first fan, so it crosses at least one of the first's triangles.
+    REQUIRE_FALSE(found.empty());
+    REQUIRE(found.size() % 2 == 0);
+    for (std::size_t i = 0; i < found.size(); i += 2) {
+        CHECK(found[i] < 3);
+        CHECK(found[i + 1] >= 3);
+        CHECK(found[i + 1] < 6);
+    }
+    for (std::uint32_t t = 3; t < 6; ++t) CHECK(std::count(found.begin(), found.end(), t) > 0);
+    const auto [apart, apartCells] = make(false);
+    CHECK(detail::crossingPatchTriangles(apartCells, apart, first, 1e-9).empty());
 }

@@ -13,6 +13,7 @@
 #include "dexelmill/geometry/packed_normal.h"
 #include "dexelmill/geometry/types.h"
 #include "dexelmill/stock/tridexel.h"
+#include "dexelmill/surface/mesh.h"
 
 namespace dexelmill::detail {
 
@@ -87,6 +88,12 @@ Vec3 keepOffFinMiddle(const SplitCells& cells, std::uint32_t k, double featureAn
 /// kept PatchVertexRule::kFaceInset h inside each face its loop crosses by a lens (a face
 /// vertex's face): see the definition.
 Vec3 keepOffLensFaces(const SplitCells& cells, std::uint32_t k, const Vec3& cellLo, double h, Vec3 v);
+
+/// @brief The triangles of split patches that pass through a triangle of another patch of their
+/// cell by more than `tol` (mm, trianglesCross), each pair's two in turn: patch k's fan is its
+/// loop's length in triangles of `mesh` from `firstTriangle[k]`. See the definition.
+std::vector<std::uint32_t> crossingPatchTriangles(const SplitCells& cells, const Mesh& mesh,
+                                                  const std::vector<std::uint32_t>& firstTriangle, double tol);
 
 /// @brief Finds the edges of `stock`'s lattice whose dexel has two or more ends strictly between
 /// its lattice points and agrees with the level set at both, the cells round them, and those
