@@ -91,8 +91,13 @@ void printProgram(const Program& p) {
     for (std::size_t i = 0; i < p.diagnostics.size() && i < kShown; ++i)
         std::printf("  %s: %s: %s\n", p.diagnostics[i].where.str().c_str(), isNote(p.diagnostics[i]) ? "note" : "warning",
                     p.diagnostics[i].message.c_str());
-    if (p.diagnostics.size() > kShown)
-        std::printf("  ... and %zu more ('simulate' prints them all)\n", p.diagnostics.size() - kShown);
+    if (p.diagnostics.size() > kShown) {
+        const std::size_t hiddenNotes = std::size_t(std::count_if(p.diagnostics.begin() + kShown, p.diagnostics.end(), isNote));
+        const std::size_t hidden = p.diagnostics.size() - kShown;
+        std::printf("  ... and %zu more warning%s", hidden - hiddenNotes, hidden - hiddenNotes == 1 ? "" : "s");
+        if (hiddenNotes > 0) std::printf(" and %zu more note%s", hiddenNotes, hiddenNotes == 1 ? "" : "s");
+        std::printf(" ('simulate' prints them all)\n");
+    }
 }
 
 }  // namespace

@@ -880,6 +880,11 @@ TEST_CASE("a note is printed and counted as a note, a warning as a warning", "[c
     CHECK(report["warnings"][0]["severity"] == "warning");
     CHECK(report["warnings"][26]["message"] == "M99 in the main program ends it");
     CHECK(report["warnings"][26]["severity"] == "note");
+    // info shows the first 10 and counts the rest by kind too.
+    const Run listed = cli("info p.ngc");
+    CHECK(listed.code == 0);
+    CHECK_THAT(listed.out, Contains("warnings       26\nnotes          1\n") &&
+                               Contains("  ... and 16 more warnings and 1 more note ('simulate' prints them all)\n"));
     // Within the first 20, the note is printed as one.
     cli.file("short.ngc", "G21 G90\nG0 X5 Y15 Z15\nG1 Z7 F100\nM99\n");
     const Run shortRun = cli("simulate short.ngc --stock box:0,0,0,40,30,10 --tool flat:d=6 --resolution 1");
