@@ -83,11 +83,11 @@ Result finOfTwoPlunges(double gap, double turn, const Vec3& neck) {
     return contourPart(part, h);
 }
 
-/// Contoured at h = 1: the part that two ball plunges of radius 15 leave in the box (5, 5, 0)-(15,
-/// 15, 3), their surfaces `gap` apart at `neck`, their centres on a line `turn` rad from x about z
-/// and `elevation` rad above the xy plane.
-Result finOfTwoBalls(double gap, double turn, double elevation, const Vec3& neck) {
-    const double h = 1.0, r = 15.0;
+/// Contoured at h = 1: the part that two ball plunges of radius r (15 unless given) leave in the box
+/// (5, 5, 0)-(15, 15, 3), their surfaces `gap` apart at `neck`, their centres on a line `turn` rad
+/// from x about z and `elevation` rad above the xy plane.
+Result finOfTwoBalls(double gap, double turn, double elevation, const Vec3& neck, double r = 15.0) {
+    const double h = 1.0;
     const Vec3 apart(std::cos(turn) * std::cos(elevation), std::sin(turn) * std::cos(elevation), std::sin(elevation));
     const Part part{Box{Vec3(5.0, 5.0, 0.0), Vec3(15.0, 15.0, 3.0)},
                     {testing::sphere(neck - (r + 0.5 * gap) * apart, r), testing::sphere(neck + (r + 0.5 * gap) * apart, r)}};
@@ -308,6 +308,17 @@ TEST_CASE("contour: split patches of one cell whose fans pass through each other
     CHECK(res.check.ok());
     CHECK(res.stats.splitEdges > 0);  // the rest of the fin is meshed from its dexels
     CHECK(res.stats.splitEdgesDropped > 0);
+}
+
+TEST_CASE("contour: a fin's crease chords are not flipped through the other side of the fin",
+          "[surface][contour][fine]") {
+    // Two ball plunges of radius 5 h whose surfaces pass 0.0048 h apart at (9.48, 9.36, 1.06),
+    // their centres on a line 2.311 rad from x and 0.388 rad above the xy plane: both sides of the
+    // fin cross the cells at (7.5, 7.5, 1.5) and (8.5, 7.5, 1.5), each side a patch of the table's
+    // loops. The flip pass joined one side's vertices, (8.499, 8.284, 1.503) and (9.161, 8.499,
+    // 1.808), across the face x = 8.5 through the cells' insides, and 4 pairs of triangles met the
+    // fans of the other side, 0.005 h away (contourPart checks them).
+    checkFinApart("fin between small balls", finOfTwoBalls(0.004768, 2.311061, 0.387694, Vec3(9.483694, 9.360880, 1.064044), 5.0));
 }
 
 TEST_CASE("contour: ball passes closer than a cell", "[surface][contour]") {
