@@ -795,7 +795,8 @@ private:
                     // apart, the join of (8.50, 8.44, 1.00) with (8.37, 8.50, 1.57) across the
                     // face z = 1.5 passed through the fan of the fin's other side in the lower
                     // cell (11 of 16 pairs of triangles that met). Such chords keep the fan.
-                    if (patches.count == 1 && other->count == 1 && isFeature(partner) && flipChord(edges, len, i, *other, ok, face, patch, partner, loop)) {
+                    if (patches.count == 1 && other->count == 1 && isFeature(partner) &&
+                        flipChord(edges, len, i, *other, ok, face, patch, partner, loop)) {
                         mesh_.triangles[tri] = {patch, loop[i], partner};
                         flipped += patch < partner;
                     }
