@@ -15,7 +15,8 @@
 //     flat square across an axis, read from the dexels: two triangles, no patch vertex);
 //  2. crossings: each owned crossing's position goes to the mesh, its normal to a side array;
 //  3. patches: each patch's vertex from its crossings (quadric error function, detail/patch_vertex.h),
-//     and its fan; a plain cell's square;
+//     and its fan, the vertices of a cell's patches whose fans cross moved apart
+//     (detail/patches_apart.h); a plain cell's square;
 //  4. flips: the fan chords of feature patches that cross a crease are turned to run along it;
 // the split cells' vertices and fans come between passes 3 and 4. Then the mesh is checked, and
 // the vertices of folded triangles are pulled back towards their loops (repairAndCheckMesh); split
@@ -52,6 +53,7 @@
 #include "surface/detail/contour_blocks.h"
 #include "surface/detail/grid_meta.h"
 #include "surface/detail/patch_vertex.h"
+#include "surface/detail/patches_apart.h"
 #include "surface/detail/split_cells.h"
 
 namespace dexelmill {
@@ -105,9 +107,10 @@ constexpr int kPullRounds = 8;
 /// edges with several crossings to the last run.
 constexpr int kSplitRetries = 3;
 
-/// Split patches of one cell whose triangles pass through each other by more than this (in h) are
-/// left to the table path as folds are (detail::crossingPatchTriangles): far below the dexel ends'
-/// float precision, far above the rounding of the vertices' doubles.
+/// Patches of one cell whose triangles pass through each other by more than this (in h): split
+/// ones are left to the table path as folds are (detail::crossingPatchTriangles), the table path's
+/// have their vertices moved apart (detail::keepPatchesApart). Far below the dexel ends' float
+/// precision, far above the rounding of the vertices' doubles.
 constexpr double kFanCrossing = 1e-9;
 
 /// How far towards the middle of its lens's chord the last resort of fold repair tries a split
@@ -613,8 +616,12 @@ private:
                 mesh_.triangles[tri++] = {loop[0], loop[2], loop[3]};
                 return;
             }
+            detail::SharedPatch shared[detail::kMaxPatches];
             for (int k = 0; k < patches.count; ++k) {
                 const int len = loopOf(near, p, patches, k, loop);
+                shared[k].vertex = at;
+                shared[k].len = len;
+                std::copy(loop, loop + len, shared[k].loop);
                 int qefRank = 0;
                 const detail::PatchVertexRule::Loop crossings{mesh_.vertices.data(), crossingNormal_.data(), loop, len};
                 mesh_.vertices[at] = vertexRule_.place(crossings, latticePoint(p), patches.count > 1, qefRank);
@@ -625,6 +632,7 @@ private:
                 for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[i], loop[i + 1 == len ? 0 : i + 1]};
                 ++at;
             }
+            if (patches.count > 1) detail::keepPatchesApart(shared, patches.count, mesh_.vertices.data(), kFanCrossing * h_);
         });
         edgeCount += edges;
         cornerCount += corners;

@@ -321,6 +321,18 @@ TEST_CASE("contour: a fin's crease chords are not flipped through the other side
     checkFinApart("fin between small balls", finOfTwoBalls(0.004768, 2.311061, 0.387694, Vec3(9.483694, 9.360880, 1.064044), 5.0));
 }
 
+TEST_CASE("contour: the patches of a fin's cell that the face rule cut apart keep their fans apart",
+          "[surface][contour][fine]") {
+    // Two ball plunges of radius 5 h whose surfaces pass 0.0095 h apart at (9.21, 9.42, 1.08),
+    // their centres on a line 2.500 rad from x and 0.346 rad below the xy plane: the fin between
+    // them crosses the face z = 1.5 of the cell at (7.5, 7.5, 1.5) slantwise, and the asymptotic
+    // decider cut its corner (8.5, 8.5, 1.5) off as a patch of its own. The other patch, holding
+    // crossings of both sides, was fitted at (8.366, 8.499, 1.574), past that patch's chord on the
+    // face y = 8.5, and 5 pairs of their fan triangles passed through each other, none folded
+    // (contourPart checks them).
+    checkFinApart("fin cut at a face", finOfTwoBalls(0.009517, 2.500465, -0.345721, Vec3(9.210257, 9.418062, 1.080355), 5.0));
+}
+
 TEST_CASE("contour: ball passes closer than a cell", "[surface][contour]") {
     // Parallel passes of a ball of radius 3 mm at a stepover of 0.3 h: the cusps between them,
     // s^2 / (8 R) = 0.0009 mm high, are finer than the lattice can show.
