@@ -677,7 +677,7 @@ private:
         const double inset = qefRank >= 2 ? detail::PatchVertexRule::kFaceInset * h_ : 0.0;
         const Vec3 ownSide =
             detail::keepOffFinMiddle(split_, k, featureAngle_, cellLo + inset, cellLo + (h_ - inset), fitted);
-        mesh_.vertices[at] = detail::keepOffLensFaces(split_, k, cellLo, h_, ownSide);
+        mesh_.vertices[at] = detail::keepOffPathFaces(crossingsOf, cellLo, h_, ownSide);
         edgeCount += qefRank == 2;
         cornerCount += qefRank == 3;
         for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[std::size_t(i)], loop[std::size_t(i + 1 == len ? 0 : i + 1)]};

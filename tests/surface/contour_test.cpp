@@ -333,6 +333,19 @@ TEST_CASE("contour: the patches of a fin's cell that the face rule cut apart kee
     checkFinApart("fin cut at a face", finOfTwoBalls(0.009517, 2.500465, -0.345721, Vec3(9.210257, 9.418062, 1.080355), 5.0));
 }
 
+TEST_CASE("contour: a split cell's vertex is kept off the faces its loop crosses", "[surface][contour][fine]") {
+    // Two ball plunges of radius 2 h whose surfaces pass 0.024 h apart at (9.53, 9.07, 1.92): the
+    // fin between them lies nearly in the lattice plane x = 9.5. The split cell beyond it had a
+    // patch holding crossings of both sides, fitted past that face and clamped onto it at (9.5,
+    // 8.932, 1.999), where the table path's vertex of the cell before it was clamped too: their
+    // fans over the path they share overlapped in the face (3 pairs of triangles).
+    checkFinApart("fin in a face", finOfTwoBalls(0.024073, 3.081145, 0.223876, Vec3(9.531458, 9.069396, 1.919947), 2.0));
+    // Radius 2 h, 0.029 h apart at (9.38, 9.32, 1.79): a split cell's vertex clamped onto its
+    // lattice edge x = y = 9.5, its fan lying in both faces through it over its paths there, where
+    // the next cells' fans over those paths stand (8 pairs).
+    checkFinApart("fin by an edge", finOfTwoBalls(0.028804, 2.409307, -0.110987, Vec3(9.375561, 9.317136, 1.789182), 2.0));
+}
+
 TEST_CASE("contour: ball passes closer than a cell", "[surface][contour]") {
     // Parallel passes of a ball of radius 3 mm at a stepover of 0.3 h: the cusps between them,
     // s^2 / (8 R) = 0.0009 mm high, are finer than the lattice can show.

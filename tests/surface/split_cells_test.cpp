@@ -82,28 +82,30 @@ TEST_CASE("split cells: a vertex brought back from a fin's middle stays in its c
     CHECK(kept.z == 0.0);
 }
 
-TEST_CASE("split cells: a vertex on a face its loop crosses by a lens is kept off that face", "[surface][split]") {
-    // The cell from (0, 0, 0) to (2, 2, 2) (h = 2). One patch: two ends on the x edge at y = 0,
-    // z = 2 and a face vertex between them on the top face (z = 2); another: an end on the y edge
-    // at x = z = 0 and a face vertex on the low x face (x = 0). kFaceInset is 1e-3 h: 0.002.
-    SplitCells cells;
-    cells.points = {Vec3(0.8, 0.0, 2.0), Vec3(1.0, 0.0, 2.0), Vec3(0.0, 0.7, 0.0), Vec3(0.9, 0.6, 2.0), Vec3(0.0, 0.7, 0.5)};
-    cells.normals.resize(cells.points.size());
-    cells.edgeEnds = 3;
-    cells.faceVertexEnds = {{0, 1}, {2, 2}};
-    cells.faceVertexAxis = {2, 0};
-    cells.loopIds = {0, 3, 1, 2, 4};
-    cells.loopStart = {0, 3, 5};
+TEST_CASE("split cells: a vertex on a face a path of its loop crosses is kept off that face", "[surface][split]") {
+    // The cell from (0, 0, 0) to (2, 2, 2) (h = 2); kFaceInset is 1e-3 h: 0.002. One loop: two
+    // ends on the x edge at y = 0, z = 2 with a face vertex between them on the top face (z = 2),
+    // a lens, then crossings on the z edge at x = 2, y = 0 and on the x edge at y = z = 0, its
+    // other paths on the face y = 0. Another cuts off the corner (0, 0, 0): a path between two
+    // edges on each of the faces x = 0, y = 0 and z = 0.
+    const std::vector<Vec3> points = {Vec3(0.8, 0.0, 2.0), Vec3(0.9, 0.6, 2.0), Vec3(1.0, 0.0, 2.0),
+                                      Vec3(2.0, 0.0, 1.2), Vec3(0.5, 0.0, 0.0),
+                                      Vec3(0.6, 0.0, 0.0), Vec3(0.0, 0.7, 0.0), Vec3(0.0, 0.0, 0.5)};
+    const std::uint32_t lens[] = {0, 1, 2, 3, 4}, corner[] = {5, 6, 7};
+    const detail::PatchVertexRule::Loop lensLoop{points.data(), nullptr, lens, 5};
+    const detail::PatchVertexRule::Loop cornerLoop{points.data(), nullptr, corner, 3};
     const Vec3 lo(0.0);
-    // On the top face, and past it: brought 0.002 under it; x and y stay.
-    CHECK(detail::keepOffLensFaces(cells, 0, lo, 2.0, Vec3(0.85, 0.3, 2.0)) == Vec3(0.85, 0.3, 1.998));
-    CHECK(detail::keepOffLensFaces(cells, 0, lo, 2.0, Vec3(0.85, 0.3, 2.1)) == Vec3(0.85, 0.3, 1.998));
-    // On the low x face: brought 0.002 in; on the top face, which its loop does not cross by a
-    // lens, it stays.
-    CHECK(detail::keepOffLensFaces(cells, 1, lo, 2.0, Vec3(0.0, 0.5, 2.0)) == Vec3(0.002, 0.5, 2.0));
+    // On the top face, and past it: brought 0.002 under it; on the face y = 0 too: 0.002 in.
+    CHECK(detail::keepOffPathFaces(lensLoop, lo, 2.0, Vec3(0.85, 0.3, 2.0)) == Vec3(0.85, 0.3, 1.998));
+    CHECK(detail::keepOffPathFaces(lensLoop, lo, 2.0, Vec3(0.85, 0.3, 2.1)) == Vec3(0.85, 0.3, 1.998));
+    CHECK(detail::keepOffPathFaces(lensLoop, lo, 2.0, Vec3(0.85, 0.0, 1.5)) == Vec3(0.85, 0.002, 1.5));
+    // On the face x = 0, and on the edge where it meets y = 0: brought 0.002 in from each; on the
+    // top face, which no path of its loop crosses, it stays.
+    CHECK(detail::keepOffPathFaces(cornerLoop, lo, 2.0, Vec3(0.0, 0.5, 2.0)) == Vec3(0.002, 0.5, 2.0));
+    CHECK(detail::keepOffPathFaces(cornerLoop, lo, 2.0, Vec3(0.0, 0.0, 0.3)) == Vec3(0.002, 0.002, 0.3));
     // Off those faces by more than that, a vertex stays where it is.
-    CHECK(detail::keepOffLensFaces(cells, 0, lo, 2.0, Vec3(0.0, 0.3, 1.5)) == Vec3(0.0, 0.3, 1.5));
-    CHECK(detail::keepOffLensFaces(cells, 1, lo, 2.0, Vec3(0.01, 0.5, 0.0)) == Vec3(0.01, 0.5, 0.0));
+    CHECK(detail::keepOffPathFaces(lensLoop, lo, 2.0, Vec3(0.0, 0.3, 1.5)) == Vec3(0.0, 0.3, 1.5));
+    CHECK(detail::keepOffPathFaces(cornerLoop, lo, 2.0, Vec3(0.01, 0.5, 0.01)) == Vec3(0.01, 0.5, 0.01));
 }
 
 TEST_CASE("split cells: fans of one cell's patches that pass through each other are named, others not",

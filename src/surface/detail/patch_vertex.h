@@ -46,8 +46,8 @@ public:
     /// moves a vertex by at most 1e-3 h, as kCornerGap moves a crossing off a lattice point. A
     /// smooth patch's vertex keeps the whole cell: where its loop is a sliver kCornerGap from a
     /// lattice point, the inset would stand the fan over the sliver on edge, past fanOffset's
-    /// bound (62 triangles of the contour tests' grazing spheres). Only faces its loop crosses by
-    /// a lens are kept off whatever the rank (keepOffLensFaces, split_cells.h).
+    /// bound (62 triangles of the contour tests' grazing spheres). A split cell's vertex is kept
+    /// off the faces its loop crosses whatever the rank (keepOffPathFaces, split_cells.h).
     static constexpr double kFaceInset = 1e-3;
 
     /// @brief The patch's vertex in the cell whose lowest corner is `cellLo`; `rank` is the rank

@@ -55,6 +55,12 @@ int edgeOfStretch(const FineStretch& s, double h, int n) {
 /// by up to 0.017 h; at a quarter none).
 constexpr double kOwnSide = 0.25;
 
+/// A loop's crossing or face vertex this close (in h) to a face of its cell lies on it
+/// (keepOffPathFaces): one off a face lies at least 1e-3 h from it (crossings are kept kCornerGap
+/// from the lattice points, face vertices kFaceVertexGap from their face's edges); half that is
+/// far above the rounding of lattice coordinates.
+constexpr double kOnFace = 0.5e-3;
+
 }  // namespace
 
 /// A patch's vertex is where its crossings' tangent planes meet best (patch_vertex.cpp). Where the
@@ -108,26 +114,35 @@ Vec3 keepOffFinMiddle(const SplitCells& cells, std::uint32_t k, double featureAn
 }
 
 /// A smooth patch's vertex (rank 0 or 1) keeps its whole cell, or the box of its crossings where
-/// it shares the cell (PatchVertexRule::place), and either may put it on a face its loop crosses
-/// by a lens: on a thin fin slanting across that face its crossings there bound the box, and the
+/// it shares the cell (PatchVertexRule::place), and either may put it on a face its loop crosses:
+/// on a thin fin slanting across that face its crossings there bound the box, and the
 /// least-squares point may lie past them (a wall concave seen from the fin puts it in the fin).
-/// Its fan over the lens then lies in the face, where it overlaps itself if the lens rises past
-/// the vertex, and meets the fan of the cell across the face. (Two ball plunges of radius 15 h
-/// whose walls pass 0.017 h apart, the fin slanting through the lattice plane z = 1.5 at (9.62,
-/// 9.46): the vertex, clamped onto that face, sat 0.004 h outside a lens 0.5 h deep; three pairs
-/// of triangles met.) Kept kFaceInset h off such a face, as a crease's or corner's vertex is off
-/// every face, two fan triangles that share an edge meet only along it.
-Vec3 keepOffLensFaces(const SplitCells& cells, std::uint32_t k, const Vec3& cellLo, double h, Vec3 v) {
-    const double inset = PatchVertexRule::kFaceInset * h;
-    for (std::uint32_t i = cells.loopStart[k]; i < cells.loopStart[k + 1]; ++i) {
-        const std::uint32_t id = cells.loopIds[i];
-        if (id & SplitCells::kOrdinary || id < cells.edgeEnds) continue;
-        const int a = cells.faceVertexAxis[id - cells.edgeEnds];
-        const double face = cells.points[id][a];
-        if (face < cellLo[a] + 0.5 * h) {
-            v[a] = std::max(v[a], face + inset);
-        } else {
-            v[a] = std::min(v[a], face - inset);
+/// Its fan over its paths across that face then lies in the face. Over a lens it overlaps itself
+/// if the lens rises past the vertex, and meets the fan of the cell across the face. (Two ball
+/// plunges of radius 15 h whose walls pass 0.017 h apart, the fin slanting through the lattice
+/// plane z = 1.5 at (9.62, 9.46): the vertex, clamped onto that face, sat 0.004 h outside a lens
+/// 0.5 h deep; three pairs of triangles met.) Over a path between two edges it covers the face
+/// round that path, where the cell across the face has its own fan over the same path, or over
+/// another path of the face, and their triangles meet: the cell across stands its fan on the
+/// face along the path's chord, which passes through the triangle lying in the face, or puts its
+/// vertex on the face as well, the two fans then overlapping in it. (Two ball plunges of radius
+/// 2 h whose walls pass 0.024 h apart at (9.53, 9.07, 1.92), the fin nearly in the lattice plane
+/// x = 9.5: the face rule gave the split cell beyond it a patch holding crossings of both sides,
+/// fitted past that face and clamped onto it at (9.5, 8.932, 1.999), where the table path's
+/// vertex of the cell before it was clamped too, at (9.5, 8.903, 1.941); three pairs met. In 5 of
+/// 3,000 such pairs of plunges a split cell's vertex stood on such a face.) Kept kFaceInset h off
+/// every face that a path of its loop crosses, as a crease's or corner's vertex is off every
+/// face, its fan leaves the face along the paths' chords, and two fan triangles that share an
+/// edge meet only along it.
+Vec3 keepOffPathFaces(const PatchVertexRule::Loop& loop, const Vec3& cellLo, double h, Vec3 v) {
+    const double inset = PatchVertexRule::kFaceInset * h, near = kOnFace * h;
+    for (int i = 0; i < loop.len; ++i) {
+        const Vec3& p = loop.points[loop.index[i]];
+        const Vec3& q = loop.points[loop.index[i + 1 == loop.len ? 0 : i + 1]];
+        for (int a = 0; a < 3; ++a) {
+            const double low = cellLo[a], high = cellLo[a] + h;
+            if (std::abs(p[a] - low) < near && std::abs(q[a] - low) < near) v[a] = std::max(v[a], low + inset);
+            if (std::abs(p[a] - high) < near && std::abs(q[a] - high) < near) v[a] = std::min(v[a], high - inset);
         }
     }
     return v;

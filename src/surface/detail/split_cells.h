@@ -14,6 +14,7 @@
 #include "dexelmill/geometry/types.h"
 #include "dexelmill/stock/tridexel.h"
 #include "dexelmill/surface/mesh.h"
+#include "surface/detail/patch_vertex.h"
 
 namespace dexelmill::detail {
 
@@ -84,10 +85,10 @@ struct SplitCells {
 Vec3 keepOffFinMiddle(const SplitCells& cells, std::uint32_t k, double featureAngle, const Vec3& lo, const Vec3& hi,
                       Vec3 v);
 
-/// @brief Split patch k's vertex `v`, in the cell whose lowest corner is `cellLo` (spacing h),
-/// kept PatchVertexRule::kFaceInset h inside each face its loop crosses by a lens (a face
-/// vertex's face): see the definition.
-Vec3 keepOffLensFaces(const SplitCells& cells, std::uint32_t k, const Vec3& cellLo, double h, Vec3 v);
+/// @brief A split patch's vertex `v`, in the cell whose lowest corner is `cellLo` (spacing h), kept
+/// PatchVertexRule::kFaceInset h inside each face that a path of its `loop` crosses (two
+/// consecutive entries on that face, a lens's or one between two edges): see the definition.
+Vec3 keepOffPathFaces(const PatchVertexRule::Loop& loop, const Vec3& cellLo, double h, Vec3 v);
 
 /// @brief The triangles of split patches that pass through a triangle of another patch of their
 /// cell by more than `tol` (mm, trianglesCross), each pair's two in turn: patch k's fan is its
