@@ -11,6 +11,7 @@
 #include "dexelmill/job/simulate.h"
 #include "dexelmill/path/camotics.h"
 #include "dexelmill/surface/levelset.h"
+#include "wording.h"
 
 namespace dexelmill::cli {
 
@@ -94,9 +95,7 @@ void printProgram(const Program& p) {
     if (p.diagnostics.size() > kShown) {
         const std::size_t hiddenNotes = std::size_t(std::count_if(p.diagnostics.begin() + kShown, p.diagnostics.end(), isNote));
         const std::size_t hidden = p.diagnostics.size() - kShown;
-        std::printf("  ... and %zu more warning%s", hidden - hiddenNotes, hidden - hiddenNotes == 1 ? "" : "s");
-        if (hiddenNotes > 0) std::printf(" and %zu more note%s", hiddenNotes, hiddenNotes == 1 ? "" : "s");
-        std::printf(" ('simulate' prints them all)\n");
+        std::printf("  ... and %s ('simulate' prints them all)\n", moreDiagnostics(hidden - hiddenNotes, hiddenNotes).c_str());
     }
 }
 

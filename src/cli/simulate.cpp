@@ -16,6 +16,7 @@
 #include "dexelmill/job/simulate.h"
 #include "dexelmill/tool/spec.h"
 #include "progress.h"
+#include "wording.h"
 
 namespace dexelmill::cli {
 
@@ -249,11 +250,6 @@ namespace {
 
 std::string where(const SourceLocation& l) { return l.file.empty() ? "dexelmill" : l.str(); }
 
-/// A count and its noun, plural unless the count is one: "1 move", "0 moves".
-std::string counted(std::size_t n, const char* noun) {
-    return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
-}
-
 }  // namespace
 
 std::FILE* summaryStream(const std::vector<std::string>& outputs) {
@@ -461,9 +457,8 @@ int runSimulate(const SimulateArgs& args) {
         }
         if (r.warnings.size() > kPrintedDiagnostics) {
             const std::size_t more = r.warnings.size() - kPrintedDiagnostics;
-            std::cerr << "dexelmill: " << counted(more - notes, "more warning");
-            if (notes > 0) std::cerr << " and " << counted(notes, "more note");
-            std::cerr << (args.report.empty() ? "" : " in " + args.report) << "\n";
+            std::cerr << "dexelmill: " << moreDiagnostics(more - notes, notes)
+                      << (args.report.empty() ? "" : " in " + args.report) << "\n";
         }
         shown = 0;
         for (const ReportCollision& c : r.collisions) {

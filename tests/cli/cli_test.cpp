@@ -896,3 +896,24 @@ TEST_CASE("a note is printed and counted as a note, a warning as a warning", "[c
     CHECK_THAT(info.out, Contains("warnings       2\nnotes          1\n") &&
                              Contains("short.ngc:4: note: M99 in the main program ends it"));
 }
+
+TEST_CASE("diagnostics left out of a listing are counted by the kinds left out", "[cli]") {
+    const Cli cli("notes_only_hidden");
+    // Two warnings come first (the first move's unknown start, the feed rate), then 21 notes, one
+    // for each subroutine read from a file of its own: the notes fill every place the listings
+    // leave out, and no "0 more warnings" is printed.
+    std::string program = "G21 G90\nG0 X5 Y15 Z15\nG1 Z7 F100\n";
+    for (int k = 0; k < 21; ++k) {
+        const std::string name = "s" + std::to_string(k);
+        cli.file(name + ".ngc", "o<" + name + "> sub\nG1 X" + std::to_string(6 + k) + "\no<" + name + "> endsub\n");
+        program += "o<" + name + "> call\n";
+    }
+    cli.file("p.ngc", program + "M2\n");
+    const Run r = cli("simulate p.ngc --stock box:0,0,0,40,30,10 --tool flat:d=6 --resolution 1");
+    CHECK(r.code == 0);
+    CHECK_THAT(r.out, Contains(" 2 warnings, 21 notes; "));
+    CHECK_THAT(r.err, Contains("\ndexelmill: 3 more notes\n") && !Contains("more warning"));
+    const Run listed = cli("info p.ngc");
+    CHECK(listed.code == 0);
+    CHECK_THAT(listed.out, Contains("  ... and 13 more notes ('simulate' prints them all)\n") && !Contains("more warning"));
+}
