@@ -303,7 +303,6 @@ SplitCells findSplitCells(const TriDexelStock& stock, const SplitInputs& in) {
                 out.points.push_back(p);
                 out.normals.push_back(PackedNormal{});
                 out.faceVertexEnds.push_back({from, to});
-                out.faceVertexAxis.push_back(std::uint8_t(a));
             }
             return it->second;
         };

@@ -58,8 +58,6 @@ struct SplitCells {
     static constexpr std::uint32_t kNoPartner = ~0u;
     /// Per face vertex (points[edgeEnds + k]): the two ends (indices into `points`) it lies between.
     std::vector<std::array<std::uint32_t, 2>> faceVertexEnds;
-    /// Per face vertex: the axis its face lies across.
-    std::vector<std::uint8_t> faceVertexAxis;
     /// The contourer's crossings the loops use: edges by lower grid point and axis.
     std::vector<std::pair<GridPoint, int>> ordinary;
     /// Edges with several crossings, by lower grid point and axis, sorted: the contourer makes no
