@@ -67,7 +67,8 @@ bool fansCross(const SharedPatch& k, const SharedPatch& l, const Vec3* points, d
 /// from a point x of that hull, the difference s of the crossings farthest along -x and along x
 /// bounds the distance d between the hulls as x . s / |x| <= d <= |x|; x steps to the point of the
 /// segment x-s nearest the origin, until x . s reaches kNearWidest |x|^2. The plane across x
-/// midway between the two loops then has a margin of at least kNearWidest / 2 of the widest's.
+/// midway between the two loops then has a margin (lo - hi) / 2 = x . s / (2 |x|) of at least
+/// kNearWidest d / 2: kNearWidest of the widest plane's, d / 2.
 bool separatingPlane(const Loop& a, const Loop& b, Vec3& n, double& c, double& margin) {
     Vec3 x = a.mass - b.mass;
     for (int step = 0; step < kPlaneSteps; ++step) {
