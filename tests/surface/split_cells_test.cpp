@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "surface/detail/crossings.h"
 #include "surface/detail/split_cells.h"
 
 using namespace dexelmill;
@@ -131,6 +132,15 @@ TEST_CASE("split cells: fans of one cell's patches that pass through each other 
     };
     const std::vector<std::uint32_t> first{0, 3, 6};
     const auto [crossed, crossedCells] = make(true);
+    // The third patch's triangle does cross the first fan, so its absence below is the cell rule's.
+    const auto corners = [&](std::size_t t) {
+        const auto& tri = crossed.triangles[t];
+        return std::array<Vec3, 3>{crossed.vertices[tri[0]], crossed.vertices[tri[1]], crossed.vertices[tri[2]]};
+    };
+    bool thirdCrossesFirst = false;
+    for (std::size_t t = 0; t < 3; ++t)
+        thirdCrossesFirst |= detail::trianglesCross(crossed.triangles[t], corners(t), crossed.triangles[6], corners(6), 1e-9);
+    REQUIRE(thirdCrossesFirst);
     const std::vector<std::uint32_t> found = detail::crossingPatchTriangles(crossedCells, crossed, first, 1e-9);
     // Each of the second fan's triangles runs from below the plane (its vertex) to above it (its
     // far edge) over the first fan, so it crosses at least one of the first's triangles.
