@@ -103,7 +103,8 @@ void checkOutputs(const SimulateOptions& o) {
 /// Warns of what the lattice cannot show (finerThanLattice): material the surface leaves out, and
 /// gaps it fills, with their share of the part's volume (`part`, mm^3). The dexels keep both, so
 /// the volumes reported count them.
-void noteFineFeatures(const FineFeatures& f, double h, double part, Mesher mesher, std::vector<ReportWarning>& notes) {
+void noteFineFeatures(const FineFeatures& f, double h, double part, Mesher mesher,
+                      std::vector<ReportWarning>& jobWarnings) {
     const auto note = [&](const FineStretches& s, const char* what) {
         if (s.count == 0) return;
         const FineRegion& most = s.regions.front();
@@ -120,7 +121,7 @@ void noteFineFeatures(const FineFeatures& f, double h, double part, Mesher meshe
                       most.widestAt.x, most.widestAt.y, most.widestAt.z);
         ReportWarning w;
         w.message = text;
-        notes.push_back(w);
+        jobWarnings.push_back(w);
     };
     // The dexel mesher meshes what the dexels cross of them (contour.h); the level set, and with
     // it the picture, the .vdb and the vdb mesher, cannot.
@@ -144,7 +145,7 @@ constexpr double kDesignBeyondStockSlack = 0x1p-23;
 /// Warns when the design reaches past a stock the user gave (`stock`, its box): there the part
 /// cannot hold the design, and the cut there is not compared, since no material is.
 void noteDesignBeyondStock(const Box& design, const Box& stock, const std::string& designPath,
-                           std::vector<ReportWarning>& notes) {
+                           std::vector<ReportWarning>& jobWarnings) {
     const char* sides[3][2] = {{"-x", "+x"}, {"-y", "+y"}, {"-z", "+z"}};
     std::string beyond;
     for (int i = 0; i < 3; ++i) {
@@ -169,13 +170,14 @@ void noteDesignBeyondStock(const Box& design, const Box& stock, const std::strin
     ReportWarning w;
     w.where.file = designPath;
     w.message = std::string(text) + "; check --stock and --design-transform";
-    notes.push_back(w);
+    jobWarnings.push_back(w);
 }
 
 /// Warns when the chords the readers cut arcs into lie farther from their arcs than the lattice
 /// spacing `h`: the part then shows the chords' facets, which the lattice resolves, where the
 /// program asked for arcs.
-void noteArcChords(const Program& program, double h, double chordTolerance, std::vector<ReportWarning>& notes) {
+void noteArcChords(const Program& program, double h, double chordTolerance,
+                   std::vector<ReportWarning>& jobWarnings) {
     if (!(program.arcSag > h)) return;
     char text[400];
     std::snprintf(text, sizeof text,
@@ -187,7 +189,7 @@ void noteArcChords(const Program& program, double h, double chordTolerance, std:
     ReportWarning w;
     w.where = at;
     w.message = text;
-    notes.push_back(w);
+    jobWarnings.push_back(w);
 }
 
 /// Moves whose tool axis turns. A feed move is swept turning (TurningSweep, within the job's
@@ -196,7 +198,7 @@ void noteArcChords(const Program& program, double h, double chordTolerance, std:
 /// is swept with its end axis, with a warning where it can reach the stock; a rapid of a machine's
 /// rotary axes follows the machine's law (Move::rotary) and needs no warning.
 void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& stockBox,
-                       std::vector<ReportWarning>& notes) {
+                       std::vector<ReportWarning>& jobWarnings) {
     std::size_t rapids = 0;
     SourceLocation firstRapid;
     for (const Move& m : path.moves) {
@@ -213,7 +215,7 @@ void checkTurningMoves(const ToolPath& path, const ToolTable& tools, const Box& 
     w.message = std::to_string(rapids) + (rapids == 1 ? " move turns" : " moves turn") +
                 " the tool axis at rapid within reach of the stock (the first here): each is swept with its end axis "
                 "throughout, while the machine's own path for the turn decides where the tool really goes";
-    notes.push_back(w);
+    jobWarnings.push_back(w);
 }
 
 struct LoadedStock {
@@ -262,8 +264,8 @@ Box guessStock(const ToolPath& path, const ToolTable& tools, const Project* proj
 }
 
 LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, const Program& program,
-                      const ToolTable& tools, const Project* project, const Mesh* design, SimulateReport& report,
-                      std::vector<ReportWarning>& notes) {
+                      const ToolTable& tools, const Project* project, const Mesh* design,
+                      SimulateReport& report, std::vector<ReportWarning>& jobWarnings) {
     Box box;
     bool aroundDesign = false;
     std::optional<LevelSet> fromVdb;
@@ -292,7 +294,7 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
         ReportWarning w;
         box = designStockBox(design->bounds(), program.statedStock, w.message);
         aroundDesign = true;
-        notes.push_back(w);
+        jobWarnings.push_back(w);
     } else {
         double cutTop = 0.0;
         box = guessStock(program.path, tools, project, cutTop);
@@ -340,7 +342,7 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
                               st.size.z, st.where.file.c_str(), st.where.line);
                 w.message += text;
             }
-            notes.push_back(w);
+            jobWarnings.push_back(w);
         }
     }
     const Vec3 size = box.size();
@@ -361,7 +363,7 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
                               "its stored resolution %g mm applies in the manual mode only",
                               h, project->resolution);
                 w.message = text;
-                notes.push_back(w);
+                jobWarnings.push_back(w);
             }
         } else if (project->resolution > 0) {
             h = project->resolution;
@@ -377,7 +379,7 @@ LoadedStock loadStock(const SimulateOptions& o, const MemoryBudget& budget, cons
             std::snprintf(text, sizeof text, "project resolution %g mm is not positive: using %g mm, chosen from the stock",
                           *project->unusableResolution, h);
             w.message = text;
-            notes.push_back(w);
+            jobWarnings.push_back(w);
         }
     }
     // kMinCellsAcross (a 20 x 16 x 5 mm block at 10 mm gave an empty mesh and a part of 2,000 mm^3).
@@ -571,22 +573,22 @@ Simulation runStages(const SimulateOptions& o) {
                                               [](const Move& m) { return m.rapid; }));
     report.toolChanges = program.path.toolChanges.size();
     report.movesNotSimulated = program.movesNotSimulated;
-    std::vector<ReportWarning> notes;
+    std::vector<ReportWarning> jobWarnings;
     if (!budget.note.empty()) {
         ReportWarning w;
         w.message = budget.note;
-        notes.push_back(w);
+        jobWarnings.push_back(w);
     }
     if (std::string cut = threadsCutNote(o.threads); !cut.empty()) {
         ReportWarning w;
         w.message = std::move(cut);
-        notes.push_back(w);
+        jobWarnings.push_back(w);
     }
     if (program.path.moves.empty()) {
         ReportWarning w;
         if (!o.inputs.empty()) w.where.file = o.inputs.back();
         w.message = "the program makes no moves: the part is the stock";
-        notes.push_back(w);
+        jobWarnings.push_back(w);
     }
     // The design's mesh first: with no stock given, its box is the stock's.
     std::optional<Mesh> designMesh;
@@ -598,11 +600,12 @@ Simulation runStages(const SimulateOptions& o) {
         report.timingS.design = seconds(t);
     }
     LoadedStock loaded = loadStock(o, budget, program, tools, project ? &*project : nullptr,
-                                   designMesh ? &*designMesh : nullptr, report, notes);
-    checkTurningMoves(program.path, tools, loaded.box, notes);
+                                   designMesh ? &*designMesh : nullptr, report, jobWarnings);
+    checkTurningMoves(program.path, tools, loaded.box, jobWarnings);
     if (designMesh) {
         // A stock made from the design's box holds it; a stock the user gave may not.
-        if (!loaded.aroundDesign) noteDesignBeyondStock(designMesh->bounds(), loaded.box, o.designPath, notes);
+        if (!loaded.aroundDesign)
+            noteDesignBeyondStock(designMesh->bounds(), loaded.box, o.designPath, jobWarnings);
         designCheck = checkMesh(*designMesh);
         report.designClosed = designCheck.closedManifold();
     }
@@ -611,7 +614,7 @@ Simulation runStages(const SimulateOptions& o) {
     report.stockBox = loaded.box;
     report.resolutionMm = stock.lattice().h;
     report.lattice = stock.lattice().n;
-    noteArcChords(program, report.resolutionMm, o.chordTolerance, notes);
+    noteArcChords(program, report.resolutionMm, o.chordTolerance, jobWarnings);
     for (int a = 0; a < 3; ++a) {
         const Axis ax = axisFromIndex(a);
         if (stock.has(ax)) report.dexels[a] = std::size_t(stock.family(ax).nb()) * std::size_t(stock.family(ax).nc());
@@ -633,13 +636,13 @@ Simulation runStages(const SimulateOptions& o) {
             w.where.file = o.designPath;
             w.message = "the design is not closed: " + std::to_string(design->cast.unpairedDexels) +
                         " dexels met an odd number of its faces; its solid there is a guess";
-            notes.push_back(w);
+            jobWarnings.push_back(w);
         } else if (!report.designClosed) {
             ReportWarning w;
             w.where.file = o.designPath;
             w.message = "the design's mesh is not closed (" + designCheck.openness() +
                         "); every dexel met its faces in pairs, but distances near the gaps may take the wrong sign";
-            notes.push_back(w);
+            jobWarnings.push_back(w);
         }
         report.designFile = o.designPath;
         report.gougeToleranceMm = o.gougeTolerance;
@@ -697,10 +700,11 @@ Simulation runStages(const SimulateOptions& o) {
     report.finalVolumeMm3 = stock.volume(measure);
     report.removedVolumeMm3 = report.stockVolumeMm3 - report.finalVolumeMm3;
     report.fineFeatures = finerThanLattice(stock);
-    noteFineFeatures(report.fineFeatures, stock.lattice().h, report.finalVolumeMm3, o.mesher, notes);
-    // The job's own notes first (a thread count cut, the stock it chose, an open design): a long
+    noteFineFeatures(report.fineFeatures, stock.lattice().h, report.finalVolumeMm3, o.mesher,
+                     jobWarnings);
+    // The job's own warnings first (a thread count cut, the stock it chose, an open design): a long
     // program's diagnostics would push them past what the summary prints.
-    for (ReportWarning& n : notes) report.warnings.push_back(std::move(n));
+    for (ReportWarning& n : jobWarnings) report.warnings.push_back(std::move(n));
     for (const Diagnostic& d : program.diagnostics)
         report.warnings.push_back({d.where, d.message, d.severity});
     report.stockMemoryBytes = stock.memoryBytes();
