@@ -776,7 +776,14 @@ private:
                 const int len = patches.size[k];
                 const std::uint8_t* edges = &patches.edges[start];
                 start += len;
-                if (!isFeature(patch)) {
+                // A flip joins two patch vertices through the cells' insides, where a cell's only
+                // surface is the patch's own. A cell holding another patch, the other side of a fin
+                // thinner than the cell, has it within a fraction of h of that join: between two
+                // ball plunges of radius 5 h whose walls pass 0.0095 h apart, the join of (8.50,
+                // 8.44, 1.00) with (8.37, 8.50, 1.57) across the face z = 1.5 passed through the
+                // fan of the fin's other side in the lower cell (11 of 16 pairs of triangles that
+                // met). The chords of such cells, and those they share with one, keep their fans.
+                if (patches.count > 1 || !isFeature(patch)) {
                     tri += std::uint32_t(len);
                     continue;
                 }
@@ -796,14 +803,7 @@ private:
                     if (!cellAt(*near, np, other, otherFirst)) continue;
                     const int ok = other->patchOf[tables.across[edges[i]][face]];
                     const std::uint32_t partner = otherFirst + std::uint32_t(ok);
-                    // A flip joins two patch vertices through the cells' insides, where a cell's
-                    // only surface is the patch's own. A cell holding another patch, the other
-                    // side of a fin thinner than the cell, has it within a fraction of h of that
-                    // join: between two ball plunges of radius 5 h whose walls pass 0.0095 h
-                    // apart, the join of (8.50, 8.44, 1.00) with (8.37, 8.50, 1.57) across the
-                    // face z = 1.5 passed through the fan of the fin's other side in the lower
-                    // cell (11 of 16 pairs of triangles that met). Such chords keep the fan.
-                    if (patches.count == 1 && other->count == 1 && isFeature(partner) &&
+                    if (other->count == 1 && isFeature(partner) &&
                         flipChord(edges, len, i, *other, ok, face, patch, partner, loop)) {
                         mesh_.triangles[tri] = {patch, loop[i], partner};
                         flipped += patch < partner;
