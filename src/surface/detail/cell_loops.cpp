@@ -460,13 +460,17 @@ bool uniteCrossing(const std::vector<Path>& paths, std::vector<int>& region) {
 /// still close into loops. Splits one region and says whether it did.
 bool splitSelfCrossing(const CellCrossings& cell, const Frame& f, const std::vector<Path>& paths,
                        std::vector<int>& region) {
+    // Each path's slice, made when a pair first needs it.
+    std::vector<std::optional<std::vector<std::array<double, 2>>>> slices(paths.size());
+    const auto slice = [&](std::size_t k) -> const std::vector<std::array<double, 2>>& {
+        if (!slices[k]) slices[k] = slicePoints(cell, f, paths[k]);
+        return *slices[k];
+    };
     for (std::size_t i = 0; i < paths.size(); ++i)
         for (std::size_t j = i + 1; j < paths.size(); ++j) {
             const Path& p = paths[i];
             const Path& q = paths[j];
-            if (p.region != q.region || (!p.lens && !q.lens) ||
-                !polylinesCross(slicePoints(cell, f, p), slicePoints(cell, f, q)))
-                continue;
+            if (p.region != q.region || (!p.lens && !q.lens) || !polylinesCross(slice(i), slice(j))) continue;
             const int fresh = *std::max_element(region.begin(), region.end()) + 1;
             for (std::size_t r = i + 1; r <= j; ++r)
                 if (region[r] == p.region) region[r] = fresh;
