@@ -14,12 +14,14 @@
 //     surface crosses (a mixed cell), with its patches and triangles, and whether it is plain (one
 //     flat square across an axis, read from the dexels: two triangles, no patch vertex);
 //  2. crossings: each owned crossing's position goes to the mesh, its normal to a side array;
-//  3. patches: each patch's vertex from its crossings (quadric error function, detail/patch_vertex.h),
-//     and its fan, the vertices of a cell's patches whose fans cross moved apart
-//     (detail/patches_apart.h); a plain cell's square;
-//  4. flips: the fan chords of feature patches that cross a crease are turned to run along it;
+//  3. patches: each patch's vertex from its crossings (quadric error function,
+//     detail/patch_vertex.h), and its fan, the vertices of a cell's patches whose fans cross moved
+//     apart (detail/patches_apart.h); a plain cell's square;
+//  4. flips: the fan chords of feature patches that cross a crease are turned to run along it
+//     (detail/flips.h);
 // the split cells' vertices and fans come between passes 3 and 4. Then the mesh is checked, and
-// the vertices of folded triangles are pulled back towards their loops (repairAndCheckMesh); split
+// the vertices of folded triangles are pulled back towards their loops (repairAndCheckMesh), and
+// flips whose triangles still fold are undone (detail::unflip) before a second repair; split
 // cells whose triangles still fold are left to the table path in a new run (contourStock). With
 // adaptivity flat regions are merged (mergeFlatRegions).
 // Passes 2 to 4 read only what pass 1 stored per block: bit masks with prefix counts, which turn a
@@ -36,7 +38,6 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <memory>
 #include <optional>
 #include <vector>
 
@@ -51,6 +52,7 @@
 #include "memory/pages.h"
 #include "surface/detail/cell_table.h"
 #include "surface/detail/contour_blocks.h"
+#include "surface/detail/flips.h"
 #include "surface/detail/grid_meta.h"
 #include "surface/detail/patch_vertex.h"
 #include "surface/detail/patches_apart.h"
@@ -64,8 +66,6 @@ using detail::Block;
 using detail::CellPatches;
 using detail::EdgeStart;
 using detail::edgeStarts;
-using detail::EdgeTables;
-using detail::edgeTables;
 using detail::forEachSetBit;
 using detail::kCells;
 using detail::kDim;
@@ -86,11 +86,6 @@ constexpr double kCornerGap = 1e-3;
 /// so 1e-4 mm at 1.7 m), turns a triangle a lattice cell across (1 mm at that size) by 1e-4 rad
 /// at most, a tenth of this margin.
 constexpr double kFoldMargin = 1e-3;
-
-/// A flip's new triangles must face within acos(this) (87 degrees) of the pair they replace. Across
-/// a crease each lies in one face, whose normal is half the crease's turn from the pair's: this
-/// admits creases up to 174 degrees sharp.
-constexpr double kFlipFacing = 0.05;
 
 /// How far from a loop's mass point towards a crossing, or the midpoint of two, the last resort of
 /// fold repair tries its candidate positions.
@@ -206,7 +201,9 @@ public:
         index_.forEach([&](std::size_t i) { crossingPass(i, exact); });
         index_.forEach([&](std::size_t i) { patchPass(i, edges, corners); });
         splitPatchPass(std::uint32_t(crossings), edges, corners);
-        index_.forEach([&](std::size_t i) { flipPass(i, flipped); });
+        const detail::FlipInputs flips = flipInputs();
+        index_.forEach(
+            [&](std::size_t i) { flipped += detail::flipChords(flips, index_.blocks[i]); });
         stats.cells = cells;
         stats.crossings = crossings + split_.edgeEnds;
         stats.patches = patches + split_.patches();
@@ -230,7 +227,8 @@ public:
         decltype(split_.normals)().swap(split_.normals);
         decltype(split_.loopIds)().swap(split_.loopIds);
         stats.check = repairAndCheck(stats.pulledBack);
-        if (stats.check.facingAgainstTriangles + stats.check.degenerateTriangles > 0 && unflip(unrepaired_) > 0) {
+        if (stats.check.facingAgainstTriangles + stats.check.degenerateTriangles > 0 &&
+            detail::unflip(mesh_, patchVertexBase_, unrepaired_) > 0) {
             std::size_t more = 0;
             stats.check = repairAndCheck(more);
             stats.pulledBack += more;
@@ -712,28 +710,26 @@ private:
         foldedSplitEdges_.erase(std::unique(foldedSplitEdges_.begin(), foldedSplitEdges_.end()), foldedSplitEdges_.end());
     }
 
-    // ------------------------------------------------------------------ pass 4: triangles
+    // ------------------------------------------------------------------ pass 4: flips
 
-    /// Twice the area vector of a triangle.
-    Vec3 area(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
-        return glm::cross(mesh_.vertices[b] - mesh_.vertices[a], mesh_.vertices[c] - mesh_.vertices[a]);
+    /// What the flip pass (detail/flips.h) reads, after pass 3 and the split cells' vertices and
+    /// fans, and the lookups it makes.
+    detail::FlipInputs flipInputs() {
+        detail::FlipInputs in;
+        in.index = &index_;
+        in.mesh = &mesh_;
+        in.patchVertexBase = patchVertexBase_;
+        in.crossingNormal = crossingNormal_.data();
+        in.feature = feature_.data();
+        in.loop = [this](const detail::BlockIndex::Around& near, const Coord& p,
+                         const CellPatches& patches, int k,
+                         std::uint32_t* out) { return loopOf(near, p, patches, k, out); };
+        in.cell = [this](const detail::BlockIndex::Around& near, const Coord& p,
+                         const CellPatches*& patches, std::uint32_t& firstPatch) {
+            return cellAt(near, p, patches, firstPatch);
+        };
+        return in;
     }
-
-    /// How well a triangle agrees with the Hermite data: the least cosine between its normal and
-    /// the normals of its crossings (1 when none has a known normal; -1 when it has no area).
-    double fit(std::uint32_t a, std::uint32_t b, std::uint32_t c) const {
-        const Vec3 n = glm::cross(mesh_.vertices[b] - mesh_.vertices[a], mesh_.vertices[c] - mesh_.vertices[a]);
-        const double len = glm::length(n);
-        if (!(len > 0.0)) return -1.0;
-        double worst = 1.0;
-        for (std::uint32_t i : {a, b, c}) {
-            if (i >= patchVertexBase_ || !crossingNormal_[i].present()) continue;
-            worst = std::min(worst, glm::dot(n, crossingNormal_[i].unpack()) / len);
-        }
-        return worst;
-    }
-
-    bool isFeature(std::uint32_t patchVertex) const { return feature_[patchVertex - patchVertexBase_] != 0; }
 
     /// The mixed cell whose lower corner is p: its patches and the mesh index of its first patch;
     /// false for a plain cell, which has no patch vertex, and for a split cell, whose fans are
@@ -748,105 +744,6 @@ private:
         patches = &b.patchesOf(rank);
         firstPatch = b.patchBase + b.patchBefore[std::size_t(rank)];
         return !b.isPlain(off) && !b.isSplit(rank);
-    }
-
-    /// Flips the fan chords of the block's feature patches that run across a crease (flipChord).
-    /// Each of the two cells sharing a chord decides alike and turns its own triangle.
-    void flipPass(std::size_t bi, std::atomic<std::size_t>& flippedCount) {
-        const Block& b = index_.blocks[bi];
-        const EdgeTables& tables = edgeTables();
-        std::size_t flipped = 0;
-        std::uint32_t loop[detail::kCellEdges];
-        std::uint32_t tri = b.triangleBase;
-        std::uint32_t patch = b.patchBase;
-        std::unique_ptr<detail::BlockIndex::Around> near;  // made for the first feature patch of the block
-        int rank = 0;
-        forEachSetBit(b.mixed, kCells / 64, [&](int off) {
-            if (b.isSplit(rank)) {
-                ++rank;
-                return;
-            }
-            const CellPatches& patches = b.patchesOf(rank++);
-            if (b.isPlain(off)) {
-                tri += 2;
-                return;
-            }
-            int start = 0;
-            for (int k = 0; k < patches.count; ++k, ++patch) {
-                const int len = patches.size[k];
-                const std::uint8_t* edges = &patches.edges[start];
-                start += len;
-                // A flip joins two patch vertices through the cells' insides, where a cell's only
-                // surface is the patch's own. A cell holding another patch, the other side of a fin
-                // thinner than the cell, has it within a fraction of h of that join: between two
-                // ball plunges of radius 5 h whose walls pass 0.0095 h apart, the join of (8.50,
-                // 8.44, 1.00) with (8.37, 8.50, 1.57) across the face z = 1.5 passed through the
-                // fan of the fin's other side in the lower cell (11 of 16 pairs of triangles that
-                // met). The chords of such cells, and those they share with one, keep their fans.
-                if (patches.count > 1 || !isFeature(patch)) {
-                    tri += std::uint32_t(len);
-                    continue;
-                }
-                if (!near) near = std::make_unique<detail::BlockIndex::Around>(index_.around(b));
-                const Coord p = b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7);
-                loopOf(*near, p, patches, k, loop);
-                for (int i = 0; i < len; ++i, ++tri) {
-                    const int j = i + 1 == len ? 0 : i + 1;
-                    // The chord loop[i]-loop[j] lies on the face shared with the neighbour
-                    // whose patch holds the same two crossings.
-                    const int face = tables.face[edges[i]][edges[j]];
-                    Coord np = p;
-                    np[face >> 1] += (face & 1) ? 1 : -1;
-                    const CellPatches* other = nullptr;
-                    std::uint32_t otherFirst = 0;
-                    // A plain neighbour has no vertex to join, and no crease.
-                    if (!cellAt(*near, np, other, otherFirst)) continue;
-                    const int ok = other->patchOf[tables.across[edges[i]][face]];
-                    const std::uint32_t partner = otherFirst + std::uint32_t(ok);
-                    if (other->count == 1 && isFeature(partner) &&
-                        flipChord(edges, len, i, *other, ok, face, patch, partner, loop)) {
-                        mesh_.triangles[tri] = {patch, loop[i], partner};
-                        flipped += patch < partner;
-                    }
-                }
-            }
-        });
-        flippedCount += flipped;
-    }
-
-    /// Whether the chord loop[i]-loop[i+1] of this cell's patch (vertex `patch`) is flipped to
-    /// join `patch` with the neighbour's patch `partner` across `face`. Both cells ask the same
-    /// question of the same data and get the same answer: flip when the two new triangles agree
-    /// better with the normals at their crossings (across a crease each new triangle lies in the
-    /// plane of its one crossing), and when this chord is the first, in the order of the lattice
-    /// edges, of the chords the two patches share on the face (two flips would join the two
-    /// vertices twice), and when neither new triangle faces against the pair it replaces.
-    bool flipChord(const std::uint8_t* edges, int len, int i, const CellPatches& otherPatches, int ok, int face,
-                   std::uint32_t patch, std::uint32_t partner, const std::uint32_t* loop) const {
-        const int j = (i + 1) % len;
-        const std::uint32_t xi = loop[i], xj = loop[j];
-        // Before: (patch, xi, xj) and (partner, xj, xi). After: (patch, xi, partner) and
-        // (partner, xj, patch).
-        const double before = std::min(fit(patch, xi, xj), fit(partner, xj, xi));
-        const double after = std::min(fit(patch, xi, partner), fit(partner, xj, patch));
-        if (!(after > before)) return false;
-        // The new pair must face the way the old pair does, by more than a sliver's margin: a flip
-        // never turns a triangle over, nor makes one that stands edge-on to the surface there.
-        const Vec3 quad = area(patch, xi, xj) + area(partner, xj, xi);
-        for (const Vec3& n : {area(patch, xi, partner), area(partner, xj, patch)})
-            if (!(glm::dot(n, quad) > kFlipFacing * glm::length(n) * glm::length(quad))) return false;
-        // Other chords of this patch on the same face that reach the same partner.
-        const EdgeTables& tables = edgeTables();
-        const std::uint64_t mine = std::min<std::uint64_t>(xi, xj);
-        for (int m = 0; m < len; ++m) {
-            if (m == i) continue;
-            const int n = (m + 1) % len;
-            if (tables.face[edges[m]][edges[n]] != face) continue;
-            const int oe = tables.across[edges[m]][face];
-            if (otherPatches.patchOf[oe] != ok) continue;
-            if (std::min<std::uint64_t>(loop[m], loop[n]) < mine) return false;
-        }
-        return true;
     }
 
     // ------------------------------------------------------------------ pass 5: folds
@@ -902,42 +799,6 @@ private:
             }
         };
         return repairAndCheckMesh(mesh_, repair, &moved, &unrepaired_);
-    }
-
-    /// Undoes the flips that made any of `triangles`, which the repair could not mend: a flip is
-    /// judged with the vertices where pass 3 put them, and a later pull can turn one of its
-    /// triangles over. The pair (patch, xi, partner), (partner, xj, patch) goes back to the fan
-    /// triangles (patch, xi, xj), (partner, xj, xi). Returns the number of pairs undone.
-    std::size_t unflip(const std::vector<std::uint32_t>& triangles) {
-        auto isFlip = [&](const Mesh::Triangle& t) { return t[0] >= patchVertexBase_ && t[2] >= patchVertexBase_; };
-        // Each flipped triangle's partner triangle is the one that runs the other way along the
-        // join of the two patch vertices.
-        std::vector<std::pair<std::uint64_t, std::uint32_t>> wanted;
-        for (std::uint32_t t : triangles) {
-            const Mesh::Triangle& tri = mesh_.triangles[t];
-            if (isFlip(tri)) wanted.push_back({std::uint64_t(tri[2]) << 32 | tri[0], t});
-        }
-        if (wanted.empty()) return 0;
-        std::sort(wanted.begin(), wanted.end());
-        wanted.erase(std::unique(wanted.begin(), wanted.end()), wanted.end());
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
-        for (std::uint32_t t = 0; t < mesh_.triangles.size(); ++t) {
-            const Mesh::Triangle& tri = mesh_.triangles[t];
-            if (!isFlip(tri)) continue;
-            const std::uint64_t key = std::uint64_t(tri[0]) << 32 | tri[2];
-            auto it = std::lower_bound(wanted.begin(), wanted.end(), std::make_pair(key, std::uint32_t(0)));
-            if (it != wanted.end() && it->first == key) pairs.push_back({std::min(it->second, t), std::max(it->second, t)});
-        }
-        std::sort(pairs.begin(), pairs.end());
-        pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-        for (const auto& [a, b] : pairs) {
-            Mesh::Triangle& t1 = mesh_.triangles[a];
-            Mesh::Triangle& t2 = mesh_.triangles[b];
-            const std::uint32_t xi = t1[1], xj = t2[1];
-            t1[2] = xj;
-            t2[2] = xi;
-        }
-        return pairs.size();
     }
 
     const openvdb::FloatGrid& grid_;

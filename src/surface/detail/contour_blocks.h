@@ -1,8 +1,8 @@
 /// @file contour_blocks.h
 /// @brief The contourer's work units: OpenVDB leaf blocks (8^3 lattice points) of the stock's
 /// level set that hold surface, each with bit masks of its points' signs, its owned crossings and
-/// its mixed cells, and the lookups from a lattice point to its block. Only contour.cpp includes
-/// this header (it includes OpenVDB).
+/// its mixed cells, and the lookups from a lattice point to its block. Only contour.cpp and its
+/// flip pass (flips.h) include this header (it includes OpenVDB).
 #pragma once
 
 #include <algorithm>
