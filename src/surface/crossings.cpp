@@ -158,6 +158,19 @@ bool trianglesCross(const std::array<std::uint32_t, 3>& ia, const std::array<Vec
     return crossWithNormal(ia, a, unitNormal(a), ib, b, tol);
 }
 
+std::vector<std::pair<int, int>> fanCrossings(const Mesh::Triangle* a, int na,
+                                              const Mesh::Triangle* b, int nb, const Vec3* points,
+                                              double tol) {
+    const auto at = [&](const Mesh::Triangle& t) {
+        return std::array<Vec3, 3>{points[t[0]], points[t[1]], points[t[2]]};
+    };
+    std::vector<std::pair<int, int>> out;
+    for (int i = 0; i < na; ++i)
+        for (int j = 0; j < nb; ++j)
+            if (trianglesCross(a[i], at(a[i]), b[j], at(b[j]), tol)) out.push_back({i, j});
+    return out;
+}
+
 std::vector<std::uint32_t> crossingTriangles(const Mesh& mesh,
                                              const std::vector<std::uint32_t>& pieces,
                                              const std::vector<std::uint32_t>& partners,

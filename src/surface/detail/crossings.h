@@ -1,10 +1,11 @@
 /// @file crossings.h
 /// @brief Triangles of a mesh that pass through one another: the refinement's guard against the
-/// splits it makes, and the contourer's against split patches of one cell whose fans cross.
+/// splits it makes, and the contourer's against patches of one cell whose fans cross.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "dexelmill/surface/mesh.h"
@@ -28,6 +29,14 @@ namespace dexelmill::detail {
 bool trianglesCross(const std::array<std::uint32_t, 3>& ia, const std::array<Vec3, 3>& a,
                     const std::array<std::uint32_t, 3>& ib, const std::array<Vec3, 3>& b,
                     double tol);
+
+/// @brief The pairs (i, j) of a triangle a[i] (i < na) of one fan and b[j] (j < nb) of another,
+/// their corners indices into `points`, that pass through each other (trianglesCross, `tol`), by
+/// i, then j: the test of two patches of one cell whose fans cross, the table path's
+/// (keepPatchesApart) and the split cells' (crossingPatchTriangles).
+std::vector<std::pair<int, int>> fanCrossings(const Mesh::Triangle* a, int na,
+                                              const Mesh::Triangle* b, int nb, const Vec3* points,
+                                              double tol);
 
 /// @brief The triangles of `mesh` that take part in a crossing (trianglesCross) of a triangle
 /// listed in `pieces` (increasing) with one listed in `partners` (which should hold the pieces),

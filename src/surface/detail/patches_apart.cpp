@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <utility>
 
 #include "surface/detail/crossings.h"
 
@@ -42,20 +41,18 @@ Loop loopOf(const SharedPatch& patch, const Vec3* points) {
     return out;
 }
 
+/// A patch's fan: vertex, loop[i], loop[i + 1].
+std::array<Mesh::Triangle, kCellEdges> fanOf(const SharedPatch& s) {
+    std::array<Mesh::Triangle, kCellEdges> fan{};
+    for (int i = 0; i < s.len; ++i)
+        fan[std::size_t(i)] = {s.vertex, s.loop[i], s.loop[i + 1 == s.len ? 0 : i + 1]};
+    return fan;
+}
+
 /// Whether a triangle of patch k's fan passes through one of patch l's by more than tol.
 bool fansCross(const SharedPatch& k, const SharedPatch& l, const Vec3* points, double tol) {
-    const auto triangle = [&](const SharedPatch& s, int i) {
-        const std::uint32_t a = s.loop[i], b = s.loop[i + 1 == s.len ? 0 : i + 1];
-        return std::make_pair(std::array<std::uint32_t, 3>{s.vertex, a, b},
-                              std::array<Vec3, 3>{points[s.vertex], points[a], points[b]});
-    };
-    for (int i = 0; i < k.len; ++i)
-        for (int j = 0; j < l.len; ++j) {
-            const auto [ia, pa] = triangle(k, i);
-            const auto [ib, pb] = triangle(l, j);
-            if (trianglesCross(ia, pa, ib, pb, tol)) return true;
-        }
-    return false;
+    const std::array<Mesh::Triangle, kCellEdges> a = fanOf(k), b = fanOf(l);
+    return !fanCrossings(a.data(), k.len, b.data(), l.len, points, tol).empty();
 }
 
 /// A plane between the crossings of loops a and b: its unit normal n, pointing towards a, and

@@ -328,25 +328,17 @@ SplitCells findSplitCells(const TriDexelStock& stock, const SplitInputs& in) {
 std::vector<std::uint32_t> crossingPatchTriangles(const SplitCells& cells, const Mesh& mesh,
                                                   const std::vector<std::uint32_t>& firstTriangle, double tol) {
     std::vector<std::uint32_t> out;
-    const auto corners = [&](std::uint32_t t) {
-        const Mesh::Triangle& tri = mesh.triangles[t];
-        return std::make_pair(std::array<std::uint32_t, 3>{tri[0], tri[1], tri[2]},
-                              std::array<Vec3, 3>{mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]]});
-    };
-    const auto fan = [&](std::uint32_t k) {
-        return std::make_pair(firstTriangle[k], firstTriangle[k] + cells.loopStart[k + 1] - cells.loopStart[k]);
+    const auto size = [&](std::uint32_t k) {
+        return int(cells.loopStart[k + 1] - cells.loopStart[k]);
     };
     for (std::size_t c = 0; c < cells.cells.size(); ++c)
         for (std::uint32_t k = cells.cellPatchStart[c]; k < cells.cellPatchStart[c + 1]; ++k)
             for (std::uint32_t l = k + 1; l < cells.cellPatchStart[c + 1]; ++l) {
-                const auto [k0, k1] = fan(k);
-                const auto [l0, l1] = fan(l);
-                for (std::uint32_t a = k0; a < k1; ++a)
-                    for (std::uint32_t b = l0; b < l1; ++b) {
-                        const auto [ia, pa] = corners(a);
-                        const auto [ib, pb] = corners(b);
-                        if (trianglesCross(ia, pa, ib, pb, tol)) out.insert(out.end(), {a, b});
-                    }
+                const std::uint32_t k0 = firstTriangle[k], l0 = firstTriangle[l];
+                for (const auto& [i, j] :
+                     fanCrossings(mesh.triangles.data() + k0, size(k), mesh.triangles.data() + l0,
+                                  size(l), mesh.vertices.data(), tol))
+                    out.insert(out.end(), {k0 + std::uint32_t(i), l0 + std::uint32_t(j)});
             }
     return out;
 }
