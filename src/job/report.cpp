@@ -149,6 +149,7 @@ std::string reportJson(const SimulateReport& r) {
                                      {"edges_with_several_crossings_left_out", r.splitEdgesDropped},
                                      {"split_cells", r.splitCells},
                                      {"face_vertices", r.faceVertices},
+                                     {"patch_pairs_left_crossing", r.patchPairsLeftCrossing},
                                      {"runs", r.meshRuns}};
     if (r.refineRounds > 0)
         j["mesh"]["refine"] = {{"rounds", r.refineRounds},

@@ -737,6 +737,7 @@ Simulation runStages(const SimulateOptions& o) {
         report.splitEdgesDropped = stats.splitEdgesDropped;
         report.splitCells = stats.splitCells;
         report.faceVertices = stats.faceVertices;
+        report.patchPairsLeftCrossing = stats.patchPairsLeftCrossing;
         report.meshRuns = stats.splitRuns;
         if (stats.splitEdgesDropped > 0) {
             char text[300];

@@ -197,10 +197,11 @@ public:
         std::copy(split_.points.begin(), split_.points.end(), mesh_.vertices.begin() + std::ptrdiff_t(crossings));
         std::copy(split_.normals.begin(), split_.normals.end(), crossingNormal_.begin() + std::ptrdiff_t(crossings));
 
-        std::atomic<std::size_t> exact{0}, edges{0}, corners{0}, flipped{0};
+        std::atomic<std::size_t> exact{0}, flipped{0};
+        VertexCounts placed;
         index_.forEach([&](std::size_t i) { crossingPass(i, exact); });
-        index_.forEach([&](std::size_t i) { patchPass(i, edges, corners); });
-        splitPatchPass(std::uint32_t(crossings), edges, corners);
+        index_.forEach([&](std::size_t i) { patchPass(i, placed); });
+        splitPatchPass(std::uint32_t(crossings), placed);
         const detail::FlipInputs flips = flipInputs();
         index_.forEach(
             [&](std::size_t i) { flipped += detail::flipChords(flips, index_.blocks[i]); });
@@ -212,8 +213,10 @@ public:
         stats.faceVertices = split_.points.size() - split_.edgeEnds;
         stats.plainCells = plainCells;
         stats.exactCrossings = exact + split_.edgeEnds;
-        stats.edgeVertices = edges;
-        stats.cornerVertices = corners;
+        stats.edgeVertices = placed.edges;
+        stats.cornerVertices = placed.corners;
+        stats.movedApart = placed.movedApart;
+        stats.patchPairsLeftCrossing = placed.pairsLeftCrossing;
         stats.flipped = flipped;
         // Only the mesh is needed from here on: free the rest before the check.
         decltype(crossingNormal_)().swap(crossingNormal_);
@@ -592,10 +595,16 @@ private:
 
     // ------------------------------------------------------------------ pass 3: patch vertices
 
-    void patchPass(std::size_t bi, std::atomic<std::size_t>& edgeCount, std::atomic<std::size_t>& cornerCount) {
+    /// What pass 3 counts (ContourStats): vertices on creases and on corners, vertices moved apart
+    /// from another patch's, and pairs of patches left crossing (keepPatchesApart).
+    struct VertexCounts {
+        std::atomic<std::size_t> edges{0}, corners{0}, movedApart{0}, pairsLeftCrossing{0};
+    };
+
+    void patchPass(std::size_t bi, VertexCounts& counts) {
         const Block& b = index_.blocks[bi];
         const detail::BlockIndex::Around near = index_.around(b);
-        std::size_t edges = 0, corners = 0;
+        std::size_t edges = 0, corners = 0, movedApart = 0, leftCrossing = 0;
         std::uint32_t loop[detail::kCellEdges];
         std::uint32_t at = b.patchBase;
         std::uint32_t tri = b.triangleBase;
@@ -630,26 +639,34 @@ private:
                 for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[i], loop[i + 1 == len ? 0 : i + 1]};
                 ++at;
             }
-            if (patches.count > 1) detail::keepPatchesApart(shared, patches.count, mesh_.vertices.data(), kFanCrossing * h_);
+            if (patches.count > 1) {
+                const detail::PatchesApart apart = detail::keepPatchesApart(
+                    shared, patches.count, mesh_.vertices.data(), kFanCrossing * h_);
+                movedApart += std::size_t(apart.moved);
+                leftCrossing += std::size_t(apart.leftCrossing);
+            }
         });
-        edgeCount += edges;
-        cornerCount += corners;
+        counts.edges += edges;
+        counts.corners += corners;
+        counts.movedApart += movedApart;
+        counts.pairsLeftCrossing += leftCrossing;
     }
 
     /// The split cells' patch vertices and fans (split_cells.h), one after another: they are few.
     /// `crossings` is the number of the table path's crossings, after which the split cells' own
     /// vertices lie. Their fans are never flipped.
-    void splitPatchPass(std::uint32_t crossings, std::atomic<std::size_t>& edgeCount, std::atomic<std::size_t>& cornerCount) {
+    void splitPatchPass(std::uint32_t crossings, VertexCounts& counts) {
         std::vector<std::uint32_t> loop;
         for (std::size_t c = 0; c < split_.cells.size(); ++c) {
             const std::uint32_t p0 = split_.cellPatchStart[c], p1 = split_.cellPatchStart[c + 1];
-            for (std::uint32_t k = p0; k < p1; ++k) placeSplitPatch(k, crossings, p1 - p0 > 1, loop, edgeCount, cornerCount);
+            for (std::uint32_t k = p0; k < p1; ++k)
+                placeSplitPatch(k, crossings, p1 - p0 > 1, loop, counts);
         }
     }
 
     /// Split patch k's vertex and fan (splitPatchPass); `sharesCell`: its cell holds others.
-    void placeSplitPatch(std::uint32_t k, std::uint32_t crossings, bool sharesCell, std::vector<std::uint32_t>& loop,
-                         std::atomic<std::size_t>& edgeCount, std::atomic<std::size_t>& cornerCount) {
+    void placeSplitPatch(std::uint32_t k, std::uint32_t crossings, bool sharesCell,
+                         std::vector<std::uint32_t>& loop, VertexCounts& counts) {
         std::uint32_t tri = splitPatchTriangle_[k];
         loop.clear();
         for (std::uint32_t i = split_.loopStart[k]; i < split_.loopStart[k + 1]; ++i) {
@@ -676,8 +693,8 @@ private:
         const Vec3 ownSide =
             detail::keepOffFinMiddle(split_, k, featureAngle_, cellLo + inset, cellLo + (h_ - inset), fitted);
         mesh_.vertices[at] = detail::keepOffPathFaces(crossingsOf, cellLo, h_, ownSide);
-        edgeCount += qefRank == 2;
-        cornerCount += qefRank == 3;
+        counts.edges += qefRank == 2;
+        counts.corners += qefRank == 3;
         for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[std::size_t(i)], loop[std::size_t(i + 1 == len ? 0 : i + 1)]};
     }
 

@@ -138,6 +138,8 @@ TEST_CASE("a slot removes its analytic volume and the report says so", "[job]") 
     // The block's bottom, which no move reaches, is (160 - 1) x (120 - 1) plain cells (two
     // triangles each, no patch vertex); its sides and the slot's floor add more.
     CHECK(j["mesh"]["dexel_mesher"]["plain_cells"].get<std::size_t>() == r.plainCells);
+    CHECK(j["mesh"]["dexel_mesher"]["patch_pairs_left_crossing"].get<std::size_t>() ==
+          r.patchPairsLeftCrossing);
     CHECK(r.plainCells > std::size_t(159 * 119));
     CHECK(j["lattice"]["nx"].get<int>() == 160);
     CHECK(j["family_volumes_mm3"].contains("y"));

@@ -59,8 +59,10 @@ TEST_CASE("patches apart: a fin's cell whose fans cross has its vertices moved t
     addFans(m, patches);
     REQUIRE(testing::countSelfIntersections(m).pairs > 0);
     const Mesh before = m;
-    const int moved = detail::keepPatchesApart(patches.data(), 2, m.vertices.data(), 1e-9);
-    CHECK(moved >= 1);
+    const detail::PatchesApart apart =
+        detail::keepPatchesApart(patches.data(), 2, m.vertices.data(), 1e-9);
+    CHECK(apart.moved >= 1);
+    CHECK(apart.leftCrossing == 0);
     CHECK(testing::countSelfIntersections(m).pairs == 0);
     for (const detail::SharedPatch& s : patches) {
         // On the segment from where it was fitted to its loop's mass point: only the vertex moved,
@@ -82,6 +84,34 @@ TEST_CASE("patches apart: fans that do not cross are left as they are", "[surfac
     addFans(m, patches);
     REQUIRE(testing::countSelfIntersections(m).pairs == 0);
     const Mesh before = m;
-    CHECK(detail::keepPatchesApart(patches.data(), 2, m.vertices.data(), 1e-9) == 0);
+    const detail::PatchesApart apart =
+        detail::keepPatchesApart(patches.data(), 2, m.vertices.data(), 1e-9);
+    CHECK(apart.moved == 0);
+    CHECK(apart.leftCrossing == 0);
+    CHECK(m.vertices == before.vertices);
+}
+
+TEST_CASE(
+    "patches apart: fans that cross where the loops' hulls meet are left as they are, and counted",
+    "[surface][contour]") {
+    // Two flat loops through each other: one in the plane z = 0.5, one in x = 0.5, each rectangle
+    // passing through the other's inside, so no plane lies between them.
+    Mesh m;
+    m.vertices = {{0.5, 0.5, 0.5}, {0.5, 0.45, 0.55}, {0.0, 0.2, 0.5}, {1.0, 0.2, 0.5},
+                  {1.0, 0.8, 0.5}, {0.0, 0.8, 0.5},   {0.5, 0.3, 0.1}, {0.5, 0.7, 0.1},
+                  {0.5, 0.7, 1.0}, {0.5, 0.3, 1.0}};
+    std::vector<detail::SharedPatch> patches(2);
+    for (int k = 0; k < 2; ++k) {
+        patches[std::size_t(k)].vertex = std::uint32_t(k);
+        patches[std::size_t(k)].len = 4;
+        for (int i = 0; i < 4; ++i) patches[std::size_t(k)].loop[i] = std::uint32_t(2 + 4 * k + i);
+    }
+    addFans(m, patches);
+    REQUIRE(testing::countSelfIntersections(m).pairs > 0);
+    const Mesh before = m;
+    const detail::PatchesApart apart =
+        detail::keepPatchesApart(patches.data(), 2, m.vertices.data(), 1e-9);
+    CHECK(apart.moved == 0);
+    CHECK(apart.leftCrossing == 1);
     CHECK(m.vertices == before.vertices);
 }

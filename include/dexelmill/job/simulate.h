@@ -221,6 +221,9 @@ struct SimulateReport {
     /// Its general path (ContourStats): edges with several crossings meshed and left out (their
     /// cells' triangles folded), the cells round the meshed ones, and the vertices it put on faces.
     std::size_t splitEdges = 0, splitEdgesDropped = 0, splitCells = 0, faceVertices = 0;
+    /// Pairs of a cell's patches whose fans pass through each other and could not be set apart
+    /// (ContourStats::patchPairsLeftCrossing).
+    std::size_t patchPairsLeftCrossing = 0;
     /// Times the dexel mesher meshed the part: one, and one more each time split cells' triangles
     /// folded and their edges were left out.
     int meshRuns = 0;

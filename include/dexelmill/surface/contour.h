@@ -33,6 +33,11 @@ struct ContourStats {
     std::size_t edgeVertices = 0;    ///< patch vertices placed on a sharp edge
     std::size_t cornerVertices = 0;  ///< patch vertices placed on a sharp corner
     std::size_t pulledBack = 0;      ///< patch vertices moved towards their loop to avoid a fold
+    /// Patch vertices moved apart from another patch's of their cell, where the two fans crossed.
+    std::size_t movedApart = 0;
+    /// Pairs of a cell's patches whose fans cross but whose loops' hulls meet, so that no plane
+    /// sets them apart: left crossing.
+    std::size_t patchPairsLeftCrossing = 0;
     std::size_t flipped = 0;         ///< chords flipped to run along a crease
     std::size_t merged = 0;          ///< vertices merged away in flat regions (adaptivity)
     /// Lattice edges whose dexel has several ends between its two lattice points (a wall, fin or

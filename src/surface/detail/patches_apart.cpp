@@ -128,9 +128,12 @@ bool moveToSide(Vec3& v, const Vec3& mass, const Vec3& n, double c, double want)
 /// point, by fold repair, keeps it on its side. A cell holds at most four patches of a few
 /// triangles each, so every pair is tested; a pair once set apart stays apart as others move, so
 /// the sweeps end after at most one per pair.
-int keepPatchesApart(const SharedPatch* patches, int count, Vec3* points, double tol) {
+///
+/// Where the two loops' hulls meet, no plane lies between them and the pair is left crossing; the
+/// count of such pairs goes into ContourStats::patchPairsLeftCrossing.
+PatchesApart keepPatchesApart(const SharedPatch* patches, int count, Vec3* points, double tol) {
     std::array<std::array<bool, kMaxPatches>, kMaxPatches> apart{};
-    int moved = 0;
+    PatchesApart out;
     for (bool again = true; again;) {
         again = false;
         for (int k = 0; k < count; ++k)
@@ -140,13 +143,17 @@ int keepPatchesApart(const SharedPatch* patches, int count, Vec3* points, double
                 const Loop a = loopOf(patches[k], points), b = loopOf(patches[l], points);
                 Vec3 n(0.0);
                 double c = 0.0, margin = 0.0;
-                if (!separatingPlane(a, b, n, c, margin)) continue;
+                if (!separatingPlane(a, b, n, c, margin)) {
+                    ++out.leftCrossing;
+                    continue;
+                }
                 again = true;
-                moved += moveToSide(points[patches[k].vertex], a.mass, n, c, kOwnSide * margin);
-                moved += moveToSide(points[patches[l].vertex], b.mass, -n, -c, kOwnSide * margin);
+                out.moved += moveToSide(points[patches[k].vertex], a.mass, n, c, kOwnSide * margin);
+                out.moved +=
+                    moveToSide(points[patches[l].vertex], b.mass, -n, -c, kOwnSide * margin);
             }
     }
-    return moved;
+    return out;
 }
 
 }  // namespace dexelmill::detail

@@ -19,9 +19,17 @@ struct SharedPatch {
     int len = 0;
 };
 
+/// @brief What keepPatchesApart did in one cell.
+struct PatchesApart {
+    int moved = 0;  ///< vertices moved
+    int leftCrossing =
+        0;  ///< pairs whose fans cross but whose loops' hulls meet: left as they were
+};
+
 /// @brief For the `count` patches of one cell (their loops apart: a cell table's patches share no
 /// crossing), the pairs whose fans pass through each other by more than `tol` (mm, trianglesCross)
-/// have their vertices in `points` moved apart: see the definition. Returns how many vertices moved.
-int keepPatchesApart(const SharedPatch* patches, int count, Vec3* points, double tol);
+/// have their vertices in `points` moved apart: see the definition. A pair whose loops' hulls meet
+/// has no plane between them and is left crossing, and counted.
+PatchesApart keepPatchesApart(const SharedPatch* patches, int count, Vec3* points, double tol);
 
 }  // namespace dexelmill::detail
