@@ -94,6 +94,19 @@ Result finOfTwoBalls(double gap, double turn, double elevation, const Vec3& neck
     return contourPart(part, h);
 }
 
+/// Contoured at h = 1: all that is left of the box (5, 5, 0)-(15, 15, 3) is a plate `thickness`
+/// thick whose middle passes through `centre`, its normal `turn` rad from x about z and
+/// `elevation` rad above the xy plane.
+Result plate(double thickness, double turn, double elevation, const Vec3& centre) {
+    const Vec3 n(std::cos(turn) * std::cos(elevation), std::sin(turn) * std::cos(elevation),
+                 std::sin(elevation));
+    const double d = glm::dot(n, centre);
+    const Part part{Box{Vec3(5.0, 5.0, 0.0), Vec3(15.0, 15.0, 3.0)},
+                    {testing::halfSpaces({{n, d - 0.5 * thickness}}),
+                     testing::halfSpaces({{-n, -(d + 0.5 * thickness)}})}};
+    return contourPart(part, 1.0);
+}
+
 /// A fin meshed from its dexels with its patches apart: no fold, no crossing pair (contourPart
 /// checks them), no split edge dropped.
 void checkFinApart(const char* name, const Result& res) {
@@ -308,6 +321,45 @@ TEST_CASE("contour: split patches of one cell whose fans pass through each other
     CHECK(res.check.ok());
     CHECK(res.stats.splitEdges > 0);  // the rest of the fin is meshed from its dexels
     CHECK(res.stats.splitEdgesDropped > 0);
+}
+
+TEST_CASE("contour: split cells that fold run after run are left to the table path 3 more times",
+          "[surface][contour][fine]") {
+    // A plate 0.0454 h thick through (9.0143, 10.8677, 1.3713), its normal 3.152 rad from x and
+    // 0.5442 rad below the xy plane: it runs along y, and its dexels cross it on 44 edges with
+    // several crossings. After repair one triangle of the first run's split cells still faces
+    // against its vertices (none is folded by checkMesh's test), in the cells round four of those
+    // edges, from (8.5, 5.5 and 6.5, 2.5) by the box's face y = 5. Left to the table path, they
+    // make the split cells two further along y do the same at the next run, and those the next:
+    // four edges a run. The fourth run, the last that kSplitRetries allows with split cells, has
+    // none.
+    const Result res = plate(0.0454, 3.1520, -0.5442, Vec3(9.0143, 10.8677, 1.3713));
+    INFO(summary("plate folding three runs", res)
+         << "; " << res.stats.splitRuns << " runs, " << res.stats.splitEdges << " split edges, "
+         << res.stats.splitEdgesDropped << " dropped");
+    CHECK(res.check.ok());
+    CHECK(res.stats.splitRuns == 4);
+    CHECK(res.stats.splitEdgesDropped == 12);
+    CHECK(res.stats.splitEdges == 32);  // the rest of the plate is meshed from its dexels
+}
+
+TEST_CASE("contour: split cells that still fold after kSplitRetries runs are all left out",
+          "[surface][contour][fine]") {
+    // The plate of the test before, turned 0.005 rad less about z and 0.0014 rad less steep: its
+    // faulty cells move along y as they did there, and the fourth run has them too (a fifth run
+    // with split cells would as well, a sixth not). The fifth and last run finds no split cells and
+    // makes what the level set alone shows: the bits of the plate round the two lattice points it
+    // holds, (9.5, 13.5, 0.5) and (9.5, 14.5, 0.5), closed and without folds.
+    const Result res = plate(0.0454, 3.1470, -0.5428, Vec3(9.0143, 10.8677, 1.3713));
+    INFO(summary("plate folding four runs", res)
+         << "; " << res.stats.splitRuns << " runs, " << res.stats.splitEdges << " split edges, "
+         << res.stats.splitEdgesDropped << " dropped");
+    CHECK(res.check.ok());
+    CHECK(res.stats.splitRuns == 5);  // four with split cells, the last without
+    CHECK(res.stats.splitEdges == 0);
+    CHECK(res.stats.splitCells == 0);
+    CHECK(res.stats.faceVertices == 0);
+    CHECK(res.stats.splitEdgesDropped == 46);  // all that the first run found
 }
 
 TEST_CASE("contour: a fin's crease chords are not flipped through the other side of the fin",
