@@ -46,7 +46,8 @@ struct ContourStats {
     std::size_t splitCells = 0;    ///< cells round those edges, meshed by the general path
     std::size_t faceVertices = 0;  ///< vertices on cell faces that the general path added
     /// Runs of the contourer: one, and one more each time split cells' triangles folded and
-    /// their edges were left to the table path (at most 4, the last without split cells).
+    /// their edges were left to the table path: at most 5, the first four with split cells and the
+    /// last without.
     int splitRuns = 1;
     /// Edges with several crossings left to the table path because their cells' triangles folded.
     std::size_t splitEdgesDropped = 0;
@@ -74,7 +75,7 @@ struct ContourStats {
 /// edge has several, with a vertex on the face where a path's two ends lie on one edge. Stretches
 /// thinner than 0.02 h, and those where the surface grazes the dexel, are left out; so are split
 /// cells whose triangles fold after repair: the mesh is made again with their edges left to the
-/// table path (at most three times, the last time without split cells).
+/// table path (up to four more times, the last without split cells).
 ///
 /// Families that disagree a little (a near-tangent cut, a family marched from a VDB) only move
 /// crossings: where a dexel disagrees with the level set's vote the crossing is interpolated. Where
