@@ -608,13 +608,7 @@ private:
         std::uint32_t loop[detail::kCellEdges];
         std::uint32_t at = b.patchBase;
         std::uint32_t tri = b.triangleBase;
-        int rank = 0;
-        forEachSetBit(b.mixed, kCells / 64, [&](int off) {
-            if (b.isSplit(rank)) {
-                ++rank;
-                return;
-            }
-            const CellPatches& patches = b.patchesOf(rank++);
+        b.forEachTableCell([&](int off, const CellPatches& patches) {
             const Coord p = b.origin.offsetBy(off >> 6, (off >> 3) & 7, off & 7);
             if (b.isPlain(off)) {
                 // One square (plainCell): its loop is convex and flat, so any diagonal serves.
@@ -636,7 +630,8 @@ private:
                 edges += qefRank == 2;
                 corners += qefRank == 3;
                 // The fan; the flip pass turns chords along creases afterwards.
-                for (int i = 0; i < len; ++i) mesh_.triangles[tri++] = {at, loop[i], loop[i + 1 == len ? 0 : i + 1]};
+                for (int i = 0; i < len; ++i)
+                    mesh_.triangles[tri++] = {at, loop[i], loop[i + 1 == len ? 0 : i + 1]};
                 ++at;
             }
             if (patches.count > 1) {

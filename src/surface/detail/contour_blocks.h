@@ -105,6 +105,16 @@ struct Block {
         const std::uint16_t c = config[std::size_t(rank)];
         return detail::cellPatches(std::uint8_t(c & 0xff), std::uint8_t(c >> 8));
     }
+    /// Calls f(offset, patches) for every mixed cell the table path meshes (split cells are the
+    /// general path's), in increasing offset order.
+    template <class F>
+    void forEachTableCell(F&& f) const {
+        int rank = 0;
+        forEachSetBit(mixed, kCells / 64, [&](int off) {
+            const int r = rank++;
+            if (!isSplit(r)) f(off, patchesOf(r));
+        });
+    }
 };
 
 /// The blocks of a level set that hold surface, sorted by key, and the lookups into them.

@@ -27,13 +27,7 @@ class ChordFlips {
         std::uint32_t tri = b.triangleBase;
         std::uint32_t patch = b.patchBase;
         std::unique_ptr<BlockIndex::Around> near;  // made for the first feature patch of the block
-        int rank = 0;
-        forEachSetBit(b.mixed, kCells / 64, [&](int off) {
-            if (b.isSplit(rank)) {
-                ++rank;
-                return;
-            }
-            const CellPatches& patches = b.patchesOf(rank++);
+        b.forEachTableCell([&](int off, const CellPatches& patches) {
             if (b.isPlain(off)) {
                 tri += 2;
                 return;
