@@ -185,6 +185,30 @@ void finishTemporary(const std::string& temp, const Destination& d) {
     if (rc != 0) throw Error(systemError("cannot flush", temp));
 }
 
+/// A second hard link to the regular file `file`, under a fresh hidden name beside it, which
+/// OutputBatch::commit renames back over `file` where a later rename fails; empty where `file` is
+/// not a regular file or its folder takes no hard link (a file system without them, a full
+/// folder, a file at its most links).
+std::string linkBackup(const std::string& file) {
+    static std::atomic<unsigned> counter{0};
+    struct stat st {};
+    if (::lstat(file.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return {};
+    const std::filesystem::path path = file;
+    const std::filesystem::path dir =
+        path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
+    const std::size_t longest = longestName(dir);
+    for (int attempt = 0; attempt < 100; ++attempt) {
+        const std::string name = temporaryName(
+            path.filename().string(),
+            ".old" + std::to_string(::getpid()) + "_" + std::to_string(counter.fetch_add(1)),
+            longest);
+        const std::string backup = (dir / name).string();
+        if (::link(file.c_str(), backup.c_str()) == 0) return backup;
+        if (errno != EEXIST) return {};
+    }
+    return {};
+}
+
 /// Whether two paths name the same file (see checkSeparateFiles).
 bool sameFile(const std::string& a, const std::string& b) {
     struct stat sa {}, sb {};
@@ -272,18 +296,71 @@ void OutputBatch::stage(const std::string& target, const std::function<void(cons
 }
 
 void OutputBatch::commit() {
+    // What puts a renamed target back: the file it replaced, kept under a second hard link
+    // (linkBackup) until every rename is done; or, for a target that was not there, removal.
+    struct Undo {
+        std::string backup;
+        int slot = -1;  ///< the backup's place in removeLiveTemporaries' table
+        bool existed = false;
+    };
+    std::vector<Undo> undo;
+    undo.reserve(staged_.size());
+    const auto dropBackup = [](const Undo& u) {
+        if (u.backup.empty()) return;
+        ::unlink(u.backup.c_str());
+        untrack(u.slot);
+    };
     for (std::size_t i = 0; i < staged_.size(); ++i) {
+        const Staged& s = staged_[i];
+        Undo u;
+        struct stat st {};
+        u.existed = ::lstat(s.file.c_str(), &st) == 0;
+        u.backup = linkBackup(s.file);
+        if (!u.backup.empty()) u.slot = track(u.backup);
         std::error_code ec;
-        std::filesystem::rename(staged_[i].temp, staged_[i].file, ec);
-        if (!ec) untrack(staged_[i].slot);
-        if (ec) {
-            const std::string message =
-                "cannot rename '" + staged_[i].temp + "' to '" + staged_[i].target + "': " + ec.message();
-            // The files renamed are the targets' now; the destructor removes the rest.
-            staged_.erase(staged_.begin(), staged_.begin() + std::ptrdiff_t(i));
-            throw Error(message);
+        std::filesystem::rename(s.temp, s.file, ec);
+        if (!ec) {
+            untrack(s.slot);
+            undo.push_back(std::move(u));
+            continue;
         }
+        dropBackup(u);
+        std::string message =
+            "cannot rename '" + s.temp + "' to '" + s.target + "': " + ec.message();
+        // The renames before it undone, last first; a target that cannot be put back keeps the
+        // run's file, and the message names it and where the file it replaced is kept.
+        std::vector<std::string> kept;
+        for (std::size_t j = i; j-- > 0;) {
+            std::error_code put;
+            if (!undo[j].backup.empty()) {
+                std::filesystem::rename(undo[j].backup, staged_[j].file, put);
+                if (!put) untrack(undo[j].slot);
+            } else if (!undo[j].existed) {
+                std::filesystem::remove(staged_[j].file, put);
+            } else {
+                put = std::make_error_code(std::errc::operation_not_supported);
+            }
+            if (put) {
+                std::string what = "'" + staged_[j].target + "'";
+                if (!undo[j].backup.empty()) {
+                    untrack(undo[j].slot);  // the old content, for the user to take back
+                    what += " (the file it replaced is kept as '" + undo[j].backup + "')";
+                }
+                kept.push_back(what);
+            }
+        }
+        if (kept.empty()) {
+            message += "; no file was changed";
+        } else {
+            message += "; the run's new content is kept in";
+            for (std::size_t k = 0; k < kept.size(); ++k)
+                message += (k == 0 ? " " : ", ") + kept[k];
+        }
+        // The files renamed are gone as temporary files; the destructor removes the rest.
+        staged_.erase(staged_.begin(), staged_.begin() + std::ptrdiff_t(i));
+        throw Error(message);
     }
+    for (const Undo& u : undo) dropBackup(u);
     staged_.clear();
 }
 

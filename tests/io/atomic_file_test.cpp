@@ -80,6 +80,48 @@ TEST_CASE("output batch: the files are renamed together on commit, and none when
     CHECK(dir.entries() == 2);
 }
 
+TEST_CASE("output batch: a rename that fails puts back the files renamed before it", "[io]") {
+    TempDir dir;
+    fs::create_directories(dir.path / "later");
+    const std::string replaced = dir.file("a.txt"), added = dir.file("new.txt"),
+                      last = dir.file("later/b.txt");
+    std::ofstream(replaced) << "old a";
+    ::chmod(replaced.c_str(), 0640);
+    const std::string other = dir.file("other link to a");
+    REQUIRE(::link(replaced.c_str(), other.c_str()) == 0);
+    struct stat before {};
+    REQUIRE(::stat(replaced.c_str(), &before) == 0);
+    OutputBatch batch;
+    for (const std::string& target : {replaced, added, last})
+        writeStreamAtomically(
+            target, [](std::ostream& out) { out << "new"; }, &batch);
+    // The last target's folder goes, with its staged file: its rename fails after the other two.
+    fs::remove_all(dir.path / "later");
+    CHECK_THROWS_WITH(batch.commit(), Catch::Contains("cannot rename") &&
+                                          Catch::Contains("later/b.txt") &&
+                                          Catch::Contains("no file was changed"));
+    // The replaced file is back, the same file with its mode; the new one is gone, and no backup
+    // or temporary file is left.
+    struct stat after {};
+    REQUIRE(::stat(replaced.c_str(), &after) == 0);
+    CHECK(after.st_ino == before.st_ino);
+    CHECK((after.st_mode & 07777) == 0640);
+    CHECK(slurp(replaced) == "old a");
+    CHECK(slurp(other) == "old a");
+    CHECK_FALSE(fs::exists(added));
+    CHECK(dir.entries() == 2);
+    // Committed whole, the batch leaves no backup either, and the other link keeps the old file.
+    OutputBatch again;
+    for (const std::string& target : {replaced, added})
+        writeStreamAtomically(
+            target, [](std::ostream& out) { out << "new"; }, &again);
+    again.commit();
+    CHECK(slurp(replaced) == "new");
+    CHECK(slurp(added) == "new");
+    CHECK(slurp(other) == "old a");
+    CHECK(dir.entries() == 3);
+}
+
 TEST_CASE("atomic write: the temporary files alive are what an interruption removes", "[io]") {
     TempDir dir;
     std::ofstream(dir.file("kept.txt")) << "old";

@@ -31,7 +31,8 @@ namespace dexelmill {
 
 /// @brief The files one run writes, renamed over their targets together: each is staged in its
 /// temporary file, complete and flushed to disk, and commit() renames them all, so that a run that
-/// fails at its last file (a full disk while writing the report) leaves every target as it was.
+/// fails at its last file (a full disk while writing the report), or at one of the renames,
+/// leaves every target as it was.
 /// A batch destroyed before commit() removes its temporary files. A device or FIFO target has no
 /// temporary file: it is written when staged.
 class OutputBatch {
@@ -51,9 +52,15 @@ public:
     /// flushed.
     void stage(const std::string& target, const std::function<void(const std::string& path)>& write);
 
-    /// @brief Renames every staged temporary file over its target, in the order staged.
+    /// @brief Renames every staged temporary file over its target, in the order staged. Until the
+    /// last rename is done, each file replaced is kept under a second hard link beside it (a
+    /// hidden name ending ".oldPID_N"), which removeLiveTemporaries removes.
     /// @throw Error naming the file whose rename fails (its folder removed meanwhile, say): the
-    /// files before it are renamed, the others left as they were.
+    /// renames before it are undone, each replaced file renamed back over its target (the same
+    /// file, other hard links to it untouched) and each target that was new removed, so that
+    /// every target is as it was. Where a folder takes no hard link (a file system without them),
+    /// a replaced file cannot be put back: the message names the targets that keep the run's
+    /// files, and where a backup could not be renamed back, the backup.
     void commit();
 
 private:
@@ -101,7 +108,8 @@ struct NamedFile {
 /// would outlive an interruption. Called by the handler removeTemporariesOnSignals installs.
 void removeLiveTemporaries() noexcept;
 
-/// The temporary files removeLiveTemporaries can reach at once: a run stages one per output.
+/// The temporary files removeLiveTemporaries can reach at once: a run stages one per output, and
+/// keeps one backup per replaced output while it commits.
 constexpr int kTrackedTemporaries = 64;
 
 /// @brief Makes SIGINT, SIGTERM and SIGHUP remove the live temporary files
