@@ -157,7 +157,11 @@ void turningQuery(benchmark::State& state, const Vec3& start, const Vec3& end, d
     const MovePieces pieces(path, toolRegions(path, table), kDefaultTurnTolerance);
     std::vector<TurningSweep> sweeps;
     Box box;
+    // The whole tool along each piece of the move, once, as the held move sweeps it: a move cut
+    // into pieces is listed once per region of a tool with a shank (its cutting part's pieces, then
+    // its shank's), and the shank's listing names the same stretches of u again.
     for (std::size_t k = 0; k < pieces.size(); ++k) {
+        if (pieces.regions(k) == Regions::Shank) continue;
         sweeps.emplace_back(tool, pieces.piece(k));
         box.expand(sweeps.back().bounds());
     }
