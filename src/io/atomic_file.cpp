@@ -137,28 +137,42 @@ Destination destinationOf(const std::string& target) {
 }
 
 /// Creates a new, empty, uniquely named file beside `d.file` and returns its path.
-std::string createTemporary(const std::string& target, const Destination& d) {
+/// Makes something under a fresh hidden name beside `file`: "." + its name + `tag` + "PID_N"
+/// (temporaryName), each try calling `make(path)`, which returns whether it made it and otherwise
+/// leaves errno set. Tries names until one is made or `make` fails for a reason other than the
+/// name being taken (EEXIST). The path made, or empty (errno says why; 0 where every name tried
+/// was taken).
+template <class Make>
+std::string makeBeside(const std::filesystem::path& file, const char* tag, Make&& make) {
     static std::atomic<unsigned> counter{0};
     const std::filesystem::path dir =
-        d.file.has_parent_path() ? d.file.parent_path() : std::filesystem::path(".");
+        file.has_parent_path() ? file.parent_path() : std::filesystem::path(".");
     const std::size_t longest = longestName(dir);
+    for (int attempt = 0; attempt < 100; ++attempt) {
+        const std::string suffix =
+            tag + std::to_string(::getpid()) + "_" + std::to_string(counter.fetch_add(1));
+        const std::string path =
+            (dir / temporaryName(file.filename().string(), suffix, longest)).string();
+        if (make(path)) return path;
+        if (errno != EEXIST) return {};
+    }
+    errno = 0;
+    return {};
+}
+
+std::string createTemporary(const std::string& target, const Destination& d) {
     // O_EXCL: never reuse a file someone else made. Mode 0666 less the umask, like any new file
     // the user writes; or, replacing a file, no more than its own bits (and read and write for
     // its writer, who reopens it), so that no one may read the content who may not read the file.
     const mode_t mode = d.replaces ? (d.replaces->st_mode & 0777) | 0600 : 0666;
-    for (int attempt = 0; attempt < 100; ++attempt) {
-        const std::string name = temporaryName(d.file.filename().string(),
-                                               ".tmp" + std::to_string(::getpid()) + "_" +
-                                                   std::to_string(counter.fetch_add(1)),
-                                               longest);
-        const std::string path = (dir / name).string();
-        const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
-        if (fd >= 0) {
-            ::close(fd);
-            return path;
-        }
-        if (errno != EEXIST) throw Error(systemError("cannot create a temporary file for", target));
-    }
+    const std::string path = makeBeside(d.file, ".tmp", [mode](const std::string& p) {
+        const int fd = ::open(p.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
+        if (fd < 0) return false;
+        ::close(fd);
+        return true;
+    });
+    if (!path.empty()) return path;
+    if (errno != 0) throw Error(systemError("cannot create a temporary file for", target));
     throw Error("cannot find a free temporary file name for '" + target + "'");
 }
 
@@ -190,23 +204,11 @@ void finishTemporary(const std::string& temp, const Destination& d) {
 /// not a regular file or its folder takes no hard link (a file system without them, a full
 /// folder, a file at its most links).
 std::string linkBackup(const std::string& file) {
-    static std::atomic<unsigned> counter{0};
     struct stat st {};
     if (::lstat(file.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return {};
-    const std::filesystem::path path = file;
-    const std::filesystem::path dir =
-        path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
-    const std::size_t longest = longestName(dir);
-    for (int attempt = 0; attempt < 100; ++attempt) {
-        const std::string name = temporaryName(
-            path.filename().string(),
-            ".old" + std::to_string(::getpid()) + "_" + std::to_string(counter.fetch_add(1)),
-            longest);
-        const std::string backup = (dir / name).string();
-        if (::link(file.c_str(), backup.c_str()) == 0) return backup;
-        if (errno != EEXIST) return {};
-    }
-    return {};
+    return makeBeside(file, ".old", [&file](const std::string& p) {
+        return ::link(file.c_str(), p.c_str()) == 0;
+    });
 }
 
 /// Whether two paths name the same file (see checkSeparateFiles).
